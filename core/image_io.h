@@ -1,0 +1,60 @@
+// Reading and writing environment maps and camera images. The only module that touches
+// image files; every write goes to a temporary file beside the target and is renamed
+// into place, so a failed write leaves nothing behind.
+//
+// Map formats, chosen by file extension:
+//   .exr  OpenEXR, float or half RGB(A); attributes "lightprobe.layout",
+//         "lightprobe.units" and "lightprobe.nside" carry the metadata.
+//   .hdr  Radiance RGBE, reads flat and run-length (new and old) scanlines; writes RLE.
+//         Metadata as header lines "LIGHTPROBE_LAYOUT=..." / "LIGHTPROBE_UNITS=...".
+//   .pfm  Portable float map (colour "PF" and grey "Pf", either byte order).
+// A healpix map is stored as an image nside wide and 12 nside tall: face f occupies rows
+// [f nside, (f+1) nside), and the pixel at (column ix, row iy) of a face is NESTED index
+// f nside^2 + interleave(ix, iy) (ix on the even bits).
+// When a file carries no layout, it is inferred from the size: W = 2H latlong,
+// 12 W = H (W a power of two) healpix, otherwise hemisphere.
+//
+// All failures throw InputError naming the path and the problem.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/envmap.h"
+
+namespace lp {
+
+struct ReadMapOptions {
+  // Overrides the layout recorded in (or inferred from) the file.
+  std::optional<Layout> layout;
+  // Reject NaN, Inf and negative pixels (the default): maps are radiance.
+  bool reject_bad_pixels = true;
+};
+EnvMap read_envmap(const std::string& path, const ReadMapOptions& options = {});
+
+enum class ExrPixelType { Half, Float };
+struct WriteMapOptions {
+  ExrPixelType exr_pixel_type = ExrPixelType::Float;
+};
+void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOptions& options = {});
+
+// Camera images (8/16-bit PNG, JPEG, TIFF via OpenCV) as linear-in-code float RGB in
+// [0, 1] (no response curve applied), row-major, 3 floats per pixel.
+struct CameraImage {
+  int width = 0, height = 0;
+  int bit_depth = 8;
+  std::vector<float> rgb;
+};
+CameraImage read_camera_image(const std::string& path);
+// 8-bit sRGB PNG/JPEG of already tone-mapped RGB in [0, 1] (overlays, charts).
+void write_display_image(const std::string& path, int width, int height, const std::vector<float>& rgb);
+
+// Write `bytes` to `path` through a temporary file and rename (text outputs: JSON, CSV, SVG).
+void write_file_atomically(const std::string& path, const std::string& bytes);
+
+// Healpix NESTED index <-> (face, ix, iy) within the face, used by the file layout above.
+size_t healpix_nested_index(int nside, int face, int ix, int iy);
+void healpix_face_xy(int nside, size_t nested, int* face, int* ix, int* iy);
+
+}  // namespace lp

@@ -1,0 +1,35 @@
+// Conversion between layouts and rotation into the world frame, with filtering that
+// preserves power: each destination pixel is supersampled, every sample is attributed
+// to the source pixel it falls in, and each source pixel's power is spread over its
+// samples in proportion to their solid angles (or, if no sample hit it, given whole to
+// the destination pixel holding its centre). Total power over the valid region is
+// therefore kept to float rounding, and a one-pixel sun keeps its direction when going
+// down in resolution instead of being aliased away.
+#pragma once
+
+#include "core/envmap.h"
+#include "core/vec3.h"
+
+namespace lp {
+
+struct ResampleOptions {
+  // Samples per destination pixel edge. 0 chooses it from the ratio of pixel sizes so
+  // that samples are no larger than source pixels (capped at 16). Raise it only to
+  // check convergence.
+  int samples_per_edge = 0;
+  // Rotation world_from_source applied to the source map (identity: same frame).
+  Mat3 world_from_source{};
+  // A destination pixel is valid when at least this fraction of its samples hit valid
+  // source pixels (and lie inside the source layout's domain).
+  double min_valid_fraction = 0.5;
+};
+
+// Resample `src` into `layout`. For latlong/hemisphere, width x height; for healpix,
+// `width` is nside. Throws InputError on sizes the layout does not allow.
+EnvMap resample(const EnvMap& src, Layout layout, int width, int height,
+                const ResampleOptions& options = {});
+
+// The same map turned into the world frame by world_from_map, in the same layout and size.
+EnvMap rotate(const EnvMap& src, const Mat3& world_from_map);
+
+}  // namespace lp

@@ -1,0 +1,34 @@
+#include "core/vec3.h"
+
+namespace lp {
+
+Mat3 operator*(const Mat3& a, const Mat3& b) {
+  Mat3 r;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r.m[3 * i + j] = a(i, 0) * b(0, j) + a(i, 1) * b(1, j) + a(i, 2) * b(2, j);
+  return r;
+}
+
+Mat3 rotation_from_yaw_pitch_roll_deg(double yaw, double pitch, double roll) {
+  const double d2r = M_PI / 180.0;
+  const double cy = std::cos(yaw * d2r), sy = std::sin(yaw * d2r);
+  const double cp = std::cos(pitch * d2r), sp = std::sin(pitch * d2r);
+  const double cr = std::cos(roll * d2r), sr = std::sin(roll * d2r);
+  const Mat3 rz{{cy, -sy, 0, sy, cy, 0, 0, 0, 1}};
+  const Mat3 ry{{cp, 0, sp, 0, 1, 0, -sp, 0, cp}};
+  const Mat3 rx{{1, 0, 0, 0, cr, -sr, 0, sr, cr}};
+  return rz * (ry * rx);
+}
+
+bool is_rotation(const Mat3& a, double tol) {
+  const Mat3 p = transpose(a) * a;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (std::fabs(p(i, j) - (i == j ? 1.0 : 0.0)) > tol) return false;
+  const double det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1)) -
+                     a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0)) +
+                     a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
+  return std::fabs(det - 1.0) < tol;
+}
+
+}  // namespace lp

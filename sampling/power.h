@@ -1,0 +1,25 @@
+// Shared finishing steps of every sampler.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "core/envmap.h"
+#include "core/light_list.h"
+
+namespace lp {
+
+// Scale each channel of the lights so that their sum equals `target` (the map's power).
+// Equal-power methods give each light the colour of the pixel it landed on; this keeps
+// the per-channel total exact without changing luminance ratios by more than the
+// colour noise of the sample. Channels whose light sum is zero are left untouched.
+void match_total_power(std::vector<Light>& lights, const std::array<double, 3>& target);
+
+// The map as a row grid (latlong or hemisphere) for methods that work on rows;
+// healpix maps are resampled to a latlong map with about as many pixels.
+EnvMap as_row_grid(const EnvMap& map);
+
+// Throws InputError unless the map has positive, finite total luminance power.
+void require_samplable(const EnvMap& map, const char* method);
+
+}  // namespace lp

@@ -1,0 +1,108 @@
+// Speed of every sampler on the two map sizes that matter: the 360x90 polar map of a live
+// fisheye (Havran 2005) and a 1024x512 latlong probe. Each time is also reported as a
+// multiple of one plain pass over the same map's memory (x_read), the floor no method
+// can beat:  build/bench/lightprobe_bench --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <vector>
+
+#include "core/synthetic_scene.h"
+#include "sampling/sampler.h"
+
+namespace {
+
+using namespace lp;
+
+const EnvMap& scene_map(Layout layout) {
+  static std::map<Layout, EnvMap> cache;
+  auto it = cache.find(layout);
+  if (it == cache.end()) {
+    const auto scene = describe_scene();
+    it = cache.emplace(layout, layout == Layout::Hemisphere ? render_scene(scene, layout, 360, 90)
+                                                              : render_scene(scene, layout, 1024, 512)).first;
+  }
+  return it->second;
+}
+
+// One plain pass over the map: read every float once (the luminance of every pixel).
+double plain_read_seconds(const EnvMap& map) {
+  std::vector<double> t;
+  for (int r = 0; r < 50; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    float s = 0;
+    const float* p = map.rgb.data();
+    const size_t n = map.pixel_count();
+    for (size_t i = 0; i < n; ++i) s += 0.2126f * p[3 * i] + 0.7152f * p[3 * i + 1] + 0.0722f * p[3 * i + 2];
+    benchmark::DoNotOptimize(s);
+    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+void report_ratio(benchmark::State& state, const EnvMap& map) {
+  static std::map<const EnvMap*, double> read;
+  if (!read.count(&map)) read[&map] = plain_read_seconds(map);
+  state.counters["x_read"] =
+      benchmark::Counter(double(state.iterations()) * read[&map], benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void BM_PlainRead(benchmark::State& state, Layout layout) {
+  const EnvMap& map = scene_map(layout);
+  for (auto _ : state) {
+    float s = 0;
+    const float* p = map.rgb.data();
+    for (size_t i = 0, n = map.pixel_count(); i < n; ++i)
+      s += 0.2126f * p[3 * i] + 0.7152f * p[3 * i + 1] + 0.0722f * p[3 * i + 2];
+    benchmark::DoNotOptimize(s);
+  }
+  report_ratio(state, map);
+}
+
+void BM_Prepare(benchmark::State& state, Method method, Layout layout) {
+  const EnvMap& map = scene_map(layout);
+  auto sampler = make_sampler(method);
+  for (auto _ : state) sampler->prepare(map);
+  report_ratio(state, map);
+}
+
+void BM_Place(benchmark::State& state, Method method, Layout layout) {
+  const EnvMap& map = scene_map(layout);
+  auto sampler = make_sampler(method);
+  sampler->prepare(map);
+  const int n = int(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(sampler->place(n));
+}
+
+void BM_PrepareAndPlace(benchmark::State& state, Method method, Layout layout) {
+  const EnvMap& map = scene_map(layout);
+  auto sampler = make_sampler(method);
+  const int n = int(state.range(0));
+  for (auto _ : state) {
+    sampler->prepare(map);
+    benchmark::DoNotOptimize(sampler->place(n));
+  }
+  report_ratio(state, map);
+}
+
+int register_all() {
+  for (Layout layout : {Layout::Hemisphere, Layout::LatLong}) {
+    const std::string size = layout == Layout::Hemisphere ? "hemisphere360x90" : "latlong1024x512";
+    benchmark::RegisterBenchmark(("PlainRead/" + size).c_str(), BM_PlainRead, layout)->Unit(benchmark::kMicrosecond);
+    for (Method m : all_methods()) {
+      const std::string name = std::string(to_string(m)) + "/" + size;
+      benchmark::RegisterBenchmark(("Prepare/" + name).c_str(), BM_Prepare, m, layout)->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("Place/" + name).c_str(), BM_Place, m, layout)
+          ->Arg(300)->Arg(1000)->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("PrepareAndPlace/" + name).c_str(), BM_PrepareAndPlace, m, layout)
+          ->Arg(300)->Arg(1000)->Unit(benchmark::kMicrosecond);
+    }
+  }
+  return 0;
+}
+const int registered = register_all();
+
+}  // namespace

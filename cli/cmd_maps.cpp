@@ -1,0 +1,255 @@
+// info, convert, synth scene: the map commands.
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "cli/commands.h"
+#include "cli/report.h"
+#include "core/envmap.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/resample.h"
+#include "core/synthetic_scene.h"
+
+namespace lp::cli {
+
+void parse_size(const std::string& text, const char* option, int* width, int* height) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  std::istringstream in(text);
+  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || (in >> extra) || w <= 0 || h <= 0)
+    throw InputError(fmt::format("{} must be WxH with positive integers, got '{}'", option, text));
+  *width = w;
+  *height = h;
+}
+
+std::vector<int> parse_int_list(const std::string& text, const char* option) {
+  std::vector<int> values;
+  std::istringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      const int v = std::stoi(item, &used);
+      if (used != item.size() || v <= 0) throw std::invalid_argument("x");
+      values.push_back(v);
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("{} must be a comma-separated list of positive integers, got '{}'", option, text));
+    }
+  }
+  if (values.empty()) throw InputError(fmt::format("{} is empty", option));
+  return values;
+}
+
+namespace {
+
+std::optional<Layout> optional_layout(const std::string& name, const char* option) {
+  if (name.empty()) return std::nullopt;
+  auto l = layout_from_string(name);
+  if (!l) throw InputError(fmt::format("{}: unknown layout '{}' (latlong, hemisphere, healpix)", option, name));
+  return l;
+}
+
+Mat3 parse_rotation(const std::string& text) {
+  std::vector<double> v;
+  std::string item;
+  std::istringstream in(text);
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument("x");
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("--rotation: '{}' is not a number", item));
+    }
+  }
+  if (v.size() == 3) return rotation_from_yaw_pitch_roll_deg(v[0], v[1], v[2]);
+  if (v.size() == 9) {
+    Mat3 m;
+    std::copy(v.begin(), v.end(), m.m.begin());
+    if (!is_rotation(m, 1e-4)) throw InputError("--rotation: the 9 numbers are not a rotation matrix");
+    return m;
+  }
+  throw InputError("--rotation takes 'yaw,pitch,roll' (degrees) or 9 comma-separated numbers");
+}
+
+// Target (layout, width, height) of convert/synth from --layout/--size/--nside.
+void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h) {
+  if (layout == Layout::Healpix) {
+    *w = nside > 0 ? nside : (like && like->layout == Layout::Healpix ? like->nside : 0);
+    if (*w == 0) {
+      // About as many pixels as the source.
+      const double px = like ? double(like->pixel_count()) : 12.0 * 64 * 64;
+      *w = 1;
+      while (12.0 * (2 * *w) * (2 * *w) <= px * 1.5) *w *= 2;
+    }
+    *h = 1;
+    return;
+  }
+  if (!size.empty()) {
+    parse_size(size, "--size", w, h);
+    return;
+  }
+  if (like && like->layout == layout) {
+    *w = like->width;
+    *h = like->height;
+    return;
+  }
+  if (layout == Layout::Hemisphere) {
+    *w = 360;
+    *h = 90;
+    return;
+  }
+  // latlong with about as many pixels as the source
+  const double px = like ? double(like->pixel_count()) : 1024.0 * 512;
+  *h = std::max(2, int(std::lround(std::sqrt(px / 2))));
+  *w = 2 * *h;
+}
+
+}  // namespace
+
+int run_info(const InfoArgs& args, const Output& out) {
+  nlohmann::json all = nlohmann::json::array();
+  for (const std::string& path : args.files) {
+    ReadMapOptions ro;
+    ro.layout = optional_layout(args.layout, "--layout");
+    const EnvMap map = read_envmap(path, ro);
+    const size_t n = map.pixel_count();
+    std::vector<float> lum;
+    lum.reserve(n);
+    size_t valid = 0, brightest = 0;
+    float ymax = -1;
+    for (size_t i = 0; i < n; ++i) {
+      if (!map.is_valid(i)) continue;
+      ++valid;
+      const float* p = map.pixel(i);
+      const float y = luminance(p[0], p[1], p[2]);
+      lum.push_back(y);
+      if (y > ymax) ymax = y, brightest = i;
+    }
+    float ymin_pos = 0;
+    for (float y : lum)
+      if (y > 0 && (ymin_pos == 0 || y < ymin_pos)) ymin_pos = y;
+    auto quantile = [&](double q) {
+      if (lum.empty()) return 0.0f;
+      std::vector<float> v = lum;
+      const size_t k = std::min(v.size() - 1, size_t(q * double(v.size() - 1) + 0.5));
+      std::nth_element(v.begin(), v.begin() + long(k), v.end());
+      return v[k];
+    };
+    const auto power = total_power(map);
+    const double ypower = luminance(power.data());
+    double mean = 0;
+    for (float y : lum) mean += y;
+    mean = lum.empty() ? 0 : mean / double(lum.size());
+    const double range_stops = (ymin_pos > 0 && ymax > 0) ? std::log2(double(ymax) / ymin_pos) : 0;
+    const Vec3 bdir = n ? pixel_direction(map, brightest) : Vec3{};
+    // Share of the power in the brightest 0.1 % of the valid pixels: how peaky the map is.
+    double top_share = 0;
+    if (valid > 0 && ypower > 0) {
+      std::vector<std::pair<double, size_t>> by;
+      by.reserve(valid);
+      for (size_t i = 0; i < n; ++i)
+        if (map.is_valid(i)) {
+          const float* p = map.pixel(i);
+          by.emplace_back(luminance(p[0], p[1], p[2]) * pixel_solid_angle(map, i), i);
+        }
+      const size_t k = std::max<size_t>(1, valid / 1000);
+      std::nth_element(by.begin(), by.begin() + long(k - 1), by.end(), std::greater<>());
+      for (size_t i = 0; i < k; ++i) top_share += by[i].first;
+      top_share /= ypower;
+    }
+    nlohmann::json j = {
+        {"file", path},
+        {"layout", std::string(to_string(map.layout))},
+        {"width", map.width},
+        {"height", map.height},
+        {"units", std::string(to_string(map.units))},
+        {"pixels", n},
+        {"valid_fraction", n ? double(valid) / double(n) : 0.0},
+        {"luminance", {{"min_positive", ymin_pos}, {"max", ymax}, {"mean", mean}, {"median", quantile(0.5)},
+                       {"p99", quantile(0.99)}}},
+        {"dynamic_range_stops", range_stops},
+        {"power_rgb", {power[0], power[1], power[2]}},
+        {"power_luminance", ypower},
+        {"brightest_direction", {bdir.x, bdir.y, bdir.z}},
+        {"power_share_top_0_1_percent", top_share},
+    };
+    if (map.layout == Layout::Healpix) j["nside"] = map.nside;
+    all.push_back(j);
+    say(out,
+        "{}\n  layout      {} ({})\n  valid       {:.1f} % of {} pixels\n"
+        "  luminance   min>0 {:.4g}  median {:.4g}  mean {:.4g}  p99 {:.4g}  max {:.4g}\n"
+        "  range       {:.1f} stops\n  power       rgb ({:.5g}, {:.5g}, {:.5g})  luminance {:.5g}\n"
+        "  brightest   theta {:.2f} deg, phi {:.2f} deg; top 0.1 % of pixels hold {:.1f} % of the power\n",
+        path, describe_size(map), to_string(map.units), 100.0 * j["valid_fraction"].get<double>(), n, ymin_pos,
+        quantile(0.5), mean, quantile(0.99), ymax, range_stops, power[0], power[1], power[2], ypower,
+        zenith_of(bdir) * 180 / M_PI, azimuth_of(bdir) * 180 / M_PI, 100 * top_share);
+  }
+  emit_json(out, all.size() == 1 ? all[0] : nlohmann::json{{"maps", all}});
+  return 0;
+}
+
+int run_convert(const ConvertArgs& args, const Output& out) {
+  ReadMapOptions ro;
+  ro.layout = optional_layout(args.in_layout, "--in-layout");
+  const auto t0 = std::chrono::steady_clock::now();
+  const EnvMap src = read_envmap(args.input, ro);
+  const Layout layout = optional_layout(args.layout, "--layout").value_or(src.layout);
+  if (layout == Layout::Healpix && !args.size.empty())
+    throw InputError("--size does not apply to healpix: use --nside");
+  if (layout != Layout::Healpix && args.nside != 0) throw InputError("--nside applies only to --layout healpix");
+  int w = 0, h = 0;
+  target_geometry(layout, args.size, args.nside, &src, &w, &h);
+  ResampleOptions options;
+  if (!args.rotation.empty()) options.world_from_source = parse_rotation(args.rotation);
+  const EnvMap dst = resample(src, layout, w, h, options);
+  WriteMapOptions wo;
+  wo.exr_pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
+  write_envmap(args.output, dst, wo);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double p_in = total_luminance_power(src), p_out = total_luminance_power(dst);
+  say(out, "{} ({}) -> {} ({}); power {:.6g} -> {:.6g} ({:+.2e} relative), {:.2f} s\n", args.input,
+      describe_size(src), args.output, describe_size(dst), p_in, p_out, p_in > 0 ? (p_out - p_in) / p_in : 0.0,
+      seconds);
+  emit_json(out, {{"input", args.input},
+                  {"output", args.output},
+                  {"layout", std::string(to_string(dst.layout))},
+                  {"width", dst.width},
+                  {"height", dst.height},
+                  {"power_in", p_in},
+                  {"power_out", p_out},
+                  {"seconds", seconds}});
+  return 0;
+}
+
+int run_synth_scene(const SynthSceneArgs& args, const Output& out) {
+  const auto layout = optional_layout(args.layout, "--layout").value_or(Layout::LatLong);
+  if (layout == Layout::Healpix && !args.size.empty())
+    throw InputError("--size does not apply to healpix: use --nside");
+  int w = 0, h = 0;
+  target_geometry(layout, args.size, args.nside > 0 ? args.nside : 128, nullptr, &w, &h);
+  SceneOptions so;
+  if (!(args.sun_scale >= 0)) throw InputError("--sun-scale must be >= 0");
+  for (double& c : so.sun_rgb) c *= args.no_sun ? 0.0 : args.sun_scale;
+  const SceneDescription scene = describe_scene(so);
+  const EnvMap map = render_scene(scene, layout, w, h);
+  write_envmap(args.output, map);
+  const auto sun = scene.sun_power();
+  const double total = total_luminance_power(map);
+  say(out, "{}: procedural scene, {}; power {:.6g}, sun {:.1f} %\n", args.output, describe_size(map), total,
+      total > 0 ? 100 * luminance(sun.data()) / total : 0.0);
+  emit_json(out, {{"output", args.output},
+                  {"layout", std::string(to_string(map.layout))},
+                  {"width", map.width},
+                  {"height", map.height},
+                  {"power_luminance", total},
+                  {"sun_power_luminance", luminance(sun.data())}});
+  return 0;
+}
+
+}  // namespace lp::cli

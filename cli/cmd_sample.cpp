@@ -1,0 +1,182 @@
+// sample: environment map(s) -> light list in the chosen format.
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+
+#include "cli/commands.h"
+#include "cli/report.h"
+#include "core/accuracy.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/progress.h"
+#include "sampling/auto_count.h"
+#include "sampling/exporters.h"
+#include "sampling/overlay.h"
+#include "sampling/sampler.h"
+
+namespace lp::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_map_file(const fs::path& p) {
+  const std::string e = p.extension().string();
+  return e == ".exr" || e == ".hdr" || e == ".pfm";
+}
+
+// A directory stands for the maps inside it, in name order (a recorded sequence).
+std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
+  std::vector<std::string> files;
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (fs::is_directory(in, ec)) {
+      std::vector<std::string> found;
+      for (const auto& entry : fs::directory_iterator(in))
+        if (entry.is_regular_file() && is_map_file(entry.path())) found.push_back(entry.path().string());
+      std::sort(found.begin(), found.end());
+      if (found.empty()) throw InputError(fmt::format("{}: directory holds no .exr/.hdr/.pfm maps", in));
+      files.insert(files.end(), found.begin(), found.end());
+    } else {
+      files.push_back(in);
+    }
+  }
+  return files;
+}
+
+ExportFormat format_for(const std::string& format, const std::string& output, bool sequence) {
+  if (!format.empty()) {
+    auto f = export_format_from_string(format);
+    if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, csv)", format));
+    return *f;
+  }
+  const std::string e = fs::path(output).extension().string();
+  if (e == ".ndjson" || e == ".jsonl") return ExportFormat::Ndjson;
+  if (e == ".pbrt") return ExportFormat::Pbrt;
+  if (e == ".xml") return ExportFormat::Mitsuba;
+  if (e == ".gltf") return ExportFormat::Gltf;
+  if (e == ".csv") return ExportFormat::Csv;
+  return sequence ? ExportFormat::Ndjson : ExportFormat::Json;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+int run_sample(const SampleArgs& args, const Output& out) {
+  const auto method = method_from_string(args.method);
+  if (!method) throw InputError(fmt::format("--method: unknown method '{}' (pharr, hemigon, q2tree, mediancut)", args.method));
+  const bool automatic = args.n == "auto";
+  int n = 0;
+  if (!automatic) {
+    try {
+      size_t used = 0;
+      n = std::stoi(args.n, &used);
+      if (used != args.n.size()) throw std::invalid_argument("x");
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("--n must be a positive integer or 'auto', got '{}'", args.n));
+    }
+    if (n <= 0) throw InputError(fmt::format("--n must be positive, got {}", n));
+  }
+  const std::vector<std::string> files = expand_inputs(args.inputs);
+  const bool sequence = files.size() > 1;
+  const ExportFormat format = format_for(args.format, args.output, sequence);
+  if (sequence && format != ExportFormat::Ndjson && format != ExportFormat::Csv)
+    throw InputError(fmt::format("{} maps form a sequence: use --format ndjson (or csv)", files.size()));
+
+  SamplerOptions so;
+  so.upper_only = args.upper_only;
+  so.lloyd_relaxed = args.lloyd;
+  so.q2_luminance_exponent = args.q2_a;
+  so.q2_solid_angle_exponent = args.q2_b;
+  so.q2_jitter = args.q2_jitter;
+  so.q2_nside = args.q2_nside;
+  auto sampler = make_sampler(*method, so);
+
+  ReadMapOptions ro;
+  if (!args.layout.empty()) {
+    ro.layout = layout_from_string(args.layout);
+    if (!ro.layout) throw InputError(fmt::format("--layout: unknown layout '{}'", args.layout));
+  }
+  AccuracyOptions ao;
+  ao.shadowed = false;  // the slow part of the reference; `eval sampling` charts it
+
+  std::string text;
+  nlohmann::json frames = nlohmann::json::array();
+  Progress progress("sample", files.size(), out.progress && sequence);
+  EnvMap last_map;
+  LightList last;
+  for (size_t f = 0; f < files.size(); ++f) {
+    EnvMap map = read_envmap(files[f], ro);
+    auto t0 = std::chrono::steady_clock::now();
+    try {
+      sampler->prepare(map);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", files[f], e.what()));
+    }
+    const double prepare_s = seconds_since(t0);
+    const AccuracyReference reference = make_accuracy_reference(map, ao);
+    LightList list;
+    list.method = std::string(to_string(*method));
+    list.units = map.units;
+    list.frame = int64_t(f);
+    list.timestamp = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    nlohmann::json frame_report;
+    t0 = std::chrono::steady_clock::now();
+    if (automatic) {
+      AutoCountOptions aco;
+      aco.target_diffuse_error = args.target_error;
+      const AutoCountResult r = choose_light_count(*sampler, reference, aco);
+      list.lights = r.lights;
+      frame_report["auto"] = {{"target_error", args.target_error}, {"reached", r.reached},
+                              {"evaluations", r.evaluations}};
+      if (!r.reached)
+        say(out, "{}: the target diffuse error {:.3g} was not reached with {} lights (best {:.3g})\n", files[f],
+            args.target_error, r.count, r.diffuse_error);
+    } else {
+      list.lights = sampler->place(n);
+    }
+    const double place_s = seconds_since(t0);
+    const LightError err = light_error(reference, list.lights);
+    frame_report.update({{"file", files[f]},
+                         {"frame", list.frame},
+                         {"lights", list.lights.size()},
+                         {"prepare_seconds", prepare_s},
+                         {"place_seconds", place_s},
+                         {"diffuse_error", err.diffuse},
+                         {"glossy10_error", err.glossy.at(0)},
+                         {"glossy100_error", err.glossy.at(1)}});
+    frames.push_back(frame_report);
+    if (!out.json && !sequence)
+      say(out, "{}: {} {} lights in {:.3f} ms (+{:.3f} ms preparing); diffuse error {:.2f} %, glossy {:.2f} % (s=10), {:.2f} % (s=100)\n",
+          files[f], list.lights.size(), list.method, place_s * 1e3, prepare_s * 1e3, 100 * err.diffuse,
+          100 * err.glossy[0], 100 * err.glossy[1]);
+    if (format == ExportFormat::Csv && f > 0) {
+      std::string body = export_lights(list, format);
+      text += body.substr(body.find('\n') + 1);  // one header for the whole sequence
+    } else {
+      text += export_lights(list, format);
+    }
+    progress.advance();
+    last = std::move(list);
+    if (f + 1 == files.size()) last_map = std::move(map);
+  }
+  progress.finish();
+  write_file_atomically(args.output, text);
+  if (!args.overlay.empty()) write_overlay_png(args.overlay, last_map, last.lights);
+  if (sequence && !out.json) say(out, "{} frames -> {}\n", files.size(), args.output);
+  nlohmann::json report = {{"method", args.method}, {"output", args.output}, {"format", std::string(to_string(format))}};
+  if (sequence)
+    report["frames"] = frames;
+  else
+    report.update(frames[0]);
+  emit_json(out, report);
+  return 0;
+}
+
+}  // namespace lp::cli

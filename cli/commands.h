@@ -1,0 +1,77 @@
+// The subcommands of `lightprobe`, one function each over plain argument structs.
+// Only main.cpp knows CLI11 (slow to compile); handlers turn arguments into options,
+// validate, load, make one library call, write, report.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lp::cli {
+
+// Where reports go: with --json one JSON object on stdout; human text on stdout
+// otherwise (stderr when --json).
+struct Output {
+  bool json = false;
+  bool progress = true;  // progress bars (shown only on a terminal anyway)
+};
+
+struct InfoArgs {
+  std::vector<std::string> files;
+  std::string layout;  // override
+};
+int run_info(const InfoArgs& args, const Output& out);
+
+struct ConvertArgs {
+  std::string input, output;
+  std::string layout;    // target layout
+  std::string size;      // WxH
+  int nside = 0;
+  std::string in_layout; // override of the input's layout
+  std::string rotation;  // "yaw,pitch,roll" degrees or 9 numbers
+  bool half = false;     // EXR half floats
+};
+int run_convert(const ConvertArgs& args, const Output& out);
+
+struct SynthSceneArgs {
+  std::string output;
+  std::string layout = "latlong";
+  std::string size;                 // default 1024x512 (latlong), 360x90 (hemisphere)
+  int nside = 0;
+  double sun_scale = 1.0;
+  bool no_sun = false;
+};
+int run_synth_scene(const SynthSceneArgs& args, const Output& out);
+
+struct SampleArgs {
+  std::vector<std::string> inputs;  // one map, several maps (a sequence) or a directory
+  std::string method = "pharr";
+  std::string n = "256";            // a count or "auto"
+  double target_error = 0.01;
+  std::string format;               // json|ndjson|pbrt|mitsuba|gltf|csv (default from -o)
+  std::string output;
+  std::string overlay;              // PNG of the lights on the map
+  std::string layout;               // input layout override
+  bool upper_only = false;
+  bool lloyd = false;
+  double q2_a = 1.0, q2_b = 0.25;
+  bool q2_jitter = false;
+  int q2_nside = 0;
+};
+int run_sample(const SampleArgs& args, const Output& out);
+
+struct EvalSamplingArgs {
+  std::vector<std::string> maps;    // "scene" renders the procedural scene
+  std::string methods = "all";
+  std::string counts = "16,32,64,128,256,512,1024,2048,4096";
+  std::string output_dir;
+  int repeats = 0;                  // 0: adaptive (at least 5, ~0.2 s per point)
+  bool no_shadowed = false;
+};
+int run_eval_sampling(const EvalSamplingArgs& args, const Output& out);
+
+// Shared parsing helpers; throw lp::InputError naming the option.
+void parse_size(const std::string& text, const char* option, int* width, int* height);
+std::vector<int> parse_int_list(const std::string& text, const char* option);
+
+}  // namespace lp::cli

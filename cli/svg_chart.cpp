@@ -1,0 +1,121 @@
+#include "cli/svg_chart.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace lp::cli {
+
+namespace {
+
+constexpr const char* kColours[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2"};
+constexpr int kPanelW = 460, kPanelH = 320, kLeft = 70, kRight = 20, kTop = 36, kBottom = 50;
+
+std::string escape(const std::string& s) {
+  std::string r;
+  for (char c : s) {
+    if (c == '<') r += "&lt;";
+    else if (c == '>') r += "&gt;";
+    else if (c == '&') r += "&amp;";
+    else r += c;
+  }
+  return r;
+}
+
+// Decade range covering [lo, hi] on a log axis.
+void decades(double lo, double hi, double* a, double* b) {
+  *a = std::floor(std::log10(lo));
+  *b = std::ceil(std::log10(hi));
+  if (*b <= *a) *b = *a + 1;
+}
+
+std::string tick_label(double e) {
+  const double v = std::pow(10.0, e);
+  if (e >= 0 && e < 4) return fmt::format("{:g}", v);
+  if (e < 0 && e > -4) return fmt::format("{:g}", v);
+  return fmt::format("1e{:g}", e);
+}
+
+}  // namespace
+
+std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& panels, int columns) {
+  columns = std::max(1, std::min(columns, int(panels.size())));
+  const int rows = int((panels.size() + size_t(columns) - 1) / size_t(columns));
+  const int width = columns * kPanelW, height = 40 + rows * kPanelH + 30;
+  std::map<std::string, const char*> colour;
+  for (const auto& p : panels)
+    for (const auto& s : p.series)
+      if (!colour.count(s.name)) colour[s.name] = kColours[colour.size() % std::size(kColours)];
+
+  std::string svg = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" "
+      "font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+      "<text x=\"{}\" y=\"24\" text-anchor=\"middle\" font-size=\"16\">{}</text>\n",
+      width, height, width / 2, escape(title));
+  for (size_t pi = 0; pi < panels.size(); ++pi) {
+    const ChartPanel& p = panels[pi];
+    const int ox = int(pi % size_t(columns)) * kPanelW, oy = 40 + int(pi / size_t(columns)) * kPanelH;
+    double xlo = INFINITY, xhi = 0, ylo = INFINITY, yhi = 0;
+    for (const auto& s : p.series)
+      for (size_t i = 0; i < s.x.size(); ++i)
+        if (s.x[i] > 0 && s.y[i] > 0) {
+          xlo = std::min(xlo, s.x[i]), xhi = std::max(xhi, s.x[i]);
+          ylo = std::min(ylo, s.y[i]), yhi = std::max(yhi, s.y[i]);
+        }
+    if (!(xhi > 0)) continue;
+    double xa, xb, ya, yb;
+    decades(xlo, xhi, &xa, &xb);
+    decades(ylo, yhi, &ya, &yb);
+    const double pw = kPanelW - kLeft - kRight, ph = kPanelH - kTop - kBottom;
+    auto X = [&](double v) { return ox + kLeft + (std::log10(v) - xa) / (xb - xa) * pw; };
+    auto Y = [&](double v) { return oy + kTop + (yb - std::log10(v)) / (yb - ya) * ph; };
+    svg += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"13\">{}</text>\n",
+                       ox + kLeft + pw / 2, oy + kTop - 10, escape(p.title));
+    svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#333\"/>\n",
+                       ox + kLeft, oy + kTop, pw, ph);
+    for (double e = xa; e <= xb + 1e-9; e += 1) {
+      const double x = X(std::pow(10.0, e));
+      svg += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1}\" x2=\"{0:.1f}\" y2=\"{2}\" stroke=\"#ddd\"/>"
+                         "<text x=\"{0:.1f}\" y=\"{3}\" text-anchor=\"middle\">{4}</text>\n",
+                         x, oy + kTop, oy + kTop + ph, oy + kTop + ph + 16, tick_label(e));
+    }
+    for (double e = ya; e <= yb + 1e-9; e += 1) {
+      const double y = Y(std::pow(10.0, e));
+      svg += fmt::format("<line x1=\"{0}\" y1=\"{1:.1f}\" x2=\"{2}\" y2=\"{1:.1f}\" stroke=\"#ddd\"/>"
+                         "<text x=\"{3}\" y=\"{4:.1f}\" text-anchor=\"end\">{5}</text>\n",
+                         ox + kLeft, y, ox + kLeft + pw, ox + kLeft - 6, y + 4, tick_label(e));
+    }
+    svg += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", ox + kLeft + pw / 2,
+                       oy + kTop + ph + 36, escape(p.x_label));
+    svg += fmt::format("<text transform=\"translate({},{}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
+                       ox + 18, oy + kTop + ph / 2, escape(p.y_label));
+    int legend = 0;
+    for (const auto& s : p.series) {
+      std::string pts;
+      for (size_t i = 0; i < s.x.size(); ++i)
+        if (s.x[i] > 0 && s.y[i] > 0) pts += fmt::format("{:.1f},{:.1f} ", X(s.x[i]), Y(s.y[i]));
+      if (pts.empty()) continue;
+      const char* c = colour[s.name];
+      svg += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.8\"/>\n", pts, c);
+      for (size_t i = 0; i < s.x.size(); ++i) {
+        if (!(s.x[i] > 0 && s.y[i] > 0)) continue;
+        svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.8\" fill=\"{}\"/>", X(s.x[i]), Y(s.y[i]), c);
+        if (i < s.labels.size() && (i == 0 || i + 1 == s.x.size()))
+          svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"9\" fill=\"{}\">{}</text>", X(s.x[i]) + 4,
+                             Y(s.y[i]) - 4, c, escape(s.labels[i]));
+      }
+      svg += "\n";
+      svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{}\"/>"
+                         "<text x=\"{}\" y=\"{}\">{}</text>\n",
+                         ox + kLeft + pw - 100, oy + kTop + 8 + 16 * legend, c, ox + kLeft + pw - 85,
+                         oy + kTop + 17 + 16 * legend, escape(s.name));
+      ++legend;
+    }
+  }
+  svg += "</svg>\n";
+  return svg;
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages lightprobe builds with, only those missing.
+# Run as root (or with sudo available). Package notes: ../shared/DEPENDENCIES.md.
+set -euo pipefail
+
+packages=(
+  cmake ninja-build pkg-config g++ ccache
+  libopencv-dev libopenexr-dev libimath-dev
+  libcli11-dev nlohmann-json3-dev libfmt-dev libtbb-dev libeigen3-dev
+  libchealpix-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}" >&2
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -15,10 +15,10 @@ namespace lp {
 
 struct SceneOptions {
   // Sun: direction, angular radius (deg) and radiance; the default radiance makes the sun
-  // carry ~ 60 % of the map's power from 2.5e-5 of its solid angle.
+  // carry ~ 60 % of the map's luminance power (60.2 %) from 5.5e-6 of the sphere.
   Vec3 sun_direction = direction_from_angles(50.0 * M_PI / 180.0, 30.0 * M_PI / 180.0);
   double sun_radius_deg = 0.27;
-  std::array<double, 3> sun_rgb{40000.0, 36000.0, 30000.0};
+  std::array<double, 3> sun_rgb{200000.0, 180000.0, 150000.0};
   double sky_scale = 1.0;          // multiplies sky, ground and area lights
   bool area_lights = true;
   int samples_per_edge = 4;        // supersampling of the smooth part per pixel edge

@@ -1,0 +1,217 @@
+// The `lightprobe` command as a user and a script see it: exit codes, one-line errors
+// naming the file, --json reports, nothing half-written, every real map readable.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Run {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+fs::path scratch() {
+  static const fs::path dir = [] {
+    fs::path d = fs::path(::testing::TempDir()) / ("lightprobe_cli_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+Run lightprobe(const std::string& args) {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
+  const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  Run r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+std::string shared(const std::string& rel) { return std::string(LIGHTPROBE_SHARED_DATA) + "/" + rel; }
+
+int line_count(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+// A bad input: exit 2, exactly one line on stderr, naming `needle` (the file or option).
+void expect_one_line_error(const Run& r, const std::string& needle) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+}
+
+}  // namespace
+
+TEST(Cli, VersionAndHelpSucceed) {
+  Run v = lightprobe("--version");
+  EXPECT_EQ(v.code, 0);
+  EXPECT_NE(v.out.find("lightprobe 0."), std::string::npos) << v.out;
+  for (const char* sub : {"--help", "info --help", "convert --help", "sample --help", "eval sampling --help",
+                          "synth scene --help"}) {
+    Run h = lightprobe(sub);
+    EXPECT_EQ(h.code, 0) << sub;
+    EXPECT_NE(h.out.find("Usage"), std::string::npos) << sub;
+  }
+}
+
+TEST(Cli, UnknownSubcommandAndMissingArgumentsExitTwo) {
+  EXPECT_EQ(lightprobe("frobnicate").code, 2);
+  EXPECT_EQ(lightprobe("info").code, 2);
+  EXPECT_EQ(lightprobe("sample x.exr").code, 2);  // -o missing
+}
+
+TEST(Cli, InfoReadsEveryRealMapAndReportsJson) {
+  const std::vector<std::string> maps = {
+      "probes-blender-studiolights/city.exr",      "probes-blender-studiolights/courtyard.exr",
+      "probes-blender-studiolights/forest.exr",    "probes-blender-studiolights/interior.exr",
+      "probes-blender-studiolights/night.exr",     "probes-blender-studiolights/studio.exr",
+      "probes-blender-studiolights/sunrise.exr",   "probes-blender-studiolights/sunset.exr",
+      "probes-probulator-latlong256/ennis.hdr",    "probes-probulator-latlong256/grace.hdr",
+      "probes-probulator-latlong256/pisa.hdr",     "probes-probulator-latlong256/uffizi.hdr",
+      "probes-probulator-latlong256/wells.hdr",    "probes-threejs-spot-and-cube/spot1Lux.hdr",
+      "probes-threejs-spot-and-cube/pisa_cube/px.hdr", "hdr-memorial-debevec/reference/memorial_radiance_hdrshop.hdr"};
+  for (const auto& m : maps) {
+    Run r = lightprobe("info --json " + shared(m));
+    ASSERT_EQ(r.code, 0) << m << ": " << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_GT(j["power_luminance"].get<double>(), 0) << m;
+    EXPECT_GT(j["luminance"]["max"].get<double>(), 0) << m;
+  }
+  // spot1Lux: one lit pixel whose L dw sums to 0.959 (PROVENANCE.md), at u=(597.5)/1024, v=(213.5)/512.
+  Run r = lightprobe("info --json " + shared("probes-threejs-spot-and-cube/spot1Lux.hdr"));
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["layout"], "latlong");
+  EXPECT_NEAR(j["power_rgb"][0].get<double>(), 0.959, 0.002);
+  const double phi = 2 * M_PI * 597.5 / 1024, theta = M_PI * 213.5 / 512;
+  EXPECT_NEAR(j["brightest_direction"][0].get<double>(), std::sin(theta) * std::cos(phi), 1e-6);
+  EXPECT_NEAR(j["brightest_direction"][2].get<double>(), std::cos(theta), 1e-6);
+}
+
+TEST(Cli, ConvertWorksOnEveryRealLatlongMapAndKeepsPower) {
+  for (const std::string m : {"probes-blender-studiolights/sunrise.exr", "probes-probulator-latlong256/grace.hdr",
+                              "probes-threejs-spot-and-cube/spot1Lux.hdr"}) {
+    for (const std::string target : {"--layout healpix --nside 64", "--layout hemisphere --size 360x90",
+                                     "--layout latlong --size 256x128"}) {
+      const fs::path out = scratch() / "converted.exr";
+      Run r = lightprobe("convert --json " + shared(m) + " " + out.string() + " " + target);
+      ASSERT_EQ(r.code, 0) << m << " " << target << ": " << r.err;
+      const auto j = nlohmann::json::parse(r.out);
+      if (target.find("hemisphere") == std::string::npos)  // the hemisphere keeps only the upper half
+        EXPECT_NEAR(j["power_out"].get<double>() / j["power_in"].get<double>(), 1.0, 1e-4) << m << " " << target;
+      Run info = lightprobe("info --json " + out.string());
+      ASSERT_EQ(info.code, 0) << info.err;
+      EXPECT_NEAR(nlohmann::json::parse(info.out)["power_luminance"].get<double>(), j["power_out"].get<double>(),
+                  1e-5 * j["power_out"].get<double>());
+    }
+  }
+}
+
+TEST(Cli, BadInputsGetOneLineNamingTheFileAndExitTwo) {
+  const fs::path dir = scratch();
+  // Missing file.
+  expect_one_line_error(lightprobe("info " + (dir / "nope.exr").string()), "nope.exr");
+  // Corrupt file (see hdr-memorial-debevec/PROVENANCE.md).
+  expect_one_line_error(lightprobe("info " + shared("hdr-memorial-debevec/reference/memorial_CORRUPT_from_SSARCandy.hdr")),
+                        "memorial_CORRUPT_from_SSARCandy.hdr");
+  // Truncated file.
+  {
+    const std::string bytes = slurp(shared("probes-probulator-latlong256/grace.hdr"));
+    std::ofstream(dir / "truncated.hdr", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    expect_one_line_error(lightprobe("info " + (dir / "truncated.hdr").string()), "truncated.hdr");
+  }
+  // Not an image at all, and an unknown extension.
+  std::ofstream(dir / "text.exr") << "hello\n";
+  expect_one_line_error(lightprobe("info " + (dir / "text.exr").string()), "text.exr");
+  std::ofstream(dir / "map.xyz") << "hello\n";
+  expect_one_line_error(lightprobe("info " + (dir / "map.xyz").string()), "map.xyz");
+  // NaN pixels in a PFM.
+  {
+    std::ofstream f(dir / "nan.pfm", std::ios::binary);
+    f << "PF\n4 2\n-1.0\n";
+    for (int i = 0; i < 24; ++i) {
+      const float v = i == 7 ? std::nanf("") : 1.0f;
+      f.write(reinterpret_cast<const char*>(&v), 4);
+    }
+  }
+  expect_one_line_error(lightprobe("info " + (dir / "nan.pfm").string()), "nan.pfm");
+  // Wrong dimensions for a declared layout.
+  expect_one_line_error(lightprobe("info --layout latlong " + shared("probes-threejs-spot-and-cube/pisa_cube/px.hdr")),
+                        "px.hdr");
+  // Unknown layout.
+  expect_one_line_error(lightprobe("convert " + shared("probes-probulator-latlong256/grace.hdr") + " " +
+                                   (dir / "x.exr").string() + " --layout cubist"),
+                        "cubist");
+  // Unwritable output: error, and nothing left behind.
+  const fs::path unwritable = dir / "no_such_dir" / "out.exr";
+  expect_one_line_error(lightprobe("convert " + shared("probes-probulator-latlong256/grace.hdr") + " " + unwritable.string() +
+                                   " --layout healpix --nside 16"),
+                        "out.exr");
+  EXPECT_FALSE(fs::exists(unwritable));
+  // Sampling bad input: n <= 0, an all-black map.
+  expect_one_line_error(lightprobe("sample " + shared("probes-probulator-latlong256/grace.hdr") + " --n 0 -o " +
+                                   (dir / "l.json").string()),
+                        "--n");
+  {
+    std::ofstream f(dir / "black.pfm", std::ios::binary);
+    f << "PF\n8 4\n-1.0\n";
+    const float z = 0;
+    for (int i = 0; i < 96; ++i) f.write(reinterpret_cast<const char*>(&z), 4);
+  }
+  expect_one_line_error(lightprobe("sample " + (dir / "black.pfm").string() + " --n 16 -o " + (dir / "l.json").string()),
+                        "black.pfm");
+  EXPECT_FALSE(fs::exists(dir / "l.json"));
+}
+
+TEST(Cli, SampleWritesALightListThatPreservesPower) {
+  const fs::path out = scratch() / "lights.json";
+  const fs::path png = scratch() / "lights.png";
+  Run r = lightprobe("sample --json " + shared("probes-probulator-latlong256/grace.hdr") + " --method pharr --n 64 -o " +
+                     out.string() + " --overlay " + png.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["lights"].get<int>(), 64);
+  EXPECT_LT(report["diffuse_error"].get<double>(), 0.1);
+  const auto list = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(list["format"], "lightprobe.lights/1");
+  EXPECT_EQ(list["frame_convention"], "z-up");
+  EXPECT_EQ(list["lights"].size(), 64u);
+  Run info = lightprobe("info --json " + shared("probes-probulator-latlong256/grace.hdr"));
+  const auto map = nlohmann::json::parse(info.out);
+  double sum = 0;
+  for (const auto& l : list["lights"]) sum += l["rgb"][1].get<double>();
+  EXPECT_NEAR(sum, map["power_rgb"][1].get<double>(), 1e-5 * sum);
+  EXPECT_GT(fs::file_size(png), 1000u);
+}
+
+TEST(Cli, SynthSceneWritesAMapWhoseSunCarriesMostOfThePower) {
+  const fs::path out = scratch() / "scene.exr";
+  Run r = lightprobe("synth scene --json -o " + out.string() + " --size 512x256");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["sun_power_luminance"].get<double>() / j["power_luminance"].get<double>(), 0.4);
+  Run info = lightprobe("info --json " + out.string());
+  EXPECT_NEAR(nlohmann::json::parse(info.out)["power_luminance"].get<double>(), j["power_luminance"].get<double>(),
+              1e-5 * j["power_luminance"].get<double>());
+}

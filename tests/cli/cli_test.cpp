@@ -11,6 +11,11 @@
 #include <string>
 #include <vector>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+
 namespace fs = std::filesystem;
 
 namespace {

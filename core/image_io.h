@@ -5,9 +5,21 @@
 // Map formats, chosen by file extension:
 //   .exr  OpenEXR, float or half RGB(A); attributes "lightprobe.layout",
 //         "lightprobe.units" and "lightprobe.nside" carry the metadata.
+//         Reads R,G,B or Y (grey, or Y/RY/BY luminance-chroma) channels of any pixel type.
+//         The validity mask is channel "A" (1 valid, 0 invalid): written only when the
+//         map's mask is non-empty, read as the mask only when the file also carries
+//         "lightprobe.layout" (a foreign RGBA file's alpha is coverage, not a mask).
+//         Lossy codecs (DWAA/DWAB/B44) ring: their negative values are clamped to 0 on
+//         read. Writing half refuses values above 65504 rather than turning them to Inf.
 //   .hdr  Radiance RGBE, reads flat and run-length (new and old) scanlines; writes RLE.
-//         Metadata as header lines "LIGHTPROBE_LAYOUT=..." / "LIGHTPROBE_UNITS=...".
-//   .pfm  Portable float map (colour "PF" and grey "Pf", either byte order).
+//         Metadata as header lines "LIGHTPROBE_LAYOUT=..." / "LIGHTPROBE_UNITS=..." /
+//         "LIGHTPROBE_NSIDE=...". Pixels decode as m 2^(e-136) (as OpenCV, stb_image),
+//         divided by the product of EXPOSURE (and COLORCORR) lines. Only the "-Y H +X W"
+//         orientation and FORMAT=32-bit_rle_rgbe are read; XYZE is refused.
+//   .pfm  Portable float map (colour "PF" and grey "Pf", either byte order; the scale's
+//         magnitude is ignored, as most readers do). PFM carries no metadata: the layout
+//         is inferred from the size on read and the units read back as relative.
+// .hdr and .pfm cannot hold a mask: writing a map with invalid pixels to them throws.
 // A healpix map is stored as an image nside wide and 12 nside tall: face f occupies rows
 // [f nside, (f+1) nside), and the pixel at (column ix, row iy) of a face is NESTED index
 // f nside^2 + interleave(ix, iy) (ix on the even bits).

@@ -1,0 +1,892 @@
+#include "core/image_io.h"
+
+#include <ImfChannelList.h>
+#include <ImfCompression.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfIntAttribute.h>
+#include <ImfOutputFile.h>
+#include <ImfRgbaFile.h>
+#include <ImfStdIO.h>
+#include <ImfStringAttribute.h>
+#include <ImfVersion.h>
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <Iex.h>
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace lp {
+
+namespace {
+
+// Largest image any reader accepts (pixels): guards against absurd sizes in damaged headers.
+constexpr size_t kMaxPixels = size_t(1) << 28;
+
+[[noreturn]] void fail(const std::string& path, const std::string& problem) {
+  throw InputError(path + ": " + problem);
+}
+
+// Keeps a foreign message to one printable line.
+std::string one_line(std::string_view text, size_t max_len = 200) {
+  std::string out;
+  for (char c : text) {
+    if (out.size() >= max_len) {
+      out += "...";
+      break;
+    }
+    const unsigned char u = static_cast<unsigned char>(c);
+    out += (u < 0x20 || u == 0x7f) ? ' ' : c;
+  }
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  return out;
+}
+
+std::string lower_extension(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
+  std::string ext = path.substr(dot);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
+std::string read_whole_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, fmt::format("cannot open: {}", std::strerror(errno ? errno : ENOENT)));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) fail(path, "cannot read: I/O error");
+  return std::move(ss).str();
+}
+
+bool is_power_of_two(int n) { return n > 0 && (n & (n - 1)) == 0; }
+
+// ---------------------------------------------------------------------------------------
+// A decoded file before layout handling: top-to-bottom rows, 3 floats per pixel.
+struct RawImage {
+  int width = 0, height = 0;
+  std::vector<float> rgb;
+  std::vector<uint8_t> valid;         // empty: no mask in the file
+  std::optional<std::string> layout;  // as recorded in the file
+  std::optional<std::string> units;
+  std::optional<int> nside;
+  std::string layout_key = "layout";  // how the file names the field, for messages
+};
+
+void check_size(const std::string& path, long long w, long long h) {
+  if (w <= 0 || h <= 0) fail(path, fmt::format("bad image size {}x{}", w, h));
+  if (size_t(w) * size_t(h) > kMaxPixels) fail(path, fmt::format("image too large ({}x{})", w, h));
+}
+
+Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMapOptions& options) {
+  const int w = raw.width, h = raw.height;
+  Layout layout;
+  if (options.layout) {
+    layout = *options.layout;
+  } else if (raw.layout) {
+    const auto parsed = layout_from_string(*raw.layout);
+    if (!parsed)
+      fail(path, fmt::format("unknown {} '{}' (expected latlong, hemisphere or healpix)", raw.layout_key,
+                             one_line(*raw.layout, 40)));
+    layout = *parsed;
+  } else if (w == 2 * h) {
+    layout = Layout::LatLong;
+  } else if (h == 12 * w && is_power_of_two(w)) {
+    layout = Layout::Healpix;
+  } else {
+    layout = Layout::Hemisphere;
+  }
+  switch (layout) {
+    case Layout::LatLong:
+      if (w != 2 * h) fail(path, fmt::format("layout latlong needs width = 2 x height, but the image is {}x{}", w, h));
+      break;
+    case Layout::Healpix:
+      if (h != 12 * w || !is_power_of_two(w) || w > 8192)
+        fail(path, fmt::format("layout healpix needs an image nside wide and 12 nside tall (nside a power of two), "
+                               "but the image is {}x{}",
+                               w, h));
+      if (raw.nside && *raw.nside != w)
+        fail(path, fmt::format("healpix nside {} recorded in the file does not match the {}x{} image", *raw.nside, w, h));
+      break;
+    case Layout::Hemisphere: break;
+  }
+  return layout;
+}
+
+EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions& options) {
+  const Layout layout = resolve_layout(path, raw, options);
+  EnvMap map;
+  map.layout = layout;
+  if (raw.units) {
+    const auto units = units_from_string(*raw.units);
+    if (!units) fail(path, fmt::format("unknown units '{}' (expected relative or radiance)", one_line(*raw.units, 40)));
+    map.units = *units;
+  }
+  if (layout == Layout::Healpix) {
+    const int nside = raw.width;
+    map.nside = nside;
+    map.width = 12 * nside * nside;
+    map.height = 1;
+    map.rgb.resize(raw.rgb.size());
+    if (!raw.valid.empty()) map.valid.resize(raw.valid.size());
+    for (int row = 0; row < raw.height; ++row) {
+      for (int col = 0; col < raw.width; ++col) {
+        const size_t src = size_t(row) * size_t(raw.width) + size_t(col);
+        const size_t dst = healpix_nested_index(nside, row / nside, col, row % nside);
+        std::copy_n(&raw.rgb[3 * src], 3, &map.rgb[3 * dst]);
+        if (!raw.valid.empty()) map.valid[dst] = raw.valid[src];
+      }
+    }
+  } else {
+    map.width = raw.width;
+    map.height = raw.height;
+    map.rgb = std::move(raw.rgb);
+    map.valid = std::move(raw.valid);
+  }
+  if (options.reject_bad_pixels) {
+    const std::string bad = find_bad_pixel(map, path);
+    if (!bad.empty()) throw InputError(bad);
+  }
+  return map;
+}
+
+// The map as a file image: top-to-bottom rows (healpix: nside wide, 12 nside tall).
+struct FileImage {
+  int width = 0, height = 0;
+  std::vector<float> rgb;
+  std::vector<uint8_t> valid;
+};
+
+FileImage to_file_image(const EnvMap& map) {
+  if (map.rgb.size() != 3 * map.pixel_count() || (!map.valid.empty() && map.valid.size() != map.pixel_count()))
+    throw std::invalid_argument("write_envmap: map buffers do not match its size");
+  FileImage img;
+  if (map.layout == Layout::Healpix) {
+    const int nside = map.nside;
+    if (!is_power_of_two(nside) || size_t(map.width) != 12 * size_t(nside) * size_t(nside) || map.height != 1)
+      throw std::invalid_argument("write_envmap: healpix map with inconsistent nside");
+    img.width = nside;
+    img.height = 12 * nside;
+    img.rgb.resize(map.rgb.size());
+    if (!map.valid.empty()) img.valid.resize(map.valid.size());
+    for (size_t n = 0; n < map.pixel_count(); ++n) {
+      int face, ix, iy;
+      healpix_face_xy(nside, n, &face, &ix, &iy);
+      const size_t dst = (size_t(face) * nside + iy) * size_t(nside) + ix;
+      std::copy_n(&map.rgb[3 * n], 3, &img.rgb[3 * dst]);
+      if (!map.valid.empty()) img.valid[dst] = map.valid[n];
+    }
+  } else {
+    img.width = map.width;
+    img.height = map.height;
+    img.rgb = map.rgb;
+    img.valid = map.valid;
+  }
+  return img;
+}
+
+bool has_invalid_pixels(const EnvMap& map) {
+  return std::any_of(map.valid.begin(), map.valid.end(), [](uint8_t v) { return v == 0; });
+}
+
+// ---------------------------------------------------------------------------------------
+// OpenEXR
+
+// Reads from a byte buffer, so that a short file is an exception, never a crash.
+class MemoryIStream : public Imf::IStream {
+ public:
+  MemoryIStream(const std::string& bytes, const std::string& name) : Imf::IStream(name.c_str()), bytes_(bytes) {}
+  bool read(char c[], int n) override {
+    if (n < 0 || pos_ + uint64_t(n) > bytes_.size()) throw Iex::InputExc("unexpected end of file");
+    std::memcpy(c, bytes_.data() + pos_, size_t(n));
+    pos_ += uint64_t(n);
+    return pos_ < bytes_.size();
+  }
+  uint64_t tellg() override { return pos_; }
+  void seekg(uint64_t pos) override { pos_ = pos; }
+
+ private:
+  const std::string& bytes_;
+  uint64_t pos_ = 0;
+};
+
+RawImage read_exr(const std::string& path) {
+  const std::string bytes = read_whole_file(path);
+  if (bytes.size() < 4 || !Imf::isImfMagic(bytes.data())) fail(path, "not an OpenEXR file (bad magic number)");
+  MemoryIStream stream(bytes, path);
+  Imf::InputFile file(stream);
+  const Imf::Header& header = file.header();
+  const Imath::Box2i dw = header.dataWindow();
+  RawImage raw;
+  const long long w = (long long)dw.max.x - dw.min.x + 1, h = (long long)dw.max.y - dw.min.y + 1;
+  check_size(path, w, h);
+  raw.width = int(w);
+  raw.height = int(h);
+  raw.layout_key = "lightprobe.layout";
+  if (auto* a = header.findTypedAttribute<Imf::StringAttribute>("lightprobe.layout")) raw.layout = a->value();
+  if (auto* a = header.findTypedAttribute<Imf::StringAttribute>("lightprobe.units")) raw.units = a->value();
+  if (auto* a = header.findTypedAttribute<Imf::IntAttribute>("lightprobe.nside")) raw.nside = a->value();
+
+  const Imf::ChannelList& channels = header.channels();
+  auto has = [&](const char* name) { return channels.findChannel(name) != nullptr; };
+  for (const char* name : {"R", "G", "B", "A", "Y"}) {
+    const Imf::Channel* c = channels.findChannel(name);
+    if (c && (c->xSampling != 1 || c->ySampling != 1)) fail(path, fmt::format("channel {} is subsampled", name));
+  }
+  const bool rgb = has("R") && has("G") && has("B");
+  const bool luma = has("Y");
+  if (!rgb && !luma) {
+    std::string names;
+    for (auto it = channels.begin(); it != channels.end(); ++it) names += (names.empty() ? "" : ", ") + std::string(it.name());
+    fail(path, fmt::format("no R, G, B or Y channels (channels: {})", one_line(names.empty() ? "none" : names, 80)));
+  }
+  if (!file.isComplete()) fail(path, "truncated file (pixel data incomplete)");
+
+  const size_t n = size_t(w) * size_t(h);
+  raw.rgb.assign(3 * n, 0.0f);
+  const bool want_mask = raw.layout.has_value() && has("A");
+  std::vector<float> alpha(want_mask ? n : 0, 1.0f);
+  std::vector<float> y;
+  if (!rgb && (has("RY") || has("BY"))) {
+    // Luminance/chroma file: let the RGBA interface convert it.
+    MemoryIStream stream2(bytes, path);
+    Imf::RgbaInputFile rgba(stream2);
+    std::vector<Imf::Rgba> px(n);
+    rgba.setFrameBuffer(px.data() - dw.min.x - size_t(dw.min.y) * size_t(w), 1, size_t(w));
+    rgba.readPixels(dw.min.y, dw.max.y);
+    for (size_t i = 0; i < n; ++i) {
+      raw.rgb[3 * i] = px[i].r;
+      raw.rgb[3 * i + 1] = px[i].g;
+      raw.rgb[3 * i + 2] = px[i].b;
+      if (want_mask) alpha[i] = px[i].a;
+    }
+  } else {
+    Imf::FrameBuffer fb;
+    const size_t xs = 3 * sizeof(float), ys = xs * size_t(w);
+    if (rgb) {
+      fb.insert("R", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[0], dw, xs, ys));
+      fb.insert("G", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[1], dw, xs, ys));
+      fb.insert("B", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[2], dw, xs, ys));
+    } else {
+      y.assign(n, 0.0f);
+      fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, y.data(), dw, sizeof(float), sizeof(float) * size_t(w)));
+    }
+    if (want_mask)
+      fb.insert("A", Imf::Slice::Make(Imf::FLOAT, alpha.data(), dw, sizeof(float), sizeof(float) * size_t(w)));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    for (size_t i = 0; i < y.size(); ++i) raw.rgb[3 * i] = raw.rgb[3 * i + 1] = raw.rgb[3 * i + 2] = y[i];
+  }
+  // Lossy codecs ring around bright spots: tiny negative values that are not radiance.
+  const Imf::Compression comp = header.compression();
+  if (comp == Imf::DWAA_COMPRESSION || comp == Imf::DWAB_COMPRESSION || comp == Imf::B44_COMPRESSION ||
+      comp == Imf::B44A_COMPRESSION) {
+    for (float& v : raw.rgb)
+      if (v < 0.0f) v = 0.0f;
+  }
+  if (want_mask) {
+    raw.valid.resize(n);
+    for (size_t i = 0; i < n; ++i) raw.valid[i] = alpha[i] > 0.5f ? 1 : 0;
+  }
+  return raw;
+}
+
+std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMapOptions& options) {
+  const FileImage img = to_file_image(map);
+  const bool half = options.exr_pixel_type == ExrPixelType::Half;
+  if (half) {
+    constexpr float kHalfMax = 65504.0f;
+    for (size_t i = 0; i < img.rgb.size(); ++i) {
+      if (std::fabs(img.rgb[i]) > kHalfMax && std::isfinite(img.rgb[i])) {
+        const size_t p = i / 3;
+        fail(path, fmt::format("cannot write as half: value {} at image pixel ({}, {}) exceeds the half range "
+                               "(65504); write float",
+                               img.rgb[i], p % size_t(img.width), p / size_t(img.width)));
+      }
+    }
+  }
+  const Imf::PixelType type = half ? Imf::HALF : Imf::FLOAT;
+  Imf::Header header(img.width, img.height);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(type));
+  const bool mask = !img.valid.empty();
+  if (mask) header.channels().insert("A", Imf::Channel(type));
+  header.insert("lightprobe.layout", Imf::StringAttribute(std::string(to_string(map.layout))));
+  header.insert("lightprobe.units", Imf::StringAttribute(std::string(to_string(map.units))));
+  if (map.layout == Layout::Healpix) header.insert("lightprobe.nside", Imf::IntAttribute(map.nside));
+
+  std::vector<float> alpha;
+  Imf::FrameBuffer fb;
+  const size_t xs = 3 * sizeof(float), ys = xs * size_t(img.width);
+  float* base = const_cast<float*>(img.rgb.data());
+  fb.insert("R", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base + 0), xs, ys));
+  fb.insert("G", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base + 1), xs, ys));
+  fb.insert("B", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base + 2), xs, ys));
+  if (mask) {
+    alpha.resize(img.valid.size());
+    for (size_t i = 0; i < alpha.size(); ++i) alpha[i] = img.valid[i] ? 1.0f : 0.0f;
+    fb.insert("A", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(alpha.data()), sizeof(float),
+                              sizeof(float) * size_t(img.width)));
+  }
+  Imf::StdOSStream os;
+  {
+    Imf::OutputFile out(os, header);
+    out.setFrameBuffer(fb);
+    out.writePixels(img.height);
+  }
+  return os.str();
+}
+
+// ---------------------------------------------------------------------------------------
+// Radiance RGBE
+
+std::string trim(std::string_view s) {
+  size_t a = 0, b = s.size();
+  while (a < b && std::isspace(static_cast<unsigned char>(s[a]))) ++a;
+  while (b > a && std::isspace(static_cast<unsigned char>(s[b - 1]))) --b;
+  return std::string(s.substr(a, b - a));
+}
+
+double parse_positive(const std::string& path, const std::string& what, const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str() || !std::isfinite(v) || v <= 0)
+    fail(path, fmt::format("bad {} value '{}'", what, one_line(text, 40)));
+  return v;
+}
+
+RawImage read_hdr(const std::string& path) {
+  const std::string bytes = read_whole_file(path);
+  size_t pos = 0;
+  constexpr size_t kMaxHeader = 1 << 16;
+  // Returns the next line without its '\n'; nullopt at end of file.
+  auto next_line = [&]() -> std::optional<std::string_view> {
+    if (pos >= bytes.size()) return std::nullopt;
+    const size_t nl = bytes.find('\n', pos);
+    if (nl == std::string::npos || nl - pos > kMaxHeader) return std::nullopt;
+    std::string_view line(bytes.data() + pos, nl - pos);
+    pos = nl + 1;
+    return line;
+  };
+  auto check_crlf = [&](std::string_view line) {
+    if (!line.empty() && line.back() == '\r')
+      fail(path, "header lines end in CR LF (the file went through a text-mode conversion and its pixel data is damaged)");
+  };
+
+  const auto magic = next_line();
+  if (!magic) fail(path, "not a Radiance HDR file (no header)");
+  const bool crlf = !magic->empty() && magic->back() == '\r';
+  if (*magic != "#?RADIANCE" && *magic != "#?RGBE")
+    fail(path, fmt::format("not a Radiance HDR file (first line is '{}', expected #?RADIANCE or #?RGBE{})",
+                           one_line(*magic, 60), crlf ? "; lines end in CR LF, as after a text-mode conversion" : ""));
+  check_crlf(*magic);
+
+  RawImage raw;
+  raw.layout_key = "LIGHTPROBE_LAYOUT";
+  double exposure = 1.0;
+  double colorcorr[3] = {1.0, 1.0, 1.0};
+  for (;;) {
+    const auto line = next_line();
+    if (!line || pos > kMaxHeader) fail(path, "truncated or damaged header (no blank line before the resolution line)");
+    check_crlf(*line);
+    if (line->empty()) break;
+    if ((*line)[0] == '#') continue;
+    const size_t eq = line->find('=');
+    if (eq == std::string_view::npos) continue;  // e.g. a command line recorded by a Radiance tool
+    const std::string key = trim(line->substr(0, eq));
+    const std::string value = trim(line->substr(eq + 1));
+    if (key == "FORMAT") {
+      if (value == "32-bit_rle_xyze")
+        fail(path, "XYZE pixels are not supported (convert to RGBE, e.g. with Radiance's ra_xyze -r)");
+      if (value != "32-bit_rle_rgbe")
+        fail(path, fmt::format("unsupported FORMAT '{}' (expected 32-bit_rle_rgbe)", one_line(value, 40)));
+    } else if (key == "EXPOSURE") {
+      exposure *= parse_positive(path, "EXPOSURE", value);
+    } else if (key == "COLORCORR") {
+      std::istringstream in(value);
+      double c[3];
+      if (!(in >> c[0] >> c[1] >> c[2]) || !(c[0] > 0 && c[1] > 0 && c[2] > 0))
+        fail(path, fmt::format("bad COLORCORR value '{}'", one_line(value, 40)));
+      for (int k = 0; k < 3; ++k) colorcorr[k] *= c[k];
+    } else if (key == "LIGHTPROBE_LAYOUT") {
+      raw.layout = value;
+    } else if (key == "LIGHTPROBE_UNITS") {
+      raw.units = value;
+    } else if (key == "LIGHTPROBE_NSIDE") {
+      char* end = nullptr;
+      const long v = std::strtol(value.c_str(), &end, 10);
+      if (end == value.c_str() || *end != '\0' || v <= 0 || v > 8192)
+        fail(path, fmt::format("bad LIGHTPROBE_NSIDE value '{}'", one_line(value, 40)));
+      raw.nside = int(v);
+    }
+  }
+
+  const auto res = next_line();
+  if (!res) fail(path, "truncated file (no resolution line)");
+  check_crlf(*res);
+  {
+    std::istringstream in{std::string(*res)};
+    std::string a, b, extra;
+    long long h = 0, w = 0;
+    const bool four = bool(in >> a >> h >> b >> w) && !(in >> extra);
+    if (!four) fail(path, fmt::format("bad resolution line '{}'", one_line(*res, 60)));
+    if (a != "-Y" || b != "+X") {
+      const bool radiance_orientation = (a.size() == 2 && b.size() == 2 && (a[0] == '+' || a[0] == '-') &&
+                                         (b[0] == '+' || b[0] == '-'));
+      if (radiance_orientation)
+        fail(path, fmt::format("unsupported orientation '{}' (only -Y H +X W, top to bottom and left to right)",
+                               one_line(*res, 60)));
+      fail(path, fmt::format("bad resolution line '{}'", one_line(*res, 60)));
+    }
+    check_size(path, w, h);
+    raw.width = int(w);
+    raw.height = int(h);
+  }
+
+  const int W = raw.width, H = raw.height;
+  const size_t end = bytes.size();
+  auto byte = [&](size_t i) { return static_cast<uint8_t>(bytes[i]); };
+  auto truncated = [&](int row) {
+    fail(path, fmt::format("truncated file (expected {} scanlines, read {})", H, row));
+  };
+  std::vector<uint8_t> line(4 * size_t(W));  // RGBE per pixel
+  raw.rgb.resize(3 * size_t(W) * size_t(H));
+  const double scale[3] = {1.0 / (exposure * colorcorr[0]), 1.0 / (exposure * colorcorr[1]),
+                           1.0 / (exposure * colorcorr[2])};
+  for (int row = 0; row < H; ++row) {
+    const bool new_rle = W >= 8 && W <= 0x7fff && pos + 4 <= end && byte(pos) == 2 && byte(pos + 1) == 2 &&
+                         (byte(pos + 2) & 0x80) == 0;
+    if (new_rle) {
+      const int len = (byte(pos + 2) << 8) | byte(pos + 3);
+      if (len != W) fail(path, fmt::format("corrupt scanline {} (length {}, expected {})", row, len, W));
+      pos += 4;
+      for (int c = 0; c < 4; ++c) {
+        int x = 0;
+        while (x < W) {
+          if (pos >= end) truncated(row);
+          int count = byte(pos++);
+          if (count > 128) {
+            count -= 128;
+            if (x + count > W) fail(path, fmt::format("corrupt run-length data in scanline {}", row));
+            if (pos >= end) truncated(row);
+            const uint8_t v = byte(pos++);
+            for (int k = 0; k < count; ++k) line[4 * size_t(x++) + c] = v;
+          } else {
+            if (count == 0 || x + count > W) fail(path, fmt::format("corrupt run-length data in scanline {}", row));
+            if (pos + size_t(count) > end) truncated(row);
+            for (int k = 0; k < count; ++k) line[4 * size_t(x++) + c] = byte(pos++);
+          }
+        }
+      }
+    } else {
+      // Flat pixels, possibly with old-style runs: (1, 1, 1, n) repeats the previous pixel
+      // n << shift times, the shift growing by 8 for consecutive run codes.
+      int x = 0, shift = 0;
+      while (x < W) {
+        if (pos + 4 > end) truncated(row);
+        const uint8_t r = byte(pos), g = byte(pos + 1), b = byte(pos + 2), e = byte(pos + 3);
+        pos += 4;
+        if (r == 1 && g == 1 && b == 1) {
+          if (x == 0 || shift > 16) fail(path, fmt::format("corrupt run-length data in scanline {}", row));
+          const long long count = (long long)e << shift;
+          if (x + count > W) fail(path, fmt::format("corrupt run-length data in scanline {}", row));
+          for (long long k = 0; k < count; ++k, ++x) std::copy_n(&line[4 * size_t(x - 1)], 4, &line[4 * size_t(x)]);
+          shift += 8;
+        } else {
+          line[4 * size_t(x)] = r;
+          line[4 * size_t(x) + 1] = g;
+          line[4 * size_t(x) + 2] = b;
+          line[4 * size_t(x) + 3] = e;
+          ++x;
+          shift = 0;
+        }
+      }
+    }
+    float* out = &raw.rgb[3 * size_t(row) * size_t(W)];
+    for (int x = 0; x < W; ++x) {
+      const uint8_t* p = &line[4 * size_t(x)];
+      if (p[3] == 0) {
+        out[3 * x] = out[3 * x + 1] = out[3 * x + 2] = 0.0f;
+        continue;
+      }
+      // Same decoding as Greg Ward's / Bruce Walter's rgbe.c (and OpenCV, stb_image, three.js).
+      const double f = std::ldexp(1.0, int(p[3]) - (128 + 8));
+      for (int c = 0; c < 3; ++c) out[3 * x + c] = float(p[c] * f * scale[c]);
+    }
+  }
+  return raw;
+}
+
+// RGBE of one pixel, mantissas rounded to nearest (decoded as m * 2^(e-136)).
+void float_to_rgbe(const float* rgb, uint8_t* out) {
+  const float v = std::max({rgb[0], rgb[1], rgb[2]});
+  if (!(v > 1e-38f)) {
+    out[0] = out[1] = out[2] = out[3] = 0;
+    return;
+  }
+  int e;
+  std::frexp(v, &e);  // v = m 2^e, m in [0.5, 1): the largest mantissa is in [128, 256)
+  double f = std::ldexp(1.0, 8 - e);
+  if (std::lround(v * f) > 255) {
+    ++e;
+    f = std::ldexp(1.0, 8 - e);
+  }
+  if (e + 128 > 255) {  // beyond RGBE range: saturate
+    out[0] = out[1] = out[2] = 255;
+    out[3] = 255;
+    return;
+  }
+  if (e + 128 < 1) {
+    out[0] = out[1] = out[2] = out[3] = 0;
+    return;
+  }
+  for (int c = 0; c < 3; ++c) out[c] = uint8_t(std::clamp<long>(std::lround(rgb[c] * f), 0, 255));
+  out[3] = uint8_t(e + 128);
+}
+
+// Run-length encodes one channel of a scanline (new-style RLE): runs of 4 or more equal
+// bytes become (128 + n, value), the rest literal dumps (n, bytes...), n <= 127 / 128.
+void rle_channel(const uint8_t* data, int n, std::string& out) {
+  constexpr int kMinRun = 4;
+  int cur = 0;
+  while (cur < n) {
+    int beg_run = cur, run_count = 0, old_run_count = 0;
+    while (run_count < kMinRun && beg_run < n) {
+      beg_run += run_count;
+      old_run_count = run_count;
+      run_count = 1;
+      while (beg_run + run_count < n && run_count < 127 && data[beg_run] == data[beg_run + run_count]) ++run_count;
+    }
+    // A short run just before the long one: emit it as a run too.
+    if (old_run_count > 1 && old_run_count == beg_run - cur) {
+      out += char(128 + old_run_count);
+      out += char(data[cur]);
+      cur = beg_run;
+    }
+    while (cur < beg_run) {
+      const int count = std::min(128, beg_run - cur);
+      out += char(count);
+      out.append(reinterpret_cast<const char*>(data + cur), size_t(count));
+      cur += count;
+    }
+    if (run_count >= kMinRun) {
+      out += char(128 + run_count);
+      out += char(data[beg_run]);
+      cur += run_count;
+    }
+  }
+}
+
+std::string encode_hdr(const std::string& path, const EnvMap& map) {
+  if (has_invalid_pixels(map))
+    fail(path, "cannot write: the map has invalid pixels (a validity mask), which .hdr cannot store; write .exr");
+  const std::string bad = find_bad_pixel(map, path);
+  if (!bad.empty()) throw InputError(bad + "; RGBE cannot store it");
+  const FileImage img = to_file_image(map);
+  std::string out = "#?RADIANCE\n# Written by lightprobe\nFORMAT=32-bit_rle_rgbe\n";
+  out += fmt::format("LIGHTPROBE_LAYOUT={}\nLIGHTPROBE_UNITS={}\n", to_string(map.layout), to_string(map.units));
+  if (map.layout == Layout::Healpix) out += fmt::format("LIGHTPROBE_NSIDE={}\n", map.nside);
+  out += fmt::format("\n-Y {} +X {}\n", img.height, img.width);
+  const int W = img.width;
+  std::vector<uint8_t> rgbe(4 * size_t(W));
+  std::vector<uint8_t> channel(static_cast<size_t>(W));
+  for (int row = 0; row < img.height; ++row) {
+    for (int x = 0; x < W; ++x) float_to_rgbe(&img.rgb[3 * (size_t(row) * W + x)], &rgbe[4 * size_t(x)]);
+    if (W < 8 || W > 0x7fff) {
+      out.append(reinterpret_cast<const char*>(rgbe.data()), rgbe.size());
+      continue;
+    }
+    out += char(2);
+    out += char(2);
+    out += char(W >> 8);
+    out += char(W & 0xff);
+    for (int c = 0; c < 4; ++c) {
+      for (int x = 0; x < W; ++x) channel[size_t(x)] = rgbe[4 * size_t(x) + c];
+      rle_channel(channel.data(), W, out);
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// PFM
+
+RawImage read_pfm(const std::string& path) {
+  const std::string bytes = read_whole_file(path);
+  size_t pos = 0;
+  auto token = [&]() -> std::string {
+    while (pos < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[pos]))) ++pos;
+    const size_t start = pos;
+    while (pos < bytes.size() && !std::isspace(static_cast<unsigned char>(bytes[pos])) && pos - start < 64) ++pos;
+    return bytes.substr(start, pos - start);
+  };
+  const std::string magic = token();
+  if (magic != "PF" && magic != "Pf")
+    fail(path, fmt::format("not a PFM file (starts with '{}', expected PF or Pf)", one_line(magic, 20)));
+  const int channels = magic == "PF" ? 3 : 1;
+  const std::string ws = token(), hs = token(), ss = token();
+  char* end = nullptr;
+  const long long w = std::strtoll(ws.c_str(), &end, 10);
+  if (ws.empty() || *end) fail(path, fmt::format("bad PFM width '{}'", one_line(ws, 20)));
+  const long long h = std::strtoll(hs.c_str(), &end, 10);
+  if (hs.empty() || *end) fail(path, fmt::format("bad PFM height '{}'", one_line(hs, 20)));
+  const double scale = std::strtod(ss.c_str(), &end);
+  if (ss.empty() || *end || !std::isfinite(scale) || scale == 0)
+    fail(path, fmt::format("bad PFM scale '{}'", one_line(ss, 20)));
+  if (pos >= bytes.size() || !std::isspace(static_cast<unsigned char>(bytes[pos])))
+    fail(path, "truncated file (no pixel data)");
+  ++pos;  // the single whitespace after the scale
+  check_size(path, w, h);
+  const bool little = scale < 0;
+  const size_t row_bytes = size_t(w) * size_t(channels) * 4;
+  const size_t avail = bytes.size() - pos;
+  if (avail < row_bytes * size_t(h))
+    fail(path, fmt::format("truncated file (expected {} rows, read {})", h, avail / row_bytes));
+  RawImage raw;
+  raw.width = int(w);
+  raw.height = int(h);
+  raw.rgb.resize(3 * size_t(w) * size_t(h));
+  const bool swap = little != (std::endian::native == std::endian::little);
+  const char* data = bytes.data() + pos;
+  for (long long r = 0; r < h; ++r) {
+    const long long out_row = h - 1 - r;  // stored bottom to top
+    for (long long x = 0; x < w; ++x) {
+      float v[3];
+      for (int c = 0; c < channels; ++c) {
+        uint32_t u;
+        std::memcpy(&u, data + (size_t(r) * size_t(w) + size_t(x)) * size_t(channels) * 4 + size_t(c) * 4, 4);
+        if (swap) u = __builtin_bswap32(u);
+        std::memcpy(&v[c], &u, 4);
+      }
+      if (channels == 1) v[1] = v[2] = v[0];
+      std::copy_n(v, 3, &raw.rgb[3 * (size_t(out_row) * size_t(w) + size_t(x))]);
+    }
+  }
+  return raw;
+}
+
+std::string encode_pfm(const std::string& path, const EnvMap& map) {
+  if (has_invalid_pixels(map))
+    fail(path, "cannot write: the map has invalid pixels (a validity mask), which .pfm cannot store; write .exr");
+  const FileImage img = to_file_image(map);
+  const bool little = std::endian::native == std::endian::little;
+  std::string out = fmt::format("PF\n{} {}\n{}\n", img.width, img.height, little ? "-1.0" : "1.0");
+  const size_t row_floats = 3 * size_t(img.width);
+  for (int r = img.height - 1; r >= 0; --r)
+    out.append(reinterpret_cast<const char*>(&img.rgb[size_t(r) * row_floats]), row_floats * sizeof(float));
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+
+std::string unsupported_map_extension(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  return fmt::format("unsupported map format '{}' (expected .exr, .hdr or .pfm)", ext.empty() ? "(none)" : ext);
+}
+
+// Runs `body`, turning any foreign exception (Iex, OpenCV, std) into one InputError line.
+template <class F>
+auto guarded(const std::string& path, const char* verb, F&& body) -> decltype(body()) {
+  try {
+    return body();
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::invalid_argument&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    fail(path, fmt::format("cannot {}: out of memory", verb));
+  } catch (const std::exception& e) {
+    fail(path, fmt::format("cannot {}: {}", verb, one_line(e.what())));
+  } catch (...) {
+    fail(path, fmt::format("cannot {}: unknown error", verb));
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+
+EnvMap read_envmap(const std::string& path, const ReadMapOptions& options) {
+  return guarded(path, "read", [&] {
+    const std::string ext = lower_extension(path);
+    RawImage raw;
+    if (ext == ".exr")
+      raw = read_exr(path);
+    else if (ext == ".hdr" || ext == ".pic" || ext == ".rgbe")
+      raw = read_hdr(path);
+    else if (ext == ".pfm")
+      raw = read_pfm(path);
+    else
+      fail(path, unsupported_map_extension(path));
+    return finish_map(path, std::move(raw), options);
+  });
+}
+
+void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOptions& options) {
+  const std::string bytes = guarded(path, "write", [&] {
+    const std::string ext = lower_extension(path);
+    if (ext == ".exr") return encode_exr(path, map, options);
+    if (ext == ".hdr") return encode_hdr(path, map);
+    if (ext == ".pfm") return encode_pfm(path, map);
+    fail(path, unsupported_map_extension(path));
+  });
+  write_file_atomically(path, bytes);
+}
+
+CameraImage read_camera_image(const std::string& path) {
+  return guarded(path, "read", [&] {
+    const std::string bytes = read_whole_file(path);
+    if (bytes.empty()) fail(path, "cannot read: empty file");
+    const cv::Mat buf(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
+    const cv::Mat img = cv::imdecode(buf, cv::IMREAD_UNCHANGED);
+    if (img.empty()) fail(path, "cannot decode image (unsupported format or damaged file)");
+    const int depth = img.depth();
+    if (depth != CV_8U && depth != CV_16U)
+      fail(path, "unsupported sample type (camera images must be 8- or 16-bit)");
+    const int ch = img.channels();
+    if (ch != 1 && ch != 3 && ch != 4) fail(path, fmt::format("unsupported channel count {}", ch));
+    CameraImage out;
+    out.width = img.cols;
+    out.height = img.rows;
+    out.bit_depth = depth == CV_8U ? 8 : 16;
+    const float s = depth == CV_8U ? 1.0f / 255.0f : 1.0f / 65535.0f;
+    out.rgb.resize(3 * size_t(img.cols) * size_t(img.rows));
+    for (int y = 0; y < img.rows; ++y) {
+      for (int x = 0; x < img.cols; ++x) {
+        float* o = &out.rgb[3 * (size_t(y) * size_t(img.cols) + size_t(x))];
+        float v[4];
+        for (int c = 0; c < ch; ++c)
+          v[c] = depth == CV_8U ? float(img.ptr<uint8_t>(y)[x * ch + c]) : float(img.ptr<uint16_t>(y)[x * ch + c]);
+        if (ch == 1) {
+          o[0] = o[1] = o[2] = v[0] * s;
+        } else {  // BGR(A) -> RGB
+          o[0] = v[2] * s;
+          o[1] = v[1] * s;
+          o[2] = v[0] * s;
+        }
+      }
+    }
+    return out;
+  });
+}
+
+void write_display_image(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+  if (width <= 0 || height <= 0 || rgb.size() != 3 * size_t(width) * size_t(height))
+    throw std::invalid_argument("write_display_image: rgb does not hold width x height pixels");
+  const std::string ext = lower_extension(path);
+  if (ext != ".png" && ext != ".jpg" && ext != ".jpeg")
+    fail(path, fmt::format("unsupported display image format '{}' (expected .png or .jpg)", ext.empty() ? "(none)" : ext));
+  const std::string bytes = guarded(path, "write", [&] {
+    cv::Mat img(height, width, CV_8UC3);
+    auto encode = [](float v) {
+      if (!(v > 0.0f)) return uint8_t(0);  // also NaN
+      if (v >= 1.0f) return uint8_t(255);
+      const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(double(v), 1.0 / 2.4) - 0.055;
+      return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
+    };
+    for (int y = 0; y < height; ++y) {
+      uint8_t* row = img.ptr<uint8_t>(y);
+      for (int x = 0; x < width; ++x) {
+        const float* p = &rgb[3 * (size_t(y) * size_t(width) + size_t(x))];
+        row[3 * x] = encode(p[2]);
+        row[3 * x + 1] = encode(p[1]);
+        row[3 * x + 2] = encode(p[0]);
+      }
+    }
+    std::vector<uint8_t> buf;
+    std::vector<int> params;
+    if (ext != ".png") params = {cv::IMWRITE_JPEG_QUALITY, 95};
+    if (!cv::imencode(ext == ".png" ? ".png" : ".jpg", img, buf, params)) fail(path, "cannot write: encoder failed");
+    return std::string(buf.begin(), buf.end());
+  });
+  write_file_atomically(path, bytes);
+}
+
+void write_file_atomically(const std::string& path, const std::string& bytes) {
+  auto error = [&](int err) { return InputError(fmt::format("{}: cannot write: {}", path, std::strerror(err))); };
+  std::random_device rd;
+  std::string tmp;
+  int fd = -1;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyz0123456789";
+    tmp = path + ".tmp-";
+    uint32_t r = rd();
+    for (int k = 0; k < 6; ++k, r /= 36) tmp += kChars[r % 36];
+    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0 && errno != EEXIST) throw error(errno);
+  }
+  if (fd < 0) throw error(EEXIST);
+  size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      throw error(err);
+    }
+    done += size_t(n);
+  }
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw error(err);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    throw error(err);
+  }
+}
+
+namespace {
+// Spreads the low 16 bits of v onto the even bits.
+uint64_t spread_bits(uint64_t v) {
+  v &= 0xffff;
+  v = (v | (v << 8)) & 0x00ff00ffULL;
+  v = (v | (v << 4)) & 0x0f0f0f0fULL;
+  v = (v | (v << 2)) & 0x33333333ULL;
+  v = (v | (v << 1)) & 0x55555555ULL;
+  return v;
+}
+// Inverse of spread_bits: gathers the even bits.
+int compact_bits(uint64_t v) {
+  v &= 0x55555555ULL;
+  v = (v | (v >> 1)) & 0x33333333ULL;
+  v = (v | (v >> 2)) & 0x0f0f0f0fULL;
+  v = (v | (v >> 4)) & 0x00ff00ffULL;
+  v = (v | (v >> 8)) & 0x0000ffffULL;
+  return int(v);
+}
+}  // namespace
+
+size_t healpix_nested_index(int nside, int face, int ix, int iy) {
+  return size_t(face) * size_t(nside) * size_t(nside) + size_t(spread_bits(uint64_t(ix)) | (spread_bits(uint64_t(iy)) << 1));
+}
+
+void healpix_face_xy(int nside, size_t nested, int* face, int* ix, int* iy) {
+  const size_t per_face = size_t(nside) * size_t(nside);
+  *face = int(nested / per_face);
+  const uint64_t in_face = nested % per_face;
+  *ix = compact_bits(in_face);
+  *iy = compact_bits(in_face >> 1);
+}
+
+}  // namespace lp

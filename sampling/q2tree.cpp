@@ -1,9 +1,406 @@
-// Placeholder until the method lands: the factory exists so that everything links.
+// Spherical Q2-tree sampling (Wan, Wong, Leung, EGSR 2005; as described by Nikodym,
+// Havran, Bittner, section 3.2 and Algorithm 1).
+//
+// The sphere is cut into the 12 HEALPix base quads and a quadtree grows on each: the
+// most important LEAF is split into its four equal-area children until the leaf count
+// reaches n. Importance p = L^a * dw^b with L the leaf's luminance power (integral of
+// luminance over the quad), dw = pi / (3 * 4^level) its solid angle, a and b from the
+// options (Agarwal et al.'s a = 1, b = 1/4 by default).
+//
+// Key design: in HEALPix NESTED order, the pixels of a quadtree node at level l are ONE
+// CONTIGUOUS RANGE of the finest-level pixel array ([ipix << 2(L-l), (ipix+1) << 2(L-l))
+// for finest level L). A 1D prefix sum over the nested pixel array therefore gives the
+// sums of any node in O(1): the role the paper gives to summed-area tables, with one
+// table instead of twelve and no 2D corner arithmetic. We keep double prefix sums of
+// r, g, b times dw (luminance is their linear combination) and of luminance * dw * (x, y, z)
+// for the luminance-weighted centroids. The leaves partition the array, so the sum of
+// the leaves' rgb telescopes to the map's total power (double rounding only).
+//
+// Input: a healpix map is used as it is (its nside; q2_nside, when set and smaller, only
+// caps the tree depth). Latlong and hemisphere maps are binned into healpix pixels at
+// nside = q2_nside, or, when 0, the largest power of two (1..256) whose pixels are no
+// smaller than the input's mean pixel (4 pi or 2 pi / pixel count). The binning
+// geometry (which source pixels fall in each healpix pixel, by pixel centre, as a
+// compressed list in nested order) depends only on layout and size and is cached, so a
+// frame costs one gather pass over the map that writes the prefix sums sequentially.
+// Each source pixel gives its rgb * (exact pixel solid angle) to exactly one healpix
+// pixel, so power is preserved exactly; invalid pixels give nothing. Leaves never split
+// below the binned nside: a finest-level leaf is retired and the next leaf is split.
+//
+// Light count: the count goes 12, 15, 18, ... (12 + 3k). We stop at the first count
+// >= n - 2, i.e. the largest count <= n, so n - 2 <= count <= n. n < 12 cannot be met
+// (12 base quads) and throws InputError, as does n above the number of binned pixels.
+//
+// One light per leaf: rgb = sum of rgb * dw over the leaf, solid_angle = the leaf's
+// solid angle, id = HEALPix NUNIQ of the node (4 * 4^level + nested index at
+// nside 2^level; base quads 4..15), direction = luminance-weighted centroid of the
+// leaf's pixel directions, normalised. With q2_jitter the direction is instead a fixed
+// point inside the quad chosen by a hash (SplitMix64) of the NUNIQ id: offsets in the
+// face's (x, y) coordinates, uniform in the central half of the quad on a 256 x 256
+// sub-grid, so it is deterministic and stable from frame to frame. A leaf with zero
+// power gets its quad centre.
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <queue>
+#include <tuple>
+#include <vector>
+
 #include "core/error.h"
 #include "sampling/methods.h"
 
-namespace lp {
+extern "C" {
+#include <chealpix.h>
+}
 
-std::unique_ptr<Sampler> make_q2tree_sampler(const SamplerOptions&) { throw InputError("q2tree is not implemented yet"); }
+namespace lp {
+namespace {
+
+constexpr int kMaxAutoNside = 256;
+
+bool is_power_of_two(int n) { return n > 0 && (n & (n - 1)) == 0; }
+int log2_int(int n) {
+  int l = 0;
+  while ((1 << l) < n) ++l;
+  return l;
+}
+
+// Auto binning resolution: the largest nside = 2^k (1..256) whose pixel solid angle
+// 4 pi / (12 nside^2) is at least the input's mean pixel, so that healpix pixels hold one
+// or more source pixel centres rather than leaving holes (1024 x 512 latlong -> 128,
+// 2048 x 1024 -> 256, 360 x 90 hemisphere -> 64). One step finer would double the
+// tree's depth budget at four times the prefix memory for no better leaves.
+int auto_nside(const EnvMap& map) {
+  const double mean = layout_solid_angle(map.layout) / double(map.pixel_count());
+  int nside = 1;
+  while (nside < kMaxAutoNside && 4 * M_PI / (12.0 * 4.0 * nside * nside) >= mean * (1 - 1e-12)) nside *= 2;
+  return nside;
+}
+
+// Geometry of binning one row-grid layout/size into healpix at one nside.
+struct RowGridBinning {
+  Layout layout;
+  int width = 0, height = 0, nside = 0;
+  std::vector<uint32_t> offset;  // 12 nside^2 + 1: healpix pixel h holds sources [offset[h], offset[h+1])
+  // Source pixels (row v, column u) grouped by healpix pixel, in row-major order within one.
+  struct Source {
+    uint16_t u, v;
+  };
+  std::vector<Source> source;
+  std::vector<double> row_dw, row_sin, row_cos;  // per row: exact solid angle, sin/cos theta
+  std::vector<double> col_cos, col_sin;          // per column: cos/sin phi
+};
+
+std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside) {
+  auto b = std::make_shared<RowGridBinning>();
+  b->layout = map.layout;
+  b->width = map.width;
+  b->height = map.height;
+  b->nside = nside;
+  const int w = map.width, h = map.height;
+  const double span = map.layout == Layout::Hemisphere ? M_PI / 2 : M_PI;
+  b->row_dw.resize(h);
+  b->row_sin.resize(h);
+  b->row_cos.resize(h);
+  for (int v = 0; v < h; ++v) {
+    const double t = span * (v + 0.5) / h;
+    b->row_sin[v] = std::sin(t);
+    b->row_cos[v] = std::cos(t);
+    b->row_dw[v] = pixel_solid_angle(map, size_t(v) * size_t(w));
+  }
+  b->col_cos.resize(w);
+  b->col_sin.resize(w);
+  for (int u = 0; u < w; ++u) {
+    const double p = 2 * M_PI * (u + 0.5) / w;
+    b->col_cos[u] = std::cos(p);
+    b->col_sin[u] = std::sin(p);
+  }
+  const size_t count = map.pixel_count();
+  std::vector<uint32_t> target(count);
+  tbb::parallel_for(0, h, [&](int v) {
+    for (int u = 0; u < w; ++u) {
+      const double d[3] = {b->row_sin[v] * b->col_cos[u], b->row_sin[v] * b->col_sin[u], b->row_cos[v]};
+      int64_t ipix = 0;
+      vec2pix_nest64(nside, d, &ipix);
+      target[size_t(v) * w + u] = uint32_t(ipix);
+    }
+  });
+  const size_t npix = 12 * size_t(nside) * size_t(nside);
+  b->offset.assign(npix + 1, 0);
+  for (uint32_t t : target) ++b->offset[t + 1];
+  for (size_t i = 0; i < npix; ++i) b->offset[i + 1] += b->offset[i];
+  b->source.resize(count);
+  std::vector<uint32_t> fill(b->offset.begin(), b->offset.end() - 1);
+  for (size_t i = 0; i < count; ++i)
+    b->source[fill[target[i]]++] = {uint16_t(i % size_t(w)), uint16_t(i / size_t(w))};
+  return b;
+}
+
+// Process-wide cache of binning geometry, keyed by layout, size and nside (a few entries:
+// a live stream uses one). Samplers hold a shared_ptr, so eviction never pulls a table
+// from under a running prepare.
+std::shared_ptr<const RowGridBinning> cached_binning(const EnvMap& map, int nside) {
+  static std::mutex mutex;
+  static std::list<std::shared_ptr<const RowGridBinning>> cache;
+  std::lock_guard lock(mutex);
+  for (auto it = cache.begin(); it != cache.end(); ++it) {
+    const auto& b = **it;
+    if (b.layout == map.layout && b.width == map.width && b.height == map.height && b.nside == nside) {
+      cache.splice(cache.begin(), cache, it);
+      return cache.front();
+    }
+  }
+  auto b = build_binning(map, nside);
+  cache.push_front(b);
+  if (cache.size() > 4) cache.pop_back();
+  return b;
+}
+
+// Unit directions of healpix pixel centres (float), cached per nside.
+std::shared_ptr<const std::vector<float>> cached_healpix_directions(int nside) {
+  static std::mutex mutex;
+  static std::list<std::pair<int, std::shared_ptr<const std::vector<float>>>> cache;
+  std::lock_guard lock(mutex);
+  for (auto it = cache.begin(); it != cache.end(); ++it)
+    if (it->first == nside) {
+      cache.splice(cache.begin(), cache, it);
+      return cache.front().second;
+    }
+  const size_t npix = 12 * size_t(nside) * size_t(nside);
+  auto dirs = std::make_shared<std::vector<float>>(3 * npix);
+  tbb::parallel_for(size_t(0), npix, [&](size_t i) {
+    double v[3];
+    pix2vec_nest64(nside, int64_t(i), v);
+    for (int c = 0; c < 3; ++c) (*dirs)[3 * i + c] = float(v[c]);
+  });
+  cache.emplace_front(nside, dirs);
+  if (cache.size() > 4) cache.pop_back();
+  return dirs;
+}
+
+// Running sums over the nested pixel array: entry i holds the sum over pixels [0, i).
+struct Prefix {
+  double r = 0, g = 0, b = 0;  // rgb * dw
+  double x = 0, y = 0, z = 0;  // luminance * dw * direction
+};
+
+uint64_t splitmix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+// Interleave the low 8 bits of ix (even bits) and iy (odd bits): nested index within a face.
+uint64_t interleave8(uint32_t ix, uint32_t iy) {
+  uint64_t r = 0;
+  for (int bit = 0; bit < 8; ++bit) r |= uint64_t((ix >> bit) & 1) << (2 * bit) | uint64_t((iy >> bit) & 1) << (2 * bit + 1);
+  return r;
+}
+
+class Q2TreeSampler final : public Sampler {
+ public:
+  explicit Q2TreeSampler(const SamplerOptions& options) : options_(options) {
+    if (options.q2_nside != 0 && (!is_power_of_two(options.q2_nside) || options.q2_nside > 8192))
+      throw InputError(fmt::format("q2tree: nside must be a power of two up to 8192, got {}", options.q2_nside));
+    if (!std::isfinite(options.q2_luminance_exponent) || !std::isfinite(options.q2_solid_angle_exponent))
+      throw InputError("q2tree: importance exponents must be finite");
+  }
+
+  Method method() const override { return Method::Q2Tree; }
+
+  void prepare(const EnvMap& map) override {
+    if (map.pixel_count() == 0) throw InputError("q2tree: the map is empty");
+    if (map.layout == Layout::Healpix)
+      prepare_healpix(map);
+    else
+      prepare_row_grid(map);
+    const Prefix& t = prefix_.back();
+    const double rgb[3] = {t.r, t.g, t.b};
+    const double lum = luminance(rgb);
+    if (!std::isfinite(lum)) throw InputError("q2tree: the map has non-finite pixels");
+    if (!(lum > 0)) throw InputError("q2tree: the map is black (zero power): there is no light to sample");
+  }
+
+  std::vector<Light> place(int n) override {
+    if (prefix_.empty()) throw InputError("q2tree: place() called before prepare()");
+    if (n < 12)
+      throw InputError(fmt::format("q2tree: needs n >= 12 lights (one per HEALPix base quad), got {}", n));
+    const int cap_nside = 1 << max_level_;
+    const int64_t capacity = 12 * int64_t(cap_nside) * cap_nside;
+    if (n - 2 > capacity)
+      throw InputError(fmt::format("q2tree: n = {} exceeds the {} HEALPix pixels at nside {}; raise the nside", n,
+                                   capacity, cap_nside));
+
+    std::vector<double> dw_pow(max_level_ + 1);
+    for (int l = 0; l <= max_level_; ++l)
+      dw_pow[l] = std::pow(M_PI / (3.0 * std::ldexp(1.0, 2 * l)), options_.q2_solid_angle_exponent);
+    const double a = options_.q2_luminance_exponent;
+
+    // Leaves in a max-heap by importance; ties go to the smaller NUNIQ so that the
+    // tree does not depend on the heap's internal order.
+    using Entry = std::tuple<double, int64_t, int, int64_t>;  // importance, -nuniq, level, ipix
+    std::vector<Entry> heap;
+    heap.reserve(size_t(n) + 4);
+    auto push = [&](int level, int64_t ipix) {
+      const double power = std::max(0.0, node_luminance_power(level, ipix));
+      const double pa = a == 1.0 ? power : std::pow(power, a);
+      const int64_t nuniq = (int64_t(4) << (2 * level)) + ipix;
+      heap.emplace_back(pa * dw_pow[level], -nuniq, level, ipix);
+      std::push_heap(heap.begin(), heap.end());
+    };
+    for (int f = 0; f < 12; ++f) push(0, f);
+    std::vector<std::pair<int, int64_t>> retired;  // finest-level leaves: cannot split
+    size_t count = 12;
+    while (count < size_t(n - 2) && !heap.empty()) {
+      std::pop_heap(heap.begin(), heap.end());
+      const auto [imp, neg_id, level, ipix] = heap.back();
+      heap.pop_back();
+      if (level >= max_level_) {
+        retired.emplace_back(level, ipix);
+        continue;
+      }
+      for (int c = 0; c < 4; ++c) push(level + 1, 4 * ipix + c);
+      count += 3;
+    }
+
+    std::vector<Light> lights;
+    lights.reserve(count);
+    for (const auto& e : heap) lights.push_back(make_light(std::get<2>(e), std::get<3>(e)));
+    for (const auto& [level, ipix] : retired) lights.push_back(make_light(level, ipix));
+    std::sort(lights.begin(), lights.end(), [](const Light& x, const Light& y) { return x.id < y.id; });
+    return lights;
+  }
+
+ private:
+  // Finest-level range of a node.
+  std::pair<size_t, size_t> range(int level, int64_t ipix) const {
+    const int shift = 2 * (finest_level_ - level);
+    return {size_t(ipix) << shift, size_t(ipix + 1) << shift};
+  }
+
+  double node_luminance_power(int level, int64_t ipix) const {
+    const auto [b, e] = range(level, ipix);
+    const Prefix& p = prefix_[b];
+    const Prefix& q = prefix_[e];
+    return 0.2126 * (q.r - p.r) + 0.7152 * (q.g - p.g) + 0.0722 * (q.b - p.b);
+  }
+
+  Light make_light(int level, int64_t ipix) const {
+    const auto [b, e] = range(level, ipix);
+    const Prefix& p = prefix_[b];
+    const Prefix& q = prefix_[e];
+    Light l;
+    l.id = (uint64_t(4) << (2 * level)) + uint64_t(ipix);
+    l.rgb = {q.r - p.r, q.g - p.g, q.b - p.b};
+    l.solid_angle = M_PI / (3.0 * std::ldexp(1.0, 2 * level));
+    const double power = luminance(l.rgb.data());
+    const Vec3 c{q.x - p.x, q.y - p.y, q.z - p.z};
+    const double len = length(c);
+    if (!(power > 0) || !(len > 1e-12 * power)) {
+      l.direction = quad_point(level, ipix, 128, 128);
+    } else if (options_.q2_jitter) {
+      const uint64_t h = splitmix64(l.id);
+      l.direction = quad_point(level, ipix, 64 + uint32_t(h & 127), 64 + uint32_t((h >> 32) & 127));
+    } else {
+      l.direction = (1.0 / len) * c;
+    }
+    return l;
+  }
+
+  // A point of the quad (level, ipix) at face offsets (ix, iy) / 256 on a 256 x 256
+  // sub-grid (128, 128: the corner shared by the four central sub-pixels, the centre).
+  static Vec3 quad_point(int level, int64_t ipix, uint32_t ix, uint32_t iy) {
+    if (ix == 128 && iy == 128) {
+      double v[3];
+      pix2vec_nest64(int64_t(1) << level, ipix, v);
+      return {v[0], v[1], v[2]};
+    }
+    const int64_t nside = int64_t(1) << (level + 8);
+    double v[3];
+    pix2vec_nest64(nside, (ipix << 16) + int64_t(interleave8(ix, iy)), v);
+    return {v[0], v[1], v[2]};
+  }
+
+  void prepare_healpix(const EnvMap& map) {
+    const int nside = map.nside;
+    if (!is_power_of_two(nside) || map.pixel_count() != 12 * size_t(nside) * size_t(nside))
+      throw InputError(fmt::format("q2tree: healpix map has {} pixels for nside {}", map.pixel_count(), nside));
+    finest_level_ = log2_int(nside);
+    max_level_ = options_.q2_nside ? std::min(finest_level_, log2_int(options_.q2_nside)) : finest_level_;
+    const auto dirs = cached_healpix_directions(nside);
+    const size_t npix = map.pixel_count();
+    const double dw = 4 * M_PI / double(npix);
+    prefix_.resize(npix + 1);
+    Prefix s;
+    prefix_[0] = s;
+    const float* px = map.rgb.data();
+    const float* d = dirs->data();
+    for (size_t i = 0; i < npix; ++i) {
+      if (map.is_valid(i)) {
+        const double r = px[3 * i] * dw, g = px[3 * i + 1] * dw, b = px[3 * i + 2] * dw;
+        const double wl = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+        s.r += r, s.g += g, s.b += b;
+        s.x += wl * d[3 * i], s.y += wl * d[3 * i + 1], s.z += wl * d[3 * i + 2];
+      }
+      prefix_[i + 1] = s;
+    }
+  }
+
+  void prepare_row_grid(const EnvMap& map) {
+    if (map.width > 65535 || map.height > 65535)
+      throw InputError(fmt::format("q2tree: {} is too large (at most 65535 pixels a side)", describe_size(map)));
+    const int nside = options_.q2_nside ? options_.q2_nside : auto_nside(map);
+    if (!binning_ || binning_->layout != map.layout || binning_->width != map.width ||
+        binning_->height != map.height || binning_->nside != nside)
+      binning_ = cached_binning(map, nside);
+    const RowGridBinning& bin = *binning_;
+    finest_level_ = max_level_ = log2_int(nside);
+    const size_t npix = 12 * size_t(nside) * size_t(nside);
+    prefix_.resize(npix + 1);
+    Prefix s;
+    prefix_[0] = s;
+    const float* px = map.rgb.data();
+    const RowGridBinning::Source* src = bin.source.data();
+    const size_t w = size_t(map.width);
+    const bool masked = !map.valid.empty();
+    const uint32_t total = uint32_t(bin.source.size());
+    constexpr uint32_t kPrefetch = 16;
+    for (size_t h = 0; h < npix; ++h) {
+      for (uint32_t k = bin.offset[h], end = bin.offset[h + 1]; k < end; ++k) {
+        const size_t u = src[k].u, v = src[k].v, i = v * w + u;
+        // The gather order jumps between rows: fetch a few sources ahead.
+        const auto& ahead = src[k + kPrefetch < total ? k + kPrefetch : k];
+        __builtin_prefetch(px + 3 * (size_t(ahead.v) * w + ahead.u));
+        if (masked && !map.valid[i]) continue;
+        const double dw = bin.row_dw[v];
+        const double r = px[3 * i] * dw, g = px[3 * i + 1] * dw, b = px[3 * i + 2] * dw;
+        const double wl = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+        const double ws = wl * bin.row_sin[v];
+        s.r += r, s.g += g, s.b += b;
+        s.x += ws * bin.col_cos[u], s.y += ws * bin.col_sin[u], s.z += wl * bin.row_cos[v];
+      }
+      prefix_[h + 1] = s;
+    }
+  }
+
+  SamplerOptions options_;
+  std::shared_ptr<const RowGridBinning> binning_;
+  std::vector<Prefix> prefix_;
+  int finest_level_ = 0;  // level of the prefix array's pixels
+  int max_level_ = 0;     // deepest level a leaf may reach
+};
+
+}  // namespace
+
+std::unique_ptr<Sampler> make_q2tree_sampler(const SamplerOptions& options) {
+  return std::make_unique<Q2TreeSampler>(options);
+}
 
 }  // namespace lp

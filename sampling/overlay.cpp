@@ -72,7 +72,10 @@ std::vector<float> render_overlay(const EnvMap& map, const std::vector<Light>& l
         continue;
       }
       const float* p = view->pixel(i);
-      const double s = k / (1 + k * luminance(p[0], p[1], p[2]));
+      // Saturated colours can exceed 1 in one channel: scale the pixel back (keeping its
+      // hue) rather than clipping that channel alone.
+      double s = k / (1 + k * luminance(p[0], p[1], p[2]));
+      s /= std::max(1.0, s * std::max({p[0], p[1], p[2]}));
       for (int c = 0; c < 3; ++c) o[c] = float(std::clamp(s * p[c], 0.0, 1.0));
     }
 

@@ -10,7 +10,8 @@
 // Tone mapping: exposure k puts the `percentile` luminance of the valid pixels at
 // `percentile_display` after Reinhard on luminance, c' = k c / (1 + k Y) per channel
 // (hue kept, highlights compressed instead of clipped; for Reinhard y/(1+y) = 0.8 this
-// is k = 4 / Y_p99). Channels are clipped to [0, 1].
+// is k = 4 / Y_p99). A saturated pixel whose largest channel still exceeds 1 is scaled
+// down as a whole so that it keeps its hue.
 //
 // Lights: each a filled disc in the light's colour (rgb / max component, so a light is
 // as bright as the display allows and its hue shows) with a dark one-pixel outline,

@@ -35,6 +35,7 @@ struct Block {
   size_t begin = 0, end = 0;  // [begin, end) into the arrays; (end - begin) % kLanes == 0
   Vec3 centre;                // unit
   double radius = 0;          // max angle (rad) from centre to any pixel of the block
+  double cos_radius = -1, sin_radius = 0;
 };
 
 struct PixelSet {
@@ -80,6 +81,8 @@ void close_block(PixelSet& s, size_t begin) {
     // A little slack covers float rounding of the stored directions.
     b.radius = std::min(M_PI, std::acos(std::clamp(min_cos, -1.0, 1.0)) + 1e-4);
   }
+  b.cos_radius = std::cos(b.radius);
+  b.sin_radius = std::sin(b.radius);
   s.max_block = std::max(s.max_block, end - begin);
   s.blocks.push_back(b);
 }
@@ -138,14 +141,22 @@ PixelSet make_pixel_set(const EnvMap& map) {
   return s;
 }
 
-// The pixels of `all` inside the cap {d : d.c >= cos_half}, keeping the blocks.
-PixelSet pixels_in_cap(const PixelSet& all, Vec3 c, double half_angle) {
+// The pixels of `all` inside the cap {d : d.c >= cos_half}, keeping the blocks. Blocks that
+// lie wholly inside the cap are not copied but listed in `whole` (indices into all.blocks),
+// so that their sums, already known from the full pass, can be reused.
+PixelSet pixels_in_cap(const PixelSet& all, Vec3 c, double half_angle, std::vector<size_t>& whole) {
   const double cos_half = std::cos(half_angle);
   PixelSet s;
   s.scale = all.scale;
-  for (const Block& b : all.blocks) {
+  whole.clear();
+  for (size_t bi = 0; bi < all.blocks.size(); ++bi) {
+    const Block& b = all.blocks[bi];
     const double a = std::acos(std::clamp(dot(c, b.centre), -1.0, 1.0));
-    if (a - b.radius > half_angle) continue;  // block entirely outside
+    if (a - b.radius > half_angle) continue;  // block entirely outside the cap
+    if (a + b.radius < half_angle) {          // entirely inside (radius carries 1e-4 slack)
+      whole.push_back(bi);
+      continue;
+    }
     const size_t begin = s.x.size();
     for (size_t i = b.begin; i < b.end; ++i) {
       if (all.w[i] == 0) continue;
@@ -212,16 +223,26 @@ class FlushDenormals {
 // For each direction k in [first, last): diffuse[k] = sum w max(0, n.d) and, for each
 // exponent e, glossy[e][k] = sum w max(0, n.d)^s_e (unnormalised, in units of the set's
 // normalised w; the caller multiplies by scale and the lobe's constant).
+// When `per_block` is given, it also receives each block's diffuse sum at [block * dirs.size() + k].
 void integrate(const PixelSet& s, const std::vector<Vec3>& dirs, size_t first, size_t last,
-               const std::vector<double>& exponents, double* diffuse, std::vector<double*>& glossy) {
+               const std::vector<double>& exponents, double* diffuse, std::vector<double*>& glossy,
+               double* per_block = nullptr) {
   FlushDenormals ftz;
+  // A block's lobe values are all negligible when its largest cosine t_max < t_min(s).
+  std::vector<double> t_min(exponents.size());
+  for (size_t e = 0; e < exponents.size(); ++e) t_min[e] = std::pow(kNegligible, 1.0 / exponents[e]);
   const size_t nb = s.max_block;
   std::vector<float> t(nb), p(nb), base(nb);
   for (size_t k = first; k < last; ++k) {
     diffuse[k] = 0;
     for (double* g : glossy) g[k] = 0;
   }
-  for (const Block& b : s.blocks) {
+  const size_t nd = dirs.size();
+  if (per_block)
+    for (size_t bi = 0; bi < s.blocks.size(); ++bi)
+      for (size_t k = first; k < last; ++k) per_block[bi * nd + k] = 0;
+  for (size_t bi = 0; bi < s.blocks.size(); ++bi) {
+    const Block& b = s.blocks[bi];
     const size_t n = b.end - b.begin;
     const float* __restrict x = s.x.data() + b.begin;
     const float* __restrict y = s.y.data() + b.begin;
@@ -229,20 +250,26 @@ void integrate(const PixelSet& s, const std::vector<Vec3>& dirs, size_t first, s
     const float* __restrict w = s.w.data() + b.begin;
     for (size_t k = first; k < last; ++k) {
       const Vec3 d = dirs[k];
-      const double a = std::acos(std::clamp(dot(d, b.centre), -1.0, 1.0));
-      const double lo = a - b.radius;
-      if (lo >= M_PI / 2) continue;  // the whole block is behind the surface
+      // With a the angle from d to the block's centre, every pixel is at least a - radius
+      // away: the block is wholly behind when a >= pi/2 + radius, i.e. cos a <= -sin radius.
+      const double ca = std::clamp(dot(d, b.centre), -1.0, 1.0);
+      if (ca <= -b.sin_radius) continue;
       const float nx = float(d.x), ny = float(d.y), nz = float(d.z);
       float* __restrict tt = t.data();
       for (size_t i = 0; i < n; ++i) {
         const float v = nx * x[i] + ny * y[i] + nz * z[i];
         tt[i] = v > 0.0f ? v : 0.0f;
       }
-      diffuse[k] += double(dot_sum(w, tt, n));
-      const double max_t = lo <= 0 ? 1.0 : std::cos(lo);
+      const double block_sum = double(dot_sum(w, tt, n));
+      diffuse[k] += block_sum;
+      if (per_block) per_block[bi * nd + k] = block_sum;
+      // Largest cosine in the block: cos(a - radius), or 1 when d points into the block.
+      const double max_t = ca >= b.cos_radius
+                               ? 1.0
+                               : ca * b.cos_radius + std::sqrt(std::max(0.0, 1 - ca * ca)) * b.sin_radius;
       for (size_t e = 0; e < exponents.size(); ++e) {
         const double sexp = exponents[e];
-        if (std::pow(max_t, sexp) < kNegligible) continue;
+        if (max_t < t_min[e]) continue;
         if (is_small_integer(sexp)) {
           integer_power(tt, p.data(), base.data(), n, unsigned(sexp));
         } else {
@@ -324,13 +351,16 @@ AccuracyReference make_accuracy_reference(const EnvMap& map, const AccuracyOptio
 
   // Diffuse and glossy together, in chunks of directions: each chunk streams the pixel
   // blocks once and reuses each block (in cache) for all of its directions.
+  // The per-block diffuse sums are kept for the shadowed pass (blocks wholly inside a cap).
+  std::vector<double> per_block(options.shadowed ? all.blocks.size() * nd : 0);
+  double* per_block_data = options.shadowed ? per_block.data() : nullptr;
   const size_t chunk = 8;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, (nd + chunk - 1) / chunk, 1), [&](const auto& r) {
     std::vector<double*> g(ne);
     for (size_t e = 0; e < ne; ++e) g[e] = ref.glossy[e].data();
     for (size_t c = r.begin(); c != r.end(); ++c)
       integrate(all, ref.directions, c * chunk, std::min(nd, (c + 1) * chunk), options.glossy_exponents,
-                ref.diffuse.data(), g);
+                ref.diffuse.data(), g, per_block_data);
   });
   for (size_t k = 0; k < nd; ++k) ref.diffuse[k] *= all.scale;
   for (size_t e = 0; e < ne; ++e) {
@@ -343,12 +373,17 @@ AccuracyReference make_accuracy_reference(const EnvMap& map, const AccuracyOptio
     const size_t nc = ref.caps.size();
     ref.shadowed.assign(nc, std::vector<double>(nd, 0.0));
     const double half = options.cap_half_angle_deg * M_PI / 180.0;
+    // Shadowed = diffuse - (irradiance from the pixels inside the cap). Blocks wholly inside
+    // the cap reuse their sums from the full pass; only blocks on the rim are integrated again.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nc, 1), [&](const auto& r) {
       std::vector<double> in_cap(nd);
       std::vector<double*> none;
+      std::vector<size_t> whole;
       for (size_t c = r.begin(); c != r.end(); ++c) {
-        const PixelSet inside = pixels_in_cap(all, ref.caps[c], half);
-        integrate(inside, ref.directions, 0, nd, {}, in_cap.data(), none);
+        const PixelSet rim = pixels_in_cap(all, ref.caps[c], half, whole);
+        integrate(rim, ref.directions, 0, nd, {}, in_cap.data(), none);
+        for (size_t bi : whole)
+          for (size_t k = 0; k < nd; ++k) in_cap[k] += per_block[bi * nd + k];
         for (size_t k = 0; k < nd; ++k)
           ref.shadowed[c][k] = std::max(0.0, ref.diffuse[k] - in_cap[k] * all.scale);
       }

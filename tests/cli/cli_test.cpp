@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
+struct CliRun {
   int code = -1;
   std::string out, err;
 };
@@ -41,11 +41,11 @@ fs::path scratch() {
   return dir;
 }
 
-Run lightprobe(const std::string& args) {
+CliRun lightprobe(const std::string& args) {
   const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
   const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();
   const int status = std::system(cmd.c_str());
-  Run r;
+  CliRun r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.out = slurp(out);
   r.err = slurp(err);
@@ -61,7 +61,7 @@ int line_count(const std::string& s) {
 }
 
 // A bad input: exit 2, exactly one line on stderr, naming `needle` (the file or option).
-void expect_one_line_error(const Run& r, const std::string& needle) {
+void expect_one_line_error(const CliRun& r, const std::string& needle) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(line_count(r.err), 1) << r.err;
   EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
@@ -70,12 +70,12 @@ void expect_one_line_error(const Run& r, const std::string& needle) {
 }  // namespace
 
 TEST(Cli, VersionAndHelpSucceed) {
-  Run v = lightprobe("--version");
+  CliRun v = lightprobe("--version");
   EXPECT_EQ(v.code, 0);
   EXPECT_NE(v.out.find("lightprobe 0."), std::string::npos) << v.out;
   for (const char* sub : {"--help", "info --help", "convert --help", "sample --help", "eval sampling --help",
                           "synth scene --help"}) {
-    Run h = lightprobe(sub);
+    CliRun h = lightprobe(sub);
     EXPECT_EQ(h.code, 0) << sub;
     EXPECT_NE(h.out.find("Usage"), std::string::npos) << sub;
   }
@@ -98,14 +98,14 @@ TEST(Cli, InfoReadsEveryRealMapAndReportsJson) {
       "probes-probulator-latlong256/wells.hdr",    "probes-threejs-spot-and-cube/spot1Lux.hdr",
       "probes-threejs-spot-and-cube/pisa_cube/px.hdr", "hdr-memorial-debevec/reference/memorial_radiance_hdrshop.hdr"};
   for (const auto& m : maps) {
-    Run r = lightprobe("info --json " + shared(m));
+    CliRun r = lightprobe("info --json " + shared(m));
     ASSERT_EQ(r.code, 0) << m << ": " << r.err;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_GT(j["power_luminance"].get<double>(), 0) << m;
     EXPECT_GT(j["luminance"]["max"].get<double>(), 0) << m;
   }
   // spot1Lux: one lit pixel whose L dw sums to 0.959 (PROVENANCE.md), at u=(597.5)/1024, v=(213.5)/512.
-  Run r = lightprobe("info --json " + shared("probes-threejs-spot-and-cube/spot1Lux.hdr"));
+  CliRun r = lightprobe("info --json " + shared("probes-threejs-spot-and-cube/spot1Lux.hdr"));
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["layout"], "latlong");
   EXPECT_NEAR(j["power_rgb"][0].get<double>(), 0.959, 0.002);
@@ -120,12 +120,12 @@ TEST(Cli, ConvertWorksOnEveryRealLatlongMapAndKeepsPower) {
     for (const std::string target : {"--layout healpix --nside 64", "--layout hemisphere --size 360x90",
                                      "--layout latlong --size 256x128"}) {
       const fs::path out = scratch() / "converted.exr";
-      Run r = lightprobe("convert --json " + shared(m) + " " + out.string() + " " + target);
+      CliRun r = lightprobe("convert --json " + shared(m) + " " + out.string() + " " + target);
       ASSERT_EQ(r.code, 0) << m << " " << target << ": " << r.err;
       const auto j = nlohmann::json::parse(r.out);
       if (target.find("hemisphere") == std::string::npos)  // the hemisphere keeps only the upper half
         EXPECT_NEAR(j["power_out"].get<double>() / j["power_in"].get<double>(), 1.0, 1e-4) << m << " " << target;
-      Run info = lightprobe("info --json " + out.string());
+      CliRun info = lightprobe("info --json " + out.string());
       ASSERT_EQ(info.code, 0) << info.err;
       EXPECT_NEAR(nlohmann::json::parse(info.out)["power_luminance"].get<double>(), j["power_out"].get<double>(),
                   1e-5 * j["power_out"].get<double>());
@@ -192,7 +192,7 @@ TEST(Cli, BadInputsGetOneLineNamingTheFileAndExitTwo) {
 TEST(Cli, SampleWritesALightListThatPreservesPower) {
   const fs::path out = scratch() / "lights.json";
   const fs::path png = scratch() / "lights.png";
-  Run r = lightprobe("sample --json " + shared("probes-probulator-latlong256/grace.hdr") + " --method pharr --n 64 -o " +
+  CliRun r = lightprobe("sample --json " + shared("probes-probulator-latlong256/grace.hdr") + " --method pharr --n 64 -o " +
                      out.string() + " --overlay " + png.string());
   ASSERT_EQ(r.code, 0) << r.err;
   const auto report = nlohmann::json::parse(r.out);
@@ -202,7 +202,7 @@ TEST(Cli, SampleWritesALightListThatPreservesPower) {
   EXPECT_EQ(list["format"], "lightprobe.lights/1");
   EXPECT_EQ(list["frame_convention"], "z-up");
   EXPECT_EQ(list["lights"].size(), 64u);
-  Run info = lightprobe("info --json " + shared("probes-probulator-latlong256/grace.hdr"));
+  CliRun info = lightprobe("info --json " + shared("probes-probulator-latlong256/grace.hdr"));
   const auto map = nlohmann::json::parse(info.out);
   double sum = 0;
   for (const auto& l : list["lights"]) sum += l["rgb"][1].get<double>();
@@ -212,11 +212,11 @@ TEST(Cli, SampleWritesALightListThatPreservesPower) {
 
 TEST(Cli, SynthSceneWritesAMapWhoseSunCarriesMostOfThePower) {
   const fs::path out = scratch() / "scene.exr";
-  Run r = lightprobe("synth scene --json -o " + out.string() + " --size 512x256");
+  CliRun r = lightprobe("synth scene --json -o " + out.string() + " --size 512x256");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_GT(j["sun_power_luminance"].get<double>() / j["power_luminance"].get<double>(), 0.4);
-  Run info = lightprobe("info --json " + out.string());
+  CliRun info = lightprobe("info --json " + out.string());
   EXPECT_NEAR(nlohmann::json::parse(info.out)["power_luminance"].get<double>(), j["power_luminance"].get<double>(),
               1e-5 * j["power_luminance"].get<double>());
 }

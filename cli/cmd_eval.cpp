@@ -123,12 +123,13 @@ int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
       }
       const double prepare_ms = median_ms([&] { sampler->prepare(map); }, args.repeats, 0.3);
       for (int n : counts) {
+        progress.advance();
+        if (method == Method::Q2Tree && n < 12) continue;  // a Q2-tree has at least its 12 base quads
         std::vector<Light> lights;
         const double place_ms = median_ms([&] { lights = sampler->place(n); }, args.repeats, 0.1);
         const LightError e = light_error(reference, lights);
         points.push_back({map_name(path), std::string(to_string(method)), n, int(lights.size()), prepare_ms, place_ms,
                           e.diffuse, e.glossy.at(0), e.glossy.at(1), e.shadowed});
-        progress.advance();
       }
     }
   }
@@ -154,6 +155,7 @@ int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
           g10.push_back(p.glossy10), g100.push_back(p.glossy100), sh.push_back(p.shadowed);
           lights.push_back(p.lights);
         }
+      if (d.empty()) continue;
       summary.push_back({"median", std::string(to_string(method)), n, int(median(lights)), median(pre), median(place),
                          median(d), median(g10), median(g100), median(sh)});
     }

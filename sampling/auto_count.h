@@ -16,7 +16,7 @@ namespace lp {
 
 struct AutoCountOptions {
   double target_diffuse_error = 0.01;  // relative RMS, e.g. 0.01 = 1 %
-  int min_count = 4;
+  int min_count = 16;  // q2tree cannot go below its 12 base quads
   int max_count = 16384;  // give up (and report it) above this
 };
 

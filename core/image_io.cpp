@@ -12,6 +12,7 @@
 #include <ImfStdIO.h>
 #include <ImfStringAttribute.h>
 #include <ImfVersion.h>
+#include <half.h>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
@@ -213,23 +214,42 @@ class MemoryIStream : public Imf::IStream {
  public:
   MemoryIStream(const std::string& bytes, const std::string& name) : Imf::IStream(name.c_str()), bytes_(bytes) {}
   bool read(char c[], int n) override {
-    if (n < 0 || pos_ + uint64_t(n) > bytes_.size()) throw Iex::InputExc("unexpected end of file");
+    if (n < 0 || pos_ + uint64_t(n) > bytes_.size()) {
+      hit_end_ = true;
+      throw Iex::InputExc("unexpected end of file");
+    }
     std::memcpy(c, bytes_.data() + pos_, size_t(n));
     pos_ += uint64_t(n);
     return pos_ < bytes_.size();
   }
   uint64_t tellg() override { return pos_; }
   void seekg(uint64_t pos) override { pos_ = pos; }
+  // True once a read ran past the end: the file is truncated.
+  bool hit_end() const { return hit_end_; }
 
  private:
   const std::string& bytes_;
   uint64_t pos_ = 0;
+  bool hit_end_ = false;
 };
+
+RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryIStream& stream);
 
 RawImage read_exr(const std::string& path) {
   const std::string bytes = read_whole_file(path);
   if (bytes.size() < 4 || !Imf::isImfMagic(bytes.data())) fail(path, "not an OpenEXR file (bad magic number)");
   MemoryIStream stream(bytes, path);
+  try {
+    return decode_exr(path, bytes, stream);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    if (stream.hit_end()) fail(path, "truncated file (data ends early)");
+    throw;
+  }
+}
+
+RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryIStream& stream) {
   Imf::InputFile file(stream);
   const Imf::Header& header = file.header();
   const Imath::Box2i dw = header.dataWindow();
@@ -331,19 +351,26 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
   header.insert("lightprobe.units", Imf::StringAttribute(std::string(to_string(map.units))));
   if (map.layout == Layout::Healpix) header.insert("lightprobe.nside", Imf::IntAttribute(map.nside));
 
+  // The frame buffer must hold the file's pixel type: convert to half here when needed.
   std::vector<float> alpha;
-  Imf::FrameBuffer fb;
-  const size_t xs = 3 * sizeof(float), ys = xs * size_t(img.width);
-  float* base = const_cast<float*>(img.rgb.data());
-  fb.insert("R", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base + 0), xs, ys));
-  fb.insert("G", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base + 1), xs, ys));
-  fb.insert("B", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base + 2), xs, ys));
+  std::vector<Imath::half> rgb_h, alpha_h;
   if (mask) {
     alpha.resize(img.valid.size());
     for (size_t i = 0; i < alpha.size(); ++i) alpha[i] = img.valid[i] ? 1.0f : 0.0f;
-    fb.insert("A", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(alpha.data()), sizeof(float),
-                              sizeof(float) * size_t(img.width)));
   }
+  if (half) {
+    rgb_h.assign(img.rgb.begin(), img.rgb.end());
+    alpha_h.assign(alpha.begin(), alpha.end());
+  }
+  const size_t size = half ? sizeof(Imath::half) : sizeof(float);
+  char* base = half ? reinterpret_cast<char*>(rgb_h.data()) : reinterpret_cast<char*>(const_cast<float*>(img.rgb.data()));
+  char* abase = half ? reinterpret_cast<char*>(alpha_h.data()) : reinterpret_cast<char*>(alpha.data());
+  Imf::FrameBuffer fb;
+  const size_t xs = 3 * size, ys = xs * size_t(img.width);
+  fb.insert("R", Imf::Slice(type, base + 0 * size, xs, ys));
+  fb.insert("G", Imf::Slice(type, base + 1 * size, xs, ys));
+  fb.insert("B", Imf::Slice(type, base + 2 * size, xs, ys));
+  if (mask) fb.insert("A", Imf::Slice(type, abase, size, size * size_t(img.width)));
   Imf::StdOSStream os;
   {
     Imf::OutputFile out(os, header);

@@ -1,0 +1,761 @@
+#include "core/image_io.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+
+extern "C" {
+#include <chealpix.h>
+}
+
+namespace fs = std::filesystem;
+
+namespace lp {
+namespace {
+
+const std::string kData = LIGHTPROBE_SHARED_DATA;
+
+// A fresh directory under the test temp dir, one per test.
+std::string temp_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::path(::testing::TempDir()) / "lightprobe_image_io" / info->name();
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string() + "/";
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+  ASSERT_TRUE(out.good()) << path;
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void truncate_to_half(const std::string& from, const std::string& to) {
+  const std::string bytes = read_bytes(from);
+  ASSERT_GT(bytes.size(), 16u);
+  write_bytes(to, bytes.substr(0, bytes.size() / 2));
+}
+
+// Runs `f`, expects an InputError of one line that contains every fragment; returns it.
+std::string expect_input_error(const std::function<void()>& f, std::initializer_list<std::string> fragments) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\r'), std::string::npos) << msg;
+    for (const auto& frag : fragments) EXPECT_NE(msg.find(frag), std::string::npos) << "'" << frag << "' not in: " << msg;
+    return msg;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "expected InputError, got other exception: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "expected InputError, nothing thrown";
+  return {};
+}
+
+// Radiance-like values over several decades, deterministic.
+void fill_random(EnvMap& map, unsigned seed, double lo_exp = -3, double hi_exp = 4) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> e(lo_exp, hi_exp);
+  for (float& v : map.rgb) v = float(std::pow(10.0, e(rng)));
+}
+
+size_t count_temp_files(const std::string& dir) {
+  size_t n = 0;
+  for (const auto& entry : fs::directory_iterator(dir))
+    if (entry.path().filename().string().find(".tmp-") != std::string::npos) ++n;
+  return n;
+}
+
+// Renames the "lightprobe.layout" attribute of an EXR written by write_envmap so the file
+// looks foreign (same length, so the header stays valid).
+void strip_layout_attribute(const std::string& path) {
+  std::string bytes = read_bytes(path);
+  const size_t at = bytes.find("lightprobe.layout");
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, 17, "foreign.attribute");
+  write_bytes(path, bytes);
+}
+
+template <class T>
+void put(std::string& s, T v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof v);  // EXR is little-endian, as the test host
+}
+
+struct ExrChannel {
+  std::string name;  // channels must be given in alphabetical order
+  int type;          // 1 = HALF, 2 = FLOAT
+  std::function<uint32_t(int x, int y)> bits;  // raw bits of each sample
+};
+
+// An uncompressed scanline OpenEXR file written from the file-format specification, so the
+// reader is checked against bytes it did not produce.
+std::string handmade_exr(int w, int h, const std::vector<ExrChannel>& channels) {
+  std::string s = "\x76\x2f\x31\x01";
+  put<int32_t>(s, 2);
+  auto attr = [&](const std::string& name, const std::string& type, const std::string& value) {
+    s += name + '\0' + type + '\0';
+    put<int32_t>(s, int32_t(value.size()));
+    s += value;
+  };
+  std::string ch;
+  for (const auto& c : channels) {
+    ch += c.name + '\0';
+    put<int32_t>(ch, c.type);
+    put<uint32_t>(ch, 0);  // pLinear + reserved
+    put<int32_t>(ch, 1);
+    put<int32_t>(ch, 1);
+  }
+  ch += '\0';
+  std::string box;
+  for (int v : {0, 0, w - 1, h - 1}) put<int32_t>(box, v);
+  std::string one, center;
+  put<float>(one, 1.0f);
+  put<float>(center, 0.0f);
+  put<float>(center, 0.0f);
+  attr("channels", "chlist", ch);
+  attr("compression", "compression", std::string(1, '\0'));
+  attr("dataWindow", "box2i", box);
+  attr("displayWindow", "box2i", box);
+  attr("lineOrder", "lineOrder", std::string(1, '\0'));
+  attr("pixelAspectRatio", "float", one);
+  attr("screenWindowCenter", "v2f", center);
+  attr("screenWindowWidth", "float", one);
+  s += '\0';
+  size_t line_bytes = 0;
+  for (const auto& c : channels) line_bytes += size_t(w) * (c.type == 1 ? 2 : 4);
+  const size_t first = s.size() + 8 * size_t(h);
+  for (int y = 0; y < h; ++y) put<uint64_t>(s, first + size_t(y) * (8 + line_bytes));
+  for (int y = 0; y < h; ++y) {
+    put<int32_t>(s, y);
+    put<int32_t>(s, int32_t(line_bytes));
+    for (const auto& c : channels)
+      for (int x = 0; x < w; ++x) {
+        if (c.type == 1)
+          put<uint16_t>(s, uint16_t(c.bits(x, y)));
+        else
+          put<uint32_t>(s, c.bits(x, y));
+      }
+  }
+  return s;
+}
+
+uint32_t float_bits(float v) {
+  uint32_t u;
+  std::memcpy(&u, &v, 4);
+  return u;
+}
+
+// ----------------------------------------------------------------------------- OpenEXR
+
+TEST(ImageIo, ExrFloatRoundTripIsExactAndKeepsLayoutUnitsAndMask) {
+  const std::string dir = temp_dir();
+  // 2:1 hemisphere: inference alone would call it latlong, so reading it back as
+  // hemisphere proves the attribute is written and read.
+  EnvMap map = make_hemisphere(40, 20);
+  fill_random(map, 1);
+  map.units = Units::Radiance;
+  map.valid.assign(map.pixel_count(), 1);
+  for (size_t i = 0; i < map.pixel_count(); i += 7) map.valid[i] = 0;
+  write_envmap(dir + "m.exr", map);
+  const EnvMap back = read_envmap(dir + "m.exr");
+  EXPECT_EQ(back.layout, Layout::Hemisphere);
+  EXPECT_EQ(back.units, Units::Radiance);
+  ASSERT_EQ(back.width, 40);
+  ASSERT_EQ(back.height, 20);
+  EXPECT_EQ(back.rgb, map.rgb);
+  EXPECT_EQ(back.valid, map.valid);
+  EXPECT_EQ(count_temp_files(dir), 0u);
+}
+
+TEST(ImageIo, ExrHalfRoundTripIsWithinHalfPrecision) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(64, 32);
+  fill_random(map, 2, -3, 4.6);  // up to ~4e4, inside the half range
+  map.units = Units::Radiance;
+  map.valid.assign(map.pixel_count(), 0);
+  for (size_t i = 0; i < map.pixel_count(); i += 3) map.valid[i] = 1;
+  write_envmap(dir + "h.exr", map, {ExrPixelType::Half});
+  const EnvMap back = read_envmap(dir + "h.exr");
+  EXPECT_EQ(back.layout, Layout::LatLong);
+  EXPECT_EQ(back.units, Units::Radiance);
+  EXPECT_EQ(back.valid, map.valid);
+  ASSERT_EQ(back.rgb.size(), map.rgb.size());
+  double worst = 0;
+  for (size_t i = 0; i < map.rgb.size(); ++i)
+    worst = std::max(worst, std::fabs(double(back.rgb[i]) - map.rgb[i]) / map.rgb[i]);
+  EXPECT_LE(worst, std::ldexp(1.0, -11) * 1.0001);  // half: 10-bit mantissa, rounded
+  EXPECT_GT(worst, 0.0);                            // and it really was stored as half
+  EXPECT_LT(fs::file_size(dir + "h.exr"), 64 * 32 * 3 * 4u);
+}
+
+TEST(ImageIo, ExrHalfRefusesValuesBeyondTheHalfRangeInsteadOfWritingInfinity) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(8, 4);
+  map.pixel(9)[1] = 1e5f;
+  expect_input_error([&] { write_envmap(dir + "big.exr", map, {ExrPixelType::Half}); }, {dir + "big.exr", "half"});
+  EXPECT_FALSE(fs::exists(dir + "big.exr"));
+  EXPECT_EQ(count_temp_files(dir), 0u);
+}
+
+TEST(ImageIo, ExrWithoutMaskHasNoAlphaAndAForeignAlphaIsNotAMask) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(16, 8);
+  fill_random(map, 3);
+  write_envmap(dir + "plain.exr", map);
+  EXPECT_EQ(read_bytes(dir + "plain.exr").find(std::string("A\0", 2)), std::string::npos);  // no channel "A"
+  EXPECT_TRUE(read_envmap(dir + "plain.exr").valid.empty());
+
+  map.valid.assign(map.pixel_count(), 1);
+  map.valid[5] = 0;
+  write_envmap(dir + "foreign.exr", map);
+  strip_layout_attribute(dir + "foreign.exr");
+  const EnvMap back = read_envmap(dir + "foreign.exr");
+  EXPECT_EQ(back.layout, Layout::LatLong);  // inferred from 16x8
+  EXPECT_TRUE(back.valid.empty());
+  EXPECT_EQ(back.rgb, map.rgb);
+}
+
+TEST(ImageIo, HandmadeExrFilesReadToTheirKnownValues) {
+  const std::string dir = temp_dir();
+  // Half RGBA, no lightprobe attributes: 1.0 = 0x3c00, 0.5 = 0x3800, 2.0 = 0x4000; alpha 0.
+  const auto half = handmade_exr(4, 2, {{"A", 1, [](int, int) { return 0u; }},
+                                        {"B", 1, [](int, int) { return 0x4000u; }},
+                                        {"G", 1, [](int, int) { return 0x3800u; }},
+                                        {"R", 1, [](int x, int y) { return x == 1 && y == 1 ? 0x3800u : 0x3c00u; }}});
+  write_bytes(dir + "half.exr", half);
+  const EnvMap h = read_envmap(dir + "half.exr");
+  EXPECT_EQ(h.layout, Layout::LatLong);
+  EXPECT_TRUE(h.valid.empty());  // a foreign alpha is not a mask
+  EXPECT_EQ(h.pixel(0)[0], 1.0f);
+  EXPECT_EQ(h.pixel(0)[1], 0.5f);
+  EXPECT_EQ(h.pixel(0)[2], 2.0f);
+  EXPECT_EQ(h.pixel(5)[0], 0.5f);
+
+  // Float luminance only: grey.
+  const auto grey = handmade_exr(8, 4, {{"Y", 2, [](int x, int y) { return float_bits(0.25f * float(y * 8 + x)); }}});
+  write_bytes(dir + "y.exr", grey);
+  const EnvMap g = read_envmap(dir + "y.exr");
+  EXPECT_EQ(g.layout, Layout::LatLong);
+  for (int i = 0; i < 32; ++i)
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(g.pixel(i)[c], 0.25f * float(i));
+
+  // Neither RGB nor Y: refused, listing what is there.
+  write_bytes(dir + "z.exr", handmade_exr(2, 1, {{"Z", 2, [](int, int) { return 0u; }}}));
+  expect_input_error([&] { read_envmap(dir + "z.exr"); }, {dir + "z.exr", "channels: Z"});
+}
+
+TEST(ImageIo, ExrWithAnUnknownLayoutAttributeIsRefused) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(16, 8);
+  write_envmap(dir + "m.exr", map);
+  std::string bytes = read_bytes(dir + "m.exr");
+  const size_t at = bytes.find("latlong");  // the attribute's value
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, 7, "cubemap");
+  write_bytes(dir + "m.exr", bytes);
+  expect_input_error([&] { read_envmap(dir + "m.exr"); }, {dir + "m.exr", "unknown", "cubemap"});
+}
+
+// ----------------------------------------------------------------------------- Radiance HDR
+
+TEST(ImageIo, HdrRoundTripIsWithinRgbePrecisionAndKeepsMetadata) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_hemisphere(64, 32);
+  fill_random(map, 4, -4, 5);
+  // Flat rows and repeated pixels exercise the run-length encoder's runs.
+  for (int u = 0; u < 64; ++u)
+    for (int c = 0; c < 3; ++c) map.pixel(u)[c] = 3.5f;
+  for (int u = 10; u < 30; ++u) std::copy_n(map.pixel(64 + 9), 3, map.pixel(64 + u));
+  map.pixel(100)[0] = 0.0f;
+  map.pixel(101)[0] = map.pixel(101)[1] = map.pixel(101)[2] = 0.0f;
+  map.units = Units::Radiance;
+  write_envmap(dir + "m.hdr", map);
+  EXPECT_LT(fs::file_size(dir + "m.hdr"), 64 * 32 * 4u);  // runs were compressed
+  const EnvMap back = read_envmap(dir + "m.hdr");
+  EXPECT_EQ(back.layout, Layout::Hemisphere);
+  EXPECT_EQ(back.units, Units::Radiance);
+  ASSERT_EQ(back.rgb.size(), map.rgb.size());
+  double worst = 0;
+  for (size_t i = 0; i < map.pixel_count(); ++i) {
+    const float* a = map.pixel(i);
+    const float* b = back.pixel(i);
+    const double mx = std::max({a[0], a[1], a[2]});
+    for (int c = 0; c < 3; ++c) {
+      if (mx == 0) {
+        ASSERT_EQ(b[c], 0.0f);
+        continue;
+      }
+      worst = std::max(worst, std::fabs(double(b[c]) - a[c]) / mx);
+    }
+  }
+  // Shared exponent, 8-bit mantissas rounded: error <= max channel / 256.
+  EXPECT_LE(worst, 1.0 / 256 + 1e-7);
+  EXPECT_EQ(back.pixel(0)[0], 3.5f);  // exactly representable
+}
+
+TEST(ImageIo, HdrNewStyleRunLengthScanlinesDecodeToKnownValues) {
+  const std::string dir = temp_dir();
+  std::string f = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 8\n";
+  f += std::string("\x02\x02\x00\x08", 4);
+  f += std::string("\x88\x64");                                     // R: run of 8 x 100
+  f += std::string("\x08\x01\x02\x03\x04\x05\x06\x07\x08", 9);      // G: 8 literals 1..8
+  f += std::string("\x84\x05\x04\x06\x07\x08\x09", 7);              // B: run of 4 x 5, then 6..9
+  f += std::string("\x88\x81");                                     // E: run of 8 x 129
+  write_bytes(dir + "rle.hdr", f);
+  const EnvMap map = read_envmap(dir + "rle.hdr", {.layout = Layout::Hemisphere});
+  ASSERT_EQ(map.width, 8);
+  const float b[8] = {5, 5, 5, 5, 6, 7, 8, 9};
+  for (int x = 0; x < 8; ++x) {  // m * 2^(129 - 136)
+    EXPECT_EQ(map.pixel(x)[0], 100.0f / 128);
+    EXPECT_EQ(map.pixel(x)[1], float(x + 1) / 128);
+    EXPECT_EQ(map.pixel(x)[2], b[x] / 128);
+  }
+}
+
+TEST(ImageIo, HdrFlatAndOldStyleRunLengthScanlinesDecodeToKnownValues) {
+  const std::string dir = temp_dir();
+  // 300 wide: row 0 = one pixel, then old-style runs 43 and 1<<8 (the second code's count
+  // is shifted by 8): 1 + 43 + 256 = 300. Row 1 = flat pixels.
+  std::string f = "#?RGBE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 300\n";
+  f += std::string("\x80\x40\x20\x81", 4);  // (1, 0.5, 0.25)
+  f += std::string("\x01\x01\x01\x2b", 4);
+  f += std::string("\x01\x01\x01\x01", 4);
+  for (int x = 0; x < 300; ++x) {
+    f += char(x % 200 + 10);
+    f += char(0);
+    f += char(255);
+    f += char(x < 150 ? 0x82 : 0);  // exponent 0: black
+  }
+  write_bytes(dir + "old.hdr", f);
+  const EnvMap map = read_envmap(dir + "old.hdr");
+  EXPECT_EQ(map.layout, Layout::Hemisphere);
+  ASSERT_EQ(map.width, 300);
+  for (int x = 0; x < 300; ++x) {
+    ASSERT_EQ(map.pixel(x)[0], 1.0f) << x;
+    ASSERT_EQ(map.pixel(x)[1], 0.5f) << x;
+    ASSERT_EQ(map.pixel(x)[2], 0.25f) << x;
+    const float* p = map.pixel(300 + x);
+    ASSERT_EQ(p[0], x < 150 ? float(x % 200 + 10) / 64 : 0.0f) << x;
+    ASSERT_EQ(p[1], 0.0f);
+    ASSERT_EQ(p[2], x < 150 ? 255.0f / 64 : 0.0f);
+  }
+}
+
+TEST(ImageIo, HdrPixelsAreDividedByTheProductOfExposureLines) {
+  const std::string dir = temp_dir();
+  std::string f = "#?RADIANCE\nEXPOSURE=2\nFORMAT=32-bit_rle_rgbe\nEXPOSURE= 0.5\nEXPOSURE=4.0\n\n-Y 1 +X 2\n";
+  f += std::string("\x80\x80\x80\x82\x40\x20\x10\x81", 8);  // (2, 2, 2) and (0.5, 0.25, 0.125)
+  write_bytes(dir + "exp.hdr", f);
+  const EnvMap map = read_envmap(dir + "exp.hdr");
+  EXPECT_EQ(map.layout, Layout::LatLong);
+  EXPECT_EQ(map.pixel(0)[0], 0.5f);
+  EXPECT_EQ(map.pixel(1)[0], 0.125f);
+  EXPECT_EQ(map.pixel(1)[2], 0.03125f);
+}
+
+TEST(ImageIo, HdrWithXyzePixelsOrAnotherOrientationOrNoMagicIsRefused) {
+  const std::string dir = temp_dir();
+  const std::string px(8, '\x40');
+  write_bytes(dir + "xyz.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 1 +X 2\n" + px);
+  expect_input_error([&] { read_envmap(dir + "xyz.hdr"); }, {dir + "xyz.hdr", "XYZE"});
+  write_bytes(dir + "flip.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n+Y 1 +X 2\n" + px);
+  expect_input_error([&] { read_envmap(dir + "flip.hdr"); }, {dir + "flip.hdr", "orientation", "+Y 1 +X 2"});
+  write_bytes(dir + "nomagic.hdr", "FORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 2\n" + px);
+  expect_input_error([&] { read_envmap(dir + "nomagic.hdr"); }, {dir + "nomagic.hdr", "not a Radiance HDR file"});
+}
+
+TEST(ImageIo, HdrDeclaringALayoutItsSizeDoesNotFitIsRefused) {
+  const std::string dir = temp_dir();
+  std::string f = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\nLIGHTPROBE_LAYOUT=latlong\n\n-Y 100 +X 300\n";
+  f += std::string(300 * 100 * 4, '\0');  // flat black pixels
+  write_bytes(dir + "bad.hdr", f);
+  expect_input_error([&] { read_envmap(dir + "bad.hdr"); }, {dir + "bad.hdr", "latlong", "300x100"});
+  // The same pixels read fine once the caller overrides the layout.
+  EXPECT_EQ(read_envmap(dir + "bad.hdr", {.layout = Layout::Hemisphere}).width, 300);
+  // And an override that does not fit is refused too.
+  expect_input_error([&] { read_envmap(dir + "bad.hdr", {.layout = Layout::Healpix}); }, {dir + "bad.hdr", "healpix"});
+
+  std::string g = "#?RADIANCE\nLIGHTPROBE_LAYOUT=cube\n\n-Y 1 +X 2\n" + std::string(8, '\0');
+  write_bytes(dir + "cube.hdr", g);
+  expect_input_error([&] { read_envmap(dir + "cube.hdr"); }, {dir + "cube.hdr", "unknown", "cube"});
+  std::string u = "#?RADIANCE\nLIGHTPROBE_UNITS=lux\n\n-Y 1 +X 2\n" + std::string(8, '\0');
+  write_bytes(dir + "units.hdr", u);
+  expect_input_error([&] { read_envmap(dir + "units.hdr"); }, {dir + "units.hdr", "units", "lux"});
+}
+
+// ----------------------------------------------------------------------------- PFM
+
+TEST(ImageIo, PfmRoundTripIsExact) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(30, 15);
+  fill_random(map, 5, -30, 30);
+  write_envmap(dir + "m.pfm", map);
+  const EnvMap back = read_envmap(dir + "m.pfm");
+  EXPECT_EQ(back.layout, Layout::LatLong);
+  EXPECT_EQ(back.width, 30);
+  EXPECT_EQ(back.rgb, map.rgb);
+}
+
+TEST(ImageIo, PfmRowsAreStoredBottomToTopInEitherByteOrder) {
+  const std::string dir = temp_dir();
+  // Big-endian (positive scale) colour, 2x2: stored rows are bottom first.
+  auto be = [](float v) {
+    uint32_t u;
+    std::memcpy(&u, &v, 4);
+    std::string s(4, '\0');
+    for (int k = 0; k < 4; ++k) s[k] = char((u >> (24 - 8 * k)) & 0xff);
+    return s;
+  };
+  std::string f = "PF\n2 2\n1.0\n";
+  for (int i = 0; i < 12; ++i) f += be(float(i + 1));
+  write_bytes(dir + "be.pfm", f);
+  const EnvMap map = read_envmap(dir + "be.pfm");
+  EXPECT_EQ(map.layout, Layout::Hemisphere);
+  // Top-left is the first pixel of the second stored row: values 7, 8, 9.
+  EXPECT_EQ(map.pixel(0)[0], 7.0f);
+  EXPECT_EQ(map.pixel(0)[2], 9.0f);
+  EXPECT_EQ(map.pixel(2)[0], 1.0f);  // bottom-left
+  EXPECT_EQ(map.pixel(3)[2], 6.0f);
+
+  // Little-endian grey, 2x1: replicated into three channels.
+  std::string g = "Pf\n2 1\n-1.0\n";
+  const float v[2] = {0.5f, 2.0f};
+  g.append(reinterpret_cast<const char*>(v), sizeof v);  // the test host is little-endian
+  write_bytes(dir + "grey.pfm", g);
+  const EnvMap grey = read_envmap(dir + "grey.pfm");
+  EXPECT_EQ(grey.layout, Layout::LatLong);
+  EXPECT_EQ(grey.pixel(1)[0], 2.0f);
+  EXPECT_EQ(grey.pixel(1)[1], 2.0f);
+  EXPECT_EQ(grey.pixel(0)[2], 0.5f);
+}
+
+// ----------------------------------------------------------------------------- HEALPix
+
+TEST(ImageIo, HealpixNestedIndexAndFaceXyAreInversesForEveryPixelOfNside4) {
+  const int nside = 4;
+  std::vector<int> seen(12 * nside * nside, 0);
+  for (int f = 0; f < 12; ++f)
+    for (int iy = 0; iy < nside; ++iy)
+      for (int ix = 0; ix < nside; ++ix) {
+        const size_t n = healpix_nested_index(nside, f, ix, iy);
+        ASSERT_LT(n, seen.size());
+        ++seen[n];
+        int f2, x2, y2;
+        healpix_face_xy(nside, n, &f2, &x2, &y2);
+        EXPECT_EQ(f2, f);
+        EXPECT_EQ(x2, ix);
+        EXPECT_EQ(y2, iy);
+      }
+  EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int c) { return c == 1; }));
+  // ix on the even bits, iy on the odd bits.
+  EXPECT_EQ(healpix_nested_index(nside, 0, 1, 0), 1u);
+  EXPECT_EQ(healpix_nested_index(nside, 0, 0, 1), 2u);
+  EXPECT_EQ(healpix_nested_index(nside, 0, 2, 0), 4u);
+  EXPECT_EQ(healpix_nested_index(nside, 3, 3, 3), 3u * 16 + 15);
+}
+
+TEST(ImageIo, HealpixFaceCornersAgreeWithChealpixGeometry) {
+  // In HEALPix, (ix, iy) = (nside-1, nside-1) is a face's north corner, (0, 0) its south
+  // corner: the northernmost pixel of faces 0-3 lies on ring 1, z = 1 - 1/(3 nside^2).
+  const int nside = 4;
+  const double z_ring1 = 1.0 - 1.0 / (3.0 * nside * nside);
+  for (int f = 0; f < 4; ++f) {
+    double v[3];
+    pix2vec_nest64(nside, int64_t(healpix_nested_index(nside, f, nside - 1, nside - 1)), v);
+    EXPECT_NEAR(v[2], z_ring1, 1e-12) << "face " << f;
+  }
+  for (int f = 8; f < 12; ++f) {
+    double v[3];
+    pix2vec_nest64(nside, int64_t(healpix_nested_index(nside, f, 0, 0)), v);
+    EXPECT_NEAR(v[2], -z_ring1, 1e-12) << "face " << f;
+  }
+}
+
+TEST(ImageIo, HealpixMapsRoundTripThroughTheFileLayoutInEveryFormat) {
+  const std::string dir = temp_dir();
+  const int nside = 4;
+  EnvMap map = make_healpix(nside);
+  for (size_t i = 0; i < map.pixel_count(); ++i) {
+    map.pixel(i)[0] = float(i + 1);
+    map.pixel(i)[1] = 0.5f * float(i + 1);
+    map.pixel(i)[2] = 1.0f;
+  }
+  for (const char* name : {"h.exr", "h.hdr", "h.pfm"}) {
+    SCOPED_TRACE(name);
+    write_envmap(dir + name, map);
+    const EnvMap back = read_envmap(dir + name);
+    EXPECT_EQ(back.layout, Layout::Healpix);
+    EXPECT_EQ(back.nside, nside);
+    ASSERT_EQ(back.width, 12 * nside * nside);
+    EXPECT_EQ(back.height, 1);
+    for (size_t i = 0; i < map.pixel_count(); ++i)  // i + 1 <= 192 is exact in RGBE too
+      ASSERT_NEAR(back.pixel(i)[0], map.pixel(i)[0], map.pixel(i)[0] / 256) << i;
+  }
+  // The file image (PFM, stored bottom to top): nside wide, 12 nside tall; face f's
+  // (ix, iy) at row f nside + iy.
+  const std::string pfm = read_bytes(dir + "h.pfm");
+  const std::string head = "PF\n4 48\n-1.0\n";
+  ASSERT_EQ(pfm.substr(0, head.size()), head);
+  const int f = 7, ix = 2, iy = 1, row = f * nside + iy;
+  float r;
+  std::memcpy(&r, pfm.data() + head.size() + (size_t(12 * nside - 1 - row) * nside + ix) * 12, 4);
+  EXPECT_EQ(r, float(healpix_nested_index(nside, f, ix, iy) + 1));
+}
+
+// ----------------------------------------------------------------------------- real maps
+
+TEST(ImageIo, Spot1LuxHasExactlyOneLitPixelAt597And213) {
+  const EnvMap map = read_envmap(kData + "/probes-threejs-spot-and-cube/spot1Lux.hdr");
+  EXPECT_EQ(map.layout, Layout::LatLong);
+  ASSERT_EQ(map.width, 1024);
+  ASSERT_EQ(map.height, 512);
+  size_t lit = 0, where = 0;
+  for (size_t i = 0; i < map.pixel_count(); ++i)
+    if (map.pixel(i)[0] != 0 || map.pixel(i)[1] != 0 || map.pixel(i)[2] != 0) ++lit, where = i;
+  EXPECT_EQ(lit, 1u);
+  EXPECT_EQ(where % 1024, 597u);
+  EXPECT_EQ(where / 1024, 213u);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(map.pixel(where)[c], 26368.0, 26368.0 / 256);
+}
+
+TEST(ImageIo, BlenderStudioLightsReadAsLatlongWithTheirSunsAndNoRingingBelowZero) {
+  for (const char* name : {"city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset"}) {
+    SCOPED_TRACE(name);
+    const std::string path = kData + "/probes-blender-studiolights/" + name + ".exr";
+    const EnvMap map = read_envmap(path);
+    EXPECT_EQ(map.layout, Layout::LatLong);
+    EXPECT_EQ(map.width, 1024);
+    EXPECT_EQ(map.height, 512);
+    EXPECT_TRUE(map.valid.empty());
+    EXPECT_EQ(find_bad_pixel(map, path), "");
+    const float mx = *std::max_element(map.rgb.begin(), map.rgb.end());
+    double mean = 0;
+    for (float v : map.rgb) mean += v;
+    mean /= double(map.rgb.size());
+    EXPECT_GT(mean, 0.1);  // "averages about 0.5" (night is darker)
+    EXPECT_LT(mean, 1.5);
+    const std::string n = name;
+    // PROVENANCE.md: the sun in city, interior and sunrise reaches about 3.4e4.
+    if (n == "city" || n == "interior" || n == "sunrise") {
+      EXPECT_GT(mx, 1e4);
+      EXPECT_LT(mx, 6.5e4);
+    } else {
+      EXPECT_GT(mx, 50.0);
+    }
+  }
+}
+
+TEST(ImageIo, ProbulatorProbesReadAsSmallLatlongMaps) {
+  float grace_max = 0;
+  for (const char* name : {"ennis", "grace", "pisa", "uffizi", "wells"}) {
+    SCOPED_TRACE(name);
+    const EnvMap map = read_envmap(kData + "/probes-probulator-latlong256/" + name + ".hdr");
+    EXPECT_EQ(map.layout, Layout::LatLong);
+    EXPECT_EQ(map.width, 256);
+    EXPECT_EQ(map.height, 128);
+    const float mx = *std::max_element(map.rgb.begin(), map.rgb.end());
+    EXPECT_GT(mx, 1.0f);
+    if (std::string(name) == "grace") grace_max = mx;
+  }
+  EXPECT_GT(grace_max, 1000.0f);  // Grace Cathedral's small strong lights
+}
+
+TEST(ImageIo, PisaCubeFacesReadAsSquareHemisphereImages) {
+  for (const char* face : {"px", "nx", "py", "ny", "pz", "nz"}) {
+    SCOPED_TRACE(face);
+    const EnvMap map = read_envmap(kData + "/probes-threejs-spot-and-cube/pisa_cube/" + face + ".hdr");
+    EXPECT_EQ(map.layout, Layout::Hemisphere);
+    EXPECT_EQ(map.width, 256);
+    EXPECT_EQ(map.height, 256);
+    EXPECT_GT(*std::max_element(map.rgb.begin(), map.rgb.end()), 0.1f);
+  }
+}
+
+TEST(ImageIo, MemorialReferenceReadsWithAMaximumOfAbout274) {
+  const EnvMap map = read_envmap(kData + "/hdr-memorial-debevec/reference/memorial_radiance_hdrshop.hdr");
+  EXPECT_EQ(map.layout, Layout::Hemisphere);
+  EXPECT_EQ(map.width, 512);
+  EXPECT_EQ(map.height, 768);
+  EXPECT_NEAR(*std::max_element(map.rgb.begin(), map.rgb.end()), 274.0, 274.0 * 0.01);
+}
+
+TEST(ImageIo, CorruptMemorialFileIsRefusedWithOneClearLine) {
+  const std::string path = kData + "/hdr-memorial-debevec/reference/memorial_CORRUPT_from_SSARCandy.hdr";
+  const std::string msg = expect_input_error([&] { read_envmap(path); }, {path, "not a Radiance HDR file", "VIEW="});
+  EXPECT_LT(msg.size(), 400u);
+}
+
+// ----------------------------------------------------------------------------- failures
+
+TEST(ImageIo, TruncatedExrHdrAndPfmFilesAreRefusedWithOneLine) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(128, 64);
+  fill_random(map, 6);
+  for (const char* name : {"m.exr", "m.hdr", "m.pfm"}) {
+    SCOPED_TRACE(name);
+    write_envmap(dir + name, map);
+    const std::string cut = dir + "cut_" + name;
+    truncate_to_half(dir + name, cut);
+    expect_input_error([&] { read_envmap(cut); }, {cut, "truncated file"});
+  }
+  expect_input_error([&] { read_envmap(dir + "cut_m.hdr"); }, {"truncated file (expected 64 scanlines, read"});
+  expect_input_error([&] { read_envmap(dir + "cut_m.pfm"); }, {"truncated file (expected 64 rows, read 31)"});
+  // Real files cut in half: a DWAB EXR and an RLE HDR.
+  truncate_to_half(kData + "/probes-blender-studiolights/city.exr", dir + "city_cut.exr");
+  expect_input_error([&] { read_envmap(dir + "city_cut.exr"); }, {dir + "city_cut.exr: truncated file"});
+  truncate_to_half(kData + "/hdr-memorial-debevec/reference/memorial_radiance_hdrshop.hdr", dir + "mem_cut.hdr");
+  expect_input_error([&] { read_envmap(dir + "mem_cut.hdr"); }, {dir + "mem_cut.hdr", "truncated file"});
+  // Only a few header bytes left.
+  write_bytes(dir + "stub.exr", read_bytes(dir + "m.exr").substr(0, 40));
+  expect_input_error([&] { read_envmap(dir + "stub.exr"); }, {dir + "stub.exr: truncated file"});
+  write_bytes(dir + "empty.hdr", "");
+  expect_input_error([&] { read_envmap(dir + "empty.hdr"); }, {dir + "empty.hdr"});
+}
+
+TEST(ImageIo, NanInfiniteAndNegativePixelsAreRefusedNamingThePixel) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(16, 8);
+  fill_random(map, 7);
+  EnvMap nan = map, inf = map, neg = map;
+  nan.pixel(2 * 16 + 3)[1] = std::numeric_limits<float>::quiet_NaN();
+  inf.pixel(5 * 16 + 11)[0] = std::numeric_limits<float>::infinity();
+  neg.pixel(7 * 16 + 0)[2] = -0.25f;
+  write_envmap(dir + "nan.pfm", nan);
+  write_envmap(dir + "inf.exr", inf);
+  write_envmap(dir + "neg.exr", neg);
+  expect_input_error([&] { read_envmap(dir + "nan.pfm"); }, {dir + "nan.pfm: pixel (3, 2) is NaN"});
+  expect_input_error([&] { read_envmap(dir + "inf.exr"); }, {dir + "inf.exr: pixel (11, 5) is infinite"});
+  expect_input_error([&] { read_envmap(dir + "neg.exr"); }, {dir + "neg.exr: pixel (0, 7) is negative"});
+  // Asked not to check, the values come through untouched.
+  EXPECT_TRUE(std::isnan(read_envmap(dir + "nan.pfm", {.reject_bad_pixels = false}).pixel(2 * 16 + 3)[1]));
+  EXPECT_EQ(read_envmap(dir + "neg.exr", {.reject_bad_pixels = false}).pixel(7 * 16)[2], -0.25f);
+  // RGBE cannot hold them at all.
+  expect_input_error([&] { write_envmap(dir + "neg.hdr", neg); }, {dir + "neg.hdr", "negative"});
+  EXPECT_FALSE(fs::exists(dir + "neg.hdr"));
+}
+
+TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(16, 8);
+  map.valid.assign(map.pixel_count(), 1);
+  map.valid[3] = 0;
+  expect_input_error([&] { write_envmap(dir + "m.hdr", map); }, {dir + "m.hdr", "mask"});
+  expect_input_error([&] { write_envmap(dir + "m.pfm", map); }, {dir + "m.pfm", "mask"});
+  EXPECT_TRUE(fs::is_empty(dir));
+}
+
+TEST(ImageIo, UnknownExtensionsAreRefused) {
+  const std::string dir = temp_dir();
+  write_bytes(dir + "m.tga", "whatever");
+  expect_input_error([&] { read_envmap(dir + "m.tga"); }, {dir + "m.tga", "unsupported map format"});
+  expect_input_error([&] { write_envmap(dir + "m.png", make_latlong(4, 2)); }, {dir + "m.png", "unsupported"});
+  expect_input_error([&] { read_envmap(dir + "missing.exr"); }, {dir + "missing.exr", "cannot open"});
+  EXPECT_FALSE(fs::exists(dir + "m.png"));
+}
+
+TEST(ImageIo, UnwritablePathsAreRefusedAndLeaveNoFileBehind) {
+  const std::string dir = temp_dir();
+  const EnvMap map = make_latlong(8, 4);
+  expect_input_error([&] { write_envmap(dir + "no/such/dir/x.exr", map); },
+                     {dir + "no/such/dir/x.exr: cannot write: No such file or directory"});
+  write_bytes(dir + "file", "x");
+  expect_input_error([&] { write_envmap(dir + "file/x.hdr", map); }, {dir + "file/x.hdr: cannot write:"});
+  // The target is a directory: the temporary file is written, the rename fails, and the
+  // temporary is removed.
+  fs::create_directory(dir + "taken.exr");
+  expect_input_error([&] { write_envmap(dir + "taken.exr", map); }, {dir + "taken.exr: cannot write:"});
+  expect_input_error([&] { write_file_atomically(dir + "taken.exr", "{}"); }, {dir + "taken.exr: cannot write:"});
+  expect_input_error([&] { write_display_image(dir + "nodir/x.png", 1, 1, {0, 0, 0}); }, {dir + "nodir/x.png: cannot write"});
+  EXPECT_EQ(count_temp_files(dir), 0u);
+  EXPECT_TRUE(fs::is_empty(dir + "taken.exr"));
+}
+
+TEST(ImageIo, WriteFileAtomicallyReplacesTheWholeFile) {
+  const std::string dir = temp_dir();
+  write_file_atomically(dir + "a.json", std::string(1000, 'x'));
+  write_file_atomically(dir + "a.json", "{\"ok\": true}\n");
+  EXPECT_EQ(read_bytes(dir + "a.json"), "{\"ok\": true}\n");
+  EXPECT_EQ(count_temp_files(dir), 0u);
+}
+
+// ----------------------------------------------------------------------------- camera images
+
+TEST(ImageIo, CameraImagesAreScaledByTheirBitDepthAndTurnedToRgb) {
+  const std::string dir = temp_dir();
+  // Binary PPM/PGM made by hand: 8-bit colour, 16-bit colour (big-endian), 8-bit grey.
+  write_bytes(dir + "c8.ppm", std::string("P6\n2 1\n255\n") + std::string("\xff\x00\x00\x00\x80\xff", 6));
+  const CameraImage c8 = read_camera_image(dir + "c8.ppm");
+  EXPECT_EQ(c8.width, 2);
+  EXPECT_EQ(c8.height, 1);
+  EXPECT_EQ(c8.bit_depth, 8);
+  const std::vector<float> want8 = {1, 0, 0, 0, 128.0f / 255, 1};
+  ASSERT_EQ(c8.rgb.size(), want8.size());
+  for (size_t i = 0; i < want8.size(); ++i) EXPECT_FLOAT_EQ(c8.rgb[i], want8[i]) << i;
+
+  write_bytes(dir + "c16.ppm", std::string("P6\n1 1\n65535\n") + std::string("\xff\xff\x80\x00\x00\x01", 6));
+  const CameraImage c16 = read_camera_image(dir + "c16.ppm");
+  EXPECT_EQ(c16.bit_depth, 16);
+  EXPECT_FLOAT_EQ(c16.rgb[0], 1.0f);
+  EXPECT_FLOAT_EQ(c16.rgb[1], 32768.0f / 65535);
+  EXPECT_FLOAT_EQ(c16.rgb[2], 1.0f / 65535);
+
+  write_bytes(dir + "g.pgm", std::string("P5\n1 1\n255\n\x33", 12));
+  const CameraImage g = read_camera_image(dir + "g.pgm");
+  EXPECT_FLOAT_EQ(g.rgb[0], 0.2f);
+  EXPECT_FLOAT_EQ(g.rgb[2], 0.2f);
+}
+
+TEST(ImageIo, MemorialPhotographReadsAsAn8BitPortraitImage) {
+  const CameraImage img = read_camera_image(kData + "/hdr-memorial-debevec/memorial0061.png");
+  EXPECT_EQ(img.width, 512);
+  EXPECT_EQ(img.height, 768);
+  EXPECT_EQ(img.bit_depth, 8);
+  ASSERT_EQ(img.rgb.size(), 512u * 768 * 3);
+  EXPECT_TRUE(std::all_of(img.rgb.begin(), img.rgb.end(), [](float v) { return v >= 0 && v <= 1; }));
+}
+
+TEST(ImageIo, MissingOrUndecodableCameraImagesAreRefused) {
+  const std::string dir = temp_dir();
+  expect_input_error([&] { read_camera_image(dir + "none.png"); }, {dir + "none.png", "cannot open"});
+  write_bytes(dir + "junk.png", "this is not a png");
+  expect_input_error([&] { read_camera_image(dir + "junk.png"); }, {dir + "junk.png", "cannot decode"});
+}
+
+TEST(ImageIo, DisplayImagesAreSrgbEncodedAndClamped) {
+  const std::string dir = temp_dir();
+  // sRGB code 128 is linear 0.21586 (IEC 61966-2-1); out-of-range values clamp.
+  const std::vector<float> rgb = {0.0f, 0.21586f, 1.0f, -1.0f, 2.0f, 0.0031308f};
+  write_display_image(dir + "d.png", 2, 1, rgb);
+  const CameraImage back = read_camera_image(dir + "d.png");
+  ASSERT_EQ(back.bit_depth, 8);
+  const float want[6] = {0, 128, 255, 0, 255, 10};  // 12.92 * 0.0031308 * 255 = 10.3
+  for (int i = 0; i < 6; ++i) EXPECT_FLOAT_EQ(back.rgb[i] * 255, want[i]) << i;
+  write_display_image(dir + "d.jpg", 2, 1, rgb);
+  EXPECT_EQ(read_camera_image(dir + "d.jpg").width, 2);
+  expect_input_error([&] { write_display_image(dir + "d.bmp", 2, 1, rgb); }, {dir + "d.bmp", "unsupported"});
+  EXPECT_EQ(count_temp_files(dir), 0u);
+}
+
+}  // namespace
+}  // namespace lp

@@ -1,9 +1,391 @@
-// Placeholder until the method lands: the factory exists so that everything links.
+// Hemigon: Havran's inverse transform on the hemisphere (see sampling/hemigon.h for the
+// warp and the exact density it samples).
+//
+// Sampler:
+//   - `hemisphere` maps are warped directly (the live case, 360 x 90 from a fisheye).
+//   - Other layouts are resampled (power-preserving) to an upper hemisphere map and, unless
+//     options.upper_only, a lower one: the source turned by a 180 deg rotation about +X
+//     (world_from_source = Rx(180) = diag(1, -1, -1)), so a lower-map direction
+//     (x, y, z) is the world direction (x, -y, -z). The polar size follows the input's
+//     pixel size (latlong W x H -> W x H/2; healpix: pixels of about the same angular
+//     size), at least 360 x 90 and at most 8192 x 2048.
+//   - Full sphere: one Halton sequence (bases 2, 3; indices 1..n; id = index). With
+//     q = P_upper / P (luminance powers), a point with first coordinate x < q goes to the
+//     upper hemisphere as (x / q, y), otherwise to the lower as ((x - q) / (1 - q), y).
+//     Each hemisphere gets the Halton points of a sub-box of the square (still well
+//     stratified), about q n of them, every prefix stays progressive and ids are stable.
+//   - Equal power: each light carries P / n of luminance; rgb is the colour of the sampled
+//     density at the light (the interpolated radiance, normalised to luminance 1) times
+//     P / n; solid_angle = (P / n) / f, the solid angle that carries 1/n of the power at
+//     that radiance. Finally the per-channel totals are matched to the map's power.
+#include "sampling/hemigon.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <mutex>
+
 #include "core/error.h"
+#include "core/resample.h"
+#include "sampling/concentric_map.h"
+#include "sampling/halton.h"
 #include "sampling/methods.h"
+#include "sampling/power.h"
 
 namespace lp {
 
-std::unique_ptr<Sampler> make_hemigon_sampler(const SamplerOptions&) { throw InputError("hemigon is not implemented yet"); }
+void HemigonWarp::build(const EnvMap& map) {
+  if (map.layout != Layout::Hemisphere)
+    throw InputError(fmt::format("hemigon: the warp needs a hemisphere map, got {}", describe_size(map)));
+  const int W = map.width, H = map.height;
+  width_ = W;
+  height_ = H;
+  dphi_ = 2 * M_PI / W;
+  const size_t npix = map.pixel_count();
+  rgb_.resize(3 * npix);
+  cum_.resize(size_t(H) * size_t(W + 1));
+  bounds_.resize(size_t(H) + 2);
+  seg_cum_.resize(size_t(H) + 2);
+  row_density_.resize(size_t(H));
+  power_ = 0;
+  rgb_power_ = {0, 0, 0};
+
+  // Ring boundaries in s = 1 - cos(theta) = 2 sin^2(theta / 2) (accurate near the pole).
+  auto s_at = [H](int v) {
+    if (v >= H) return 1.0;
+    const double half = 0.5 * (M_PI / 2) * double(v) / H;
+    return 2 * std::sin(half) * std::sin(half);
+  };
+  double s0 = 0;
+  for (int v = 0; v < H; ++v) {
+    const double s1 = s_at(v + 1);
+    const double ds = s1 - s0;  // pixel solid angle / dphi
+    const float* src = map.rgb.data() + 3 * size_t(v) * size_t(W);
+    float* dst = rgb_.data() + 3 * size_t(v) * size_t(W);
+    double* cum = cum_.data() + size_t(v) * size_t(W + 1);
+    double acc = 0, r = 0, g = 0, b = 0;
+    cum[0] = 0;
+    const bool all_valid = map.valid.empty();
+    for (int u = 0; u < W; ++u) {
+      const size_t i = size_t(v) * size_t(W) + size_t(u);
+      if (all_valid || map.valid[i]) {
+        dst[3 * u] = src[3 * u];
+        dst[3 * u + 1] = src[3 * u + 1];
+        dst[3 * u + 2] = src[3 * u + 2];
+        r += src[3 * u];
+        g += src[3 * u + 1];
+        b += src[3 * u + 2];
+        const float y = luminance(src[3 * u], src[3 * u + 1], src[3 * u + 2]);
+        if (!(y >= 0))
+          throw InputError(fmt::format("hemigon: pixel ({}, {}) is NaN or negative", u, v));
+        acc += double(y);
+      } else {
+        dst[3 * u] = dst[3 * u + 1] = dst[3 * u + 2] = 0.0f;
+      }
+      cum[u + 1] = acc;
+    }
+    row_density_[size_t(v)] = dphi_ * acc;
+    power_ += dphi_ * acc * ds;
+    rgb_power_[0] += dphi_ * ds * r;
+    rgb_power_[1] += dphi_ * ds * g;
+    rgb_power_[2] += dphi_ * ds * b;
+    s0 = s1;
+  }
+
+  // Knots k_v in s where ring v's value is taken; f is linear in s between knots and
+  // constant from the last knot to the horizon. The hats of the rings (1 at their knot,
+  // linear to 0 at the neighbouring knots) sum to one, so constant maps stay constant;
+  // the knots are chosen so that each hat integrates to its ring's width ds_v, so every
+  // pixel keeps its power exactly: k_0 = 0 (the pole), k_1 = 2 s_1, and
+  // k_v+1 = k_v-1 + 2 ds_v. They lie within 1/6 ring of the ring midpoints (exactly at
+  // theta ~ sqrt(v (v+1)) dtheta near the pole) and are increasing for every H tried
+  // (2..3000); if rounding ever broke that, the midpoints are used instead.
+  if (knots_height_ != H) {
+    knots_.resize(size_t(H));
+    knots_[0] = 0;
+    if (H > 1) knots_[1] = 2 * s_at(1);
+    for (int v = 1; v + 1 < H; ++v) knots_[size_t(v) + 1] = knots_[size_t(v) - 1] + 2 * (s_at(v + 1) - s_at(v));
+    bool ok = true;
+    for (int v = 0; v + 1 < H; ++v) ok = ok && knots_[size_t(v)] < knots_[size_t(v) + 1];
+    ok = ok && knots_[size_t(H) - 1] < 1;
+    if (!ok)
+      for (int v = 0; v < H; ++v) knots_[size_t(v)] = 0.5 * (s_at(v) + s_at(v + 1));
+    knots_height_ = H;
+  }
+  // Segments j = 0..H: [bounds_j, bounds_j+1] between rings max(j - 1, 0) and min(j, H - 1).
+  bounds_[0] = 0;
+  for (int v = 0; v < H; ++v) bounds_[size_t(v) + 1] = knots_[size_t(v)];
+  bounds_[size_t(H) + 1] = 1;
+  seg_cum_[0] = 0;
+  for (int j = 0; j <= H; ++j) {
+    const double a = row_density_[size_t(std::max(j - 1, 0))], b = row_density_[size_t(std::min(j, H - 1))];
+    seg_cum_[size_t(j) + 1] = seg_cum_[size_t(j)] + 0.5 * (a + b) * (bounds_[size_t(j) + 1] - bounds_[size_t(j)]);
+  }
+}
+
+HemigonWarp::Sample HemigonWarp::warp(double x, double y) const {
+  const int W = width_, H = height_;
+  const DiscPoint disc = concentric_square_to_disc(std::clamp(x, 0.0, 1.0), std::clamp(y, 0.0, 1.0));
+  const double xi1 = std::min(1.0, disc.r * disc.r), xi2 = disc.phi / (2 * M_PI);
+
+  // Marginal: s from xi1 through the piecewise quadratic CDF.
+  const double total = seg_cum_[size_t(H) + 1];
+  const double R = std::min(xi1 * total, total);
+  int j = 0;
+  double xs = 0;  // offset of s inside segment j
+  if (R > 0) {
+    int lo = 0, hi = H + 1;  // seg_cum_[lo] < R <= seg_cum_[hi]
+    while (hi - lo > 1) {
+      const int mid = (lo + hi) / 2;
+      if (seg_cum_[size_t(mid)] >= R)
+        hi = mid;
+      else
+        lo = mid;
+    }
+    j = lo;
+    const int rlo = std::max(j - 1, 0), rhi = std::min(j, H - 1);
+    const double a = row_density_[size_t(rlo)], b = row_density_[size_t(rhi)];
+    const double L = bounds_[size_t(j) + 1] - bounds_[size_t(j)];
+    const double rem = R - seg_cum_[size_t(j)];
+    // a x + (b - a) x^2 / (2 L) = rem, in the form that stays stable for b ~ a and a ~ 0.
+    const double g = (b - a) / L;
+    const double den = a + std::sqrt(std::max(0.0, a * a + 2 * g * rem));
+    xs = den > 0 ? std::clamp(2 * rem / den, 0.0, L) : 0.0;
+  }
+  const double L = bounds_[size_t(j) + 1] - bounds_[size_t(j)];
+  const double s = std::clamp(bounds_[size_t(j)] + xs, 0.0, 1.0);
+  const double t = L > 0 ? xs / L : 0.0;
+  const int rlo = std::max(j - 1, 0), rhi = std::min(j, H - 1);
+  const double wlo = rlo == rhi ? 1.0 : 1 - t, whi = rlo == rhi ? 0.0 : t;
+
+  // Conditional: phi from xi2 through the blend of the two rings' running sums.
+  const double* clo = cum_.data() + size_t(rlo) * size_t(W + 1);
+  const double* chi = cum_.data() + size_t(rhi) * size_t(W + 1);
+  auto G = [&](int u) { return wlo * clo[u] + whi * chi[u]; };
+  const double gw = G(W);
+  int u = 0;
+  double phi;
+  if (!(gw > 0)) {  // only reachable on a black map or by rounding at a zero-density edge
+    phi = xi2 * 2 * M_PI;
+    u = std::min(int(xi2 * W), W - 1);
+  } else {
+    const double target = std::min(xi2 * gw, gw);
+    double frac = 0;
+    if (target > 0) {
+      int lo = 0, hi = W;  // G(lo) < target <= G(hi)
+      while (hi - lo > 1) {
+        const int mid = (lo + hi) / 2;
+        if (G(mid) >= target)
+          hi = mid;
+        else
+          lo = mid;
+      }
+      u = lo;
+      const double g0 = G(u), g1 = G(u + 1);
+      frac = g1 > g0 ? std::clamp((target - g0) / (g1 - g0), 0.0, 1.0) : 0.0;
+    }
+    phi = (double(u) + frac) * dphi_;
+  }
+
+  Sample out;
+  const double ct = 1 - s, st = std::sqrt(std::max(0.0, s * (2 - s)));
+  out.direction = {st * std::cos(phi), st * std::sin(phi), ct};
+  const float* plo = rgb_.data() + 3 * (size_t(rlo) * size_t(W) + size_t(u));
+  const float* phi_px = rgb_.data() + 3 * (size_t(rhi) * size_t(W) + size_t(u));
+  for (int c = 0; c < 3; ++c) out.rgb[c] = wlo * double(plo[c]) + whi * double(phi_px[c]);
+  out.luminance = luminance(out.rgb.data());
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Lloyd relaxation of Halton points on the unit square (bounded domain).
+
+namespace {
+
+std::vector<std::array<double, 2>> relax_halton(int n) {
+  std::vector<std::array<double, 2>> p(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) halton2(uint64_t(i) + 1, &p[size_t(i)][0], &p[size_t(i)][1]);
+  // Discrete Lloyd: the Voronoi cell of each site is the set of grid-cell centres nearest
+  // to it; the site moves to their centroid. About 64+ grid cells per site.
+  const int S = std::clamp(int(std::ceil(8 * std::sqrt(double(n)))), 256, 2048);
+  const int G = std::max(1, int(std::sqrt(n / 2.0)));  // bucket grid, ~2 sites per bucket
+  const double cell = 1.0 / G;
+  std::vector<int> start(size_t(G) * G + 1), order(static_cast<size_t>(n)), bucket(static_cast<size_t>(n));
+  std::vector<double> sx(static_cast<size_t>(n)), sy(static_cast<size_t>(n)), cnt(static_cast<size_t>(n));
+  constexpr int kIterations = 40;
+  for (int it = 0; it < kIterations; ++it) {
+    std::fill(start.begin(), start.end(), 0);
+    for (int i = 0; i < n; ++i) {
+      const int cx = std::min(G - 1, int(p[size_t(i)][0] * G)), cy = std::min(G - 1, int(p[size_t(i)][1] * G));
+      bucket[size_t(i)] = cy * G + cx;
+      ++start[size_t(bucket[size_t(i)]) + 1];
+    }
+    for (size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+    {
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (int i = 0; i < n; ++i) order[size_t(fill[size_t(bucket[size_t(i)])]++)] = i;
+    }
+    std::fill(sx.begin(), sx.end(), 0.0);
+    std::fill(sy.begin(), sy.end(), 0.0);
+    std::fill(cnt.begin(), cnt.end(), 0.0);
+    for (int gy = 0; gy < S; ++gy) {
+      const double py = (gy + 0.5) / S;
+      const int cy = std::min(G - 1, int(py * G));
+      for (int gx = 0; gx < S; ++gx) {
+        const double px = (gx + 0.5) / S;
+        const int cx = std::min(G - 1, int(px * G));
+        double best = 1e300;
+        int bi = -1;
+        for (int k = 0; k <= G; ++k) {
+          for (int yy = cy - k; yy <= cy + k; ++yy) {
+            if (yy < 0 || yy >= G) continue;
+            const bool edge_row = yy == cy - k || yy == cy + k;
+            for (int xx = cx - k; xx <= cx + k; xx += (edge_row || k == 0) ? 1 : 2 * k) {
+              if (xx < 0 || xx >= G) continue;
+              const int c = yy * G + xx;
+              for (int q = start[size_t(c)]; q < start[size_t(c) + 1]; ++q) {
+                const int i = order[size_t(q)];
+                const double dx = p[size_t(i)][0] - px, dy = p[size_t(i)][1] - py;
+                const double d2 = dx * dx + dy * dy;
+                if (d2 < best) {
+                  best = d2;
+                  bi = i;
+                }
+              }
+            }
+          }
+          // Sites in ring k + 1 are at least k cells away.
+          if (bi >= 0 && best <= (k * cell) * (k * cell)) break;
+        }
+        sx[size_t(bi)] += px;
+        sy[size_t(bi)] += py;
+        cnt[size_t(bi)] += 1;
+      }
+    }
+    for (int i = 0; i < n; ++i)
+      if (cnt[size_t(i)] > 0) p[size_t(i)] = {sx[size_t(i)] / cnt[size_t(i)], sy[size_t(i)] / cnt[size_t(i)]};
+  }
+  return p;
+}
+
+}  // namespace
+
+const std::vector<std::array<double, 2>>& lloyd_relaxed_halton(int n) {
+  static std::mutex mutex;
+  static std::map<int, std::vector<std::array<double, 2>>> cache;  // node-based: references stay valid
+  if (n <= 0) throw InputError(fmt::format("hemigon: the number of lights must be positive, got {}", n));
+  std::lock_guard<std::mutex> lock(mutex);
+  auto it = cache.find(n);
+  if (it == cache.end()) it = cache.emplace(n, relax_halton(n)).first;
+  return it->second;
+}
+
+// ---------------------------------------------------------------------------------------
+
+namespace {
+
+class HemigonSampler final : public Sampler {
+ public:
+  explicit HemigonSampler(const SamplerOptions& options) : options_(options) {}
+  Method method() const override { return Method::Hemigon; }
+
+  void prepare(const EnvMap& map) override {
+    if (map.layout == Layout::Hemisphere) {  // fast path: no full pass beyond the CDFs
+      half_[0].build(map);
+      has_lower_ = false;
+      target_ = half_[0].rgb_power();
+    } else {
+      require_samplable(map, "hemigon");
+      int w = 0, h = 0;
+      if (map.layout == Layout::LatLong) {
+        w = map.width;
+        h = (map.height + 1) / 2;
+      } else {
+        const double pixel = std::sqrt(4 * M_PI / double(map.pixel_count()));
+        h = int(std::ceil((M_PI / 2) / pixel));
+        w = 4 * h;
+      }
+      w = std::clamp(w, 360, 8192);
+      h = std::clamp(h, 90, 2048);
+      upper_ = resample(map, Layout::Hemisphere, w, h);
+      half_[0].build(upper_);
+      if (options_.upper_only) {
+        has_lower_ = false;
+        target_ = half_[0].rgb_power();
+      } else {
+        ResampleOptions ro;
+        ro.world_from_source = Mat3{{1, 0, 0, 0, -1, 0, 0, 0, -1}};  // Rx(180), its own inverse
+        lower_ = resample(map, Layout::Hemisphere, w, h, ro);
+        half_[1].build(lower_);
+        has_lower_ = true;
+        target_ = total_power(map);
+      }
+    }
+    power_ = half_[0].power() + (has_lower_ ? half_[1].power() : 0.0);
+    if (!std::isfinite(power_)) throw InputError("hemigon: the map has non-finite pixels");
+    if (!(power_ > 0))
+      throw InputError(has_lower_ || map.layout == Layout::Hemisphere
+                           ? "hemigon: the map is black (zero power): there is no light to sample"
+                           : "hemigon: the upper hemisphere is black (zero power): there is no light to sample");
+    upper_share_ = half_[0].power() / power_;
+    prepared_ = true;
+  }
+
+  std::vector<Light> place(int n) override {
+    if (n <= 0) throw InputError(fmt::format("hemigon: the number of lights must be positive, got {}", n));
+    if (!prepared_) throw std::logic_error("hemigon: place() before prepare()");
+    const std::vector<std::array<double, 2>>* relaxed = options_.lloyd_relaxed ? &lloyd_relaxed_halton(n) : nullptr;
+    const double per_light = power_ / n;
+    const double q = has_lower_ ? upper_share_ : 1.0;
+    std::vector<Light> lights(static_cast<size_t>(n));
+    for (int k = 1; k <= n; ++k) {
+      double x, y;
+      if (relaxed) {
+        x = (*relaxed)[size_t(k) - 1][0];
+        y = (*relaxed)[size_t(k) - 1][1];
+      } else {
+        halton2(uint64_t(k), &x, &y);
+      }
+      int half = 0;
+      if (x < q) {
+        x /= q;
+      } else {
+        half = 1;
+        x = (x - q) / (1 - q);
+      }
+      const HemigonWarp::Sample smp = half_[half].warp(x, y);
+      Light& l = lights[size_t(k) - 1];
+      l.id = uint64_t(k);
+      l.direction = half == 0 ? smp.direction : Vec3{smp.direction.x, -smp.direction.y, -smp.direction.z};
+      if (smp.luminance > 0) {
+        const double s = per_light / smp.luminance;
+        l.rgb = {smp.rgb[0] * s, smp.rgb[1] * s, smp.rgb[2] * s};
+        l.solid_angle = s;
+      } else {  // rounding onto a zero-density edge: grey (luminance 1), no extent
+        l.rgb = {per_light, per_light, per_light};
+        l.solid_angle = 0;
+      }
+    }
+    match_total_power(lights, target_);
+    return lights;
+  }
+
+ private:
+  SamplerOptions options_;
+  HemigonWarp half_[2];
+  EnvMap upper_, lower_;
+  bool has_lower_ = false;
+  bool prepared_ = false;
+  double power_ = 0, upper_share_ = 1;
+  std::array<double, 3> target_{0, 0, 0};
+};
+
+}  // namespace
+
+std::unique_ptr<Sampler> make_hemigon_sampler(const SamplerOptions& options) {
+  return std::make_unique<HemigonSampler>(options);
+}
 
 }  // namespace lp

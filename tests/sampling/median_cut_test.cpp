@@ -145,6 +145,20 @@ TEST(MedianCut, DarkRegionsStillSplitWhenMoreLightsThanLitPixelsAreAsked) {
   EXPECT_NEAR(got[0], want[0], 1e-6 * want[0]);
 }
 
+TEST(MedianCut, AHealpixMapIsCutOnItsRowGridWithItsPowerKept) {
+  EnvMap map = make_healpix(16);
+  for (size_t i = 0; i < map.pixel_count(); ++i) {
+    const Vec3 d = pixel_direction(map, i);
+    map.pixel(i)[0] = float(1 + d.z);
+    map.pixel(i)[1] = float(1 + d.y);
+    map.pixel(i)[2] = 0.2f;
+  }
+  const auto lights = median_cut(map, 64);
+  ASSERT_EQ(lights.size(), 64u);
+  const auto want = total_power(map), got = total_power(lights);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], want[c], 1e-5 * want[c]);
+}
+
 TEST(MedianCut, InvalidPixelsCarryNoPower) {
   EnvMap map = random_latlong(32, 5);
   map.valid.assign(map.pixel_count(), 1);

@@ -61,12 +61,14 @@ class MedianCutSampler final : public Sampler {
     sat_.resize(stride * (size_t(h) + 1));
     std::fill(sat_.begin(), sat_.begin() + ptrdiff_t(stride), 0.0);
     colour_.resize(3 * count);
+    lum_.resize(count);
     std::array<double, 3> power{0, 0, 0};
     const bool masked = !map->valid.empty();
     for (int r = 0; r < h; ++r) {
       const size_t base = size_t(r) * size_t(w);
       const float* src = map->rgb.data() + 3 * base;
       float* dst = colour_.data() + 3 * base;
+      float* lum = lum_.data() + base;
       const uint8_t* valid = masked ? map->valid.data() + base : nullptr;
       const double dw = row_solid_angle_[size_t(r)];
       const double* above = sat_.data() + size_t(r) * stride;
@@ -80,7 +82,9 @@ class MedianCutSampler final : public Sampler {
           dst[3 * c + k] = a[k];
           s[k] += a[k];
         }
-        run += dw * double(std::max(0.0f, luminance(a[0], a[1], a[2])));
+        const float y = std::max(0.0f, luminance(a[0], a[1], a[2]));
+        lum[c] = y;
+        run += dw * double(y);
         out[c + 1] = above[c + 1] + run;
       }
       for (int k = 0; k < 3; ++k) power[k] += dw * s[k];
@@ -217,9 +221,10 @@ class MedianCutSampler final : public Sampler {
     double rgb[3] = {0, 0, 0}, d[3] = {0, 0, 0};
     for (int r = g.r0; r < g.r1; ++r) {
       const float* p = colour_.data() + 3 * (size_t(r) * size_t(width_) + size_t(g.c0));
+      const float* py = lum_.data() + size_t(r) * size_t(width_);
       float s[3] = {0, 0, 0}, lc = 0, ls = 0, l = 0;
       for (int c = g.c0; c < g.c1; ++c, p += 3) {
-        const float y = std::max(0.0f, luminance(p[0], p[1], p[2]));
+        const float y = py[c];
         s[0] += p[0];
         s[1] += p[1];
         s[2] += p[2];
@@ -282,6 +287,7 @@ class MedianCutSampler final : public Sampler {
   EnvMap grid_;                 // healpix input resampled to latlong
   std::vector<double> sat_;     // (H+1) x (W+1) summed-area table of luminance * solid angle
   std::vector<float> colour_;   // the map's rgb, invalid pixels zeroed
+  std::vector<float> lum_;      // clamped luminance per pixel (0 where invalid)
   std::array<double, 3> power_{0, 0, 0};
   int width_ = 0, height_ = 0;
   bool prepared_ = false;

@@ -1,13 +1,18 @@
 // Power-preserving resampling between layouts (see resample.h).
 //
-// Pass 1 supersamples every destination pixel (k x k sub-samples of equal solid angle)
-// and accumulates, per source pixel s, W_s = the solid angle of the samples of valid
-// destination pixels that landed in s. Source pixels no sample hit are then given whole
-// to the destination pixel holding their centre. Pass 2 spreads each source pixel's
-// power T_s = L_s * Omega_s * f_s over its samples in proportion to their solid angles,
-// where f_s is the fraction of s inside the destination's domain (1 unless the
-// destination is a hemisphere). Summation is in double and in an order that does not
-// depend on the number of threads, so results are reproducible.
+// Pass 1 supersamples every destination pixel (k x k sub-samples of equal solid angle),
+// locates each sample in the source and stores, per destination pixel, how many of its
+// samples landed in which source pixel. W_s is the solid angle of the samples of valid
+// destination pixels that landed in source pixel s. Source pixels no sample hit are
+// given whole to the destination pixel holding their centre. Pass 2 spreads each source
+// pixel's power L_s * Omega_s * f_s over its samples in proportion to their solid angles
+// (f_s: the fraction of s inside the destination's domain, 1 unless the destination is
+// a hemisphere), so total power is exact. Before that, a few rounds of row balancing
+// (iterative proportional fitting) rescale each destination pixel's sample weights so
+// that a constant map comes out close to constant even where W_s is a coarse estimate
+// of Omega_s; the last step is always the column normalisation, which keeps power exact.
+// Summation is in double and in an order that does not depend on the number of
+// threads, so results are reproducible.
 #include "core/resample.h"
 
 #include <fmt/format.h>
@@ -30,6 +35,12 @@ namespace lp {
 namespace {
 
 constexpr int kMaxSamplesPerEdge = 16;
+// Automatic samples per edge: samples of a quarter of a typical source pixel's solid
+// angle (so "no larger than a source pixel" with room to spare). With only about one
+// sample per source pixel, W_s is too noisy and a smooth map comes out blotchy.
+constexpr double kOversample = 2.0;
+// Rounds of row balancing before the final (power-exact) column normalisation.
+constexpr int kBalanceRounds = 8;
 
 double theta_span(Layout layout) { return layout == Layout::Hemisphere ? M_PI / 2 : M_PI; }
 
@@ -101,12 +112,12 @@ class SubSampler {
   std::vector<double> cos_phi_, sin_phi_;
 };
 
-// Samples per destination pixel edge so that samples are no larger than a typical
-// source pixel (ratio of mean pixel solid angles), capped; a power of two for healpix.
+// Samples per destination pixel edge from the ratio of mean pixel solid angles, so that
+// samples are a quarter of a typical source pixel; capped; a power of two for healpix.
 int choose_samples_per_edge(const EnvMap& src, const EnvMap& dst) {
   const double src_area = layout_solid_angle(src.layout) / double(src.pixel_count());
   const double dst_area = layout_solid_angle(dst.layout) / double(dst.pixel_count());
-  int k = int(std::ceil(std::sqrt(dst_area / src_area) - 1e-9));
+  int k = int(std::ceil(kOversample * std::sqrt(dst_area / src_area) - 1e-9));
   k = std::clamp(k, 1, kMaxSamplesPerEdge);
   if (dst.layout == Layout::Healpix) k = next_power_of_two(k);
   return k;
@@ -198,93 +209,142 @@ EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const R
   const double needed = options.min_valid_fraction * spp - 1e-9;
   const Blocks blocks = make_blocks(dst);
 
-  // Source pixel hit by a sample, or -1 outside the source domain / on invalid pixels.
-  auto locate = [&](size_t pixel, Vec3* dirs, int64_t* hits) {
-    sampler.directions(pixel, dirs);
-    int valid = 0;
-    for (int i = 0; i < spp; ++i) {
-      const std::optional<size_t> s = pixel_at(src, identity ? dirs[i] : source_from_world * dirs[i]);
-      hits[i] = s && src.is_valid(*s) ? int64_t(*s) : -1;
-      valid += hits[i] >= 0;
-    }
-    return valid;
+  // Pass 1 (parallel, race-free): the samples of every destination pixel, located in
+  // the source and stored per destination pixel as (source pixel, sample count).
+  // A sample outside the source domain or on an invalid source pixel is invalid.
+  struct Entry {
+    uint32_t src;
+    float count;  // samples of the destination pixel in this source pixel
   };
-
-  // Pass 1: W_s over a fixed number of chunks (each with its own buffer), summed in order.
-  const size_t max_buffer_bytes = size_t(256) << 20;
-  const size_t chunks = std::clamp<size_t>(max_buffer_bytes / (sizeof(double) * nsrc), 1,
-                                           std::min<size_t>(4, blocks.count));
-  std::vector<std::vector<double>> partial(chunks, std::vector<double>(nsrc, 0.0));
+  if (nsrc > UINT32_MAX) throw InputError("source map too large to resample");
+  std::vector<std::vector<Entry>> block_entries(blocks.count);
+  std::vector<uint32_t> row_length(ndst, 0);
   std::vector<uint8_t> dst_valid(ndst, 0);
-  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks.count), [&](const tbb::blocked_range<size_t>& r) {
     std::vector<Vec3> dirs(spp);
-    std::vector<int64_t> hits(spp);
-    std::vector<double>& w_sum = partial[c];
-    const size_t b0 = blocks.count * c / chunks, b1 = blocks.count * (c + 1) / chunks;
-    for (size_t p = blocks.first(b0); p < blocks.first(b1); ++p) {
-      if (locate(p, dirs.data(), hits.data()) < needed) continue;
-      dst_valid[p] = 1;
-      const double w = pixel_solid_angle(dst, p) / spp;
-      for (int i = 0; i < spp; ++i)
-        if (hits[i] >= 0) w_sum[size_t(hits[i])] += w;
+    std::vector<uint32_t> hits(spp);
+    for (size_t b = r.begin(); b != r.end(); ++b) {
+      std::vector<Entry>& out = block_entries[b];
+      for (size_t p = blocks.first(b); p < blocks.first(b + 1); ++p) {
+        sampler.directions(p, dirs.data());
+        int valid = 0;
+        for (int i = 0; i < spp; ++i) {
+          const std::optional<size_t> s = pixel_at(src, identity ? dirs[i] : source_from_world * dirs[i]);
+          if (s && src.is_valid(*s)) hits[valid++] = uint32_t(*s);
+        }
+        if (valid < needed) continue;
+        dst_valid[p] = 1;
+        std::sort(hits.begin(), hits.begin() + valid);
+        const size_t before = out.size();
+        for (int i = 0; i < valid; ++i) {
+          if (i > 0 && hits[i] == hits[i - 1])
+            ++out.back().count;
+          else
+            out.push_back({hits[i], 1});
+        }
+        row_length[p] = uint32_t(out.size() - before);
+      }
     }
   });
-  std::vector<double> weight = std::move(partial[0]);
-  if (chunks > 1) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, nsrc, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t s = r.begin(); s != r.end(); ++s)
-        for (size_t c = 1; c < chunks; ++c) weight[s] += partial[c][s];
-    });
+  std::vector<size_t> row_start(ndst + 1, 0);
+  for (size_t p = 0; p < ndst; ++p) row_start[p + 1] = row_start[p] + row_length[p];
+  std::vector<Entry> entries;
+  entries.reserve(row_start[ndst]);
+  for (auto& e : block_entries) {
+    entries.insert(entries.end(), e.begin(), e.end());
+    std::vector<Entry>().swap(e);
   }
-  partial.clear();
-  partial.shrink_to_fit();
 
   // Power each source pixel owes the destination: all of it, or the part inside the
   // destination's domain when that is the upper hemisphere.
   std::vector<double> fraction;
   if (layout == Layout::Hemisphere) fraction = upper_fraction(src, world_from_source);
-  auto target = [&](size_t s) {
-    return pixel_solid_angle(src, s) * (fraction.empty() ? 1.0 : fraction[s]);
-  };
+  std::vector<double> owed(nsrc);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nsrc, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t s = r.begin(); s != r.end(); ++s)
+      owed[s] = src.is_valid(s) ? pixel_solid_angle(src, s) * (fraction.empty() ? 1.0 : fraction[s]) : 0.0;
+  });
 
-  // Missed source pixels (no sample of a valid destination pixel landed in them) go
-  // whole to the destination pixel holding their centre. Serial: rare and racy.
-  std::vector<double> power(3 * ndst, 0.0);
-  for (size_t s = 0; s < nsrc; ++s) {
-    if (weight[s] > 0 || !src.is_valid(s)) continue;
-    const float* l = src.pixel(s);
-    if (l[0] == 0 && l[1] == 0 && l[2] == 0) continue;
-    const double t = target(s);
-    if (t <= 0) continue;
-    const Vec3 d = identity ? pixel_direction(src, s) : world_from_source * pixel_direction(src, s);
-    const std::optional<size_t> p = pixel_at(dst, d);
-    if (!p || !dst_valid[*p]) continue;
-    for (int c = 0; c < 3; ++c) power[3 * *p + c] += double(l[c]) * t;
+  // Sample solid angle per destination pixel, times a row balance factor. The factors
+  // start at 1 (plain W_s normalisation); a few rounds of balancing (iterative
+  // proportional fitting) make each destination pixel receive, for a constant map, the
+  // solid angle its valid samples cover, while the final column step below keeps every
+  // source pixel's power exact.
+  std::vector<double> row_weight(ndst, 0.0), row_target(ndst, 0.0);
+  for (size_t p = 0; p < ndst; ++p) {
+    if (!dst_valid[p]) continue;
+    row_weight[p] = pixel_solid_angle(dst, p) / spp;
+    for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) row_target[p] += row_weight[p] * entries[e].count;
   }
 
-  // weight becomes the scale T_s / W_s applied to each sample's solid angle.
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, nsrc, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t s = r.begin(); s != r.end(); ++s) weight[s] = weight[s] > 0 ? target(s) / weight[s] : 0.0;
-  });
+  // Missed source pixels (no sample of a valid destination pixel landed in them) go
+  // whole to the destination pixel holding their centre: they join that pixel's row as
+  // one more entry weighing their own solid angle (the row's target, the area its
+  // samples cover, already includes them), so balancing makes room for them.
+  {
+    std::vector<uint8_t> hit(nsrc, 0);
+    for (const Entry& e : entries) hit[e.src] = 1;
+    std::vector<std::pair<size_t, uint32_t>> extra;  // (destination, source), in source order
+    for (size_t s = 0; s < nsrc; ++s) {
+      if (hit[s] || owed[s] <= 0) continue;
+      const Vec3 d = identity ? pixel_direction(src, s) : world_from_source * pixel_direction(src, s);
+      const std::optional<size_t> p = pixel_at(dst, d);
+      if (p && dst_valid[*p]) extra.push_back({*p, uint32_t(s)});
+    }
+    if (!extra.empty()) {
+      std::stable_sort(extra.begin(), extra.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      std::vector<Entry> merged;
+      merged.reserve(entries.size() + extra.size());
+      std::vector<size_t> merged_start(ndst + 1, 0);
+      size_t next = 0;
+      for (size_t p = 0; p < ndst; ++p) {
+        merged_start[p] = merged.size();
+        merged.insert(merged.end(), entries.begin() + row_start[p], entries.begin() + row_start[p + 1]);
+        for (; next < extra.size() && extra[next].first == p; ++next)
+          merged.push_back({extra[next].second, float(owed[extra[next].second] / row_weight[p])});
+      }
+      merged_start[ndst] = merged.size();
+      entries.swap(merged);
+      row_start.swap(merged_start);
+    }
+  }
+
+  std::vector<double> scale(nsrc);  // T_s / W_s
+  auto column_step = [&] {
+    std::fill(scale.begin(), scale.end(), 0.0);  // W_s, serial scatter in a fixed order
+    for (size_t p = 0; p < ndst; ++p)
+      for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) scale[entries[e].src] += row_weight[p] * entries[e].count;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nsrc, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t s = r.begin(); s != r.end(); ++s) scale[s] = scale[s] > 0 ? owed[s] / scale[s] : 0.0;
+    });
+  };
+  for (int round = 0; round < kBalanceRounds; ++round) {
+    column_step();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ndst, 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t p = r.begin(); p != r.end(); ++p) {
+        double got = 0;
+        for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) got += row_weight[p] * entries[e].count * scale[entries[e].src];
+        if (got > 0) row_weight[p] *= row_target[p] / got;
+      }
+    });
+  }
+  column_step();
+
+  std::vector<double> power(3 * ndst, 0.0);
 
   // Pass 2: destination power and radiance, race-free per destination pixel.
   dst.valid.assign(ndst, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks.count), [&](const tbb::blocked_range<size_t>& r) {
-    std::vector<Vec3> dirs(spp);
-    std::vector<int64_t> hits(spp);
-    for (size_t p = blocks.first(r.begin()); p < blocks.first(r.end()); ++p) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ndst, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p != r.end(); ++p) {
       if (!dst_valid[p]) continue;
-      locate(p, dirs.data(), hits.data());
-      const double area = pixel_solid_angle(dst, p);
-      const double w = area / spp;
       double* acc = &power[3 * p];
-      for (int i = 0; i < spp; ++i) {
-        if (hits[i] < 0) continue;
-        const size_t s = size_t(hits[i]);
-        const double share = w * weight[s];
+      for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) {
+        const size_t s = entries[e].src;
+        const double share = row_weight[p] * entries[e].count * scale[s];
         const float* l = src.pixel(s);
         for (int c = 0; c < 3; ++c) acc[c] += double(l[c]) * share;
       }
+      const double area = pixel_solid_angle(dst, p);
       float* out = dst.pixel(p);
       for (int c = 0; c < 3; ++c) out[c] = float(acc[c] / area);
       dst.valid[p] = 1;

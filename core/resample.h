@@ -4,7 +4,10 @@
 // samples in proportion to their solid angles (or, if no sample hit it, given whole to
 // the destination pixel holding its centre). Total power over the valid region is
 // therefore kept to float rounding, and a one-pixel sun keeps its direction when going
-// down in resolution instead of being aliased away.
+// down in resolution instead of being aliased away. Before that final normalisation the
+// per-destination sample weights are balanced (a few rounds of iterative proportional
+// fitting) so that a constant map stays nearly constant; it stays exactly constant where
+// the grids nest (healpix to healpix, latlong rotated by multiples of 360/W degrees of yaw).
 #pragma once
 
 #include "core/envmap.h"
@@ -13,9 +16,10 @@
 namespace lp {
 
 struct ResampleOptions {
-  // Samples per destination pixel edge. 0 chooses it from the ratio of pixel sizes so
-  // that samples are no larger than source pixels (capped at 16). Raise it only to
-  // check convergence.
+  // Samples per destination pixel edge. 0 chooses it from the ratio of mean pixel solid
+  // angles so that samples are about a quarter of a source pixel (capped at 16; a power
+  // of two for healpix, which subdivides into NESTED children). Raise it only to check
+  // convergence.
   int samples_per_edge = 0;
   // Rotation world_from_source applied to the source map (identity: same frame).
   Mat3 world_from_source{};

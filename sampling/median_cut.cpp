@@ -222,16 +222,41 @@ class MedianCutSampler final : public Sampler {
     for (int r = g.r0; r < g.r1; ++r) {
       const float* p = colour_.data() + 3 * (size_t(r) * size_t(width_) + size_t(g.c0));
       const float* py = lum_.data() + size_t(r) * size_t(width_);
+      // Two pixels per step into separate accumulators: the add chains, not the
+      // arithmetic, bound this loop.
       float s[3] = {0, 0, 0}, lc = 0, ls = 0, l = 0;
-      for (int c = g.c0; c < g.c1; ++c, p += 3) {
+      float t[3] = {0, 0, 0}, tc = 0, ts = 0, tl = 0;
+      const float* cp = cos_phi_.data();
+      const float* sp = sin_phi_.data();
+      int c = g.c0;
+      for (; c + 1 < g.c1; c += 2, p += 6) {
+        const float y0 = py[c], y1 = py[c + 1];
+        s[0] += p[0];
+        s[1] += p[1];
+        s[2] += p[2];
+        t[0] += p[3];
+        t[1] += p[4];
+        t[2] += p[5];
+        lc += y0 * cp[c];
+        tc += y1 * cp[c + 1];
+        ls += y0 * sp[c];
+        ts += y1 * sp[c + 1];
+        l += y0;
+        tl += y1;
+      }
+      if (c < g.c1) {
         const float y = py[c];
         s[0] += p[0];
         s[1] += p[1];
         s[2] += p[2];
-        lc += y * cos_phi_[size_t(c)];
-        ls += y * sin_phi_[size_t(c)];
+        lc += y * cp[c];
+        ls += y * sp[c];
         l += y;
       }
+      for (int k = 0; k < 3; ++k) s[k] += t[k];
+      lc += tc;
+      ls += ts;
+      l += tl;
       const double dw = row_solid_angle_[size_t(r)];
       for (int k = 0; k < 3; ++k) rgb[k] += dw * s[k];
       const double st = dw * sin_theta_[size_t(r)];

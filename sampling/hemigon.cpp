@@ -200,18 +200,24 @@ HemigonWarp::Sample HemigonWarp::warp(double x, double y) const {
 }
 
 // ---------------------------------------------------------------------------------------
-// Lloyd relaxation of Halton points on the unit square (bounded domain).
+// Lloyd relaxation of Halton points on the unit square (toroidal domain).
 
 namespace {
 
 std::vector<std::array<double, 2>> relax_halton(int n) {
   std::vector<std::array<double, 2>> p(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) halton2(uint64_t(i) + 1, &p[size_t(i)][0], &p[size_t(i)][1]);
-  // Discrete Lloyd: the Voronoi cell of each site is the set of grid-cell centres nearest
-  // to it; the site moves to their centroid. About 64+ grid cells per site.
+  // Discrete Lloyd on the torus: the Voronoi cell of each site is the set of grid-cell
+  // centres nearest to it (wrapped distances); the site moves to their centroid. About 64+
+  // grid cells per site. The torus, not the bounded square: a bounded relaxation lines
+  // rows of points up along the square's edges, which the concentric map sends to single
+  // rings near the horizon; on grace that tripled the diffuse error (4.1 % vs 1.5 % at
+  // n = 1024, upper hemisphere).
   const int S = std::clamp(int(std::ceil(8 * std::sqrt(double(n)))), 256, 2048);
   const int G = std::max(1, int(std::sqrt(n / 2.0)));  // bucket grid, ~2 sites per bucket
   const double cell = 1.0 / G;
+  auto wrap_cell = [G](int c) { return ((c % G) + G) % G; };
+  auto wrap_delta = [](double d) { return d > 0.5 ? d - 1 : (d < -0.5 ? d + 1 : d); };  // |d| < 1 -> [-1/2, 1/2]
   std::vector<int> start(size_t(G) * G + 1), order(static_cast<size_t>(n)), bucket(static_cast<size_t>(n));
   std::vector<double> sx(static_cast<size_t>(n)), sy(static_cast<size_t>(n)), cnt(static_cast<size_t>(n));
   constexpr int kIterations = 40;
@@ -238,16 +244,16 @@ std::vector<std::array<double, 2>> relax_halton(int n) {
         const int cx = std::min(G - 1, int(px * G));
         double best = 1e300;
         int bi = -1;
-        for (int k = 0; k <= G; ++k) {
+        for (int k = 0;; ++k) {
+          if (G <= 3 && k > 0) break;  // k = 0 below scans every site when the grid is tiny
           for (int yy = cy - k; yy <= cy + k; ++yy) {
-            if (yy < 0 || yy >= G) continue;
             const bool edge_row = yy == cy - k || yy == cy + k;
             for (int xx = cx - k; xx <= cx + k; xx += (edge_row || k == 0) ? 1 : 2 * k) {
-              if (xx < 0 || xx >= G) continue;
-              const int c = yy * G + xx;
-              for (int q = start[size_t(c)]; q < start[size_t(c) + 1]; ++q) {
+              const int c = wrap_cell(yy) * G + wrap_cell(xx);
+              const bool all = G <= 3;
+              for (int q = all ? 0 : start[size_t(c)]; q < (all ? n : start[size_t(c) + 1]); ++q) {
                 const int i = order[size_t(q)];
-                const double dx = p[size_t(i)][0] - px, dy = p[size_t(i)][1] - py;
+                const double dx = wrap_delta(p[size_t(i)][0] - px), dy = wrap_delta(p[size_t(i)][1] - py);
                 const double d2 = dx * dx + dy * dy;
                 if (d2 < best) {
                   best = d2;
@@ -256,16 +262,23 @@ std::vector<std::array<double, 2>> relax_halton(int n) {
               }
             }
           }
-          // Sites in ring k + 1 are at least k cells away.
+          // Sites in ring k + 1 are at least k cells away; past 2k + 1 >= G every cell
+          // has been visited.
           if (bi >= 0 && best <= (k * cell) * (k * cell)) break;
+          if (2 * k + 1 >= G) break;
         }
-        sx[size_t(bi)] += px;
-        sy[size_t(bi)] += py;
+        sx[size_t(bi)] += wrap_delta(px - p[size_t(bi)][0]);
+        sy[size_t(bi)] += wrap_delta(py - p[size_t(bi)][1]);
         cnt[size_t(bi)] += 1;
       }
     }
-    for (int i = 0; i < n; ++i)
-      if (cnt[size_t(i)] > 0) p[size_t(i)] = {sx[size_t(i)] / cnt[size_t(i)], sy[size_t(i)] / cnt[size_t(i)]};
+    for (int i = 0; i < n; ++i) {
+      if (!(cnt[size_t(i)] > 0)) continue;
+      double x = p[size_t(i)][0] + sx[size_t(i)] / cnt[size_t(i)], y = p[size_t(i)][1] + sy[size_t(i)] / cnt[size_t(i)];
+      x -= std::floor(x);
+      y -= std::floor(y);
+      p[size_t(i)] = {x, y};
+    }
   }
   return p;
 }

@@ -1,5 +1,9 @@
 // Power-preserving resampling between layouts (see resample.h).
 //
+// Row grids (latlong/hemisphere) under identity, a yaw, Rx(180) or yaw * Rx(180) take
+// the exact path (resample_exact): separable box filtering in (phi, cos theta) with exact
+// overlap areas from per-row and per-column overlap lists. Everything else:
+//
 // Pass 1 supersamples every destination pixel (k x k sub-samples of equal solid angle),
 // locates each sample in the source and stores, per destination pixel, how many of its
 // samples landed in which source pixel. W_s is the solid angle of the samples of valid
@@ -23,6 +27,8 @@
 #include <cmath>
 #include <cstdint>
 #include <optional>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
@@ -180,6 +186,146 @@ Blocks make_blocks(const EnvMap& dst) {
   return b;
 }
 
+// ---- Exact path for row grids under a yaw and/or the half-turn about X -------------
+//
+// Latlong and hemisphere pixels are rectangles in (phi, cos theta). A rotation about +Z
+// shifts phi, and Rx(180) = diag(1, -1, -1) maps (phi, cos theta) to (-phi, -cos theta),
+// so under R = Rz(yaw) or R = Rz(yaw) Rx(180) a source pixel is still a rectangle in the
+// world's (phi, cos theta), and its overlap with a destination pixel is exactly
+// (phi overlap, with wrap-around) x (cos theta overlap). The destination value is the
+// box filter with these exact areas.
+
+constexpr double kSeparableTolerance = 1e-9;
+
+// world phi = flip ? yaw - phi_s : yaw + phi_s; world cos theta = flip ? -cos_s : cos_s.
+struct SeparableRotation {
+  double yaw_turns = 0;  // yaw / (2 pi), in [0, 1)
+  bool flip = false;
+};
+
+std::optional<SeparableRotation> separable_rotation(const Mat3& r) {
+  const double tol = kSeparableTolerance;
+  if (std::abs(r(0, 2)) > tol || std::abs(r(1, 2)) > tol || std::abs(r(2, 0)) > tol || std::abs(r(2, 1)) > tol)
+    return std::nullopt;
+  SeparableRotation out;
+  if (std::abs(r(2, 2) - 1) <= tol)
+    out.flip = false;
+  else if (std::abs(r(2, 2) + 1) <= tol)
+    out.flip = true;
+  else
+    return std::nullopt;
+  // Rz(a) = [c -s 0; s c 0; 0 0 1];  Rz(a) Rx(180) = [c s 0; s -c 0; 0 0 -1].
+  const double c = r(0, 0), s = r(1, 0);
+  if (std::abs(std::hypot(c, s) - 1) > tol) return std::nullopt;
+  if (std::abs(r(0, 1) - (out.flip ? s : -s)) > tol || std::abs(r(1, 1) - (out.flip ? -c : c)) > tol)
+    return std::nullopt;
+  double turns = std::atan2(s, c) / (2 * M_PI);
+  turns -= std::floor(turns);
+  if (turns >= 1) turns -= 1;
+  out.yaw_turns = turns;
+  return out;
+}
+
+struct Overlap {
+  uint32_t index;  // source row or column
+  double length;   // overlap in cos theta, or in phi (radians)
+};
+
+// cos theta at the boundary above row v (v = 0 .. height) of a row grid.
+double row_boundary_cos(Layout layout, int height, int64_t v) {
+  return std::cos(theta_span(layout) * double(v) / height);
+}
+
+// Per destination column, the source columns overlapping it and the phi overlap.
+std::vector<std::vector<Overlap>> column_overlaps(int src_width, int dst_width, const SeparableRotation& rot) {
+  std::vector<std::vector<Overlap>> cols{size_t(dst_width)};
+  const double ws = src_width, wd = dst_width, width = 1.0 / ws;
+  auto add_piece = [&](uint32_t us, double lo, double hi) {
+    const int64_t d0 = std::max<int64_t>(0, int64_t(std::floor(lo * wd)));
+    const int64_t d1 = std::min<int64_t>(dst_width, int64_t(std::ceil(hi * wd)));
+    for (int64_t d = d0; d < d1; ++d) {
+      const double ov = std::min(hi, double(d + 1) / wd) - std::max(lo, double(d) / wd);
+      if (ov > 0) cols[size_t(d)].push_back({us, 2 * M_PI * ov});
+    }
+  };
+  for (int u = 0; u < src_width; ++u) {
+    double lo = rot.flip ? rot.yaw_turns - double(u + 1) / ws : rot.yaw_turns + double(u) / ws;
+    lo -= std::floor(lo);
+    if (lo >= 1) lo -= 1;
+    const double hi = lo + width;
+    if (hi <= 1) {
+      add_piece(uint32_t(u), lo, hi);
+    } else {
+      add_piece(uint32_t(u), lo, 1.0);
+      add_piece(uint32_t(u), 0.0, hi - 1);
+    }
+  }
+  return cols;
+}
+
+// Per destination row, the source rows overlapping it and the cos theta overlap.
+std::vector<std::vector<Overlap>> row_overlaps(const EnvMap& src, const EnvMap& dst, const SeparableRotation& rot) {
+  std::vector<std::vector<Overlap>> rows{size_t(dst.height)};
+  const double span_s = theta_span(src.layout), span_d = theta_span(dst.layout);
+  for (int vd = 0; vd < dst.height; ++vd) {
+    const double cd0 = row_boundary_cos(dst.layout, dst.height, vd);
+    const double cd1 = row_boundary_cos(dst.layout, dst.height, vd + 1);
+    // Theta range of the destination row, in the source frame.
+    double t0 = span_d * vd / dst.height, t1 = span_d * (vd + 1) / dst.height;
+    if (rot.flip) std::tie(t0, t1) = std::pair(M_PI - t1, M_PI - t0);
+    const int64_t first = std::max<int64_t>(0, int64_t(std::floor(t0 / span_s * src.height)) - 1);
+    const int64_t last = std::min<int64_t>(src.height - 1, int64_t(std::ceil(t1 / span_s * src.height)) + 1);
+    for (int64_t vs = first; vs <= last; ++vs) {
+      double hi = row_boundary_cos(src.layout, src.height, vs);  // world cos interval [lo, hi]
+      double lo = row_boundary_cos(src.layout, src.height, vs + 1);
+      if (rot.flip) std::tie(lo, hi) = std::pair(-hi, -lo);
+      const double ov = std::min(hi, cd0) - std::max(lo, cd1);
+      if (ov > 0) rows[size_t(vd)].push_back({uint32_t(vs), ov});
+    }
+  }
+  return rows;
+}
+
+EnvMap resample_exact(const EnvMap& src, EnvMap dst, const SeparableRotation& rot, double min_valid_fraction) {
+  const auto rows = row_overlaps(src, dst, rot);
+  const auto cols = column_overlaps(src.width, dst.width, rot);
+  const size_t ws = size_t(src.width), wd = size_t(dst.width);
+  const bool masked = !src.valid.empty();
+  dst.valid.assign(dst.pixel_count(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, size_t(dst.height)), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t vd = r.begin(); vd != r.end(); ++vd) {
+      const std::vector<Overlap>& row = rows[vd];
+      if (row.empty()) continue;  // outside the source's domain
+      const double area = pixel_solid_angle(dst, vd * wd);  // the same for the whole row
+      const double needed = (min_valid_fraction - 1e-9) * area;
+      for (size_t ud = 0; ud < wd; ++ud) {
+        const std::vector<Overlap>& col = cols[ud];
+        double acc[3] = {0, 0, 0}, valid_area = 0;
+        for (const Overlap& ro : row) {
+          const size_t base = size_t(ro.index) * ws;
+          for (const Overlap& co : col) {
+            const size_t s = base + co.index;
+            if (masked && !src.valid[s]) continue;
+            const double a = ro.length * co.length;
+            const float* l = src.pixel(s);
+            valid_area += a;
+            acc[0] += double(l[0]) * a;
+            acc[1] += double(l[1]) * a;
+            acc[2] += double(l[2]) * a;
+          }
+        }
+        const size_t p = vd * wd + ud;
+        if (!(valid_area > 0) || valid_area < needed) continue;
+        float* out = dst.pixel(p);
+        for (int c = 0; c < 3; ++c) out[c] = float(acc[c] / area);
+        dst.valid[p] = 1;
+      }
+    }
+  });
+  if (std::all_of(dst.valid.begin(), dst.valid.end(), [](uint8_t v) { return v != 0; })) dst.valid.clear();
+  return dst;
+}
+
 }  // namespace
 
 EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const ResampleOptions& options) {
@@ -199,6 +345,11 @@ EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const R
     throw InputError(fmt::format("min valid fraction must be in [0, 1], got {}", options.min_valid_fraction));
   if (!is_rotation(options.world_from_source))
     throw InputError("resample rotation (world_from_source) is not a proper rotation matrix");
+
+  if (src.layout != Layout::Healpix && layout != Layout::Healpix) {
+    if (const auto rot = separable_rotation(options.world_from_source))
+      return resample_exact(src, std::move(dst), *rot, options.min_valid_fraction);
+  }
 
   const Mat3& world_from_source = options.world_from_source;
   const Mat3 source_from_world = transpose(world_from_source);

@@ -7,7 +7,19 @@
 // down in resolution instead of being aliased away. Before that final normalisation the
 // per-destination sample weights are balanced (a few rounds of iterative proportional
 // fitting) so that a constant map stays nearly constant; it stays exactly constant where
-// the grids nest (healpix to healpix, latlong rotated by multiples of 360/W degrees of yaw).
+// the grids nest (healpix to healpix).
+//
+// Exact path: when source and destination are both row grids (latlong or hemisphere)
+// and world_from_source is, to within 1e-9 per matrix element, the identity, a yaw
+// Rz(a) by any angle, the half-turn about X Rx(180) = diag(1, -1, -1) (theta -> pi - theta,
+// phi -> -phi), or a composition Rz(a) Rx(180), pixels stay rectangles in
+// (phi, cos theta) and resample() box-filters with exact overlap areas instead of
+// supersampling: destination value = sum over valid source pixels of
+// L_s * overlap(s, d) / Omega_d. Power is then exact (to double rounding) and a constant
+// map stays exactly constant; samples_per_edge is not used, min_valid_fraction applies
+// to the valid source area, and destination pixels with no valid source area (outside
+// the source's domain) are invalid. Everything else (healpix, general rotations) takes
+// the supersampled path.
 #pragma once
 
 #include "core/envmap.h"
@@ -16,15 +28,16 @@
 namespace lp {
 
 struct ResampleOptions {
-  // Samples per destination pixel edge. 0 chooses it from the ratio of mean pixel solid
-  // angles so that samples are about a quarter of a source pixel (capped at 16; a power
-  // of two for healpix, which subdivides into NESTED children). Raise it only to check
-  // convergence.
+  // Samples per destination pixel edge (supersampled path only). 0 chooses it from the
+  // ratio of mean pixel solid angles so that samples are about a quarter of a source
+  // pixel (capped at 16; a power of two for healpix, which subdivides into NESTED
+  // children). Raise it only to check convergence.
   int samples_per_edge = 0;
   // Rotation world_from_source applied to the source map (identity: same frame).
   Mat3 world_from_source{};
   // A destination pixel is valid when at least this fraction of its samples hit valid
-  // source pixels (and lie inside the source layout's domain).
+  // source pixels (and lie inside the source layout's domain); on the exact path, when
+  // at least this fraction of its solid angle is covered by valid source pixels.
   double min_valid_fraction = 0.5;
 };
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -296,6 +297,149 @@ TEST(Resample, MoreSamplesPerEdgeConvergeOnTheSameMap) {
   EXPECT_LT(std::sqrt(diff2 / a.pixel_count()), 0.03);
   EXPECT_LT(std::sqrt(truth2 / a.pixel_count()), 0.01);
   expect_power_near(total_power(b), total_power(src), 1e-4, "k = 16");
+}
+
+
+// ---- The exact path: row grids under identity, a yaw, Rx(180) or a composition -------
+
+const Mat3 kRx180{{1, 0, 0, 0, -1, 0, 0, 0, -1}};
+
+struct ExactCase {
+  Size from, to;
+  Mat3 rotation;
+  std::string what;
+};
+
+std::vector<ExactCase> exact_cases() {
+  const std::vector<std::array<Size, 2>> pairs = {
+      {Size{Layout::Hemisphere, 360, 90}, Size{Layout::LatLong, 512, 256}},
+      {Size{Layout::LatLong, 1024, 512}, Size{Layout::Hemisphere, 360, 90}},
+      {Size{Layout::LatLong, 256, 128}, Size{Layout::LatLong, 100, 50}},
+      {Size{Layout::LatLong, 256, 128}, Size{Layout::LatLong, 1000, 500}},
+  };
+  const std::vector<std::pair<Mat3, std::string>> rotations = {
+      {Mat3{}, "identity"},
+      {rotation_from_yaw_pitch_roll_deg(37, 0, 0), "yaw 37"},
+      {kRx180, "Rx(180)"},
+      {rotation_from_yaw_pitch_roll_deg(37, 0, 180), "yaw 37 after Rx(180)"},
+  };
+  std::vector<ExactCase> out;
+  for (const auto& [from, to] : pairs)
+    for (const auto& [r, rname] : rotations) out.push_back({from, to, r, name(from) + " -> " + name(to) + ", " + rname});
+  return out;
+}
+
+bool flips(const Mat3& r) { return r(2, 2) < 0; }
+
+// Power of a latlong/hemisphere source that lands in the destination's domain: all of
+// it, unless the destination is a hemisphere, which keeps the source rows that end up
+// above the horizon (the upper half, or the lower half under Rx(180)). Row grids with an
+// even number of rows split exactly at the horizon.
+std::array<double, 3> power_in_domain(const EnvMap& src, Layout to, bool flip) {
+  if (to != Layout::Hemisphere || src.layout == Layout::Hemisphere) {
+    if (src.layout == Layout::Hemisphere && to == Layout::Hemisphere && flip) return {0, 0, 0};
+    return total_power(src);
+  }
+  std::array<double, 3> sum{0, 0, 0};
+  for (size_t i = 0; i < src.pixel_count(); ++i) {
+    const bool upper = int(i / size_t(src.width)) < src.height / 2;
+    if (upper == flip || !src.is_valid(i)) continue;
+    for (int c = 0; c < 3; ++c) sum[c] += pixel_solid_angle(src, i) * src.pixel(i)[c];
+  }
+  return sum;
+}
+
+TEST(Resample, AConstantMapStaysExactlyConstantBetweenRowGridsUnderAYawOrAHalfTurnAboutX) {
+  const float l = 0.5f;
+  for (const ExactCase& c : exact_cases()) {
+    ResampleOptions options;
+    options.world_from_source = c.rotation;
+    const EnvMap dst = resample(constant_map(make(c.from), l), c.to.layout, c.to.width, c.to.height, options);
+    size_t valid = 0;
+    for (size_t i = 0; i < dst.pixel_count(); ++i) {
+      const int v = int(i / size_t(dst.width));
+      // A hemisphere source fills the upper half of a latlong (the lower under Rx(180)).
+      bool want_valid = true;
+      if (c.from.layout == Layout::Hemisphere) want_valid = (v < dst.height / 2) != flips(c.rotation);
+      ASSERT_EQ(dst.is_valid(i), want_valid) << c.what << " pixel " << i;
+      if (!want_valid) continue;
+      ++valid;
+      for (int ch = 0; ch < 3; ++ch) ASSERT_NEAR(dst.pixel(i)[ch], l, 1e-6 * l) << c.what << " pixel " << i;
+    }
+    EXPECT_GT(valid, 0u) << c.what;
+  }
+}
+
+TEST(Resample, TheExactPathKeepsThePowerOfARandomMap) {
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<float> uniform(0.0f, 10.0f);
+  for (const ExactCase& c : exact_cases()) {
+    EnvMap src = make(c.from);
+    for (float& x : src.rgb) x = uniform(rng);
+    ResampleOptions options;
+    options.world_from_source = c.rotation;
+    const EnvMap dst = resample(src, c.to.layout, c.to.width, c.to.height, options);
+    expect_power_near(total_power(dst), power_in_domain(src, c.to.layout, flips(c.rotation)), 1e-6, c.what);
+  }
+}
+
+TEST(Resample, AOnePixelSunKeepsItsPowerAndDirectionOnTheExactPath) {
+  for (const ExactCase& c : exact_cases()) {
+    EnvMap src = make(c.from);
+    // Suns at mid-latitudes, near the pole and at the phi = 0 seam, all in the part of
+    // the source that the destination's domain receives.
+    const bool upper = !(c.to.layout == Layout::Hemisphere && flips(c.rotation));
+    for (const auto& [theta_deg, phi_deg] : std::vector<std::array<double, 2>>{{60, 123}, {3, 250}, {40, 0.1}}) {
+      std::fill(src.rgb.begin(), src.rgb.end(), 0.0f);
+      const double theta = (upper ? theta_deg : 180 - theta_deg) * M_PI / 180;
+      const size_t sun = *pixel_at(src, direction_from_angles(theta, phi_deg * M_PI / 180));
+      src.pixel(sun)[0] = 5e4f;
+      src.pixel(sun)[1] = 4e4f;
+      src.pixel(sun)[2] = 3e4f;
+      ResampleOptions options;
+      options.world_from_source = c.rotation;
+      const EnvMap dst = resample(src, c.to.layout, c.to.width, c.to.height, options);
+      const std::string what = c.what + ", sun at pixel " + std::to_string(sun);
+      expect_power_near(total_power(dst), total_power(src), 1e-6, what);
+      const Vec3 truth = c.rotation * mean_direction(src);
+      EXPECT_LE(angle_between(mean_direction(dst), truth), half_pixel(dst, *pixel_at(dst, truth))) << what;
+    }
+  }
+}
+
+TEST(Resample, AHalfTurnAboutXSendsASunAtThetaThirtyPhiFortyToThetaOneFiftyPhiMinusForty) {
+  const double deg = M_PI / 180;
+  const Vec3 sun_dir = direction_from_angles(30 * deg, 40 * deg);
+  const Vec3 want = direction_from_angles(150 * deg, -40 * deg);
+  ResampleOptions options;
+  options.world_from_source = kRx180;
+  const int w = 512, h = 256;
+  EnvMap src = make_latlong(w, h);
+  const size_t sun = *pixel_at(src, sun_dir);
+  src.pixel(sun)[0] = src.pixel(sun)[1] = src.pixel(sun)[2] = 1e4f;
+  for (Size to : {Size{Layout::LatLong, w, h}, Size{Layout::LatLong, 200, 100}, Size{Layout::LatLong, 2048, 1024}}) {
+    const EnvMap dst = resample(src, to.layout, to.width, to.height, options);
+    expect_power_near(total_power(dst), total_power(src), 1e-6, name(to));
+    const Vec3 got = mean_direction(dst);
+    EXPECT_LE(angle_between(got, want), half_pixel(src, sun) + half_pixel(dst, *pixel_at(dst, want))) << name(to);
+    EXPECT_LE(angle_between(got, kRx180 * mean_direction(src)), half_pixel(dst, *pixel_at(dst, want))) << name(to);
+  }
+  // Same grid: rows and columns map onto rows and columns, so the sun is moved, not
+  // blurred: pixel (u, v) goes to (w - 1 - u, h - 1 - v), which holds theta = 150,
+  // phi = -40 degrees.
+  const EnvMap same = resample(src, Layout::LatLong, w, h, options);
+  const size_t u = sun % w, v = sun / w, moved = (h - 1 - v) * w + (w - 1 - u);
+  EXPECT_EQ(moved, *pixel_at(same, want));
+  EXPECT_FLOAT_EQ(same.pixel(moved)[0], 1e4f);
+  EXPECT_NEAR(total_power(same)[0], same.pixel(moved)[0] * pixel_solid_angle(same, moved), 1e-6 * total_power(same)[0]);
+  // The hemigon sampler's use: the lower hemisphere of the world as a hemisphere map.
+  EnvMap low = make_latlong(w, h);
+  const size_t low_sun = *pixel_at(low, want);
+  low.pixel(low_sun)[0] = low.pixel(low_sun)[1] = low.pixel(low_sun)[2] = 1e4f;
+  const EnvMap hemi = resample(low, Layout::Hemisphere, 360, 90, options);
+  expect_power_near(total_power(hemi), total_power(low), 1e-6, "lower hemisphere");
+  EXPECT_LE(angle_between(mean_direction(hemi), sun_dir),
+            half_pixel(low, low_sun) + half_pixel(hemi, *pixel_at(hemi, sun_dir)));
 }
 
 }  // namespace

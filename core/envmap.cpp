@@ -140,13 +140,19 @@ PixelTable make_pixel_table(const EnvMap& map) {
 }
 
 std::array<double, 3> total_power(const EnvMap& map) {
+  // Sum radiance per row first: every pixel of a row (or of a healpix map) has the same
+  // solid angle, so one multiplication per row instead of two cosines per pixel.
   std::array<double, 3> sum{0, 0, 0};
-  const size_t n = map.pixel_count();
-  for (size_t i = 0; i < n; ++i) {
-    if (!map.is_valid(i)) continue;
-    const double w = pixel_solid_angle(map, i);
-    const float* p = map.pixel(i);
-    for (int c = 0; c < 3; ++c) sum[c] += w * double(p[c]);
+  const size_t width = size_t(map.width);
+  for (size_t row = 0; row < size_t(map.height); ++row) {
+    std::array<double, 3> row_sum{0, 0, 0};
+    for (size_t i = row * width; i < (row + 1) * width; ++i) {
+      if (!map.is_valid(i)) continue;
+      const float* p = map.pixel(i);
+      for (int c = 0; c < 3; ++c) row_sum[c] += double(p[c]);
+    }
+    const double w = pixel_solid_angle(map, row * width);
+    for (int c = 0; c < 3; ++c) sum[c] += w * row_sum[c];
   }
   return sum;
 }

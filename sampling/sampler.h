@@ -3,12 +3,14 @@
 // n lights), so that each can be timed on its own.
 //
 // Contract for every method:
-//   - exactly n lights (q2tree: within 3, the Q2-tree splits four at a time),
+//   - exactly n lights (q2tree: n - 2 to n, the Q2-tree splits four at a time, and at
+//     least its 12 base quads: n < 12 throws InputError),
 //   - sum of rgb equal to the map's total power over its valid region (1e-5 relative),
 //   - ids stable from frame to frame (Halton index for pharr/hemigon, HEALPix NUNIQ node
 //     for q2tree, split-path code for mediancut),
 //   - pharr and hemigon are progressive: the first k lights of an n-light answer are a
-//     good k-light answer (their power rescaled).
+//     good k-light answer (their power rescaled); not hemigon with lloyd_relaxed,
+//     whose relaxed points depend on n (its ids are still the Halton indices).
 #pragma once
 
 #include <memory>

@@ -43,7 +43,7 @@ std::string tick_label(double e) {
 std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& panels, int columns) {
   columns = std::max(1, std::min(columns, int(panels.size())));
   const int rows = int((panels.size() + size_t(columns) - 1) / size_t(columns));
-  const int width = columns * kPanelW, height = 40 + rows * kPanelH + 30;
+  const int width = columns * kPanelW, height = 60 + rows * kPanelH + 30;
   std::map<std::string, const char*> colour;
   for (const auto& p : panels)
     for (const auto& s : p.series)
@@ -54,9 +54,19 @@ std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& p
       "font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
       "<text x=\"{}\" y=\"24\" text-anchor=\"middle\" font-size=\"16\">{}</text>\n",
       width, height, width / 2, escape(title));
+  // One legend for the whole chart, under the title, so it never hides a curve.
+  {
+    int x = width / 2 - int(colour.size()) * 55;
+    for (const auto& [name, c] : colour) {
+      svg += fmt::format("<rect x=\"{}\" y=\"36\" width=\"10\" height=\"10\" fill=\"{}\"/>"
+                         "<text x=\"{}\" y=\"45\">{}</text>\n",
+                         x, c, x + 14, escape(name));
+      x += 110;
+    }
+  }
   for (size_t pi = 0; pi < panels.size(); ++pi) {
     const ChartPanel& p = panels[pi];
-    const int ox = int(pi % size_t(columns)) * kPanelW, oy = 40 + int(pi / size_t(columns)) * kPanelH;
+    const int ox = int(pi % size_t(columns)) * kPanelW, oy = 60 + int(pi / size_t(columns)) * kPanelH;
     double xlo = INFINITY, xhi = 0, ylo = INFINITY, yhi = 0;
     for (const auto& s : p.series)
       for (size_t i = 0; i < s.x.size(); ++i)
@@ -91,7 +101,6 @@ std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& p
                        oy + kTop + ph + 36, escape(p.x_label));
     svg += fmt::format("<text transform=\"translate({},{}) rotate(-90)\" text-anchor=\"middle\">{}</text>\n",
                        ox + 18, oy + kTop + ph / 2, escape(p.y_label));
-    int legend = 0;
     for (const auto& s : p.series) {
       std::string pts;
       for (size_t i = 0; i < s.x.size(); ++i)
@@ -107,11 +116,6 @@ std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& p
                              Y(s.y[i]) - 4, c, escape(s.labels[i]));
       }
       svg += "\n";
-      svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{}\"/>"
-                         "<text x=\"{}\" y=\"{}\">{}</text>\n",
-                         ox + kLeft + pw - 100, oy + kTop + 8 + 16 * legend, c, ox + kLeft + pw - 85,
-                         oy + kTop + 17 + 16 * legend, escape(s.name));
-      ++legend;
     }
   }
   svg += "</svg>\n";

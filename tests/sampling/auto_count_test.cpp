@@ -1,0 +1,68 @@
+// --n auto: the fewest lights that reach a diffuse error, found by bracketing + bisection.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/accuracy.h"
+#include "core/error.h"
+#include "core/synthetic_scene.h"
+#include "sampling/auto_count.h"
+
+namespace lp {
+namespace {
+
+struct Fixture {
+  EnvMap map = render_scene(describe_scene(), Layout::LatLong, 256, 128);
+  AccuracyReference reference = [this] {
+    AccuracyOptions o;
+    o.shadowed = false;
+    return make_accuracy_reference(map, o);
+  }();
+};
+
+TEST(AutoCount, FindsACountThatMeetsTheTargetWhileOneLessMissesIt) {
+  Fixture f;
+  auto sampler = make_sampler(Method::Pharr);
+  sampler->prepare(f.map);
+  AutoCountOptions options;
+  options.target_diffuse_error = 0.02;
+  const AutoCountResult r = choose_light_count(*sampler, f.reference, options);
+  ASSERT_TRUE(r.reached);
+  EXPECT_EQ(int(r.lights.size()), r.count);
+  EXPECT_LE(light_error(f.reference, sampler->place(r.count)).diffuse, 0.02);
+  // Bisection ends on a miss just below the answer.
+  EXPECT_GT(light_error(f.reference, sampler->place(r.count - 1)).diffuse, 0.02);
+  // Far fewer evaluations than trying every count.
+  EXPECT_LE(r.evaluations, 2 * int(std::log2(double(r.count))) + 4);
+}
+
+TEST(AutoCount, ATighterTargetNeedsMoreLights) {
+  Fixture f;
+  auto sampler = make_sampler(Method::Q2Tree);
+  sampler->prepare(f.map);
+  AutoCountOptions loose, tight;
+  loose.target_diffuse_error = 0.05;
+  tight.target_diffuse_error = 0.002;
+  const auto a = choose_light_count(*sampler, f.reference, loose);
+  const auto b = choose_light_count(*sampler, f.reference, tight);
+  ASSERT_TRUE(a.reached && b.reached);
+  EXPECT_LT(a.count, b.count);
+  EXPECT_LE(b.diffuse_error, 0.002);
+}
+
+TEST(AutoCount, AnUnreachableTargetIsReportedNotFaked) {
+  Fixture f;
+  auto sampler = make_sampler(Method::Pharr);
+  sampler->prepare(f.map);
+  AutoCountOptions options;
+  options.target_diffuse_error = 1e-9;
+  options.max_count = 64;
+  const auto r = choose_light_count(*sampler, f.reference, options);
+  EXPECT_FALSE(r.reached);
+  EXPECT_GT(r.diffuse_error, 1e-9);
+  options.target_diffuse_error = 0;
+  EXPECT_THROW(choose_light_count(*sampler, f.reference, options), InputError);
+}
+
+}  // namespace
+}  // namespace lp

@@ -174,6 +174,43 @@ TEST(CubeMap, RealPisaCubeKeepsPowerAndMatchesProbulatorLuminance) {
   EXPECT_NEAR(mean_cube / mean_ref, 1.0, 0.30);
 }
 
+// Orientation check against an independent processing of the same scene. Probulator's
+// pisa.hdr, read as-is in our latlong convention, is the mirror image (phi -> -phi, no
+// yaw) of the default conversion: it stores an ordinary panorama (azimuth growing
+// clockwise seen from above). The pole, the faces' placement and their orientation all
+// have to be right for the log-luminance correlation to reach 0.99; mirrored it is far lower.
+double log_luminance_correlation(const EnvMap& a, const EnvMap& b, bool mirror_b) {
+  std::vector<double> x, y;
+  for (int v = 0; v < a.height; ++v)
+    for (int u = 0; u < a.width; ++u) {
+      const float* p = a.pixel(size_t(v) * a.width + u);
+      const float* q = b.pixel(size_t(v) * b.width + (mirror_b ? b.width - 1 - u : u));
+      x.push_back(std::log1p(luminance(p[0], p[1], p[2])));
+      y.push_back(std::log1p(luminance(q[0], q[1], q[2])));
+    }
+  double mx = 0, my = 0;
+  for (size_t i = 0; i < x.size(); ++i) mx += x[i], my += y[i];
+  mx /= x.size(), my /= y.size();
+  double sxy = 0, sxx = 0, syy = 0;
+  for (size_t i = 0; i < x.size(); ++i)
+    sxy += (x[i] - mx) * (y[i] - my), sxx += (x[i] - mx) * (x[i] - mx), syy += (y[i] - my) * (y[i] - my);
+  return sxy / std::sqrt(sxx * syy);
+}
+
+TEST(CubeMap, RealPisaCubeOrientationAgreesWithProbulator) {
+  const EnvMap map = read_cube_map(LIGHTPROBE_SHARED_DATA "/probes-threejs-spot-and-cube/pisa_cube",
+                                   Layout::LatLong, 256, 128);
+  const EnvMap probulator = read_envmap(LIGHTPROBE_SHARED_DATA "/probes-probulator-latlong256/pisa.hdr");
+  ASSERT_EQ(probulator.width, 256);
+  ASSERT_EQ(probulator.height, 128);
+  const double mirrored = log_luminance_correlation(map, probulator, true);
+  const double as_is = log_luminance_correlation(map, probulator, false);
+  RecordProperty("correlation_probulator_mirrored", std::to_string(mirrored));
+  RecordProperty("correlation_probulator_as_is", std::to_string(as_is));
+  EXPECT_GT(mirrored, 0.99);
+  EXPECT_LT(as_is, 0.95);
+}
+
 class CubeFilesTest : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
 #include "cli/commands.h"
@@ -14,6 +15,7 @@
 #include "core/image_io.h"
 #include "core/resample.h"
 #include "core/synthetic_scene.h"
+#include "probe/cube_map.h"
 
 namespace lp::cli {
 
@@ -198,7 +200,18 @@ int run_convert(const ConvertArgs& args, const Output& out) {
   ReadMapOptions ro;
   ro.layout = optional_layout(args.in_layout, "--in-layout");
   const auto t0 = std::chrono::steady_clock::now();
-  const EnvMap src = read_envmap(args.input, ro);
+  // A directory (or a pattern with {face}) holds the six faces of a cube map:
+  // assemble them into a latlong map at about the cube's resolution first.
+  std::error_code ec;
+  const bool cube = std::filesystem::is_directory(args.input, ec) || args.input.find("{face}") != std::string::npos;
+  const EnvMap src = [&] {
+    if (!cube) return read_envmap(args.input, ro);
+    const CubeFaces faces = read_cube_faces(args.input);
+    const int h = 2 * faces.face_size;
+    EnvMap m = cube_map_to_envmap(faces.rgb, faces.face_size, Layout::LatLong, 2 * h, h);
+    m.units = faces.units;
+    return m;
+  }();
   const Layout layout = optional_layout(args.layout, "--layout").value_or(src.layout);
   if (layout == Layout::Healpix && !args.size.empty())
     throw InputError("--size does not apply to healpix: use --nside");

@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   // convert
   ConvertArgs conv;
   auto* c_conv = app.add_subcommand("convert", "Convert a map between layouts, sizes, formats and frames");
-  c_conv->add_option("IN", conv.input, "Input map")->required();
+  c_conv->add_option("IN", conv.input, "Input map, or a directory of cube faces px nx py ny pz nz")->required();
   c_conv->add_option("OUT", conv.output, "Output map (.exr, .hdr, .pfm)")->required();
   c_conv->add_option("--layout", conv.layout, "Target layout: latlong|hemisphere|healpix (default: the input's)");
   c_conv->add_option("--size", conv.size, "Target size WxH (latlong, hemisphere)");

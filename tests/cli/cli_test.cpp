@@ -220,3 +220,18 @@ TEST(Cli, SynthSceneWritesAMapWhoseSunCarriesMostOfThePower) {
   EXPECT_NEAR(nlohmann::json::parse(info.out)["power_luminance"].get<double>(), j["power_luminance"].get<double>(),
               1e-5 * j["power_luminance"].get<double>());
 }
+
+TEST(Cli, ConvertAssemblesACubeMapDirectoryIntoALatlongMap) {
+  const fs::path out = scratch() / "pisa_latlong.exr";
+  CliRun r = lightprobe("convert --json " + shared("probes-threejs-spot-and-cube/pisa_cube") + " " + out.string() +
+                        " --layout latlong --size 512x256");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["width"].get<int>(), 512);
+  // Same scene as Probulator's pisa probe (differently processed): power within 10 %.
+  CliRun ref = lightprobe("info --json " + shared("probes-probulator-latlong256/pisa.hdr"));
+  const double p_ref = nlohmann::json::parse(ref.out)["power_luminance"].get<double>();
+  EXPECT_NEAR(j["power_out"].get<double>() / p_ref, 1.0, 0.1);
+  expect_one_line_error(lightprobe("convert " + scratch().string() + " " + (scratch() / "x.exr").string()),
+                        scratch().string());
+}

@@ -21,7 +21,8 @@ struct AutoCountOptions {
 };
 
 struct AutoCountResult {
-  int count = 0;             // the chosen n (the best found when !reached)
+  int count = 0;             // lights returned (q2tree may return up to 2 fewer than asked)
+  int requested = 0;         // the n asked of the sampler for them
   double diffuse_error = 0;  // its error
   bool reached = false;      // false when even max_count missed the target
   int evaluations = 0;       // samplings + error evaluations made
@@ -31,5 +32,28 @@ struct AutoCountResult {
 // `sampler` must already be prepared on the map that `reference` was built from.
 AutoCountResult choose_light_count(Sampler& sampler, const AccuracyReference& reference,
                                    const AutoCountOptions& options);
+
+// Per-frame automatic counts for a sequence, with hysteresis so that the count does not
+// itself flicker: the count rises at once when the error exceeds the target (accuracy
+// first), but falls only after the error has stayed below target * (1 - band) for
+// hold_frames consecutive frames, and only to a count at least `band` smaller.
+struct AutoCountHysteresis {
+  double band = 0.25;   // relative margin below the target before a decrease is considered
+  int hold_frames = 8;  // frames the margin must hold (about 0.4 s at 21 Hz)
+};
+
+class AutoCountTracker {
+ public:
+  AutoCountTracker(const AutoCountOptions& options, const AutoCountHysteresis& hysteresis = {});
+  // `sampler` prepared on this frame's map, `reference` built from it.
+  AutoCountResult update(Sampler& sampler, const AccuracyReference& reference);
+  int count() const { return count_; }
+
+ private:
+  AutoCountOptions options_;
+  AutoCountHysteresis hysteresis_;
+  int count_ = 0;         // the count asked of the sampler (0: no frame yet)
+  int below_streak_ = 0;  // consecutive frames comfortably below the target
+};
 
 }  // namespace lp

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "core/accuracy.h"
 #include "core/error.h"
@@ -62,6 +63,51 @@ TEST(AutoCount, AnUnreachableTargetIsReportedNotFaked) {
   EXPECT_GT(r.diffuse_error, 1e-9);
   options.target_diffuse_error = 0;
   EXPECT_THROW(choose_light_count(*sampler, f.reference, options), InputError);
+}
+
+}  // namespace
+}  // namespace lp
+
+namespace lp {
+namespace {
+
+TEST(AutoCountTracker, RisesAtOnceButFallsOnlyAfterTheHoldTime) {
+  // Two scenes: a plain sky needs few lights for 2 %; with sun, windows and lamp many more.
+  SceneOptions calm_options;
+  calm_options.sun_rgb = {0, 0, 0};
+  calm_options.area_lights = false;
+  const EnvMap calm = render_scene(describe_scene(calm_options), Layout::LatLong, 256, 128);
+  const EnvMap sunny = render_scene(describe_scene(), Layout::LatLong, 256, 128);
+  AccuracyOptions ao;
+  ao.shadowed = false;
+  const AccuracyReference calm_ref = make_accuracy_reference(calm, ao), sunny_ref = make_accuracy_reference(sunny, ao);
+
+  auto sampler = make_sampler(Method::Pharr);
+  AutoCountOptions options;
+  options.target_diffuse_error = 0.02;
+  AutoCountHysteresis hysteresis;
+  hysteresis.hold_frames = 5;
+  AutoCountTracker tracker(options, hysteresis);
+
+  std::vector<int> counts;
+  auto frame = [&](const EnvMap& map, const AccuracyReference& ref) {
+    sampler->prepare(map);
+    const AutoCountResult r = tracker.update(*sampler, ref);
+    EXPECT_LE(r.diffuse_error, 0.02);  // every frame meets the target
+    counts.push_back(r.count);
+  };
+  for (int i = 0; i < 4; ++i) frame(calm, calm_ref);
+  for (int i = 0; i < 4; ++i) frame(sunny, sunny_ref);
+  for (int i = 0; i < 12; ++i) frame(calm, calm_ref);
+
+  // Steady on a static scene: no flicker of the count.
+  for (int i = 1; i < 4; ++i) EXPECT_EQ(counts[size_t(i)], counts[0]);
+  // Rises on the very frame the sun appears, and stays while it is there.
+  EXPECT_GT(counts[4], counts[3]);
+  for (int i = 5; i < 8; ++i) EXPECT_EQ(counts[size_t(i)], counts[4]);
+  // Back to calm: the count is held for the hold time, then falls.
+  for (int i = 8; i < 8 + hysteresis.hold_frames - 1; ++i) EXPECT_EQ(counts[size_t(i)], counts[4]) << i;
+  EXPECT_LT(counts.back(), counts[4]);
 }
 
 }  // namespace

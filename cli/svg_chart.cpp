@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <utility>
+#include <vector>
 
 namespace lp::cli {
 
@@ -29,6 +31,37 @@ void decades(double lo, double hi, double* a, double* b) {
   *a = std::floor(std::log10(lo));
   *b = std::ceil(std::log10(hi));
   if (*b <= *a) *b = *a + 1;
+}
+
+// A log (decades) or linear ("nice" steps) axis over the data's range.
+struct Axis {
+  bool log = true;
+  double lo = 0, hi = 1;
+  std::vector<std::pair<double, std::string>> ticks;
+  double unit(double v) const {
+    return log ? (std::log10(v) - lo) / (hi - lo) : (v - lo) / (hi - lo);
+  }
+};
+
+std::string tick_label(double e);
+
+Axis make_axis(const std::vector<double>& values, bool log) {
+  Axis a;
+  a.log = log;
+  const auto [mn, mx] = std::minmax_element(values.begin(), values.end());
+  if (log) {
+    decades(*mn, *mx, &a.lo, &a.hi);
+    for (double e = a.lo; e <= a.hi + 1e-9; e += 1) a.ticks.emplace_back(std::pow(10.0, e), tick_label(e));
+    return a;
+  }
+  double lo = *mn, hi = *mx;
+  if (hi - lo < 1e-12 * std::max(1.0, std::fabs(hi))) lo -= 0.5, hi += 0.5;
+  const double raw = (hi - lo) / 5, mag = std::pow(10.0, std::floor(std::log10(raw)));
+  const double step = raw / mag < 1.5 ? mag : raw / mag < 3.5 ? 2 * mag : raw / mag < 7.5 ? 5 * mag : 10 * mag;
+  a.lo = std::floor(lo / step) * step;
+  a.hi = std::ceil(hi / step) * step;
+  for (double v = a.lo; v <= a.hi + step * 1e-6; v += step) a.ticks.emplace_back(v, fmt::format("{:g}", std::fabs(v) < step * 1e-6 ? 0.0 : v));
+  return a;
 }
 
 std::string tick_label(double e) {
@@ -67,35 +100,33 @@ std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& p
   for (size_t pi = 0; pi < panels.size(); ++pi) {
     const ChartPanel& p = panels[pi];
     const int ox = int(pi % size_t(columns)) * kPanelW, oy = 60 + int(pi / size_t(columns)) * kPanelH;
-    double xlo = INFINITY, xhi = 0, ylo = INFINITY, yhi = 0;
+    auto usable = [&](double x, double y) {
+      return std::isfinite(x) && std::isfinite(y) && (!p.log_x || x > 0) && (!p.log_y || y > 0);
+    };
+    std::vector<double> xs, ys;
     for (const auto& s : p.series)
       for (size_t i = 0; i < s.x.size(); ++i)
-        if (s.x[i] > 0 && s.y[i] > 0) {
-          xlo = std::min(xlo, s.x[i]), xhi = std::max(xhi, s.x[i]);
-          ylo = std::min(ylo, s.y[i]), yhi = std::max(yhi, s.y[i]);
-        }
-    if (!(xhi > 0)) continue;
-    double xa, xb, ya, yb;
-    decades(xlo, xhi, &xa, &xb);
-    decades(ylo, yhi, &ya, &yb);
+        if (usable(s.x[i], s.y[i])) xs.push_back(s.x[i]), ys.push_back(s.y[i]);
+    if (xs.empty()) continue;
+    const Axis ax = make_axis(xs, p.log_x), ay = make_axis(ys, p.log_y);
     const double pw = kPanelW - kLeft - kRight, ph = kPanelH - kTop - kBottom;
-    auto X = [&](double v) { return ox + kLeft + (std::log10(v) - xa) / (xb - xa) * pw; };
-    auto Y = [&](double v) { return oy + kTop + (yb - std::log10(v)) / (yb - ya) * ph; };
+    auto X = [&](double v) { return ox + kLeft + ax.unit(v) * pw; };
+    auto Y = [&](double v) { return oy + kTop + (1 - ay.unit(v)) * ph; };
     svg += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"13\">{}</text>\n",
                        ox + kLeft + pw / 2, oy + kTop - 10, escape(p.title));
     svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#333\"/>\n",
                        ox + kLeft, oy + kTop, pw, ph);
-    for (double e = xa; e <= xb + 1e-9; e += 1) {
-      const double x = X(std::pow(10.0, e));
+    for (const auto& [v, label] : ax.ticks) {
+      const double x = X(v);
       svg += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1}\" x2=\"{0:.1f}\" y2=\"{2}\" stroke=\"#ddd\"/>"
                          "<text x=\"{0:.1f}\" y=\"{3}\" text-anchor=\"middle\">{4}</text>\n",
-                         x, oy + kTop, oy + kTop + ph, oy + kTop + ph + 16, tick_label(e));
+                         x, oy + kTop, oy + kTop + ph, oy + kTop + ph + 16, label);
     }
-    for (double e = ya; e <= yb + 1e-9; e += 1) {
-      const double y = Y(std::pow(10.0, e));
+    for (const auto& [v, label] : ay.ticks) {
+      const double y = Y(v);
       svg += fmt::format("<line x1=\"{0}\" y1=\"{1:.1f}\" x2=\"{2}\" y2=\"{1:.1f}\" stroke=\"#ddd\"/>"
                          "<text x=\"{3}\" y=\"{4:.1f}\" text-anchor=\"end\">{5}</text>\n",
-                         ox + kLeft, y, ox + kLeft + pw, ox + kLeft - 6, y + 4, tick_label(e));
+                         ox + kLeft, y, ox + kLeft + pw, ox + kLeft - 6, y + 4, label);
     }
     svg += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", ox + kLeft + pw / 2,
                        oy + kTop + ph + 36, escape(p.x_label));
@@ -104,12 +135,12 @@ std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& p
     for (const auto& s : p.series) {
       std::string pts;
       for (size_t i = 0; i < s.x.size(); ++i)
-        if (s.x[i] > 0 && s.y[i] > 0) pts += fmt::format("{:.1f},{:.1f} ", X(s.x[i]), Y(s.y[i]));
+        if (usable(s.x[i], s.y[i])) pts += fmt::format("{:.1f},{:.1f} ", X(s.x[i]), Y(s.y[i]));
       if (pts.empty()) continue;
       const char* c = colour[s.name];
       svg += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.8\"/>\n", pts, c);
       for (size_t i = 0; i < s.x.size(); ++i) {
-        if (!(s.x[i] > 0 && s.y[i] > 0)) continue;
+        if (!usable(s.x[i], s.y[i])) continue;
         svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.8\" fill=\"{}\"/>", X(s.x[i]), Y(s.y[i]), c);
         if (i < s.labels.size() && (i == 0 || i + 1 == s.x.size()))
           svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"9\" fill=\"{}\">{}</text>", X(s.x[i]) + 4,

@@ -1,4 +1,4 @@
-// Minimal SVG line charts on log-log axes: speed against accuracy, one curve per method.
+// Minimal SVG line charts on log or linear axes: speed against accuracy, one curve per method.
 // Written by hand (a few dozen lines) so that charts need no plotting stack at run time.
 #pragma once
 
@@ -16,6 +16,7 @@ struct ChartSeries {
 struct ChartPanel {
   std::string title, x_label, y_label;
   std::vector<ChartSeries> series;
+  bool log_x = true, log_y = true;  // log axes show decades; linear ones "nice" steps
 };
 
 // Panels in a grid of `columns`; series with the same name share a colour across panels.

@@ -27,6 +27,10 @@ struct FirFilter {
 // The printed coefficients sum to 1.09245, not 1 (a DC gain of +0.77 dB); they are
 // returned divided by that sum so that power is preserved, as the paper intends
 // ("the overall energy ... is preserved ... through normalizing the coefficients").
+// Measured: these taps do not meet the stated 7/9 Hz spec; |H| falls to 0.43 at 7 Hz and
+// the stop band is only about -21.5 dB. A design that meets it (design_lowpass_filter(21,
+// 7, 9)) needs 25 taps, i.e. 12 frames of delay instead of 4; filter_for_frame_rate keeps
+// the paper's short filter at 21 Hz.
 FirFilter havran2005_filter();
 
 // A low-pass for another frame rate: Kaiser-windowed sinc with cutoff (pass + stop) / 2,

@@ -39,21 +39,46 @@
 // face's (x, y) coordinates, uniform in the central half of the quad on a 256 x 256
 // sub-grid, so it is deterministic and stable from frame to frame. A leaf with zero
 // power gets its quad centre.
+//
+// Between frames (q2_incremental, Nikodym et al. end of 3.2) the tree is kept and only
+// repaired. Why that is exact: rank nodes by the total order the rebuild's heap uses,
+// importance first, then the smaller NUNIQ. With a >= 0, b >= 0 and no negative pixel a
+// child ranks strictly below its parent, in floating point too: the r, g, b prefix sums
+// only grow, so a child's range differences are <= its parent's, and so are its
+// luminance (positive weights), power^a (pow is monotone; a = 0 gives 1 for both),
+// dw^b (<= for b >= 0, equal for b = 0) and the product; where the importances tie
+// (zero-power regions, b = 0, a = 0) the parent wins on its smaller NUNIQ. So the rebuild
+// pops nodes in decreasing rank over the whole tree, and its interior set is exactly the
+// S = (n - 12) / 3 highest-ranked nodes above the finest level (finest nodes are leaves
+// it retires). For a kept tree re-evaluated on a new frame, the lowest interior node is
+// always one whose four children are leaves (a "mergeable" node) and the highest node
+// outside is always a splittable leaf, so: while the best splittable leaf ranks above
+// the worst mergeable node, merge that node and split that leaf. The leaf count stays,
+// every pair swaps an interior node for a higher-ranked one (so it ends), and when it
+// ends the interior set is the top S again: the same leaves, so the same lights, bit for
+// bit. The leaf is never a child of the merged node (it would rank below it). Growing or
+// shrinking S by splitting the best leaf or merging the worst node keeps the top-S
+// property too, so place() with another n repairs the tree the same way. The order
+// argument needs a >= 0, b >= 0 and non-negative pixels: otherwise, and on any change
+// of layout, size or nside, place() rebuilds.
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <queue>
 #include <tuple>
 #include <vector>
 
 #include "core/error.h"
 #include "sampling/methods.h"
+#include "sampling/q2tree.h"
 
 extern "C" {
 #include <chealpix.h>
@@ -216,6 +241,9 @@ class Q2TreeSampler final : public Sampler {
   Method method() const override { return Method::Q2Tree; }
 
   void prepare(const EnvMap& map) override {
+    update_operations_.reset();
+    const bool had_tree = tree_ready_ && !tree_broken_;
+    tree_ready_ = false;  // until it matches this frame
     if (map.pixel_count() == 0) throw InputError("q2tree: the map is empty");
     if (map.layout == Layout::Healpix)
       prepare_healpix(map);
@@ -226,6 +254,17 @@ class Q2TreeSampler final : public Sampler {
     const double lum = luminance(rgb);
     if (!std::isfinite(lum)) throw InputError("q2tree: the map has non-finite pixels");
     if (!(lum > 0)) throw InputError("q2tree: the map is black (zero power): there is no light to sample");
+
+    dw_pow_.resize(size_t(max_level_) + 1);
+    for (int l = 0; l <= max_level_; ++l)
+      dw_pow_[size_t(l)] = std::pow(M_PI / (3.0 * std::ldexp(1.0, 2 * l)), options_.q2_solid_angle_exponent);
+    const TreeKey key{map.layout, map.width, map.height, finest_level_, max_level_};
+    if (had_tree && key == tree_key_ && incremental_allowed()) {
+      update_operations_ = update_tree();
+      tree_ready_ = update_operations_.has_value();
+    }
+    if (!tree_ready_) clear_tree();
+    tree_key_ = key;
   }
 
   std::vector<Light> place(int n) override {
@@ -237,22 +276,48 @@ class Q2TreeSampler final : public Sampler {
     if (n - 2 > capacity)
       throw InputError(fmt::format("q2tree: n = {} exceeds the {} HEALPix pixels at nside {}; raise the nside", n,
                                    capacity, cap_nside));
+    if (!incremental_allowed()) return rebuild_lights(n);
+    // The largest count 12 + 3 S <= n, the rebuild's first count >= n - 2.
+    const int splits = (n - 12) / 3;
+    if (!tree_ready_) init_tree();
+    while (!tree_broken_ && tree_splits_ < splits) {
+      const int x = top_leaf();
+      std::pop_heap(leaf_heap_.begin(), leaf_heap_.end());
+      leaf_heap_.pop_back();
+      split(x);
+      ++tree_splits_;
+    }
+    while (!tree_broken_ && tree_splits_ > splits) {
+      const int m = top_mergeable();
+      std::pop_heap(merge_heap_.begin(), merge_heap_.end(), std::greater<>());
+      merge_heap_.pop_back();
+      merge(m);
+      --tree_splits_;
+    }
+    if (tree_broken_) {
+      clear_tree();
+      return rebuild_lights(n);
+    }
+    std::vector<Light> lights;
+    lights.reserve(size_t(12 + 3 * splits));
+    for (const TreeNode& node : nodes_)
+      if (node.live && node.child < 0) lights.push_back(make_light(node.level, node.ipix));
+    std::sort(lights.begin(), lights.end(), [](const Light& x, const Light& y) { return x.id < y.id; });
+    return lights;
+  }
 
-    std::vector<double> dw_pow(max_level_ + 1);
-    for (int l = 0; l <= max_level_; ++l)
-      dw_pow[l] = std::pow(M_PI / (3.0 * std::ldexp(1.0, 2 * l)), options_.q2_solid_angle_exponent);
-    const double a = options_.q2_luminance_exponent;
+  std::optional<int> last_update_operations() const { return update_operations_; }
 
+ private:
+  // The greedy rebuild of Algorithm 1: split the most important leaf until n - 2 <= count.
+  std::vector<Light> rebuild_lights(int n) const {
     // Leaves in a max-heap by importance; ties go to the smaller NUNIQ so that the
     // tree does not depend on the heap's internal order.
     using Entry = std::tuple<double, int64_t, int, int64_t>;  // importance, -nuniq, level, ipix
     std::vector<Entry> heap;
     heap.reserve(size_t(n) + 4);
     auto push = [&](int level, int64_t ipix) {
-      const double power = std::max(0.0, node_luminance_power(level, ipix));
-      const double pa = a == 1.0 ? power : std::pow(power, a);
-      const int64_t nuniq = (int64_t(4) << (2 * level)) + ipix;
-      heap.emplace_back(pa * dw_pow[level], -nuniq, level, ipix);
+      heap.emplace_back(importance(level, ipix), -nuniq(level, ipix), level, ipix);
       std::push_heap(heap.begin(), heap.end());
     };
     for (int f = 0; f < 12; ++f) push(0, f);
@@ -278,7 +343,183 @@ class Q2TreeSampler final : public Sampler {
     return lights;
   }
 
- private:
+  static int64_t nuniq(int level, int64_t ipix) { return (int64_t(4) << (2 * level)) + ipix; }
+
+  // p = L^a * dw^b, the one definition both the rebuild and the kept tree use.
+  double importance(int level, int64_t ipix) const {
+    const double power = std::max(0.0, node_luminance_power(level, ipix));
+    const double a = options_.q2_luminance_exponent;
+    const double pa = a == 1.0 ? power : std::pow(power, a);
+    return pa * dw_pow_[level];
+  }
+
+  // When the kept tree is exact (see the top of the file).
+  bool incremental_allowed() const {
+    return options_.q2_incremental && options_.q2_luminance_exponent >= 0 && options_.q2_solid_angle_exponent >= 0 &&
+           !negative_pixels_;
+  }
+
+  // ---- The kept tree. Nodes live in a pool; the four children of a node are one block.
+  struct TreeNode {
+    int64_t ipix = 0;
+    double importance = 0;
+    int parent = -1;  // -1: base quad
+    int child = -1;   // first of four children, -1: leaf
+    int level = 0;
+    bool live = false;
+  };
+  // Heap entries compare in the rebuild's total order: importance, then the smaller NUNIQ.
+  using HeapEntry = std::tuple<double, int64_t, int>;  // importance, -nuniq, node
+
+  HeapEntry heap_entry(int i) const {
+    const TreeNode& node = nodes_[size_t(i)];
+    return {node.importance, -nuniq(node.level, node.ipix), i};
+  }
+  bool splittable(int i) const {
+    const TreeNode& node = nodes_[size_t(i)];
+    return node.live && node.child < 0 && node.level < max_level_;
+  }
+  bool mergeable(int i) const {
+    const TreeNode& node = nodes_[size_t(i)];
+    if (!node.live || node.child < 0) return false;
+    for (int k = 0; k < 4; ++k)
+      if (nodes_[size_t(node.child + k)].child >= 0) return false;
+    return true;
+  }
+  // An entry still describes its node (pool slots are reused; entries are never erased).
+  bool current(const HeapEntry& e) const { return heap_entry(std::get<2>(e)) == e && nodes_[size_t(std::get<2>(e))].live; }
+
+  // Best splittable leaf / worst mergeable node, left on top of their heap; -1 if none.
+  int top_leaf() {
+    while (!leaf_heap_.empty()) {
+      const HeapEntry& e = leaf_heap_.front();
+      if (current(e) && splittable(std::get<2>(e))) return std::get<2>(e);
+      std::pop_heap(leaf_heap_.begin(), leaf_heap_.end());
+      leaf_heap_.pop_back();
+    }
+    return -1;
+  }
+  int top_mergeable() {
+    while (!merge_heap_.empty()) {
+      const HeapEntry& e = merge_heap_.front();
+      if (current(e) && mergeable(std::get<2>(e))) return std::get<2>(e);
+      std::pop_heap(merge_heap_.begin(), merge_heap_.end(), std::greater<>());
+      merge_heap_.pop_back();
+    }
+    return -1;
+  }
+  void push_leaf(int i) {
+    leaf_heap_.push_back(heap_entry(i));
+    std::push_heap(leaf_heap_.begin(), leaf_heap_.end());
+  }
+  void push_mergeable(int i) {
+    merge_heap_.push_back(heap_entry(i));
+    std::push_heap(merge_heap_.begin(), merge_heap_.end(), std::greater<>());
+  }
+
+  void split(int i) {
+    if (i < 0) {
+      tree_broken_ = true;
+      return;
+    }
+    int block;
+    if (!free_blocks_.empty()) {
+      block = free_blocks_.back();
+      free_blocks_.pop_back();
+    } else {
+      block = int(nodes_.size());
+      nodes_.resize(nodes_.size() + 4);
+    }
+    TreeNode& node = nodes_[size_t(i)];
+    node.child = block;
+    for (int k = 0; k < 4; ++k) {
+      TreeNode& c = nodes_[size_t(block + k)];
+      c.level = node.level + 1;
+      c.ipix = 4 * node.ipix + k;
+      c.importance = importance(c.level, c.ipix);
+      c.parent = i;
+      c.child = -1;
+      c.live = true;
+      if (std::isnan(c.importance)) tree_broken_ = true;
+      if (c.level < max_level_) push_leaf(block + k);
+    }
+    push_mergeable(i);
+  }
+
+  void merge(int i) {
+    if (i < 0) {
+      tree_broken_ = true;
+      return;
+    }
+    TreeNode& node = nodes_[size_t(i)];
+    for (int k = 0; k < 4; ++k) nodes_[size_t(node.child + k)].live = false;
+    free_blocks_.push_back(node.child);
+    node.child = -1;
+    push_leaf(i);
+    if (node.parent >= 0 && mergeable(node.parent)) push_mergeable(node.parent);
+  }
+
+  void clear_tree() {
+    nodes_.clear();
+    free_blocks_.clear();
+    leaf_heap_.clear();
+    merge_heap_.clear();
+    tree_ready_ = false;
+    tree_broken_ = false;
+    tree_splits_ = 0;
+  }
+
+  // The 12 base quads as leaves, for the current frame.
+  void init_tree() {
+    clear_tree();
+    nodes_.resize(12);
+    for (int f = 0; f < 12; ++f) {
+      nodes_[size_t(f)] = {f, importance(0, f), -1, -1, 0, true};
+      if (std::isnan(nodes_[size_t(f)].importance)) tree_broken_ = true;
+    }
+    rebuild_heaps();
+    tree_ready_ = true;
+  }
+
+  void rebuild_heaps() {
+    leaf_heap_.clear();
+    merge_heap_.clear();
+    for (int i = 0; i < int(nodes_.size()); ++i) {
+      if (splittable(i)) leaf_heap_.push_back(heap_entry(i));
+      if (mergeable(i)) merge_heap_.push_back(heap_entry(i));
+    }
+    std::make_heap(leaf_heap_.begin(), leaf_heap_.end());
+    std::make_heap(merge_heap_.begin(), merge_heap_.end(), std::greater<>());
+  }
+
+  // Re-evaluates the kept tree on the current frame and restores the top-S order by
+  // merge-and-split pairs. Returns the number of pairs, or nullopt if the tree was dropped.
+  std::optional<int> update_tree() {
+    for (TreeNode& node : nodes_) {
+      if (!node.live) continue;
+      node.importance = importance(node.level, node.ipix);
+      if (std::isnan(node.importance)) return std::nullopt;
+    }
+    rebuild_heaps();
+    int pairs = 0;
+    for (;;) {
+      const int x = top_leaf();
+      const int m = top_mergeable();
+      if (x < 0 || m < 0 || !(heap_entry(x) > heap_entry(m))) break;
+      // Cannot happen (a child ranks below its parent); drop the tree rather than guess.
+      if (nodes_[size_t(x)].parent == m) return std::nullopt;
+      std::pop_heap(leaf_heap_.begin(), leaf_heap_.end());
+      leaf_heap_.pop_back();
+      std::pop_heap(merge_heap_.begin(), merge_heap_.end(), std::greater<>());
+      merge_heap_.pop_back();
+      merge(m);
+      split(x);
+      ++pairs;
+      if (tree_broken_) return std::nullopt;
+    }
+    return pairs;
+  }
+
   // Finest-level range of a node.
   std::pair<size_t, size_t> range(int level, int64_t ipix) const {
     const int shift = 2 * (finest_level_ - level);
@@ -342,15 +583,18 @@ class Q2TreeSampler final : public Sampler {
     prefix_[0] = s;
     const float* px = map.rgb.data();
     const float* d = dirs->data();
+    bool negative = false;
     for (size_t i = 0; i < npix; ++i) {
       if (map.is_valid(i)) {
         const double r = px[3 * i] * dw, g = px[3 * i + 1] * dw, b = px[3 * i + 2] * dw;
+        negative |= (r < 0) | (g < 0) | (b < 0);
         const double wl = 0.2126 * r + 0.7152 * g + 0.0722 * b;
         s.r += r, s.g += g, s.b += b;
         s.x += wl * d[3 * i], s.y += wl * d[3 * i + 1], s.z += wl * d[3 * i + 2];
       }
       prefix_[i + 1] = s;
     }
+    negative_pixels_ = negative;
   }
 
   void prepare_row_grid(const EnvMap& map) {
@@ -372,6 +616,7 @@ class Q2TreeSampler final : public Sampler {
     const bool masked = !map.valid.empty();
     const uint32_t total = uint32_t(bin.source.size());
     constexpr uint32_t kPrefetch = 16;
+    bool negative = false;
     for (size_t h = 0; h < npix; ++h) {
       for (uint32_t k = bin.offset[h], end = bin.offset[h + 1]; k < end; ++k) {
         const size_t u = src[k].u, v = src[k].v, i = v * w + u;
@@ -381,6 +626,7 @@ class Q2TreeSampler final : public Sampler {
         if (masked && !map.valid[i]) continue;
         const double dw = bin.row_dw[v];
         const double r = px[3 * i] * dw, g = px[3 * i + 1] * dw, b = px[3 * i + 2] * dw;
+        negative |= (r < 0) | (g < 0) | (b < 0);
         const double wl = 0.2126 * r + 0.7152 * g + 0.0722 * b;
         const double ws = wl * bin.row_sin[v];
         s.r += r, s.g += g, s.b += b;
@@ -388,9 +634,28 @@ class Q2TreeSampler final : public Sampler {
       }
       prefix_[h + 1] = s;
     }
+    negative_pixels_ = negative;
   }
 
+  // Geometry a kept tree belongs to.
+  struct TreeKey {
+    Layout layout = Layout::LatLong;
+    int width = 0, height = 0, finest_level = -1, max_level = -1;
+    bool operator==(const TreeKey&) const = default;
+  };
+
   SamplerOptions options_;
+  std::vector<double> dw_pow_;    // dw^b per level
+  bool negative_pixels_ = false;  // this frame has a negative contribution
+  TreeKey tree_key_;
+  std::vector<TreeNode> nodes_;
+  std::vector<int> free_blocks_;
+  std::vector<HeapEntry> leaf_heap_;   // max-heap of splittable leaves (lazy: stale entries skipped)
+  std::vector<HeapEntry> merge_heap_;  // min-heap of mergeable interior nodes (lazy)
+  bool tree_ready_ = false;   // nodes_ hold the tree of tree_splits_ splits for this frame
+  bool tree_broken_ = false;  // a NaN importance: the order is undefined, rebuild
+  int tree_splits_ = 0;
+  std::optional<int> update_operations_;
   std::shared_ptr<const RowGridBinning> binning_;
   std::vector<Prefix> prefix_;
   int finest_level_ = 0;  // level of the prefix array's pixels
@@ -401,6 +666,13 @@ class Q2TreeSampler final : public Sampler {
 
 std::unique_ptr<Sampler> make_q2tree_sampler(const SamplerOptions& options) {
   return std::make_unique<Q2TreeSampler>(options);
+}
+
+std::optional<int> q2tree_last_update_operations(const Sampler& sampler) {
+  const auto* q2 = dynamic_cast<const Q2TreeSampler*>(&sampler);
+  if (!q2) throw InputError(fmt::format("q2tree_last_update_operations: the sampler is {}, not q2tree",
+                                        to_string(sampler.method())));
+  return q2->last_update_operations();
 }
 
 }  // namespace lp

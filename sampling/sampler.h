@@ -43,6 +43,13 @@ struct SamplerOptions {
   // q2tree: HEALPix resolution the map is binned to (power of two); 0 picks the nside
   // whose pixels are closest to the input's.
   int q2_nside = 0;
+  // q2tree: keep the tree between frames. prepare() re-evaluates the previous frame's
+  // nodes on the new map and restores the greedy order by merge-and-split pairs
+  // (Nikodym et al. 3.2) instead of rebuilding; place(n) then gives exactly the lights a
+  // fresh sampler would (same ids, directions, rgb). Falls back to a rebuild when the
+  // map's geometry changes, and when exactness cannot be guaranteed (negative exponents
+  // or negative pixels).
+  bool q2_incremental = true;
 };
 
 class Sampler {

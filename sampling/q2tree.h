@@ -1,0 +1,16 @@
+// Q2-tree internals visible to tests and benchmarks (sampling/q2tree.cpp).
+#pragma once
+
+#include <optional>
+
+#include "sampling/sampler.h"
+
+namespace lp {
+
+// Merge-and-split pairs the last prepare() of a q2tree sampler performed to bring the
+// previous frame's tree up to date; nullopt when it did not update a tree (first frame,
+// geometry change, q2_incremental off or exactness not guaranteed: place() rebuilds).
+// Throws InputError when `sampler` is not a q2tree sampler.
+std::optional<int> q2tree_last_update_operations(const Sampler& sampler);
+
+}  // namespace lp

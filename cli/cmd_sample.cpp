@@ -14,6 +14,7 @@
 #include "core/progress.h"
 #include "sampling/auto_count.h"
 #include "sampling/exporters.h"
+#include "sampling/frame_pipeline.h"
 #include "sampling/overlay.h"
 #include "sampling/sampler.h"
 
@@ -89,14 +90,25 @@ int run_sample(const SampleArgs& args, const Output& out) {
   if (sequence && format != ExportFormat::Ndjson && format != ExportFormat::Csv)
     throw InputError(fmt::format("{} maps form a sequence: use --format ndjson (or csv)", files.size()));
 
-  SamplerOptions so;
-  so.upper_only = args.upper_only;
-  so.lloyd_relaxed = args.lloyd;
-  so.q2_luminance_exponent = args.q2_a;
-  so.q2_solid_angle_exponent = args.q2_b;
-  so.q2_jitter = args.q2_jitter;
-  so.q2_nside = args.q2_nside;
-  auto sampler = make_sampler(*method, so);
+  FramePipelineOptions po;
+  po.method = *method;
+  po.sampler.upper_only = args.upper_only;
+  po.sampler.lloyd_relaxed = args.lloyd;
+  po.sampler.q2_luminance_exponent = args.q2_a;
+  po.sampler.q2_solid_angle_exponent = args.q2_b;
+  po.sampler.q2_jitter = args.q2_jitter;
+  po.sampler.q2_nside = args.q2_nside;
+  po.count = n;
+  po.auto_count = automatic;
+  po.auto_options.target_diffuse_error = args.target_error;
+  if (args.filter == "auto") po.filter = FilterMode::Auto;
+  else if (args.filter == "on") po.filter = FilterMode::On;
+  else if (args.filter == "off") po.filter = FilterMode::Off;
+  else throw InputError(fmt::format("--filter must be auto, on or off, got '{}'", args.filter));
+  if (!(args.fps > 0)) throw InputError(fmt::format("--fps must be positive, got {}", args.fps));
+  po.frame_rate_hz = args.fps;
+  po.cluster_max_lights = args.cluster;
+  FramePipeline pipeline(po);
 
   ReadMapOptions ro;
   if (!args.layout.empty()) {
@@ -113,48 +125,32 @@ int run_sample(const SampleArgs& args, const Output& out) {
   LightList last;
   for (size_t f = 0; f < files.size(); ++f) {
     EnvMap map = read_envmap(files[f], ro);
-    auto t0 = std::chrono::steady_clock::now();
+    const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    LightList list;
     try {
-      sampler->prepare(map);
+      list = pipeline.process(map, int64_t(f), now);
     } catch (const InputError& e) {
       throw InputError(fmt::format("{}: {}", files[f], e.what()));
     }
-    const double prepare_s = seconds_since(t0);
+    const FrameTiming& t = pipeline.last_timing();
     const AccuracyReference reference = make_accuracy_reference(map, ao);
-    LightList list;
-    list.method = std::string(to_string(*method));
-    list.units = map.units;
-    list.frame = int64_t(f);
-    list.timestamp = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-    nlohmann::json frame_report;
-    t0 = std::chrono::steady_clock::now();
-    if (automatic) {
-      AutoCountOptions aco;
-      aco.target_diffuse_error = args.target_error;
-      const AutoCountResult r = choose_light_count(*sampler, reference, aco);
-      list.lights = r.lights;
-      frame_report["auto"] = {{"target_error", args.target_error}, {"reached", r.reached},
-                              {"evaluations", r.evaluations}};
-      if (!r.reached)
-        say(out, "{}: the target diffuse error {:.3g} was not reached with {} lights (best {:.3g})\n", files[f],
-            args.target_error, r.count, r.diffuse_error);
-    } else {
-      list.lights = sampler->place(n);
-    }
-    const double place_s = seconds_since(t0);
     const LightError err = light_error(reference, list.lights);
-    frame_report.update({{"file", files[f]},
-                         {"frame", list.frame},
-                         {"lights", list.lights.size()},
-                         {"prepare_seconds", prepare_s},
-                         {"place_seconds", place_s},
-                         {"diffuse_error", err.diffuse},
-                         {"glossy10_error", err.glossy.at(0)},
-                         {"glossy100_error", err.glossy.at(1)}});
+    nlohmann::json frame_report = {{"file", files[f]},
+                                   {"frame", list.frame},
+                                   {"lights", list.lights.size()},
+                                   {"prepare_seconds", t.prepare_ms / 1e3},
+                                   {"place_seconds", t.place_ms / 1e3},
+                                   {"temporal_seconds", t.temporal_ms / 1e3},
+                                   {"diffuse_error", err.diffuse},
+                                   {"glossy10_error", err.glossy.at(0)},
+                                   {"glossy100_error", err.glossy.at(1)}};
+    if (automatic && err.diffuse > args.target_error)
+      say(out, "{}: the target diffuse error {:.3g} was not reached ({} lights, {:.3g})\n", files[f],
+          args.target_error, list.lights.size(), err.diffuse);
     frames.push_back(frame_report);
     if (!out.json && !sequence)
       say(out, "{}: {} {} lights in {:.3f} ms (+{:.3f} ms preparing); diffuse error {:.2f} %, glossy {:.2f} % (s=10), {:.2f} % (s=100)\n",
-          files[f], list.lights.size(), list.method, place_s * 1e3, prepare_s * 1e3, 100 * err.diffuse,
+          files[f], list.lights.size(), list.method, t.place_ms + t.temporal_ms, t.prepare_ms, 100 * err.diffuse,
           100 * err.glossy[0], 100 * err.glossy[1]);
     if (format == ExportFormat::Csv && f > 0) {
       std::string body = export_lights(list, format);
@@ -169,8 +165,13 @@ int run_sample(const SampleArgs& args, const Output& out) {
   progress.finish();
   write_file_atomically(args.output, text);
   if (!args.overlay.empty()) write_overlay_png(args.overlay, last_map, last.lights);
-  if (sequence && !out.json) say(out, "{} frames -> {}\n", files.size(), args.output);
-  nlohmann::json report = {{"method", args.method}, {"output", args.output}, {"format", std::string(to_string(format))}};
+  if (sequence && !out.json)
+    say(out, "{} frames -> {}{}\n", files.size(), args.output,
+        pipeline.filtering() ? fmt::format(" (FIR-filtered: lights lag the maps by {} frames)", pipeline.delay_frames()) : "");
+  nlohmann::json report = {{"method", args.method},
+                            {"output", args.output},
+                            {"format", std::string(to_string(format))},
+                            {"filter_delay_frames", pipeline.delay_frames()}};
   if (sequence)
     report["frames"] = frames;
   else

@@ -57,6 +57,9 @@ struct SampleArgs {
   double q2_a = 1.0, q2_b = 0.25;
   bool q2_jitter = false;
   int q2_nside = 0;
+  std::string filter = "auto";      // FIR filtering of power and directions: auto|on|off
+  double fps = 21;                  // frame rate the filter is designed for
+  int cluster = 0;                  // cluster to at most this many lights (0: off)
 };
 int run_sample(const SampleArgs& args, const Output& out);
 
@@ -69,6 +72,29 @@ struct EvalSamplingArgs {
   bool no_shadowed = false;
 };
 int run_eval_sampling(const EvalSamplingArgs& args, const Output& out);
+
+struct SynthSequenceArgs {
+  std::string scenario = "moving-light";
+  std::string base = "scene";       // a map file or "scene"
+  int frames = 48;
+  double fps = 21;
+  uint64_t seed = 7;
+  std::string size;                 // resample the base first (WxH)
+  std::string output_dir;
+};
+int run_synth_sequence(const SynthSequenceArgs& args, const Output& out);
+
+struct EvalTemporalArgs {
+  std::vector<std::string> maps;    // base maps; "scene" for the procedural scene
+  std::string methods = "all";
+  std::string scenarios = "all";
+  int frames = 48;
+  int n = 256;
+  double fps = 21;
+  std::string filter = "auto";
+  std::string output_dir;
+};
+int run_eval_temporal(const EvalTemporalArgs& args, const Output& out);
 
 // Shared parsing helpers; throw lp::InputError naming the option.
 void parse_size(const std::string& text, const char* option, int* width, int* height);

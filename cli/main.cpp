@@ -65,6 +65,18 @@ int main(int argc, char** argv) {
   c_scene->add_flag("--no-sun", scene.no_sun, "Leave the sun out");
   c_scene->add_flag("--json", out.json, "Print the report as JSON");
 
+  SynthSequenceArgs seq;
+  auto* c_seq = c_synth->add_subcommand("sequence", "A dynamic sequence with ground truth, one EXR per frame");
+  c_seq->add_option("--scenario", seq.scenario,
+                    "static-noise|moving-light|swinging-bulb|abrupt-switch|flicker|rising-light|camera-turn");
+  c_seq->add_option("--base", seq.base, "Base map file, or 'scene' (the procedural scene at 512x256)");
+  c_seq->add_option("--frames", seq.frames, "Number of frames");
+  c_seq->add_option("--fps", seq.fps, "Frame rate (flicker aliasing depends on it)");
+  c_seq->add_option("--seed", seq.seed, "Noise seed");
+  c_seq->add_option("--size", seq.size, "Resample the base to WxH first");
+  c_seq->add_option("-o,--output", seq.output_dir, "Output directory (frame_0000.exr ..., truth.json)")->required();
+  c_seq->add_flag("--json", out.json, "Print the report as JSON");
+
   // sample
   SampleArgs samp;
   auto* c_samp = app.add_subcommand("sample", "Environment map -> directional lights");
@@ -83,6 +95,10 @@ int main(int argc, char** argv) {
   c_samp->add_option("--q2-b", samp.q2_b, "q2tree: solid-angle exponent b of p = L^a dw^b");
   c_samp->add_flag("--q2-jitter", samp.q2_jitter, "q2tree: deterministic jitter instead of leaf centroids");
   c_samp->add_option("--q2-nside", samp.q2_nside, "q2tree: HEALPix resolution to bin to (0: from the input)");
+  c_samp->add_option("--filter", samp.filter,
+                     "Temporal FIR filter on power and directions: auto (hemigon only), on, off");
+  c_samp->add_option("--fps", samp.fps, "Frame rate of a sequence (the FIR filter is designed for it)");
+  c_samp->add_option("--cluster", samp.cluster, "Cluster the lights to at most this many (Havran 2005 4.3)");
   c_samp->add_flag("--json", out.json, "Print the report as JSON");
 
   // eval
@@ -97,6 +113,18 @@ int main(int argc, char** argv) {
   c_evs->add_option("--repeats", evs.repeats, "Timing repeats per point (0: adaptive)");
   c_evs->add_flag("--no-shadowed", evs.no_shadowed, "Skip the shadowed error (its reference is the slow part)");
   c_evs->add_flag("--json", out.json, "Print the report as JSON");
+
+  EvalTemporalArgs evt;
+  auto* c_evt = c_eval->add_subcommand("temporal", "Flicker, jitter and lag of every method on dynamic scenarios");
+  c_evt->add_option("MAP", evt.maps, "Base maps ('scene' for the procedural scene)")->required();
+  c_evt->add_option("--methods", evt.methods, "Comma-separated methods or 'all'");
+  c_evt->add_option("--scenarios", evt.scenarios, "Comma-separated scenarios or 'all'");
+  c_evt->add_option("--frames", evt.frames, "Frames per scenario");
+  c_evt->add_option("--n", evt.n, "Lights per frame");
+  c_evt->add_option("--fps", evt.fps, "Frame rate");
+  c_evt->add_option("--filter", evt.filter, "FIR filtering: auto (hemigon only), on, off");
+  c_evt->add_option("-o,--output", evt.output_dir, "Directory for temporal.csv and temporal.svg")->required();
+  c_evt->add_flag("--json", out.json, "Print the report as JSON");
 
   try {
     app.parse(argc, argv);
@@ -113,6 +141,8 @@ int main(int argc, char** argv) {
     if (*c_scene) return run_synth_scene(scene, out);
     if (*c_samp) return run_sample(samp, out);
     if (*c_evs) return run_eval_sampling(evs, out);
+    if (*c_seq) return run_synth_sequence(seq, out);
+    if (*c_evt) return run_eval_temporal(evt, out);
   } catch (const lp::InputError& e) {
     std::fprintf(stderr, "lightprobe: %s\n", e.what());
     return 2;

@@ -1,0 +1,237 @@
+// synth sequence and eval temporal: dynamic scenes with ground truth, and where each
+// method breaks on them (flicker, jitter, lag; CONVENTIONS.md "Temporal").
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "cli/commands.h"
+#include "cli/report.h"
+#include "cli/svg_chart.h"
+#include "core/accuracy.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/progress.h"
+#include "core/resample.h"
+#include "core/synthetic_scene.h"
+#include "core/synthetic_sequence.h"
+#include "core/temporal_accuracy.h"
+#include "sampling/frame_pipeline.h"
+
+namespace lp::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// "scene" is the procedural scene at latlong 512x256; anything else a map file.
+EnvMap load_base(const std::string& base) {
+  if (base == "scene") return render_scene(describe_scene(), Layout::LatLong, 512, 256);
+  return read_envmap(base);
+}
+
+std::string base_name(const std::string& base) { return base == "scene" ? "scene" : fs::path(base).stem().string(); }
+
+std::vector<Scenario> parse_scenarios(const std::string& text) {
+  if (text == "all") return all_scenarios();
+  std::vector<Scenario> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string name = text.substr(start, comma - start);
+    auto s = scenario_from_string(name);
+    if (!s) {
+      std::string known;
+      for (Scenario k : all_scenarios()) known += (known.empty() ? "" : ", ") + std::string(to_string(k));
+      throw InputError(fmt::format("--scenarios: unknown scenario '{}' ({})", name, known));
+    }
+    out.push_back(*s);
+    start = comma + 1;
+  }
+  return out;
+}
+
+std::vector<Method> parse_method_list(const std::string& text) {
+  if (text == "all") return all_methods();
+  std::vector<Method> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string name = text.substr(start, comma - start);
+    auto m = method_from_string(name);
+    if (!m) throw InputError(fmt::format("--methods: unknown method '{}' (pharr, hemigon, q2tree, mediancut, all)", name));
+    out.push_back(*m);
+    start = comma + 1;
+  }
+  return out;
+}
+
+double mean(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? 0 : s / double(v.size());
+}
+
+}  // namespace
+
+int run_synth_sequence(const SynthSequenceArgs& args, const Output& out) {
+  const auto scenario = scenario_from_string(args.scenario);
+  if (!scenario) throw InputError(fmt::format("--scenario: unknown scenario '{}'", args.scenario));
+  SequenceOptions so;
+  so.scenario = *scenario;
+  so.frames = args.frames;
+  so.frame_rate_hz = args.fps;
+  so.seed = args.seed;
+  try {
+    validate(so);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("synth sequence: {}", e.what()));
+  }
+  EnvMap base = load_base(args.base);
+  if (!args.size.empty()) {
+    int w = 0, h = 0;
+    parse_size(args.size, "--size", &w, &h);
+    base = resample(base, base.layout == Layout::Healpix ? Layout::LatLong : base.layout, w, h);
+  }
+  std::error_code ec;
+  fs::create_directories(args.output_dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+
+  nlohmann::json truth = {{"scenario", std::string(to_string(*scenario))},
+                          {"base", args.base},
+                          {"frames", so.frames},
+                          {"frame_rate_hz", so.frame_rate_hz},
+                          {"layout", std::string(to_string(base.layout))}};
+  if (*scenario == Scenario::AbruptSwitch) truth["step_frame"] = step_frame(so);
+  if (*scenario == Scenario::Flicker) truth["alias_hz"] = flicker_alias_hz(so);
+  nlohmann::json per_frame = nlohmann::json::array();
+  Progress progress("synth sequence", size_t(so.frames), out.progress);
+  for (int f = 0; f < so.frames; ++f) {
+    const EnvMap frame = render_sequence_frame(base, so, f);
+    const std::string path = (fs::path(args.output_dir) / fmt::format("frame_{:04d}.exr", f)).string();
+    write_envmap(path, frame);
+    nlohmann::json j = {{"frame", f}, {"file", fs::path(path).filename().string()},
+                        {"power_luminance", total_luminance_power(frame)}};
+    if (auto d = added_light_direction(so, f)) {
+      const auto rgb = added_light_rgb(base, so, f);
+      j["light_direction"] = {d->x, d->y, d->z};
+      j["light_rgb"] = {rgb[0], rgb[1], rgb[2]};
+    }
+    per_frame.push_back(j);
+    progress.advance();
+  }
+  progress.finish();
+  truth["per_frame"] = per_frame;
+  const std::string truth_path = (fs::path(args.output_dir) / "truth.json").string();
+  write_file_atomically(truth_path, truth.dump(2) + "\n");
+  say(out, "{}: {} frames of '{}' on {} ({}), ground truth in {}\n", args.output_dir, so.frames, to_string(*scenario),
+      base_name(args.base), describe_size(base), truth_path);
+  emit_json(out, {{"output", args.output_dir}, {"frames", so.frames}, {"truth", truth_path}});
+  return 0;
+}
+
+int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
+  const std::vector<Method> methods = parse_method_list(args.methods);
+  const std::vector<Scenario> scenarios = parse_scenarios(args.scenarios);
+  if (args.n <= 0) throw InputError(fmt::format("--n must be positive, got {}", args.n));
+  std::error_code ec;
+  fs::create_directories(args.output_dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+
+  struct Row {
+    std::string map, scenario, method;
+    TemporalReport report;
+    double ms_per_frame = 0;
+    int delay = 0;
+  };
+  std::vector<Row> rows;
+  std::vector<ChartPanel> panels;
+  Progress progress("eval temporal", args.maps.size() * scenarios.size() * size_t(args.frames), out.progress);
+  AccuracyOptions ao;
+  ao.shadowed = false;
+  ao.glossy_exponents.clear();
+  for (const std::string& map_path : args.maps) {
+    const EnvMap base = load_base(map_path);
+    for (Scenario scenario : scenarios) {
+      SequenceOptions so;
+      so.scenario = scenario;
+      so.frames = args.frames;
+      so.frame_rate_hz = args.fps;
+      validate(so);
+      std::vector<FramePipeline> pipelines;
+      std::vector<TemporalScorer> scorers(methods.size());
+      std::vector<double> ms(methods.size(), 0.0);
+      for (Method m : methods) {
+        FramePipelineOptions po;
+        po.method = m;
+        po.count = args.n;
+        po.frame_rate_hz = args.fps;
+        po.filter = args.filter == "on" ? FilterMode::On : args.filter == "off" ? FilterMode::Off : FilterMode::Auto;
+        pipelines.emplace_back(po);
+      }
+      ChartPanel panel{fmt::format("{}: {}", base_name(map_path), to_string(scenario)), "frame",
+                       "mean irradiance over 256 normals", {}};
+      panel.log_x = panel.log_y = false;
+      ChartSeries truth{"reference", {}, {}, {}};
+      std::vector<ChartSeries> series;
+      for (Method m : methods) series.push_back({std::string(to_string(m)), {}, {}, {}});
+      for (int f = 0; f < so.frames; ++f) {
+        const EnvMap frame = render_sequence_frame(base, so, f);
+        const std::vector<double> e_ref = make_accuracy_reference(frame, ao).diffuse;
+        truth.x.push_back(f);
+        truth.y.push_back(mean(e_ref));
+        for (size_t i = 0; i < methods.size(); ++i) {
+          const auto t0 = std::chrono::steady_clock::now();
+          const LightList lights = pipelines[i].process(frame, f, f / so.frame_rate_hz);
+          ms[i] += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+          scorers[i].add_frame(e_ref, lights.lights);
+          series[i].x.push_back(f);
+          series[i].y.push_back(mean(scorers[i].lights_irradiance(f)));
+        }
+        progress.advance();
+      }
+      const std::optional<int> step =
+          scenario == Scenario::AbruptSwitch ? std::optional<int>(step_frame(so)) : std::nullopt;
+      for (size_t i = 0; i < methods.size(); ++i)
+        rows.push_back({base_name(map_path), std::string(to_string(scenario)), std::string(to_string(methods[i])),
+                        scorers[i].report(step), ms[i] / so.frames, pipelines[i].delay_frames()});
+      panel.series.push_back(truth);
+      for (auto& s : series) panel.series.push_back(std::move(s));
+      panels.push_back(std::move(panel));
+    }
+  }
+  progress.finish();
+
+  auto num = [](double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : std::string("nan"); };
+  std::string csv = "map,scenario,method,flicker,jitter_deg,lag_frames,mean_diffuse_error,ms_per_frame,filter_delay_frames\n";
+  for (const Row& r : rows)
+    csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", r.map, r.scenario, r.method, num(r.report.flicker),
+                       num(r.report.jitter_deg), num(r.report.lag_frames), num(r.report.mean_diffuse_error),
+                       num(r.ms_per_frame), r.delay);
+  const std::string csv_path = (fs::path(args.output_dir) / "temporal.csv").string();
+  write_file_atomically(csv_path, csv);
+  const std::string svg_path = (fs::path(args.output_dir) / "temporal.svg").string();
+  write_file_atomically(svg_path, svg_chart(fmt::format("Mean irradiance per frame, n = {}", args.n), panels, 2));
+
+  say(out, "{:<10} {:<14} {:<10} {:>9} {:>10} {:>5} {:>9} {:>9}\n", "map", "scenario", "method", "flicker",
+      "jitter deg", "lag", "diffuse", "ms/frame");
+  for (const Row& r : rows)
+    say(out, "{:<10} {:<14} {:<10} {:>8.3f}% {:>10.3f} {:>5} {:>8.2f}% {:>9.3f}\n", r.map, r.scenario, r.method,
+        100 * r.report.flicker, r.report.jitter_deg,
+        std::isfinite(r.report.lag_frames) ? fmt::format("{:g}", r.report.lag_frames) : std::string("-"),
+        100 * r.report.mean_diffuse_error, r.ms_per_frame);
+  say(out, "{} rows -> {}, {}\n", rows.size(), csv_path, svg_path);
+  nlohmann::json jrows = nlohmann::json::array();
+  for (const Row& r : rows)
+    jrows.push_back({{"map", r.map}, {"scenario", r.scenario}, {"method", r.method}, {"flicker", r.report.flicker},
+                     {"jitter_deg", r.report.jitter_deg},
+                     {"lag_frames", std::isfinite(r.report.lag_frames) ? nlohmann::json(r.report.lag_frames) : nlohmann::json()},
+                     {"mean_diffuse_error", r.report.mean_diffuse_error}, {"ms_per_frame", r.ms_per_frame},
+                     {"filter_delay_frames", r.delay}});
+  emit_json(out, {{"csv", csv_path}, {"chart", svg_path}, {"rows", jrows}});
+  return 0;
+}
+
+}  // namespace lp::cli

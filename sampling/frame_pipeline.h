@@ -1,0 +1,60 @@
+// The per-frame back end of a live probe: map -> lights, with the temporal processing a
+// video needs. One object per stream; it keeps the state that makes frames coherent
+// (the sampler's caches and incremental tree, the FIR histories, the auto-count state).
+//
+//   prepare + place (or the auto count with hysteresis)
+//   -> FIR low-pass on total power and on each light's direction (Havran 2005 3.3)
+//   -> optional clustering to at most Q lights (Havran 2005 4.3)
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include "core/accuracy.h"
+#include "sampling/auto_count.h"
+#include "sampling/sampler.h"
+#include "sampling/temporal_filter.h"
+
+namespace lp {
+
+enum class FilterMode { Auto, On, Off };
+
+struct FramePipelineOptions {
+  Method method = Method::Hemigon;
+  SamplerOptions sampler;
+  int count = 256;                  // lights per frame (ignored with auto_count)
+  bool auto_count = false;          // --n auto: fewest lights reaching the target error
+  AutoCountOptions auto_options;
+  AutoCountHysteresis hysteresis;
+  // Auto: the FIR filters run for hemigon (as in Havran 2005) and not for the others;
+  // q2tree is stable by construction, pharr's global jumps are what the atlas shows.
+  FilterMode filter = FilterMode::Auto;
+  double frame_rate_hz = 21;        // the filter is re-designed for other rates
+  int cluster_max_lights = 0;       // 0: no clustering
+};
+
+struct FrameTiming {
+  double prepare_ms = 0, place_ms = 0, temporal_ms = 0;
+};
+
+class FramePipeline {
+ public:
+  explicit FramePipeline(const FramePipelineOptions& options);
+  // Lights for the next frame of the stream. With auto_count the accuracy reference of
+  // the map is built here (diffuse only), which dominates the cost of such frames.
+  LightList process(const EnvMap& map, int64_t frame, double timestamp);
+  // Frames by which the output lags the input (0 without filtering).
+  int delay_frames() const;
+  bool filtering() const { return filter_.has_value(); }
+  const FrameTiming& last_timing() const { return timing_; }
+  void reset();
+
+ private:
+  FramePipelineOptions options_;
+  std::unique_ptr<Sampler> sampler_;
+  std::optional<LightTemporalFilter> filter_;
+  std::optional<AutoCountTracker> tracker_;
+  FrameTiming timing_;
+};
+
+}  // namespace lp

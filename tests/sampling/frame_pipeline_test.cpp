@@ -1,0 +1,107 @@
+// The live back end on the dynamic scenarios where the papers say methods fail.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/accuracy.h"
+#include "core/error.h"
+#include "core/synthetic_scene.h"
+#include "core/synthetic_sequence.h"
+#include "core/temporal_accuracy.h"
+#include "sampling/frame_pipeline.h"
+
+namespace lp {
+namespace {
+
+const EnvMap& base_map() {
+  static const EnvMap map = render_scene(describe_scene(), Layout::LatLong, 256, 128);
+  return map;
+}
+
+TemporalReport run(Scenario scenario, Method method, int frames, FilterMode filter = FilterMode::Auto,
+                   int count = 128) {
+  SequenceOptions so;
+  so.scenario = scenario;
+  so.frames = frames;
+  FramePipelineOptions po;
+  po.method = method;
+  po.count = count;
+  po.filter = filter;
+  FramePipeline pipeline(po);
+  TemporalScorer scorer;
+  for (int f = 0; f < frames; ++f) {
+    const EnvMap frame = render_sequence_frame(base_map(), so, f);
+    scorer.add_frame(frame, pipeline.process(frame, f, f / 21.0).lights);
+  }
+  return scorer.report(scenario == Scenario::AbruptSwitch ? std::optional<int>(step_frame(so)) : std::nullopt);
+}
+
+TEST(FramePipeline, HemigonJittersLessThanPharrOnAStaticSceneWithSensorNoise) {
+  const double hemigon = run(Scenario::StaticNoise, Method::Hemigon, 24).jitter_deg;
+  const double pharr = run(Scenario::StaticNoise, Method::Pharr, 24).jitter_deg;
+  EXPECT_LT(hemigon, pharr);
+  EXPECT_GT(pharr, 0.05);  // noise really moves equal-power lights
+}
+
+TEST(FramePipeline, Q2TreeFollowsAnAbruptSwitchWithinOneFrame) {
+  EXPECT_LE(run(Scenario::AbruptSwitch, Method::Q2Tree, 24).lag_frames, 1.0);
+}
+
+TEST(FramePipeline, FilteredHemigonLagsAnAbruptSwitchByTheFilterStepResponse) {
+  // Independent expectation from the taps alone: the first frame whose running sum of
+  // taps reaches 90 % (the FIR's step response); 4 frames of group delay plus one.
+  const FirFilter fir = havran2005_filter();
+  double sum = 0;
+  int expected = -1;
+  for (size_t k = 0; k < fir.taps.size(); ++k) {
+    sum += fir.taps[k];
+    if (sum >= 0.9) {
+      expected = int(k);
+      break;
+    }
+  }
+  ASSERT_EQ(expected, fir.delay_frames() + 1);
+  const TemporalReport filtered = run(Scenario::AbruptSwitch, Method::Hemigon, 24);
+  EXPECT_EQ(filtered.lag_frames, expected);
+  // Without the filter hemigon follows at once.
+  EXPECT_LE(run(Scenario::AbruptSwitch, Method::Hemigon, 24, FilterMode::Off).lag_frames, 1.0);
+}
+
+TEST(FramePipeline, ClusteringBoundsTheLightCountAndKeepsPower) {
+  FramePipelineOptions po;
+  po.method = Method::Pharr;
+  po.count = 300;
+  po.cluster_max_lights = 40;
+  FramePipeline pipeline(po);
+  const LightList list = pipeline.process(base_map(), 0, 0);
+  EXPECT_LE(list.lights.size(), 40u);
+  const auto want = total_power(base_map()), got = total_power(list.lights);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(got[c], want[c], 1e-6 * want[c]);
+}
+
+TEST(FramePipeline, AutoCountPerFrameMeetsTheTargetOnEveryFrame) {
+  FramePipelineOptions po;
+  po.method = Method::Q2Tree;
+  po.auto_count = true;
+  po.auto_options.target_diffuse_error = 0.01;
+  FramePipeline pipeline(po);
+  SequenceOptions so;
+  so.scenario = Scenario::MovingLight;
+  so.frames = 6;
+  AccuracyOptions ao;
+  ao.shadowed = false;
+  for (int f = 0; f < so.frames; ++f) {
+    const EnvMap frame = render_sequence_frame(base_map(), so, f);
+    const LightList list = pipeline.process(frame, f, 0);
+    EXPECT_LE(light_error(make_accuracy_reference(frame, ao), list.lights).diffuse, 0.01) << f;
+  }
+}
+
+TEST(FramePipeline, RejectsANonPositiveCount) {
+  FramePipelineOptions po;
+  po.count = 0;
+  EXPECT_THROW(FramePipeline{po}, InputError);
+}
+
+}  // namespace
+}  // namespace lp

@@ -171,12 +171,16 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
         po.filter = args.filter == "on" ? FilterMode::On : args.filter == "off" ? FilterMode::Off : FilterMode::Auto;
         pipelines.emplace_back(po);
       }
-      ChartPanel panel{fmt::format("{}: {}", base_name(map_path), to_string(scenario)), "frame",
+      ChartPanel panel{fmt::format("{}: {} (power)", base_name(map_path), to_string(scenario)), "frame",
                        "mean irradiance over 256 normals", {}};
       panel.log_x = panel.log_y = false;
+      ChartPanel error_panel{fmt::format("{}: {} (error)", base_name(map_path), to_string(scenario)), "frame",
+                             "diffuse error of the frame", {}};
+      error_panel.log_x = false;
       ChartSeries truth{"reference", {}, {}, {}};
-      std::vector<ChartSeries> series;
+      std::vector<ChartSeries> series, errors;
       for (Method m : methods) series.push_back({std::string(to_string(m)), {}, {}, {}});
+      errors = series;
       for (int f = 0; f < so.frames; ++f) {
         const EnvMap frame = render_sequence_frame(base, so, f);
         const std::vector<double> e_ref = make_accuracy_reference(frame, ao).diffuse;
@@ -188,7 +192,12 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
           ms[i] += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
           scorers[i].add_frame(e_ref, lights.lights);
           series[i].x.push_back(f);
-          series[i].y.push_back(mean(scorers[i].lights_irradiance(f)));
+          const std::vector<double>& e_lights = scorers[i].lights_irradiance(f);
+          series[i].y.push_back(mean(e_lights));
+          double sq = 0;
+          for (size_t k = 0; k < e_ref.size(); ++k) sq += (e_lights[k] - e_ref[k]) * (e_lights[k] - e_ref[k]);
+          errors[i].x.push_back(f);
+          errors[i].y.push_back(std::sqrt(sq / double(e_ref.size())) / mean(e_ref));
         }
         progress.advance();
       }
@@ -197,9 +206,11 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
       for (size_t i = 0; i < methods.size(); ++i)
         rows.push_back({base_name(map_path), std::string(to_string(scenario)), std::string(to_string(methods[i])),
                         scorers[i].report(step), ms[i] / so.frames, pipelines[i].delay_frames()});
-      panel.series.push_back(truth);
       for (auto& s : series) panel.series.push_back(std::move(s));
+      panel.series.push_back(truth);  // last, so the truth is drawn on top
+      for (auto& s : errors) error_panel.series.push_back(std::move(s));
       panels.push_back(std::move(panel));
+      panels.push_back(std::move(error_panel));
     }
   }
   progress.finish();
@@ -213,7 +224,7 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
   const std::string csv_path = (fs::path(args.output_dir) / "temporal.csv").string();
   write_file_atomically(csv_path, csv);
   const std::string svg_path = (fs::path(args.output_dir) / "temporal.svg").string();
-  write_file_atomically(svg_path, svg_chart(fmt::format("Mean irradiance per frame, n = {}", args.n), panels, 2));
+  write_file_atomically(svg_path, svg_chart(fmt::format("Per frame: power (mean irradiance) and diffuse error, n = {}", args.n), panels, 2));
 
   say(out, "{:<10} {:<14} {:<10} {:>9} {:>10} {:>5} {:>9} {:>9}\n", "map", "scenario", "method", "flicker",
       "jitter deg", "lag", "diffuse", "ms/frame");

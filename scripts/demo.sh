@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job on the project's own default data: render the procedural scene (sky, a
 # small very bright sun, windows and a lamp), inspect it, turn it into lights with every
-# method, and chart speed against accuracy. Outputs land in ./out.
+# method, chart speed against accuracy, and run the live chain on dynamic sequences.
+# Outputs land in ./out.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build.sh
@@ -14,4 +15,9 @@ for m in pharr hemigon q2tree mediancut; do
 done
 $lp sample out/scene.exr --method q2tree --n auto --target-error 0.01 -o out/lights_auto.json
 $lp eval sampling scene --methods all --n 16,64,256,1024 -o out/eval
-echo "demo: results in out/ (scene.exr, lights_*.json, lights_*.png, eval/sampling.svg)"
+# Live sequences: a light moving across the scene, sampled frame by frame with hemigon's
+# FIR filters, then every method on every dynamic scenario (flicker, jitter, lag).
+$lp synth sequence --scenario moving-light --frames 24 -o out/sequence
+$lp sample out/sequence --method hemigon --n 300 -o out/sequence_lights.ndjson
+$lp eval temporal scene --frames 32 -o out/temporal
+echo "demo: results in out/ (scene.exr, lights_*.json, lights_*.png, eval/sampling.svg, sequence_lights.ndjson, temporal/temporal.svg)"

@@ -125,7 +125,9 @@ int run_sample(const SampleArgs& args, const Output& out) {
   LightList last;
   for (size_t f = 0; f < files.size(); ++f) {
     EnvMap map = read_envmap(files[f], ro);
-    const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    // A recorded sequence has no capture clock here: frame times follow --fps from 0.
+    const double now = sequence ? double(f) / args.fps
+                                : std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
     LightList list;
     try {
       list = pipeline.process(map, int64_t(f), now);

@@ -235,3 +235,48 @@ TEST(Cli, ConvertAssemblesACubeMapDirectoryIntoALatlongMap) {
   expect_one_line_error(lightprobe("convert " + scratch().string() + " " + (scratch() / "x.exr").string()),
                         scratch().string());
 }
+
+TEST(Cli, ASynthesisedSequenceIsSampledFrameByFrameWithStableIdsAndTheFilterDelayReported) {
+  const fs::path dir = scratch() / "seq";
+  CliRun s = lightprobe("synth sequence --json --scenario abrupt-switch --frames 12 --size 128x64 -o " + dir.string());
+  ASSERT_EQ(s.code, 0) << s.err;
+  EXPECT_TRUE(fs::exists(dir / "frame_0011.exr"));
+  const auto truth = nlohmann::json::parse(slurp(dir / "truth.json"));
+  EXPECT_EQ(truth["step_frame"].get<int>(), 6);
+
+  const fs::path out = scratch() / "seq.ndjson";
+  CliRun r = lightprobe("sample --json " + dir.string() + " --method hemigon --n 32 -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["filter_delay_frames"].get<int>(), 4);
+  EXPECT_EQ(report["frames"].size(), 12u);
+  std::istringstream lines(slurp(out));
+  std::string line;
+  std::vector<nlohmann::json> frames;
+  while (std::getline(lines, line)) frames.push_back(nlohmann::json::parse(line));
+  ASSERT_EQ(frames.size(), 12u);
+  for (size_t f = 0; f < frames.size(); ++f) {
+    EXPECT_EQ(frames[f]["frame"].get<int>(), int(f));
+    EXPECT_NEAR(frames[f]["timestamp"].get<double>(), double(f) / 21, 1e-9);
+    ASSERT_EQ(frames[f]["lights"].size(), 32u);
+    for (size_t i = 0; i < 32; ++i) EXPECT_EQ(frames[f]["lights"][i]["id"], frames[0]["lights"][i]["id"]);
+  }
+  // Clustering bounds the count.
+  CliRun c = lightprobe("sample --json " + dir.string() + " --method pharr --n 64 --cluster 10 -o " + out.string());
+  ASSERT_EQ(c.code, 0) << c.err;
+  for (const auto& fr : nlohmann::json::parse(c.out)["frames"]) EXPECT_LE(fr["lights"].get<int>(), 10);
+}
+
+TEST(Cli, EvalTemporalWritesTheAtlasAndRejectsUnknownScenarios) {
+  const fs::path dir = scratch() / "temporal";
+  CliRun r = lightprobe("eval temporal --json scene --frames 8 --scenarios abrupt-switch,static-noise --methods q2tree,pharr -o " +
+                        dir.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["rows"].size(), 4u);
+  for (const auto& row : j["rows"])
+    if (row["scenario"] == "abrupt-switch" && row["method"] == "q2tree") EXPECT_LE(row["lag_frames"].get<double>(), 1.0);
+  EXPECT_TRUE(fs::exists(dir / "temporal.csv"));
+  EXPECT_TRUE(fs::exists(dir / "temporal.svg"));
+  expect_one_line_error(lightprobe("eval temporal scene --scenarios earthquake -o " + dir.string()), "earthquake");
+}

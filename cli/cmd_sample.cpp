@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "cli/commands.h"
 #include "cli/report.h"
@@ -48,6 +50,33 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& inputs) {
   return files;
 }
 
+// Capture times of a recorded sequence, when known: a directory may hold
+// `timestamps.txt`, one time in seconds per map, in the maps' name order.
+std::optional<std::vector<double>> read_timestamps(const std::vector<std::string>& inputs, size_t frames) {
+  if (inputs.size() != 1) return std::nullopt;
+  std::error_code ec;
+  if (!fs::is_directory(inputs[0], ec)) return std::nullopt;
+  const fs::path path = fs::path(inputs[0]) / "timestamps.txt";
+  if (!fs::exists(path, ec)) return std::nullopt;
+  std::ifstream in(path);
+  std::vector<double> times;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    try {
+      size_t used = 0;
+      const double t = std::stod(line, &used);
+      if (!std::isfinite(t)) throw std::invalid_argument("x");
+      times.push_back(t);
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("{}: line {} is not a time in seconds: '{}'", path.string(), times.size() + 1, line));
+    }
+  }
+  if (times.size() != frames)
+    throw InputError(fmt::format("{}: {} times for {} maps", path.string(), times.size(), frames));
+  return times;
+}
+
 ExportFormat format_for(const std::string& format, const std::string& output, bool sequence) {
   if (!format.empty()) {
     auto f = export_format_from_string(format);
@@ -85,6 +114,7 @@ int run_sample(const SampleArgs& args, const Output& out) {
     if (n <= 0) throw InputError(fmt::format("--n must be positive, got {}", n));
   }
   const std::vector<std::string> files = expand_inputs(args.inputs);
+  const auto timestamps = read_timestamps(args.inputs, files.size());
   const bool sequence = files.size() > 1;
   const ExportFormat format = format_for(args.format, args.output, sequence);
   if (sequence && format != ExportFormat::Ndjson && format != ExportFormat::Csv)
@@ -125,9 +155,11 @@ int run_sample(const SampleArgs& args, const Output& out) {
   LightList last;
   for (size_t f = 0; f < files.size(); ++f) {
     EnvMap map = read_envmap(files[f], ro);
-    // A recorded sequence has no capture clock here: frame times follow --fps from 0.
-    const double now = sequence ? double(f) / args.fps
-                                : std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    // Frame times: the sequence's timestamps.txt when known, else --fps from 0; a single
+    // map is stamped with the current time.
+    const double now = timestamps ? (*timestamps)[f]
+                       : sequence ? double(f) / args.fps
+                                  : std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
     LightList list;
     try {
       list = pipeline.process(map, int64_t(f), now);

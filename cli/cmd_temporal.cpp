@@ -124,6 +124,9 @@ int run_synth_sequence(const SynthSequenceArgs& args, const Output& out) {
   }
   progress.finish();
   truth["per_frame"] = per_frame;
+  std::string times;
+  for (int f = 0; f < so.frames; ++f) times += fmt::format("{:.9g}\n", f / so.frame_rate_hz);
+  write_file_atomically((fs::path(args.output_dir) / "timestamps.txt").string(), times);
   const std::string truth_path = (fs::path(args.output_dir) / "truth.json").string();
   write_file_atomically(truth_path, truth.dump(2) + "\n");
   say(out, "{}: {} frames of '{}' on {} ({}), ground truth in {}\n", args.output_dir, so.frames, to_string(*scenario),

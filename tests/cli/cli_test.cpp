@@ -261,6 +261,18 @@ TEST(Cli, ASynthesisedSequenceIsSampledFrameByFrameWithStableIdsAndTheFilterDela
     ASSERT_EQ(frames[f]["lights"].size(), 32u);
     for (size_t i = 0; i < 32; ++i) EXPECT_EQ(frames[f]["lights"][i]["id"], frames[0]["lights"][i]["id"]);
   }
+  // Known capture times replace --fps; a wrong count of them is refused.
+  std::ofstream(dir / "timestamps.txt") << "0\n0.1\n0.2\n0.3\n0.4\n0.5\n0.6\n0.7\n0.8\n0.9\n1.0\n1.5\n";
+  ASSERT_EQ(lightprobe("sample " + dir.string() + " --method q2tree --n 32 -o " + out.string()).code, 0);
+  {
+    std::istringstream l2(slurp(out));
+    std::string last;
+    while (std::getline(l2, line)) last = line;
+    EXPECT_NEAR(nlohmann::json::parse(last)["timestamp"].get<double>(), 1.5, 1e-12);
+  }
+  std::ofstream(dir / "timestamps.txt") << "0\n0.1\n";
+  expect_one_line_error(lightprobe("sample " + dir.string() + " --n 32 -o " + out.string()), "timestamps.txt");
+  fs::remove(dir / "timestamps.txt");
   // Clustering bounds the count.
   CliRun c = lightprobe("sample --json " + dir.string() + " --method pharr --n 64 --cluster 10 -o " + out.string());
   ASSERT_EQ(c.code, 0) << c.err;

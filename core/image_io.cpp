@@ -347,7 +347,8 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
   for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(type));
   const bool mask = !img.valid.empty();
   if (mask) header.channels().insert("A", Imf::Channel(type));
-  header.insert("lightprobe.layout", Imf::StringAttribute(std::string(to_string(map.layout))));
+  if (options.record_layout)
+    header.insert("lightprobe.layout", Imf::StringAttribute(std::string(to_string(map.layout))));
   header.insert("lightprobe.units", Imf::StringAttribute(std::string(to_string(map.units))));
   if (map.layout == Layout::Healpix) header.insert("lightprobe.nside", Imf::IntAttribute(map.nside));
 
@@ -620,14 +621,15 @@ void rle_channel(const uint8_t* data, int n, std::string& out) {
   }
 }
 
-std::string encode_hdr(const std::string& path, const EnvMap& map) {
+std::string encode_hdr(const std::string& path, const EnvMap& map, const WriteMapOptions& options) {
   if (has_invalid_pixels(map))
     fail(path, "cannot write: the map has invalid pixels (a validity mask), which .hdr cannot store; write .exr");
   const std::string bad = find_bad_pixel(map, path);
   if (!bad.empty()) throw InputError(bad + "; RGBE cannot store it");
   const FileImage img = to_file_image(map);
   std::string out = "#?RADIANCE\n# Written by lightprobe\nFORMAT=32-bit_rle_rgbe\n";
-  out += fmt::format("LIGHTPROBE_LAYOUT={}\nLIGHTPROBE_UNITS={}\n", to_string(map.layout), to_string(map.units));
+  if (options.record_layout) out += fmt::format("LIGHTPROBE_LAYOUT={}\n", to_string(map.layout));
+  out += fmt::format("LIGHTPROBE_UNITS={}\n", to_string(map.units));
   if (map.layout == Layout::Healpix) out += fmt::format("LIGHTPROBE_NSIDE={}\n", map.nside);
   out += fmt::format("\n-Y {} +X {}\n", img.height, img.width);
   const int W = img.width;
@@ -769,11 +771,45 @@ void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOpti
   const std::string bytes = guarded(path, "write", [&] {
     const std::string ext = lower_extension(path);
     if (ext == ".exr") return encode_exr(path, map, options);
-    if (ext == ".hdr") return encode_hdr(path, map);
+    if (ext == ".hdr") return encode_hdr(path, map, options);
     if (ext == ".pfm") return encode_pfm(path, map);
     fail(path, unsupported_map_extension(path));
   });
   write_file_atomically(path, bytes);
+}
+
+RgbImage read_rgb_image(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  RgbImage img;
+  if (ext == ".exr" || ext == ".hdr" || ext == ".pic" || ext == ".rgbe" || ext == ".pfm") {
+    ReadMapOptions ro;
+    ro.layout = Layout::Hemisphere;  // any W x H; the layout is not used
+    EnvMap m = read_envmap(path, ro);
+    img.width = m.width;
+    img.height = m.height;
+    img.rgb = std::move(m.rgb);
+    img.valid = std::move(m.valid);
+    img.units = m.units;
+    return img;
+  }
+  CameraImage c = read_camera_image(path);
+  img.width = c.width;
+  img.height = c.height;
+  img.rgb = std::move(c.rgb);
+  return img;
+}
+
+void write_rgb_image(const std::string& path, const RgbImage& image, const WriteMapOptions& options) {
+  EnvMap m;
+  m.layout = Layout::Hemisphere;
+  m.width = image.width;
+  m.height = image.height;
+  m.rgb = image.rgb;
+  m.valid = image.valid;
+  m.units = image.units;
+  WriteMapOptions o = options;
+  o.record_layout = false;
+  write_envmap(path, m, o);
 }
 
 CameraImage read_camera_image(const std::string& path) {

@@ -48,6 +48,8 @@ EnvMap read_envmap(const std::string& path, const ReadMapOptions& options = {});
 enum class ExrPixelType { Half, Float };
 struct WriteMapOptions {
   ExrPixelType exr_pixel_type = ExrPixelType::Float;
+  // False for plain images that are not maps (write_rgb_image sets it).
+  bool record_layout = true;
 };
 void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOptions& options = {});
 
@@ -59,6 +61,20 @@ struct CameraImage {
   std::vector<float> rgb;
 };
 CameraImage read_camera_image(const std::string& path);
+// Radiance images that are not maps yet (a fused bracket, a mirror-ball or fisheye photo):
+// float RGB, top row first, 3 floats per pixel, optional validity mask, units.
+struct RgbImage {
+  int width = 0, height = 0;
+  std::vector<float> rgb;
+  std::vector<uint8_t> valid;  // empty: every pixel valid
+  Units units = Units::Relative;
+};
+// .exr/.hdr/.pfm as stored (NaN/Inf/negative refused); 8/16-bit formats as code values
+// in [0, 1] (read_camera_image).
+RgbImage read_rgb_image(const std::string& path);
+// .exr/.hdr/.pfm without a layout record; atomic like every writer.
+void write_rgb_image(const std::string& path, const RgbImage& image, const WriteMapOptions& options = {});
+
 // 8-bit sRGB PNG/JPEG of already tone-mapped RGB in [0, 1] (overlays, charts).
 void write_display_image(const std::string& path, int width, int height, const std::vector<float>& rgb);
 

@@ -7,7 +7,7 @@ packages=(
   cmake ninja-build pkg-config g++ ccache
   libopencv-dev libopenexr-dev libimath-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libtbb-dev libeigen3-dev
-  libchealpix-dev
+  libchealpix-dev libexiv2-dev libraw-dev libceres-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )
 

@@ -1,0 +1,174 @@
+#include "probe/remap.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <string>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+// One coordinate (pixel-centre convention) -> top-left index along the axis and the
+// fraction towards the next one, clamped so that i0 + 1 < n. False when off the image.
+inline bool axis_tap(float x, int n, int* i0, float* f) {
+  if (!(x >= 0.0f && x <= float(n))) return false;  // also rejects NaN
+  float u = x - 0.5f;
+  if (u <= 0.0f) {
+    *i0 = 0;
+    *f = 0.0f;
+    return true;
+  }
+  if (u >= float(n - 1)) {
+    *i0 = n - 2;
+    *f = 1.0f;
+    return true;
+  }
+  int i = int(u);  // u > 0: truncation is floor
+  if (i > n - 2) i = n - 2;
+  *i0 = i;
+  *f = u - float(i);
+  return true;
+}
+
+template <typename F>
+void run_rows(int rows, const RemapOptions& options, F&& body) {
+  auto loop = [&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, rows, 8),
+                      [&](const tbb::blocked_range<int>& r) { body(r.begin(), r.end()); });
+  };
+  if (options.threads == 1) {
+    body(0, rows);
+  } else if (options.threads > 1) {
+    tbb::task_arena arena(options.threads);
+    arena.execute(loop);
+  } else {
+    loop();
+  }
+}
+
+}  // namespace
+
+CompiledRemap compile_remap(const RemapTable& table, int src_width, int src_height) {
+  if (table.out_width <= 0 || table.out_height <= 0)
+    throw InputError("remap table has size " + std::to_string(table.out_width) + "x" +
+                     std::to_string(table.out_height));
+  const size_t n = size_t(table.out_width) * size_t(table.out_height);
+  if (table.src_x.size() != n || table.src_y.size() != n)
+    throw InputError("remap table holds " + std::to_string(table.src_x.size()) + "/" +
+                     std::to_string(table.src_y.size()) + " coordinates for " + std::to_string(n) +
+                     " output pixels");
+  if (src_width < 2 || src_height < 2)
+    throw InputError("remap source is " + std::to_string(src_width) + "x" + std::to_string(src_height) +
+                     ", needs at least 2x2 pixels");
+  if (size_t(src_width) * size_t(src_height) > size_t(INT32_MAX))
+    throw InputError("remap source is too large for 32-bit indices");
+  CompiledRemap c;
+  c.src_width = src_width;
+  c.src_height = src_height;
+  c.out_width = table.out_width;
+  c.out_height = table.out_height;
+  c.taps.resize(n);
+  bool any_invalid = false;
+  for (size_t i = 0; i < n; ++i) {
+    int ix, iy;
+    float fx, fy;
+    CompiledRemap::Tap& t = c.taps[i];
+    if (axis_tap(table.src_x[i], src_width, &ix, &fx) && axis_tap(table.src_y[i], src_height, &iy, &fy)) {
+      t.index = int32_t(iy * src_width + ix);
+      t.fx = fx;
+      t.fy = fy;
+    } else {
+      t.index = -1;
+      t.fx = t.fy = 0.0f;
+      any_invalid = true;
+    }
+  }
+  c.any_invalid = any_invalid;
+  return c;
+}
+
+void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out, const RemapOptions& options) {
+  if (src.width != remap.src_width || src.height != remap.src_height)
+    throw InputError("remap compiled for a " + std::to_string(remap.src_width) + "x" +
+                     std::to_string(remap.src_height) + " source, image is " + std::to_string(src.width) + "x" +
+                     std::to_string(src.height));
+  if (src.rgb.size() != size_t(src.width) * size_t(src.height) * 3)
+    throw InputError("remap source holds " + std::to_string(src.rgb.size()) + " floats for " +
+                     std::to_string(src.width) + "x" + std::to_string(src.height) + " RGB pixels");
+  const bool src_mask = !src.valid.empty();
+  if (src_mask && src.valid.size() != size_t(src.width) * size_t(src.height))
+    throw InputError("remap source mask has the wrong size");
+  const size_t n = size_t(remap.out_width) * size_t(remap.out_height);
+  out->width = remap.out_width;
+  out->height = remap.out_height;
+  out->units = src.units;
+  out->rgb.resize(3 * n);
+  const bool want_mask = remap.any_invalid || src_mask;
+  if (want_mask)
+    out->valid.resize(n);
+  else
+    out->valid.clear();
+
+  const float* s = src.rgb.data();
+  const uint8_t* sm = src_mask ? src.valid.data() : nullptr;
+  const ptrdiff_t W = src.width;
+  const ptrdiff_t row3 = 3 * W;
+  const CompiledRemap::Tap* taps = remap.taps.data();
+  float* o = out->rgb.data();
+  uint8_t* om = want_mask ? out->valid.data() : nullptr;
+  const int ow = remap.out_width;
+
+  run_rows(remap.out_height, options, [&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r) {
+      const size_t begin = size_t(r) * size_t(ow), end = begin + size_t(ow);
+      for (size_t i = begin; i < end; ++i) {
+        const CompiledRemap::Tap t = taps[i];
+        float* d = o + 3 * i;
+        if (t.index < 0) {
+          d[0] = d[1] = d[2] = 0.0f;
+          if (om) om[i] = 0;
+          continue;
+        }
+        const float* p = s + 3 * ptrdiff_t(t.index);
+        const float gx = 1.0f - t.fx, gy = 1.0f - t.fy;
+        const float w00 = gx * gy, w10 = t.fx * gy, w01 = gx * t.fy, w11 = t.fx * t.fy;
+        const float* q = p + row3;
+        d[0] = w00 * p[0] + w10 * p[3] + w01 * q[0] + w11 * q[3];
+        d[1] = w00 * p[1] + w10 * p[4] + w01 * q[1] + w11 * q[4];
+        d[2] = w00 * p[2] + w10 * p[5] + w01 * q[2] + w11 * q[5];
+        if (om) {
+          uint8_t v = 1;
+          if (sm) {
+            const uint8_t* m = sm + t.index;
+            v = (w00 <= 0.0f || m[0]) && (w10 <= 0.0f || m[1]) && (w01 <= 0.0f || m[W]) && (w11 <= 0.0f || m[W + 1]);
+            if (!v) d[0] = d[1] = d[2] = 0.0f;
+          }
+          om[i] = v;
+        }
+      }
+    }
+  });
+  if (want_mask && !remap.any_invalid) {
+    // The source mask may still have left every output pixel valid: keep "empty = all valid".
+    bool all = true;
+    for (uint8_t v : out->valid)
+      if (!v) {
+        all = false;
+        break;
+      }
+    if (all) out->valid.clear();
+  }
+}
+
+RgbImage apply_remap(const RgbImage& src, const RemapTable& table, const RemapOptions& options) {
+  if (src.width <= 0 || src.height <= 0) throw InputError("remap source image is empty");
+  RgbImage out;
+  apply_remap(src, compile_remap(table, src.width, src.height), &out, options);
+  return out;
+}
+
+}  // namespace lp

@@ -1,0 +1,116 @@
+#include "probe/remap.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+RgbImage random_image(int w, int h, unsigned seed) {
+  RgbImage im;
+  im.width = w;
+  im.height = h;
+  im.rgb.resize(size_t(w) * h * 3);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 10.0f);
+  for (float& v : im.rgb) v = u(rng);
+  return im;
+}
+
+TEST(Remap, IdentityTableReproducesTheImageExactly) {
+  RgbImage im = random_image(17, 11, 1);
+  RemapTable t;
+  t.out_width = 17;
+  t.out_height = 11;
+  for (int y = 0; y < 11; ++y)
+    for (int x = 0; x < 17; ++x) {
+      t.src_x.push_back(x + 0.5f);
+      t.src_y.push_back(y + 0.5f);
+    }
+  RgbImage out = apply_remap(im, t);
+  ASSERT_EQ(out.rgb.size(), im.rgb.size());
+  EXPECT_TRUE(out.valid.empty());
+  for (size_t i = 0; i < im.rgb.size(); ++i) EXPECT_FLOAT_EQ(out.rgb[i], im.rgb[i]);
+}
+
+TEST(Remap, AgreesWithOpenCvRemapReplicateBorderOnRandomCoordinates) {
+  const int w = 40, h = 30;
+  RgbImage im = random_image(w, h, 2);
+  RemapTable t;
+  t.out_width = 64;
+  t.out_height = 48;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> ux(0.0f, float(w)), uy(0.0f, float(h));
+  cv::Mat mx(48, 64, CV_32FC1), my(48, 64, CV_32FC1);
+  for (int i = 0; i < 64 * 48; ++i) {
+    const float x = ux(rng), y = uy(rng);
+    t.src_x.push_back(x);
+    t.src_y.push_back(y);
+    mx.at<float>(i / 64, i % 64) = x - 0.5f;  // OpenCV: pixel centres at integers
+    my.at<float>(i / 64, i % 64) = y - 0.5f;
+  }
+  RgbImage out = apply_remap(im, t, RemapOptions{2});
+  cv::Mat src(h, w, CV_32FC3, im.rgb.data()), ref;
+  cv::remap(src, ref, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  double max_diff = 0;
+  for (int i = 0; i < 64 * 48; ++i)
+    for (int c = 0; c < 3; ++c)
+      max_diff = std::max(max_diff, double(std::abs(out.rgb[3 * i + c] - ref.at<cv::Vec3f>(i / 64, i % 64)[c])));
+  // OpenCV quantises the fractions to 1/32 pixel (INTER_TAB_SIZE), so up to
+  // 1/64 of the largest neighbour difference (10 here): ~0.16.
+  EXPECT_LT(max_diff, 0.2);
+  EXPECT_TRUE(out.valid.empty());
+}
+
+TEST(Remap, NanAndOffImageCoordinatesAreInvalidAndBlack) {
+  RgbImage im = random_image(8, 8, 4);
+  RemapTable t;
+  t.out_width = 3;
+  t.out_height = 1;
+  t.src_x = {std::numeric_limits<float>::quiet_NaN(), -0.1f, 4.0f};
+  t.src_y = {2.0f, 2.0f, 4.0f};
+  RgbImage out = apply_remap(im, t);
+  ASSERT_EQ(out.valid.size(), 3u);
+  EXPECT_EQ(out.valid[0], 0);
+  EXPECT_EQ(out.valid[1], 0);
+  EXPECT_EQ(out.valid[2], 1);
+  EXPECT_EQ(out.rgb[0], 0.0f);
+  EXPECT_EQ(out.rgb[3], 0.0f);
+}
+
+TEST(Remap, InvalidSourcePixelsInvalidateOnlyOutputsThatTouchThem) {
+  RgbImage im = random_image(8, 8, 5);
+  im.valid.assign(64, 1);
+  im.valid[3 * 8 + 3] = 0;  // pixel (3, 3)
+  RemapTable t;
+  t.out_width = 3;
+  t.out_height = 1;
+  t.src_x = {3.5f, 3.0f, 5.5f};  // exactly on (3,3); between (2,3) and (3,3); far away
+  t.src_y = {2.5f, 3.5f, 3.5f};  // (3,2)-(3,3) blend: weight 0 on (3,3) at y=2.5
+  RgbImage out = apply_remap(im, t);
+  ASSERT_EQ(out.valid.size(), 3u);
+  EXPECT_EQ(out.valid[0], 1);  // centre of (3,2): zero weight on (3,3)
+  EXPECT_EQ(out.valid[1], 0);
+  EXPECT_EQ(out.valid[2], 1);
+}
+
+TEST(Remap, CompiledTableForOneSizeRefusesAnother) {
+  RemapTable t;
+  t.out_width = 1;
+  t.out_height = 1;
+  t.src_x = {1.0f};
+  t.src_y = {1.0f};
+  CompiledRemap c = compile_remap(t, 4, 4);
+  RgbImage out;
+  EXPECT_THROW(apply_remap(random_image(5, 4, 6), c, &out), InputError);
+}
+
+}  // namespace
+}  // namespace lp

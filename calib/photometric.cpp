@@ -1,0 +1,518 @@
+#include "calib/photometric.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string where(const PhotometricReading& r) {
+  if (!r.source.empty()) return r.source;
+  return "reading '" + r.label + "'";
+}
+
+std::string trim(std::string_view s) {
+  size_t b = 0, e = s.size();
+  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
+  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
+  return std::string(s.substr(b, e - b));
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// Splits one CSV line; fields may be double-quoted ("" is a quote inside quotes).
+std::vector<std::string> split_csv(const std::string& line, const std::string& at) {
+  std::vector<std::string> fields;
+  std::string field;
+  bool quoted = false, was_quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"' && trim(field).empty()) {
+      quoted = was_quoted = true;
+      field.clear();
+    } else if (c == ',') {
+      fields.push_back(was_quoted ? field : trim(field));
+      field.clear();
+      was_quoted = false;
+    } else {
+      field += c;
+    }
+  }
+  if (quoted) throw InputError(at + ": unterminated quote");
+  fields.push_back(was_quoted ? field : trim(field));
+  return fields;
+}
+
+bool parse_int(const std::string& s, int* out) {
+  const std::string t = trim(s);
+  if (t.empty()) return false;
+  auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), *out);
+  return ec == std::errc() && p == t.data() + t.size();
+}
+
+double parse_number(const std::string& s, const std::string& what, const std::string& at) {
+  const std::string t = trim(s);
+  double v = 0;
+  auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+  if (t.empty() || ec != std::errc() || p != t.data() + t.size())
+    throw InputError(at + ": " + what + " '" + t + "' is not a number");
+  if (!std::isfinite(v)) throw InputError(at + ": " + what + " '" + t + "' is not finite");
+  if (v <= 0) throw InputError(at + ": " + what + " " + t + " is not positive");
+  return v;
+}
+
+std::optional<PhotometricReading::Unit> parse_unit(const std::string& text) {
+  std::string u = lower(trim(text));
+  if (u == "cd/m2" || u == "cd/m^2" || u == "cd m-2" || u == "cd/m²" || u == "nit" || u == "nits")
+    return PhotometricReading::Unit::CandelaPerSquareMetre;
+  if (u == "lux" || u == "lx") return PhotometricReading::Unit::Lux;
+  return std::nullopt;
+}
+
+// "image.exr:x,y,w,h" -> region; a label without ':' followed by a comma is a plain label.
+std::optional<ImageRegion> parse_region(const std::string& label, const std::string& at) {
+  const size_t colon = label.rfind(':');
+  if (colon == std::string::npos || label.find(',', colon) == std::string::npos) return std::nullopt;
+  ImageRegion region;
+  region.image = label.substr(0, colon);
+  std::vector<std::string> parts;
+  std::stringstream ss(label.substr(colon + 1));
+  for (std::string part; std::getline(ss, part, ',');) parts.push_back(part);
+  if (region.image.empty() || parts.size() != 4 || !parse_int(parts[0], &region.x) ||
+      !parse_int(parts[1], &region.y) || !parse_int(parts[2], &region.width) ||
+      !parse_int(parts[3], &region.height))
+    throw InputError(at + ": region '" + label + "' is not image:x,y,w,h");
+  if (region.x < 0 || region.y < 0 || region.width <= 0 || region.height <= 0)
+    throw InputError(at + ": region '" + label + "' needs x, y >= 0 and w, h > 0");
+  return region;
+}
+
+const char* loss_name(RobustLoss loss) {
+  switch (loss) {
+    case RobustLoss::None: return "none";
+    case RobustLoss::Huber: return "huber";
+    case RobustLoss::Cauchy: return "cauchy";
+  }
+  return "none";
+}
+
+ceres::LossFunction* make_loss(const PhotometricOptions& options) {
+  switch (options.loss) {
+    case RobustLoss::None: return nullptr;
+    case RobustLoss::Huber: return new ceres::HuberLoss(options.loss_scale);
+    case RobustLoss::Cauchy: return new ceres::CauchyLoss(options.loss_scale);
+  }
+  return nullptr;
+}
+
+// r = theta + ln(camera) - ln(measured), theta = ln k.
+struct LinearCost {
+  double log_camera, log_measured;
+  template <typename T>
+  bool operator()(const T* theta, T* residual) const {
+    residual[0] = theta[0] + T(log_camera) - T(log_measured);
+    return true;
+  }
+};
+
+// r = (v - a) / b - ln(measured), ab = {a, b}.
+struct LogSensorCost {
+  double value, log_measured;
+  template <typename T>
+  bool operator()(const T* ab, T* residual) const {
+    residual[0] = (T(value) - ab[0]) / ab[1] - T(log_measured);
+    return true;
+  }
+};
+
+double median(std::vector<double> v) {
+  const size_t n = v.size();
+  std::sort(v.begin(), v.end());
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Fit {
+  std::vector<double> params;  // {ln k} or {a, b}
+  std::vector<double> sigma;   // standard errors of params
+};
+
+// Robust fit over readings[i] for i in `use`; with_covariance adds standard errors.
+Fit solve(const std::vector<PhotometricReading>& readings, const std::vector<size_t>& use,
+          const PhotometricOptions& options, bool with_covariance) {
+  const bool log_model = options.model == PhotometricOptions::Model::LogSensor;
+  Fit fit;
+  // Robust start: median log ratio (linear); Theil-Sen line of v on ln L (log sensor).
+  if (!log_model) {
+    std::vector<double> ratios;
+    for (size_t i : use) ratios.push_back(std::log(readings[i].measured / readings[i].camera_value));
+    fit.params = {median(ratios)};
+  } else {
+    std::vector<double> slopes;
+    for (size_t i = 0; i < use.size(); ++i)
+      for (size_t j = i + 1; j < use.size(); ++j) {
+        const double dx = std::log(readings[use[j]].measured) - std::log(readings[use[i]].measured);
+        if (std::abs(dx) > 1e-12) slopes.push_back((readings[use[j]].camera_value - readings[use[i]].camera_value) / dx);
+      }
+    if (slopes.empty()) throw InputError("photometric readings: every measured luminance is the same; a log-sensor fit needs different ones");
+    const double b = median(slopes);
+    if (b == 0) throw InputError("photometric readings: camera values do not change with luminance; a log-sensor fit needs them to");
+    std::vector<double> offsets;
+    for (size_t i : use) offsets.push_back(readings[i].camera_value - b * std::log(readings[i].measured));
+    fit.params = {median(offsets), b};
+  }
+
+  ceres::Problem problem;
+  double* params = fit.params.data();
+  for (size_t i : use) {
+    const auto& r = readings[i];
+    if (!log_model) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LinearCost, 1, 1>(
+                                   new LinearCost{std::log(r.camera_value), std::log(r.measured)}),
+                               make_loss(options), params);
+    } else {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LogSensorCost, 1, 2>(
+                                   new LogSensorCost{r.camera_value, std::log(r.measured)}),
+                               make_loss(options), params);
+    }
+  }
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.logging_type = ceres::SILENT;
+  solver.minimizer_progress_to_stdout = false;
+  solver.max_num_iterations = 200;
+  solver.function_tolerance = 1e-16;
+  solver.gradient_tolerance = 1e-16;
+  solver.parameter_tolerance = 1e-16;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  if (!summary.IsSolutionUsable() || !std::all_of(fit.params.begin(), fit.params.end(),
+                                                    [](double p) { return std::isfinite(p); }))
+    throw std::runtime_error("photometric fit failed: " + summary.BriefReport());
+
+  fit.sigma.assign(fit.params.size(), 0.0);
+  if (with_covariance) {
+    const size_t p = fit.params.size();
+    const double dof = double(use.size()) - double(p);
+    const double s2 = dof > 0 ? 2 * summary.final_cost / dof : 0.0;
+    ceres::Covariance::Options cov_options;
+    cov_options.algorithm_type = ceres::DENSE_SVD;
+    cov_options.null_space_rank = -1;  // pseudo-inverse: never fails on a flat direction
+    ceres::Covariance covariance(cov_options);
+    std::vector<std::pair<const double*, const double*>> blocks{{params, params}};
+    if (covariance.Compute(blocks, &problem)) {
+      std::vector<double> cov(p * p);
+      covariance.GetCovarianceBlock(params, params, cov.data());
+      for (size_t k = 0; k < p; ++k) fit.sigma[k] = std::sqrt(std::max(0.0, cov[k * p + k] * s2));
+    } else {
+      fit.sigma.assign(p, std::numeric_limits<double>::infinity());
+    }
+  }
+  return fit;
+}
+
+// Prediction of reading r in its own unit.
+double predict(const Fit& fit, const PhotometricReading& r, bool log_model) {
+  if (!log_model) return std::exp(fit.params[0]) * r.camera_value;
+  return std::exp((r.camera_value - fit.params[0]) / fit.params[1]);
+}
+
+void validate(const std::vector<PhotometricReading>& readings, const PhotometricOptions& options) {
+  const bool log_model = options.model == PhotometricOptions::Model::LogSensor;
+  std::map<std::string, std::string> seen;
+  for (const auto& r : readings) {
+    if (!std::isfinite(r.camera_value))
+      throw InputError(where(r) + ": camera value of '" + r.label + "' is " +
+                       (r.region ? "unresolved (the image region was not read)" : "not finite"));
+    if (!(r.camera_value > 0) && !log_model)
+      throw InputError(where(r) + ": camera value " + std::to_string(r.camera_value) + " of '" + r.label + "' is not positive");
+    if (!std::isfinite(r.measured) || !(r.measured > 0))
+      throw InputError(where(r) + ": measured value " + std::to_string(r.measured) + " of '" + r.label + "' is not a positive number");
+    if (log_model && r.unit == PhotometricReading::Unit::Lux)
+      throw InputError(where(r) + ": a log-sensor fit takes luminance (cd/m2) readings only, '" + r.label + "' is in lux");
+    auto [it, inserted] = seen.emplace(r.label, where(r));
+    if (!inserted) throw InputError(where(r) + ": duplicate label '" + r.label + "' (first at " + it->second + ")");
+  }
+  const size_t needed = log_model ? 3 : 2;
+  if (readings.size() < needed) {
+    const std::string file = readings.empty() || readings[0].source.empty()
+                                 ? std::string("photometric readings")
+                                 : readings[0].source.substr(0, readings[0].source.rfind(':'));
+    throw InputError(file + ": " + std::to_string(readings.size()) + " reading(s); a " +
+                     (log_model ? "log-sensor fit needs at least 3 (2 parameters" : "scale fit needs at least 2 (1 parameter") +
+                     " plus one for the uncertainty and the held-out check)");
+  }
+}
+
+}  // namespace
+
+std::vector<PhotometricReading> read_readings_csv(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the readings file");
+  std::vector<PhotometricReading> readings;
+  std::map<std::string, int> first_line;
+  bool header = false;
+  int line_no = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
+    const std::string t = trim(line);
+    if (t.empty() || t[0] == '#') continue;
+    const std::string at = path + ":" + std::to_string(line_no);
+    auto fields = split_csv(line, at);
+    if (!header) {
+      std::string h;
+      for (size_t i = 0; i < fields.size(); ++i) h += (i ? "," : "") + lower(trim(fields[i]));
+      if (h != "region,camera_value,measured,unit")
+        throw InputError(at + ": header must be 'region,camera_value,measured,unit', found '" + t + "'");
+      header = true;
+      continue;
+    }
+    if (fields.size() != 4)
+      throw InputError(at + ": expected 4 fields (region,camera_value,measured,unit), found " +
+                       std::to_string(fields.size()) + (fields.size() > 4 ? " (quote a region that has commas)" : ""));
+    PhotometricReading r;
+    r.source = at;
+    r.label = fields[0];
+    if (r.label.empty()) throw InputError(at + ": empty region label");
+    r.region = parse_region(r.label, at);
+    if (trim(fields[1]).empty()) {
+      if (!r.region) throw InputError(at + ": camera_value is empty and '" + r.label + "' is not an image region");
+      r.camera_value = kNaN;
+    } else {
+      r.camera_value = parse_number(fields[1], "camera_value", at);
+    }
+    r.measured = parse_number(fields[2], "measured value", at);
+    const auto unit = parse_unit(fields[3]);
+    if (!unit) throw InputError(at + ": unknown unit '" + trim(fields[3]) + "' (cd/m2 or lux)");
+    r.unit = *unit;
+    auto [it, inserted] = first_line.emplace(r.label, line_no);
+    if (!inserted)
+      throw InputError(at + ": duplicate label '" + r.label + "' (first on line " + std::to_string(it->second) + ")");
+    readings.push_back(std::move(r));
+  }
+  if (!header) throw InputError(path + ": no header 'region,camera_value,measured,unit'");
+  if (readings.size() < 2)
+    throw InputError(path + ": " + std::to_string(readings.size()) +
+                     " reading(s); at least 2 are needed (one fits the scale, another checks it)");
+  return readings;
+}
+
+void resolve_regions(std::vector<PhotometricReading>& readings, const std::string& base_dir) {
+  std::map<std::string, RgbImage> images;
+  for (auto& r : readings) {
+    if (!r.region || std::isfinite(r.camera_value)) continue;
+    std::filesystem::path dir = base_dir;
+    if (dir.empty() && !r.source.empty())
+      dir = std::filesystem::path(r.source.substr(0, r.source.rfind(':'))).parent_path();
+    const std::filesystem::path image_path = std::filesystem::path(r.region->image).is_absolute()
+                                                 ? std::filesystem::path(r.region->image)
+                                                 : dir / r.region->image;
+    auto it = images.find(image_path.string());
+    if (it == images.end()) {
+      try {
+        it = images.emplace(image_path.string(), read_rgb_image(image_path.string())).first;
+      } catch (const InputError& e) {
+        throw InputError(where(r) + ": " + e.what());
+      }
+    }
+    try {
+      r.camera_value = mean_luminance_in_region(it->second, r.region->x, r.region->y,
+                                                r.region->width, r.region->height);
+    } catch (const InputError& e) {
+      throw InputError(where(r) + ": " + image_path.string() + ": " + e.what());
+    }
+  }
+}
+
+double mean_luminance_in_region(const RgbImage& image, int x, int y, int width, int height) {
+  if (x < 0 || y < 0 || width <= 0 || height <= 0 || int64_t(x) + width > image.width ||
+      int64_t(y) + height > image.height)
+    throw InputError("region " + std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(width) +
+                     "," + std::to_string(height) + " is not inside the " + std::to_string(image.width) +
+                     "x" + std::to_string(image.height) + " image");
+  double sum = 0;
+  size_t count = 0;
+  for (int v = y; v < y + height; ++v)
+    for (int u = x; u < x + width; ++u) {
+      const size_t i = size_t(v) * size_t(image.width) + size_t(u);
+      if (!image.valid.empty() && !image.valid[i]) continue;
+      const float* p = &image.rgb[3 * i];
+      sum += luminance(p[0], p[1], p[2]);
+      ++count;
+    }
+  if (count == 0) throw InputError("region holds no valid pixel");
+  return sum / double(count);
+}
+
+double relative_illuminance(const EnvMap& map, Vec3 normal) {
+  const double len = std::sqrt(normal.x * normal.x + normal.y * normal.y + normal.z * normal.z);
+  double e = 0;
+  for (size_t i = 0; i < map.pixel_count(); ++i) {
+    if (!map.is_valid(i)) continue;
+    const Vec3 d = pixel_direction(map, i);
+    const double c = (d.x * normal.x + d.y * normal.y + d.z * normal.z) / len;
+    if (c <= 0) continue;
+    const float* p = map.pixel(i);
+    e += luminance(p[0], p[1], p[2]) * c * pixel_solid_angle(map, i);
+  }
+  return e;
+}
+
+PhotometricCalibration fit_photometric(const std::vector<PhotometricReading>& readings,
+                                       const PhotometricOptions& options) {
+  if (!(options.loss_scale > 0) || !std::isfinite(options.loss_scale))
+    throw InputError("photometric options: loss scale must be a positive number");
+  validate(readings, options);
+  const bool log_model = options.model == PhotometricOptions::Model::LogSensor;
+  const size_t n = readings.size();
+  std::vector<size_t> all(n);
+  for (size_t i = 0; i < n; ++i) all[i] = i;
+  const Fit fit = solve(readings, all, options, true);
+
+  PhotometricCalibration cal;
+  cal.readings = int(n);
+  cal.loss = loss_name(options.loss);
+  cal.loss_scale = options.loss_scale;
+  if (!log_model) {
+    cal.scale_luminance = std::exp(fit.params[0]);
+    cal.scale_relative_error = fit.sigma[0];  // sigma of ln k = relative sigma of k
+  } else {
+    cal.scale_luminance = 1.0;
+    cal.log_sensor = LogSensorCurve{fit.params[0], fit.params[1], fit.sigma[0], fit.sigma[1]};
+  }
+  for (double& s : cal.scale_rgb) s = cal.scale_luminance / kLuminousEfficacy;
+
+  double sum2 = 0, held2 = 0;
+  for (size_t i = 0; i < n; ++i) {
+    PhotometricResidual res;
+    res.label = readings[i].label;
+    res.measured = readings[i].measured;
+    res.predicted = predict(fit, readings[i], log_model);
+    res.relative = res.predicted / res.measured - 1;
+    std::vector<size_t> rest;
+    for (size_t j = 0; j < n; ++j)
+      if (j != i) rest.push_back(j);
+    const Fit held = solve(readings, rest, options, false);
+    res.held_out_relative = predict(held, readings[i], log_model) / res.measured - 1;
+    sum2 += res.relative * res.relative;
+    held2 += res.held_out_relative * res.held_out_relative;
+    cal.max_abs_relative = std::max(cal.max_abs_relative, std::abs(res.relative));
+    cal.residuals.push_back(std::move(res));
+  }
+  cal.rms_relative = std::sqrt(sum2 / double(n));
+  cal.held_out_rms_relative = std::sqrt(held2 / double(n));
+  return cal;
+}
+
+void save_photometric(const std::string& path, const PhotometricCalibration& c) {
+  nlohmann::json j;
+  j["format"] = "lightprobe.photometric/1";
+  j["scale_luminance"] = c.scale_luminance;
+  j["scale_luminance_note"] = "cd m^-2 per relative luminance unit";
+  j["scale_rgb"] = c.scale_rgb;
+  j["luminous_efficacy"] = kLuminousEfficacy;
+  j["scale_relative_error"] = c.scale_relative_error;
+  if (c.log_sensor)
+    j["log_sensor"] = {{"a", c.log_sensor->a}, {"b", c.log_sensor->b},
+                       {"sigma_a", c.log_sensor->sigma_a}, {"sigma_b", c.log_sensor->sigma_b}};
+  else
+    j["log_sensor"] = nullptr;
+  j["readings"] = c.readings;
+  j["loss"] = c.loss;
+  j["loss_scale"] = c.loss_scale;
+  j["rms_relative"] = c.rms_relative;
+  j["max_abs_relative"] = c.max_abs_relative;
+  j["held_out_rms_relative"] = c.held_out_rms_relative;
+  nlohmann::json residuals = nlohmann::json::array();
+  for (const auto& r : c.residuals)
+    residuals.push_back({{"label", r.label}, {"predicted", r.predicted}, {"measured", r.measured},
+                         {"relative", r.relative}, {"held_out_relative", r.held_out_relative}});
+  j["residuals"] = residuals;
+  write_file_atomically(path, j.dump(2) + "\n");
+}
+
+PhotometricCalibration load_photometric(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the photometric calibration");
+  PhotometricCalibration c;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    if (j.value("format", "") != "lightprobe.photometric/1")
+      throw InputError(path + ": not a photometric calibration (format is not lightprobe.photometric/1)");
+    c.scale_luminance = j.at("scale_luminance").get<double>();
+    c.scale_rgb = j.at("scale_rgb").get<std::array<double, 3>>();
+    c.scale_relative_error = j.value("scale_relative_error", 0.0);
+    if (j.contains("log_sensor") && !j["log_sensor"].is_null()) {
+      const auto& l = j["log_sensor"];
+      c.log_sensor = LogSensorCurve{l.at("a").get<double>(), l.at("b").get<double>(),
+                                    l.value("sigma_a", 0.0), l.value("sigma_b", 0.0)};
+    }
+    c.readings = j.value("readings", 0);
+    c.loss = j.value("loss", "");
+    c.loss_scale = j.value("loss_scale", 0.0);
+    c.rms_relative = j.value("rms_relative", 0.0);
+    c.max_abs_relative = j.value("max_abs_relative", 0.0);
+    c.held_out_rms_relative = j.value("held_out_rms_relative", 0.0);
+    if (j.contains("residuals"))
+      for (const auto& r : j["residuals"])
+        c.residuals.push_back({r.value("label", ""), r.value("predicted", 0.0), r.value("measured", 0.0),
+                               r.value("relative", 0.0), r.value("held_out_relative", 0.0)});
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": not a valid photometric calibration: " + e.what());
+  }
+  for (double s : c.scale_rgb)
+    if (!(s > 0) || !std::isfinite(s)) throw InputError(path + ": scale_rgb must hold three positive numbers");
+  if (!(c.scale_luminance > 0) || !std::isfinite(c.scale_luminance))
+    throw InputError(path + ": scale_luminance must be a positive number");
+  return c;
+}
+
+namespace {
+void scale_pixels(std::vector<float>& rgb, const PhotometricCalibration& c) {
+  for (size_t i = 0; i + 2 < rgb.size(); i += 3)
+    for (int k = 0; k < 3; ++k) rgb[i + k] = float(rgb[i + k] * c.scale_rgb[k]);
+}
+}  // namespace
+
+void apply_photometric(RgbImage& image, const PhotometricCalibration& c) {
+  if (image.units == Units::Radiance)
+    throw InputError("apply_photometric: the image is already in radiance units (the scale would apply twice)");
+  scale_pixels(image.rgb, c);
+  image.units = Units::Radiance;
+}
+
+void apply_photometric(EnvMap& map, const PhotometricCalibration& c) {
+  if (map.units == Units::Radiance)
+    throw InputError("apply_photometric: the map is already in radiance units (the scale would apply twice)");
+  scale_pixels(map.rgb, c);
+  map.units = Units::Radiance;
+}
+
+}  // namespace lp

@@ -7,6 +7,9 @@
 #include "core/error.h"
 
 namespace lp {
+namespace {
+double luminance_of(const float* p) { return 0.2126 * double(p[0]) + 0.7152 * double(p[1]) + 0.0722 * double(p[2]); }
+}  // namespace
 
 HdrError hdr_log_error(const RgbImage& estimate, const RgbImage& truth,
                        const std::optional<std::vector<uint8_t>>& mask) {
@@ -26,11 +29,12 @@ HdrError hdr_log_error(const RgbImage& estimate, const RgbImage& truth,
   for (size_t i = 0; i < pixels; ++i) {
     if (mask && !(*mask)[i]) continue;
     if (!truth.valid.empty() && !truth.valid[i]) continue;
-    const float* t = &truth.rgb[3 * i];
-    const double yt = luminance(t[0], t[1], t[2]);
-    if (!std::isfinite(yt) || !(yt > 0)) continue;
-    const float* e = &estimate.rgb[3 * i];
-    const double ye = double(0.2126f * e[0]) + double(0.7152f * e[1]) + double(0.0722f * e[2]);
+    const double yt = luminance_of(&truth.rgb[3 * i]);
+    if (!std::isfinite(yt) || !(yt > 0)) {
+      ++out.pixels_truth_dark;
+      continue;
+    }
+    const double ye = luminance_of(&estimate.rgb[3 * i]);
     if ((!estimate.valid.empty() && !estimate.valid[i]) || !std::isfinite(ye) || !(ye > 0)) {
       ++out.pixels_invalid;
       continue;

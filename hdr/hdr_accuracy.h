@@ -3,7 +3,8 @@
 //
 //   Y = 0.2126 R + 0.7152 G + 0.0722 B per pixel, estimate and truth
 //   compared pixels: in the mask (if any), valid in the truth (its own mask) with a finite
-//                    truth luminance > 0 (log10 0 is not a number)
+//                    truth luminance > 0 (log10 0 is not a number; the others are counted in
+//                    pixels_truth_dark)
 //   invalid pixels:  compared pixels whose estimate luminance is 0, negative, NaN or Inf, or
 //                    that the estimate's own mask marks invalid; counted in pixels_invalid and
 //                    left out of the statistics (an estimate that blanks hard pixels shows it)
@@ -29,6 +30,7 @@ struct HdrError {
   double p95_log10 = 0;
   size_t pixels_compared = 0;
   size_t pixels_invalid = 0;  // 0, negative, NaN, Inf or masked out in the estimate
+  size_t pixels_truth_dark = 0;  // truth luminance 0 (or not finite): no log, left out
   double global_scale = 1;    // applied to the estimate
 };
 

@@ -1,0 +1,168 @@
+#include "hdr/bracket.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <exiv2/exiv2.hpp>
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+std::string frame_name(const Bracket& b, size_t k) {
+  return k < b.paths.size() ? b.paths[k] : fmt::format("bracket frame {}", k);
+}
+
+// "0.025", "2.5e-2" or "1/40"; nullopt when the text is not one whole number.
+std::optional<double> parse_seconds(const std::string& text) {
+  auto parse_number = [](const std::string& s) -> std::optional<double> {
+    if (s.empty()) return std::nullopt;
+    size_t used = 0;
+    try {
+      const double v = std::stod(s, &used);
+      if (used != s.size()) return std::nullopt;
+      return v;
+    } catch (const std::exception&) {
+      return std::nullopt;
+    }
+  };
+  const size_t slash = text.find('/');
+  if (slash == std::string::npos) return parse_number(text);
+  const auto num = parse_number(text.substr(0, slash));
+  const auto den = parse_number(text.substr(slash + 1));
+  if (!num || !den || *den == 0.0) return std::nullopt;
+  return *num / *den;
+}
+
+std::string trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t\r\n");
+  if (a == std::string::npos) return {};
+  const size_t b = s.find_last_not_of(" \t\r\n");
+  return s.substr(a, b - a + 1);
+}
+
+}  // namespace
+
+void check_bracket(const Bracket& b) {
+  const std::string who = b.paths.empty() ? "bracket" : b.paths.front();
+  if (b.frames.size() < 2)
+    throw InputError(fmt::format("{}: a bracket needs at least 2 exposures, got {}", who, b.frames.size()));
+  if (b.exposure_seconds.size() != b.frames.size())
+    throw InputError(fmt::format("{}: {} exposure times for {} images", who, b.exposure_seconds.size(),
+                                 b.frames.size()));
+  if (!b.paths.empty() && b.paths.size() != b.frames.size())
+    throw InputError(fmt::format("{}: {} paths for {} images", who, b.paths.size(), b.frames.size()));
+  if (b.bit_depth < 1 || b.bit_depth > 16)
+    throw InputError(fmt::format("{}: unsupported bit depth {}", who, b.bit_depth));
+  const RgbImage& first = b.frames.front();
+  for (size_t k = 0; k < b.frames.size(); ++k) {
+    const RgbImage& f = b.frames[k];
+    if (f.width != first.width || f.height != first.height)
+      throw InputError(fmt::format("{}: size {}x{} differs from the first image's {}x{}", frame_name(b, k),
+                                   f.width, f.height, first.width, first.height));
+    if (f.width <= 0 || f.height <= 0 || f.rgb.size() != 3 * size_t(f.width) * size_t(f.height))
+      throw InputError(fmt::format("{}: empty or malformed image", frame_name(b, k)));
+    const double t = b.exposure_seconds[k];
+    if (!std::isfinite(t) || !(t > 0.0))
+      throw InputError(fmt::format("{}: exposure time {} s is not positive and finite", frame_name(b, k), t));
+  }
+}
+
+std::optional<double> read_exif_exposure_seconds(const std::string& path) {
+  try {
+    // Exiv2 writes warnings to stderr by default; library code prints nothing.
+    static const bool muted = [] {
+      Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
+      return true;
+    }();
+    (void)muted;
+    auto image = Exiv2::ImageFactory::open(path);
+    if (image.get() == nullptr) throw InputError(path + ": cannot open to read EXIF");
+    image->readMetadata();
+    const Exiv2::ExifData& exif = image->exifData();
+    for (const char* key : {"Exif.Photo.ExposureTime", "Exif.Image.ExposureTime"}) {
+      const auto it = exif.findKey(Exiv2::ExifKey(key));
+      if (it == exif.end() || it->count() == 0) continue;
+      const Exiv2::Rational r = it->toRational(0);
+      if (r.second != 0 && r.first > 0) return double(r.first) / double(r.second);
+    }
+    const auto it = exif.findKey(Exiv2::ExifKey("Exif.Photo.ShutterSpeedValue"));
+    if (it != exif.end() && it->count() > 0) {
+      const Exiv2::Rational r = it->toRational(0);  // APEX: t = 2^-Tv
+      if (r.second != 0) return std::exp2(-double(r.first) / double(r.second));
+    }
+    return std::nullopt;
+  } catch (const Exiv2::AnyError& e) {
+    throw InputError(fmt::format("{}: cannot read EXIF: {}", path, trim(e.what())));
+  }
+}
+
+Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<std::vector<double>>& times) {
+  Bracket b;
+  if (times && times->size() != paths.size())
+    throw InputError(fmt::format("--exposure-times: {} times for {} images", times->size(), paths.size()));
+  for (size_t k = 0; k < paths.size(); ++k) {
+    CameraImage cam = read_camera_image(paths[k]);
+    if (k == 0) {
+      b.bit_depth = cam.bit_depth;
+    } else if (cam.bit_depth != b.bit_depth) {
+      throw InputError(fmt::format("{}: {}-bit image in a bracket of {}-bit images", paths[k], cam.bit_depth,
+                                   b.bit_depth));
+    }
+    RgbImage f;
+    f.width = cam.width;
+    f.height = cam.height;
+    f.rgb = std::move(cam.rgb);
+    b.frames.push_back(std::move(f));
+    b.paths.push_back(paths[k]);
+    if (times) {
+      b.exposure_seconds.push_back((*times)[k]);
+    } else {
+      const auto t = read_exif_exposure_seconds(paths[k]);
+      if (!t) throw InputError(paths[k] + ": no exposure time in EXIF; give --exposure-times");
+      b.exposure_seconds.push_back(*t);
+    }
+  }
+  check_bracket(b);
+  return b;
+}
+
+std::vector<double> read_exposure_list(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open exposure list");
+  std::vector<double> times;
+  std::string line;
+  int line_no = 0;
+  bool first_data_line = true;
+  while (std::getline(in, line)) {
+    ++line_no;
+    line = trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> fields;
+    if (line.find(',') != std::string::npos) {
+      std::stringstream ss(line);
+      std::string f;
+      while (std::getline(ss, f, ',')) fields.push_back(trim(f));
+    } else {
+      std::istringstream ss(line);
+      std::string f;
+      while (ss >> f) fields.push_back(f);
+    }
+    std::optional<double> t = parse_seconds(fields[0]);
+    if (!t && fields.size() >= 2) t = parse_seconds(fields[1]);
+    const bool header = first_data_line && !t;
+    first_data_line = false;
+    if (header) continue;
+    if (!t) throw InputError(fmt::format("{}:{}: no exposure time in '{}'", path, line_no, line));
+    if (!std::isfinite(*t) || !(*t > 0.0))
+      throw InputError(fmt::format("{}:{}: exposure time {} s is not positive and finite", path, line_no, *t));
+    times.push_back(*t);
+  }
+  if (times.empty()) throw InputError(path + ": no exposure times in the file");
+  return times;
+}
+
+}  // namespace lp

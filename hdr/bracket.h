@@ -1,0 +1,54 @@
+// An exposure bracket: several 8- or 16-bit photographs of one static scene, each with
+// its exposure time in seconds, as the input of response recovery (hdr/response.h) and
+// merging (hdr/merge.h).
+//
+// Frames hold code values in [0, 1] exactly as core's read_camera_image gives them (no
+// response applied); frame k was exposed for exposure_seconds[k]. Frames need not be
+// sorted by exposure.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/image_io.h"
+
+namespace lp {
+
+struct Bracket {
+  std::vector<RgbImage> frames;          // code values in [0, 1], all the same size
+  std::vector<double> exposure_seconds;  // one per frame, positive and finite
+  int bit_depth = 8;                     // 8 or 16 (of the files read)
+  std::vector<std::string> paths;        // one per frame, or empty for brackets made in memory
+
+  int width() const { return frames.empty() ? 0 : frames[0].width; }
+  int height() const { return frames.empty() ? 0 : frames[0].height; }
+};
+
+// Throws InputError naming the first offending file (or "bracket" when it has no paths):
+// fewer than 2 frames, sizes that differ from the first frame's, a time count that does
+// not match the frame count, a time that is not positive and finite.
+void check_bracket(const Bracket& bracket);
+
+// Reads every image (read_camera_image) and its exposure time: from `exposure_seconds`
+// when given (one per path, same order), else from each file's EXIF ExposureTime, else
+// InputError("<file>: no exposure time in EXIF; give --exposure-times"). All files must
+// have the same bit depth. The result passes check_bracket.
+Bracket read_bracket(const std::vector<std::string>& paths,
+                     const std::optional<std::vector<double>>& exposure_seconds = std::nullopt);
+
+// The exposure time recorded in a file's EXIF (Exif.Photo.ExposureTime, else
+// Exif.Image.ExposureTime, else the APEX Exif.Photo.ShutterSpeedValue), in seconds;
+// nullopt when the file carries none. Throws InputError when the file cannot be read.
+std::optional<double> read_exif_exposure_seconds(const std::string& path);
+
+// A list of exposure times in seconds, in file order. Accepts:
+//  - one time per line ("0.025" or "1/40"), blank lines and '#' comments skipped;
+//  - CSV "file,seconds[,...]" with an optional header line (the exposures.csv files
+//    of the shared data sets: "filename,exposure_time_s,exposure_time_fraction");
+//  - whitespace-separated "file seconds ..." (Debevec's hdr_image_list.txt).
+// Rule per line: the first field when it is a number, else the second. A first line whose
+// time field is not a number is a header. Throws InputError naming the file and line.
+std::vector<double> read_exposure_list(const std::string& csv_or_txt);
+
+}  // namespace lp

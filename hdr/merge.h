@@ -1,0 +1,61 @@
+// Merging an exposure bracket into one relative-radiance image through a camera response:
+// L = Σ_k w_k exp(g(z_k)) / t_k / Σ_k w_k per channel (Debevec & Malik 1997, eq. 6, in the
+// linear domain), with hat weights on code values that drop clipped codes and, by
+// default, the noise-aware factor t_k.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/image_io.h"
+#include "hdr/bracket.h"
+#include "hdr/response.h"
+
+namespace lp {
+
+struct MergeOptions {
+  // Code values (in [0, 1]) at or below black_threshold or at or above
+  // saturation_threshold carry no weight; between them the weight is a hat, 0 at both
+  // thresholds and 1 halfway.
+  double black_threshold = 0.02;
+  double saturation_threshold = 0.98;
+  // Multiply each frame's weight by its exposure time: for photon (Poisson) noise the
+  // variance of z/t is ∝ E/t, so the inverse-variance weight of a frame is ∝ t.
+  bool exposure_weighting = true;
+  // TBB worker threads (rows in parallel); 0 = TBB's default.
+  int threads = 0;
+  // Pixel/frame pairs of exactly this 8-bit colour (registration borders, pure blue in
+  // Debevec's Memorial) get no weight; a pixel of this colour in every frame is invalid
+  // in the output (RgbImage::valid) and counted in MergeReport::ignored.
+  std::optional<std::array<uint8_t, 3>> ignore_colour;
+  // Fill MergeReport::flags (one byte per pixel).
+  bool flag_image = false;
+};
+
+// Flag bits per pixel (MergeReport::flags).
+enum MergeFlag : uint8_t {
+  kSaturatedEverywhere = 1,  // some channel at or above saturation_threshold in every frame
+  kBlackEverywhere = 2,      // some channel at or below black_threshold in every frame
+};
+
+struct MergeReport {
+  // Pixels (not channels) with a channel that had no usable frame. A channel saturated in
+  // every frame takes the shortest exposure's estimate (a lower bound); one black in every
+  // frame takes the longest exposure's (an upper bound). Both stay valid in the image.
+  size_t saturated_everywhere = 0;
+  size_t black_everywhere = 0;
+  size_t ignored = 0;  // pixels of ignore_colour in every frame (invalid in the output)
+  double seconds = 0.0;
+  std::vector<uint8_t> flags;  // width*height MergeFlag bits, when MergeOptions::flag_image
+};
+
+// Relative radiance (units Relative): code z of frame k maps to level
+// lround(z · (levels − 1)) of `response`. Per-channel lookup tables and TBB over rows.
+// Throws InputError on a bad bracket or a response with an unusable shape.
+RgbImage merge_bracket(const Bracket& bracket, const CameraResponse& response, const MergeOptions& options = {},
+                       MergeReport* report = nullptr);
+
+}  // namespace lp

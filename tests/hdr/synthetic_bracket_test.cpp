@@ -68,6 +68,33 @@ TEST(SyntheticBracket, NoiseFreeLinearBracketMergedByTheLongestUnsaturatedFrameR
   EXPECT_NEAR(error.global_scale, 1.0, 0.01);
 }
 
+TEST(SyntheticBracket, NoisyDefaultBracketOfARealMapMergesToAFewPercentInLog10Luminance) {
+  // Default options: 1/64, 1/8, 1 s, linear, 8 bits, 10000 e- full well, 2 e- read noise.
+  const RgbImage truth = grace();
+  const auto bracket = make_synthetic_bracket(truth, {});
+  RgbImage estimate = truth;
+  for (size_t p = 0; p < size_t(truth.width) * truth.height; ++p) {
+    int best = -1;
+    for (size_t f = 0; f < bracket.frames.size(); ++f) {
+      const float* z = &bracket.frames[f].rgb[3 * p];
+      if (std::max({z[0], z[1], z[2]}) < 0.95f &&
+          (best < 0 || bracket.exposure_seconds[f] > bracket.exposure_seconds[size_t(best)]))
+        best = int(f);
+    }
+    const double gain = best < 0 ? 0.0 : bracket.exposure_scale * bracket.exposure_seconds[size_t(best)];
+    for (int c = 0; c < 3; ++c)
+      estimate.rgb[3 * p + c] = best < 0 ? NAN : float(bracket.frames[size_t(best)].rgb[3 * p + c] / gain);
+  }
+  const HdrError e = hdr_log_error(estimate, truth);
+  ::testing::Test::RecordProperty("median_log10", std::to_string(e.median_log10));
+  ::testing::Test::RecordProperty("p95_log10", std::to_string(e.p95_log10));
+  EXPECT_LT(e.median_log10, 0.01);
+  EXPECT_LT(e.p95_log10, 0.05);
+  EXPECT_GT(e.median_log10, 0.0);  // noise is there
+  EXPECT_NEAR(e.global_scale, 1.0, 0.01);
+  EXPECT_LT(e.pixels_invalid, size_t(truth.width) * truth.height / 20);
+}
+
 TEST(SyntheticBracket, AutomaticExposurePutsTheMedianAtEighteenPercentInTheMiddleFrame) {
   const RgbImage truth = grace();
   SyntheticBracketOptions options;

@@ -79,11 +79,11 @@ CompiledRemap compile_remap(const RemapTable& table, int src_width, int src_heig
     CompiledRemap::Tap& t = c.taps[i];
     if (axis_tap(table.src_x[i], src_width, &ix, &fx) && axis_tap(table.src_y[i], src_height, &iy, &fy)) {
       t.index = int32_t(iy * src_width + ix);
-      t.fx = fx;
-      t.fy = fy;
+      t.fx = uint16_t(std::lround(fx * CompiledRemap::kFractionScale));
+      t.fy = uint16_t(std::lround(fy * CompiledRemap::kFractionScale));
     } else {
       t.index = -1;
-      t.fx = t.fy = 0.0f;
+      t.fx = t.fy = 0;
       any_invalid = true;
     }
   }
@@ -134,8 +134,10 @@ void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out,
           continue;
         }
         const float* p = s + 3 * ptrdiff_t(t.index);
-        const float gx = 1.0f - t.fx, gy = 1.0f - t.fy;
-        const float w00 = gx * gy, w10 = t.fx * gy, w01 = gx * t.fy, w11 = t.fx * t.fy;
+        const float fx = float(t.fx) * (1.0f / CompiledRemap::kFractionScale);
+        const float fy = float(t.fy) * (1.0f / CompiledRemap::kFractionScale);
+        const float gx = 1.0f - fx, gy = 1.0f - fy;
+        const float w00 = gx * gy, w10 = fx * gy, w01 = gx * fy, w11 = fx * fy;
         const float* q = p + row3;
         d[0] = w00 * p[0] + w10 * p[3] + w01 * q[0] + w11 * q[3];
         d[1] = w00 * p[1] + w10 * p[4] + w01 * q[1] + w11 * q[4];

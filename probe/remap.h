@@ -18,9 +18,9 @@
 // Speed: apply_remap(src, RemapTable) compiles the table on every call. For video,
 // compile once with compile_remap() and call apply_remap(src, compiled, &out), which
 // reuses `out`'s storage. The compiled form stores per output pixel one int32 index of
-// the top-left source pixel of the 2 x 2 footprint and the two bilinear fractions
-// (12 bytes; the four weights are formed on the fly, which is cheaper than reading
-// them); border clamping is folded into index and fractions so the inner loop has no
+// the top-left source pixel of the 2 x 2 footprint and the two bilinear fractions in
+// 1/32768 px (8 bytes; the four weights are formed on the fly, which is cheaper than
+// reading them; OpenCV's fixed-point maps quantise to 1/32 px); border clamping is folded into index and fractions so the inner loop has no
 // branches but the validity test. Runs over rows in parallel with TBB.
 #pragma once
 
@@ -54,9 +54,10 @@ RgbImage apply_remap(const RgbImage& src, const RemapTable& table, const RemapOp
 struct CompiledRemap {
   int src_width = 0, src_height = 0;
   int out_width = 0, out_height = 0;
+  static constexpr float kFractionScale = 32768.0f;  // fractions in units of 1/32768 px
   struct Tap {
-    int32_t index;  // source pixel index (row * src_width + column) or -1
-    float fx, fy;   // in [0, 1]
+    int32_t index;    // source pixel index (row * src_width + column) or -1
+    uint16_t fx, fy;  // fractions in [0, 1] times kFractionScale (exact at 0 and 1)
   };
   std::vector<Tap> taps;
   bool any_invalid = false;  // some tap is -1

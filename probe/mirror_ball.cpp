@@ -1,0 +1,693 @@
+#include "probe/mirror_ball.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <cstdlib>
+#include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+Vec3 reflect(Vec3 v, Vec3 n) { return v - (2 * dot(v, n)) * n; }
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// Projection
+
+MirrorBallProjection::MirrorBallProjection(const BallInImage& ball, const MirrorBallCamera& camera,
+                                           int image_width)
+    : ball_(ball), camera_(camera) {
+  if (!(ball.radius_px > 0) || !std::isfinite(ball.cx) || !std::isfinite(ball.cy))
+    throw InputError("mirror ball: radius must be positive and the centre finite");
+  if (camera.distance_in_radii && camera.fov_deg)
+    throw InputError("mirror ball: give the camera distance or its field of view, not both");
+  if (!(camera.reflectivity > 0 && camera.reflectivity <= 1))
+    throw InputError("mirror ball: reflectivity must be in (0, 1]");
+  if (!is_rotation(camera.world_from_probe, 1e-6))
+    throw InputError("mirror ball: world_from_probe is not a rotation");
+  probe_from_world_ = transpose(camera.world_from_probe);
+  if (camera.distance_in_radii) {
+    if (!(*camera.distance_in_radii > 1))
+      throw InputError("mirror ball: camera distance must exceed one ball radius");
+    distance_ = *camera.distance_in_radii;
+  } else if (camera.fov_deg) {
+    const double fov = *camera.fov_deg;
+    if (!(fov > 0 && fov < 180)) throw InputError("mirror ball: field of view must be in (0, 180) degrees");
+    if (image_width <= 0) throw InputError("mirror ball: a field of view needs the image width");
+    const double f = 0.5 * image_width / std::tan(0.5 * fov * M_PI / 180);
+    distance_ = std::sqrt(1 + (f / ball.radius_px) * (f / ball.radius_px));
+  }
+  if (distance_) tan_alpha_ = 1 / std::sqrt(*distance_ * *distance_ - 1);
+}
+
+double MirrorBallProjection::distance_in_radii() const {
+  return distance_ ? *distance_ : std::numeric_limits<double>::infinity();
+}
+
+double MirrorBallProjection::max_reflection_angle() const {
+  return distance_ ? M_PI - std::asin(1 / *distance_) : M_PI;
+}
+
+std::optional<MirrorBallProjection::Hit> MirrorBallProjection::hit(double x, double y) const {
+  const double a = (x - ball_.cx) / ball_.radius_px;
+  const double b = -(y - ball_.cy) / ball_.radius_px;
+  const double rho2 = a * a + b * b;
+  if (rho2 > 1) return std::nullopt;
+  Vec3 v, n;
+  if (!distance_) {
+    v = {1, 0, 0};
+    n = {-std::sqrt(std::max(0.0, 1 - rho2)), -a, b};
+  } else {
+    const double d = *distance_;
+    v = normalize(Vec3{1, -a * tan_alpha_, b * tan_alpha_});
+    const Vec3 c{-d, 0, 0};
+    const double cw = dot(c, v);
+    const double disc = std::max(0.0, cw * cw - (d * d - 1));
+    const double t = -cw - std::sqrt(disc);
+    n = normalize(c + t * v);
+  }
+  const Vec3 r = normalize(reflect(v, n));
+  return Hit{camera_.world_from_probe * r, std::clamp(-dot(v, n), 0.0, 1.0)};
+}
+
+double MirrorBallProjection::reflection_angle(Vec3 world_direction) const {
+  const Vec3 r = normalize(probe_from_world_ * world_direction);
+  return angle_between(r, Vec3{-1, 0, 0});
+}
+
+std::optional<std::array<double, 2>> MirrorBallProjection::image_point(Vec3 world_direction) const {
+  const Vec3 r = normalize(probe_from_world_ * world_direction);
+  double a = 0, b = 0;
+  if (!distance_) {
+    const Vec3 m = r - Vec3{1, 0, 0};
+    const double len = length(m);
+    if (len < 1e-12) return std::nullopt;
+    const Vec3 n = (1 / len) * m;
+    a = -n.y;
+    b = n.z;
+  } else {
+    const double d = *distance_;
+    const double psi = angle_between(r, Vec3{-1, 0, 0});
+    if (psi >= max_reflection_angle()) return std::nullopt;
+    const double perp = std::hypot(r.y, r.z);
+    const Vec3 u = perp > 1e-15 ? Vec3{0, r.y / perp, r.z / perp} : Vec3{0, 1, 0};
+    // 2-D problem in the plane (s = -X, t = u): camera at (d, 0), hit P = (cos g, sin g).
+    auto psi_of = [d](double g) {
+      const double ps = std::cos(g), pt = std::sin(g);
+      double ws = ps - d, wt = pt;
+      const double wl = std::hypot(ws, wt);
+      ws /= wl;
+      wt /= wl;
+      const double wp = ws * ps + wt * pt;
+      return std::atan2(wt - 2 * wp * pt, ws - 2 * wp * ps);
+    };
+    double lo = 0, hi = std::acos(1 / d);
+    double g = std::clamp(0.5 * psi, lo, hi);
+    for (int it = 0; it < 100; ++it) {
+      const double f = psi_of(g) - psi;
+      if (f > 0) hi = g; else lo = g;
+      if (std::abs(f) < 1e-14 || hi - lo < 1e-13) break;
+      const double h = 1e-7;
+      const double slope = (psi_of(g + h) - psi_of(g - h)) / (2 * h);
+      double next = slope > 0 ? g - f / slope : 0.5 * (lo + hi);
+      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+      g = next;
+    }
+    const Vec3 p = std::cos(g) * Vec3{-1, 0, 0} + std::sin(g) * u;
+    const Vec3 w = p + Vec3{d, 0, 0};  // from the camera at (-d, 0, 0) to P
+    a = -(w.y / w.x) / tan_alpha_;
+    b = (w.z / w.x) / tan_alpha_;
+  }
+  return std::array<double, 2>{ball_.cx + a * ball_.radius_px, ball_.cy - b * ball_.radius_px};
+}
+
+double MirrorBallProjection::reflectivity(double cos_incidence) const {
+  const double f0 = camera_.reflectivity;
+  if (!camera_.fresnel) return f0;
+  const double m = 1 - std::clamp(cos_incidence, 0.0, 1.0);
+  return f0 + (1 - f0) * m * m * m * m * m;
+}
+
+// ---------------------------------------------------------------------------------------
+// Detection
+
+namespace {
+
+struct Circle {
+  double cx = 0, cy = 0, r = 0;
+};
+
+struct EdgePoint {
+  double x, y, strength;
+};
+
+// Bilinear sample of a 3-channel float image at (x, y) in pixel-centre-at-+0.5
+// coordinates; the caller keeps (x, y) within [0.5, W - 0.5] x [0.5, H - 0.5].
+cv::Vec3f bilinear(const cv::Mat& img, double x, double y) {
+  const double fx = x - 0.5, fy = y - 0.5;
+  int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+  x0 = std::clamp(x0, 0, img.cols - 2);
+  y0 = std::clamp(y0, 0, img.rows - 2);
+  const float ax = float(fx - x0), ay = float(fy - y0);
+  const cv::Vec3f* r0 = img.ptr<cv::Vec3f>(y0);
+  const cv::Vec3f* r1 = img.ptr<cv::Vec3f>(y0 + 1);
+  return (1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1]);
+}
+
+// Local maxima of the radial derivative's magnitude (summed over the colour channels, so
+// an edge between equally bright but differently coloured regions counts) along one ray within [r_lo, r_hi],
+// strongest first (at most `keep`), each placed to sub-pixel precision by a parabola;
+// empty when the band leaves the image.
+std::vector<EdgePoint> radial_edges(const cv::Mat& img, double cx, double cy, double theta, double r_lo,
+                                    double r_hi, int keep, double step = 0.25) {
+  const double dx = std::cos(theta), dy = std::sin(theta);
+  const double w = img.cols, h = img.rows;
+  // Derivatives over a 1 px baseline (bilinear samples have piecewise-constant slopes
+  // within a pixel, so a shorter baseline would quantise the peak to pixel cells); peak
+  // refined by a parabola through the derivative at -1, 0, +1 px.
+  const int half = int(std::lround(0.5 / step)), reach = 2 * half;
+  const double lo = std::max(0.0, r_lo - (reach + 1) * step), hi = r_hi + (reach + 1) * step;
+  for (double rr : {lo, hi}) {
+    const double x = cx + rr * dx, y = cy + rr * dy;
+    if (x < 0.5 || y < 0.5 || x > w - 0.5 || y > h - 0.5) return {};
+  }
+  const int n = int(std::ceil((hi - lo) / step)) + 1;
+  if (n < 2 * reach + 5) return {};
+  std::vector<cv::Vec3f> p(n);
+  std::vector<double> d(n, 0.0);
+  for (int i = 0; i < n; ++i) p[i] = bilinear(img, cx + (lo + i * step) * dx, cy + (lo + i * step) * dy);
+  for (int i = half; i + half < n; ++i) {
+    const cv::Vec3f g = p[i + half] - p[i - half];
+    d[i] = (std::abs(g[0]) + std::abs(g[1]) + std::abs(g[2])) / (2 * half * step);
+  }
+  std::vector<EdgePoint> out;
+  for (int i = reach + half; i + reach + half < n; ++i) {
+    if (!(d[i] > d[i - 1] && d[i] >= d[i + 1])) continue;
+    const double dm = d[i - reach], dp = d[i + reach];
+    const double denom = dm - 2 * d[i] + dp;
+    const double off = denom < 0 ? std::clamp(0.5 * (dm - dp) / denom, -0.5, 0.5) * reach : 0.0;
+    const double rr = lo + (i + off) * step;
+    if (rr < r_lo || rr > r_hi) continue;
+    out.push_back({cx + rr * dx, cy + rr * dy, d[i]});
+  }
+  std::sort(out.begin(), out.end(), [](const EdgePoint& a, const EdgePoint& b) { return a.strength > b.strength; });
+  if (int(out.size()) > keep) out.resize(keep);
+  return out;
+}
+
+// Geometric fit, Gauss-Newton with Tukey biweights (iteratively reweighted).
+Circle geometric_fit(const std::vector<EdgePoint>& pts, Circle c) {
+  std::vector<double> res(pts.size());
+  for (int outer = 0; outer < 8; ++outer) {
+    for (size_t i = 0; i < pts.size(); ++i) res[i] = std::hypot(pts[i].x - c.cx, pts[i].y - c.cy) - c.r;
+    std::vector<double> absr(res.size());
+    for (size_t i = 0; i < res.size(); ++i) absr[i] = std::abs(res[i]);
+    std::nth_element(absr.begin(), absr.begin() + absr.size() / 2, absr.end());
+    const double sigma = std::max(0.1, 1.4826 * absr[absr.size() / 2]);
+    const double k = 4.685 * sigma;
+    for (int it = 0; it < 5; ++it) {
+      double jtj[3][3] = {}, jtr[3] = {};
+      for (size_t i = 0; i < pts.size(); ++i) {
+        const double dx = pts[i].x - c.cx, dy = pts[i].y - c.cy;
+        const double dist = std::hypot(dx, dy);
+        if (dist < 1e-9) continue;
+        const double ri = dist - c.r;
+        if (std::abs(ri) >= k) continue;
+        const double u = ri / k;
+        const double wgt = (1 - u * u) * (1 - u * u);
+        const double j[3] = {-dx / dist, -dy / dist, -1};
+        for (int p = 0; p < 3; ++p) {
+          jtr[p] += wgt * j[p] * ri;
+          for (int q = 0; q < 3; ++q) jtj[p][q] += wgt * j[p] * j[q];
+        }
+      }
+      cv::Matx33d m(jtj[0][0], jtj[0][1], jtj[0][2], jtj[1][0], jtj[1][1], jtj[1][2], jtj[2][0], jtj[2][1],
+                    jtj[2][2]);
+      cv::Vec3d rhs(-jtr[0], -jtr[1], -jtr[2]);
+      cv::Vec3d delta;
+      if (!cv::solve(m, rhs, delta, cv::DECOMP_SVD)) break;
+      c.cx += delta[0];
+      c.cy += delta[1];
+      c.r += delta[2];
+      if (std::abs(delta[0]) + std::abs(delta[1]) + std::abs(delta[2]) < 1e-6) break;
+    }
+  }
+  return c;
+}
+
+double ray_angle(int k, int rays) { return 2 * M_PI * (k + 0.5) / rays; }
+
+// Per ray: edge candidates in the band [r - half_band, r + half_band] around circle c.
+std::vector<std::vector<EdgePoint>> ray_candidates(const cv::Mat& img, const Circle& c, double half_band, int rays,
+                                                   int keep) {
+  std::vector<std::vector<EdgePoint>> out(rays);
+  for (int k = 0; k < rays; ++k)
+    out[k] = radial_edges(img, c.cx, c.cy, ray_angle(k, rays), c.r - half_band, c.r + half_band, keep);
+  return out;
+}
+
+double radial_residual(const EdgePoint& p, const Circle& c) { return std::hypot(p.x - c.cx, p.y - c.cy) - c.r; }
+
+// Per ray, the outermost candidate among those at least `rel` times as strong as the
+// ray's strongest: the silhouette is the ball's outer boundary, while the rim's
+// reflection (the whole scene behind the ball squeezed into a few pixels) draws rings
+// concentric with it just inside, which would pull a "strongest edge" fit inwards.
+std::vector<EdgePoint> outermost_edges(const std::vector<std::vector<EdgePoint>>& cands, const Circle& c,
+                                       double rel) {
+  std::vector<EdgePoint> pts;
+  for (const auto& ray : cands) {
+    if (ray.empty()) continue;
+    const EdgePoint* best = nullptr;
+    for (const auto& e : ray)
+      if (e.strength >= rel * ray[0].strength && (!best || radial_residual(e, c) > radial_residual(*best, c)))
+        best = &e;
+    pts.push_back(*best);
+  }
+  return pts;
+}
+
+bool circle_through(const EdgePoint& a, const EdgePoint& b, const EdgePoint& c, Circle* out) {
+  const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
+  const double d = 2 * (bx * cy - by * cx);
+  if (std::abs(d) < 1e-9) return false;
+  const double b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
+  const double ux = (cy * b2 - by * c2) / d, uy = (bx * c2 - cx * b2) / d;
+  *out = {a.x + ux, a.y + uy, std::hypot(ux, uy)};
+  return true;
+}
+
+// RANSAC over the rays' candidates: the circle through three candidates of three rays
+// that most rays have a candidate near (within tol), weighted by strength rank.
+Circle ransac_circle(const std::vector<std::vector<EdgePoint>>& cands, const Circle& guess, double max_move,
+                     double r_min, double r_max) {
+  std::vector<int> usable;
+  for (int k = 0; k < int(cands.size()); ++k)
+    if (!cands[k].empty()) usable.push_back(k);
+  if (usable.size() < 3) return guess;
+  std::mt19937 rng(12345);
+  std::uniform_int_distribution<size_t> pick(0, usable.size() - 1);
+  Circle best = guess;
+  double best_score = -1;
+  for (int it = 0; it < 800; ++it) {
+    const int k0 = usable[pick(rng)], k1 = usable[pick(rng)], k2 = usable[pick(rng)];
+    if (k0 == k1 || k1 == k2 || k0 == k2) continue;
+    const auto& c0 = cands[k0];
+    const auto& c1 = cands[k1];
+    const auto& c2 = cands[k2];
+    Circle c;
+    if (!circle_through(c0[rng() % c0.size()], c1[rng() % c1.size()], c2[rng() % c2.size()], &c)) continue;
+    if (c.r < r_min || c.r > r_max || std::hypot(c.cx - guess.cx, c.cy - guess.cy) > max_move ||
+        std::abs(c.r - guess.r) > max_move)
+      continue;
+    const double tol = 1.5 + 0.005 * c.r;
+    double score = 0;
+    for (int k : usable)
+      for (size_t j = 0; j < cands[k].size(); ++j)
+        if (std::abs(radial_residual(cands[k][j], c)) < tol) {
+          score += 1.0 / (1 + 0.25 * j);
+          break;
+        }
+    if (score > best_score) best_score = score, best = c;
+  }
+  return best;
+}
+
+double cut_fraction(const Circle& c, int w, int h) {
+  int out = 0;
+  const int n = 720;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * M_PI * (k + 0.5) / n;
+    const double x = c.cx + c.r * std::cos(t), y = c.cy + c.r * std::sin(t);
+    if (x < 0 || y < 0 || x > w || y > h) ++out;
+  }
+  return double(out) / n;
+}
+
+struct Candidate {
+  Circle circle;
+  double confidence = 0;
+  double rms = 0;
+  int inliers = 0;
+  bool ok = false;
+};
+
+Candidate refine(const cv::Mat& coarse, const cv::Mat& fine, Circle c, int rays, double r_min, double r_max) {
+  Candidate out;
+  // Coarse: RANSAC over the strongest edges in a +-25 % band, then a robust fit to the
+  // edges nearest to that circle.
+  const double band0 = 0.25 * c.r;
+  const auto cands0 = ray_candidates(coarse, c, band0, rays, 4);
+  c = ransac_circle(cands0, c, band0, r_min, r_max);
+  // Narrow passes on the finer image.
+  for (const double band : {6.0, 4.0, 3.0}) {
+    const auto pts = outermost_edges(ray_candidates(fine, c, band, rays, 4), c, 0.3);
+    if (pts.size() < 12) return out;
+    Circle next = geometric_fit(pts, c);
+    if (!(next.r > 0) || !std::isfinite(next.cx) || !std::isfinite(next.cy)) return out;
+    if (std::hypot(next.cx - c.cx, next.cy - c.cy) > 2 * band || std::abs(next.r - c.r) > 2 * band) return out;
+    c = next;
+  }
+  if (c.r < r_min || c.r > r_max) return out;
+  // Final inliers and confidence.
+  const auto pts = outermost_edges(ray_candidates(fine, c, 3, rays, 4), c, 0.3);
+  double ss = 0;
+  int n_in = 0;
+  const double tol = 1.5 + 0.005 * c.r;
+  for (auto& p : pts) {
+    const double ri = radial_residual(p, c);
+    if (std::abs(ri) < tol) ss += ri * ri, ++n_in;
+  }
+  const auto wide = ray_candidates(coarse, c, 0.1 * c.r, rays, 1);
+  int agree = 0, n_wide = 0;
+  for (auto& ray : wide) {
+    if (ray.empty()) continue;
+    ++n_wide;
+    if (std::abs(radial_residual(ray[0], c)) < tol) ++agree;
+  }
+  out.circle = c;
+  out.inliers = n_in;
+  out.rms = n_in ? std::sqrt(ss / n_in) : 0;
+  out.confidence = n_wide >= 12 ? double(agree) / n_wide : 0;
+  out.ok = true;
+  return out;
+}
+
+}  // namespace
+
+BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, FindBallReport* report) {
+  const int w = image.width, h = image.height;
+  if (w < 16 || h < 16 || image.rgb.size() != size_t(3) * w * h)
+    throw InputError("find_ball: the image is empty or smaller than 16 x 16");
+  if (options.rays < 16) throw InputError("find_ball: need at least 16 rays");
+  // Compressed colour c / (c + mean luminance), so that HDR highlights do not dominate.
+  double mean = 0;
+  for (size_t i = 0; i < size_t(w) * h; ++i) {
+    const float* p = &image.rgb[3 * i];
+    const float l = luminance(p[0], p[1], p[2]);
+    if (std::isfinite(l) && l > 0) mean += l;
+  }
+  mean /= double(w) * h;
+  if (!(mean > 0)) throw InputError("find_ball: no ball found (the image is black)");
+  cv::Mat col(h, w, CV_32FC3), lin(h, w, CV_32FC3), lum(h, w, CV_32F);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float* p = &image.rgb[3 * (size_t(y) * w + x)];
+      cv::Vec3f v, u;
+      for (int c = 0; c < 3; ++c) {
+        const double q = std::isfinite(p[c]) ? std::max(0.0f, p[c]) : 0.0;
+        v[c] = float(q / (q + mean));
+        u[c] = float(q / mean);
+      }
+      col.at<cv::Vec3f>(y, x) = v;
+      lin.at<cv::Vec3f>(y, x) = u;
+      lum.at<float>(y, x) = float(0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]);
+    }
+  cv::Mat coarse, fine, coarse_lum;
+  cv::GaussianBlur(col, coarse, cv::Size(0, 0), 2.0);
+  // Sub-pixel passes run on linear values: the rim's pixels blend ball and background
+  // linearly in radiance, and any compression would move the edge towards the dark side.
+  cv::GaussianBlur(lin, fine, cv::Size(0, 0), 1.0);
+  cv::GaussianBlur(lum, coarse_lum, cv::Size(0, 0), 2.0);
+
+  const double min_dim = std::min(w, h);
+  const double r_min = options.min_radius_fraction * min_dim, r_max = options.max_radius_fraction * min_dim;
+  std::vector<Circle> guesses;
+  if (options.initial_guess) {
+    guesses.push_back({options.initial_guess->cx, options.initial_guess->cy, options.initial_guess->radius_px});
+  } else {
+    cv::Mat img8;
+    coarse_lum.convertTo(img8, CV_8U, 255.0);
+    std::vector<cv::Vec3f> circles;
+    cv::HoughCircles(img8, circles, cv::HOUGH_GRADIENT, 2, min_dim / 4, 100, 40, int(r_min), int(r_max));
+    for (size_t i = 0; i < circles.size() && i < 5; ++i) guesses.push_back({circles[i][0], circles[i][1], circles[i][2]});
+  }
+  guesses.push_back({0.5 * w, 0.5 * h, 0.5 * min_dim});
+
+  Candidate best;
+  for (const Circle& g : guesses) {
+    const Candidate c = refine(coarse, fine, g, options.rays, r_min, r_max);
+    if (c.ok && c.confidence > best.confidence) best = c;
+  }
+  if (!best.ok || best.confidence < options.min_confidence)
+    throw InputError("find_ball: no ball found (edge confidence " + std::to_string(best.confidence).substr(0, 4) +
+                     " < " + std::to_string(options.min_confidence).substr(0, 4) + ")");
+  const double cut = cut_fraction(best.circle, w, h);
+  if (report) *report = {best.confidence, cut, best.rms, best.inliers};
+  if (cut > options.max_cut_fraction)
+    throw InputError("find_ball: ball cut by the image border (" + std::to_string(int(std::round(100 * cut))) +
+                     " % of its rim outside, max_cut_fraction allows " +
+                     std::to_string(int(std::round(100 * options.max_cut_fraction))) + " %)");
+  return {best.circle.cx, best.circle.cy, best.circle.r};
+}
+
+// ---------------------------------------------------------------------------------------
+// Unwrapping
+
+RemapTable mirror_ball_remap(const BallInImage& ball, const MirrorBallCamera& camera, int image_width,
+                             int image_height, Layout layout, int width, int height,
+                             const MirrorBallRemapOptions& options) {
+  if (image_width <= 0 || image_height <= 0) throw InputError("mirror ball: image size must be positive");
+  if (!(options.blind_spot_deg >= 0 && options.blind_spot_deg < 180))
+    throw InputError("mirror ball: blind_spot_deg must be in [0, 180)");
+  const MirrorBallProjection proj(ball, camera, image_width);
+  const EnvMap map = make_envmap(layout, width, height);
+  RemapTable table;
+  table.out_width = map.width;
+  table.out_height = map.height;
+  const size_t n = map.pixel_count();
+  table.src_x.assign(n, float(kNaN));
+  table.src_y.assign(n, float(kNaN));
+  const double max_psi = std::min(M_PI - options.blind_spot_deg * M_PI / 180, proj.max_reflection_angle());
+  const double max_r = ball.radius_px - options.rim_margin_px;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      const Vec3 d = pixel_direction(map, i);
+      if (proj.reflection_angle(d) > max_psi) continue;
+      const auto pt = proj.image_point(d);
+      if (!pt) continue;
+      const double x = (*pt)[0], y = (*pt)[1];
+      if (std::hypot(x - ball.cx, y - ball.cy) > max_r) continue;
+      if (!(x >= 0 && y >= 0 && x <= image_width && y <= image_height)) continue;
+      table.src_x[i] = float(x);
+      table.src_y[i] = float(y);
+    }
+  });
+  return table;
+}
+
+namespace {
+
+// Push-pull fill of a row grid (latlong wraps in azimuth) in place; only invalid pixels change.
+void fill_grid(std::vector<float>& rgb, const std::vector<uint8_t>& valid, int w, int h, bool wrap) {
+  struct Level {
+    int w, h;
+    std::vector<float> rgb;  // 3 per pixel
+    std::vector<float> wt;   // coverage in [0, 1]
+  };
+  std::vector<Level> levels;
+  Level l0{w, h, rgb, std::vector<float>(size_t(w) * h)};
+  for (size_t i = 0; i < l0.wt.size(); ++i) l0.wt[i] = valid[i] ? 1.f : 0.f;
+  levels.push_back(std::move(l0));
+  while (levels.back().w > 1 || levels.back().h > 1) {
+    const Level& f = levels.back();
+    Level c{(f.w + 1) / 2, (f.h + 1) / 2, {}, {}};
+    c.rgb.assign(3 * size_t(c.w) * c.h, 0.f);
+    c.wt.assign(size_t(c.w) * c.h, 0.f);
+    for (int y = 0; y < c.h; ++y)
+      for (int x = 0; x < c.w; ++x) {
+        double s[3] = {0, 0, 0}, ws = 0;
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx) {
+            const int fx = 2 * x + dx, fy = 2 * y + dy;
+            if (fx >= f.w || fy >= f.h) continue;
+            const size_t j = size_t(fy) * f.w + fx;
+            ws += f.wt[j];
+            for (int ch = 0; ch < 3; ++ch) s[ch] += f.wt[j] * f.rgb[3 * j + ch];
+          }
+        const size_t i = size_t(y) * c.w + x;
+        if (ws > 0)
+          for (int ch = 0; ch < 3; ++ch) c.rgb[3 * i + ch] = float(s[ch] / ws);
+        c.wt[i] = float(std::min(1.0, ws));
+      }
+    levels.push_back(std::move(c));
+  }
+  // Pull: from coarse to fine, pixels with weight < 1 blend in the upsampled coarser level.
+  for (int li = int(levels.size()) - 2; li >= 0; --li) {
+    Level& f = levels[li];
+    const Level& c = levels[li + 1];
+    for (int y = 0; y < f.h; ++y)
+      for (int x = 0; x < f.w; ++x) {
+        const size_t i = size_t(y) * f.w + x;
+        if (f.wt[i] >= 1) continue;
+        // Bilinear upsampling: fine centre (x + 0.5) sits at coarse coordinate (x + 0.5) / 2 - 0.5.
+        const double cxf = (x + 0.5) / 2 - 0.5, cyf = (y + 0.5) / 2 - 0.5;
+        int x0 = int(std::floor(cxf)), y0 = int(std::floor(cyf));
+        const double ax = cxf - x0, ay = cyf - y0;
+        double up[3] = {0, 0, 0};
+        for (int dy = 0; dy < 2; ++dy)
+          for (int dx = 0; dx < 2; ++dx) {
+            int xx = x0 + dx, yy = std::clamp(y0 + dy, 0, c.h - 1);
+            xx = wrap ? ((xx % c.w) + c.w) % c.w : std::clamp(xx, 0, c.w - 1);
+            const double wgt = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay);
+            const size_t j = size_t(yy) * c.w + xx;
+            for (int ch = 0; ch < 3; ++ch) up[ch] += wgt * c.rgb[3 * j + ch];
+          }
+        const double a = f.wt[i];
+        for (int ch = 0; ch < 3; ++ch) f.rgb[3 * i + ch] = float(a * f.rgb[3 * i + ch] + (1 - a) * up[ch]);
+      }
+  }
+  for (size_t i = 0; i < valid.size(); ++i)
+    if (!valid[i])
+      for (int ch = 0; ch < 3; ++ch) rgb[3 * i + ch] = levels[0].rgb[3 * i + ch];
+}
+
+// Push-pull on a NESTED healpix map: parents are groups of four consecutive indices.
+void fill_healpix(std::vector<float>& rgb, const std::vector<uint8_t>& valid) {
+  std::vector<std::vector<float>> vals{rgb};
+  std::vector<std::vector<float>> wts{std::vector<float>(valid.size())};
+  for (size_t i = 0; i < valid.size(); ++i) wts[0][i] = valid[i] ? 1.f : 0.f;
+  while (vals.back().size() / 3 > 12) {
+    const auto& fv = vals.back();
+    const auto& fw = wts.back();
+    const size_t n = fw.size() / 4;
+    std::vector<float> cv(3 * n, 0.f), cw(n, 0.f);
+    for (size_t p = 0; p < n; ++p) {
+      double s[3] = {0, 0, 0}, ws = 0;
+      for (size_t c = 4 * p; c < 4 * p + 4; ++c) {
+        ws += fw[c];
+        for (int ch = 0; ch < 3; ++ch) s[ch] += fw[c] * fv[3 * c + ch];
+      }
+      if (ws > 0)
+        for (int ch = 0; ch < 3; ++ch) cv[3 * p + ch] = float(s[ch] / ws);
+      cw[p] = float(std::min(1.0, ws));
+    }
+    vals.push_back(std::move(cv));
+    wts.push_back(std::move(cw));
+  }
+  // Base pixels with nothing valid take the mean of the valid base pixels.
+  {
+    auto& bv = vals.back();
+    auto& bw = wts.back();
+    double s[3] = {0, 0, 0}, ws = 0;
+    for (size_t p = 0; p < bw.size(); ++p) {
+      ws += bw[p];
+      for (int ch = 0; ch < 3; ++ch) s[ch] += bw[p] * bv[3 * p + ch];
+    }
+    for (size_t p = 0; p < bw.size(); ++p)
+      if (bw[p] < 1 && ws > 0)
+        for (int ch = 0; ch < 3; ++ch) bv[3 * p + ch] = float(bw[p] * bv[3 * p + ch] + (1 - bw[p]) * s[ch] / ws);
+  }
+  for (int li = int(vals.size()) - 2; li >= 0; --li) {
+    auto& fv = vals[li];
+    const auto& fw = wts[li];
+    const auto& cv = vals[li + 1];
+    for (size_t i = 0; i < fw.size(); ++i)
+      if (fw[i] < 1)
+        for (int ch = 0; ch < 3; ++ch) fv[3 * i + ch] = fw[i] * fv[3 * i + ch] + (1 - fw[i]) * cv[3 * (i / 4) + ch];
+  }
+  for (size_t i = 0; i < valid.size(); ++i)
+    if (!valid[i])
+      for (int ch = 0; ch < 3; ++ch) rgb[3 * i + ch] = vals[0][3 * i + ch];
+}
+
+}  // namespace
+
+EnvMap unwrap_mirror_ball(const RgbImage& image, const BallInImage& ball, const MirrorBallCamera& camera,
+                          Layout layout, int width, int height, const UnwrapOptions& options,
+                          UnwrapReport* report) {
+  if (image.width < 2 || image.height < 2 || image.rgb.size() != size_t(3) * image.width * image.height)
+    throw InputError("unwrap mirror ball: the image is empty");
+  if (options.samples_per_edge < 0 || options.samples_per_edge > 64)
+    throw InputError("unwrap mirror ball: samples_per_edge must be in [0, 64]");
+  const MirrorBallProjection proj(ball, camera, image.width);
+  EnvMap out = make_envmap(layout, width, height);
+  out.units = image.units;
+
+  // Sub-samples per edge.
+  int k = options.samples_per_edge;
+  if (k == 0) {
+    const double out_angle = std::sqrt(layout_solid_angle(layout) / double(out.pixel_count()));
+    k = std::clamp(int(std::ceil(out_angle / (2 / ball.radius_px) - 1e-9)), 1, 8);
+  }
+  if (layout == Layout::Healpix) {
+    int p = 1;
+    while (p < k) p *= 2;
+    k = p;
+  }
+  const int fw = layout == Layout::Healpix ? out.nside * k : width * k;
+  const int fh = layout == Layout::Healpix ? 0 : height * k;
+  const RemapTable table = mirror_ball_remap(ball, camera, image.width, image.height, layout, fw, fh,
+                                             {options.blind_spot_deg, options.rim_margin_px});
+  const RgbImage sampled = apply_remap(image, table);
+  const EnvMap fine = make_envmap(layout, fw, fh);
+
+  // Downsample with solid-angle weights over valid sub-samples.
+  const size_t n = out.pixel_count();
+  out.valid.assign(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
+    std::vector<size_t> subs(size_t(k) * k);
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      if (layout == Layout::Healpix) {
+        for (size_t s = 0; s < subs.size(); ++s) subs[s] = i * subs.size() + s;
+      } else {
+        const size_t u = i % width, v = i / width;
+        for (int j = 0; j < k; ++j)
+          for (int q = 0; q < k; ++q) subs[size_t(j) * k + q] = (v * k + j) * size_t(fw) + u * k + q;
+      }
+      double sum[3] = {0, 0, 0}, wv = 0, wall = 0;
+      for (size_t s : subs) {
+        const double om = pixel_solid_angle(fine, s);
+        wall += om;
+        if (!(sampled.valid.empty() || sampled.valid[s])) continue;
+        if (std::isnan(table.src_x[s])) continue;
+        double scale = 1;
+        if (options.compensate_reflectivity) {
+          const auto hit = proj.hit(table.src_x[s], table.src_y[s]);
+          scale = 1 / proj.reflectivity(hit ? hit->cos_incidence : 0.0);
+        }
+        wv += om;
+        for (int c = 0; c < 3; ++c) sum[c] += om * scale * sampled.rgb[3 * s + c];
+      }
+      if (wv > 0 && wv >= options.min_valid_fraction * wall) {
+        out.valid[i] = 1;
+        for (int c = 0; c < 3; ++c) out.rgb[3 * i + c] = float(sum[c] / wv);
+      }
+    }
+  });
+
+  double valid_omega = 0, valid_power = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (out.valid[i]) {
+      const double om = pixel_solid_angle(out, i);
+      valid_omega += om;
+      valid_power += om * luminance(out.pixel(i)[0], out.pixel(i)[1], out.pixel(i)[2]);
+    }
+  double fill_share = 0;
+  if (options.fill && valid_omega > 0) {
+    if (layout == Layout::Healpix)
+      fill_healpix(out.rgb, out.valid);
+    else
+      fill_grid(out.rgb, out.valid, width, height, layout == Layout::LatLong || layout == Layout::Hemisphere);
+    double fill_power = 0;
+    for (size_t i = 0; i < n; ++i)
+      if (!out.valid[i])
+        fill_power += pixel_solid_angle(out, i) * luminance(out.pixel(i)[0], out.pixel(i)[1], out.pixel(i)[2]);
+    fill_share = fill_power + valid_power > 0 ? fill_power / (fill_power + valid_power) : 0;
+  }
+  if (report) *report = {k, valid_omega / layout_solid_angle(layout), fill_share};
+  return out;
+}
+
+}  // namespace lp

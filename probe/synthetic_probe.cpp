@@ -1,0 +1,84 @@
+#include "probe/synthetic_probe.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "core/error.h"
+
+namespace lp {
+
+RgbImage render_mirror_ball(const EnvMap& world, const BallInImage& ball, const MirrorBallCamera& camera,
+                            int width, int height, const RenderBallOptions& options) {
+  if (width <= 0 || height <= 0) throw InputError("render mirror ball: image size must be positive");
+  if (options.samples_per_pixel_edge < 1) throw InputError("render mirror ball: samples_per_pixel_edge must be >= 1");
+  if (world.pixel_count() == 0) throw InputError("render mirror ball: the map is empty");
+  const MirrorBallProjection proj(ball, camera, width);
+  RgbImage img;
+  img.width = width;
+  img.height = height;
+  img.units = world.units;
+  img.rgb.resize(3 * size_t(width) * height);
+  const int k = options.samples_per_pixel_edge;
+  const auto& bg = options.background;
+  tbb::parallel_for(0, height, [&](int y) {
+    for (int x = 0; x < width; ++x) {
+      float* out = &img.rgb[3 * (size_t(y) * width + x)];
+      // Pixels whose square misses the disc entirely.
+      const double dx = std::max(0.0, std::abs(x + 0.5 - ball.cx) - 0.5);
+      const double dy = std::max(0.0, std::abs(y + 0.5 - ball.cy) - 0.5);
+      if (dx * dx + dy * dy > ball.radius_px * ball.radius_px) {
+        for (int c = 0; c < 3; ++c) out[c] = bg[c];
+        continue;
+      }
+      double sum[3] = {0, 0, 0};
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i < k; ++i) {
+          const auto hit = proj.hit(x + (i + 0.5) / k, y + (j + 0.5) / k);
+          if (!hit) {
+            for (int c = 0; c < 3; ++c) sum[c] += bg[c];
+            continue;
+          }
+          const auto p = pixel_at(world, hit->direction);
+          if (!p || !world.is_valid(*p)) continue;
+          const double f = proj.reflectivity(hit->cos_incidence);
+          for (int c = 0; c < 3; ++c) sum[c] += f * world.pixel(*p)[c];
+        }
+      for (int c = 0; c < 3; ++c) out[c] = float(sum[c] / (k * k));
+    }
+  });
+  if (options.noise_relative > 0 || options.noise_absolute > 0) {
+    std::mt19937_64 rng(options.seed);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    for (float& v : img.rgb) {
+      double nv = v * (1 + options.noise_relative * normal(rng));
+      if (options.noise_absolute > 0) nv += options.noise_absolute * normal(rng);
+      v = float(std::max(0.0, nv));
+    }
+  }
+  return img;
+}
+
+RgbImage render_mirror_ball(const EnvMap& world, const BallInImage& ball, const MirrorBallCamera& camera,
+                            int width, int height, int samples_per_pixel_edge) {
+  RenderBallOptions options;
+  options.samples_per_pixel_edge = samples_per_pixel_edge;
+  return render_mirror_ball(world, ball, camera, width, height, options);
+}
+
+std::vector<BallInImage> jittered_track(BallInImage ball, int frames, double jitter_px, uint64_t seed) {
+  if (frames < 0) throw InputError("jittered track: frames must be >= 0");
+  if (!(jitter_px >= 0)) throw InputError("jittered track: jitter must be >= 0");
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<BallInImage> track(size_t(frames), ball);
+  for (auto& b : track) {
+    b.cx = ball.cx + jitter_px * normal(rng);
+    b.cy = ball.cy + jitter_px * normal(rng);
+  }
+  return track;
+}
+
+}  // namespace lp

@@ -24,6 +24,7 @@ struct Tables {
   std::vector<size_t> by_time;                  // frame indices, shortest exposure first
   int sat_level = 0, black_level = 0;           // level >= sat_level: saturated; <= black_level: black
   std::array<int, 3> colour_level{-1, -1, -1};  // ignore_colour in levels, or -1
+  std::vector<const uint8_t*> keep, valid;      // per frame: frame_masks[k] / frames[k].valid, or null
 };
 
 inline int level_of(float v, float scale, int levels) {
@@ -33,40 +34,69 @@ inline int level_of(float v, float scale, int levels) {
   return l < levels ? l : levels - 1;
 }
 
-template <bool kIgnore>
+// kIgnore: ignore_colour is set. kMask: some frame has a keep mask (frame_masks) or a valid
+// mask; both are chosen once per call, so the plain merge carries neither test.
+template <bool kIgnore, bool kMask>
 void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, int y0, int y1, RgbImage& out,
                 uint8_t* flags, std::atomic<size_t>& n_sat, std::atomic<size_t>& n_black,
-                std::atomic<size_t>& n_ignored) {
+                std::atomic<size_t>& n_ignored, std::atomic<size_t>& n_no_frame) {
+  constexpr bool kTrack = kIgnore || kMask;
   const int W = b.width();
   const size_t nf = b.frames.size();
   const int L = T.levels;
   const float scale = T.scale;
   std::vector<float> sw(3 * size_t(W)), swx(3 * size_t(W));
-  std::vector<uint8_t> used;  // kIgnore: frames that were not ignore_colour, per pixel
-  if constexpr (kIgnore) used.resize(size_t(W));
+  // kTrack, per pixel: bit 1 some frame was kept (mask), bit 2 some kept frame was not ignore_colour.
+  std::vector<uint8_t> used;
+  if constexpr (kTrack) used.resize(size_t(W));
   const float* w0 = T.w[0].data();
   const float* w1 = T.w[1].data();
   const float* w2 = T.w[2].data();
   const float* x0 = T.wx[0].data();
   const float* x1 = T.wx[1].data();
   const float* x2 = T.wx[2].data();
-  size_t sat = 0, black = 0, ignored = 0;
+  // Frame k does not take part at pixel index p (row-major).
+  auto dropped = [&](size_t k, size_t p) {
+    if constexpr (kMask) {
+      if ((T.keep[k] && !T.keep[k][p]) || (T.valid[k] && !T.valid[k][p])) return true;
+    }
+    if constexpr (kIgnore) {
+      const float* q = &b.frames[k].rgb[3 * p];
+      if (level_of(q[0], scale, L) == T.colour_level[0] && level_of(q[1], scale, L) == T.colour_level[1] &&
+          level_of(q[2], scale, L) == T.colour_level[2])
+        return true;
+    }
+    return false;
+  };
+  size_t sat = 0, black = 0, ignored = 0, no_frame = 0;
   for (int y = y0; y < y1; ++y) {
     std::fill(sw.begin(), sw.end(), 0.0f);
     std::fill(swx.begin(), swx.end(), 0.0f);
-    if constexpr (kIgnore) std::fill(used.begin(), used.end(), uint8_t(0));
+    if constexpr (kTrack) std::fill(used.begin(), used.end(), uint8_t(0));
     const size_t row = size_t(y) * size_t(W);
     for (size_t k = 0; k < nf; ++k) {
       const float* z = &b.frames[k].rgb[3 * row];
       const float fw = T.frame_w[k], fx = T.frame_wx[k];
+      [[maybe_unused]] const uint8_t* km = nullptr;
+      [[maybe_unused]] const uint8_t* vm = nullptr;
+      if constexpr (kMask) {
+        km = T.keep[k] ? T.keep[k] + row : nullptr;
+        vm = T.valid[k] ? T.valid[k] + row : nullptr;
+      }
       for (int x = 0; x < W; ++x) {
+        if constexpr (kMask) {
+          if ((km && !km[x]) || (vm && !vm[x])) continue;
+        }
         const int l0 = level_of(z[3 * x], scale, L);
         const int l1 = level_of(z[3 * x + 1], scale, L);
         const int l2 = level_of(z[3 * x + 2], scale, L);
         if constexpr (kIgnore) {
-          if (l0 == T.colour_level[0] && l1 == T.colour_level[1] && l2 == T.colour_level[2]) continue;
-          used[size_t(x)] = 1;
+          if (l0 == T.colour_level[0] && l1 == T.colour_level[1] && l2 == T.colour_level[2]) {
+            used[size_t(x)] |= 1;
+            continue;
+          }
         }
+        if constexpr (kTrack) used[size_t(x)] = 3;
         float* a = &sw[3 * size_t(x)];
         float* c = &swx[3 * size_t(x)];
         a[0] += w0[l0] * fw;
@@ -79,11 +109,15 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
     }
     float* o = &out.rgb[3 * row];
     for (int x = 0; x < W; ++x) {
-      if constexpr (kIgnore) {
-        if (!used[size_t(x)]) {
+      if constexpr (kTrack) {
+        if (!(used[size_t(x)] & 2)) {
           out.valid[row + size_t(x)] = 0;
           o[3 * x] = o[3 * x + 1] = o[3 * x + 2] = 0.0f;
-          ++ignored;
+          if (used[size_t(x)] & 1)
+            ++ignored;
+          else
+            ++no_frame;
+          if (flags) flags[row + size_t(x)] = 0;
           continue;
         }
       }
@@ -94,32 +128,27 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
           o[i] = swx[i] / sw[i];
           continue;
         }
-        // No usable frame for this channel (rare): classify and take a bound.
+        // No usable frame for this channel (rare): classify the kept frames and take a bound.
         bool all_sat = true, all_black = true;
         size_t best = nf;
         int best_d = 1 << 30;
         for (size_t k : T.by_time) {
+          if constexpr (kTrack) {
+            if (dropped(k, row + size_t(x))) continue;
+          }
           const float* p = &b.frames[k].rgb[3 * (row + size_t(x))];
           const int l = level_of(p[c], scale, L);
-          if constexpr (kIgnore) {
-            if (level_of(p[0], scale, L) == T.colour_level[0] && level_of(p[1], scale, L) == T.colour_level[1] &&
-                level_of(p[2], scale, L) == T.colour_level[2])
-              continue;
-          }
           all_sat = all_sat && l >= T.sat_level;
           all_black = all_black && l <= T.black_level;
           const int d = std::abs(2 * l - (L - 1));
           if (d < best_d) best_d = d, best = k;
         }
         size_t pick = best;
-        if (all_sat || all_black) {  // shortest exposure (lower bound) / longest (upper bound)
+        if (all_sat || all_black) {  // shortest kept exposure (lower bound) / longest (upper bound)
           for (size_t j = 0; j < nf; ++j) {
             const size_t k = all_sat ? T.by_time[j] : T.by_time[nf - 1 - j];
-            const float* p = &b.frames[k].rgb[3 * (row + size_t(x))];
-            if constexpr (kIgnore) {
-              if (level_of(p[0], scale, L) == T.colour_level[0] && level_of(p[1], scale, L) == T.colour_level[1] &&
-                  level_of(p[2], scale, L) == T.colour_level[2])
-                continue;
+            if constexpr (kTrack) {
+              if (dropped(k, row + size_t(x))) continue;
             }
             pick = k;
             break;
@@ -137,6 +166,7 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
   n_sat += sat;
   n_black += black;
   n_ignored += ignored;
+  n_no_frame += no_frame;
 }
 
 }  // namespace
@@ -151,6 +181,17 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
                                  o.saturation_threshold));
   if (o.threads < 0) throw InputError(fmt::format("merge threads {} is negative", o.threads));
   const size_t nf = b.frames.size();
+  const size_t npix = size_t(b.width()) * size_t(b.height());
+  if (!o.frame_masks.empty() && o.frame_masks.size() != nf)
+    throw InputError(fmt::format("merge frame_masks: {} masks for {} frames", o.frame_masks.size(), nf));
+  for (size_t k = 0; k < o.frame_masks.size(); ++k)
+    if (o.frame_masks[k].size() != npix)
+      throw InputError(fmt::format("merge frame_masks[{}]: {} bytes, need width*height = {}", k,
+                                   o.frame_masks[k].size(), npix));
+  for (size_t k = 0; k < nf; ++k)
+    if (!b.frames[k].valid.empty() && b.frames[k].valid.size() != npix)
+      throw InputError(fmt::format("merge frame {}: valid mask of {} bytes, need width*height = {}", k,
+                                   b.frames[k].valid.size(), npix));
   const int L = resp.levels;
   Tables T;
   T.levels = L;
@@ -183,23 +224,37 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
   if (o.ignore_colour)
     for (int c = 0; c < 3; ++c) T.colour_level[size_t(c)] = int(std::lround((*o.ignore_colour)[size_t(c)] / 255.0 * (L - 1)));
 
+  bool masked = false;
+  T.keep.assign(nf, nullptr);
+  T.valid.assign(nf, nullptr);
+  for (size_t k = 0; k < nf; ++k) {
+    if (!o.frame_masks.empty()) T.keep[k] = o.frame_masks[k].data();
+    if (!b.frames[k].valid.empty()) T.valid[k] = b.frames[k].valid.data();
+    masked = masked || T.keep[k] || T.valid[k];
+  }
+
   RgbImage out;
   out.width = b.width();
   out.height = b.height();
   out.units = Units::Relative;
   out.rgb.resize(3 * size_t(out.width) * size_t(out.height));
-  if (o.ignore_colour) out.valid.assign(size_t(out.width) * size_t(out.height), 1);
+  if (o.ignore_colour || masked) out.valid.assign(npix, 1);
   std::vector<uint8_t> flags;
   const bool want_flags = report && o.flag_image;
   if (want_flags) flags.assign(size_t(out.width) * size_t(out.height), 0);
-  std::atomic<size_t> n_sat{0}, n_black{0}, n_ignored{0};
+  std::atomic<size_t> n_sat{0}, n_black{0}, n_ignored{0}, n_no_frame{0};
   auto run = [&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, out.height, 8), [&](const tbb::blocked_range<int>& r) {
       uint8_t* f = want_flags ? flags.data() : nullptr;
-      if (o.ignore_colour)
-        merge_rows<true>(b, resp, T, r.begin(), r.end(), out, f, n_sat, n_black, n_ignored);
+      const int y0 = r.begin(), y1 = r.end();
+      if (o.ignore_colour && masked)
+        merge_rows<true, true>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame);
+      else if (o.ignore_colour)
+        merge_rows<true, false>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame);
+      else if (masked)
+        merge_rows<false, true>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame);
       else
-        merge_rows<false>(b, resp, T, r.begin(), r.end(), out, f, n_sat, n_black, n_ignored);
+        merge_rows<false, false>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame);
     });
   };
   if (o.threads > 0) {
@@ -208,11 +263,12 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
   } else {
     run();
   }
-  if (o.ignore_colour && n_ignored == 0) out.valid.clear();
+  if (n_ignored == 0 && n_no_frame == 0) out.valid.clear();
   if (report) {
     report->saturated_everywhere = n_sat;
     report->black_everywhere = n_black;
     report->ignored = n_ignored;
+    report->no_frame = n_no_frame;
     report->flags = std::move(flags);
     report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }

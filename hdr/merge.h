@@ -34,6 +34,14 @@ struct MergeOptions {
   // Debevec's Memorial) get no weight; a pixel of this colour in every frame is invalid
   // in the output (RgbImage::valid) and counted in MergeReport::ignored.
   std::optional<std::array<uint8_t, 3>> ignore_colour;
+  // Per-frame keep masks (e.g. ghost_masks in hdr/deghost.h): empty = keep everything, else
+  // one width*height mask per frame, row-major, nonzero = merge this pixel of this frame,
+  // 0 = drop it. Each frame's own RgbImage::valid (when non-empty; align_frames marks the
+  // pixels it shifted in from outside) drops pixels the same way. Where no frame is kept a
+  // pixel is invalid in the output and counted in MergeReport::no_frame; where kept frames
+  // exist but all are clipped, the saturated/black bounds and flags below use the kept
+  // frames only. Without masks and valid masks the merge takes its unmasked fast path.
+  std::vector<std::vector<uint8_t>> frame_masks;
   // Fill MergeReport::flags (one byte per pixel).
   bool flag_image = false;
 };
@@ -50,14 +58,16 @@ struct MergeReport {
   // frame takes the longest exposure's (an upper bound). Both stay valid in the image.
   size_t saturated_everywhere = 0;
   size_t black_everywhere = 0;
-  size_t ignored = 0;  // pixels of ignore_colour in every frame (invalid in the output)
+  size_t ignored = 0;  // pixels of ignore_colour in every kept frame (invalid in the output)
+  size_t no_frame = 0;  // pixels that no frame_masks / frame valid mask kept (invalid in the output)
   double seconds = 0.0;
   std::vector<uint8_t> flags;  // width*height MergeFlag bits, when MergeOptions::flag_image
 };
 
 // Relative radiance (units Relative): code z of frame k maps to level
 // lround(z · (levels − 1)) of `response`. Per-channel lookup tables and TBB over rows.
-// Throws InputError on a bad bracket or a response with an unusable shape.
+// Throws InputError on a bad bracket, a response with an unusable shape, or frame_masks /
+// frame valid masks of the wrong count or size.
 RgbImage merge_bracket(const Bracket& bracket, const CameraResponse& response, const MergeOptions& options = {},
                        MergeReport* report = nullptr);
 

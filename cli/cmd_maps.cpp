@@ -47,15 +47,6 @@ std::vector<int> parse_int_list(const std::string& text, const char* option) {
   return values;
 }
 
-namespace {
-
-std::optional<Layout> optional_layout(const std::string& name, const char* option) {
-  if (name.empty()) return std::nullopt;
-  auto l = layout_from_string(name);
-  if (!l) throw InputError(fmt::format("{}: unknown layout '{}' (latlong, hemisphere, healpix)", option, name));
-  return l;
-}
-
 Mat3 parse_rotation(const std::string& text) {
   std::vector<double> v;
   std::string item;
@@ -77,6 +68,15 @@ Mat3 parse_rotation(const std::string& text) {
     return m;
   }
   throw InputError("--rotation takes 'yaw,pitch,roll' (degrees) or 9 comma-separated numbers");
+}
+
+namespace {
+
+std::optional<Layout> optional_layout(const std::string& name, const char* option) {
+  if (name.empty()) return std::nullopt;
+  auto l = layout_from_string(name);
+  if (!l) throw InputError(fmt::format("{}: unknown layout '{}' (latlong, hemisphere, healpix)", option, name));
+  return l;
 }
 
 // Target (layout, width, height) of convert/synth from --layout/--size/--nside.

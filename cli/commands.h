@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "core/vec3.h"
+
 namespace lp::cli {
 
 // Where reports go: with --json one JSON object on stdout; human text on stdout
@@ -96,8 +98,106 @@ struct EvalTemporalArgs {
 };
 int run_eval_temporal(const EvalTemporalArgs& args, const Output& out);
 
+struct HdrResponseArgs {
+  std::vector<std::string> images;
+  std::string exposure_times;       // "1/10,1/40" or a list file; default: EXIF
+  std::string method = "debevec";   // debevec|robertson
+  double lambda = 50;
+  std::string ignore_colour;        // "r,g,b" of registration borders to leave out
+  std::string output;
+};
+int run_hdr_response(const HdrResponseArgs& args, const Output& out);
+
+struct HdrFuseArgs {
+  std::vector<std::string> images;
+  std::string exposure_times;
+  std::string response;             // saved response; default: recovered from this bracket
+  bool linear = false;              // a linear sensor: no response curve
+  std::string photometric;          // calibration: absolute units (or a log sensor's decode)
+  std::string align = "none";       // none|mtb|ecc
+  bool deghost = false;
+  bool no_exposure_weighting = false;
+  std::string ignore_colour;
+  std::string output;
+};
+int run_hdr_fuse(const HdrFuseArgs& args, const Output& out);
+
+struct CalibPhotometricArgs {
+  std::string readings;
+  std::string model = "linear";     // linear|log
+  std::string loss = "huber";       // huber|cauchy|none
+  std::string output;
+};
+int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out);
+
+struct SynthBracketArgs {
+  std::string input = "scene";      // a radiance image/map or "scene"
+  std::string exposure_times;       // default 1/64,1/8,1
+  std::string response = "gamma";   // linear|gamma|scurve
+  bool no_noise = false;
+  int bit_depth = 8;
+  int shake_px = 0;
+  bool moving_object = false;
+  uint64_t seed = 1;
+  std::string output_dir;
+};
+int run_synth_bracket(const SynthBracketArgs& args, const Output& out);
+
+struct EvalHdrArgs {
+  std::vector<std::string> maps;    // radiance maps/images, or "scene"
+  std::string response = "gamma";
+  std::string output_dir;
+};
+int run_eval_hdr(const EvalHdrArgs& args, const Output& out);
+
+struct ProbeUnwrapArgs {
+  std::vector<std::string> inputs;  // an image, several, or a directory (a sequence)
+  std::string type = "mirrorball";  // mirrorball|fisheye
+  std::string camera;               // fisheye: OpenCV fisheye YAML (default: equidistant)
+  double fov = 0;                   // fisheye: equidistant field of view; ball: camera fov
+  double distance = 0;              // ball: camera distance in ball radii (0: orthographic)
+  std::string ball;                 // "cx,cy,r" instead of detection
+  double reflectivity = 1.0;
+  bool fresnel = false;
+  double blind_spot_deg = 15;
+  bool fill = false;
+  bool stabilise = false;
+  bool static_probe = false;
+  std::string rotation;
+  std::string layout = "latlong";
+  std::string size;
+  int nside = 0;
+  std::string output;               // a map, or a directory for a sequence
+};
+int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out);
+
+struct SynthProbeArgs {
+  std::string input = "scene";
+  std::string type = "mirrorball";
+  std::string size = "512x512";
+  double radius = 0;                // ball radius px (0: 40 % of the short side)
+  double distance = 0;              // 0: orthographic
+  double fov = 190;                 // fisheye
+  double noise = 0;
+  int frames = 1;
+  double jitter = 1.0;              // ball centre jitter px per frame (sequences)
+  uint64_t seed = 1;
+  std::string output;
+};
+int run_synth_probe(const SynthProbeArgs& args, const Output& out);
+
+struct EvalUnwrapArgs {
+  std::vector<std::string> maps;
+  std::string output_dir;
+};
+int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out);
+
 // Shared parsing helpers; throw lp::InputError naming the option.
 void parse_size(const std::string& text, const char* option, int* width, int* height);
 std::vector<int> parse_int_list(const std::string& text, const char* option);
+// --rotation: "yaw,pitch,roll" in degrees or 9 numbers (row-major world_from_probe).
+Mat3 parse_rotation(const std::string& text);
+// Comma-separated numbers, exactly `count` of them (0: any).
+std::vector<double> parse_numbers(const std::string& text, const char* option, size_t count = 0);
 
 }  // namespace lp::cli

@@ -126,6 +126,108 @@ int main(int argc, char** argv) {
   c_evt->add_option("-o,--output", evt.output_dir, "Directory for temporal.csv and temporal.svg")->required();
   c_evt->add_flag("--json", out.json, "Print the report as JSON");
 
+  // hdr
+  auto* c_hdr = app.add_subcommand("hdr", "Exposure brackets and log sensors -> radiance");
+  c_hdr->require_subcommand(1);
+  HdrResponseArgs hresp;
+  auto* c_hresp = c_hdr->add_subcommand("response", "Recover a camera's response curve from brackets");
+  c_hresp->add_option("IMAGE", hresp.images, "Bracket frames (8/16-bit PNG, JPEG, TIFF)")->required();
+  c_hresp->add_option("--exposure-times", hresp.exposure_times, "Seconds per frame ('1/40' allowed) or a list file; default EXIF");
+  c_hresp->add_option("--method", hresp.method, "debevec|robertson");
+  c_hresp->add_option("--lambda", hresp.lambda, "Debevec smoothness weight");
+  c_hresp->add_option("--ignore-colour", hresp.ignore_colour, "r,g,b of registration borders to leave out");
+  c_hresp->add_option("-o,--output", hresp.output, "response.json")->required();
+  c_hresp->add_flag("--json", out.json, "Print the report as JSON");
+  HdrFuseArgs hfuse;
+  auto* c_hfuse = c_hdr->add_subcommand("fuse", "Fuse a bracket (or decode a log sensor frame) into radiance");
+  c_hfuse->add_option("IMAGE", hfuse.images, "Bracket frames, or one frame of a log sensor")->required();
+  c_hfuse->add_option("--exposure-times", hfuse.exposure_times, "Seconds per frame or a list file; default EXIF");
+  c_hfuse->add_option("--response", hfuse.response, "Saved response (hdr response); default: recovered here");
+  c_hfuse->add_flag("--linear", hfuse.linear, "Linear sensor: no response curve");
+  c_hfuse->add_option("--photometric", hfuse.photometric, "Photometric calibration: absolute units");
+  c_hfuse->add_option("--align", hfuse.align, "Align hand-held frames: none|mtb|ecc");
+  c_hfuse->add_flag("--deghost", hfuse.deghost, "Drop moving objects from the frames that disagree");
+  c_hfuse->add_flag("--no-exposure-weighting", hfuse.no_exposure_weighting, "Do not trust long exposures more");
+  c_hfuse->add_option("--ignore-colour", hfuse.ignore_colour, "r,g,b of registration borders to leave out");
+  c_hfuse->add_option("-o,--output", hfuse.output, "probe.exr")->required();
+  c_hfuse->add_flag("--json", out.json, "Print the report as JSON");
+
+  // calib
+  auto* c_calib = app.add_subcommand("calib", "Camera calibration");
+  c_calib->require_subcommand(1);
+  CalibPhotometricArgs cphot;
+  auto* c_cphot = c_calib->add_subcommand("photometric", "Absolute scale (or log-sensor curve) from meter readings");
+  c_cphot->add_option("READINGS", cphot.readings, "CSV: region,camera_value,measured,unit")->required();
+  c_cphot->add_option("--model", cphot.model, "linear|log");
+  c_cphot->add_option("--loss", cphot.loss, "Robust loss: huber|cauchy|none");
+  c_cphot->add_option("-o,--output", cphot.output, "photometric.json")->required();
+  c_cphot->add_flag("--json", out.json, "Print the report as JSON");
+
+  SynthBracketArgs sbr;
+  auto* c_sbr = c_synth->add_subcommand("bracket", "A bracket with known response, noise and truth from a radiance map");
+  c_sbr->add_option("INPUT", sbr.input, "Radiance map or image, or 'scene'");
+  c_sbr->add_option("--exposure-times", sbr.exposure_times, "Seconds, default 1/64,1/8,1");
+  c_sbr->add_option("--response", sbr.response, "linear|gamma|scurve");
+  c_sbr->add_flag("--no-noise", sbr.no_noise, "No shot or read noise");
+  c_sbr->add_option("--bit-depth", sbr.bit_depth, "8 or 16");
+  c_sbr->add_option("--shake", sbr.shake_px, "Camera shake, max px per frame");
+  c_sbr->add_flag("--moving-object", sbr.moving_object, "A bright square moving between frames");
+  c_sbr->add_option("--seed", sbr.seed, "Noise seed");
+  c_sbr->add_option("-o,--output", sbr.output_dir, "Directory for frames, exposures.csv, truth")->required();
+  c_sbr->add_flag("--json", out.json, "Print the report as JSON");
+
+  EvalHdrArgs evh;
+  auto* c_evh = c_eval->add_subcommand("hdr", "Error and time of HDR fusion against OpenCV on synthetic brackets");
+  c_evh->add_option("MAP", evh.maps, "Radiance maps ('scene' for the procedural scene)")->required();
+  c_evh->add_option("--response", evh.response, "Camera response of the synthetic brackets: linear|gamma|scurve");
+  c_evh->add_option("-o,--output", evh.output_dir, "Directory for hdr.csv and hdr.svg")->required();
+  c_evh->add_flag("--json", out.json, "Print the report as JSON");
+
+  // probe
+  auto* c_probe = app.add_subcommand("probe", "Mirror-ball and fisheye probes -> environment maps");
+  c_probe->require_subcommand(1);
+  ProbeUnwrapArgs pun;
+  auto* c_pun = c_probe->add_subcommand("unwrap", "Unwrap a probe image (or a sequence) into a map in the world frame");
+  c_pun->add_option("IMAGE", pun.inputs, "Probe image(s) or a directory of frames")->required();
+  c_pun->add_option("--type", pun.type, "mirrorball|fisheye");
+  c_pun->add_option("--camera", pun.camera, "fisheye: OpenCV fisheye YAML camera model");
+  c_pun->add_option("--fov", pun.fov, "fisheye: equidistant field of view (deg); ball: the camera's field of view");
+  c_pun->add_option("--distance", pun.distance, "ball: camera distance in ball radii (default orthographic)");
+  c_pun->add_option("--ball", pun.ball, "ball: 'cx,cy,r' in pixels instead of detection");
+  c_pun->add_option("--reflectivity", pun.reflectivity, "ball: reflectivity at normal incidence (chrome ~0.6-0.7)");
+  c_pun->add_flag("--fresnel", pun.fresnel, "ball: reflectivity rises towards the rim (Schlick)");
+  c_pun->add_option("--blind-spot", pun.blind_spot_deg, "ball: half-angle (deg) masked around the blind spot");
+  c_pun->add_flag("--fill", pun.fill, "Fill what the camera cannot see smoothly (mask kept)");
+  c_pun->add_flag("--stabilise", pun.stabilise, "Sequences: smooth the ball / image-circle track");
+  c_pun->add_flag("--static-probe", pun.static_probe, "With --stabilise: the probe does not drift (median track)");
+  c_pun->add_option("--rotation", pun.rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers");
+  c_pun->add_option("--layout", pun.layout, "latlong|hemisphere|healpix");
+  c_pun->add_option("--size", pun.size, "WxH");
+  c_pun->add_option("--nside", pun.nside, "healpix nside");
+  c_pun->add_option("-o,--output", pun.output, "Output map (or directory for a sequence)")->required();
+  c_pun->add_flag("--json", out.json, "Print the report as JSON");
+
+  SynthProbeArgs spr;
+  auto* c_spr = c_synth->add_subcommand("probe", "Ray-trace a mirror ball or fisheye view of a map (ground truth)");
+  c_spr->add_option("MAP", spr.input, "A latlong map, or 'scene'");
+  c_spr->add_option("--type", spr.type, "mirrorball|fisheye");
+  c_spr->add_option("--size", spr.size, "Image WxH");
+  c_spr->add_option("--radius", spr.radius, "Ball radius, px");
+  c_spr->add_option("--distance", spr.distance, "Camera distance in ball radii (default orthographic)");
+  c_spr->add_option("--fov", spr.fov, "Fisheye field of view, deg");
+  c_spr->add_option("--noise", spr.noise, "Relative Gaussian noise");
+  c_spr->add_option("--frames", spr.frames, "Frames (a jittered sequence)");
+  c_spr->add_option("--jitter", spr.jitter, "Ball centre jitter per frame, px");
+  c_spr->add_option("--seed", spr.seed, "Noise seed");
+  c_spr->add_option("-o,--output", spr.output, "Image (or directory for a sequence)")->required();
+  c_spr->add_flag("--json", out.json, "Print the report as JSON");
+
+  EvalUnwrapArgs evu;
+  auto* c_evu = c_eval->add_subcommand("unwrap", "Unwrapping error and centre error on synthetic probes");
+  c_evu->add_option("MAP", evu.maps, "Latlong maps ('scene' for the procedural scene)")->required();
+  c_evu->add_option("-o,--output", evu.output_dir, "Directory for unwrap.csv")->required();
+  c_evu->add_flag("--json", out.json, "Print the report as JSON");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -143,6 +245,14 @@ int main(int argc, char** argv) {
     if (*c_evs) return run_eval_sampling(evs, out);
     if (*c_seq) return run_synth_sequence(seq, out);
     if (*c_evt) return run_eval_temporal(evt, out);
+    if (*c_hresp) return run_hdr_response(hresp, out);
+    if (*c_hfuse) return run_hdr_fuse(hfuse, out);
+    if (*c_cphot) return run_calib_photometric(cphot, out);
+    if (*c_sbr) return run_synth_bracket(sbr, out);
+    if (*c_evh) return run_eval_hdr(evh, out);
+    if (*c_pun) return run_probe_unwrap(pun, out);
+    if (*c_spr) return run_synth_probe(spr, out);
+    if (*c_evu) return run_eval_unwrap(evu, out);
   } catch (const lp::InputError& e) {
     std::fprintf(stderr, "lightprobe: %s\n", e.what());
     return 2;

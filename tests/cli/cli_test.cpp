@@ -60,6 +60,8 @@ int line_count(const std::string& s) {
   return n;
 }
 
+std::string fmt_frame(const std::string& dir, int i) { return " " + dir + "/memorial00" + std::to_string(i) + ".png"; }
+
 // A bad input: exit 2, exactly one line on stderr, naming `needle` (the file or option).
 void expect_one_line_error(const CliRun& r, const std::string& needle) {
   EXPECT_EQ(r.code, 2) << r.err;
@@ -291,4 +293,69 @@ TEST(Cli, EvalTemporalWritesTheAtlasAndRejectsUnknownScenarios) {
   EXPECT_TRUE(fs::exists(dir / "temporal.csv"));
   EXPECT_TRUE(fs::exists(dir / "temporal.svg"));
   expect_one_line_error(lightprobe("eval temporal scene --scenarios earthquake -o " + dir.string()), "earthquake");
+}
+
+TEST(Cli, HdrFuseOfMemorialBeatsNothingLessThanAValidRadianceImageAndBadBracketsExitTwo) {
+  const std::string m = shared("hdr-memorial-debevec");
+  std::string frames;
+  for (int i = 61; i <= 76; ++i) frames += fmt_frame(m, i);
+  const fs::path resp = scratch() / "resp.json", out = scratch() / "memorial.exr";
+  ASSERT_EQ(lightprobe("hdr response " + frames + " --exposure-times " + m + "/exposures.csv --ignore-colour 0,0,255 -o " +
+                       resp.string()).code,
+            0);
+  CliRun r = lightprobe("hdr fuse --json " + frames + " --exposure-times " + m + "/exposures.csv --response " +
+                        resp.string() + " --ignore-colour 0,0,255 -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["frames"].get<int>(), 16);
+  CliRun info = lightprobe("info --json " + out.string());
+  ASSERT_EQ(info.code, 0) << info.err;
+  // Debevec's own map spans ~1e-3 .. 274 (5+ decades); ours must too, up to scale.
+  const auto j = nlohmann::json::parse(info.out);
+  EXPECT_GT(j["dynamic_range_stops"].get<double>(), 15);
+
+  // One exposure; no exposure times for PNGs without EXIF; frames of different sizes.
+  expect_one_line_error(lightprobe("hdr fuse " + fmt_frame(m, 61) + " --exposure-times 1 -o " + out.string()), "");
+  expect_one_line_error(lightprobe("hdr fuse " + fmt_frame(m, 61) + fmt_frame(m, 62) + " -o " + out.string()),
+                        "memorial0061.png");
+  const std::string k = shared("hdr-mirrorball-kartik");
+  expect_one_line_error(lightprobe("hdr fuse " + k + "/ball_1-10s.jpg " + k + "/ball_1-40s.jpg -o " + out.string()),
+                        "ball_1-40s.jpg");
+}
+
+TEST(Cli, PhotometricCalibrationRecoversAKnownScaleAndRejectsBadReadings) {
+  const fs::path csv = scratch() / "readings.csv", cal = scratch() / "photometric.json";
+  std::ofstream(csv) << "region,camera_value,measured,unit\npatch1,0.5,100,cd/m2\npatch2,1.0,200,cd/m2\n"
+                        "patch3,2.0,400,cd/m2\nmeter,3.14159,628.318,lux\n";
+  CliRun r = lightprobe("calib photometric --json " + csv.string() + " -o " + cal.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["scale_luminance"].get<double>(), 200.0, 200.0 * 1e-6);
+  std::ofstream(csv) << "region,camera_value,measured,unit\npatch1,0.5,-100,cd/m2\npatch2,1.0,200,cd/m2\n";
+  expect_one_line_error(lightprobe("calib photometric " + csv.string() + " -o " + cal.string()), "readings.csv:2");
+}
+
+TEST(Cli, ASynthesisedMirrorBallUnwrapsToTheMapItCameFrom) {
+  const fs::path ball = scratch() / "ball.exr", map = scratch() / "unwrapped.exr";
+  ASSERT_EQ(lightprobe("synth probe scene --type mirrorball --size 400x400 -o " + ball.string()).code, 0);
+  CliRun r = lightprobe("probe unwrap --json " + ball.string() + " --type mirrorball --layout latlong --size 256x128 -o " +
+                        map.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  const auto b = j["per_frame"][0]["ball"];
+  EXPECT_NEAR(b[0].get<double>(), 200, 0.2);  // the renderer centres the ball, radius 40 % of 400
+  EXPECT_NEAR(b[2].get<double>(), 160, 0.3);
+  // The sun survives the round trip: most of the power in the brightest direction.
+  CliRun info = lightprobe("info --json " + map.string());
+  const auto d = nlohmann::json::parse(info.out)["brightest_direction"];
+  const double theta = std::acos(d[2].get<double>()) * 180 / M_PI, phi = std::atan2(d[1].get<double>(), d[0].get<double>()) * 180 / M_PI;
+  EXPECT_NEAR(theta, 50, 2);  // the procedural sun: theta 50, phi 30
+  EXPECT_NEAR(phi, 30, 2);
+  // No ball in a flat image.
+  const fs::path flat = scratch() / "flat.pfm";
+  {
+    std::ofstream f(flat, std::ios::binary);
+    f << "PF\n64 64\n-1.0\n";
+    const float v = 0.5f;
+    for (int i = 0; i < 64 * 64 * 3; ++i) f.write(reinterpret_cast<const char*>(&v), 4);
+  }
+  expect_one_line_error(lightprobe("probe unwrap " + flat.string() + " --type mirrorball -o " + map.string()), "flat.pfm");
 }

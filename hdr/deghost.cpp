@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 
@@ -87,16 +88,17 @@ std::vector<std::vector<uint8_t>> ghost_masks(const std::vector<RgbImage>& frame
   const size_t npix = size_t(w) * h;
   const size_t ref = o.reference >= 0 ? size_t(o.reference) : middle_exposure_index(exposure_seconds);
 
-  // Anchor candidates: the reference, then the other frames by distance in exposure order.
+  // Anchor candidates: the reference, then (where the reference pixel is invalid) the other
+  // frames by distance in exposure order.
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), size_t(0));
   std::stable_sort(order.begin(), order.end(),
                    [&](size_t a, size_t b) { return exposure_seconds[a] < exposure_seconds[b]; });
-  const long ref_rank = long(std::find(order.begin(), order.end(), ref) - order.begin());
+  std::vector<long> rank(n);
+  for (size_t r = 0; r < n; ++r) rank[order[r]] = long(r);
   std::vector<size_t> anchors = order;
   std::stable_sort(anchors.begin(), anchors.end(), [&](size_t a, size_t b) {
-    auto rank = [&](size_t f) { return long(std::find(order.begin(), order.end(), f) - order.begin()); };
-    return std::abs(rank(a) - ref_rank) < std::abs(rank(b) - ref_rank);
+    return std::abs(rank[a] - rank[ref]) < std::abs(rank[b] - rank[ref]);
   });
 
   const std::array<LogCurve, 3> curves = {LogCurve(response ? &(*response)[0] : nullptr),
@@ -113,9 +115,28 @@ std::vector<std::vector<uint8_t>> ghost_masks(const std::vector<RgbImage>& frame
   std::vector<double> log_t(n);
   for (size_t i = 0; i < n; ++i) log_t[i] = std::log(exposure_seconds[i]);
   const double base_tol = std::log1p(o.relative_threshold);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
 
   auto valid = [&](size_t f, size_t p) { return frames[f].valid.empty() || frames[f].valid[p] != 0; };
-  auto usable = [&](double z) { return z > o.black_code && z < o.saturated_code; };
+
+  // What one code of frame f says about the exposure-normalised log radiance of channel c:
+  // the interval [lo, hi] (a point for a usable code, a half-line for a clipped one) and the
+  // noise s of a point (clipped bounds carry their noise in g_black / g_sat already).
+  struct Interval {
+    double lo, hi, s;
+  };
+  auto interval = [&](size_t f, int c, double z) -> Interval {
+    if (z >= o.saturated_code) return {g_sat[size_t(c)] - log_t[f], kInf, 0.0};
+    if (z <= o.black_code) return {-kInf, g_black[size_t(c)] - log_t[f], 0.0};
+    const double v = curves[size_t(c)].g(z) - log_t[f];
+    return {v, v, o.noise_sigma * curves[size_t(c)].slope(z)};
+  };
+  // Two statements contradict each other when one's lower end lies above the other's upper
+  // end by more than the tolerance; two bounds on the same side never do.
+  auto contradict = [&](const Interval& a, const Interval& b) {
+    const double tol = base_tol + o.noise_k * std::sqrt(a.s * a.s + b.s * b.s);
+    return a.lo - b.hi > tol || b.lo - a.hi > tol;
+  };
 
   std::vector<std::vector<uint8_t>> keep(n, std::vector<uint8_t>(npix, 1));
   std::vector<cv::Mat> ghost(n);
@@ -123,37 +144,24 @@ std::vector<std::vector<uint8_t>> ghost_masks(const std::vector<RgbImage>& frame
 
   for (size_t p = 0; p < npix; ++p) {
     size_t anchor = n;
-    for (size_t a : anchors) {
-      if (!valid(a, p)) continue;
-      const float* z = &frames[a].rgb[3 * p];
-      if (usable(z[0]) || usable(z[1]) || usable(z[2])) {
+    for (size_t a : anchors)
+      if (valid(a, p)) {
         anchor = a;
         break;
       }
-    }
+    const float* za = anchor < n ? &frames[anchor].rgb[3 * p] : nullptr;
+    std::array<Interval, 3> ia{};
+    if (za)
+      for (int c = 0; c < 3; ++c) ia[size_t(c)] = interval(anchor, c, za[c]);
     for (size_t i = 0; i < n; ++i) {
       if (!valid(i, p)) {
         keep[i][p] = 0;
         continue;
       }
       if (anchor == n || i == anchor || i == ref) continue;
-      const float* za = &frames[anchor].rgb[3 * p];
       const float* zi = &frames[i].rgb[3 * p];
       bool disagree = false;
-      for (int c = 0; c < 3 && !disagree; ++c) {
-        if (!usable(za[c])) continue;
-        const double ln_e = curves[c].g(za[c]) - log_t[anchor];
-        const double sa = o.noise_sigma * curves[c].slope(za[c]);
-        if (usable(zi[c])) {
-          const double si = o.noise_sigma * curves[c].slope(zi[c]);
-          const double d = std::abs(curves[c].g(zi[c]) - log_t[i] - ln_e);
-          disagree = d > base_tol + o.noise_k * std::sqrt(si * si + sa * sa);
-        } else {
-          const double predicted = ln_e + log_t[i];  // g the anchor predicts for frame i
-          const double tol = base_tol + o.noise_k * sa;
-          disagree = zi[c] >= o.saturated_code ? predicted + tol < g_sat[c] : predicted - tol > g_black[c];
-        }
-      }
+      for (int c = 0; c < 3 && !disagree; ++c) disagree = contradict(interval(i, c, zi[c]), ia[size_t(c)]);
       if (disagree) ghost[i].data[p] = 1;
     }
   }

@@ -7,11 +7,22 @@
 //   |ln E_i - ln E_ref| > ln(1 + relative_threshold) + noise_k * sqrt(s_i^2 + s_ref^2),
 // s = noise_sigma * dg/dz the code noise carried into log radiance (so dark codes, whose
 // relative noise is large, need a larger difference). Clipped codes are bounds, not values:
-// a saturated frame disagrees when the reference predicts it well below saturation
-// (below saturated_code - noise_k noise_sigma, by more than the tolerance above), and a
-// black one when the reference predicts it well above black_code + noise_k noise_sigma.
-// Where the reference itself is clipped or invalid in every channel, the usable frame
-// closest to it in exposure order stands in as the anchor.
+// a saturated code says ln E >= g(saturated_code - noise_k noise_sigma) - ln t, a black one
+// ln E <= g(black_code + noise_k noise_sigma) - ln t. So each code states an interval of
+// ln E (a point when usable), and a frame disagrees in a channel when its interval and the
+// reference's lie apart by more than the tolerance above (noise terms of points only):
+//   - both usable: the point test above;
+//   - frame clipped, reference usable: the reference predicts the frame well inside its
+//     range (a saturated frame where the reference predicts well below saturation);
+//   - reference clipped: the frame contradicts the reference's bound. Where a bright
+//     object saturates the reference, a shorter frame showing darker background there
+//     (well below the bound) is the ghost and is dropped; a static bright pixel seen
+//     unsaturated in the shorter frame is at or above the bound and is kept. Two bounds on
+//     the same side never disagree; a saturated frame disagrees with a black reference
+//     (and vice versa) when the bounds cannot both hold.
+// If every other frame disagrees, the reference alone is kept there (the merge then uses its
+// bound and flags the pixel). Where the reference pixel is invalid (RgbImage::valid), the
+// valid frame closest to it in exposure order stands in as the anchor.
 // Disagreeing pixels are dropped (mask 0), grown by dilate_px; invalid pixels
 // (RgbImage::valid, e.g. shifted in by alignment) are dropped too. The reference keeps all
 // its valid pixels.

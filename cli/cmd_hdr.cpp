@@ -310,19 +310,26 @@ int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
     };
     const std::string name = path == "scene" ? "scene" : fs::path(path).stem().string();
     auto add = [&](const std::string& method, const RgbImage& est, double rec_ms, double merge_ms) {
-      rows.push_back({name, method, hdr_log_error(est, sb.true_radiance), rec_ms, merge_ms, floor_ms});
+      HdrError e;
+      try {
+        e = hdr_log_error(est, sb.true_radiance);
+      } catch (const InputError&) {  // nothing usable in the estimate: a failure, recorded as such
+        e.median_log10 = e.p95_log10 = std::nan("");
+        e.pixels_invalid = size_t(est.width) * size_t(est.height);
+      }
+      rows.push_back({name, method, e, rec_ms, merge_ms, floor_ms});
     };
     RgbImage est;
     double merge_ms = timed([&] { est = merge_bracket(bracket, truth); });
-    add("ours, true response", est, 0, merge_ms);
+    add("ours (true response)", est, 0, merge_ms);
     CameraResponse deb;
     double rec_ms = timed([&] { deb = recover_debevec(bracket); });
     merge_ms = timed([&] { est = merge_bracket(bracket, deb); });
-    add("ours, Debevec", est, rec_ms, merge_ms);
+    add("ours (Debevec)", est, rec_ms, merge_ms);
     CameraResponse rob;
     rec_ms = timed([&] { rob = recover_robertson(bracket); });
     merge_ms = timed([&] { est = merge_bracket(bracket, rob); });
-    add("ours, Robertson", est, rec_ms, merge_ms);
+    add("ours (Robertson)", est, rec_ms, merge_ms);
     double ms = 0;
     CameraResponse cvdeb, cvrob;
     rec_ms = timed([&] { cvdeb = opencv_recover_response(bracket, OpenCvHdrMethod::Debevec); });
@@ -332,7 +339,7 @@ int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
     merge_ms = timed([&] { est = opencv_merge(bracket, OpenCvHdrMethod::Robertson, &cvrob, &ms); });
     add("OpenCV Robertson", est, rec_ms, merge_ms);
     merge_ms = timed([&] { est = opencv_merge(bracket, OpenCvHdrMethod::Robertson, &truth, &ms); });
-    add("OpenCV MergeRobertson, true response", est, 0, merge_ms);
+    add("OpenCV MergeRobertson (true response)", est, 0, merge_ms);
     progress.advance();
   }
   progress.finish();

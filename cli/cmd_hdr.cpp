@@ -365,7 +365,7 @@ int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
     std::vector<size_t> idx(s.x.size());
     for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
     std::sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return s.x[a] < s.x[b]; });
-    ChartSeries sorted{s.name, {}, {}, {}};
+    ChartSeries sorted{s.name, {}, {}, {}, false};  // one point per map: a scatter
     for (size_t i : idx) sorted.x.push_back(s.x[i]), sorted.y.push_back(s.y[i]), sorted.labels.push_back(s.labels[i]);
     panel.series.push_back(sorted);
   }

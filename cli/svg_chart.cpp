@@ -76,30 +76,40 @@ std::string tick_label(double e) {
 std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& panels, int columns) {
   columns = std::max(1, std::min(columns, int(panels.size())));
   const int rows = int((panels.size() + size_t(columns) - 1) / size_t(columns));
-  const int width = columns * kPanelW, height = 60 + rows * kPanelH + 30;
+  // At least 920 px wide, so that a one-panel chart still has room for its title and legend.
+  const int panel_w = std::max(kPanelW, 920 / columns);
+  const int width = columns * panel_w;
   std::map<std::string, const char*> colour;
   for (const auto& p : panels)
     for (const auto& s : p.series)
       if (!colour.count(s.name)) colour[s.name] = kColours[colour.size() % std::size(kColours)];
 
+  // One legend for the whole chart, under the title, so it never hides a curve; it wraps
+  // into as many rows as it needs.
+  std::string legend;
+  int legend_rows = 1;
+  {
+    int x = 20, y = 36;
+    for (const auto& [name, c] : colour) {
+      const int item = 14 + 7 * int(name.size()) + 24;
+      if (x + item > width - 10 && x > 20) x = 20, y += 18, ++legend_rows;
+      legend += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{}\"/>"
+                         "<text x=\"{}\" y=\"{}\">{}</text>\n",
+                         x, y, c, x + 14, y + 9, escape(name));
+      x += item;
+    }
+  }
+  const int top = 44 + 18 * legend_rows;
+  const int height = top + rows * kPanelH + 30;
   std::string svg = fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" "
       "font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
       "<text x=\"{}\" y=\"24\" text-anchor=\"middle\" font-size=\"16\">{}</text>\n",
       width, height, width / 2, escape(title));
-  // One legend for the whole chart, under the title, so it never hides a curve.
-  {
-    int x = width / 2 - int(colour.size()) * 55;
-    for (const auto& [name, c] : colour) {
-      svg += fmt::format("<rect x=\"{}\" y=\"36\" width=\"10\" height=\"10\" fill=\"{}\"/>"
-                         "<text x=\"{}\" y=\"45\">{}</text>\n",
-                         x, c, x + 14, escape(name));
-      x += 110;
-    }
-  }
+  svg += legend;
   for (size_t pi = 0; pi < panels.size(); ++pi) {
     const ChartPanel& p = panels[pi];
-    const int ox = int(pi % size_t(columns)) * kPanelW, oy = 60 + int(pi / size_t(columns)) * kPanelH;
+    const int ox = int(pi % size_t(columns)) * panel_w, oy = top + int(pi / size_t(columns)) * kPanelH;
     auto usable = [&](double x, double y) {
       return std::isfinite(x) && std::isfinite(y) && (!p.log_x || x > 0) && (!p.log_y || y > 0);
     };
@@ -109,7 +119,7 @@ std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& p
         if (usable(s.x[i], s.y[i])) xs.push_back(s.x[i]), ys.push_back(s.y[i]);
     if (xs.empty()) continue;
     const Axis ax = make_axis(xs, p.log_x), ay = make_axis(ys, p.log_y);
-    const double pw = kPanelW - kLeft - kRight, ph = kPanelH - kTop - kBottom;
+    const double pw = panel_w - kLeft - kRight, ph = kPanelH - kTop - kBottom;
     auto X = [&](double v) { return ox + kLeft + ax.unit(v) * pw; };
     auto Y = [&](double v) { return oy + kTop + (1 - ay.unit(v)) * ph; };
     svg += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"13\">{}</text>\n",
@@ -138,11 +148,12 @@ std::string svg_chart(const std::string& title, const std::vector<ChartPanel>& p
         if (usable(s.x[i], s.y[i])) pts += fmt::format("{:.1f},{:.1f} ", X(s.x[i]), Y(s.y[i]));
       if (pts.empty()) continue;
       const char* c = colour[s.name];
-      svg += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.8\"/>\n", pts, c);
+      if (s.lines)
+        svg += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.8\"/>\n", pts, c);
       for (size_t i = 0; i < s.x.size(); ++i) {
         if (!usable(s.x[i], s.y[i])) continue;
         svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.8\" fill=\"{}\"/>", X(s.x[i]), Y(s.y[i]), c);
-        if (i < s.labels.size() && (i == 0 || i + 1 == s.x.size()))
+        if (i < s.labels.size() && (!s.lines || i == 0 || i + 1 == s.x.size()))
           svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" font-size=\"9\" fill=\"{}\">{}</text>", X(s.x[i]) + 4,
                              Y(s.y[i]) - 4, c, escape(s.labels[i]));
       }

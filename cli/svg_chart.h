@@ -11,6 +11,7 @@ struct ChartSeries {
   std::string name;
   std::vector<double> x, y;           // positive values (log axes); others are skipped
   std::vector<std::string> labels;    // optional, one per point (e.g. the light count)
+  bool lines = true;                  // false: points only (a scatter), every point labelled
 };
 
 struct ChartPanel {

@@ -278,52 +278,6 @@ std::vector<EdgePoint> outermost_edges(const std::vector<std::vector<EdgePoint>>
   return pts;
 }
 
-bool circle_through(const EdgePoint& a, const EdgePoint& b, const EdgePoint& c, Circle* out) {
-  const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
-  const double d = 2 * (bx * cy - by * cx);
-  if (std::abs(d) < 1e-9) return false;
-  const double b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
-  const double ux = (cy * b2 - by * c2) / d, uy = (bx * c2 - cx * b2) / d;
-  *out = {a.x + ux, a.y + uy, std::hypot(ux, uy)};
-  return true;
-}
-
-// RANSAC over the rays' candidates: the circle through three candidates of three rays
-// that most rays have a candidate near (within tol), weighted by strength rank.
-Circle ransac_circle(const std::vector<std::vector<EdgePoint>>& cands, const Circle& guess, double max_move,
-                     double r_min, double r_max) {
-  std::vector<int> usable;
-  for (int k = 0; k < int(cands.size()); ++k)
-    if (!cands[k].empty()) usable.push_back(k);
-  if (usable.size() < 3) return guess;
-  std::mt19937 rng(12345);
-  std::uniform_int_distribution<size_t> pick(0, usable.size() - 1);
-  Circle best = guess;
-  double best_score = -1;
-  for (int it = 0; it < 800; ++it) {
-    const int k0 = usable[pick(rng)], k1 = usable[pick(rng)], k2 = usable[pick(rng)];
-    if (k0 == k1 || k1 == k2 || k0 == k2) continue;
-    const auto& c0 = cands[k0];
-    const auto& c1 = cands[k1];
-    const auto& c2 = cands[k2];
-    Circle c;
-    if (!circle_through(c0[rng() % c0.size()], c1[rng() % c1.size()], c2[rng() % c2.size()], &c)) continue;
-    if (c.r < r_min || c.r > r_max || std::hypot(c.cx - guess.cx, c.cy - guess.cy) > max_move ||
-        std::abs(c.r - guess.r) > max_move)
-      continue;
-    const double tol = 1.5 + 0.005 * c.r;
-    double score = 0;
-    for (int k : usable)
-      for (size_t j = 0; j < cands[k].size(); ++j)
-        if (std::abs(radial_residual(cands[k][j], c)) < tol) {
-          score += 1.0 / (1 + 0.25 * j);
-          break;
-        }
-    if (score > best_score) best_score = score, best = c;
-  }
-  return best;
-}
-
 double cut_fraction(const Circle& c, int w, int h) {
   int out = 0;
   const int n = 720;
@@ -343,16 +297,214 @@ struct Candidate {
   bool ok = false;
 };
 
-Candidate refine(const cv::Mat& coarse, const cv::Mat& fine, Circle c, int rays, double r_min, double r_max) {
+// ---- Region contrast (coarse-to-fine search and confidence) ----
+
+// One pyramid level of feature images: compressed colour (median-filtered, suppressing
+// speckle) and the log of local high-frequency energy (texture), each channel divided by
+// its noise scale (the median absolute difference between pixels 2 apart, about the
+// median filter's correlation length), so that a contrast of 1 is one typical fluctuation of the
+// image's own texture.
+struct FeatureLevel {
+  cv::Mat feat;  // CV_32FC4
+  cv::Mat ok;    // CV_8U, 1 where every source pixel under the level pixel is valid
+  double sx = 1, sy = 1;
+  double s() const { return std::sqrt(sx * sy); }
+};
+
+FeatureLevel make_level(const cv::Mat& col, const cv::Mat& energy, const cv::Mat& valid01, int factor) {
+  FeatureLevel L;
+  const int lw = std::max(8, int(std::lround(double(col.cols) / factor)));
+  const int lh = std::max(8, int(std::lround(double(col.rows) / factor)));
+  L.sx = double(col.cols) / lw;
+  L.sy = double(col.rows) / lh;
+  cv::Mat c, e, v;
+  if (factor == 1) {
+    c = col.clone(), e = energy.clone(), v = valid01.clone();
+  } else {
+    cv::resize(col, c, cv::Size(lw, lh), 0, 0, cv::INTER_AREA);
+    cv::resize(energy, e, cv::Size(lw, lh), 0, 0, cv::INTER_AREA);
+    cv::resize(valid01, v, cv::Size(lw, lh), 0, 0, cv::INTER_AREA);
+  }
+  cv::medianBlur(c, c, 3);
+  cv::Mat le;
+  cv::log(e + 1e-3, le);
+  std::vector<cv::Mat> ch;
+  cv::split(c, ch);
+  ch.push_back(le);
+  cv::Mat okf = v >= 0.999f;
+  cv::erode(okf, L.ok, cv::Mat());  // next to invalid pixels, not at the image border
+  // Noise scale per channel.
+  const float floors[4] = {0.004f, 0.004f, 0.004f, 0.05f};
+  for (int k = 0; k < 4; ++k) {
+    std::vector<float> d;
+    d.reserve(2 * size_t(lw) * lh);
+    for (int y = 0; y < lh; ++y)
+      for (int x = 0; x < lw; ++x) {
+        if (!L.ok.at<uint8_t>(y, x)) continue;
+        const float f = ch[k].at<float>(y, x);
+        if (x + 2 < lw && L.ok.at<uint8_t>(y, x + 2)) d.push_back(std::abs(ch[k].at<float>(y, x + 2) - f));
+        if (y + 2 < lh && L.ok.at<uint8_t>(y + 2, x)) d.push_back(std::abs(ch[k].at<float>(y + 2, x) - f));
+      }
+    float noise = floors[k];
+    if (!d.empty()) {
+      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+      noise = std::max(noise, d[d.size() / 2]);
+    }
+    ch[k] /= noise;
+  }
+  cv::merge(ch, L.feat);
+  return L;
+}
+
+// Bilinear 4-channel sample at level coordinates (pixel centres at +0.5); false outside
+// the level or on a pixel that is not ok.
+bool sample4(const FeatureLevel& L, double x, double y, cv::Vec4f* out) {
+  const cv::Mat& m = L.feat;
+  if (!(x >= 0.5 && y >= 0.5 && x <= m.cols - 0.5 && y <= m.rows - 0.5)) return false;
+  if (!L.ok.at<uint8_t>(std::min(m.rows - 1, int(y)), std::min(m.cols - 1, int(x)))) return false;
+  const double fx = x - 0.5, fy = y - 0.5;
+  const int x0 = std::min(int(fx), m.cols - 2), y0 = std::min(int(fy), m.rows - 2);
+  const float ax = float(fx - x0), ay = float(fy - y0);
+  const cv::Vec4f* r0 = m.ptr<cv::Vec4f>(y0);
+  const cv::Vec4f* r1 = m.ptr<cv::Vec4f>(y0 + 1);
+  *out = (1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1]);
+  return true;
+}
+
+// A circle's contrast: per angle, the feature means over a thin inner annulus (1-3 level
+// px inside) and a thin outer one (1-3 px outside); the contrast c is the largest
+// normalised channel difference. score = R times the mean over all angles of a soft
+// support clamp((c - kSupport / 2) / kSupport, 0, 1) (+ 0.02 log(1 + c) to break ties
+// between saturated edges): the length of boundary that separates differing regions, so
+// that the ball beats the round highlights it reflects (an angle whose annuli leave the
+// image or touch invalid pixels counts 0); support = share of the visible angles with
+// c >= kSupport.
+constexpr double kSupport = 3.0;
+struct RegionScore {
+  double score = 0, support = 0, visible = 0;
+};
+
+RegionScore region_score(const FeatureLevel& L, const Circle& c_full, int angles, double max_cut) {
+  const double cx = c_full.cx / L.sx, cy = c_full.cy / L.sy, r = c_full.r / L.s();
+  RegionScore out;
+  if (r < 4) return out;
+  int vis = 0, sup = 0;
+  double sum = 0;
+  for (int k = 0; k < angles; ++k) {
+    const double t = 2 * M_PI * (k + 0.5) / angles, dx = std::cos(t), dy = std::sin(t);
+    cv::Vec4f in(0, 0, 0, 0), outv(0, 0, 0, 0), v;
+    int n_in = 0, n_out = 0;
+    for (int j = 1; j <= 3; ++j) {
+      if (sample4(L, cx + (r - j) * dx, cy + (r - j) * dy, &v)) in += v, ++n_in;
+      if (sample4(L, cx + (r + j) * dx, cy + (r + j) * dy, &v)) outv += v, ++n_out;
+      if (!n_in || !n_out) break;  // the annuli start at the circle: the first samples must be seen
+    }
+    if (!n_in || !n_out) continue;
+    ++vis;
+    const cv::Vec4f d = in * (1.0f / n_in) - outv * (1.0f / n_out);
+    const double con = std::max({std::abs(d[0]), std::abs(d[1]), std::abs(d[2]), std::abs(d[3])});
+    sum += std::clamp((con - 0.5 * kSupport) / kSupport, 0.0, 1.0) + 0.02 * std::log1p(con);
+    if (con >= kSupport) ++sup;
+  }
+  out.visible = double(vis) / angles;
+  // Unseen angles count as the seen ones' mean, so that a ball overflowing the crop is
+  // not pushed inside it; circles less than half visible fade out (the cut check
+  // after the fit decides whether a ball is too cut; max_cut is unused here).
+  const double fade = std::min(1.0, out.visible / 0.5);
+  out.score = vis ? c_full.r * sum / vis * fade * fade : 0;
+  out.support = vis ? double(sup) / vis : 0;
+  return out;
+}
+
+int angles_for(const FeatureLevel& L, const Circle& c) {
+  return std::clamp(int(std::lround(M_PI * c.r / L.s())), 48, 256);
+}
+
+// Local search around c (full-res coordinates) on one level: +-2 level px in centre and
+// radius, step 0.5 level px.
+Circle local_search(const FeatureLevel& L, const Circle& c, double r_min, double r_max, double max_cut) {
+  const double sx = L.sx, sy = L.sy, s = L.s();
+  const int n = 9;
+  std::vector<double> scores(size_t(n) * n * n, -1);
+  const int angles = angles_for(L, c);
+  tbb::parallel_for(0, n * n, [&](int ij) {
+    const int i = ij / n, j = ij % n;
+    for (int k = 0; k < n; ++k) {
+      const Circle q{c.cx + (i - 4) * 0.5 * sx, c.cy + (j - 4) * 0.5 * sy, c.r + (k - 4) * 0.5 * s};
+      if (q.r < r_min || q.r > r_max) continue;
+      scores[size_t(ij) * n + k] = region_score(L, q, angles, max_cut).score;
+    }
+  });
+  const size_t best = size_t(std::max_element(scores.begin(), scores.end()) - scores.begin());
+  if (scores[best] < 0) return c;
+  const int i = int(best / (n * n)), j = int(best / n % n), k = int(best % n);
+  // Sub-step: a parabola through the best and its two neighbours along each axis.
+  auto at = [&](int a, int b, int d) { return scores[(size_t(a) * n + b) * n + d]; };
+  auto vertex = [](double m, double z, double p) {
+    const double den = m - 2 * z + p;
+    return m >= 0 && p >= 0 && den < 0 ? std::clamp(0.5 * (m - p) / den, -0.5, 0.5) : 0.0;
+  };
+  const double di = i > 0 && i < n - 1 ? vertex(at(i - 1, j, k), at(i, j, k), at(i + 1, j, k)) : 0;
+  const double dj = j > 0 && j < n - 1 ? vertex(at(i, j - 1, k), at(i, j, k), at(i, j + 1, k)) : 0;
+  const double dk = k > 0 && k < n - 1 ? vertex(at(i, j, k - 1), at(i, j, k), at(i, j, k + 1)) : 0;
+  return {c.cx + (i - 4 + di) * 0.5 * sx, c.cy + (j - 4 + dj) * 0.5 * sy, c.r + (k - 4 + dk) * 0.5 * s};
+}
+
+// Exhaustive search on the coarsest level: every centre and radius on the level's pixel
+// grid; the best few local maxima (apart by > 3 level px) as seeds, in full-res coordinates.
+std::vector<Circle> coarse_seeds(const FeatureLevel& L, double r_min, double r_max, int keep, double max_cut) {
+  const int lw = L.feat.cols, lh = L.feat.rows;
+  const int r0 = std::max(4, int(std::ceil(r_min / L.s()))), r1 = int(std::floor(r_max / L.s()));
+  if (r1 < r0) return {};
+  const int nr = r1 - r0 + 1;
+  std::vector<float> sc(size_t(lw + 1) * (lh + 1) * nr, 0.f);
+  tbb::parallel_for(0, lh + 1, [&](int y) {
+    for (int x = 0; x <= lw; ++x)
+      for (int r = r0; r <= r1; ++r)
+        sc[(size_t(y) * (lw + 1) + x) * nr + (r - r0)] =
+            float(region_score(L, {x * L.sx, y * L.sy, r * L.s()}, 48, max_cut).score);
+  });
+  std::vector<size_t> order(sc.size());
+  std::iota(order.begin(), order.end(), size_t(0));
+  const size_t top = std::min<size_t>(order.size(), 2000);
+  std::partial_sort(order.begin(), order.begin() + top, order.end(), [&](size_t a, size_t b) { return sc[a] > sc[b]; });
+  std::vector<std::array<int, 3>> picked;
+  std::vector<Circle> out;
+  for (size_t t = 0; t < top && int(out.size()) < keep; ++t) {
+    const size_t id = order[t];
+    if (!(sc[id] > 0)) break;
+    const int r = int(id % nr) + r0, x = int(id / nr % (lw + 1)), y = int(id / nr / (lw + 1));
+    bool near = false;
+    for (const auto& p : picked)
+      if (std::abs(p[0] - x) <= 3 && std::abs(p[1] - y) <= 3 && std::abs(p[2] - r) <= 3) near = true;
+    if (near) continue;
+    picked.push_back({x, y, r});
+    out.push_back({x * L.sx, y * L.sy, r * L.s()});
+  }
+  return out;
+}
+
+// Sub-pixel polish on edges: the narrow passes of `refine` (outermost edge per ray in
+// bands of +-6, 4, 3 px on the linear image), skipping rays whose band touches invalid
+// pixels. The edge agreement (share of rays whose strongest edge within +-10 % of R
+// lies on the circle) tells whether the boundary is a clean edge.
+Candidate edge_polish(const cv::Mat& coarse, const cv::Mat& fine, const cv::Mat& valid8, Circle c, int rays,
+                      double r_min, double r_max) {
   Candidate out;
-  // Coarse: RANSAC over the strongest edges in a +-25 % band, then a robust fit to the
-  // edges nearest to that circle.
-  const double band0 = 0.25 * c.r;
-  const auto cands0 = ray_candidates(coarse, c, band0, rays, 4);
-  c = ransac_circle(cands0, c, band0, r_min, r_max);
-  // Narrow passes on the finer image.
+  auto usable = [&](std::vector<std::vector<EdgePoint>> cands, const Circle& cc, double band) {
+    if (valid8.empty()) return cands;
+    for (int k = 0; k < int(cands.size()); ++k) {
+      const double t = ray_angle(k, rays);
+      for (int j = -4; j <= 4 && !cands[k].empty(); ++j) {
+        const double rr = cc.r + j * (band + 2) / 4;
+        const int x = int(cc.cx + rr * std::cos(t)), y = int(cc.cy + rr * std::sin(t));
+        if (x < 0 || y < 0 || x >= valid8.cols || y >= valid8.rows || !valid8.at<uint8_t>(y, x)) cands[k].clear();
+      }
+    }
+    return cands;
+  };
   for (const double band : {6.0, 4.0, 3.0}) {
-    const auto pts = outermost_edges(ray_candidates(fine, c, band, rays, 4), c, 0.3);
+    const auto pts = outermost_edges(usable(ray_candidates(fine, c, band, rays, 4), c, band), c, 0.3);
     if (pts.size() < 12) return out;
     Circle next = geometric_fit(pts, c);
     if (!(next.r > 0) || !std::isfinite(next.cx) || !std::isfinite(next.cy)) return out;
@@ -360,8 +512,7 @@ Candidate refine(const cv::Mat& coarse, const cv::Mat& fine, Circle c, int rays,
     c = next;
   }
   if (c.r < r_min || c.r > r_max) return out;
-  // Final inliers and confidence.
-  const auto pts = outermost_edges(ray_candidates(fine, c, 3, rays, 4), c, 0.3);
+  const auto pts = outermost_edges(usable(ray_candidates(fine, c, 3, rays, 4), c, 3), c, 0.3);
   double ss = 0;
   int n_in = 0;
   const double tol = 1.5 + 0.005 * c.r;
@@ -369,7 +520,7 @@ Candidate refine(const cv::Mat& coarse, const cv::Mat& fine, Circle c, int rays,
     const double ri = radial_residual(p, c);
     if (std::abs(ri) < tol) ss += ri * ri, ++n_in;
   }
-  const auto wide = ray_candidates(coarse, c, 0.1 * c.r, rays, 1);
+  const auto wide = usable(ray_candidates(coarse, c, 0.1 * c.r, rays, 1), c, 0.1 * c.r);
   int agree = 0, n_wide = 0;
   for (auto& ray : wide) {
     if (ray.empty()) continue;
@@ -391,19 +542,25 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   if (w < 16 || h < 16 || image.rgb.size() != size_t(3) * w * h)
     throw InputError("find_ball: the image is empty or smaller than 16 x 16");
   if (options.rays < 16) throw InputError("find_ball: need at least 16 rays");
+  if (!image.valid.empty() && image.valid.size() != size_t(w) * h)
+    throw InputError("find_ball: the validity mask does not match the image size");
   // Compressed colour c / (c + mean luminance), so that HDR highlights do not dominate.
   double mean = 0;
+  size_t n_valid = 0;
   for (size_t i = 0; i < size_t(w) * h; ++i) {
+    if (!image.valid.empty() && !image.valid[i]) continue;
+    ++n_valid;
     const float* p = &image.rgb[3 * i];
     const float l = luminance(p[0], p[1], p[2]);
     if (std::isfinite(l) && l > 0) mean += l;
   }
-  mean /= double(w) * h;
+  mean /= std::max<double>(1, n_valid);
   if (!(mean > 0)) throw InputError("find_ball: no ball found (the image is black)");
-  cv::Mat col(h, w, CV_32FC3), lin(h, w, CV_32FC3), lum(h, w, CV_32F);
+  cv::Mat col(h, w, CV_32FC3), lin(h, w, CV_32FC3), lum(h, w, CV_32F), valid01(h, w, CV_32F), valid8(h, w, CV_8U);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const float* p = &image.rgb[3 * (size_t(y) * w + x)];
+      const size_t i = size_t(y) * w + x;
+      const float* p = &image.rgb[3 * i];
       cv::Vec3f v, u;
       for (int c = 0; c < 3; ++c) {
         const double q = std::isfinite(p[c]) ? std::max(0.0f, p[c]) : 0.0;
@@ -413,43 +570,69 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
       col.at<cv::Vec3f>(y, x) = v;
       lin.at<cv::Vec3f>(y, x) = u;
       lum.at<float>(y, x) = float(0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]);
+      const bool ok = image.valid.empty() || image.valid[i];
+      valid01.at<float>(y, x) = ok ? 1.f : 0.f;
+      valid8.at<uint8_t>(y, x) = ok ? 1 : 0;
     }
-  cv::Mat coarse, fine, coarse_lum;
+  cv::Mat coarse, fine, lum_blur, energy;
   cv::GaussianBlur(col, coarse, cv::Size(0, 0), 2.0);
   // Sub-pixel passes run on linear values: the rim's pixels blend ball and background
   // linearly in radiance, and any compression would move the edge towards the dark side.
   cv::GaussianBlur(lin, fine, cv::Size(0, 0), 1.0);
-  cv::GaussianBlur(lum, coarse_lum, cv::Size(0, 0), 2.0);
+  // Texture: local high-frequency energy of the compressed luminance.
+  // (the residual of a 3 x 3 median: speckle and fine texture, but not a step edge).
+  cv::medianBlur(lum, lum_blur, 3);
+  cv::absdiff(lum, lum_blur, energy);
+  cv::GaussianBlur(energy, energy, cv::Size(0, 0), 1.5);
 
   const double min_dim = std::min(w, h);
   const double r_min = options.min_radius_fraction * min_dim, r_max = options.max_radius_fraction * min_dim;
-  std::vector<Circle> guesses;
-  if (options.initial_guess) {
-    guesses.push_back({options.initial_guess->cx, options.initial_guess->cy, options.initial_guess->radius_px});
-  } else {
-    cv::Mat img8;
-    coarse_lum.convertTo(img8, CV_8U, 255.0);
-    std::vector<cv::Vec3f> circles;
-    cv::HoughCircles(img8, circles, cv::HOUGH_GRADIENT, 2, min_dim / 4, 100, 40, int(r_min), int(r_max));
-    for (size_t i = 0; i < circles.size() && i < 5; ++i) guesses.push_back({circles[i][0], circles[i][1], circles[i][2]});
-  }
-  guesses.push_back({0.5 * w, 0.5 * h, 0.5 * min_dim});
 
-  Candidate best;
-  for (const Circle& g : guesses) {
-    const Candidate c = refine(coarse, fine, g, options.rays, r_min, r_max);
-    if (c.ok && c.confidence > best.confidence) best = c;
+  // Pyramid: factors 1, 2, 4, ... up to the coarsest level at most 64 px across; the
+  // analysis level (confidence, choice between seeds) is the one at most 128 px across.
+  std::vector<int> factors{1};
+  while (std::max(w, h) / factors.back() > 64) factors.push_back(2 * factors.back());
+  std::vector<FeatureLevel> levels;
+  for (int f : factors) levels.push_back(make_level(col, energy, valid01, f));
+  int analysis = 0;
+  while (analysis + 1 < int(levels.size()) && std::max(w, h) / factors[analysis] > 128) ++analysis;
+
+  std::vector<Circle> seeds;
+  if (options.initial_guess)
+    seeds.push_back({options.initial_guess->cx, options.initial_guess->cy, options.initial_guess->radius_px});
+  else
+    seeds = coarse_seeds(levels.back(), r_min, r_max, 8, options.max_cut_fraction);
+
+  Circle best_c;
+  RegionScore best_s;
+  bool found = false;
+  for (Circle c : seeds) {
+    for (int li = int(levels.size()) - 1; li >= 0; --li) c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction);
+    const RegionScore s = region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction);
+    if (!found || s.score > best_s.score) best_c = c, best_s = s, found = true;
   }
-  if (!best.ok || best.confidence < options.min_confidence)
-    throw InputError("find_ball: no ball found (edge confidence " + std::to_string(best.confidence).substr(0, 4) +
+  const double confidence = found && best_s.visible >= 0.25 ? best_s.support : 0.0;
+  if (!found || confidence < options.min_confidence)
+    throw InputError("find_ball: no ball found (boundary confidence " + std::to_string(confidence).substr(0, 4) +
                      " < " + std::to_string(options.min_confidence).substr(0, 4) + ")");
-  const double cut = cut_fraction(best.circle, w, h);
-  if (report) *report = {best.confidence, cut, best.rms, best.inliers};
-  if (cut > options.max_cut_fraction)
-    throw InputError("find_ball: ball cut by the image border (" + std::to_string(int(std::round(100 * cut))) +
+
+  // Sub-pixel polish on the edges when the boundary is a clean edge near the region answer.
+  Circle result = best_c;
+  FindBallReport rep;
+  const Candidate pol = edge_polish(coarse, fine, valid8, best_c, options.rays, r_min, r_max);
+  if (pol.ok && pol.confidence >= 0.5 &&
+      std::hypot(pol.circle.cx - best_c.cx, pol.circle.cy - best_c.cy) <= 8 + 0.02 * best_c.r &&
+      std::abs(pol.circle.r - best_c.r) <= 8 + 0.02 * best_c.r)
+    result = pol.circle;
+  if (pol.ok) rep.rms_residual_px = pol.rms, rep.edge_points = pol.inliers;
+  rep.confidence = confidence;
+  rep.cut_fraction = cut_fraction(result, w, h);
+  if (report) *report = rep;
+  if (rep.cut_fraction > options.max_cut_fraction)
+    throw InputError("find_ball: ball cut by the image border (" + std::to_string(int(std::round(100 * rep.cut_fraction))) +
                      " % of its rim outside, max_cut_fraction allows " +
                      std::to_string(int(std::round(100 * options.max_cut_fraction))) + " %)");
-  return {best.circle.cx, best.circle.cy, best.circle.r};
+  return {result.cx, result.cy, result.r};
 }
 
 // ---------------------------------------------------------------------------------------

@@ -110,24 +110,25 @@ class MirrorBallProjection {
 // ---------------------------------------------------------------------------------------
 // Detection.
 //
-// Method: candidates are the strongest cv::HoughCircles answers on the blurred (2 px),
-// compressed (c / (c + mean luminance)) image, and the circle inscribed in the image (the
-// usual tight crop). For each, edge candidates are taken along `rays` radial profiles:
-// local maxima of the radial derivative summed over colour channels (1 px baseline,
-// parabola through -1/0/+1 px for sub-pixel position); profiles that leave the image
-// are skipped. RANSAC over circles through three rays' candidates (+-25 % of R around
-// the guess) picks the best-supported circle; three passes then refit (Gauss-Newton
-// with Tukey weights) to each ray's OUTERMOST edge with at least 0.3 of the ray's
-// strongest, in bands of +-6, 4, 3 px, on the LINEAR image blurred by 1 px (rim pixels
-// blend ball and background linearly in radiance; compression would shift the edge).
-// Outermost, because the rim's reflection squeezes the scene behind the ball into rings
-// concentric with the silhouette just inside it.
-// Confidence: on the final circle, the share of in-image rays whose strongest edge within
-// +-10 % of R (compressed image) lies within 1.5 px + 0.5 % of R of the circle. The best
-// candidate by confidence wins; below `min_confidence` -> InputError "no ball found".
-// Known limits: sharp structure in the rim's reflection still pulls the fit inwards by up
-// to ~0.6 px (grace at R = 200 px); on strongly textured backgrounds (granite) the
-// confidence is low and the fit can lock onto a wrong circle.
+// Method (region contrast, multi-scale): feature images per pyramid level (factors 1, 2,
+// 4, ... down to <= 64 px): compressed colour c / (c + mean luminance), 3 x 3 median-
+// filtered against speckle, and the log of local texture energy (the residual of a 3 x 3
+// median, blurred), each channel divided by its own fluctuation scale (median |difference|
+// of pixels 2 apart). A circle's contrast per angle is the largest channel difference
+// between thin annuli 1-3 level px inside and outside; its score is R times the mean over
+// seen angles of a soft support (unseen angles, outside the image or on invalid pixels,
+// count as the mean; circles less than half seen fade out). Exhaustive search over
+// centre and radius on the coarsest level, the best 8 local maxima refined level by level
+// (+-2 level px, parabolic sub-step), the best at the <= 128 px level kept. Then the
+// outer-edge sub-pixel fit on the linear image (rays to the outermost edge with >= 0.3
+// of the strongest, bands +-6, 4, 3 px, Tukey-weighted Gauss-Newton; rim rings pull it
+// in by up to ~0.6 px on grace) replaces the region answer when its edge agreement is
+// >= 0.5 and it stays within 8 px + 2 % of R (clean edges: synthetic renders); on
+// textured backgrounds the region answer stands (no sub-pixel claim there).
+// Confidence: the share of seen angles whose contrast is >= 3 (at the <= 128 px level):
+// ~0.1-0.2 on uniform noise, 0.84-0.87 on the kartik photos, 1 on clean renders.
+// Below `min_confidence` -> InputError "no ball found". Invalid pixels (RgbImage::valid)
+// are never looked at.
 // Cut: the share of the circle's circumference outside the image [0, W] x [0, H]; above
 // `max_cut_fraction` -> InputError "ball cut by the image border". The default 0.3
 // admits tight crops where the ball touches or slightly overflows two opposite sides

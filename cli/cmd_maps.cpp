@@ -15,6 +15,7 @@
 #include "core/image_io.h"
 #include "core/resample.h"
 #include "core/synthetic_scene.h"
+#include "core/tonemap.h"
 #include "probe/cube_map.h"
 
 namespace lp::cli {
@@ -262,6 +263,18 @@ int run_synth_scene(const SynthSceneArgs& args, const Output& out) {
                   {"height", map.height},
                   {"power_luminance", total},
                   {"sun_power_luminance", luminance(sun.data())}});
+  return 0;
+}
+
+int run_preview(const PreviewArgs& args, const Output& out) {
+  // Any radiance image or map file as stored (no unwrapping), tone-mapped for people.
+  const RgbImage img = read_rgb_image(args.input);
+  ToneMapOptions o;
+  if (!(args.percentile > 0 && args.percentile <= 1)) throw InputError("--percentile must be in (0, 1]");
+  o.percentile = args.percentile;
+  write_display_image(args.output, img.width, img.height, tone_map(img.rgb, img.valid, img.width, img.height, o));
+  say(out, "{} -> {} ({}x{})\n", args.input, args.output, img.width, img.height);
+  emit_json(out, {{"input", args.input}, {"output", args.output}, {"width", img.width}, {"height", img.height}});
   return 0;
 }
 

@@ -14,6 +14,8 @@
 #include "core/progress.h"
 #include "core/resample.h"
 #include "core/synthetic_scene.h"
+#include "hdr/bracket.h"
+#include "probe/ball_register.h"
 #include "probe/fill.h"
 #include "probe/fisheye.h"
 #include "probe/mirror_ball.h"
@@ -198,6 +200,41 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
                                         residual_jitter_px(raw), residual_jitter_px(track))
                           : "");
   emit_json(out, report);
+  return 0;
+}
+
+int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
+  // Differently cropped photos of one ball (a bracket shot by hand): find the ball in
+  // each, then resample every photo so the ball is centred with one radius, code values
+  // untouched, ready for `hdr fuse`.
+  if (args.images.size() < 2) throw InputError("probe register needs at least two photos of the ball");
+  if (args.size < 32) throw InputError("--size must be at least 32 px");
+  std::vector<RgbImage> frames;
+  std::vector<BallInImage> balls;
+  nlohmann::json found = nlohmann::json::array();
+  for (const std::string& f : args.images) {
+    frames.push_back(read_rgb_image(f));
+    try {
+      balls.push_back(find_ball(frames.back()));
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", f, e.what()));
+    }
+    found.push_back({{"file", f}, {"ball", {balls.back().cx, balls.back().cy, balls.back().radius_px}}});
+  }
+  const std::vector<RgbImage> registered = register_balls(frames, balls, args.size);
+  std::error_code ec;
+  fs::create_directories(args.output_dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  for (size_t i = 0; i < registered.size(); ++i) {
+    const std::string name = fs::path(args.images[i]).stem().string() + ".png";
+    write_code_image((fs::path(args.output_dir) / name).string(), registered[i], 8);
+    found[i]["output"] = name;
+  }
+  const BallInImage ball = registered_ball(args.size);
+  say(out, "{}: {} photos registered to {}x{}, ball at ({:.1f}, {:.1f}) r {:.1f} px\n", args.output_dir,
+      registered.size(), args.size, args.size, ball.cx, ball.cy, ball.radius_px);
+  emit_json(out, {{"output", args.output_dir}, {"frames", found},
+                  {"registered_ball", {ball.cx, ball.cy, ball.radius_px}}});
   return 0;
 }
 

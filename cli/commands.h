@@ -35,6 +35,12 @@ struct ConvertArgs {
 };
 int run_convert(const ConvertArgs& args, const Output& out);
 
+struct PreviewArgs {
+  std::string input, output;
+  double percentile = 0.99;
+};
+int run_preview(const PreviewArgs& args, const Output& out);
+
 struct SynthSceneArgs {
   std::string output;
   std::string layout = "latlong";
@@ -170,6 +176,13 @@ struct ProbeUnwrapArgs {
   std::string output;               // a map, or a directory for a sequence
 };
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out);
+
+struct ProbeRegisterArgs {
+  std::vector<std::string> images;  // photos of one ball, cropped differently
+  int size = 512;                   // output square, px
+  std::string output_dir;
+};
+int run_probe_register(const ProbeRegisterArgs& args, const Output& out);
 
 struct SynthProbeArgs {
   std::string input = "scene";

@@ -52,6 +52,13 @@ int main(int argc, char** argv) {
   c_conv->add_flag("--half", conv.half, "Write EXR as half floats");
   c_conv->add_flag("--json", out.json, "Print the report as JSON");
 
+  PreviewArgs prev;
+  auto* c_prev = app.add_subcommand("preview", "Tone-mapped PNG/JPEG of a radiance image or map, as stored");
+  c_prev->add_option("IMAGE", prev.input, "Radiance image or map (.exr, .hdr, .pfm) or a camera image")->required();
+  c_prev->add_option("-o,--output", prev.output, "PNG or JPEG")->required();
+  c_prev->add_option("--percentile", prev.percentile, "Luminance percentile shown at 0.8 after Reinhard");
+  c_prev->add_flag("--json", out.json, "Print the report as JSON");
+
   // synth
   auto* c_synth = app.add_subcommand("synth", "Ground-truth makers");
   c_synth->require_subcommand(1);
@@ -207,6 +214,13 @@ int main(int argc, char** argv) {
   c_pun->add_option("-o,--output", pun.output, "Output map (or directory for a sequence)")->required();
   c_pun->add_flag("--json", out.json, "Print the report as JSON");
 
+  ProbeRegisterArgs preg;
+  auto* c_preg = c_probe->add_subcommand("register", "Centre one ball in differently cropped photos (for hdr fuse)");
+  c_preg->add_option("IMAGE", preg.images, "Photos of the same mirror ball")->required();
+  c_preg->add_option("--size", preg.size, "Output square size, px");
+  c_preg->add_option("-o,--output", preg.output_dir, "Directory for the registered photos (PNG)")->required();
+  c_preg->add_flag("--json", out.json, "Print the report as JSON");
+
   SynthProbeArgs spr;
   auto* c_spr = c_synth->add_subcommand("probe", "Ray-trace a mirror ball or fisheye view of a map (ground truth)");
   c_spr->add_option("MAP", spr.input, "A latlong map, or 'scene'");
@@ -239,6 +253,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*c_info) return run_info(info, out);
+    if (*c_prev) return run_preview(prev, out);
     if (*c_conv) return run_convert(conv, out);
     if (*c_scene) return run_synth_scene(scene, out);
     if (*c_samp) return run_sample(samp, out);
@@ -252,6 +267,7 @@ int main(int argc, char** argv) {
     if (*c_evh) return run_eval_hdr(evh, out);
     if (*c_pun) return run_probe_unwrap(pun, out);
     if (*c_spr) return run_synth_probe(spr, out);
+    if (*c_preg) return run_probe_register(preg, out);
     if (*c_evu) return run_eval_unwrap(evu, out);
   } catch (const lp::InputError& e) {
     std::fprintf(stderr, "lightprobe: %s\n", e.what());

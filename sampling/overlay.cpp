@@ -11,36 +11,15 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/resample.h"
+#include "core/tonemap.h"
 
 namespace lp {
 
 namespace {
 
-constexpr float kCheckerLight = 0.55f, kCheckerDark = 0.45f;
 constexpr double kOutline = 0.03;  // display value of the disc outline
 constexpr int kShift = 4;          // cv::circle fixed-point bits: sub-pixel centres
 constexpr double kFixed = 1 << kShift;
-
-// Exposure k with Reinhard k Y / (1 + k Y) = display at the chosen percentile of the
-// valid luminances; falls back to the maximum when that percentile is black.
-double exposure_for(const EnvMap& view, const OverlayOptions& options) {
-  std::vector<float> lum;
-  lum.reserve(view.pixel_count());
-  for (size_t i = 0; i < view.pixel_count(); ++i)
-    if (view.is_valid(i)) {
-      const float* p = view.pixel(i);
-      lum.push_back(luminance(p[0], p[1], p[2]));
-    }
-  if (lum.empty()) return 1;
-  const double p = std::clamp(options.percentile, 0.0, 1.0);
-  const size_t rank = std::min(lum.size() - 1, size_t(std::max(0.0, std::ceil(p * double(lum.size())) - 1)));
-  std::nth_element(lum.begin(), lum.begin() + rank, lum.end());
-  double y = lum[rank];
-  if (!(y > 0)) y = *std::max_element(lum.begin(), lum.end());
-  if (!(y > 0) || !std::isfinite(y)) return 1;
-  const double d = std::clamp(options.percentile_display, 1e-6, 1 - 1e-6);
-  return d / (1 - d) / y;
-}
 
 }  // namespace
 
@@ -59,25 +38,11 @@ std::vector<float> render_overlay(const EnvMap& map, const std::vector<Light>& l
   }
 
   // Tone map; invalid pixels as a checkerboard.
-  const double k = exposure_for(*view, options);
-  const int checker = std::max(1, options.checker_px);
-  std::vector<float> out(size_t(width) * size_t(height) * 3);
-  for (int v = 0; v < height; ++v)
-    for (int u = 0; u < width; ++u) {
-      const size_t i = size_t(v) * size_t(width) + size_t(u);
-      float* o = &out[3 * i];
-      if (!view->is_valid(i)) {
-        const float g = ((u / checker + v / checker) % 2) ? kCheckerDark : kCheckerLight;
-        o[0] = o[1] = o[2] = g;
-        continue;
-      }
-      const float* p = view->pixel(i);
-      // Saturated colours can exceed 1 in one channel: scale the pixel back (keeping its
-      // hue) rather than clipping that channel alone.
-      double s = k / (1 + k * luminance(p[0], p[1], p[2]));
-      s /= std::max(1.0, s * std::max({p[0], p[1], p[2]}));
-      for (int c = 0; c < 3; ++c) o[c] = float(std::clamp(s * p[c], 0.0, 1.0));
-    }
+  ToneMapOptions tm;
+  tm.percentile = options.percentile;
+  tm.display = options.percentile_display;
+  tm.checker_px = options.checker_px;
+  std::vector<float> out = tone_map(view->rgb, view->valid, width, height, tm);
 
   // Lights, dimmest first so the brightest stay on top.
   std::vector<size_t> order(lights.size());

@@ -1,0 +1,58 @@
+#include "core/tonemap.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/envmap.h"
+
+namespace lp {
+
+namespace {
+
+constexpr float kCheckerLight = 0.55f, kCheckerDark = 0.45f;
+
+// Exposure k with Reinhard k Y / (1 + k Y) = display at the chosen percentile of the
+// valid luminances; falls back to the maximum when that percentile is black.
+double exposure_for(const std::vector<float>& rgb, const std::vector<uint8_t>& valid, size_t n,
+                    const ToneMapOptions& options) {
+  std::vector<float> lum;
+  lum.reserve(n);
+  for (size_t i = 0; i < n; ++i)
+    if (valid.empty() || valid[i]) lum.push_back(luminance(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]));
+  if (lum.empty()) return 1;
+  const double p = std::clamp(options.percentile, 0.0, 1.0);
+  const size_t rank = std::min(lum.size() - 1, size_t(std::max(0.0, std::ceil(p * double(lum.size())) - 1)));
+  std::nth_element(lum.begin(), lum.begin() + long(rank), lum.end());
+  double y = lum[rank];
+  if (!(y > 0)) y = *std::max_element(lum.begin(), lum.end());
+  if (!(y > 0) || !std::isfinite(y)) return 1;
+  const double d = std::clamp(options.display, 1e-6, 1 - 1e-6);
+  return d / (1 - d) / y;
+}
+
+}  // namespace
+
+std::vector<float> tone_map(const std::vector<float>& rgb, const std::vector<uint8_t>& valid, int width, int height,
+                            const ToneMapOptions& options) {
+  const size_t n = size_t(width) * size_t(height);
+  const double k = exposure_for(rgb, valid, n, options);
+  const int checker = std::max(1, options.checker_px);
+  std::vector<float> out(3 * n);
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const size_t i = size_t(v) * size_t(width) + size_t(u);
+      float* o = &out[3 * i];
+      if (!valid.empty() && !valid[i]) {
+        const float g = ((u / checker + v / checker) % 2) ? kCheckerDark : kCheckerLight;
+        o[0] = o[1] = o[2] = g;
+        continue;
+      }
+      const float* p = &rgb[3 * i];
+      double s = k / (1 + k * luminance(p[0], p[1], p[2]));
+      s /= std::max(1.0, s * std::max({double(p[0]), double(p[1]), double(p[2])}));
+      for (int c = 0; c < 3; ++c) o[c] = float(std::clamp(s * p[c], 0.0, 1.0));
+    }
+  return out;
+}
+
+}  // namespace lp

@@ -1,0 +1,24 @@
+// Tone mapping for pictures people look at (overlays, previews of probes and maps).
+// Exposure k puts the `percentile` luminance of the valid pixels at `display` after
+// Reinhard on luminance, c' = k c / (1 + k Y) per channel (hue kept, highlights
+// compressed, not clipped); a pixel whose largest channel would still exceed 1 is scaled
+// down as a whole. Invalid pixels become a neutral grey checkerboard, never black.
+// Output: linear display RGB in [0, 1] (write_display_image applies the sRGB encoding).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+namespace lp {
+
+struct ToneMapOptions {
+  double percentile = 0.99;  // luminance percentile of the valid pixels that sets exposure
+  double display = 0.8;      // the display value it maps to
+  int checker_px = 8;        // checkerboard square for invalid pixels
+};
+
+// `valid` empty: every pixel valid. Row-major, 3 floats per pixel.
+std::vector<float> tone_map(const std::vector<float>& rgb, const std::vector<uint8_t>& valid, int width, int height,
+                            const ToneMapOptions& options = {});
+
+}  // namespace lp

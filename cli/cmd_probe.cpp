@@ -129,14 +129,20 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
         }
       }
       raw.cx.push_back(ball.cx), raw.cy.push_back(ball.cy), raw.r.push_back(ball.radius_px);
-    } else if (args.stabilise) {
+    } else if (files.size() > 1 && !args.fixed_ball) {
       const ImageCircle c = find_image_circle(img);
       raw.cx.push_back(c.cx), raw.cy.push_back(c.cy), raw.r.push_back(c.r);
     }
     frames.push_back(std::move(img));
     progress.advance();
   }
+  // Stabilisation: every frame is unwrapped with its own ball (or image circle), so the
+  // map stays put when the camera shakes. --smooth-track additionally smooths that track,
+  // for a fixed probe whose per-frame detection is noisy; --fixed-ball uses frame 0's
+  // geometry for every frame (what an unstabilised pipeline does), for comparison.
   CircleTrack track = raw;
+  if (args.fixed_ball && !raw.cx.empty())
+    for (size_t i = 0; i < raw.cx.size(); ++i) track.cx[i] = raw.cx[0], track.cy[i] = raw.cy[0], track.r[i] = raw.r[0];
   if (args.stabilise && raw.cx.size() > 1) {
     SmoothOptions so;
     so.static_probe = args.static_probe;
@@ -147,6 +153,7 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   double fill_share = 0;
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<FisheyeModel> base_model;
+  std::vector<Vec3> centroids;
   for (size_t i = 0; i < frames.size(); ++i) {
     EnvMap map;
     nlohmann::json fj = {{"file", files[i]}};
@@ -164,7 +171,7 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
     } else {
       if (!base_model) base_model = fisheye_model(args, frames[0]);
       FisheyeModel m = *base_model;
-      if (args.stabilise && !track.cx.empty()) {
+      if (!track.cx.empty()) {
         // Move the optical centre with the image circle, relative to the track's first frame.
         m.cx += track.cx[i] - track.cx[0];
         m.cy += track.cy[i] - track.cy[0];
@@ -177,6 +184,14 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
       fill_share = fr.fill.filled_power_share;
     }
     map.units = frames[i].units;
+    // Power-weighted mean direction of the valid map: a static world must keep it still.
+    Vec3 c{0, 0, 0};
+    for (size_t p = 0; p < map.pixel_count(); ++p)
+      if (map.is_valid(p)) {
+        const float* q = map.pixel(p);
+        c = c + (luminance(q[0], q[1], q[2]) * pixel_solid_angle(map, p)) * pixel_direction(map, p);
+      }
+    if (length(c) > 0) centroids.push_back(normalize(c));
     write_envmap(output_for(args, i, frames.size()), map);
     per_frame.push_back(fj);
     progress.advance();
@@ -187,17 +202,23 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
                            {"layout", args.layout}, {"width", w}, {"height", h}, {"milliseconds", ms},
                            {"per_frame", per_frame}};
   if (args.fill) report["fill_power_share"] = fill_share;
+  double map_jitter_deg = 0;
+  for (size_t i = 1; i < centroids.size(); ++i) map_jitter_deg += angle_between(centroids[i - 1], centroids[i]) * 180 / M_PI;
+  if (centroids.size() > 1) {
+    map_jitter_deg /= double(centroids.size() - 1);
+    report["map_jitter_deg"] = map_jitter_deg;
+  }
   if (raw.cx.size() > 1) {
-    report["raw_jitter_px"] = residual_jitter_px(raw);
-    report["stabilised_jitter_px"] = residual_jitter_px(track);
+    report["detected_jitter_px"] = residual_jitter_px(raw);
+    report["used_jitter_px"] = residual_jitter_px(track);
   }
   if (args.type == "mirrorball" && frames.size() == 1)
     say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px -> {} {}x{}{}\n", args.output, track.cx[0], track.cy[0],
         track.r[0], args.layout, w, h, args.fill ? fmt::format(", fill holds {:.2f} % of the power", 100 * fill_share) : "");
   else
     say(out, "{}: {} frame(s) -> {} {}x{} in {:.0f} ms{}\n", args.output, frames.size(), args.layout, w, h, ms,
-        raw.cx.size() > 1 ? fmt::format("; centre jitter {:.3f} px raw, {:.3f} px stabilised",
-                                        residual_jitter_px(raw), residual_jitter_px(track))
+        raw.cx.size() > 1 ? fmt::format("; probe centre moved {:.3f} px per frame, unwrapped map {:.4f} deg per frame",
+                                        residual_jitter_px(raw), map_jitter_deg)
                           : "");
   emit_json(out, report);
   return 0;

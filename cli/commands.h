@@ -167,8 +167,9 @@ struct ProbeUnwrapArgs {
   bool fresnel = false;
   double blind_spot_deg = 15;
   bool fill = false;
-  bool stabilise = false;
-  bool static_probe = false;
+  bool stabilise = false;           // smooth the per-frame ball / circle track
+  bool static_probe = false;        // with stabilise: one median position for all frames
+  bool fixed_ball = false;          // use frame 0's geometry for every frame (no tracking)
   std::string rotation;
   std::string layout = "latlong";
   std::string size;

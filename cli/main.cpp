@@ -205,8 +205,10 @@ int main(int argc, char** argv) {
   c_pun->add_flag("--fresnel", pun.fresnel, "ball: reflectivity rises towards the rim (Schlick)");
   c_pun->add_option("--blind-spot", pun.blind_spot_deg, "ball: half-angle (deg) masked around the blind spot");
   c_pun->add_flag("--fill", pun.fill, "Fill what the camera cannot see smoothly (mask kept)");
-  c_pun->add_flag("--stabilise", pun.stabilise, "Sequences: smooth the ball / image-circle track");
-  c_pun->add_flag("--static-probe", pun.static_probe, "With --stabilise: the probe does not drift (median track)");
+  c_pun->add_flag("--smooth-track", pun.stabilise,
+                   "Sequences: smooth the per-frame ball / image-circle track (a fixed probe, noisy detection)");
+  c_pun->add_flag("--static-probe", pun.static_probe, "With --smooth-track: one median position for every frame");
+  c_pun->add_flag("--fixed-ball", pun.fixed_ball, "Sequences: no tracking, frame 0's geometry for all (for comparison)");
   c_pun->add_option("--rotation", pun.rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers");
   c_pun->add_option("--layout", pun.layout, "latlong|hemisphere|healpix");
   c_pun->add_option("--size", pun.size, "WxH");

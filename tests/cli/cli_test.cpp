@@ -359,3 +359,43 @@ TEST(Cli, ASynthesisedMirrorBallUnwrapsToTheMapItCameFrom) {
   }
   expect_one_line_error(lightprobe("probe unwrap " + flat.string() + " --type mirrorball -o " + map.string()), "flat.pfm");
 }
+
+TEST(Cli, TrackingTheBallFrameByFrameKeepsTheUnwrappedMapStillWhenTheCameraShakes) {
+  const fs::path world = scratch() / "nosun.exr", seq = scratch() / "ballseq", out = scratch() / "ballseq_maps";
+  ASSERT_EQ(lightprobe("synth scene --no-sun --size 512x256 -o " + world.string()).code, 0);
+  ASSERT_EQ(lightprobe("synth probe " + world.string() + " --type mirrorball --size 256x256 --frames 8 --jitter 1.5 "
+                       "--noise 0.01 -o " + seq.string()).code,
+            0);
+  CliRun tracked = lightprobe("probe unwrap --json " + seq.string() + " --type mirrorball --layout latlong --size 128x64 -o " +
+                              out.string());
+  ASSERT_EQ(tracked.code, 0) << tracked.err;
+  CliRun fixed = lightprobe("probe unwrap --json " + seq.string() +
+                            " --type mirrorball --fixed-ball --layout latlong --size 128x64 -o " + out.string());
+  ASSERT_EQ(fixed.code, 0) << fixed.err;
+  const double jt = nlohmann::json::parse(tracked.out)["map_jitter_deg"].get<double>();
+  const double jf = nlohmann::json::parse(fixed.out)["map_jitter_deg"].get<double>();
+  EXPECT_LT(jt, 0.3);
+  EXPECT_LT(jt * 5, jf);
+  EXPECT_TRUE(fs::exists(out / "frame_0007.exr"));
+}
+
+TEST(Cli, DifferentlyCroppedBallPhotosAreRegisteredFusedAndUnwrapped) {
+  const std::string k = shared("hdr-mirrorball-kartik");
+  const fs::path dir = scratch() / "kartik";
+  CliRun reg = lightprobe("probe register --json " + k + "/ball_1-10s.jpg " + k + "/ball_1-40s.jpg " + k +
+                          "/ball_1-160s.jpg --size 320 -o " + dir.string());
+  ASSERT_EQ(reg.code, 0) << reg.err;
+  const fs::path fused = scratch() / "kartik.exr", map = scratch() / "kartik_map.exr", png = scratch() / "kartik.png";
+  // Exposure times from the JPEGs' EXIF are gone after registration: give them.
+  CliRun fuse = lightprobe("hdr fuse " + (dir / "ball_1-10s.png").string() + " " + (dir / "ball_1-40s.png").string() + " " +
+                           (dir / "ball_1-160s.png").string() + " --exposure-times 1/10,1/40,1/160 -o " + fused.string());
+  ASSERT_EQ(fuse.code, 0) << fuse.err;
+  CliRun un = lightprobe("probe unwrap --json " + fused.string() + " --type mirrorball --layout latlong --size 256x128 -o " +
+                         map.string());
+  ASSERT_EQ(un.code, 0) << un.err;
+  const auto ball = nlohmann::json::parse(un.out)["per_frame"][0]["ball"];
+  EXPECT_NEAR(ball[0].get<double>(), 160, 3);  // registered to the centre
+  EXPECT_NEAR(ball[1].get<double>(), 160, 3);
+  ASSERT_EQ(lightprobe("preview " + fused.string() + " -o " + png.string()).code, 0);
+  EXPECT_GT(fs::file_size(png), 1000u);
+}

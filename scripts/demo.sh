@@ -15,9 +15,19 @@ for m in pharr hemigon q2tree mediancut; do
 done
 $lp sample out/scene.exr --method q2tree --n auto --target-error 0.01 -o out/lights_auto.json
 $lp eval sampling scene --methods all --n 16,64,256,1024 -o out/eval
+# HDR: a 3-exposure bracket of the scene through a gamma camera, fused with a response
+# recovered from the bracket itself, scored against OpenCV.
+$lp synth bracket scene --response gamma -o out/bracket
+$lp hdr fuse out/bracket/frame_0*.png --exposure-times out/bracket/exposures.csv -o out/bracket_fused.exr
+$lp eval hdr scene -o out/hdr
+# Probes: a mirror ball ray-traced from the scene, found, unwrapped and turned into lights.
+$lp synth probe scene --type mirrorball --size 512x512 -o out/ball.exr
+$lp probe unwrap out/ball.exr --type mirrorball --layout latlong --size 512x256 --fill -o out/ball_latlong.exr
+$lp sample out/ball_latlong.exr --method q2tree --n 128 -o out/ball_lights.json --overlay out/ball_lights.png
+$lp preview out/ball.exr -o out/ball.png
 # Live sequences: a light moving across the scene, sampled frame by frame with hemigon's
 # FIR filters, then every method on every dynamic scenario (flicker, jitter, lag).
 $lp synth sequence --scenario moving-light --frames 24 -o out/sequence
 $lp sample out/sequence --method hemigon --n 300 -o out/sequence_lights.ndjson
 $lp eval temporal scene --frames 32 -o out/temporal
-echo "demo: results in out/ (scene.exr, lights_*.json, lights_*.png, eval/sampling.svg, sequence_lights.ndjson, temporal/temporal.svg)"
+echo "demo: results in out/ (scene.exr, lights_*.png, eval/sampling.svg, hdr/hdr.svg, ball.png, ball_lights.png, sequence_lights.ndjson, temporal/temporal.svg)"

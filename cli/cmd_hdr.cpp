@@ -132,7 +132,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     if (!args.response.empty()) {
       response = load_response(args.response);
       report["response"] = args.response;
-    } else if (args.linear) {
+    } else if (args.linear || bracket.linear) {
       response = linear_response(bracket.bit_depth == 8 ? 256 : 1024);
       report["response"] = "linear";
     } else {

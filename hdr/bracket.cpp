@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "hdr/raw_input.h"
 
 namespace lp {
 namespace {
@@ -108,7 +109,29 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
   Bracket b;
   if (times && times->size() != paths.size())
     throw InputError(fmt::format("--exposure-times: {} times for {} images", times->size(), paths.size()));
+  // Camera RAW files (through LibRaw) are linear 16-bit with their own shutter time.
+  auto is_raw = [](const std::string& p) {
+    std::string e = p.substr(p.find_last_of('.') == std::string::npos ? p.size() : p.find_last_of('.'));
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    for (const char* r : {".cr2", ".cr3", ".nef", ".arw", ".dng", ".raf", ".orf", ".rw2", ".pef", ".srw"})
+      if (e == r) return true;
+    return false;
+  };
   for (size_t k = 0; k < paths.size(); ++k) {
+    if (is_raw(paths[k])) {
+      double t = 0;
+      RgbImage f = read_camera_raw(paths[k], &t);
+      if (k > 0 && !b.linear) throw InputError(fmt::format("{}: a RAW file in a bracket of non-RAW images", paths[k]));
+      b.linear = true;
+      b.bit_depth = 16;
+      b.frames.push_back(std::move(f));
+      b.paths.push_back(paths[k]);
+      if (times) b.exposure_seconds.push_back((*times)[k]);
+      else if (t > 0) b.exposure_seconds.push_back(t);
+      else throw InputError(paths[k] + ": no shutter time in the RAW file; give --exposure-times");
+      continue;
+    }
+    if (b.linear) throw InputError(fmt::format("{}: a non-RAW image in a bracket of RAW files", paths[k]));
     CameraImage cam = read_camera_image(paths[k]);
     if (k == 0) {
       b.bit_depth = cam.bit_depth;

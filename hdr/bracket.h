@@ -20,6 +20,7 @@ struct Bracket {
   std::vector<double> exposure_seconds;  // one per frame, positive and finite
   int bit_depth = 8;                     // 8 or 16 (of the files read)
   std::vector<std::string> paths;        // one per frame, or empty for brackets made in memory
+  bool linear = false;                   // camera RAW frames: linear sensor values, no response curve
 
   int width() const { return frames.empty() ? 0 : frames[0].width; }
   int height() const { return frames.empty() ? 0 : frames[0].height; }

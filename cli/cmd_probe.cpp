@@ -14,6 +14,7 @@
 #include "core/progress.h"
 #include "core/resample.h"
 #include "core/synthetic_scene.h"
+#include "calib/colour_match.h"
 #include "hdr/bracket.h"
 #include "probe/ball_register.h"
 #include "probe/fill.h"
@@ -154,6 +155,8 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<FisheyeModel> base_model;
   std::vector<Vec3> centroids;
+  std::optional<ColourMatch> colour;
+  if (!args.colour_match.empty()) colour = load_colour_match(args.colour_match);
   for (size_t i = 0; i < frames.size(); ++i) {
     EnvMap map;
     nlohmann::json fj = {{"file", files[i]}};
@@ -184,6 +187,7 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
       fill_share = fr.fill.filled_power_share;
     }
     map.units = frames[i].units;
+    if (colour) apply_colour_match(map, *colour);
     // Power-weighted mean direction of the valid map: a static world must keep it still.
     Vec3 c{0, 0, 0};
     for (size_t p = 0; p < map.pixel_count(); ++p)
@@ -221,6 +225,16 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
                                         residual_jitter_px(raw), map_jitter_deg)
                           : "");
   emit_json(out, report);
+  return 0;
+}
+
+int run_calib_colour(const CalibColourArgs& args, const Output& out) {
+  const ColourMatch m = fit_colour_match(read_colour_patches_csv(args.patches));
+  save_colour_match(args.output, m);
+  say(out, "{}: 3x3 colour match from {} patches, residual RMS {:.2f} %\n", args.output, m.patches,
+      100 * m.rms_relative);
+  emit_json(out, {{"output", args.output}, {"patches", m.patches}, {"rms_relative", m.rms_relative},
+                  {"matrix", m.matrix.m}});
   return 0;
 }
 

@@ -170,6 +170,7 @@ struct ProbeUnwrapArgs {
   bool stabilise = false;           // smooth the per-frame ball / circle track
   bool static_probe = false;        // with stabilise: one median position for all frames
   bool fixed_ball = false;          // use frame 0's geometry for every frame (no tracking)
+  std::string colour_match;         // 3x3 transform to the backplate camera (calib colour)
   std::string rotation;
   std::string layout = "latlong";
   std::string size;
@@ -177,6 +178,12 @@ struct ProbeUnwrapArgs {
   std::string output;               // a map, or a directory for a sequence
 };
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out);
+
+struct CalibColourArgs {
+  std::string patches;              // CSV probe_r,probe_g,probe_b,plate_r,plate_g,plate_b
+  std::string output;
+};
+int run_calib_colour(const CalibColourArgs& args, const Output& out);
 
 struct ProbeRegisterArgs {
   std::vector<std::string> images;  // photos of one ball, cropped differently

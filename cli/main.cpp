@@ -170,6 +170,12 @@ int main(int argc, char** argv) {
   c_cphot->add_option("-o,--output", cphot.output, "photometric.json")->required();
   c_cphot->add_flag("--json", out.json, "Print the report as JSON");
 
+  CalibColourArgs ccol;
+  auto* c_ccol = c_calib->add_subcommand("colour", "3x3 colour match of the probe camera to a backplate camera");
+  c_ccol->add_option("PATCHES", ccol.patches, "CSV: probe_r,probe_g,probe_b,plate_r,plate_g,plate_b")->required();
+  c_ccol->add_option("-o,--output", ccol.output, "colour.json")->required();
+  c_ccol->add_flag("--json", out.json, "Print the report as JSON");
+
   SynthBracketArgs sbr;
   auto* c_sbr = c_synth->add_subcommand("bracket", "A bracket with known response, noise and truth from a radiance map");
   c_sbr->add_option("INPUT", sbr.input, "Radiance map or image, or 'scene'");
@@ -209,6 +215,7 @@ int main(int argc, char** argv) {
                    "Sequences: smooth the per-frame ball / image-circle track (a fixed probe, noisy detection)");
   c_pun->add_flag("--static-probe", pun.static_probe, "With --smooth-track: one median position for every frame");
   c_pun->add_flag("--fixed-ball", pun.fixed_ball, "Sequences: no tracking, frame 0's geometry for all (for comparison)");
+  c_pun->add_option("--colour-match", pun.colour_match, "3x3 colour transform to the backplate (calib colour)");
   c_pun->add_option("--rotation", pun.rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers");
   c_pun->add_option("--layout", pun.layout, "latlong|hemisphere|healpix");
   c_pun->add_option("--size", pun.size, "WxH");
@@ -265,6 +272,7 @@ int main(int argc, char** argv) {
     if (*c_hresp) return run_hdr_response(hresp, out);
     if (*c_hfuse) return run_hdr_fuse(hfuse, out);
     if (*c_cphot) return run_calib_photometric(cphot, out);
+    if (*c_ccol) return run_calib_colour(ccol, out);
     if (*c_sbr) return run_synth_bracket(sbr, out);
     if (*c_evh) return run_eval_hdr(evh, out);
     if (*c_pun) return run_probe_unwrap(pun, out);

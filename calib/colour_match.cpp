@@ -1,0 +1,116 @@
+#include "calib/colour_match.h"
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/image_io.h"
+
+namespace lp {
+
+ColourMatch fit_colour_match(const std::vector<ColourPatchPair>& pairs) {
+  if (pairs.size() < 3) throw InputError(fmt::format("colour match needs at least 3 patches, got {}", pairs.size()));
+  const int n = int(pairs.size());
+  Eigen::MatrixXd P(n, 3), Q(n, 3);
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const double p = pairs[size_t(i)].probe[size_t(c)], q = pairs[size_t(i)].plate[size_t(c)];
+      if (!std::isfinite(p) || !std::isfinite(q) || p < 0 || q < 0)
+        throw InputError(fmt::format("colour patch {}: values must be finite and non-negative", i + 1));
+      P(i, c) = p;
+      Q(i, c) = q;
+    }
+  // Least squares Q = P M^T, solved column by column with a rank-revealing QR.
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P);
+  if (qr.rank() < 3) throw InputError("colour match: the probe colours of the patches do not span RGB (singular fit)");
+  const Eigen::MatrixXd Mt = qr.solve(Q);  // 3x3, = M^T
+  ColourMatch m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m.matrix.m[size_t(3 * r + c)] = Mt(c, r);
+  double sq = 0;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d e = Mt.transpose() * P.row(i).transpose() - Q.row(i).transpose();
+    const double q = Q.row(i).norm();
+    sq += q > 0 ? (e.squaredNorm() / (q * q)) : 0;
+  }
+  m.rms_relative = std::sqrt(sq / n);
+  m.patches = n;
+  return m;
+}
+
+std::vector<ColourPatchPair> read_colour_patches_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open");
+  std::vector<ColourPatchPair> pairs;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    if (line_no == 1 && line.find("probe_r") != std::string::npos) continue;
+    std::stringstream ss(line);
+    std::string f;
+    std::vector<double> v;
+    while (std::getline(ss, f, ',')) {
+      try {
+        size_t used = 0;
+        v.push_back(std::stod(f, &used));
+      } catch (const std::exception&) {
+        throw InputError(fmt::format("{}:{}: '{}' is not a number", path, line_no, f));
+      }
+    }
+    if (v.size() != 6) throw InputError(fmt::format("{}:{}: expected 6 numbers, got {}", path, line_no, v.size()));
+    ColourPatchPair p;
+    for (int c = 0; c < 3; ++c) p.probe[size_t(c)] = v[size_t(c)], p.plate[size_t(c)] = v[size_t(c) + 3];
+    for (double x : v)
+      if (!std::isfinite(x) || x < 0)
+        throw InputError(fmt::format("{}:{}: values must be finite and non-negative", path, line_no));
+    pairs.push_back(p);
+  }
+  return pairs;
+}
+
+void save_colour_match(const std::string& path, const ColourMatch& match) {
+  nlohmann::json j = {{"format", "lightprobe.colour_match/1"},
+                      {"matrix", match.matrix.m},
+                      {"rms_relative", match.rms_relative},
+                      {"patches", match.patches}};
+  write_file_atomically(path, j.dump(2) + "\n");
+}
+
+ColourMatch load_colour_match(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open");
+  try {
+    const auto j = nlohmann::json::parse(in);
+    if (j.at("format") != "lightprobe.colour_match/1") throw InputError(path + ": not a lightprobe colour match");
+    ColourMatch m;
+    const auto a = j.at("matrix").get<std::vector<double>>();
+    if (a.size() != 9) throw InputError(path + ": matrix must have 9 numbers");
+    for (size_t i = 0; i < 9; ++i) m.matrix.m[i] = a[i];
+    m.rms_relative = j.value("rms_relative", 0.0);
+    m.patches = j.value("patches", 0);
+    return m;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: malformed colour match: {}", path, e.what()));
+  }
+}
+
+void apply_colour_match(EnvMap& map, const ColourMatch& match) {
+  const auto& m = match.matrix;
+  for (size_t i = 0; i < map.pixel_count(); ++i) {
+    float* p = map.pixel(i);
+    const Vec3 v = m * Vec3{p[0], p[1], p[2]};
+    p[0] = float(std::max(0.0, v.x));
+    p[1] = float(std::max(0.0, v.y));
+    p[2] = float(std::max(0.0, v.z));
+  }
+}
+
+}  // namespace lp

@@ -171,6 +171,61 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
 
 }  // namespace
 
+MergeWeights merge_weights(const CameraResponse& resp, int bit_depth, const std::vector<double>& exposure_seconds,
+                           const MergeOptions& o) {
+  check_response(resp, "response");
+  if (exposure_seconds.empty()) throw InputError("merge weights: no exposure times");
+  const int L = resp.levels;
+  const double lo = o.black_threshold, hi = o.saturation_threshold;
+  const MergeOptions::Weighting weighting = o.exposure_weighting ? o.weighting : MergeOptions::Weighting::Hat;
+  const bool noise_aware = weighting == MergeOptions::Weighting::NoiseAware;
+  if (noise_aware && (!(o.noise_full_well > 0.0) || !(o.noise_read_electrons >= 0.0)))
+    throw InputError(fmt::format("merge noise model: need full well > 0 ({}) and read noise >= 0 ({})",
+                                 o.noise_full_well, o.noise_read_electrons));
+  MergeWeights mw;
+  for (int c = 0; c < 3; ++c) {
+    const std::vector<float>& g = resp.log_exposure[size_t(c)];
+    // NoiseAware: 1 / var(ln E) per level (see MergeOptions).
+    std::vector<double> inv_var(size_t(L), 1.0);
+    if (noise_aware) {
+      const int h = std::max(1, (L - 1) / 64);
+      const int sat = std::clamp(int(std::lround(hi * (L - 1))), 0, L - 1);
+      const double steps = std::pow(2.0, double(std::clamp(bit_depth, 1, 30))) - 1.0;
+      const double q = 1.0 / std::min(steps, double(L - 1));  // one code step
+      const double N = o.noise_full_well, r = o.noise_read_electrons;
+      double top = 0.0;
+      for (int l = 0; l < L; ++l) {
+        const int a = std::max(0, l - h), e = std::min(L - 1, l + h);
+        // g' per code unit (a code value in [0, 1] spans L - 1 levels); a non-monotone
+        // stretch of a recovered curve is limited by the sensor terms alone.
+        const double slope = std::max(0.0, double(g[size_t(e)] - g[size_t(a)]) / double(e - a) * double(L - 1));
+        const double X = std::exp(std::min(double(g[size_t(l)] - g[size_t(sat)]), 50.0));
+        const double var = slope * slope * q * q / 12.0 + 1.0 / (N * X) + (r * r) / (N * N * X * X);
+        // var(E_k) = E_k^2 var(ln E_k) at the frame's own estimate E_k = exp(g) / t_k: the
+        // level part here (exp(-2 g), relative to the saturation level), t_k^2 per frame below.
+        const double rel = std::clamp(double(g[size_t(l)] - g[size_t(sat)]), -40.0, 40.0);
+        inv_var[size_t(l)] = var > 0.0 && std::isfinite(var) ? std::exp(-2.0 * rel) / var : 0.0;
+        top = std::max(top, inv_var[size_t(l)]);
+      }
+      // Normalised to a maximum of 1, floored so that no usable code underflows to weight 0.
+      for (double& v : inv_var) v = std::max(top > 0.0 ? v / top : 0.0, 1e-30);
+    }
+    mw.level[size_t(c)].resize(size_t(L));
+    for (int l = 0; l < L; ++l) {
+      const double z = double(l) / double(L - 1);
+      const double hat = (z <= lo || z >= hi) ? 0.0 : 1.0 - std::abs(2.0 * (z - lo) / (hi - lo) - 1.0);
+      mw.level[size_t(c)][size_t(l)] = float(hat * inv_var[size_t(l)]);
+    }
+  }
+  // Exposure factors relative to the longest exposure keep every product in float range.
+  const double t_max = *std::max_element(exposure_seconds.begin(), exposure_seconds.end());
+  for (double t : exposure_seconds)
+    mw.frame.push_back(float(weighting == MergeOptions::Weighting::HatTimesExposure ? t / t_max
+                             : noise_aware                                         ? (t / t_max) * (t / t_max)
+                                                                                   : 1.0));
+  return mw;
+}
+
 RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const MergeOptions& o, MergeReport* report) {
   const auto start = std::chrono::steady_clock::now();
   check_bracket(b);
@@ -197,23 +252,17 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
   T.levels = L;
   T.scale = float(L - 1);
   const double lo = o.black_threshold, hi = o.saturation_threshold;
+  const MergeWeights mw = merge_weights(resp, b.bit_depth, b.exposure_seconds, o);
   for (int c = 0; c < 3; ++c) {
-    T.w[size_t(c)].resize(size_t(L));
+    const std::vector<float>& g = resp.log_exposure[size_t(c)];
+    T.w[size_t(c)] = mw.level[size_t(c)];
     T.wx[size_t(c)].resize(size_t(L));
-    for (int l = 0; l < L; ++l) {
-      const double z = double(l) / double(L - 1);
-      const double h = (z <= lo || z >= hi) ? 0.0 : 1.0 - std::abs(2.0 * (z - lo) / (hi - lo) - 1.0);
-      T.w[size_t(c)][size_t(l)] = float(h);
-      T.wx[size_t(c)][size_t(l)] = float(h * std::exp(double(resp.log_exposure[size_t(c)][size_t(l)])));
-    }
+    for (int l = 0; l < L; ++l)
+      T.wx[size_t(c)][size_t(l)] = float(double(mw.level[size_t(c)][size_t(l)]) * std::exp(double(g[size_t(l)])));
   }
-  // Exposure factors relative to the longest exposure keep every product in float range.
-  const double t_max = *std::max_element(b.exposure_seconds.begin(), b.exposure_seconds.end());
   for (size_t k = 0; k < nf; ++k) {
-    const double t = b.exposure_seconds[k];
-    const double s = o.exposure_weighting ? t / t_max : 1.0;
-    T.frame_w.push_back(float(s));
-    T.frame_wx.push_back(float(s / t));
+    T.frame_w.push_back(mw.frame[k]);
+    T.frame_wx.push_back(float(double(mw.frame[k]) / b.exposure_seconds[k]));
   }
   T.by_time.resize(nf);
   std::iota(T.by_time.begin(), T.by_time.end(), size_t(0));

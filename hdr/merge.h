@@ -1,7 +1,7 @@
 // Merging an exposure bracket into one relative-radiance image through a camera response:
 // L = Σ_k w_k exp(g(z_k)) / t_k / Σ_k w_k per channel (Debevec & Malik 1997, eq. 6, in the
-// linear domain), with hat weights on code values that drop clipped codes and, by
-// default, the noise-aware factor t_k.
+// linear domain), with hat weights on code values that drop clipped codes, times the
+// factor t_k (default) or the inverse variance of a sensor noise model (MergeOptions::weighting).
 #pragma once
 
 #include <array>
@@ -22,11 +22,51 @@ struct MergeOptions {
   // thresholds and 1 halfway.
   double black_threshold = 0.02;
   double saturation_threshold = 0.98;
-  // Multiply each frame's weight by its exposure time: for photon (Poisson) noise the
-  // variance of z/t is ∝ E/t, so the inverse-variance weight of a frame is ∝ t. Where
-  // quantisation rather than photon noise limits the error and the response is strongly
-  // non-linear, it can hurt: on a noise-free 8-bit bracket through a film S-curve
-  // (tests/hdr/merge_test.cpp) it doubles the median log10 error, 0.0026 vs 0.0012.
+  // How each frame's code value is weighted (the weight of frame k at code z, per channel):
+  //   Hat               hat(z)
+  //   HatTimesExposure  hat(z) * t_k: for photon (Poisson) noise the variance of z/t is
+  //                     ∝ E/t, so the inverse-variance weight of a frame is ∝ t. Where
+  //                     quantisation rather than photon noise limits the error and the
+  //                     response is strongly non-linear, it can hurt: on a noise-free 8-bit
+  //                     bracket through a film S-curve (tests/hdr/merge_test.cpp) it doubles
+  //                     the median log10 error, 0.0026 vs 0.0012.
+  //   NoiseAware        (default) hat(z) / var(E_k): the inverse variance of frame k's
+  //                     estimate E_k = exp(g(z)) / t_k under a sensor model (Robertson et al.
+  //                     2003, Granados et al. 2010), with g = ln(E t) the response:
+  //                       X(z) = exp(g(z) - g(saturation_threshold))   exposure, 1 = full well
+  //                       sigma_z^2 = q^2/12                            quantisation, q = one code step
+  //                                 + (sigma_X / X'(z))^2               sensor noise through the response
+  //                       sigma_X^2 = X / N + (r / N)^2                 shot + read noise (N = noise_full_well,
+  //                                                                     r = noise_read_electrons)
+  //                       var(ln E_k) = (g'(z) sigma_z)^2
+  //                                   = g'(z)^2 q^2/12 + 1/(N X) + (r/(N X))^2   (X' = X g')
+  //                       var(E_k) = E_k^2 var(ln E_k)   at the frame's own E_k, so the weight is
+  //                       hat(z) exp(-2 g(z)) / var(ln E_k)  per level  ×  t_k^2  per frame
+  //                     g' (per code unit) is a central difference of the response table over
+  //                     ±(levels−1)/64 levels, so a flat response (toe, shoulder: g' large) gets
+  //                     almost no weight; q = 1/(min(2^bit_depth, levels) − 1). Where frames
+  //                     agree, the E_k^2 factor is common and this is the inverse variance of
+  //                     ln E (shot-noise limited: ∝ t, as HatTimesExposure). Where one is biased
+  //                     high, it weighs less: on Memorial, pixels at the film's fog floor
+  //                     (code ~19 in every frame) otherwise take the short frames' far too
+  //                     bright estimates (with var(ln E) alone, p95 0.171 instead of 0.046).
+  // Every weighting is a per-level table times a per-frame factor, precomputed once: the
+  // per-pixel cost is the same for all three.
+  enum class Weighting { Hat, HatTimesExposure, NoiseAware };
+  Weighting weighting = Weighting::NoiseAware;
+  // Sensor constants of NoiseAware: electrons at the saturation code (full well) and the
+  // read-noise sigma in electrons. Only their ratios to the quantisation term matter; the
+  // defaults (10 000 e-, 2 e-) are a small-pixel sensor's, as in hdr/synthetic_bracket.h.
+  double noise_full_well = 10000.0;
+  double noise_read_electrons = 2.0;
+  // Legacy switch (CLI --no-exposure-weighting): false merges with plain Hat weights
+  // whatever `weighting` says (NoiseAware, too, trusts long exposures more).
+  // Measured (tests/hdr/merge_weights_test.cpp, DISABLED_WeightingTable; median/p95 log10
+  // error): Memorial vs Debevec's HDRShop map, our Debevec g: Hat 0.149/1.12, HatTimesExposure
+  // 0.0114/0.0546, NoiseAware 0.0101/0.0457; 3-frame synthetic brackets (grace, pisa, uffizi,
+  // procedural scene; gamma and S-curve; true and recovered g): NoiseAware within 0.5 % of
+  // HatTimesExposure on 10 of 16, 0.6-2.2 % worse on 6 (S-curve; worst pisa, true g, 0.00427/
+  // 0.01391 vs 0.00418/0.01366); Hat up to 50 % worse (pisa gamma).
   bool exposure_weighting = true;
   // TBB worker threads (rows in parallel); 0 = TBB's default.
   int threads = 0;
@@ -70,5 +110,15 @@ struct MergeReport {
 // frame valid masks of the wrong count or size.
 RgbImage merge_bracket(const Bracket& bracket, const CameraResponse& response, const MergeOptions& options = {},
                        MergeReport* report = nullptr);
+
+// The merge's weights, as merge_bracket precomputes them: frame k's weight at code level l
+// of channel c is level[c][l] * frame[k] (0 outside the thresholds). Throws InputError on a
+// response of the wrong shape, no exposure times or bad noise constants.
+struct MergeWeights {
+  std::array<std::vector<float>, 3> level;
+  std::vector<float> frame;
+};
+MergeWeights merge_weights(const CameraResponse& response, int bit_depth, const std::vector<double>& exposure_seconds,
+                           const MergeOptions& options = {});
 
 }  // namespace lp

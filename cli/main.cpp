@@ -154,7 +154,8 @@ int main(int argc, char** argv) {
   c_hfuse->add_option("--photometric", hfuse.photometric, "Photometric calibration: absolute units");
   c_hfuse->add_option("--align", hfuse.align, "Align hand-held frames: none|mtb|ecc");
   c_hfuse->add_flag("--deghost", hfuse.deghost, "Drop moving objects from the frames that disagree");
-  c_hfuse->add_flag("--no-exposure-weighting", hfuse.no_exposure_weighting, "Do not trust long exposures more");
+  c_hfuse->add_flag("--no-exposure-weighting", hfuse.no_exposure_weighting,
+                    "Plain hat weights instead of noise-aware ones (every frame trusted alike)");
   c_hfuse->add_option("--ignore-colour", hfuse.ignore_colour, "r,g,b of registration borders to leave out");
   c_hfuse->add_option("-o,--output", hfuse.output, "probe.exr")->required();
   c_hfuse->add_flag("--json", out.json, "Print the report as JSON");

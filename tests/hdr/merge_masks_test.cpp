@@ -113,10 +113,9 @@ TEST(MergeMasks, AligningAShakenBracketAndMergingWithTheValidMasksCutsTheErrorAg
 
 TEST(MergeMasks, GhostMasksRemoveAMovingObjectFromTheMergedImage) {
   const RgbImage truth = grace();
-  // The object at 4x the median luminance: code ~0.72 in the (linear) middle exposure. At the
-  // default 16x it saturates the reference, whose bound then loses to the frames that show
-  // background there (see the report of this change); that is ghost_masks' choice of anchor,
-  // not the merge's.
+  // The object at 4x the median luminance: code ~0.72 in the (linear) middle exposure, so the
+  // reference sees it unclipped. (An object that saturates the reference is covered in
+  // deghost_test: there only its saturation bound is left where no other frame saw it.)
   std::vector<float> y;
   for (size_t p = 0; p < truth.rgb.size(); p += 3)
     y.push_back(0.2126f * truth.rgb[p] + 0.7152f * truth.rgb[p + 1] + 0.0722f * truth.rgb[p + 2]);

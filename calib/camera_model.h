@@ -1,0 +1,60 @@
+// A calibrated camera: lens model + intrinsics + image size, with project/unproject for
+// every model, including rays beyond 90 deg from the axis for > 180 deg fisheyes.
+//
+// Models (names as mrcal spells them where mrcal has the model):
+//   LENSMODEL_PINHOLE                      fx fy cx cy
+//   LENSMODEL_STEREOGRAPHIC                fx fy cx cy
+//   LENSMODEL_OPENCV8                      fx fy cx cy k1 k2 p1 p2 k3 k4 k5 k6 (OpenCV rational)
+//   LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=..._Ny=..._fov_x_deg=...   fx fy cx cy + spline
+//   LENSMODEL_KANNALA_BRANDT               fx fy cx cy k1 k2 k3 k4 (cv::fisheye; not an mrcal model)
+//   LENSMODEL_OMNIDIR_MEI                  fx fy cx cy xi k1 k2 p1 p2 (cv::omnidir; not an mrcal model)
+// Coordinates: pixels with OpenCV's convention (pixel centres at integers, x right, y
+// down); camera frame x right, y down, z forward (both OpenCV and mrcal). A model's
+// `world_from_camera` is not part of it: the probe stage adds the rotation.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/vec3.h"
+
+namespace lp {
+
+struct CameraModel {
+  std::string lensmodel;           // e.g. "LENSMODEL_OPENCV8"
+  std::vector<double> intrinsics;  // as listed above for the model
+  int width = 0, height = 0;       // image size the model was calibrated for
+  // Informational: where it came from and how well it fits (written to the files' comments).
+  double rms_reprojection_px = 0;
+  double cross_validation_px = 0;  // headline accuracy: see calib/geometric.h
+};
+
+// Number of intrinsics a model takes (splined: from its configuration string); throws
+// InputError for an unknown model name.
+int intrinsics_count(const std::string& lensmodel);
+bool is_mrcal_model(const std::string& lensmodel);
+
+// Pixel of a camera-frame direction (need not be normalised); nullopt where the model
+// cannot image it (behind a pinhole, beyond a fisheye's domain).
+struct Pixel {
+  double x = 0, y = 0;
+};
+std::optional<Pixel> project(const CameraModel& model, Vec3 direction_camera);
+// Unit camera-frame direction of a pixel; nullopt where the model has no ray.
+std::optional<Vec3> unproject(const CameraModel& model, Pixel pixel);
+
+// Files. .cameramodel is mrcal's text format (readable by mrcal's Python and C readers);
+// only mrcal models can be written to it (InputError otherwise). OpenCV FileStorage YAML
+// with the keys of CONVENTIONS.md "Camera models" (image_width, image_height,
+// camera_matrix, distortion_coefficients, distortion_model = rational | plumb_bob |
+// fisheye | omnidir (+ xi)); models OpenCV has no form for (stereographic, splined) are
+// refused with InputError. Both written atomically.
+void write_cameramodel(const std::string& path, const CameraModel& model);
+CameraModel read_cameramodel(const std::string& path);
+void write_opencv_yaml(const std::string& path, const CameraModel& model);
+CameraModel read_opencv_yaml(const std::string& path);
+// By extension: .cameramodel or .yaml/.yml/.xml.
+CameraModel read_camera_model(const std::string& path);
+
+}  // namespace lp

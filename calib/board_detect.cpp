@@ -1,0 +1,191 @@
+#include "calib/board_detect.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+using Corners = std::vector<std::array<double, 2>>;
+
+cv::Mat to_gray8(const CameraImage& image) {
+  cv::Mat gray(image.height, image.width, CV_8U);
+  const float* p = image.rgb.data();
+  for (int y = 0; y < image.height; ++y) {
+    auto* row = gray.ptr<uint8_t>(y);
+    for (int x = 0; x < image.width; ++x, p += 3) {
+      const double v = 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2];
+      row[x] = static_cast<uint8_t>(std::clamp(std::lround(v * 255.0), 0L, 255L));
+    }
+  }
+  return gray;
+}
+
+// Shortest distance from corner (r, c) to a grid neighbour: the local square size in pixels.
+double local_square_px(const std::vector<cv::Point2f>& pts, int cols, int rows, int r, int c) {
+  double best = 1e30;
+  const cv::Point2f p = pts[r * cols + c];
+  const int dr[4] = {-1, 1, 0, 0}, dc[4] = {0, 0, -1, 1};
+  for (int k = 0; k < 4; ++k) {
+    const int rr = r + dr[k], cc = c + dc[k];
+    if (rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
+    const cv::Point2f d = pts[rr * cols + cc] - p;
+    best = std::min(best, std::hypot(double(d.x), double(d.y)));
+  }
+  return best;
+}
+
+struct RefineStats {
+  int reverted = 0;
+  double median_shift = 0;
+};
+
+// cornerSubPix per corner with a half-window of ~0.4 of the local square size (2..10 px),
+// so small or strongly curved squares are not blurred together with their neighbours.
+// A move larger than max_shift (when > 0) is undone.
+RefineStats refine(const cv::Mat& gray, std::vector<cv::Point2f>& pts, int cols, int rows,
+                   double max_shift) {
+  RefineStats stats;
+  std::vector<double> shifts;
+  const cv::TermCriteria criteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 40, 0.001);
+  std::vector<cv::Point2f> one(1);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const double square = local_square_px(pts, cols, rows, r, c);
+      const int half = std::clamp(static_cast<int>(std::floor(0.4 * square)), 2, 10);
+      one[0] = pts[r * cols + c];
+      cv::cornerSubPix(gray, one, cv::Size(half, half), cv::Size(-1, -1), criteria);
+      const cv::Point2f d = one[0] - pts[r * cols + c];
+      const double shift = std::hypot(double(d.x), double(d.y));
+      if (!std::isfinite(shift) || (max_shift > 0 && shift > max_shift)) {
+        ++stats.reverted;
+        continue;
+      }
+      shifts.push_back(shift);
+      pts[r * cols + c] = one[0];
+    }
+  }
+  if (!shifts.empty()) {
+    std::nth_element(shifts.begin(), shifts.begin() + shifts.size() / 2, shifts.end());
+    stats.median_shift = shifts[shifts.size() / 2];
+  }
+  return stats;
+}
+
+bool try_classic(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Point2f>& pts) {
+  return cv::findChessboardCorners(
+      gray, cv::Size(board.cols, board.rows), pts,
+      cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK);
+}
+
+bool try_sb(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Point2f>& pts) {
+  return cv::findChessboardCornersSB(gray, cv::Size(board.cols, board.rows), pts,
+                                     cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
+}
+
+bool valid_points(const std::vector<cv::Point2f>& pts, const BoardSpec& board) {
+  if (pts.size() != static_cast<size_t>(board.cols) * board.rows) return false;
+  for (const auto& p : pts)
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) return false;
+  return true;
+}
+
+}  // namespace
+
+void canonicalize_corner_order(Corners& corners, int cols, int rows) {
+  if (corners.size() != static_cast<size_t>(cols) * rows || corners.empty()) return;
+  // Source (row, col) for output (r, c) under each symmetry of the grid's shape.
+  struct Map {
+    bool transpose, flip_r, flip_c;
+  };
+  std::vector<Map> maps;
+  for (int t = 0; t < (cols == rows ? 2 : 1); ++t)
+    for (int fr = 0; fr < 2; ++fr)
+      for (int fc = 0; fc < 2; ++fc) maps.push_back({t == 1, fr == 1, fc == 1});
+  auto source = [&](const Map& m, int r, int c) {
+    int rr = m.transpose ? c : r, cc = m.transpose ? r : c;
+    if (m.flip_r) rr = rows - 1 - rr;
+    if (m.flip_c) cc = cols - 1 - cc;
+    return corners[rr * cols + cc];
+  };
+  int best = 0;
+  double best_d2 = 0, best_x = 0;
+  for (size_t i = 0; i < maps.size(); ++i) {
+    const auto p0 = source(maps[i], 0, 0), p1 = source(maps[i], 0, cols - 1);
+    const double d2 = p0[0] * p0[0] + p0[1] * p0[1];
+    const double dx = p1[0] - p0[0], dy = p1[1] - p0[1];
+    const double along_x = dx / std::max(1e-12, std::hypot(dx, dy));
+    if (i == 0 || d2 < best_d2 || (d2 == best_d2 && along_x > best_x)) {
+      best = static_cast<int>(i);
+      best_d2 = d2;
+      best_x = along_x;
+    }
+  }
+  Corners out(corners.size());
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) out[r * cols + c] = source(maps[best], r, c);
+  corners = std::move(out);
+}
+
+BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
+                            const DetectOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgb.size() != static_cast<size_t>(image.width) * image.height * 3)
+    throw InputError("detect_board: empty or inconsistent image");
+  if (board.cols < 3 || board.rows < 3)
+    throw InputError("detect_board: board needs at least 3x3 inner corners, got " +
+                     std::to_string(board.cols) + "x" + std::to_string(board.rows));
+
+  BoardDetection result;
+  const cv::Mat gray = to_gray8(image);
+  cv::Mat equalised;
+  std::vector<cv::Point2f> pts;
+  std::string tried;
+
+  auto attempt = [&](const cv::Mat& img, bool sb, const std::string& name) {
+    if (!tried.empty()) tried += ", ";
+    tried += name;
+    pts.clear();
+    const bool ok = sb ? try_sb(img, board, pts) : try_classic(img, board, pts);
+    if (!ok || !valid_points(pts, board)) return false;
+    // Refine on the original grey image: CLAHE changes edge profiles.
+    if (!sb || options.refine_sb) {
+      const RefineStats stats =
+          refine(gray, pts, board.cols, board.rows, sb ? options.max_refine_shift_px : 0.0);
+      result.refine_reverted = stats.reverted;
+      result.refine_median_shift_px = stats.median_shift;
+    }
+    result.method = name;
+    return true;
+  };
+
+  bool found = (options.classic && attempt(gray, false, "classic")) ||
+               (options.sb && attempt(gray, true, "sb"));
+  if (!found && options.clahe && (options.classic || options.sb)) {
+    cv::createCLAHE(2.0, cv::Size(8, 8))->apply(gray, equalised);
+    found = (options.classic && attempt(equalised, false, "classic+clahe")) ||
+            (options.sb && attempt(equalised, true, "sb+clahe"));
+  }
+  if (found) {
+    result.found = true;
+    result.corners.reserve(pts.size());
+    for (const auto& p : pts) result.corners.push_back({double(p.x), double(p.y)});
+    canonicalize_corner_order(result.corners, board.cols, board.rows);
+  } else {
+    result.method.clear();
+    result.reason = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+                    " inner-corner chessboard found (tried " + (tried.empty() ? "nothing" : tried) +
+                    ")";
+  }
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace lp

@@ -1,0 +1,56 @@
+// Chessboard detection for geometric calibration, built for fisheye and wide lenses.
+//
+// Strategy (first success wins):
+//   1. classic cv::findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE | FAST_CHECK)
+//      refined by cv::cornerSubPix: fast, the best sub-pixel precision on straight boards;
+//   2. cv::findChessboardCornersSB (EXHAUSTIVE | ACCURACY): recall on curved fisheye boards
+//      and steep views, then cornerSubPix with a window sized from the local square size;
+//      a corner that refinement moves by more than max_refine_shift_px keeps SB's position;
+//   3. (optional) both again on a CLAHE-equalised image (dim or uneven lighting).
+// Corner order is row-major over the board (`cols` corners per row) and deterministic:
+// corner 0 is the outer corner of the grid nearest the image origin (0, 0); of the grid
+// re-orderings with that first corner (and the board's shape), the one whose first row runs
+// most nearly along +x (square boards) is kept. So cols x rows and rows x cols detections of
+// one view are transposes of each other. Pixel coordinates: OpenCV convention (pixel
+// centres at integers). The library prints nothing; bad arguments throw InputError.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/image_io.h"
+
+namespace lp {
+
+struct BoardSpec {
+  int cols = 9, rows = 6;  // inner corners per row / per column
+  double square_mm = 30;
+};
+
+struct DetectOptions {
+  bool classic = true;        // stage 1
+  bool sb = true;             // stage 2
+  bool clahe = true;          // stage 3 (only when 1 and 2 fail)
+  bool refine_sb = true;      // cornerSubPix after SB
+  double max_refine_shift_px = 1.0;
+};
+
+struct BoardDetection {
+  bool found = false;
+  std::vector<std::array<double, 2>> corners;  // row-major over the board, cols per row
+  std::string method;   // "classic", "sb", "classic+clahe", "sb+clahe"; "" when not found
+  std::string reason;   // why nothing was found; empty when found
+  double seconds = 0;   // wall time of detect_board
+  int refine_reverted = 0;       // SB corners whose cornerSubPix move exceeded the limit
+  double refine_median_shift_px = 0;  // median move of the accepted refinements
+};
+
+// Throws InputError for an empty image or a board with fewer than 3 inner corners per side.
+BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
+                            const DetectOptions& options = {});
+
+// Put `corners` (row-major, cols per row) into the canonical order described above.
+void canonicalize_corner_order(std::vector<std::array<double, 2>>& corners, int cols, int rows);
+
+}  // namespace lp

@@ -1,0 +1,189 @@
+#include "calib/board_detect.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+
+namespace fs = std::filesystem;
+
+namespace lp {
+namespace {
+
+using Corners = std::vector<std::array<double, 2>>;
+
+const std::string kData = LIGHTPROBE_SHARED_DATA;
+
+std::string set_dir(const std::string& set) { return kData + "/" + set + "/"; }
+
+// Reference corners of one image: board (X, Y) grid index -> 0-based pixel.
+struct Reference {
+  int nx = 0, ny = 0;  // grid extent along board X and Y
+  std::map<std::pair<int, int>, std::array<double, 2>> at;
+};
+
+std::map<std::string, Reference> read_reference(const std::string& csv, double square_mm) {
+  std::map<std::string, Reference> out;
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string image, idx, u, v, X, Y;
+    std::getline(ss, image, ',');
+    std::getline(ss, idx, ',');
+    std::getline(ss, u, ',');
+    std::getline(ss, v, ',');
+    std::getline(ss, X, ',');
+    std::getline(ss, Y, ',');
+    Reference& ref = out[image];
+    const int i = static_cast<int>(std::lround(std::stod(X) / square_mm));
+    const int j = static_cast<int>(std::lround(std::stod(Y) / square_mm));
+    ref.nx = std::max(ref.nx, i + 1);
+    ref.ny = std::max(ref.ny, j + 1);
+    ref.at[{i, j}] = {std::stod(u) - 1.0, std::stod(v) - 1.0};  // MATLAB 1-based -> 0-based
+  }
+  return out;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Median |corner - reference| over the best of the grid's symmetries (the reference's
+// own ordering convention differs from ours); NaN when shapes do not match.
+double median_error_vs_reference(const Corners& corners, int cols, int rows, const Reference& ref) {
+  double best = NAN;
+  for (int t = 0; t < 2; ++t)
+    for (int fr = 0; fr < 2; ++fr)
+      for (int fc = 0; fc < 2; ++fc) {
+        // Our (r, c) -> reference (i, j).
+        const int ni = t ? rows : cols, nj = t ? cols : rows;
+        if (ni != ref.nx || nj != ref.ny) continue;
+        std::vector<double> errors;
+        for (int r = 0; r < rows; ++r)
+          for (int c = 0; c < cols; ++c) {
+            int i = t ? r : c, j = t ? c : r;
+            if (fr) j = nj - 1 - j;
+            if (fc) i = ni - 1 - i;
+            const auto it = ref.at.find({i, j});
+            if (it == ref.at.end()) continue;
+            const auto& p = corners[r * cols + c];
+            errors.push_back(std::hypot(p[0] - it->second[0], p[1] - it->second[1]));
+          }
+        const double m = median(errors);
+        if (std::isnan(best) || m < best) best = m;
+      }
+  return best;
+}
+
+struct SetResult {
+  int images = 0, found = 0;
+  double seconds = 0;
+  std::vector<double> medians;  // per image with a reference
+  std::map<std::string, int> methods;
+};
+
+SetResult run_set(const std::vector<std::string>& paths, const BoardSpec& board,
+                  const std::map<std::string, Reference>* refs = nullptr,
+                  const DetectOptions& options = {}) {
+  SetResult out;
+  for (const auto& path : paths) {
+    const CameraImage image = read_camera_image(path);
+    const BoardDetection d = detect_board(image, board, options);
+    ++out.images;
+    out.seconds += d.seconds;
+    if (!d.found) {
+      EXPECT_FALSE(d.reason.empty()) << path;
+      continue;
+    }
+    EXPECT_EQ(d.corners.size(), static_cast<size_t>(board.cols * board.rows));
+    ++out.found;
+    ++out.methods[d.method];
+    if (refs) {
+      const auto it = refs->find(fs::path(path).filename().string());
+      if (it != refs->end())
+        out.medians.push_back(median_error_vs_reference(d.corners, board.cols, board.rows, it->second));
+    }
+  }
+  std::string methods;
+  for (const auto& [m, n] : out.methods) methods += " " + m + "=" + std::to_string(n);
+  std::printf("[board] %zu-image set %s: found %d/%d, %.3f s/image, median err vs ref %.3f px over %zu,%s\n",
+              paths.size(), fs::path(paths.front()).parent_path().filename().c_str(), out.found,
+              out.images, out.seconds / std::max(1, out.images), median(out.medians),
+              out.medians.size(), methods.c_str());
+  return out;
+}
+
+std::vector<std::string> images_in(const std::string& dir, const std::string& prefix = "") {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (e.path().extension() == ".jpg" && name.rfind(prefix, 0) == 0) out.push_back(e.path().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+bool have(const std::string& set) { return fs::exists(set_dir(set)); }
+
+TEST(BoardDetect, OpencvStereo9x6) {
+  if (!have("calib-opencv-stereo-9x6")) GTEST_SKIP() << "no shared data";
+  const auto r = run_set(images_in(set_dir("calib-opencv-stereo-9x6")), {9, 6, 25});
+  EXPECT_GE(r.found, 21);
+}
+
+TEST(BoardDetect, OcamcalibFisheye1) {
+  if (!have("calib-ocamcalib-fisheye1")) GTEST_SKIP() << "no shared data";
+  const auto r = run_set(images_in(set_dir("calib-ocamcalib-fisheye1")), {6, 8, 32.5});
+  EXPECT_GE(r.found, 14);
+}
+
+const std::string kOmni = "calib-ocamcalib-omni-samples";
+
+TEST(BoardDetect, Fisheye190deg) {
+  if (!have(kOmni)) GTEST_SKIP() << "no shared data";
+  const auto refs = read_reference(set_dir(kOmni) + "reference_corners_Fisheye190deg.csv", 30);
+  const auto r = run_set(images_in(set_dir(kOmni) + "Fisheye190deg"), {6, 7, 30}, &refs);
+  EXPECT_GE(r.found, 3);
+}
+
+TEST(BoardDetect, VMRImage) {
+  if (!have(kOmni)) GTEST_SKIP() << "no shared data";
+  const auto refs = read_reference(set_dir(kOmni) + "reference_corners_VMRImage.csv", 30);
+  const auto r = run_set(images_in(set_dir(kOmni) + "VMRImage"), {6, 7, 30}, &refs);
+  EXPECT_GE(r.found, 0);
+}
+
+TEST(BoardDetect, Ladybug) {
+  if (!have(kOmni)) GTEST_SKIP() << "no shared data";
+  const auto refs = read_reference(set_dir(kOmni) + "reference_corners_Ladybug.csv", 30);
+  const auto r = run_set(images_in(set_dir(kOmni) + "Ladybug"), {5, 8, 30}, &refs);
+  EXPECT_GE(r.found, 0);
+}
+
+TEST(BoardDetect, KaidanOmni) {
+  if (!have(kOmni)) GTEST_SKIP() << "no shared data";
+  const auto r = run_set(images_in(set_dir(kOmni) + "KaidanOmni"), {7, 11, 30});
+  EXPECT_GE(r.found, 0);
+}
+
+TEST(BoardDetect, MiniOmni) {
+  if (!have(kOmni)) GTEST_SKIP() << "no shared data";
+  const auto r = run_set(images_in(set_dir(kOmni) + "MiniOmni"), {7, 11, 30});
+  EXPECT_GE(r.found, 0);
+}
+
+}  // namespace
+}  // namespace lp

@@ -1,0 +1,485 @@
+#include "calib/camera_model.h"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/image_io.h"
+
+// mrcal.h is a C header without extern "C".
+extern "C" {
+#include <mrcal/mrcal.h>
+}
+
+namespace lp {
+namespace {
+
+constexpr const char* kKannalaBrandt = "LENSMODEL_KANNALA_BRANDT";
+constexpr const char* kOmnidirMei = "LENSMODEL_OMNIDIR_MEI";
+
+// ---- mrcal lens models ----------------------------------------------------------------
+
+// mrcal's parsed lens model for a name; the last name is cached per thread because the
+// splined models' configuration is parsed with sscanf and project() is called per pixel.
+bool parse_mrcal_lensmodel(const std::string& name, mrcal_lensmodel_t* out) {
+  thread_local std::string cached_name;
+  thread_local mrcal_lensmodel_t cached{};
+  thread_local bool cached_ok = false;
+  if (name != cached_name || cached_name.empty()) {
+    cached_name = name;
+    cached = mrcal_lensmodel_t{};
+    cached_ok = !name.empty() && mrcal_lensmodel_from_name(&cached, name.c_str());
+  }
+  *out = cached;
+  return cached_ok;
+}
+
+void check_intrinsics(const CameraModel& m) {
+  const int n = intrinsics_count(m.lensmodel);
+  if (int(m.intrinsics.size()) != n)
+    throw InputError(m.lensmodel + ": " + std::to_string(m.intrinsics.size()) + " intrinsics, the model takes " +
+                     std::to_string(n));
+}
+
+// ---- Kannala-Brandt (cv::fisheye) -----------------------------------------------------
+
+inline double kb_distort(const double* k, double t) {
+  const double t2 = t * t;
+  return t * (1 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))));
+}
+inline double kb_derivative(const double* k, double t) {
+  const double t2 = t * t;
+  return 1 + t2 * (3 * k[0] + t2 * (5 * k[1] + t2 * (7 * k[2] + t2 * 9 * k[3])));
+}
+
+// Largest theta in (0, pi] up to which theta_d(theta) increases: the model's domain.
+// Cached per thread for the last coefficients (project/unproject run per pixel).
+double kb_max_theta(const double* k) {
+  thread_local std::array<double, 4> cached_k{NAN, NAN, NAN, NAN};
+  thread_local double cached_max = 0;
+  if (std::equal(k, k + 4, cached_k.begin())) return cached_max;
+  constexpr int kSteps = 2048;
+  double max_theta = M_PI;
+  for (int i = 1; i <= kSteps; ++i) {
+    const double t = M_PI * i / kSteps;
+    if (!(kb_derivative(k, t) > 0)) {
+      // refine the first zero of the derivative by bisection
+      double lo = M_PI * (i - 1) / kSteps, hi = t;
+      for (int it = 0; it < 60; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (kb_derivative(k, mid) > 0 ? lo : hi) = mid;
+      }
+      max_theta = lo;
+      break;
+    }
+  }
+  std::copy(k, k + 4, cached_k.begin());
+  cached_max = max_theta;
+  return max_theta;
+}
+
+std::optional<Pixel> kb_project(const double* p, Vec3 d) {
+  const double* k = p + 4;
+  const double rho = std::hypot(d.x, d.y);
+  const double theta = std::atan2(rho, d.z);
+  if (!(rho > 0 || d.z > 0)) return std::nullopt;  // zero vector or exactly backwards
+  if (!(theta <= kb_max_theta(k))) return std::nullopt;
+  if (rho == 0) return Pixel{p[2], p[3]};
+  const double s = kb_distort(k, theta) / rho;
+  return Pixel{p[0] * s * d.x + p[2], p[1] * s * d.y + p[3]};
+}
+
+std::optional<Vec3> kb_unproject(const double* p, Pixel q) {
+  const double* k = p + 4;
+  const double a = (q.x - p[2]) / p[0], b = (q.y - p[3]) / p[1];
+  const double theta_d = std::hypot(a, b);
+  if (!std::isfinite(theta_d)) return std::nullopt;
+  if (theta_d == 0) return Vec3{0, 0, 1};
+  const double hi0 = kb_max_theta(k);
+  if (!(kb_distort(k, hi0) >= theta_d)) return std::nullopt;  // beyond the lens' image circle
+  // Safeguarded Newton on the monotonic branch [0, hi0].
+  double lo = 0, hi = hi0, t = std::min(theta_d, hi0);
+  for (int it = 0; it < 100; ++it) {
+    const double f = kb_distort(k, t) - theta_d;
+    if (f > 0) hi = t; else lo = t;
+    const double df = kb_derivative(k, t);
+    double next = t - f / df;
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    const double step = std::abs(next - t);
+    t = next;
+    if (step < 1e-15 * std::max(1.0, t) || hi - lo < 1e-15) break;
+  }
+  const double s = std::sin(t) / theta_d;
+  return Vec3{s * a, s * b, std::cos(t)};
+}
+
+// ---- Mei's unified model (cv::omnidir) ------------------------------------------------
+
+// Radial-tangential distortion of normalised coordinates (k1 k2 p1 p2), as cv::omnidir.
+inline void mei_distort(const double* D, double xu, double yu, double* xd, double* yd) {
+  const double r2 = xu * xu + yu * yu, r4 = r2 * r2;
+  const double radial = 1 + D[0] * r2 + D[1] * r4;
+  *xd = xu * radial + 2 * D[2] * xu * yu + D[3] * (r2 + 2 * xu * xu);
+  *yd = yu * radial + D[2] * (r2 + 2 * yu * yu) + 2 * D[3] * xu * yu;
+}
+
+// Points on the unit sphere below this z cannot be imaged uniquely by the unified model:
+// z + xi > 0 for xi <= 1; for xi > 1 the projection folds over at z = -1/xi.
+inline double mei_min_z(double xi) { return xi <= 1 ? -xi : -1 / xi; }
+
+std::optional<Pixel> mei_project(const double* p, Vec3 d) {
+  const double xi = p[4];
+  const double n = length(d);
+  if (!(n > 0) || !std::isfinite(n)) return std::nullopt;
+  const Vec3 s = (1 / n) * d;
+  if (!(s.z > mei_min_z(xi))) return std::nullopt;
+  const double w = s.z + xi;
+  if (!(w > 0)) return std::nullopt;
+  double xd, yd;
+  mei_distort(p + 5, s.x / w, s.y / w, &xd, &yd);
+  return Pixel{p[0] * xd + p[2], p[1] * yd + p[3]};
+}
+
+std::optional<Vec3> mei_unproject(const double* p, Pixel q) {
+  const double xi = p[4];
+  const double* D = p + 5;
+  const double xd = (q.x - p[2]) / p[0], yd = (q.y - p[3]) / p[1];
+  if (!std::isfinite(xd) || !std::isfinite(yd)) return std::nullopt;
+  // Undistort by Newton on the 2x2 system (cv::omnidir::undistortPoints iterates a fixed
+  // point; Newton converges to full precision and from further out).
+  double xu = xd, yu = yd;
+  bool converged = false;
+  for (int it = 0; it < 50; ++it) {
+    double fx, fy;
+    mei_distort(D, xu, yu, &fx, &fy);
+    fx -= xd;
+    fy -= yd;
+    const double r2 = xu * xu + yu * yu;
+    const double radial = 1 + D[0] * r2 + D[1] * r2 * r2;
+    const double dradial = 2 * D[0] + 4 * D[1] * r2;  // d radial / d (r2)
+    const double j00 = radial + xu * dradial * xu + 2 * D[2] * yu + D[3] * 6 * xu;
+    const double j01 = xu * dradial * yu + 2 * D[2] * xu + D[3] * 2 * yu;
+    const double j10 = yu * dradial * xu + D[2] * 2 * xu + 2 * D[3] * yu;
+    const double j11 = radial + yu * dradial * yu + D[2] * 6 * yu + 2 * D[3] * xu;
+    const double det = j00 * j11 - j01 * j10;
+    if (!(std::abs(det) > 1e-300)) break;
+    const double dx = (j11 * fx - j01 * fy) / det, dy = (-j10 * fx + j00 * fy) / det;
+    xu -= dx;
+    yu -= dy;
+    if (!std::isfinite(xu) || !std::isfinite(yu)) break;
+    if (std::abs(dx) + std::abs(dy) < 1e-15 * (1 + std::abs(xu) + std::abs(yu))) {
+      converged = true;
+      break;
+    }
+  }
+  if (!converged) {
+    double cx, cy;  // accept a solution that reprojects within ~1e-12
+    mei_distort(D, xu, yu, &cx, &cy);
+    if (!(std::hypot(cx - xd, cy - yd) < 1e-12 * (1 + std::hypot(xd, yd)))) return std::nullopt;
+  }
+  // Closed-form lift to the unit sphere.
+  const double r2 = xu * xu + yu * yu;
+  const double disc = 1 + (1 - xi * xi) * r2;
+  if (!(disc >= 0)) return std::nullopt;
+  const double f = (xi + std::sqrt(disc)) / (r2 + 1);
+  const Vec3 s{f * xu, f * yu, f - xi};
+  if (!(s.z > mei_min_z(xi) - 1e-12)) return std::nullopt;
+  return normalize(s);
+}
+
+// ---- text helpers ---------------------------------------------------------------------
+
+std::string g17(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  if (s.size() < suffix.size()) return false;
+  std::string tail = s.substr(s.size() - suffix.size());
+  std::transform(tail.begin(), tail.end(), tail.begin(), [](unsigned char c) { return std::tolower(c); });
+  return tail == suffix;
+}
+
+void check_finite(const std::string& path, const CameraModel& m) {
+  for (double v : m.intrinsics)
+    if (!std::isfinite(v)) throw InputError(path + ": " + m.lensmodel + " has a non-finite intrinsic");
+  if (m.width <= 0 || m.height <= 0)
+    throw InputError(path + ": image size " + std::to_string(m.width) + "x" + std::to_string(m.height) +
+                     " is not positive");
+}
+
+// Value after "# <key> =" in a comment line of a .cameramodel we wrote; 0 when absent.
+double comment_value(const std::string& text, const std::string& key) {
+  const std::string tag = "# " + key + " = ";
+  const size_t at = text.find(tag);
+  if (at == std::string::npos) return 0;
+  return std::strtod(text.c_str() + at + tag.size(), nullptr);
+}
+
+}  // namespace
+
+int intrinsics_count(const std::string& lensmodel) {
+  if (lensmodel == kKannalaBrandt) return 8;
+  if (lensmodel == kOmnidirMei) return 9;
+  mrcal_lensmodel_t m;
+  if (!parse_mrcal_lensmodel(lensmodel, &m)) throw InputError("unknown lens model '" + lensmodel + "'");
+  return mrcal_lensmodel_num_params(&m);
+}
+
+bool is_mrcal_model(const std::string& lensmodel) {
+  mrcal_lensmodel_t m;
+  return parse_mrcal_lensmodel(lensmodel, &m);
+}
+
+std::optional<Pixel> project(const CameraModel& model, Vec3 d) {
+  if (!std::isfinite(d.x) || !std::isfinite(d.y) || !std::isfinite(d.z)) return std::nullopt;
+  if (model.lensmodel == kKannalaBrandt) {
+    check_intrinsics(model);
+    return kb_project(model.intrinsics.data(), d);
+  }
+  if (model.lensmodel == kOmnidirMei) {
+    check_intrinsics(model);
+    return mei_project(model.intrinsics.data(), d);
+  }
+  mrcal_lensmodel_t lm;
+  if (!parse_mrcal_lensmodel(model.lensmodel, &lm)) throw InputError("unknown lens model '" + model.lensmodel + "'");
+  if (int(model.intrinsics.size()) != mrcal_lensmodel_num_params(&lm)) check_intrinsics(model);
+  if (d.x == 0 && d.y == 0 && d.z == 0) return std::nullopt;
+  const mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(&lm);
+  if (!meta.can_project_behind_camera && !(d.z > 0)) return std::nullopt;
+  if (lm.type == MRCAL_LENSMODEL_STEREOGRAPHIC || lm.type == MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC) {
+    // The stereographic mapping sends the backward axis to infinity.
+    if (d.x == 0 && d.y == 0 && d.z < 0) return std::nullopt;
+  }
+  mrcal_point3_t p;
+  p.x = d.x;
+  p.y = d.y;
+  p.z = d.z;
+  mrcal_point2_t q;
+  if (!mrcal_project(&q, nullptr, nullptr, &p, 1, &lm, model.intrinsics.data())) return std::nullopt;
+  if (!std::isfinite(q.x) || !std::isfinite(q.y)) return std::nullopt;
+  return Pixel{q.x, q.y};
+}
+
+std::optional<Vec3> unproject(const CameraModel& model, Pixel pixel) {
+  if (!std::isfinite(pixel.x) || !std::isfinite(pixel.y)) return std::nullopt;
+  if (model.lensmodel == kKannalaBrandt) {
+    check_intrinsics(model);
+    return kb_unproject(model.intrinsics.data(), pixel);
+  }
+  if (model.lensmodel == kOmnidirMei) {
+    check_intrinsics(model);
+    return mei_unproject(model.intrinsics.data(), pixel);
+  }
+  mrcal_lensmodel_t lm;
+  if (!parse_mrcal_lensmodel(model.lensmodel, &lm)) throw InputError("unknown lens model '" + model.lensmodel + "'");
+  if (int(model.intrinsics.size()) != mrcal_lensmodel_num_params(&lm)) check_intrinsics(model);
+  mrcal_point2_t q;
+  q.x = pixel.x;
+  q.y = pixel.y;
+  mrcal_point3_t v;
+  if (!mrcal_unproject(&v, &q, 1, &lm, model.intrinsics.data())) return std::nullopt;
+  const Vec3 r{v.x, v.y, v.z};
+  const double n = length(r);
+  if (!(n > 0) || !std::isfinite(n)) return std::nullopt;
+  return (1 / n) * r;
+}
+
+// ---- .cameramodel ---------------------------------------------------------------------
+
+void write_cameramodel(const std::string& path, const CameraModel& model) {
+  if (!is_mrcal_model(model.lensmodel))
+    throw InputError(path + ": mrcal has no lens model '" + model.lensmodel +
+                     "'; write it as OpenCV YAML (.yaml) instead");
+  const int n = intrinsics_count(model.lensmodel);
+  if (int(model.intrinsics.size()) != n)
+    throw InputError(path + ": " + model.lensmodel + " takes " + std::to_string(n) + " intrinsics, got " +
+                     std::to_string(model.intrinsics.size()));
+  check_finite(path, model);
+  // mrcal's C writer prints %f and its Python writer ~10 digits: write the text ourselves
+  // with %.17g so doubles survive a round trip bit-exactly.
+  std::string t;
+  t += "# Camera model written by lightprobe (mrcal .cameramodel format)\n";
+  t += "# rms_reprojection_px = " + g17(model.rms_reprojection_px) + "\n";
+  t += "# cross_validation_px = " + g17(model.cross_validation_px) + "\n";
+  t += "{\n";
+  t += "    'lensmodel':  '" + model.lensmodel + "',\n\n";
+  t += "    # intrinsics are fx,fy,cx,cy,distortion0,distortion1,....\n";
+  t += "    'intrinsics': [";
+  for (double v : model.intrinsics) {
+    t += ' ';
+    t += g17(v);
+    t += ',';
+  }
+  t += "],\n\n";
+  t += "    # extrinsics are rt_fromref\n";
+  t += "    'extrinsics': [ 0, 0, 0, 0, 0, 0,],\n\n";
+  t += "    'imagersize': [ " + std::to_string(model.width) + ", " + std::to_string(model.height) + ",],\n";
+  t += "}\n";
+  write_file_atomically(path, t);
+}
+
+CameraModel read_cameramodel(const std::string& path) {
+  const std::string text = read_text(path);
+  struct Free {
+    void operator()(mrcal_cameramodel_t* m) const { mrcal_free_cameramodel(&m); }
+  };
+  std::unique_ptr<mrcal_cameramodel_t, Free> cm(mrcal_read_cameramodel_string(text.c_str(), int(text.size())));
+  if (!cm) throw InputError(path + ": not a valid mrcal .cameramodel");
+  char name[1024];
+  if (!mrcal_lensmodel_name(name, sizeof name, &cm->lensmodel))
+    throw InputError(path + ": lens model name too long");
+  CameraModel m;
+  m.lensmodel = name;
+  const int n = mrcal_lensmodel_num_params(&cm->lensmodel);
+  m.intrinsics.assign(cm->intrinsics, cm->intrinsics + n);
+  m.width = int(cm->imagersize[0]);
+  m.height = int(cm->imagersize[1]);
+  m.rms_reprojection_px = comment_value(text, "rms_reprojection_px");
+  m.cross_validation_px = comment_value(text, "cross_validation_px");
+  return m;
+}
+
+// ---- OpenCV FileStorage YAML ----------------------------------------------------------
+
+void write_opencv_yaml(const std::string& path, const CameraModel& model) {
+  const std::string& lm = model.lensmodel;
+  const std::vector<double>& p = model.intrinsics;
+  std::string dist_model;
+  std::vector<double> dist;
+  if (lm == "LENSMODEL_OPENCV8" || lm == "LENSMODEL_OPENCV4" || lm == "LENSMODEL_OPENCV5") {
+    dist_model = lm == "LENSMODEL_OPENCV8" ? "rational" : "plumb_bob";
+  } else if (lm == kKannalaBrandt) {
+    dist_model = "fisheye";
+  } else if (lm == kOmnidirMei) {
+    dist_model = "omnidir";
+  } else if (lm == "LENSMODEL_PINHOLE") {
+    dist_model = "plumb_bob";  // with all-zero k1 k2 p1 p2
+  } else {
+    throw InputError(path + ": OpenCV has no form for lens model '" + lm +
+                     "'; write it as mrcal .cameramodel instead");
+  }
+  const int n = intrinsics_count(lm);
+  if (int(p.size()) != n)
+    throw InputError(path + ": " + lm + " takes " + std::to_string(n) + " intrinsics, got " +
+                     std::to_string(p.size()));
+  check_finite(path, model);
+  if (lm == "LENSMODEL_PINHOLE") dist = {0, 0, 0, 0};
+  else if (lm == kOmnidirMei) dist.assign(p.begin() + 5, p.end());
+  else dist.assign(p.begin() + 4, p.end());
+
+  const int format = ends_with(path, ".xml") ? cv::FileStorage::FORMAT_XML : cv::FileStorage::FORMAT_YAML;
+  cv::FileStorage fs(path, cv::FileStorage::WRITE | cv::FileStorage::MEMORY | format);
+  fs << "image_width" << model.width << "image_height" << model.height;
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << p[0], 0, p[2], 0, p[1], p[3], 0, 0, 1);
+  fs << "camera_matrix" << K;
+  fs << "distortion_coefficients" << cv::Mat(cv::Mat_<double>(1, int(dist.size()), dist.data())).clone();
+  fs << "distortion_model" << dist_model;
+  if (lm == kOmnidirMei) fs << "xi" << p[4];
+  fs << "lensmodel" << lm;
+  fs << "rms_reprojection_px" << model.rms_reprojection_px;
+  fs << "cross_validation_px" << model.cross_validation_px;
+  write_file_atomically(path, fs.releaseAndGetString());
+}
+
+CameraModel read_opencv_yaml(const std::string& path) {
+  CameraModel m;
+  try {
+    cv::FileStorage fs(path, cv::FileStorage::READ);
+    if (!fs.isOpened()) throw InputError(path + ": cannot open as OpenCV FileStorage");
+    auto need = [&](const char* key) {
+      cv::FileNode node = fs[key];
+      if (node.empty()) throw InputError(path + ": missing '" + key + "'");
+      return node;
+    };
+    m.width = int(need("image_width"));
+    m.height = int(need("image_height"));
+    cv::Mat K, D;
+    need("camera_matrix") >> K;
+    need("distortion_coefficients") >> D;
+    const std::string dist_model = std::string(need("distortion_model"));
+    if (K.rows != 3 || K.cols != 3) throw InputError(path + ": camera_matrix is not 3x3");
+    K.convertTo(K, CV_64F);
+    if (K.at<double>(0, 1) != 0)
+      throw InputError(path + ": camera_matrix has skew " + g17(K.at<double>(0, 1)) + ", which no lens model here holds");
+    D.convertTo(D, CV_64F);
+    D = D.reshape(1, 1);
+    std::vector<double> dist(D.begin<double>(), D.end<double>());
+    m.intrinsics = {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2)};
+    const size_t nd = dist.size();
+    auto bad_count = [&](const char* expected) {
+      return InputError(path + ": distortion_model " + dist_model + " takes " + expected +
+                        " distortion_coefficients, got " + std::to_string(nd));
+    };
+    if (dist_model == "rational") {
+      if (nd != 8) throw bad_count("8");
+      m.lensmodel = "LENSMODEL_OPENCV8";
+    } else if (dist_model == "plumb_bob") {
+      if (nd == 4) m.lensmodel = "LENSMODEL_OPENCV4";
+      else if (nd == 5) m.lensmodel = "LENSMODEL_OPENCV5";
+      else throw bad_count("4 or 5");
+    } else if (dist_model == "fisheye") {
+      if (nd != 4) throw bad_count("4");
+      m.lensmodel = kKannalaBrandt;
+    } else if (dist_model == "omnidir") {
+      if (nd != 4) throw bad_count("4");
+      m.lensmodel = kOmnidirMei;
+      cv::FileNode xi_node = need("xi");
+      double xi;
+      if (xi_node.isReal() || xi_node.isInt()) {
+        xi = double(xi_node);
+      } else {
+        cv::Mat xm;
+        xi_node >> xm;
+        if (xm.total() != 1) throw InputError(path + ": xi is not a single number");
+        xm.convertTo(xm, CV_64F);
+        xi = xm.at<double>(0);
+      }
+      m.intrinsics.push_back(xi);
+    } else {
+      throw InputError(path + ": distortion_model '" + dist_model +
+                       "' is not one of rational, plumb_bob, fisheye, omnidir");
+    }
+    m.intrinsics.insert(m.intrinsics.end(), dist.begin(), dist.end());
+    // Our own writer records the exact model (e.g. PINHOLE written as plumb_bob zeros).
+    cv::FileNode lm_node = fs["lensmodel"];
+    if (lm_node.isString() && std::string(lm_node) == "LENSMODEL_PINHOLE" && m.lensmodel == "LENSMODEL_OPENCV4" &&
+        std::all_of(dist.begin(), dist.end(), [](double v) { return v == 0; })) {
+      m.lensmodel = "LENSMODEL_PINHOLE";
+      m.intrinsics.resize(4);
+    }
+    if (fs["rms_reprojection_px"].isReal()) m.rms_reprojection_px = double(fs["rms_reprojection_px"]);
+    if (fs["cross_validation_px"].isReal()) m.cross_validation_px = double(fs["cross_validation_px"]);
+  } catch (const cv::Exception& e) {
+    throw InputError(path + ": not readable as OpenCV FileStorage (" + e.err + ")");
+  }
+  check_finite(path, m);
+  return m;
+}
+
+CameraModel read_camera_model(const std::string& path) {
+  if (ends_with(path, ".cameramodel")) return read_cameramodel(path);
+  if (ends_with(path, ".yaml") || ends_with(path, ".yml") || ends_with(path, ".xml")) return read_opencv_yaml(path);
+  throw InputError(path + ": unknown camera model file type (expected .cameramodel, .yaml, .yml or .xml)");
+}
+
+}  // namespace lp

@@ -1,0 +1,344 @@
+#include "calib/camera_model.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/ccalib/omnidir.hpp>
+#include <opencv2/core.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kDeg = M_PI / 180;
+
+CameraModel pinhole() { return {"LENSMODEL_PINHOLE", {1200.5, 1190.25, 639.5, 479.5}, 1280, 960}; }
+CameraModel stereographic() { return {"LENSMODEL_STEREOGRAPHIC", {500.1, 501.3, 800.2, 600.7}, 1600, 1200}; }
+CameraModel opencv8() {
+  return {"LENSMODEL_OPENCV8",
+          {1000.123456789012345, 1001.987654321, 640.3, 479.9, 0.1, -0.05, 0.001, -0.002, 0.01, 0.05, -0.02, 0.005},
+          1280,
+          960};
+}
+CameraModel splined() {
+  CameraModel m{"LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=12_fov_x_deg=120", {560, 558, 640.5, 480.5}, 1280,
+                960};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.01, 0.01);
+  for (int i = 0; i < 2 * 16 * 12; ++i) m.intrinsics.push_back(u(rng));
+  return m;
+}
+// 200 deg Kannala-Brandt fisheye: theta = 100 deg at ~780 px from the centre.
+CameraModel kannala_brandt_200() {
+  return {"LENSMODEL_KANNALA_BRANDT", {432.1, 431.7, 800.3, 799.6, 0.02, -0.005, 0.001, -0.0001}, 1600, 1600};
+}
+// Mei with xi > 1: images rays up to ~155 deg from the axis.
+CameraModel omnidir_mei() {
+  return {"LENSMODEL_OMNIDIR_MEI", {350.5, 349.25, 640.1, 511.8, 1.1, -0.1, 0.02, 1e-4, -2e-4}, 1280, 1024};
+}
+
+std::string temp_path(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("lp_camera_model_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return (dir / name).string();
+}
+
+struct RoundTripStats {
+  int imaged = 0, beyond_90 = 0;
+  double max_px_error = 0, max_angle_error = 0;
+};
+
+// Unproject a grid over the whole image, project back; and the reverse from the rays.
+RoundTripStats round_trip(const CameraModel& m) {
+  RoundTripStats s;
+  const int n = 41;
+  for (int iy = 0; iy < n; ++iy)
+    for (int ix = 0; ix < n; ++ix) {
+      const Pixel q{-0.5 + (m.width) * ix / double(n - 1), -0.5 + (m.height) * iy / double(n - 1)};
+      const auto v = unproject(m, q);
+      if (!v) continue;
+      EXPECT_NEAR(length(*v), 1.0, 1e-12);
+      const auto q2 = project(m, *v);
+      EXPECT_TRUE(q2.has_value()) << m.lensmodel << " at " << q.x << "," << q.y;
+      if (!q2) continue;
+      ++s.imaged;
+      if (v->z < 0) ++s.beyond_90;
+      s.max_px_error = std::max(s.max_px_error, std::hypot(q2->x - q.x, q2->y - q.y));
+      const auto v2 = unproject(m, *q2);
+      EXPECT_TRUE(v2.has_value());
+      if (v2) s.max_angle_error = std::max(s.max_angle_error, angle_between(*v, *v2));
+    }
+  return s;
+}
+
+TEST(CameraModel, IntrinsicsCountsFollowTheModelAndItsConfiguration) {
+  EXPECT_EQ(intrinsics_count("LENSMODEL_PINHOLE"), 4);
+  EXPECT_EQ(intrinsics_count("LENSMODEL_STEREOGRAPHIC"), 4);
+  EXPECT_EQ(intrinsics_count("LENSMODEL_OPENCV8"), 12);
+  EXPECT_EQ(intrinsics_count("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=12_fov_x_deg=120"), 4 + 2 * 16 * 12);
+  EXPECT_EQ(intrinsics_count("LENSMODEL_KANNALA_BRANDT"), 8);
+  EXPECT_EQ(intrinsics_count("LENSMODEL_OMNIDIR_MEI"), 9);
+  EXPECT_TRUE(is_mrcal_model("LENSMODEL_OPENCV8"));
+  EXPECT_TRUE(is_mrcal_model("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=12_fov_x_deg=120"));
+  EXPECT_FALSE(is_mrcal_model("LENSMODEL_KANNALA_BRANDT"));
+  EXPECT_FALSE(is_mrcal_model("LENSMODEL_OMNIDIR_MEI"));
+  EXPECT_THROW(intrinsics_count("LENSMODEL_NONSENSE"), InputError);
+}
+
+TEST(CameraModel, EveryModelRoundTripsPixelsToRaysAndBackOverTheWholeImage) {
+  for (const CameraModel& m : {pinhole(), stereographic(), opencv8(), splined(), kannala_brandt_200(), omnidir_mei()}) {
+    const RoundTripStats s = round_trip(m);
+    SCOPED_TRACE(m.lensmodel);
+    EXPECT_GT(s.imaged, 41 * 41 / 2);
+    EXPECT_LT(s.max_px_error, 1e-6);
+    EXPECT_LT(s.max_angle_error, 1e-9);
+    std::printf("  %-45.45s pixels %4d, beyond 90 deg %4d, max error %.2e px, %.2e rad\n", m.lensmodel.c_str(),
+                s.imaged, s.beyond_90, s.max_px_error, s.max_angle_error);
+  }
+}
+
+TEST(CameraModel, A200DegreeKannalaBrandtImagesRaysBeyond90Degrees) {
+  const CameraModel m = kannala_brandt_200();
+  const RoundTripStats s = round_trip(m);
+  EXPECT_GT(s.beyond_90, 20);
+  for (double theta_deg : {0.0, 30.0, 89.0, 91.0, 99.9}) {
+    for (double phi = 0; phi < 2 * M_PI; phi += 0.7) {
+      const Vec3 d = direction_from_angles(theta_deg * kDeg, phi);
+      const auto q = project(m, d);
+      ASSERT_TRUE(q.has_value()) << theta_deg;
+      EXPECT_GE(q->x, 0);
+      EXPECT_LT(q->x, m.width);
+      const auto d2 = unproject(m, *q);
+      ASSERT_TRUE(d2.has_value());
+      EXPECT_LT(angle_between(d, *d2), 1e-10) << theta_deg;
+    }
+  }
+  EXPECT_FALSE(project(m, {0, 0, -1}).has_value());
+}
+
+TEST(CameraModel, OmnidirMeiWithXiNearOneImagesRaysBeyond90Degrees) {
+  const RoundTripStats s = round_trip(omnidir_mei());
+  EXPECT_GT(s.beyond_90, 20);
+}
+
+TEST(CameraModel, PinholeCannotImageRaysBehindIt) {
+  EXPECT_FALSE(project(pinhole(), {0.1, 0.2, -1}).has_value());
+  EXPECT_FALSE(project(opencv8(), {0.1, 0.2, 0}).has_value());
+  EXPECT_TRUE(project(stereographic(), {0.1, 0.2, -1}).has_value());
+}
+
+TEST(CameraModel, KannalaBrandtAgreesWithCvFisheyeProjectPoints) {
+  const CameraModel m = kannala_brandt_200();
+  const auto& p = m.intrinsics;
+  std::vector<cv::Point3d> pts;
+  for (double theta_deg = 0; theta_deg < 89.5; theta_deg += 3)
+    for (double phi = 0; phi < 2 * M_PI; phi += 0.5) {
+      const Vec3 d = direction_from_angles(theta_deg * kDeg, phi);
+      pts.emplace_back(d.x, d.y, d.z);
+    }
+  const cv::Matx33d K(p[0], 0, p[2], 0, p[1], p[3], 0, 0, 1);
+  const cv::Vec4d D(p[4], p[5], p[6], p[7]);
+  std::vector<cv::Point2d> cv_px;
+  cv::fisheye::projectPoints(pts, cv_px, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, D);
+  double max_err = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const auto q = project(m, {pts[i].x, pts[i].y, pts[i].z});
+    ASSERT_TRUE(q.has_value());
+    max_err = std::max(max_err, std::hypot(q->x - cv_px[i].x, q->y - cv_px[i].y));
+  }
+  EXPECT_LT(max_err, 1e-6);
+}
+
+TEST(CameraModel, Opencv8AgreesWithCvProjectPointsRationalModel) {
+  const CameraModel m = opencv8();
+  const auto& p = m.intrinsics;
+  std::vector<cv::Point3d> pts;
+  for (double x = -0.6; x <= 0.6; x += 0.05)
+    for (double y = -0.45; y <= 0.45; y += 0.05) pts.emplace_back(x, y, 1.0);
+  const cv::Matx33d K(p[0], 0, p[2], 0, p[1], p[3], 0, 0, 1);
+  const std::vector<double> D(p.begin() + 4, p.end());
+  std::vector<cv::Point2d> cv_px;
+  cv::projectPoints(pts, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, D, cv_px);
+  double max_err = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const auto q = project(m, {pts[i].x, pts[i].y, pts[i].z});
+    ASSERT_TRUE(q.has_value());
+    max_err = std::max(max_err, std::hypot(q->x - cv_px[i].x, q->y - cv_px[i].y));
+  }
+  EXPECT_LT(max_err, 1e-6);
+}
+
+TEST(CameraModel, OmnidirMeiAgreesWithCvOmnidirProjectPoints) {
+  const CameraModel m = omnidir_mei();
+  const auto& p = m.intrinsics;
+  std::vector<cv::Vec3d> pts;
+  for (double theta_deg = 0; theta_deg < 140; theta_deg += 4)
+    for (double phi = 0; phi < 2 * M_PI; phi += 0.5) {
+      const Vec3 d = 3.0 * direction_from_angles(theta_deg * kDeg, phi);  // not normalised
+      pts.emplace_back(d.x, d.y, d.z);
+    }
+  const cv::Matx33d K(p[0], 0, p[2], 0, p[1], p[3], 0, 0, 1);
+  const cv::Matx14d D(p[5], p[6], p[7], p[8]);
+  cv::Mat pts_mat(1, int(pts.size()), CV_64FC3, pts.data());
+  cv::Mat cv_px;
+  cv::omnidir::projectPoints(pts_mat, cv_px, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, p[4], D);
+  double max_err = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const auto q = project(m, {pts[i][0], pts[i][1], pts[i][2]});
+    ASSERT_TRUE(q.has_value());
+    const cv::Vec2d c = cv_px.at<cv::Vec2d>(int(i));
+    max_err = std::max(max_err, std::hypot(q->x - c[0], q->y - c[1]));
+  }
+  EXPECT_LT(max_err, 1e-6);
+}
+
+void expect_same(const CameraModel& a, const CameraModel& b) {
+  EXPECT_EQ(a.lensmodel, b.lensmodel);
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.height, b.height);
+  ASSERT_EQ(a.intrinsics.size(), b.intrinsics.size());
+  for (size_t i = 0; i < a.intrinsics.size(); ++i) EXPECT_EQ(a.intrinsics[i], b.intrinsics[i]) << a.lensmodel << " " << i;
+  EXPECT_EQ(a.rms_reprojection_px, b.rms_reprojection_px);
+  EXPECT_EQ(a.cross_validation_px, b.cross_validation_px);
+}
+
+TEST(CameraModel, OpencvYamlRoundTripsBitExactThroughOurReader) {
+  CameraModel opencv4{"LENSMODEL_OPENCV4", {900.1, 901.2, 320.3, 240.4, 0.1 / 3, -0.2 / 7, 1e-3 / 3, 2e-4 / 9}, 640, 480};
+  CameraModel opencv5{"LENSMODEL_OPENCV5", {900.1, 901.2, 320.3, 240.4, 0.1 / 3, -0.2 / 7, 1e-3 / 3, 2e-4 / 9, 0.01 / 3},
+                      640, 480};
+  for (CameraModel m : {pinhole(), opencv8(), opencv4, opencv5, kannala_brandt_200(), omnidir_mei()}) {
+    m.rms_reprojection_px = 0.1 / 3;
+    m.cross_validation_px = 0.2 / 7;
+    for (const char* ext : {".yaml", ".xml"}) {
+      const std::string path = temp_path("model" + std::string(ext));
+      write_opencv_yaml(path, m);
+      expect_same(read_opencv_yaml(path), m);
+      expect_same(read_camera_model(path), m);
+    }
+  }
+}
+
+TEST(CameraModel, OpencvYamlLoadsWithPlainCvFileStorage) {
+  const CameraModel m = omnidir_mei();
+  const std::string path = temp_path("mei.yaml");
+  write_opencv_yaml(path, m);
+  cv::FileStorage fs(path, cv::FileStorage::READ);
+  ASSERT_TRUE(fs.isOpened());
+  EXPECT_EQ(int(fs["image_width"]), m.width);
+  EXPECT_EQ(int(fs["image_height"]), m.height);
+  cv::Mat K, D;
+  fs["camera_matrix"] >> K;
+  fs["distortion_coefficients"] >> D;
+  EXPECT_EQ(K.at<double>(0, 0), m.intrinsics[0]);
+  EXPECT_EQ(K.at<double>(1, 1), m.intrinsics[1]);
+  EXPECT_EQ(K.at<double>(0, 2), m.intrinsics[2]);
+  EXPECT_EQ(K.at<double>(1, 2), m.intrinsics[3]);
+  EXPECT_EQ(std::string(fs["distortion_model"]), "omnidir");
+  EXPECT_EQ(double(fs["xi"]), m.intrinsics[4]);
+  ASSERT_EQ(D.total(), 4u);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(D.at<double>(i), m.intrinsics[5 + i]);
+
+  const CameraModel r = opencv8();
+  write_opencv_yaml(path, r);
+  cv::FileStorage fs8(path, cv::FileStorage::READ);
+  fs8["distortion_coefficients"] >> D;
+  EXPECT_EQ(std::string(fs8["distortion_model"]), "rational");
+  ASSERT_EQ(D.total(), 8u);  // k1 k2 p1 p2 k3 k4 k5 k6, OpenCV's order
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(D.at<double>(i), r.intrinsics[4 + i]);
+
+  write_opencv_yaml(path, kannala_brandt_200());
+  cv::FileStorage fsk(path, cv::FileStorage::READ);
+  EXPECT_EQ(std::string(fsk["distortion_model"]), "fisheye");
+}
+
+TEST(CameraModel, CameramodelFilesRoundTripBitExactThroughOurReader) {
+  for (CameraModel m : {pinhole(), stereographic(), opencv8(), splined()}) {
+    m.rms_reprojection_px = 0.1 / 3;
+    m.cross_validation_px = 0.2 / 7;
+    const std::string path = temp_path("model.cameramodel");
+    write_cameramodel(path, m);
+    expect_same(read_cameramodel(path), m);
+    expect_same(read_camera_model(path), m);
+  }
+}
+
+bool python_mrcal_available() {
+  return std::system("/usr/bin/python3 -c 'import mrcal' >/dev/null 2>&1") == 0;
+}
+
+TEST(CameraModel, CameramodelFilesLoadInMrcalsPythonReaderWithTheSameNumbers) {
+  if (!python_mrcal_available()) GTEST_SKIP() << "/usr/bin/python3 has no mrcal";
+  for (const CameraModel& m : {pinhole(), stereographic(), opencv8(), splined()}) {
+    const std::string path = temp_path("py.cameramodel"), out = temp_path("py.txt");
+    write_cameramodel(path, m);
+    const std::string cmd = "/usr/bin/python3 -c \"import mrcal; m = mrcal.cameramodel('" + path +
+                            "'); l, i = m.intrinsics(); print(l); print(*m.imagersize()); "
+                            "print(' '.join(float(x).hex() for x in i))\" > " + out;
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    std::ifstream in(out);
+    std::string lensmodel;
+    int w = 0, h = 0;
+    in >> lensmodel >> w >> h;
+    EXPECT_EQ(lensmodel, m.lensmodel);
+    EXPECT_EQ(w, m.width);
+    EXPECT_EQ(h, m.height);
+    std::vector<double> values;
+    std::string hex;
+    while (in >> hex) values.push_back(std::strtod(hex.c_str(), nullptr));
+    ASSERT_EQ(values.size(), m.intrinsics.size()) << m.lensmodel;
+    for (size_t i = 0; i < values.size(); ++i) EXPECT_EQ(values[i], m.intrinsics[i]) << m.lensmodel << " " << i;
+  }
+}
+
+// The message of the InputError `f` throws: one line, naming `path`.
+template <class F>
+std::string error_of(F f, const std::string& path) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    return what;
+  }
+  ADD_FAILURE() << "no InputError";
+  return "";
+}
+
+TEST(CameraModel, ModelsAFileFormatCannotHoldAreRefusedWithAMessageNamingThePath) {
+  const std::string cm = temp_path("refused.cameramodel"), yaml = temp_path("refused.yaml");
+  std::printf("  %s\n", error_of([&] { write_cameramodel(cm, kannala_brandt_200()); }, cm).c_str());
+  std::printf("  %s\n", error_of([&] { write_cameramodel(cm, omnidir_mei()); }, cm).c_str());
+  std::printf("  %s\n", error_of([&] { write_opencv_yaml(yaml, stereographic()); }, yaml).c_str());
+  std::printf("  %s\n", error_of([&] { write_opencv_yaml(yaml, splined()); }, yaml).c_str());
+  EXPECT_FALSE(fs::exists(cm));
+  EXPECT_FALSE(fs::exists(yaml));
+  CameraModel short_model = opencv8();
+  short_model.intrinsics.pop_back();
+  std::printf("  %s\n", error_of([&] { write_cameramodel(cm, short_model); }, cm).c_str());
+}
+
+TEST(CameraModel, UnreadableFilesAreRefusedWithAMessageNamingThePath) {
+  const std::string cm = temp_path("broken.cameramodel"), yaml = temp_path("broken.yaml"),
+                    other = temp_path("model.txt");
+  std::ofstream(cm) << "{ 'lensmodel': 'LENSMODEL_NONSENSE', 'intrinsics': [1,2,3,4], 'imagersize': [1,2] }\n";
+  std::ofstream(yaml) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n";
+  std::printf("  %s\n", error_of([&] { read_cameramodel(cm); }, cm).c_str());
+  std::printf("  %s\n", error_of([&] { read_opencv_yaml(yaml); }, yaml).c_str());
+  std::printf("  %s\n", error_of([&] { read_camera_model(other); }, other).c_str());
+  const std::string missing = temp_path("missing.cameramodel");
+  std::printf("  %s\n", error_of([&] { read_camera_model(missing); }, missing).c_str());
+}
+
+}  // namespace
+}  // namespace lp

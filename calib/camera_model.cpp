@@ -6,8 +6,10 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cctype>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -235,6 +237,97 @@ double comment_value(const std::string& text, const std::string& key) {
   return std::strtod(text.c_str() + at + tag.size(), nullptr);
 }
 
+
+// A light parse of the .cameramodel text (a Python dict literal) that finds what mrcal's
+// C reader would reject, so that we can name the problem ourselves: the C reader prints
+// its complaints to stderr and the library prints nothing. Returns "" when the text
+// looks readable, else the problem.
+std::string precheck_cameramodel(const std::string& text) {
+  size_t i = 0;
+  const size_t n = text.size();
+  auto skip = [&] {
+    while (i < n) {
+      if (std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+      else if (text[i] == '#') while (i < n && text[i] != '\n') ++i;
+      else break;
+    }
+  };
+  auto string_at = [&](std::string* out) {
+    const char quote = text[i];
+    const size_t end = text.find(quote, i + 1);
+    if (end == std::string::npos) return false;
+    *out = text.substr(i + 1, end - i - 1);
+    i = end + 1;
+    return true;
+  };
+  // Numbers of a (possibly nested) list, flattened.
+  std::function<bool(std::vector<double>*)> list_at = [&](std::vector<double>* out) {
+    ++i;  // '['
+    for (;;) {
+      skip();
+      if (i >= n) return false;
+      if (text[i] == ']') {
+        ++i;
+        return true;
+      }
+      if (text[i] == '[') {
+        if (!list_at(out)) return false;
+      } else {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str() + i, &end);
+        if (end == text.c_str() + i) return false;
+        out->push_back(v);
+        i = size_t(end - text.c_str());
+      }
+      skip();
+      if (i < n && text[i] == ',') ++i;
+    }
+  };
+  skip();
+  if (i >= n || text[i] != '{') return "does not start with '{'";
+  ++i;
+  std::string lensmodel;
+  std::vector<double> intrinsics, imagersize;
+  bool have_lensmodel = false, have_intrinsics = false, have_imagersize = false;
+  for (;;) {
+    skip();
+    if (i >= n) return "ends before its closing '}'";
+    if (text[i] == '}') break;
+    std::string key;
+    if ((text[i] != '\'' && text[i] != '"') || !string_at(&key)) return "malformed key";
+    skip();
+    if (i >= n || text[i] != ':') return "no ':' after '" + key + "'";
+    ++i;
+    skip();
+    if (i >= n) return "no value for '" + key + "'";
+    std::vector<double> values;
+    std::string str;
+    if (text[i] == '\'' || text[i] == '"') {
+      if (!string_at(&str)) return "unterminated string for '" + key + "'";
+    } else if (text[i] == '[') {
+      if (!list_at(&values)) return "malformed list for '" + key + "'";
+    } else {
+      return "value of '" + key + "' is neither a string nor a list";
+    }
+    if (key == "lensmodel") lensmodel = str, have_lensmodel = true;
+    if (key == "intrinsics") intrinsics = values, have_intrinsics = true;
+    if (key == "imagersize") imagersize = values, have_imagersize = true;
+    skip();
+    if (i < n && text[i] == ',') ++i;
+  }
+  if (!have_lensmodel) return "no 'lensmodel'";
+  if (!have_intrinsics) return "no 'intrinsics'";
+  if (!have_imagersize) return "no 'imagersize'";
+  if (!is_mrcal_model(lensmodel)) return "lens model '" + lensmodel + "' is not one mrcal knows";
+  const int count = intrinsics_count(lensmodel);
+  if (int(intrinsics.size()) != count)
+    return lensmodel + " takes " + std::to_string(count) + " intrinsics, the file has " +
+           std::to_string(intrinsics.size());
+  if (imagersize.size() != 2 || !(imagersize[0] > 0) || !(imagersize[1] > 0))
+    return "'imagersize' is not two positive numbers";
+  return "";
+}
+
 }  // namespace
 
 int intrinsics_count(const std::string& lensmodel) {
@@ -340,6 +433,8 @@ void write_cameramodel(const std::string& path, const CameraModel& model) {
 
 CameraModel read_cameramodel(const std::string& path) {
   const std::string text = read_text(path);
+  if (const std::string problem = precheck_cameramodel(text); !problem.empty())
+    throw InputError(path + ": not a valid mrcal .cameramodel: " + problem);
   struct Free {
     void operator()(mrcal_cameramodel_t* m) const { mrcal_free_cameramodel(&m); }
   };

@@ -300,6 +300,22 @@ TEST(CameraModel, CameramodelFilesLoadInMrcalsPythonReaderWithTheSameNumbers) {
   }
 }
 
+TEST(CameraModel, CameramodelFilesWrittenByMrcalsPythonAreRead) {
+  if (!python_mrcal_available()) GTEST_SKIP() << "/usr/bin/python3 has no mrcal";
+  const std::string path = temp_path("from_python.cameramodel");
+  const std::string cmd = "/usr/bin/python3 -c \"import mrcal, numpy as np; m = mrcal.cameramodel(intrinsics=("
+                          "'LENSMODEL_OPENCV8', np.array([1000.5, 1001.25, 640, 480, 0.125, -0.5, 0.0625, 0.25, 0, 0, 0, "
+                          "0.5])), imagersize=(1280, 960), extrinsics_rt_fromref=np.array([0.1, 0, 0, 1, 2, 3]), "
+                          "valid_intrinsics_region=np.array([[0, 0], [1279, 0], [1279, 959], [0, 0]])); m.write('" +
+                          path + "')\"";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const CameraModel m = read_camera_model(path);
+  EXPECT_EQ(m.lensmodel, "LENSMODEL_OPENCV8");
+  EXPECT_EQ(m.width, 1280);
+  EXPECT_EQ(m.height, 960);
+  EXPECT_EQ(m.intrinsics, (std::vector<double>{1000.5, 1001.25, 640, 480, 0.125, -0.5, 0.0625, 0.25, 0, 0, 0, 0.5}));
+}
+
 // The message of the InputError `f` throws: one line, naming `path`.
 template <class F>
 std::string error_of(F f, const std::string& path) {
@@ -333,7 +349,17 @@ TEST(CameraModel, UnreadableFilesAreRefusedWithAMessageNamingThePath) {
                     other = temp_path("model.txt");
   std::ofstream(cm) << "{ 'lensmodel': 'LENSMODEL_NONSENSE', 'intrinsics': [1,2,3,4], 'imagersize': [1,2] }\n";
   std::ofstream(yaml) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n";
-  std::printf("  %s\n", error_of([&] { read_cameramodel(cm); }, cm).c_str());
+  testing::internal::CaptureStderr();
+  std::vector<std::string> messages{error_of([&] { read_cameramodel(cm); }, cm)};
+  for (const char* text : {"", "{ 'lensmodel': 'LENSMODEL_OPENCV4', 'intrinsics': [1,2,3,4], 'imagersize': [1,2] }",
+                           "{ 'lensmodel': 'LENSMODEL_PINHOLE', 'intrinsics': [1,2,3,4] }",
+                           "{ 'lensmodel': 'LENSMODEL_PINHOLE', 'intrinsics': [1,2,3,4], 'imagersize': [1,2] ",
+                           "{ 'lensmodel': 'LENSMODEL_PINHOLE', 'intrinsics': [1,2,x,4], 'imagersize': [1,2] }"}) {
+    std::ofstream(cm) << text;
+    messages.push_back(error_of([&] { read_cameramodel(cm); }, cm));
+  }
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");  // the library prints nothing
+  for (const auto& m : messages) std::printf("  %s\n", m.c_str());
   std::printf("  %s\n", error_of([&] { read_opencv_yaml(yaml); }, yaml).c_str());
   std::printf("  %s\n", error_of([&] { read_camera_model(other); }, other).c_str());
   const std::string missing = temp_path("missing.cameramodel");

@@ -190,5 +190,24 @@ TEST(SyntheticBoards, DetectedOnPinhole) {
   EXPECT_LT(s.median_px, 0.1);
 }
 
+// Through calib/camera_model (the default options' KB camera): same pictures as the local KB.
+TEST(SyntheticBoards, CameraModelPathMatchesLocalLens) {
+  const Kb kb{360, 360, 639.5, 479.5, 0.02, -0.005, 0, 0};
+  SyntheticBoardsOptions o;
+  o.views = 2;
+  const SyntheticBoards a = synthesize_boards(o);
+  const SyntheticBoards b = synthesize_boards(o, kb.lens());
+  ASSERT_EQ(a.poses.size(), 2u);
+  for (int v = 0; v < 2; ++v) {
+    for (int i = 0; i < 6; ++i) EXPECT_NEAR(a.poses[v][i], b.poses[v][i], 1e-6);
+    for (size_t k = 0; k < a.true_corners[v].size(); ++k) {
+      EXPECT_NEAR(a.true_corners[v][k][0], b.true_corners[v][k][0], 1e-6);
+      EXPECT_NEAR(a.true_corners[v][k][1], b.true_corners[v][k][1], 1e-6);
+    }
+  }
+  const Score s = detect_all(a, o.board, "KB via camera_model");
+  EXPECT_EQ(s.found, 2);
+}
+
 }  // namespace
 }  // namespace lp

@@ -1,0 +1,86 @@
+// Board detection per image over the real calibration sets (calib/board_detect.h).
+// Each benchmark detects every image of one set per iteration; counters report the time
+// per image and the recall. Sets missing from ../shared/data are skipped.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "calib/board_detect.h"
+#include "core/image_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string shared_data() {
+  if (const char* env = std::getenv("LIGHTPROBE_SHARED_DATA")) return env;
+  for (const char* candidate : {"../shared/data", "../../shared/data", "/work/shared/data"})
+    if (fs::exists(candidate)) return candidate;
+  return "";
+}
+
+std::vector<lp::CameraImage> load(const std::string& dir) {
+  std::vector<std::string> paths;
+  if (fs::exists(dir))
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().extension() == ".jpg") paths.push_back(e.path().string());
+  std::sort(paths.begin(), paths.end());
+  std::vector<lp::CameraImage> images;
+  for (const auto& p : paths) images.push_back(lp::read_camera_image(p));
+  return images;
+}
+
+void detect_set(benchmark::State& state, const std::string& subdir, lp::BoardSpec board, bool classic) {
+  const auto images = load(shared_data() + "/" + subdir);
+  if (images.empty()) {
+    state.SkipWithError(("no images in " + subdir).c_str());
+    return;
+  }
+  lp::DetectOptions options;
+  options.classic = classic;
+  int found = 0;
+  for (auto _ : state) {
+    found = 0;
+    for (const auto& image : images) found += lp::detect_board(image, board, options).found;
+  }
+  state.counters["found"] = found;
+  state.counters["images"] = static_cast<double>(images.size());
+  state.counters["s_per_image"] = benchmark::Counter(
+      static_cast<double>(images.size()), benchmark::Counter::kIsIterationInvariantRate |
+                                              benchmark::Counter::kInvert);
+}
+
+void register_all() {
+  struct Set {
+    const char* name;
+    const char* dir;
+    lp::BoardSpec board;
+  };
+  const Set sets[] = {
+      {"opencv_stereo_9x6", "calib-opencv-stereo-9x6", {9, 6, 25}},
+      {"ocamcalib_fisheye1", "calib-ocamcalib-fisheye1", {6, 8, 32.5}},
+      {"Fisheye190deg", "calib-ocamcalib-omni-samples/Fisheye190deg", {6, 7, 30}},
+      {"VMRImage", "calib-ocamcalib-omni-samples/VMRImage", {6, 7, 30}},
+      {"Ladybug", "calib-ocamcalib-omni-samples/Ladybug", {5, 8, 30}},
+      {"KaidanOmni", "calib-ocamcalib-omni-samples/KaidanOmni", {7, 11, 30}},
+      {"MiniOmni", "calib-ocamcalib-omni-samples/MiniOmni", {7, 11, 30}},
+  };
+  for (const Set& s : sets) {
+    for (bool classic : {true, false}) {
+      const std::string name = std::string("BM_DetectBoard/") + s.name + (classic ? "/cascade" : "/sb_only");
+      const std::string dir = s.dir;
+      const lp::BoardSpec board = s.board;
+      benchmark::RegisterBenchmark(name.c_str(), [dir, board, classic](benchmark::State& st) {
+        detect_set(st, dir, board, classic);
+      })->Unit(benchmark::kMillisecond)->Iterations(1);
+    }
+  }
+}
+
+const int registered = (register_all(), 0);
+
+}  // namespace

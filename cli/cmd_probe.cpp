@@ -17,6 +17,7 @@
 #include "calib/colour_match.h"
 #include "hdr/bracket.h"
 #include "probe/ball_register.h"
+#include "probe/camera_unwrap.h"
 #include "probe/fill.h"
 #include "probe/fisheye.h"
 #include "probe/mirror_ball.h"
@@ -82,10 +83,15 @@ MirrorBallCamera ball_camera(const ProbeUnwrapArgs& a) {
   return c;
 }
 
-FisheyeModel fisheye_model(const ProbeUnwrapArgs& a, const RgbImage& first) {
-  FisheyeModel m = a.camera.empty() ? equidistant_fisheye(first.width, first.height, a.fov > 0 ? a.fov : 180)
-                                    : read_fisheye_yaml(a.camera);
-  if (!a.rotation.empty()) m.world_from_camera = parse_rotation(a.rotation) * m.world_from_camera;
+// A fisheye without --camera: the plain equidistant model of CONVENTIONS, as a KB model.
+CameraModel fisheye_model(const ProbeUnwrapArgs& a, const RgbImage& first) {
+  if (!a.camera.empty()) return read_camera_model(a.camera);
+  const FisheyeModel f = equidistant_fisheye(first.width, first.height, a.fov > 0 ? a.fov : 180);
+  CameraModel m;
+  m.lensmodel = "LENSMODEL_KANNALA_BRANDT";
+  m.intrinsics = {f.fx, f.fy, f.cx, f.cy, f.k[0], f.k[1], f.k[2], f.k[3]};
+  m.width = f.width;
+  m.height = f.height;
   return m;
 }
 
@@ -153,7 +159,7 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   nlohmann::json per_frame = nlohmann::json::array();
   double fill_share = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  std::optional<FisheyeModel> base_model;
+  std::optional<CameraModel> base_model;
   std::vector<Vec3> centroids;
   std::optional<ColourMatch> colour;
   if (!args.colour_match.empty()) colour = load_colour_match(args.colour_match);
@@ -173,18 +179,21 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
       fj["valid_fraction"] = ur.valid_solid_angle_fraction;
     } else {
       if (!base_model) base_model = fisheye_model(args, frames[0]);
-      FisheyeModel m = *base_model;
+      CameraModel m = *base_model;
       if (!track.cx.empty()) {
         // Move the optical centre with the image circle, relative to the track's first frame.
-        m.cx += track.cx[i] - track.cx[0];
-        m.cy += track.cy[i] - track.cy[0];
+        m.intrinsics[2] += track.cx[i] - track.cx[0];
+        m.intrinsics[3] += track.cy[i] - track.cy[0];
         fj["circle"] = {track.cx[i], track.cy[i], track.r[i]};
       }
-      FisheyeUnwrapOptions fo;
-      if (args.fill) fo.fill.method = FillMethod::PushPull;
-      FisheyeUnwrapReport fr;
-      map = unwrap_fisheye(frames[i], m, layout, w, h, fo, &fr);
-      fill_share = fr.fill.filled_power_share;
+      CameraUnwrapOptions co;
+      co.max_field_deg = args.fov > 0 ? args.fov / 2 : (args.camera.empty() ? 90 : 0);
+      if (args.fill) co.fill.method = FillMethod::PushPull;
+      const Mat3 world_from_camera = (args.rotation.empty() ? Mat3{} : parse_rotation(args.rotation)) *
+                                     upward_camera_world_from_camera();
+      FillReport fr;
+      map = unwrap_with_camera(frames[i], m, world_from_camera, layout, w, h, co, &fr);
+      fill_share = fr.filled_power_share;
     }
     map.units = frames[i].units;
     if (colour) apply_colour_match(map, *colour);

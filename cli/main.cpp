@@ -204,8 +204,10 @@ int main(int argc, char** argv) {
   auto* c_pun = c_probe->add_subcommand("unwrap", "Unwrap a probe image (or a sequence) into a map in the world frame");
   c_pun->add_option("IMAGE", pun.inputs, "Probe image(s) or a directory of frames")->required();
   c_pun->add_option("--type", pun.type, "mirrorball|fisheye");
-  c_pun->add_option("--camera", pun.camera, "fisheye: OpenCV fisheye YAML camera model");
-  c_pun->add_option("--fov", pun.fov, "fisheye: equidistant field of view (deg); ball: the camera's field of view");
+  c_pun->add_option("--camera", pun.camera, "fisheye: calibrated model (.cameramodel or OpenCV YAML, any lens model)");
+  c_pun->add_option("--fov", pun.fov,
+                    "fisheye: field of view (deg): of the equidistant default model, or the image circle of --camera; "
+                    "ball: the camera's field of view");
   c_pun->add_option("--distance", pun.distance, "ball: camera distance in ball radii (default orthographic)");
   c_pun->add_option("--ball", pun.ball, "ball: 'cx,cy,r' in pixels instead of detection");
   c_pun->add_option("--reflectivity", pun.reflectivity, "ball: reflectivity at normal incidence (chrome ~0.6-0.7)");

@@ -1,0 +1,62 @@
+#include "probe/camera_unwrap.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/error.h"
+
+namespace lp {
+
+Mat3 upward_camera_world_from_camera() {
+  // x_cam (image right) -> +Y, y_cam (image down) -> -X, z_cam (forward) -> +Z.
+  return Mat3{{0, -1, 0, 1, 0, 0, 0, 0, 1}};
+}
+
+RemapTable camera_remap(const CameraModel& model, const Mat3& world_from_camera, Layout layout, int width,
+                        int height, double max_field_deg) {
+  const double min_cos = max_field_deg > 0 ? std::cos(max_field_deg * M_PI / 180) : -2;
+  const EnvMap shape = make_envmap(layout, width, height);
+  const Mat3 camera_from_world = transpose(world_from_camera);
+  RemapTable t;
+  t.out_width = shape.width;
+  t.out_height = shape.height;
+  const size_t n = shape.pixel_count();
+  t.src_x.resize(n);
+  t.src_y.resize(n);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const Vec3 d = camera_from_world * pixel_direction(shape, i);
+      const auto p = d.z >= min_cos ? project(model, d) : std::nullopt;
+      const double x = p ? p->x + 0.5 : -1, y = p ? p->y + 0.5 : -1;
+      if (p && x >= 0 && x <= model.width && y >= 0 && y <= model.height) {
+        t.src_x[i] = float(x);
+        t.src_y[i] = float(y);
+      } else {
+        t.src_x[i] = t.src_y[i] = nan;
+      }
+    }
+  });
+  return t;
+}
+
+EnvMap unwrap_with_camera(const RgbImage& image, const CameraModel& model, const Mat3& world_from_camera,
+                          Layout layout, int width, int height, const CameraUnwrapOptions& options,
+                          FillReport* fill_report) {
+  if (image.width != model.width || image.height != model.height)
+    throw InputError(fmt::format("camera model is for {}x{}, image is {}x{}", model.width, model.height, image.width,
+                                 image.height));
+  RgbImage out = apply_remap(image, camera_remap(model, world_from_camera, layout, width, height, options.max_field_deg),
+                             options.remap);
+  EnvMap map = make_envmap(layout, width, height);
+  map.units = image.units;
+  map.rgb = std::move(out.rgb);
+  map.valid = std::move(out.valid);
+  if (options.fill.method != FillMethod::None && !map.valid.empty()) fill_invalid(map, options.fill, fill_report);
+  return map;
+}
+
+}  // namespace lp

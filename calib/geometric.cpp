@@ -1,0 +1,829 @@
+#include "calib/geometric.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include "calib/mrcal_solve.h"
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+constexpr const char* kPinhole = "LENSMODEL_PINHOLE";
+constexpr const char* kStereo = "LENSMODEL_STEREOGRAPHIC";
+constexpr const char* kPlumbBob = "plumb_bob";
+constexpr const char* kKB = "LENSMODEL_KANNALA_BRANDT";
+constexpr const char* kOpenCV8 = "LENSMODEL_OPENCV8";
+constexpr const char* kSplined = "LENSMODEL_SPLINED_STEREOGRAPHIC";
+
+const std::vector<std::string>& all_candidates() {
+  static const std::vector<std::string> names = {kPinhole, kStereo, kPlumbBob, kKB, kOpenCV8, kSplined};
+  return names;
+}
+
+using Pose = std::array<double, 6>;  // board -> camera: Rodrigues r, t (mm)
+
+struct View {
+  int index = 0;  // as given
+  std::vector<std::array<double, 2>> px;
+  std::vector<char> inlier;
+};
+using Subset = std::vector<const View*>;
+
+struct Fit {
+  bool ok = false;
+  std::string error;
+  CameraModel model;
+  std::vector<Pose> poses;  // per view of the subset
+  int params = 0;
+};
+
+struct Problem {
+  BoardSpec board;
+  int width = 0, height = 0;
+  CalibrateOptions options;
+};
+
+cv::Point3d board_point(const BoardSpec& b, int k) {
+  return {(k % b.cols) * b.square_mm, (k / b.cols) * b.square_mm, 0.0};
+}
+
+// Camera-frame points of a view's board corners.
+std::vector<Vec3> board_in_camera(const Problem& pr, const Pose& p) {
+  cv::Matx33d R;
+  cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
+  const int n = pr.board.cols * pr.board.rows;
+  std::vector<Vec3> out(n);
+  for (int k = 0; k < n; ++k) {
+    const cv::Vec3d X = R * cv::Vec3d(board_point(pr.board, k)) + cv::Vec3d(p[3], p[4], p[5]);
+    out[k] = {X[0], X[1], X[2]};
+  }
+  return out;
+}
+
+// observed - projected per corner; NaN where the model cannot image the corner.
+std::vector<std::array<double, 2>> view_residuals(const Problem& pr, const CameraModel& m, const View& v,
+                                                  const Pose& pose) {
+  const auto P = board_in_camera(pr, pose);
+  std::vector<std::array<double, 2>> r(P.size());
+  for (size_t k = 0; k < P.size(); ++k) {
+    const auto q = project(m, P[k]);
+    if (q)
+      r[k] = {v.px[k][0] - q->x, v.px[k][1] - q->y};
+    else
+      r[k] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  }
+  return r;
+}
+
+double rms_of(const std::vector<double>& sq) {
+  if (sq.empty()) return 0;
+  return std::sqrt(std::accumulate(sq.begin(), sq.end(), 0.0) / double(sq.size()));
+}
+
+// RMS (2-D) of a fit over the inliers of its subset; +inf when a corner cannot be imaged.
+double fit_rms(const Problem& pr, const Fit& f, const Subset& views) {
+  std::vector<double> sq;
+  for (size_t i = 0; i < views.size(); ++i) {
+    const auto r = view_residuals(pr, f.model, *views[i], f.poses[i]);
+    for (size_t k = 0; k < r.size(); ++k)
+      if (views[i]->inlier[k]) {
+        const double e = r[k][0] * r[k][0] + r[k][1] * r[k][1];
+        sq.push_back(std::isfinite(e) ? e : 1e12);
+      }
+  }
+  return rms_of(sq);
+}
+
+CameraModel make_model(const Problem& pr, const std::string& lensmodel, std::vector<double> intrinsics) {
+  CameraModel m;
+  m.lensmodel = lensmodel;
+  m.intrinsics = std::move(intrinsics);
+  m.width = pr.width;
+  m.height = pr.height;
+  return m;
+}
+
+// ---- OpenCV solvers -------------------------------------------------------------------
+
+// cv::fisheye::calibrate over the inlier corners that `use` accepts; views with fewer
+// than 6 such corners get no pose (empty optional).
+Fit fit_opencv_kb(const Problem& pr, const Subset& views, const std::function<bool(const std::array<double, 2>&)>& use,
+                  std::vector<char>* has_pose) {
+  Fit f;
+  std::vector<cv::Mat> obj, img;
+  has_pose->assign(views.size(), 0);
+  for (size_t vi = 0; vi < views.size(); ++vi) {
+    const View* v = views[vi];
+    std::vector<cv::Vec3d> o;
+    std::vector<cv::Vec2d> q;
+    for (size_t k = 0; k < v->px.size(); ++k)
+      if (v->inlier[k] && use(v->px[k])) {
+        o.push_back(cv::Vec3d(board_point(pr.board, int(k))));
+        q.push_back({v->px[k][0], v->px[k][1]});
+      }
+    if (o.size() < 6) continue;
+    (*has_pose)[vi] = 1;
+    obj.push_back(cv::Mat(o, true).reshape(3, int(o.size())));
+    img.push_back(cv::Mat(q, true).reshape(2, int(q.size())));
+  }
+  cv::Matx33d K;
+  cv::Vec4d D;
+  std::vector<cv::Vec3d> rv, tv;
+  try {
+    cv::fisheye::calibrate(obj, img, cv::Size(pr.width, pr.height), K, D, rv, tv,
+                           cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW,
+                           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-14));
+  } catch (const cv::Exception& e) {
+    f.error = "cv::fisheye::calibrate failed";
+    return f;
+  }
+  f.model = make_model(pr, kKB, {K(0, 0), K(1, 1), K(0, 2), K(1, 2), D[0], D[1], D[2], D[3]});
+  f.poses.assign(views.size(), Pose{});
+  for (size_t i = 0, j = 0; i < views.size(); ++i)
+    if ((*has_pose)[i]) {
+      f.poses[i] = {rv[j][0], rv[j][1], rv[j][2], tv[j][0], tv[j][1], tv[j][2]};
+      ++j;
+    }
+  for (double x : f.model.intrinsics)
+    if (!std::isfinite(x)) {
+      f.error = "cv::fisheye::calibrate diverged";
+      return f;
+    }
+  f.ok = true;
+  f.params = 8;
+  return f;
+}
+
+// cv::calibrateCamera; flags select pinhole / plumb_bob / rational. Returns the OpenCV
+// coefficients (k1 k2 p1 p2 k3 [k4 k5 k6]) in `dist`.
+Fit fit_opencv_pinhole_family(const Problem& pr, const Subset& views, int flags, const std::string& lensmodel,
+                              int ndist) {
+  Fit f;
+  std::vector<std::vector<cv::Point3f>> obj;
+  std::vector<std::vector<cv::Point2f>> img;
+  for (const View* v : views) {
+    obj.emplace_back();
+    img.emplace_back();
+    for (size_t k = 0; k < v->px.size(); ++k)
+      if (v->inlier[k]) {
+        obj.back().push_back(cv::Point3f(board_point(pr.board, int(k))));
+        img.back().push_back(cv::Point2f(float(v->px[k][0]), float(v->px[k][1])));
+      }
+  }
+  cv::Mat K, D;
+  std::vector<cv::Mat> rv, tv;
+  try {
+    cv::calibrateCamera(obj, img, cv::Size(pr.width, pr.height), K, D, rv, tv, flags,
+                        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
+  } catch (const cv::Exception&) {
+    f.error = "cv::calibrateCamera failed";
+    return f;
+  }
+  std::vector<double> in = {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2)};
+  for (int i = 0; i < ndist; ++i) in.push_back(i < int(D.total()) ? D.at<double>(i) : 0.0);
+  f.model = make_model(pr, lensmodel, in);
+  for (size_t i = 0; i < views.size(); ++i)
+    f.poses.push_back({rv[i].at<double>(0), rv[i].at<double>(1), rv[i].at<double>(2), tv[i].at<double>(0),
+                       tv[i].at<double>(1), tv[i].at<double>(2)});
+  for (double x : in)
+    if (!std::isfinite(x)) {
+      f.error = "cv::calibrateCamera diverged";
+      return f;
+    }
+  f.ok = true;
+  f.params = 4 + ndist;
+  return f;
+}
+
+
+std::optional<Pose> solve_pose(const Problem& pr, const CameraModel& m, const View& v);
+
+// Kannala-Brandt reprojection of one corner (the projection of camera_model.cpp: theta
+// from atan2, so rays beyond 90 deg work, unlike cv::fisheye).
+struct KannalaBrandtCost {
+  double X, Y, qx, qy;
+  template <typename T>
+  bool operator()(const T* in, const T* pose, T* r) const {
+    const T P[3] = {T(X), T(Y), T(0)};
+    T C[3];
+    ceres::AngleAxisRotatePoint(pose, P, C);
+    C[0] += pose[3];
+    C[1] += pose[4];
+    C[2] += pose[5];
+    const T rho2 = C[0] * C[0] + C[1] * C[1];
+    T s;
+    if (rho2 < T(1e-24)) {
+      s = T(1) / C[2];
+    } else {
+      const T rho = ceres::sqrt(rho2);
+      const T th = ceres::atan2(rho, C[2]);
+      const T t2 = th * th;
+      s = th * (T(1) + t2 * (in[4] + t2 * (in[5] + t2 * (in[6] + t2 * in[7])))) / rho;
+    }
+    r[0] = in[0] * s * C[0] + in[2] - T(qx);
+    r[1] = in[1] * s * C[1] + in[3] - T(qy);
+    return true;
+  }
+};
+
+// Kannala-Brandt: cv::fisheye::calibrate as the seed (all corners; when it fails, the
+// corners of the central part of the image, other views posed by PnP through the seed),
+// then every inlier corner in one joint least-squares solve (Ceres, single-threaded).
+Fit fit_kb(const Problem& pr, const Subset& views) {
+  std::vector<char> has_pose;
+  Fit seed = fit_opencv_kb(pr, views, [](const std::array<double, 2>&) { return true; }, &has_pose);
+  if (!seed.ok) {
+    const double cx = (pr.width - 1) / 2.0, cy = (pr.height - 1) / 2.0, rmax = 0.45 * std::min(pr.width, pr.height);
+    seed = fit_opencv_kb(
+        pr, views, [&](const std::array<double, 2>& q) { return std::hypot(q[0] - cx, q[1] - cy) < rmax; },
+        &has_pose);
+    if (!seed.ok) return seed;
+  }
+  // cv::fisheye's poses of views with corners near or beyond 90 deg can be far off even
+  // when its intrinsics are good: every view is re-posed under the seed intrinsics
+  // (PnP on the rays + pixel refinement) and keeps whichever pose fits it better.
+  for (size_t i = 0; i < views.size(); ++i) {
+    auto view_sq = [&](const Pose& p) {
+      const auto r = view_residuals(pr, seed.model, *views[i], p);
+      double s = 0;
+      for (size_t k = 0; k < r.size(); ++k)
+        if (views[i]->inlier[k]) s += std::isfinite(r[k][0]) ? r[k][0] * r[k][0] + r[k][1] * r[k][1] : 1e12;
+      return s;
+    };
+    const auto p = solve_pose(pr, seed.model, *views[i]);
+    if (!has_pose[i] && !p) {
+      seed.ok = false;
+      seed.error = "cannot pose a view under the Kannala-Brandt seed";
+      return seed;
+    }
+    if (p && (!has_pose[i] || view_sq(*p) < view_sq(seed.poses[i]))) seed.poses[i] = *p;
+  }
+  Fit f = seed;
+  ceres::Problem problem;
+  for (size_t i = 0; i < views.size(); ++i)
+    for (size_t k = 0; k < views[i]->px.size(); ++k) {
+      if (!views[i]->inlier[k]) continue;
+      const cv::Point3d X = board_point(pr.board, int(k));
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KannalaBrandtCost, 2, 8, 6>(
+                                   new KannalaBrandtCost{X.x, X.y, views[i]->px[k][0], views[i]->px[k][1]}),
+                               nullptr, f.model.intrinsics.data(), f.poses[i].data());
+    }
+  ceres::Solver::Options o;
+  o.linear_solver_type = ceres::DENSE_SCHUR;
+  o.num_threads = 1;
+  o.max_num_iterations = 200;
+  o.function_tolerance = 1e-16;
+  o.gradient_tolerance = 1e-16;
+  o.parameter_tolerance = 1e-15;
+  o.logging_type = ceres::SILENT;
+  o.minimizer_progress_to_stdout = false;
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, &problem, &summary);
+  bool finite = summary.IsSolutionUsable();
+  for (double x : f.model.intrinsics) finite = finite && std::isfinite(x);
+  if (!finite || summary.final_cost > summary.initial_cost) return seed;
+  return f;
+}
+
+// ---- mrcal solves, seeded from another fit ---------------------------------------------
+
+Fit fit_mrcal(const Problem& pr, const Subset& views, const std::string& lensmodel, std::vector<double> seed,
+              const std::vector<Pose>& poses, bool regularization) {
+  Fit f;
+  MrcalProblem mp;
+  mp.lensmodel = lensmodel;
+  mp.intrinsics_seed = std::move(seed);
+  mp.poses_seed = poses;
+  mp.width = pr.width;
+  mp.height = pr.height;
+  mp.cols = pr.board.cols;
+  mp.rows = pr.board.rows;
+  mp.spacing = pr.board.square_mm;
+  mp.regularization = regularization;
+  for (const View* v : views) {
+    mp.observations.emplace_back();
+    for (size_t k = 0; k < v->px.size(); ++k)
+      mp.observations.back().push_back({v->px[k][0], v->px[k][1], v->inlier[k] ? 1.0 : -1.0});
+  }
+  const MrcalSolution s = mrcal_solve(mp);
+  if (!s.ok) {
+    f.error = s.error;
+    return f;
+  }
+  f.model = make_model(pr, lensmodel, s.intrinsics);
+  f.poses = s.poses;
+  f.params = int(s.intrinsics.size());
+  f.ok = true;
+  return f;
+}
+
+// Every candidate of one subset of views, fitted on demand, each once.
+class Fitter {
+ public:
+  Fitter(const Problem& pr, Subset views) : pr_(pr), views_(std::move(views)) {}
+  const Subset& views() const { return views_; }
+
+  const Fit& get(const std::string& name) {
+    auto it = cache_.find(name);
+    if (it != cache_.end()) return it->second;
+    Fit f = compute(name);
+    if (f.ok && !std::isfinite(fit_rms(pr_, f, views_))) {
+      f.ok = false;
+      f.error = "the fit cannot image some corners";
+    }
+    return cache_.emplace(name, std::move(f)).first->second;
+  }
+
+ private:
+  Fit polish(const Fit& seed, const std::string& lensmodel, bool reg) {
+    if (!seed.ok || !pr_.options.use_mrcal) return seed;
+    Fit f = fit_mrcal(pr_, views_, lensmodel, seed.model.intrinsics, seed.poses, reg);
+    // Keep OpenCV's solution when mrcal fails or does not improve it.
+    if (!f.ok || fit_rms(pr_, f, views_) > fit_rms(pr_, seed, views_)) return seed;
+    return f;
+  }
+
+  Fit compute(const std::string& name) {
+    if (name == kKB) return fit_kb(pr_, views_);
+    if (name == kPinhole) {
+      const int fl = cv::CALIB_FIX_K1 | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3 | cv::CALIB_ZERO_TANGENT_DIST;
+      return polish(fit_opencv_pinhole_family(pr_, views_, fl, kPinhole, 0), kPinhole, false);
+    }
+    if (name == kPlumbBob)
+      return polish(fit_opencv_pinhole_family(pr_, views_, 0, "LENSMODEL_OPENCV5", 5), "LENSMODEL_OPENCV5", false);
+    if (name == kOpenCV8)
+      return polish(fit_opencv_pinhole_family(pr_, views_, cv::CALIB_RATIONAL_MODEL, kOpenCV8, 8), kOpenCV8, false);
+    if (name == kStereo || name == kSplined) {
+      Fit f;
+      if (!pr_.options.use_mrcal) {
+        f.error = "needs mrcal (use_mrcal = false)";
+        return f;
+      }
+      if (name == kStereo) {
+        // Seed: the core and poses of the Kannala-Brandt fit (any field of view), else pinhole.
+        const Fit* seed = &get(kKB);
+        if (!seed->ok) seed = &get(kPinhole);
+        if (!seed->ok) {
+          f.error = "no seed (Kannala-Brandt and pinhole fits failed)";
+          return f;
+        }
+        std::vector<double> core(seed->model.intrinsics.begin(), seed->model.intrinsics.begin() + 4);
+        return fit_mrcal(pr_, views_, kStereo, core, seed->poses, false);
+      }
+      const Fit& st = get(kStereo);
+      if (!st.ok) {
+        f.error = "no seed (stereographic fit failed)";
+        return f;
+      }
+      // A zero spline is exactly the stereographic seed. Field of view: the widest
+      // horizontal angle of the image under the seed, with a margin.
+      const auto& c = st.model.intrinsics;
+      const double u = std::max(c[2] + 0.5, pr_.width - 0.5 - c[2]) / c[0];
+      const double half = 2 * std::atan(u / 2);
+      const int fov = std::min(359, int(std::ceil(2 * half * 180 / M_PI * 1.05)));
+      const auto& o = pr_.options;
+      const std::string lm = mrcal_splined_name(o.spline_order, o.spline_nx, o.spline_ny, fov);
+      const int n = mrcal_model_param_count(lm);
+      if (n < 4) {
+        f.error = "mrcal rejects " + lm;
+        return f;
+      }
+      std::vector<double> seed(n, 0.0);
+      std::copy(c.begin(), c.begin() + 4, seed.begin());
+      return fit_mrcal(pr_, views_, lm, seed, st.poses, true);
+    }
+    Fit f;
+    f.error = "unknown candidate";
+    return f;
+  }
+
+  const Problem& pr_;
+  Subset views_;
+  std::map<std::string, Fit> cache_;
+};
+
+// ---- poses with fixed intrinsics ----------------------------------------------------
+
+// Pixel residuals of a pose (Levenberg-Marquardt with numeric derivatives).
+Pose refine_pose(const Problem& pr, const CameraModel& m, const View& v, Pose p) {
+  auto resid = [&](const Pose& q, Eigen::VectorXd& r) {
+    const auto rr = view_residuals(pr, m, v, q);
+    std::vector<double> out;
+    for (size_t k = 0; k < rr.size(); ++k)
+      if (v.inlier[k]) {
+        out.push_back(std::isfinite(rr[k][0]) ? rr[k][0] : 1e4);
+        out.push_back(std::isfinite(rr[k][1]) ? rr[k][1] : 1e4);
+      }
+    r = Eigen::Map<Eigen::VectorXd>(out.data(), Eigen::Index(out.size()));
+  };
+  Eigen::VectorXd r;
+  resid(p, r);
+  double cost = r.squaredNorm(), lambda = 1e-3;
+  for (int it = 0; it < 30; ++it) {
+    Eigen::MatrixXd J(r.size(), 6);
+    for (int j = 0; j < 6; ++j) {
+      Pose q = p;
+      const double h = j < 3 ? 1e-7 : 1e-6 * std::max(1.0, std::abs(p[j]));
+      q[j] += h;
+      Eigen::VectorXd rj;
+      resid(q, rj);
+      J.col(j) = (rj - r) / h;
+    }
+    const Eigen::MatrixXd A = J.transpose() * J;
+    const Eigen::VectorXd g = J.transpose() * r;
+    bool improved = false;
+    for (int tries = 0; tries < 10 && !improved; ++tries) {
+      Eigen::MatrixXd Al = A;
+      Al.diagonal() *= (1 + lambda);
+      const Eigen::VectorXd d = Al.ldlt().solve(-g);
+      Pose q = p;
+      for (int j = 0; j < 6; ++j) q[j] += d[j];
+      Eigen::VectorXd rq;
+      resid(q, rq);
+      if (rq.squaredNorm() < cost) {
+        const double rel = (cost - rq.squaredNorm()) / std::max(cost, 1e-300);
+        p = q;
+        r = rq;
+        cost = rq.squaredNorm();
+        lambda = std::max(lambda / 10, 1e-9);
+        improved = true;
+        if (rel < 1e-12) return p;
+      } else {
+        lambda *= 10;
+      }
+    }
+    if (!improved) break;
+  }
+  return p;
+}
+
+// Board pose of a view under fixed intrinsics: PnP on the unprojected rays (normalised
+// plane, rays in front of the camera), then refined on pixels.
+std::optional<Pose> solve_pose(const Problem& pr, const CameraModel& m, const View& v) {
+  std::vector<cv::Point3d> o;
+  std::vector<cv::Point2d> q;
+  for (size_t k = 0; k < v.px.size(); ++k) {
+    if (!v.inlier[k]) continue;
+    const auto d = unproject(m, {v.px[k][0], v.px[k][1]});
+    if (!d || d->z < 0.1) continue;
+    o.push_back(board_point(pr.board, int(k)));
+    q.push_back({d->x / d->z, d->y / d->z});
+  }
+  if (o.size() < 6) return std::nullopt;
+  cv::Vec3d rv, tv;
+  try {
+    if (!cv::solvePnP(o, q, cv::Matx33d::eye(), cv::noArray(), rv, tv, false, cv::SOLVEPNP_ITERATIVE))
+      return std::nullopt;
+  } catch (const cv::Exception&) {
+    return std::nullopt;
+  }
+  return refine_pose(pr, m, v, {rv[0], rv[1], rv[2], tv[0], tv[1], tv[2]});
+}
+
+// RMS of `views`' inlier corners under the intrinsics of `m` with their poses re-solved.
+double heldout_rms(const Problem& pr, const CameraModel& m, const Subset& views) {
+  std::vector<double> sq;
+  for (const View* v : views) {
+    const auto pose = solve_pose(pr, m, *v);
+    if (!pose) return std::numeric_limits<double>::infinity();
+    const auto r = view_residuals(pr, m, *v, *pose);
+    for (size_t k = 0; k < r.size(); ++k)
+      if (v->inlier[k]) {
+        const double e = r[k][0] * r[k][0] + r[k][1] * r[k][1];
+        sq.push_back(std::isfinite(e) ? e : 1e12);
+      }
+  }
+  return rms_of(sq);
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const size_t n = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + n, v.end());
+  double m = v[n];
+  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + n));
+  return m;
+}
+
+std::vector<uint8_t> coverage_mask(const Problem& pr, const Subset& views) {
+  cv::Mat mask = cv::Mat::zeros(pr.height, pr.width, CV_8U);
+  for (const View* v : views) {
+    std::vector<cv::Point2f> pts;
+    for (size_t k = 0; k < v->px.size(); ++k)
+      if (v->inlier[k]) pts.push_back(cv::Point2f(float(v->px[k][0]), float(v->px[k][1])));
+    if (pts.size() < 3) continue;
+    std::vector<cv::Point2f> hull;
+    cv::convexHull(pts, hull);
+    std::vector<cv::Point> ih;
+    for (const auto& p : hull) ih.push_back(cv::Point(int(std::lround(p.x)), int(std::lround(p.y))));
+    cv::fillConvexPoly(mask, ih, cv::Scalar(255));
+  }
+  return std::vector<uint8_t>(mask.begin<uint8_t>(), mask.end<uint8_t>());
+}
+
+int auto_step(const Problem& pr) {
+  if (pr.options.diff_step_px > 0) return pr.options.diff_step_px;
+  return std::max(2, int(std::lround(std::sqrt(double(pr.width) * pr.height / 5000.0))));
+}
+
+}  // namespace
+
+ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const std::vector<uint8_t>& mask,
+                                     int step_px, bool fit_rotation) {
+  ProjectionDiff out;
+  const int w = a.width, h = a.height, step = std::max(1, step_px);
+  std::vector<Vec3> va, vb;
+  std::vector<Pixel> qs;
+  for (int y = step / 2; y < h; y += step)
+    for (int x = step / 2; x < w; x += step) {
+      if (!mask.empty() && !mask[size_t(y) * w + x]) continue;
+      const Pixel q{double(x), double(y)};
+      const auto da = unproject(a, q);
+      const auto db = unproject(b, q);
+      if (!da || !db) continue;
+      va.push_back(*da);
+      vb.push_back(*db);
+      qs.push_back(q);
+    }
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  if (fit_rotation && va.size() >= 3) {
+    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+    for (size_t i = 0; i < va.size(); ++i)
+      H += Eigen::Vector3d(va[i].x, va[i].y, va[i].z) * Eigen::Vector3d(vb[i].x, vb[i].y, vb[i].z).transpose();
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+    Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+    S(2, 2) = (V * U.transpose()).determinant() < 0 ? -1 : 1;
+    R = V * S * U.transpose();
+  }
+  std::vector<double> d;
+  for (size_t i = 0; i < va.size(); ++i) {
+    const Eigen::Vector3d r = R * Eigen::Vector3d(va[i].x, va[i].y, va[i].z);
+    const auto p = project(b, {r[0], r[1], r[2]});
+    if (!p) continue;
+    d.push_back(std::hypot(p->x - qs[i].x, p->y - qs[i].y));
+  }
+  out.samples = int(d.size());
+  if (d.empty()) return out;
+  double s = 0;
+  for (double x : d) s += x * x;
+  out.rms_px = std::sqrt(s / double(d.size()));
+  out.max_px = *std::max_element(d.begin(), d.end());
+  out.median_px = median_of(d);
+  return out;
+}
+
+CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                            const BoardSpec& board, int width, int height, const CalibrateOptions& options) {
+  if (board.cols < 2 || board.rows < 2)
+    throw InputError("calibrate: board needs at least 2 inner corners per side (got " + std::to_string(board.cols) +
+                     "x" + std::to_string(board.rows) + ")");
+  if (!(board.square_mm > 0)) throw InputError("calibrate: board square size must be positive");
+  if (width <= 0 || height <= 0) throw InputError("calibrate: image size must be positive");
+  const std::vector<std::string> candidates =
+      !options.model.empty() ? std::vector<std::string>{options.model}
+                             : (options.candidates.empty() ? all_candidates() : options.candidates);
+  for (const auto& c : candidates)
+    if (std::find(all_candidates().begin(), all_candidates().end(), c) == all_candidates().end())
+      throw InputError("calibrate: unknown model '" + c + "'");
+
+  Problem pr{board, width, height, options};
+  const int ncorners = board.cols * board.rows;
+  std::vector<View> views;
+  for (size_t i = 0; i < corners_per_view.size(); ++i) {
+    const auto& c = corners_per_view[i];
+    if (c.empty()) continue;
+    if (int(c.size()) != ncorners)
+      throw InputError("calibrate: view " + std::to_string(i) + " has " + std::to_string(c.size()) +
+                       " corners, the board has " + std::to_string(ncorners));
+    for (const auto& p : c)
+      if (!(p[0] >= -0.5 && p[0] <= width - 0.5 && p[1] >= -0.5 && p[1] <= height - 0.5))
+        throw InputError("calibrate: view " + std::to_string(i) + " has a corner outside the " +
+                         std::to_string(width) + "x" + std::to_string(height) + " image (mixed resolutions?)");
+    views.push_back({int(i), c, std::vector<char>(c.size(), 1)});
+  }
+  if (views.size() < 4)
+    throw InputError("calibrate: " + std::to_string(views.size()) + " views with a board, need at least 4");
+
+  CalibrationResult res;
+  res.views.resize(corners_per_view.size());
+  for (size_t i = 0; i < corners_per_view.size(); ++i) {
+    res.views[i].has_board = !corners_per_view[i].empty();
+    res.views[i].corners = int(corners_per_view[i].size());
+    res.views[i].why = res.views[i].has_board ? "" : "no board";
+  }
+  std::vector<char> view_used(views.size(), 1);
+  auto used_subset = [&](int skip = -1) {
+    Subset s;
+    for (size_t i = 0; i < views.size(); ++i)
+      if (view_used[i] && int(i) != skip) s.push_back(&views[i]);
+    return s;
+  };
+
+  // 1. Outlier rejection with a reference model (the requested one, else Kannala-Brandt,
+  //    which fits narrow and wide lenses alike; rational / pinhole when it fails).
+  std::vector<std::string> refs = {options.model.empty() ? std::string(kKB) : options.model, kOpenCV8, kPinhole};
+  std::string ref;
+  for (int round = 0; round < std::max(1, options.outlier_rounds); ++round) {
+    Fitter fitter(pr, used_subset());
+    const Fit* f = nullptr;
+    for (const auto& r : refs) {
+      if (!ref.empty() && r != ref) continue;
+      if (fitter.get(r).ok) {
+        ref = r;
+        f = &fitter.get(r);
+        break;
+      }
+    }
+    if (!f) throw InputError("calibrate: no model could be fitted to the corners");
+    res.outlier_rounds = round + 1;
+    const Subset& sub = fitter.views();
+    std::vector<std::vector<std::array<double, 2>>> rs;
+    std::vector<double> comps;
+    for (size_t i = 0; i < sub.size(); ++i) {
+      rs.push_back(view_residuals(pr, f->model, *sub[i], f->poses[i]));
+      for (size_t k = 0; k < rs.back().size(); ++k)
+        if (sub[i]->inlier[k] && std::isfinite(rs.back()[k][0])) {
+          comps.push_back(std::abs(rs.back()[k][0]));
+          comps.push_back(std::abs(rs.back()[k][1]));
+        }
+    }
+    const double sigma = 1.4826 * median_of(comps);
+    const double thr = std::max(options.outlier_k * sigma, options.outlier_floor_px);
+    // The inlier set is recomputed from every corner each round, so corners that a
+    // gross outlier dragged off in the first fit come back once it is gone.
+    bool changed = false;
+    for (size_t i = 0; i < sub.size(); ++i) {
+      View& v = const_cast<View&>(*sub[i]);
+      for (size_t k = 0; k < v.px.size(); ++k) {
+        const char in = std::hypot(rs[i][k][0], rs[i][k][1]) <= thr;
+        if (v.inlier[k] != in) {
+          v.inlier[k] = in;
+          changed = true;
+        }
+      }
+    }
+    for (size_t i = 0; i < views.size(); ++i) {
+      if (!view_used[i]) continue;
+      const int bad = int(std::count(views[i].inlier.begin(), views[i].inlier.end(), 0));
+      if (bad > options.max_view_outlier_fraction * ncorners || ncorners - bad < 4) {
+        view_used[i] = 0;
+        res.views[views[i].index].why =
+            "too many outlier corners (" + std::to_string(bad) + " of " + std::to_string(ncorners) + ")";
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  const Subset used = used_subset();
+  if (used.size() < 4)
+    throw InputError("calibrate: only " + std::to_string(used.size()) +
+                     " views left after outlier rejection, need at least 4");
+
+  // 2. Candidates: full fit, odd/even halves, cross-validation and held-out error.
+  Subset half[2];
+  for (size_t i = 0; i < used.size(); ++i) half[i % 2].push_back(used[i]);
+  const std::vector<uint8_t> mask = coverage_mask(pr, used);
+  const int step = auto_step(pr);
+  Fitter full(pr, used), fa(pr, half[0]), fb(pr, half[1]);
+  for (const auto& name : candidates) {
+    ModelCandidate c;
+    c.name = name;
+    const Fit& f = full.get(name);
+    if (!f.ok) {
+      c.error = f.error;
+      res.table.push_back(c);
+      continue;
+    }
+    c.lensmodel = f.model.lensmodel;
+    c.params = f.params;
+    c.rms_px = fit_rms(pr, f, used);
+    c.model = f.model;
+    c.model.rms_reprojection_px = c.rms_px;
+    const Fit& a = fa.get(name);
+    const Fit& b = fb.get(name);
+    if (!a.ok || !b.ok) {
+      c.error = "a half of the views could not be fitted: " + (a.ok ? b.error : a.error);
+      res.table.push_back(c);
+      continue;
+    }
+    const ProjectionDiff d = projection_difference(a.model, b.model, mask, step);
+    c.cross_validation_px = d.samples > 0 ? d.rms_px : std::numeric_limits<double>::infinity();
+    c.cross_validation_median_px = d.median_px;
+    const double h1 = heldout_rms(pr, a.model, half[1]), h2 = heldout_rms(pr, b.model, half[0]);
+    c.heldout_rms_px = std::sqrt(0.5 * (h1 * h1 + h2 * h2));
+    c.model.cross_validation_px = c.cross_validation_px;
+    c.ok = std::isfinite(c.cross_validation_px);
+    if (!c.ok) c.error = "no covered pixel both half-models can image";
+    res.table.push_back(c);
+  }
+
+  // 3. Selection: fewest parameters within max(10 %, 0.05 px) of the best cross-validation.
+  const ModelCandidate* best = nullptr;
+  for (const auto& c : res.table)
+    if (c.ok && (!best || c.cross_validation_px < best->cross_validation_px)) best = &c;
+  if (!best) {
+    std::string why;
+    for (const auto& c : res.table) why += (why.empty() ? "" : "; ") + c.name + ": " + c.error;
+    throw InputError("calibrate: no candidate model could be fitted (" + why + ")");
+  }
+  const double limit = best->cross_validation_px + std::max(0.1 * best->cross_validation_px, 0.05);
+  const ModelCandidate* pick = best;
+  for (const auto& c : res.table)
+    if (c.ok && c.cross_validation_px <= limit &&
+        (c.params < pick->params || (c.params == pick->params && c.cross_validation_px < pick->cross_validation_px)))
+      pick = &c;
+  res.selected = pick->name;
+  res.model = pick->model;
+  res.cross_validation_px = pick->cross_validation_px;
+  res.cross_validation_median_px = pick->cross_validation_median_px;
+  res.heldout_rms_px = pick->heldout_rms_px;
+  const Fit& chosen = full.get(pick->name);
+
+  // 4. Residuals, per-view RMS, coverage, edge bands.
+  res.view_rms_px.assign(corners_per_view.size(), 0.0);
+  res.coverage_nx = std::max(1, options.coverage_nx);
+  res.coverage_ny = std::max(1, options.coverage_ny);
+  res.coverage.assign(size_t(res.coverage_nx) * res.coverage_ny, 0);
+  size_t ui = 0;
+  for (size_t i = 0; i < views.size(); ++i) {
+    const View& v = views[i];
+    Pose pose;
+    if (view_used[i]) {
+      pose = chosen.poses[ui++];
+    } else {
+      const auto p = solve_pose(pr, res.model, v);
+      if (!p) continue;
+      pose = *p;
+    }
+    const auto r = view_residuals(pr, res.model, v, pose);
+    std::vector<double> sq;
+    int rejected = 0;
+    for (size_t k = 0; k < r.size(); ++k) {
+      res.residuals.push_back({v.index, int(k), r[k][0], r[k][1], !v.inlier[k]});
+      res.corners_total++;
+      if (!v.inlier[k]) {
+        rejected++;
+        continue;
+      }
+      sq.push_back(r[k][0] * r[k][0] + r[k][1] * r[k][1]);
+      if (!view_used[i]) continue;
+      const double x = v.px[k][0], y = v.px[k][1];
+      const int cx = std::clamp(int((x + 0.5) / width * res.coverage_nx), 0, res.coverage_nx - 1);
+      const int cy = std::clamp(int((y + 0.5) / height * res.coverage_ny), 0, res.coverage_ny - 1);
+      res.coverage[size_t(cy) * res.coverage_nx + cx]++;
+      const double bx = options.edge_band * width, by = options.edge_band * height;
+      if (x < bx) res.edge_observations[0]++;
+      if (x > width - bx) res.edge_observations[1]++;
+      if (y < by) res.edge_observations[2]++;
+      if (y > height - by) res.edge_observations[3]++;
+    }
+    res.corners_rejected += rejected;
+    ViewReport& vr = res.views[v.index];
+    vr.rejected_corners = rejected;
+    vr.used = view_used[i];
+    vr.rms_px = rms_of(sq);
+    res.view_rms_px[v.index] = vr.rms_px;
+  }
+  for (int e : res.edge_observations)
+    if (e < options.min_edge_observations) res.corners_poorly_covered = true;
+
+  // 5. Jackknife leverage of each used view for the chosen model.
+  if (options.leverage) {
+    std::vector<double> lev;
+    std::vector<int> idx;
+    for (size_t i = 0; i < views.size(); ++i) {
+      if (!view_used[i]) continue;
+      Fitter loo(pr, used_subset(int(i)));
+      const Fit& f = loo.get(pick->name);
+      double l = std::numeric_limits<double>::infinity();
+      if (f.ok) {
+        const ProjectionDiff d = projection_difference(f.model, res.model, mask, step);
+        if (d.samples > 0) l = d.rms_px;
+      }
+      res.views[views[i].index].leverage_px = l;
+      lev.push_back(l);
+      idx.push_back(views[i].index);
+    }
+    const double med = median_of(lev);
+    for (size_t j = 0; j < lev.size(); ++j)
+      res.views[idx[j]].influential = lev[j] > options.leverage_flag_factor * med && lev[j] > 1e-6;
+  }
+  res.model.rms_reprojection_px = pick->rms_px;
+  res.model.cross_validation_px = pick->cross_validation_px;
+  return res;
+}
+
+}  // namespace lp

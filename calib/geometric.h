@@ -1,0 +1,121 @@
+// Geometric calibration (issue 6): lens model + intrinsics from chessboard corners.
+//
+// Candidate models are fitted with OpenCV (cv::fisheye for Kannala-Brandt, calibrateCamera
+// for pinhole / plumb_bob / rational) and with mrcal (stereographic, OpenCV8 polish,
+// splined stereographic), every mrcal solve seeded deterministically from an OpenCV
+// solution, so the same corners always give bit-identical intrinsics.
+//
+// Accuracy is reported as cross-validation: the views are split into odd/even halves,
+// each half calibrated alone, and the two models compared over the area the boards
+// covered (unproject with A, best rotation between the two camera frames, project with
+// B): the pixel disagreement is what a user can expect from recalibrating (mrcal's
+// "projection difference"). The model chosen is the one with the fewest parameters whose
+// cross-validation is within max(10 %, 0.05 px) of the best candidate's.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "calib/board_detect.h"
+#include "calib/camera_model.h"
+
+namespace lp {
+
+struct CalibrateOptions {
+  // Empty: select among `candidates`. Otherwise one candidate name (see below): no selection.
+  std::string model;
+  // Candidate names: "LENSMODEL_PINHOLE", "LENSMODEL_STEREOGRAPHIC", "plumb_bob" (OpenCV's
+  // 5-coefficient model, stored as LENSMODEL_OPENCV8 with k4..k6 = 0),
+  // "LENSMODEL_KANNALA_BRANDT", "LENSMODEL_OPENCV8", "LENSMODEL_SPLINED_STEREOGRAPHIC".
+  // Empty = all of them.
+  std::vector<std::string> candidates;
+  bool use_mrcal = true;  // false: OpenCV paths only (stereographic/splined unavailable)
+  // Splined model: cubic, Nx x Ny control points, fov from the seed.
+  int spline_order = 3, spline_nx = 10, spline_ny = 8;
+  // Outlier rejection: drop corners with |residual| > k * sigma (sigma = 1.4826 * MAD of
+  // the residual components), never below `outlier_floor_px`; at most `outlier_rounds`.
+  double outlier_k = 4.0;
+  double outlier_floor_px = 0.25;
+  int outlier_rounds = 5;
+  // A view loses its board when more than this fraction of its corners are outliers.
+  double max_view_outlier_fraction = 0.5;
+  // Jackknife leverage of each view for the chosen model (one extra fit per view).
+  bool leverage = true;
+  double leverage_flag_factor = 3.0;  // flagged when leverage > factor * median
+  // Coverage grid (cells) and the edge-band warning.
+  int coverage_nx = 16, coverage_ny = 12;
+  double edge_band = 0.15;
+  int min_edge_observations = 10;
+  // Step (px) of the pixel grid that projection differences are evaluated on; 0 = auto.
+  int diff_step_px = 0;
+};
+
+struct ModelCandidate {
+  std::string name;       // candidate name as in CalibrateOptions::candidates
+  std::string lensmodel;  // camera_model.h name of the fitted model
+  int params = 0;         // free intrinsics
+  bool ok = false;
+  std::string error;      // why the fit failed (when !ok)
+  double rms_px = 0;                 // reprojection RMS (per corner, 2-D) of the full fit
+  double heldout_rms_px = 0;         // one half's intrinsics, the other half's corners (poses re-solved)
+  double cross_validation_px = 0;    // RMS odd-vs-even projection difference, covered area
+  double cross_validation_median_px = 0;
+  CameraModel model;
+};
+
+struct CornerResidual {
+  int view = 0, corner = 0;  // view index as given, corner index (row-major)
+  double dx = 0, dy = 0;     // observed - projected, px (final model)
+  bool outlier = false;
+};
+
+struct ViewReport {
+  bool has_board = false;
+  bool used = false;
+  std::string why;           // "" when used; else "no board", "too many outliers (..)", ...
+  int corners = 0;           // detected
+  int rejected_corners = 0;  // outliers
+  double rms_px = 0;         // residual RMS of its inlier corners (final model)
+  double leverage_px = 0;    // RMS projection change when left out (jackknife)
+  bool influential = false;  // leverage > leverage_flag_factor * median
+};
+
+struct CalibrationResult {
+  CameraModel model;  // rms_reprojection_px, cross_validation_px filled
+  std::string selected;  // candidate name
+  std::vector<ModelCandidate> table;
+  std::vector<double> view_rms_px;        // per view (0 for views without board)
+  std::vector<CornerResidual> residuals;  // every detected corner of views with a board
+  int coverage_nx = 0, coverage_ny = 0;
+  std::vector<int> coverage;  // coverage_ny x coverage_nx row-major, inlier corners per cell
+  std::vector<ViewReport> views;
+  double cross_validation_px = 0;  // chosen model
+  double cross_validation_median_px = 0;
+  double heldout_rms_px = 0;
+  int corners_total = 0, corners_rejected = 0, outlier_rounds = 0;
+  // Inlier corners in the outer edge_band of each side: left, right, top, bottom.
+  std::array<int, 4> edge_observations{};
+  bool corners_poorly_covered = false;  // some side has < min_edge_observations
+};
+
+// corners_per_view[i]: board.cols * board.rows pixel corners (row-major) or empty.
+// Throws InputError (one line) on < 4 views with a board, a board with < 2 corners per
+// side, a view with the wrong number of corners, corners outside width x height (images
+// of another resolution), or an unknown model name.
+CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                            const BoardSpec& board, int width, int height, const CalibrateOptions& options = {});
+
+// Projection difference between two models (same image size): pixels on a grid of
+// `step_px` where mask (width*height, row-major, nonzero = use; empty = whole image) is
+// set and both models have a ray: unproject with a, rotate by the best-fitting rotation
+// between the camera frames (or identity when !fit_rotation), project with b.
+struct ProjectionDiff {
+  double rms_px = 0, median_px = 0, max_px = 0;
+  int samples = 0;
+};
+ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const std::vector<uint8_t>& mask,
+                                     int step_px, bool fit_rotation = true);
+
+}  // namespace lp

@@ -1,0 +1,110 @@
+#include "calib/mrcal_solve.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fcntl.h>
+#include <unistd.h>
+
+extern "C" {
+#include <mrcal/mrcal.h>
+}
+
+namespace lp {
+
+int mrcal_model_param_count(const std::string& lensmodel) {
+  mrcal_lensmodel_t m;
+  if (!mrcal_lensmodel_from_name(&m, lensmodel.c_str()) || !mrcal_lensmodel_type_is_valid(m.type)) return -1;
+  return mrcal_lensmodel_num_params(&m);
+}
+
+std::string mrcal_splined_name(int order, int nx, int ny, int fov_x_deg) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "LENSMODEL_SPLINED_STEREOGRAPHIC_order=%d_Nx=%d_Ny=%d_fov_x_deg=%d", order, nx, ny,
+                fov_x_deg);
+  return buf;
+}
+
+MrcalSolution mrcal_solve(const MrcalProblem& p) {
+  MrcalSolution out;
+  mrcal_lensmodel_t lensmodel;
+  if (!mrcal_lensmodel_from_name(&lensmodel, p.lensmodel.c_str()) || !mrcal_lensmodel_type_is_valid(lensmodel.type)) {
+    out.error = "mrcal does not know lens model " + p.lensmodel;
+    return out;
+  }
+  const int nparams = mrcal_lensmodel_num_params(&lensmodel);
+  const int nframes = static_cast<int>(p.poses_seed.size());
+  const int ncorners = p.cols * p.rows;
+  if (static_cast<int>(p.intrinsics_seed.size()) != nparams || nframes == 0 ||
+      static_cast<int>(p.observations.size()) != nframes) {
+    out.error = "mrcal problem: inconsistent sizes";
+    return out;
+  }
+  std::vector<double> intrinsics = p.intrinsics_seed;
+  std::vector<mrcal_pose_t> frames(nframes);
+  for (int i = 0; i < nframes; ++i) {
+    const auto& s = p.poses_seed[i];
+    frames[i].r = {{s[0], s[1], s[2]}};
+    frames[i].t = {{s[3], s[4], s[5]}};
+  }
+  std::vector<mrcal_observation_board_t> obs(nframes);
+  std::vector<mrcal_point3_t> pool(static_cast<size_t>(nframes) * ncorners);
+  for (int i = 0; i < nframes; ++i) {
+    obs[i].icam.intrinsics = 0;
+    obs[i].icam.extrinsics = -1;  // the camera is the reference frame
+    obs[i].iframe = i;
+    if (static_cast<int>(p.observations[i].size()) != ncorners) {
+      out.error = "mrcal problem: a view without cols*rows corners";
+      return out;
+    }
+    for (int k = 0; k < ncorners; ++k) {
+      const auto& o = p.observations[i][k];
+      pool[static_cast<size_t>(i) * ncorners + k] = {{o[0], o[1], o[2]}};
+    }
+  }
+  mrcal_problem_selections_t sel{};
+  sel.do_optimize_intrinsics_core = p.optimize_intrinsics;
+  sel.do_optimize_intrinsics_distortions = p.optimize_intrinsics;
+  sel.do_optimize_extrinsics = false;
+  sel.do_optimize_frames = true;
+  sel.do_optimize_calobject_warp = false;
+  sel.do_apply_regularization = p.regularization;
+  sel.do_apply_outlier_rejection = false;
+  mrcal_problem_constants_t constants{};
+  constants.point_min_range = -1;
+  constants.point_max_range = -1;
+  const int imagersizes[2] = {p.width, p.height};
+
+  // mrcal's solver (libdogleg/CHOLMOD) writes warnings to stderr; the library prints
+  // nothing, so stderr points at /dev/null for the duration of the solve (process-wide:
+  // calibrate() is not meant to run beside other threads that print).
+  std::fflush(stderr);
+  const int saved_stderr = dup(2);
+  const int devnull = open("/dev/null", O_WRONLY);
+  if (saved_stderr >= 0 && devnull >= 0) dup2(devnull, 2);
+  const mrcal_stats_t stats =
+      mrcal_optimize(nullptr, 0, nullptr, 0, intrinsics.data(), nullptr, frames.data(), nullptr, nullptr, 1, 0,
+                     nframes, 0, 0, obs.data(), nullptr, nframes, 0, pool.data(), &lensmodel, imagersizes, sel,
+                     &constants, p.spacing, p.cols, p.rows, false, false);
+  std::fflush(stderr);
+  if (saved_stderr >= 0 && devnull >= 0) dup2(saved_stderr, 2);
+  if (saved_stderr >= 0) close(saved_stderr);
+  if (devnull >= 0) close(devnull);
+  if (!(stats.rms_reproj_error__pixels >= 0) || !std::isfinite(stats.rms_reproj_error__pixels)) {
+    out.error = "mrcal_optimize failed for " + p.lensmodel;
+    return out;
+  }
+  for (double v : intrinsics)
+    if (!std::isfinite(v)) {
+      out.error = "mrcal_optimize diverged for " + p.lensmodel;
+      return out;
+    }
+  out.ok = true;
+  out.intrinsics = intrinsics;
+  out.rms_px = stats.rms_reproj_error__pixels;
+  out.poses.resize(nframes);
+  for (int i = 0; i < nframes; ++i)
+    out.poses[i] = {frames[i].r.x, frames[i].r.y, frames[i].r.z, frames[i].t.x, frames[i].t.y, frames[i].t.z};
+  return out;
+}
+
+}  // namespace lp

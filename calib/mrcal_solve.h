@@ -1,0 +1,45 @@
+// Thin wrapper around mrcal 2.2's C solver (mrcal_optimize) for one stationary camera
+// observing a moving chessboard. This header and mrcal_solve.cpp are the only places
+// that see mrcal.h. mrcal's C API does no seeding: the caller passes a complete initial
+// guess (intrinsics + board poses), so the result is a deterministic function of it.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace lp {
+
+struct MrcalProblem {
+  std::string lensmodel;                 // full mrcal name, e.g. "LENSMODEL_OPENCV8"
+  std::vector<double> intrinsics_seed;   // mrcal_lensmodel_num_params values
+  // Board -> camera pose per view (Rodrigues r, then t), the seed; updated on output.
+  std::vector<std::array<double, 6>> poses_seed;
+  // Per view: cols*rows observations (x, y, weight); weight < 0 marks an ignored corner.
+  std::vector<std::vector<std::array<double, 3>>> observations;
+  int width = 0, height = 0;
+  int cols = 0, rows = 0;  // inner corners; corner i = r * cols + c at (c, r) * spacing
+  double spacing = 1;
+  bool optimize_intrinsics = true;
+  bool regularization = false;  // mrcal's regularisation (wanted for splined models)
+};
+
+struct MrcalSolution {
+  bool ok = false;
+  std::string error;
+  std::vector<double> intrinsics;
+  std::vector<std::array<double, 6>> poses;
+  double rms_px = 0;
+};
+
+// Runs mrcal_optimize (no outlier rejection of its own: ignored corners come in with
+// weight < 0). Never prints on purpose (mrcal itself may complain on stderr on failure).
+MrcalSolution mrcal_solve(const MrcalProblem& problem);
+
+// Number of intrinsics of a configured mrcal model name; -1 when mrcal does not know it.
+int mrcal_model_param_count(const std::string& lensmodel);
+
+// "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=200"
+std::string mrcal_splined_name(int order, int nx, int ny, int fov_x_deg);
+
+}  // namespace lp

@@ -1,0 +1,221 @@
+// Geometric calibration on corners projected through known cameras (calib/geometric.h).
+#include "calib/geometric.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+using Corners = std::vector<std::vector<std::array<double, 2>>>;
+
+// 190 deg Kannala-Brandt fisheye on a 1280x960 sensor: the 95 deg ray lands 554 px from
+// the centre (a circle cropped at top and bottom).
+CameraModel kb190() {
+  CameraModel m;
+  m.lensmodel = "LENSMODEL_KANNALA_BRANDT";
+  m.intrinsics = {330, 331, 641.3, 478.6, 0.02, -0.01, 0.003, -0.0005};
+  m.width = 1280;
+  m.height = 960;
+  return m;
+}
+
+CameraModel narrow(double k1) {
+  CameraModel m;
+  m.lensmodel = k1 == 0 ? "LENSMODEL_PINHOLE" : "LENSMODEL_OPENCV5";
+  m.intrinsics = {900, 902, 639.2, 481.7};
+  if (k1 != 0) m.intrinsics.insert(m.intrinsics.end(), {k1, 0.02, 0, 0, 0});
+  m.width = 1280;
+  m.height = 960;
+  return m;
+}
+
+Vec3 rodrigues(Vec3 axis, double angle, Vec3 v) {  // rotate v about unit axis
+  const double c = std::cos(angle), s = std::sin(angle);
+  return c * v + s * cross(axis, v) + (1 - c) * dot(axis, v) * axis;
+}
+
+// Deterministic board views spread over the field (off-axis angles up to max_theta_deg),
+// each board tilted towards the camera; corners that leave the image or land beyond
+// max_corner_deg shrink the view's off-axis angle until they fit.
+Corners make_views(const CameraModel& cam, const BoardSpec& board, int nviews, double max_theta_deg,
+                   double distance, double noise_px, unsigned seed = 1, double max_corner_deg = 93) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, noise_px);
+  Corners out;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < nviews; ++i) {
+    double theta = max_theta_deg * M_PI / 180 * std::sqrt((i + 0.5) / nviews);
+    const double phi = i * golden;
+    for (int attempt = 0; attempt < 40; ++attempt, theta *= 0.95) {
+      const Vec3 dir = direction_from_angles(theta, phi);
+      const Vec3 a = std::abs(dir.y) > 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+      Vec3 e1 = normalize(cross(a, dir));
+      Vec3 e2 = cross(dir, e1);
+      // Tilt of 15-35 deg about an in-plane axis, different per view.
+      const Vec3 tilt_axis = normalize(std::cos(1.3 * i) * e1 + std::sin(1.3 * i) * e2);
+      const double tilt = (15 + 20 * ((i * 7) % 5) / 4.0) * M_PI / 180;
+      e1 = rodrigues(tilt_axis, tilt, e1);
+      e2 = rodrigues(tilt_axis, tilt, e2);
+      const double cx = (board.cols - 1) * board.square_mm / 2, cy = (board.rows - 1) * board.square_mm / 2;
+      std::vector<std::array<double, 2>> v;
+      bool ok = true;
+      for (int r = 0; r < board.rows && ok; ++r)
+        for (int c = 0; c < board.cols && ok; ++c) {
+          const Vec3 P = distance * dir + (c * board.square_mm - cx) * e1 + (r * board.square_mm - cy) * e2;
+          const auto q = project(cam, P);
+          if (!q || std::acos(P.z / length(P)) > max_corner_deg * M_PI / 180 || q->x < 2 || q->y < 2 || q->x > cam.width - 3 || q->y > cam.height - 3)
+            ok = false;
+          else
+            v.push_back({q->x + gauss(rng), q->y + gauss(rng)});
+        }
+      if (ok) {
+        out.push_back(v);
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+const BoardSpec kBoard{10, 7, 40};
+
+TEST(GeometricCalibration, RecoversKannalaBrandt190FromNoisyCorners) {
+  const CameraModel truth = kb190();
+  const Corners views = make_views(truth, kBoard, 20, 80, 600, 0.1);
+  ASSERT_EQ(views.size(), 20u);
+  CalibrateOptions opt;
+  const CalibrationResult r = calibrate(views, kBoard, truth.width, truth.height, opt);
+  for (const auto& c : r.table)
+    std::printf("  %-34s %-10s params %3d rms %.3f heldout %.3f cv %.3f (median %.3f) %s\n", c.name.c_str(),
+                c.ok ? "ok" : "FAILED", c.params, c.rms_px, c.heldout_rms_px, c.cross_validation_px,
+                c.cross_validation_median_px, c.error.c_str());
+  std::printf("  selected %s; rejected %d of %d corners in %d rounds\n", r.selected.c_str(), r.corners_rejected,
+              r.corners_total, r.outlier_rounds);
+  EXPECT_EQ(r.model.lensmodel, "LENSMODEL_KANNALA_BRANDT");
+  const ProjectionDiff whole = projection_difference(r.model, truth, {}, 8);
+  const ProjectionDiff whole_norot = projection_difference(r.model, truth, {}, 8, false);
+  std::printf("  fitted vs truth, whole image: rms %.3f median %.3f max %.3f px (no rotation fit: rms %.3f)\n",
+              whole.rms_px, whole.median_px, whole.max_px, whole_norot.rms_px);
+  // Bound: 0.1 px corner noise over 20 x 70 corners constrains the 8 intrinsics to a few
+  // hundredths of a pixel inside the covered area; the extrapolation to the 90-95 deg rim
+  // (outside every board) amplifies that several-fold, still well inside 0.5 px.
+  EXPECT_LT(whole.rms_px, 0.5);
+  EXPECT_GT(whole.samples, 10000);
+  EXPECT_LT(r.cross_validation_px, 0.3);
+  EXPECT_NEAR(r.model.rms_reprojection_px, 0.1 * std::sqrt(2.0), 0.03);
+  EXPECT_LE(r.corners_rejected, 2);  // 4 sigma on 1400 Gaussian corners: ~0.5 false rejections expected
+  ASSERT_EQ(r.views.size(), 20u);
+  for (const auto& v : r.views) {
+    EXPECT_TRUE(v.used);
+    EXPECT_GT(v.leverage_px, 0);
+  }
+}
+
+TEST(GeometricCalibration, PicksTheSimplerModelOnNarrowLenses) {
+  {
+    const CameraModel truth = narrow(0);
+    const Corners views = make_views(truth, kBoard, 16, 25, 900, 0.1, 2);
+    CalibrateOptions opt;
+    opt.leverage = false;
+    const CalibrationResult r = calibrate(views, kBoard, truth.width, truth.height, opt);
+    for (const auto& c : r.table)
+      std::printf("  %-34s params %3d rms %.3f heldout %.3f cv %.3f %s\n", c.name.c_str(), c.params, c.rms_px,
+                  c.heldout_rms_px, c.cross_validation_px, c.error.c_str());
+    EXPECT_EQ(r.selected, "LENSMODEL_PINHOLE");
+  }
+  {
+    const CameraModel truth = narrow(-0.12);
+    const Corners views = make_views(truth, kBoard, 16, 25, 900, 0.1, 3);
+    CalibrateOptions opt;
+    opt.leverage = false;
+    const CalibrationResult r = calibrate(views, kBoard, truth.width, truth.height, opt);
+    for (const auto& c : r.table)
+      std::printf("  %-34s params %3d rms %.3f heldout %.3f cv %.3f %s\n", c.name.c_str(), c.params, c.rms_px,
+                  c.heldout_rms_px, c.cross_validation_px, c.error.c_str());
+    std::printf("  selected %s\n", r.selected.c_str());
+    EXPECT_NE(r.selected, "LENSMODEL_PINHOLE");       // the distortion is visible
+    EXPECT_NE(r.selected, "LENSMODEL_OPENCV8");       // but not a rational model
+    EXPECT_NE(r.selected, "LENSMODEL_SPLINED_STEREOGRAPHIC");
+    EXPECT_LE(r.model.intrinsics.size(), 9u);
+  }
+}
+
+TEST(GeometricCalibration, CrossValidationOfNoiseFreeCornersIsZero) {
+  const CameraModel truth = kb190();
+  const Corners views = make_views(truth, kBoard, 12, 80, 600, 0.0);
+  CalibrateOptions opt;
+  opt.model = "LENSMODEL_KANNALA_BRANDT";
+  opt.leverage = false;
+  const CalibrationResult r = calibrate(views, kBoard, truth.width, truth.height, opt);
+  std::printf("  noise-free: rms %.2e cv %.2e heldout %.2e\n", r.model.rms_reprojection_px, r.cross_validation_px,
+              r.heldout_rms_px);
+  EXPECT_LT(r.cross_validation_px, 0.01);
+  EXPECT_LT(r.model.rms_reprojection_px, 0.01);
+  EXPECT_LT(r.heldout_rms_px, 0.01);
+}
+
+TEST(GeometricCalibration, TwoRunsGiveBitIdenticalIntrinsics) {
+  const CameraModel truth = kb190();
+  const Corners views = make_views(truth, kBoard, 12, 80, 600, 0.1, 5);
+  CalibrateOptions opt;
+  opt.candidates = {"LENSMODEL_KANNALA_BRANDT", "LENSMODEL_STEREOGRAPHIC", "LENSMODEL_SPLINED_STEREOGRAPHIC"};
+  opt.leverage = false;
+  const CalibrationResult a = calibrate(views, kBoard, truth.width, truth.height, opt);
+  const CalibrationResult b = calibrate(views, kBoard, truth.width, truth.height, opt);
+  ASSERT_EQ(a.table.size(), b.table.size());
+  for (size_t i = 0; i < a.table.size(); ++i) {
+    EXPECT_EQ(a.table[i].ok, b.table[i].ok) << a.table[i].name;
+    EXPECT_EQ(a.table[i].model.intrinsics, b.table[i].model.intrinsics) << a.table[i].name;
+    EXPECT_EQ(a.table[i].cross_validation_px, b.table[i].cross_validation_px) << a.table[i].name;
+  }
+  EXPECT_EQ(a.model.intrinsics, b.model.intrinsics);
+}
+
+TEST(GeometricCalibration, RejectsAndReportsABadCorner) {
+  const CameraModel truth = kb190();
+  Corners views = make_views(truth, kBoard, 12, 80, 600, 0.1, 7);
+  views[4][23][0] += 20;  // one corner 20 px off
+  CalibrateOptions opt;
+  opt.model = "LENSMODEL_KANNALA_BRANDT";
+  const CalibrationResult r = calibrate(views, kBoard, truth.width, truth.height, opt);
+  EXPECT_EQ(r.corners_rejected, 1);
+  EXPECT_EQ(r.views[4].rejected_corners, 1);
+  EXPECT_TRUE(r.views[4].used);
+  int flagged = 0;
+  for (const auto& c : r.residuals)
+    if (c.outlier) {
+      ++flagged;
+      EXPECT_EQ(c.view, 4);
+      EXPECT_EQ(c.corner, 23);
+      EXPECT_NEAR(c.dx, 20, 1);
+    }
+  EXPECT_EQ(flagged, 1);
+  // With the corner rejected, the model is the one of the clean corners (minus that one).
+  views[4][23][0] -= 20;
+  const CalibrationResult clean = calibrate(views, kBoard, truth.width, truth.height, opt);
+  EXPECT_EQ(clean.corners_rejected, 0);
+  const ProjectionDiff d = projection_difference(r.model, clean.model, {}, 8);
+  std::printf("  with the bad corner rejected vs clean corners: rms %.4f px over the whole image\n", d.rms_px);
+  EXPECT_LT(d.rms_px, 0.05);
+}
+
+TEST(GeometricCalibration, BadInputIsAnInputError) {
+  const CameraModel truth = kb190();
+  Corners views = make_views(truth, kBoard, 6, 60, 600, 0.1);
+  Corners three(views.begin(), views.begin() + 3);
+  three.push_back({});  // a view without a board does not count
+  EXPECT_THROW(calibrate(three, kBoard, truth.width, truth.height), InputError);
+  EXPECT_THROW(calibrate(views, BoardSpec{1, 7, 40}, truth.width, truth.height), InputError);
+  EXPECT_THROW(calibrate(views, kBoard, 640, 480), InputError);  // corners of a larger image
+  Corners short_view = views;
+  short_view[2].pop_back();
+  EXPECT_THROW(calibrate(short_view, kBoard, truth.width, truth.height), InputError);
+}
+
+}  // namespace
+}  // namespace lp

@@ -33,7 +33,7 @@ struct CalibrateOptions {
   std::vector<std::string> candidates;
   bool use_mrcal = true;  // false: OpenCV paths only (stereographic/splined unavailable)
   // Splined model: cubic, Nx x Ny control points, fov from the seed.
-  int spline_order = 3, spline_nx = 10, spline_ny = 8;
+  int spline_order = 3, spline_nx = 8, spline_ny = 6;
   // Outlier rejection: drop corners with |residual| > k * sigma (sigma = 1.4826 * MAD of
   // the residual components), never below `outlier_floor_px`; at most `outlier_rounds`.
   double outlier_k = 4.0;

@@ -109,6 +109,11 @@ TEST(GeometricCalibration, RecoversKannalaBrandt190FromNoisyCorners) {
   EXPECT_LT(r.cross_validation_px, 0.3);
   EXPECT_NEAR(r.model.rms_reprojection_px, 0.1 * std::sqrt(2.0), 0.03);
   EXPECT_LE(r.corners_rejected, 2);  // 4 sigma on 1400 Gaussian corners: ~0.5 false rejections expected
+  std::printf("  leverage (px):");
+  for (const auto& v : r.views) std::printf(" %.3f%s", v.leverage_px, v.influential ? "!" : "");
+  std::printf("\n  edge observations l/r/t/b: %d %d %d %d, poorly covered: %d\n", r.edge_observations[0],
+              r.edge_observations[1], r.edge_observations[2], r.edge_observations[3], r.corners_poorly_covered);
+  EXPECT_FALSE(r.corners_poorly_covered);
   ASSERT_EQ(r.views.size(), 20u);
   for (const auto& v : r.views) {
     EXPECT_TRUE(v.used);

@@ -209,6 +209,7 @@ Fit fit_opencv_pinhole_family(const Problem& pr, const Subset& views, int flags,
 
 
 std::optional<Pose> solve_pose(const Problem& pr, const CameraModel& m, const View& v);
+Fit refine_kb(const Problem& pr, const Subset& views, const Fit& seed);
 
 // Kannala-Brandt reprojection of one corner (the projection of camera_model.cpp: theta
 // from atan2, so rays beyond 90 deg work, unlike cv::fisheye).
@@ -270,6 +271,11 @@ Fit fit_kb(const Problem& pr, const Subset& views) {
     }
     if (p && (!has_pose[i] || view_sq(*p) < view_sq(seed.poses[i]))) seed.poses[i] = *p;
   }
+  return refine_kb(pr, views, seed);
+}
+
+// Joint Kannala-Brandt solve of intrinsics and poses from `seed`; the seed when it fails.
+Fit refine_kb(const Problem& pr, const Subset& views, const Fit& seed) {
   Fit f = seed;
   ceres::Problem problem;
   for (size_t i = 0; i < views.size(); ++i)
@@ -413,6 +419,23 @@ class Fitter {
   Subset views_;
   std::map<std::string, Fit> cache_;
 };
+
+// The fit of `name` on `views` warm-started from a fit on a superset (`poses` aligned
+// with `views`): the jackknife's leave-one-out fits converge to the same minimum as a
+// cold start, in a fraction of the time. Falls back to a cold start.
+Fit warm_refit(const Problem& pr, const Subset& views, const std::string& name, const Fit& from,
+               const std::vector<Pose>& poses) {
+  Fit seed = from;
+  seed.poses = poses;
+  if (name == kKB) return refine_kb(pr, views, seed);
+  if (pr.options.use_mrcal) {
+    Fit f = fit_mrcal(pr, views, from.model.lensmodel, from.model.intrinsics, poses,
+                      from.model.lensmodel.rfind(kSplined, 0) == 0);
+    if (f.ok) return f;
+  }
+  Fitter cold(pr, views);
+  return cold.get(name);
+}
 
 // ---- poses with fixed intrinsics ----------------------------------------------------
 
@@ -806,8 +829,14 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     std::vector<int> idx;
     for (size_t i = 0; i < views.size(); ++i) {
       if (!view_used[i]) continue;
-      Fitter loo(pr, used_subset(int(i)));
-      const Fit& f = loo.get(pick->name);
+      const Subset loo = used_subset(int(i));
+      std::vector<Pose> poses;
+      for (size_t j = 0, u = 0; j < views.size(); ++j) {
+        if (!view_used[j]) continue;
+        if (j != i) poses.push_back(chosen.poses[u]);
+        ++u;
+      }
+      const Fit f = warm_refit(pr, loo, pick->name, chosen, poses);
       double l = std::numeric_limits<double>::infinity();
       if (f.ok) {
         const ProjectionDiff d = projection_difference(f.model, res.model, mask, step);

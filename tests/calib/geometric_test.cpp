@@ -224,3 +224,27 @@ TEST(GeometricCalibration, BadInputIsAnInputError) {
 
 }  // namespace
 }  // namespace lp
+
+namespace lp {
+namespace {
+
+TEST(GeometricCalibration, FlagsTheOnlyViewThatReachesTheRim) {
+  const CameraModel truth = kb190();
+  Corners views = make_views(truth, kBoard, 10, 40, 600, 0.1, 11);
+  const Corners rim = make_views(truth, kBoard, 1, 110, 600, 0.1, 12);  // one board near 78 deg
+  views.push_back(rim[0]);
+  CalibrateOptions opt;
+  opt.model = "LENSMODEL_KANNALA_BRANDT";
+  const CalibrationResult r = calibrate(views, kBoard, truth.width, truth.height, opt);
+  std::printf("  leverage (px):");
+  for (const auto& v : r.views) std::printf(" %.3f%s", v.leverage_px, v.influential ? "!" : "");
+  std::printf("\n");
+  EXPECT_TRUE(r.views.back().influential);
+  int flagged = 0;
+  for (const auto& v : r.views) flagged += v.influential;
+  EXPECT_LE(flagged, 2);
+  EXPECT_TRUE(r.corners_poorly_covered);  // central boards leave the image edges empty
+}
+
+}  // namespace
+}  // namespace lp

@@ -848,7 +848,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     }
     const double med = median_of(lev);
     for (size_t j = 0; j < lev.size(); ++j)
-      res.views[idx[j]].influential = lev[j] > options.leverage_flag_factor * med && lev[j] > 1e-6;
+      res.views[idx[j]].influential = lev[j] > options.leverage_flag_factor * med && lev[j] > options.leverage_min_px;
   }
   res.model.rms_reprojection_px = pick->rms_px;
   res.model.cross_validation_px = pick->cross_validation_px;

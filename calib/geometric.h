@@ -43,7 +43,10 @@ struct CalibrateOptions {
   double max_view_outlier_fraction = 0.5;
   // Jackknife leverage of each view for the chosen model (one extra fit per view).
   bool leverage = true;
-  double leverage_flag_factor = 3.0;  // flagged when leverage > factor * median
+  // Flagged when leverage > factor * median and > leverage_min_px (a view that moves the
+  // model by a few hundredths of a pixel is not worth a look, however it ranks).
+  double leverage_flag_factor = 3.0;
+  double leverage_min_px = 0.05;
   // Coverage grid (cells) and the edge-band warning.
   int coverage_nx = 16, coverage_ny = 12;
   double edge_band = 0.15;
@@ -79,7 +82,7 @@ struct ViewReport {
   int rejected_corners = 0;  // outliers
   double rms_px = 0;         // residual RMS of its inlier corners (final model)
   double leverage_px = 0;    // RMS projection change when left out (jackknife)
-  bool influential = false;  // leverage > leverage_flag_factor * median
+  bool influential = false;  // leverage > leverage_flag_factor * median (and > leverage_min_px)
 };
 
 struct CalibrationResult {

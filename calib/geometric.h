@@ -62,7 +62,10 @@ struct ModelCandidate {
   bool ok = false;
   std::string error;      // why the fit failed (when !ok)
   double rms_px = 0;                 // reprojection RMS (per corner, 2-D) of the full fit
-  double heldout_rms_px = 0;         // one half's intrinsics, the other half's corners (poses re-solved)
+  // One half's intrinsics on the other half's corners (poses re-solved with intrinsics
+  // fixed: PnP on the unprojected rays, then pixel refinement), both ways; inf when some
+  // view cannot be posed under the model (e.g. a pinhole model and rays near 90 deg).
+  double heldout_rms_px = 0;
   double cross_validation_px = 0;    // RMS odd-vs-even projection difference, covered area
   double cross_validation_median_px = 0;
   CameraModel model;

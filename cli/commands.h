@@ -179,6 +179,29 @@ struct ProbeUnwrapArgs {
 };
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out);
 
+struct CalibGeometricArgs {
+  std::vector<std::string> images;
+  std::string board;                // COLSxROWS inner corners
+  double square_mm = 0;
+  std::string model;                // override the selection
+  bool no_mrcal = false;
+  std::string report_dir;           // pictures; default beside the output
+  std::string output;               // camera.cameramodel or camera.yaml
+};
+int run_calib_geometric(const CalibGeometricArgs& args, const Output& out);
+
+struct SynthBoardsArgs {
+  int views = 20;
+  std::string board = "9x6";
+  double square_mm = 30;
+  double noise = 0.01;
+  double fov = 190;
+  std::string camera;               // a model file; default a 190 deg Kannala-Brandt 1280x960
+  uint64_t seed = 1;
+  std::string output_dir;
+};
+int run_synth_boards(const SynthBoardsArgs& args, const Output& out);
+
 struct CalibColourArgs {
   std::string patches;              // CSV probe_r,probe_g,probe_b,plate_r,plate_g,plate_b
   std::string output;

@@ -171,11 +171,34 @@ int main(int argc, char** argv) {
   c_cphot->add_option("-o,--output", cphot.output, "photometric.json")->required();
   c_cphot->add_flag("--json", out.json, "Print the report as JSON");
 
+  CalibGeometricArgs cgeo;
+  auto* c_cgeo = c_calib->add_subcommand("geometric", "Chessboard calibration with model selection by cross-validation");
+  c_cgeo->add_option("IMAGE", cgeo.images, "Chessboard views (one camera, one resolution)")->required();
+  c_cgeo->add_option("--board", cgeo.board, "COLSxROWS inner corners, e.g. 9x6")->required();
+  c_cgeo->add_option("--square", cgeo.square_mm, "Square size, mm")->required();
+  c_cgeo->add_option("--model", cgeo.model, "Use this model instead of the selection (see the printed table)");
+  c_cgeo->add_flag("--no-mrcal", cgeo.no_mrcal, "OpenCV models only");
+  c_cgeo->add_option("--report", cgeo.report_dir, "Directory for the residual and coverage pictures");
+  c_cgeo->add_option("-o,--output", cgeo.output, "camera.cameramodel (and .yaml) or camera.yaml")->required();
+  c_cgeo->add_flag("--json", out.json, "Print the report as JSON");
+
   CalibColourArgs ccol;
   auto* c_ccol = c_calib->add_subcommand("colour", "3x3 colour match of the probe camera to a backplate camera");
   c_ccol->add_option("PATCHES", ccol.patches, "CSV: probe_r,probe_g,probe_b,plate_r,plate_g,plate_b")->required();
   c_ccol->add_option("-o,--output", ccol.output, "colour.json")->required();
   c_ccol->add_flag("--json", out.json, "Print the report as JSON");
+
+  SynthBoardsArgs sbo;
+  auto* c_sbo = c_synth->add_subcommand("boards", "Chessboard views rendered through a known camera (ground truth)");
+  c_sbo->add_option("--views", sbo.views, "Number of views");
+  c_sbo->add_option("--board", sbo.board, "COLSxROWS inner corners");
+  c_sbo->add_option("--square", sbo.square_mm, "Square size, mm");
+  c_sbo->add_option("--noise", sbo.noise, "Image noise (0..1 units)");
+  c_sbo->add_option("--fov", sbo.fov, "Image circle, deg (0: the model's own domain)");
+  c_sbo->add_option("--camera", sbo.camera, "Camera model file (default: 190 deg Kannala-Brandt 1280x960)");
+  c_sbo->add_option("--seed", sbo.seed, "Seed");
+  c_sbo->add_option("-o,--output", sbo.output_dir, "Directory for board_NN.png, truth.json, true_camera.yaml")->required();
+  c_sbo->add_flag("--json", out.json, "Print the report as JSON");
 
   SynthBracketArgs sbr;
   auto* c_sbr = c_synth->add_subcommand("bracket", "A bracket with known response, noise and truth from a radiance map");
@@ -276,6 +299,8 @@ int main(int argc, char** argv) {
     if (*c_hfuse) return run_hdr_fuse(hfuse, out);
     if (*c_cphot) return run_calib_photometric(cphot, out);
     if (*c_ccol) return run_calib_colour(ccol, out);
+    if (*c_cgeo) return run_calib_geometric(cgeo, out);
+    if (*c_sbo) return run_synth_boards(sbo, out);
     if (*c_sbr) return run_synth_bracket(sbr, out);
     if (*c_evh) return run_eval_hdr(evh, out);
     if (*c_pun) return run_probe_unwrap(pun, out);

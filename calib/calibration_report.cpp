@@ -1,0 +1,84 @@
+#include "calib/calibration_report.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+#include "core/image_io.h"
+
+namespace lp {
+
+namespace {
+
+double scale_for(const CameraModel& m, const CalibrationPlotOptions& o) {
+  if (m.width <= 0 || m.height <= 0) throw InputError("calibration plot: the model has no image size");
+  return std::min(1.0, double(o.max_width_px) / m.width);
+}
+
+void write_png(const std::string& path, const cv::Mat& bgr) {
+  std::vector<uchar> bytes;
+  if (!cv::imencode(".png", bgr, bytes)) throw InputError(fmt::format("{}: cannot encode PNG", path));
+  write_file_atomically(path, std::string(bytes.begin(), bytes.end()));
+}
+
+}  // namespace
+
+void write_residual_plot(const std::string& path, const CalibrationResult& result,
+                         const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                         const CalibrationPlotOptions& options) {
+  const double s = scale_for(result.model, options);
+  const int w = int(std::lround(result.model.width * s)), h = int(std::lround(result.model.height * s));
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(245, 245, 245));
+  double largest = 0;
+  for (const CornerResidual& r : result.residuals)
+    if (!r.outlier) largest = std::max(largest, std::hypot(r.dx, r.dy));
+  const double k = options.arrow_scale > 0 ? options.arrow_scale : (largest > 0 ? 40.0 / largest : 1.0);
+  for (const CornerResidual& r : result.residuals) {
+    if (r.view < 0 || size_t(r.view) >= corners_per_view.size()) continue;
+    const auto& cs = corners_per_view[size_t(r.view)];
+    if (r.corner < 0 || size_t(r.corner) >= cs.size()) continue;
+    const cv::Point2d p(cs[size_t(r.corner)][0] * s, cs[size_t(r.corner)][1] * s);
+    const cv::Point2d q(p.x + r.dx * k, p.y + r.dy * k);
+    const double m = largest > 0 ? std::min(1.0, std::hypot(r.dx, r.dy) / largest) : 0;
+    const cv::Scalar colour = r.outlier ? cv::Scalar(0, 0, 220) : cv::Scalar(180 * (1 - m), 120 + 60 * m, 40 * m);
+    cv::circle(img, p, 1, cv::Scalar(90, 90, 90), cv::FILLED, cv::LINE_AA);
+    cv::line(img, p, q, colour, 1, cv::LINE_AA);
+  }
+  cv::putText(img, fmt::format("residuals x{:.0f}   RMS {:.3f} px   cross-validation {:.3f} px   {}", k,
+                               result.model.rms_reprojection_px, result.cross_validation_px, result.model.lensmodel),
+              cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(30, 30, 30), 1, cv::LINE_AA);
+  write_png(path, img);
+}
+
+void write_coverage_plot(const std::string& path, const CalibrationResult& result,
+                         const CalibrationPlotOptions& options) {
+  const double s = scale_for(result.model, options);
+  const int w = int(std::lround(result.model.width * s)), h = int(std::lround(result.model.height * s));
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(0, 0, 0));
+  const int nx = result.coverage_nx, ny = result.coverage_ny;
+  int most = 1;
+  for (int c : result.coverage) most = std::max(most, c);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int c = result.coverage[size_t(j * nx + i)];
+      const cv::Rect cell(i * w / nx, j * h / ny, (i + 1) * w / nx - i * w / nx, (j + 1) * h / ny - j * h / ny);
+      // Empty: dark red; otherwise grey to green with log count.
+      const double t = c > 0 ? std::log1p(c) / std::log1p(most) : 0;
+      const cv::Scalar colour = c == 0 ? cv::Scalar(20, 20, 120) : cv::Scalar(60 * (1 - t), 90 + 140 * t, 60 * (1 - t));
+      cv::rectangle(img, cell, colour, cv::FILLED);
+      cv::rectangle(img, cell, cv::Scalar(40, 40, 40), 1);
+      if (cell.width > 28)
+        cv::putText(img, std::to_string(c), cv::Point(cell.x + 3, cell.y + cell.height / 2 + 4), cv::FONT_HERSHEY_SIMPLEX,
+                    0.35, cv::Scalar(240, 240, 240), 1, cv::LINE_AA);
+    }
+  cv::putText(img,
+              fmt::format("corners per cell{}", result.corners_poorly_covered ? "   WARNING: image corners poorly covered" : ""),
+              cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  write_png(path, img);
+}
+
+}  // namespace lp

@@ -1,0 +1,195 @@
+// calib geometric and synth boards: chessboard calibration with model selection by
+// cross-validation, and boards rendered through a known camera (ground truth).
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <filesystem>
+
+#include "calib/board_detect.h"
+#include "calib/calibration_report.h"
+#include "calib/camera_model.h"
+#include "calib/geometric.h"
+#include "calib/synthetic_boards.h"
+#include "cli/commands.h"
+#include "cli/report.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/progress.h"
+#include "hdr/bracket.h"
+
+namespace lp::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+BoardSpec board_from(const std::string& text, double square_mm) {
+  int cols = 0, rows = 0;
+  parse_size(text, "--board", &cols, &rows);
+  if (cols < 2 || rows < 2) throw InputError("--board counts inner corners and needs at least 2x2");
+  if (!(square_mm > 0)) throw InputError("--square must be positive (mm)");
+  return BoardSpec{cols, rows, square_mm};
+}
+
+std::string with_extension(const std::string& path, const std::string& ext) {
+  return (fs::path(path).parent_path() / (fs::path(path).stem().string() + ext)).string();
+}
+
+}  // namespace
+
+int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
+  const BoardSpec board = board_from(args.board, args.square_mm);
+  const std::string ext = fs::path(args.output).extension().string();
+  if (ext != ".cameramodel" && ext != ".yaml" && ext != ".yml")
+    throw InputError(fmt::format("{}: the output must be .cameramodel or .yaml", args.output));
+  {  // Fail before minutes of work when the output cannot be written.
+    std::error_code ec;
+    const fs::path dir = fs::path(args.output).parent_path();
+    if (!dir.empty() && !fs::is_directory(dir, ec))
+      throw InputError(fmt::format("{}: cannot write: directory {} does not exist", args.output, dir.string()));
+  }
+  // Detect the board in every image; all images must share one resolution.
+  std::vector<std::vector<std::array<double, 2>>> corners(args.images.size());
+  int width = 0, height = 0, found = 0;
+  nlohmann::json images = nlohmann::json::array();
+  Progress progress("detect boards", args.images.size(), out.progress);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < args.images.size(); ++i) {
+    const CameraImage img = read_camera_image(args.images[i]);
+    if (i == 0) {
+      width = img.width;
+      height = img.height;
+    } else if (img.width != width || img.height != height) {
+      throw InputError(fmt::format("{}: {}x{} differs from the first image's {}x{} (one camera, one resolution)",
+                                   args.images[i], img.width, img.height, width, height));
+    }
+    const BoardDetection d = detect_board(img, board);
+    if (d.found) {
+      corners[i] = d.corners;
+      ++found;
+    }
+    images.push_back({{"file", args.images[i]}, {"found", d.found}, {"method", d.method}, {"reason", d.reason},
+                      {"seconds", d.seconds}});
+    progress.advance();
+  }
+  progress.finish();
+  const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (found == 0)
+    throw InputError(fmt::format("no {}x{} board found in any of the {} images (check --board: inner corners)",
+                                 board.cols, board.rows, args.images.size()));
+  if (found < 4)
+    throw InputError(fmt::format("a {}x{} board was found in only {} of {} images; at least 4 views are needed",
+                                 board.cols, board.rows, found, args.images.size()));
+
+  CalibrateOptions co;
+  co.model = args.model;
+  co.use_mrcal = !args.no_mrcal;
+  const auto t1 = std::chrono::steady_clock::now();
+  const CalibrationResult r = calibrate(corners, board, width, height, co);
+  const double solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+
+  // Files: .cameramodel where mrcal has the model, OpenCV YAML wherever OpenCV has it.
+  std::vector<std::string> written;
+  const bool mrcal_model = is_mrcal_model(r.model.lensmodel);
+  const std::string yaml = ext == ".cameramodel" ? with_extension(args.output, ".yaml") : args.output;
+  if (ext == ".cameramodel") {
+    if (mrcal_model) {
+      write_cameramodel(args.output, r.model);
+      written.push_back(args.output);
+    } else {
+      say(out, "{} is not an mrcal model: writing OpenCV YAML only ({})\n", r.model.lensmodel, yaml);
+    }
+  }
+  try {
+    write_opencv_yaml(yaml, r.model);
+    written.push_back(yaml);
+  } catch (const InputError&) {
+    if (written.empty()) throw;
+    say(out, "{} has no OpenCV form: {} only\n", r.model.lensmodel, args.output);
+  }
+  // Pictures.
+  const std::string report_dir = args.report_dir.empty() ? fs::path(args.output).parent_path().string() : args.report_dir;
+  if (!report_dir.empty()) fs::create_directories(report_dir);
+  const std::string stem = (fs::path(report_dir) / fs::path(args.output).stem()).string();
+  write_residual_plot(stem + "_residuals.png", r, corners);
+  write_coverage_plot(stem + "_coverage.png", r);
+
+  say(out, "{} of {} images have the {}x{} board ({:.2f} s); solved in {:.2f} s\n", found, args.images.size(),
+      board.cols, board.rows, detect_s, solve_s);
+  say(out, "{:<44} {:>6} {:>9} {:>10} {:>10}\n", "model", "params", "RMS px", "held-out", "cross-val");
+  for (const ModelCandidate& c : r.table)
+    if (c.ok)
+      say(out, "{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f}{}\n", c.name, c.params, c.rms_px, c.heldout_rms_px,
+          c.cross_validation_px, c.name == r.selected ? "   <- chosen" : "");
+    else
+      say(out, "{:<44} failed: {}\n", c.name, c.error);
+  say(out, "chosen: {} (the simplest whose cross-validation is within the noise of the best); {} of {} corners "
+           "rejected as outliers\n",
+      r.selected, r.corners_rejected, r.corners_total);
+  for (size_t v = 0; v < r.views.size(); ++v)
+    if (r.views[v].influential)
+      say(out, "influential view: {} (leaving it out moves the projection by {:.2f} px)\n", args.images[v],
+          r.views[v].leverage_px);
+  if (r.corners_poorly_covered)
+    say(out, "warning: the image corners/edges are poorly covered by the boards; the model is extrapolated there\n");
+  say(out, "wrote {}; pictures {}_residuals.png, {}_coverage.png\n", fmt::join(written, ", "), stem, stem);
+
+  nlohmann::json table = nlohmann::json::array();
+  for (const ModelCandidate& c : r.table)
+    table.push_back({{"model", c.name}, {"lensmodel", c.lensmodel}, {"params", c.params}, {"ok", c.ok},
+                     {"error", c.error}, {"rms_px", c.rms_px}, {"heldout_rms_px", c.heldout_rms_px},
+                     {"cross_validation_px", c.cross_validation_px}});
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t v = 0; v < r.views.size(); ++v)
+    views.push_back({{"file", args.images[v]}, {"used", r.views[v].used}, {"why", r.views[v].why},
+                     {"rms_px", r.views[v].rms_px}, {"leverage_px", r.views[v].leverage_px},
+                     {"influential", r.views[v].influential}, {"rejected_corners", r.views[v].rejected_corners}});
+  emit_json(out, {{"output", written}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
+                  {"intrinsics", r.model.intrinsics}, {"rms_px", r.model.rms_reprojection_px},
+                  {"cross_validation_px", r.cross_validation_px}, {"heldout_rms_px", r.heldout_rms_px},
+                  {"views_with_board", found}, {"detect_seconds", detect_s}, {"solve_seconds", solve_s},
+                  {"corners_poorly_covered", r.corners_poorly_covered}, {"table", table}, {"views", views},
+                  {"images", images}});
+  return 0;
+}
+
+int run_synth_boards(const SynthBoardsArgs& args, const Output& out) {
+  SyntheticBoardsOptions o;
+  o.views = args.views;
+  o.board = board_from(args.board, args.square_mm);
+  o.noise_sigma = args.noise;
+  o.seed = args.seed;
+  o.field_deg = args.fov;
+  if (!args.camera.empty()) o.camera = read_camera_model(args.camera);
+  if (o.views < 1) throw InputError("--views must be at least 1");
+  const SyntheticBoards b = synthesize_boards(o);
+  std::error_code ec;
+  fs::create_directories(args.output_dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  nlohmann::json truth = {{"board", {o.board.cols, o.board.rows}}, {"square_mm", o.board.square_mm},
+                          {"lensmodel", o.camera.lensmodel}, {"intrinsics", o.camera.intrinsics},
+                          {"width", o.camera.width}, {"height", o.camera.height}};
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t i = 0; i < b.images.size(); ++i) {
+    const std::string name = fmt::format("board_{:02d}.png", i);
+    RgbImage rgb;
+    rgb.width = b.images[i].width;
+    rgb.height = b.images[i].height;
+    rgb.rgb = b.images[i].rgb;
+    write_code_image((fs::path(args.output_dir) / name).string(), rgb, 8);
+    views.push_back({{"file", name}, {"corners", b.true_corners[i]}, {"pose", b.poses[i]}});
+  }
+  truth["views"] = views;
+  write_file_atomically((fs::path(args.output_dir) / "truth.json").string(), truth.dump(1) + "\n");
+  try {
+    write_opencv_yaml((fs::path(args.output_dir) / "true_camera.yaml").string(), o.camera);
+  } catch (const InputError&) {
+  }
+  say(out, "{}: {} views of a {}x{} board through {} ({}x{}), truth.json\n", args.output_dir, b.images.size(),
+      o.board.cols, o.board.rows, o.camera.lensmodel, o.camera.width, o.camera.height);
+  emit_json(out, {{"output", args.output_dir}, {"views", b.images.size()}});
+  return 0;
+}
+
+}  // namespace lp::cli

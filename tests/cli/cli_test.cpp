@@ -399,3 +399,39 @@ TEST(Cli, DifferentlyCroppedBallPhotosAreRegisteredFusedAndUnwrapped) {
   ASSERT_EQ(lightprobe("preview " + fused.string() + " -o " + png.string()).code, 0);
   EXPECT_GT(fs::file_size(png), 1000u);
 }
+
+TEST(Cli, GeometricCalibrationRecoversASyntheticFisheyeAndRefusesBadSets) {
+  const fs::path boards = scratch() / "boards", out = scratch() / "cal";
+  fs::create_directories(out);
+  ASSERT_EQ(lightprobe("synth boards --views 10 --seed 3 -o " + boards.string()).code, 0);
+  std::string images;
+  for (int i = 0; i < 10; ++i) images += " " + (boards / ("board_0" + std::to_string(i) + ".png")).string();
+  CliRun r = lightprobe("calib geometric --json" + images + " --board 9x6 --square 30 -o " + (out / "cam.cameramodel").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["lensmodel"], "LENSMODEL_KANNALA_BRANDT");  // the model the views were rendered with
+  EXPECT_LT(j["cross_validation_px"].get<double>(), 0.5);
+  // Kannala-Brandt is not an mrcal model: YAML only, and it loads back in OpenCV's keys.
+  EXPECT_TRUE(fs::exists(out / "cam.yaml"));
+  EXPECT_FALSE(fs::exists(out / "cam.cameramodel"));
+  EXPECT_NE(slurp(out / "cam.yaml").find("distortion_model: fisheye"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "cam_residuals.png"));
+  // The truth: fx of the rendering camera within 1 %.
+  const auto truth = nlohmann::json::parse(slurp(boards / "truth.json"));
+  EXPECT_NEAR(j["intrinsics"][0].get<double>(), truth["intrinsics"][0].get<double>(),
+              0.01 * truth["intrinsics"][0].get<double>());
+
+  // No board in any image; too few views; mixed resolutions: one line, exit 2, nothing written.
+  const std::string m = shared("hdr-memorial-debevec");
+  expect_one_line_error(lightprobe("calib geometric" + fmt_frame(m, 61) + fmt_frame(m, 62) +
+                                   " --board 9x6 --square 25 -o " + (out / "none.yaml").string()),
+                        "no 9x6 board");
+  EXPECT_FALSE(fs::exists(out / "none.yaml"));
+  expect_one_line_error(lightprobe("calib geometric " + (boards / "board_00.png").string() + " " +
+                                   (boards / "board_01.png").string() + " --board 9x6 --square 30 -o " +
+                                   (out / "few.yaml").string()),
+                        "at least 4 views");
+  expect_one_line_error(lightprobe("calib geometric " + (boards / "board_00.png").string() + fmt_frame(m, 61) +
+                                   " --board 9x6 --square 30 -o " + (out / "mixed.yaml").string()),
+                        "memorial0061.png");
+}

@@ -511,7 +511,18 @@ CameraModel read_opencv_yaml(const std::string& path) {
     cv::Mat K, D;
     need("camera_matrix") >> K;
     need("distortion_coefficients") >> D;
-    const std::string dist_model = std::string(need("distortion_model"));
+    // Files written by OpenCV's own samples carry no distortion_model: 5 or 8 coefficients
+    // can only be calibrateCamera's plumb_bob or rational model (4 stays ambiguous with
+    // the fisheye model and is refused).
+    std::string dist_model;
+    if (fs["distortion_model"].empty()) {
+      const size_t n = size_t(D.total());
+      if (n == 5) dist_model = "plumb_bob";
+      else if (n == 8) dist_model = "rational";
+      else throw InputError(path + ": missing 'distortion_model' (needed with " + std::to_string(n) + " coefficients)");
+    } else {
+      dist_model = std::string(fs["distortion_model"]);
+    }
     if (K.rows != 3 || K.cols != 3) throw InputError(path + ": camera_matrix is not 3x3");
     K.convertTo(K, CV_64F);
     if (K.at<double>(0, 1) != 0)

@@ -192,4 +192,18 @@ int run_synth_boards(const SynthBoardsArgs& args, const Output& out) {
   return 0;
 }
 
+int run_calib_compare(const CalibCompareArgs& args, const Output& out) {
+  // How far two calibrations of one camera disagree, in pixels over the whole image, with
+  // the rotation between their camera frames fitted out (what cross-validation measures).
+  const CameraModel a = read_camera_model(args.a), b = read_camera_model(args.b);
+  if (a.width != b.width || a.height != b.height)
+    throw InputError(fmt::format("{} is for {}x{}, {} for {}x{}", args.a, a.width, a.height, args.b, b.width, b.height));
+  std::vector<uint8_t> mask(size_t(a.width) * size_t(a.height), 1);
+  const ProjectionDiff d = projection_difference(a, b, mask, std::max(1, args.step_px), !args.no_rotation);
+  say(out, "{} vs {}: RMS {:.3f} px, median {:.3f} px, max {:.3f} px over {} samples{}\n", args.a, args.b, d.rms_px,
+      d.median_px, d.max_px, d.samples, args.no_rotation ? "" : " (rotation fitted out)");
+  emit_json(out, {{"rms_px", d.rms_px}, {"median_px", d.median_px}, {"max_px", d.max_px}, {"samples", d.samples}});
+  return 0;
+}
+
 }  // namespace lp::cli

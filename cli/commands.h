@@ -190,6 +190,13 @@ struct CalibGeometricArgs {
 };
 int run_calib_geometric(const CalibGeometricArgs& args, const Output& out);
 
+struct CalibCompareArgs {
+  std::string a, b;                 // two model files of one camera
+  int step_px = 4;
+  bool no_rotation = false;
+};
+int run_calib_compare(const CalibCompareArgs& args, const Output& out);
+
 struct SynthBoardsArgs {
   int views = 20;
   std::string board = "9x6";

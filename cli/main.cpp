@@ -182,6 +182,14 @@ int main(int argc, char** argv) {
   c_cgeo->add_option("-o,--output", cgeo.output, "camera.cameramodel (and .yaml) or camera.yaml")->required();
   c_cgeo->add_flag("--json", out.json, "Print the report as JSON");
 
+  CalibCompareArgs ccmp;
+  auto* c_ccmp = c_calib->add_subcommand("compare", "Projection difference (px) between two models of one camera");
+  c_ccmp->add_option("A", ccmp.a, "Model file (.cameramodel or OpenCV YAML)")->required();
+  c_ccmp->add_option("B", ccmp.b, "Model file")->required();
+  c_ccmp->add_option("--step", ccmp.step_px, "Sampling step over the image, px");
+  c_ccmp->add_flag("--no-rotation", ccmp.no_rotation, "Do not fit the rotation between the two camera frames");
+  c_ccmp->add_flag("--json", out.json, "Print the report as JSON");
+
   CalibColourArgs ccol;
   auto* c_ccol = c_calib->add_subcommand("colour", "3x3 colour match of the probe camera to a backplate camera");
   c_ccol->add_option("PATCHES", ccol.patches, "CSV: probe_r,probe_g,probe_b,plate_r,plate_g,plate_b")->required();
@@ -300,6 +308,7 @@ int main(int argc, char** argv) {
     if (*c_cphot) return run_calib_photometric(cphot, out);
     if (*c_ccol) return run_calib_colour(ccol, out);
     if (*c_cgeo) return run_calib_geometric(cgeo, out);
+    if (*c_ccmp) return run_calib_compare(ccmp, out);
     if (*c_sbo) return run_synth_boards(sbo, out);
     if (*c_sbr) return run_synth_bracket(sbr, out);
     if (*c_evh) return run_eval_hdr(evh, out);

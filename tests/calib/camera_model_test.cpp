@@ -368,3 +368,19 @@ TEST(CameraModel, UnreadableFilesAreRefusedWithAMessageNamingThePath) {
 
 }  // namespace
 }  // namespace lp
+
+namespace lp {
+namespace {
+
+TEST(CameraModelFiles, OpenCvSampleFilesWithoutADistortionModelReadAsCalibrateCameraModels) {
+  // OpenCV's own calibration sample writes no distortion_model key (5 coefficients).
+  const CameraModel m =
+      read_opencv_yaml(std::string(LIGHTPROBE_SHARED_DATA) + "/calib-opencv-stereo-9x6/reference/opencv_left_intrinsics.yml");
+  EXPECT_EQ(m.lensmodel, "LENSMODEL_OPENCV5");
+  EXPECT_EQ(m.width, 640);
+  EXPECT_NEAR(m.intrinsics[0], 535.91573396163199, 1e-9);
+  EXPECT_NEAR(m.intrinsics[4], -0.26637260909660682, 1e-12);
+}
+
+}  // namespace
+}  // namespace lp

@@ -8,6 +8,7 @@ packages=(
   libopencv-dev libopenexr-dev libimath-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libtbb-dev libeigen3-dev
   libchealpix-dev libexiv2-dev libraw-dev libceres-dev
+  libaravis-dev libusb-1.0-0-dev aravis-tools aravis-tools-cli libcamera-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev libmrcal-dev python3-mrcal
 )
 

@@ -8,6 +8,7 @@
 #include <map>
 #include <numeric>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/ccalib/omnidir.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 
@@ -26,9 +27,10 @@ constexpr const char* kPlumbBob = "plumb_bob";
 constexpr const char* kKB = "LENSMODEL_KANNALA_BRANDT";
 constexpr const char* kOpenCV8 = "LENSMODEL_OPENCV8";
 constexpr const char* kSplined = "LENSMODEL_SPLINED_STEREOGRAPHIC";
+constexpr const char* kMei = "LENSMODEL_OMNIDIR_MEI";
 
 const std::vector<std::string>& all_candidates() {
-  static const std::vector<std::string> names = {kPinhole, kStereo, kPlumbBob, kKB, kOpenCV8, kSplined};
+  static const std::vector<std::string> names = {kPinhole, kStereo, kPlumbBob, kKB, kOpenCV8, kSplined, kMei};
   return names;
 }
 
@@ -210,6 +212,7 @@ Fit fit_opencv_pinhole_family(const Problem& pr, const Subset& views, int flags,
 
 std::optional<Pose> solve_pose(const Problem& pr, const CameraModel& m, const View& v);
 Fit refine_kb(const Problem& pr, const Subset& views, const Fit& seed);
+Fit refine_mei(const Problem& pr, const Subset& views, const Fit& seed);
 
 // Kannala-Brandt reprojection of one corner (the projection of camera_model.cpp: theta
 // from atan2, so rays beyond 90 deg work, unlike cv::fisheye).
@@ -274,16 +277,18 @@ Fit fit_kb(const Problem& pr, const Subset& views) {
   return refine_kb(pr, views, seed);
 }
 
-// Joint Kannala-Brandt solve of intrinsics and poses from `seed`; the seed when it fails.
-Fit refine_kb(const Problem& pr, const Subset& views, const Fit& seed) {
+// Joint solve of intrinsics (N of them, cost functor Cost) and poses from `seed`; the
+// seed when it fails or does not improve.
+template <typename Cost, int N>
+Fit refine_joint(const Problem& pr, const Subset& views, const Fit& seed) {
   Fit f = seed;
   ceres::Problem problem;
   for (size_t i = 0; i < views.size(); ++i)
     for (size_t k = 0; k < views[i]->px.size(); ++k) {
       if (!views[i]->inlier[k]) continue;
       const cv::Point3d X = board_point(pr.board, int(k));
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<KannalaBrandtCost, 2, 8, 6>(
-                                   new KannalaBrandtCost{X.x, X.y, views[i]->px[k][0], views[i]->px[k][1]}),
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Cost, 2, N, 6>(
+                                   new Cost{X.x, X.y, views[i]->px[k][0], views[i]->px[k][1]}),
                                nullptr, f.model.intrinsics.data(), f.poses[i].data());
     }
   ceres::Solver::Options o;
@@ -301,6 +306,121 @@ Fit refine_kb(const Problem& pr, const Subset& views, const Fit& seed) {
   for (double x : f.model.intrinsics) finite = finite && std::isfinite(x);
   if (!finite || summary.final_cost > summary.initial_cost) return seed;
   return f;
+}
+
+Fit refine_kb(const Problem& pr, const Subset& views, const Fit& seed) {
+  return refine_joint<KannalaBrandtCost, 8>(pr, views, seed);
+}
+
+// ---- Mei's unified (omnidirectional) model ---------------------------------------------
+
+// Mei reprojection of one corner, as camera_model.cpp: the point on the unit sphere,
+// projected from (0, 0, -xi), radial-tangential distortion (k1 k2 p1 p2), no skew.
+struct MeiCost {
+  double X, Y, qx, qy;
+  template <typename T>
+  bool operator()(const T* in, const T* pose, T* r) const {
+    const T P[3] = {T(X), T(Y), T(0)};
+    T C[3];
+    ceres::AngleAxisRotatePoint(pose, P, C);
+    C[0] += pose[3];
+    C[1] += pose[4];
+    C[2] += pose[5];
+    const T n = ceres::sqrt(C[0] * C[0] + C[1] * C[1] + C[2] * C[2]);
+    const T w = C[2] / n + in[4];
+    const T xu = C[0] / n / w, yu = C[1] / n / w;
+    const T r2 = xu * xu + yu * yu;
+    const T radial = T(1) + in[5] * r2 + in[6] * r2 * r2;
+    const T xd = xu * radial + T(2) * in[7] * xu * yu + in[8] * (r2 + T(2) * xu * xu);
+    const T yd = yu * radial + in[7] * (r2 + T(2) * yu * yu) + T(2) * in[8] * xu * yu;
+    r[0] = in[0] * xd + in[2] - T(qx);
+    r[1] = in[1] * yd + in[3] - T(qy);
+    return true;
+  }
+};
+
+Fit refine_mei(const Problem& pr, const Subset& views, const Fit& seed) {
+  return refine_joint<MeiCost, 9>(pr, views, seed);
+}
+
+// Mei: cv::omnidir::calibrate as the seed (it drops views its initialisation cannot use:
+// `idx` maps its poses back; the others are posed by PnP through the seed), every view
+// re-posed under the seed when that fits it better, then the joint Ceres solve as for
+// Kannala-Brandt.
+Fit fit_mei(const Problem& pr, const Subset& views) {
+  Fit f;
+  std::vector<cv::Mat> obj, img;
+  std::vector<int> vmap;  // omnidir input index -> subset index
+  for (size_t vi = 0; vi < views.size(); ++vi) {
+    const View* v = views[vi];
+    std::vector<cv::Vec3d> o;
+    std::vector<cv::Vec2d> q;
+    for (size_t k = 0; k < v->px.size(); ++k)
+      if (v->inlier[k]) {
+        o.push_back(cv::Vec3d(board_point(pr.board, int(k))));
+        q.push_back({v->px[k][0], v->px[k][1]});
+      }
+    if (o.size() < 6) continue;
+    vmap.push_back(int(vi));
+    obj.push_back(cv::Mat(o, true).reshape(3, 1));
+    img.push_back(cv::Mat(q, true).reshape(2, 1));
+  }
+  cv::Mat K, xi, D, idx;
+  std::vector<cv::Mat> rv, tv;
+  try {
+    cv::omnidir::calibrate(obj, img, cv::Size(pr.width, pr.height), K, xi, D, rv, tv, cv::omnidir::CALIB_FIX_SKEW,
+                           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 300, 1e-10), idx);
+  } catch (const cv::Exception&) {
+    f.error = "cv::omnidir::calibrate failed";
+    return f;
+  }
+  if (K.empty() || xi.empty() || D.total() < 4 || idx.empty() || rv.size() != idx.total()) {
+    f.error = "cv::omnidir::calibrate found no solution";
+    return f;
+  }
+  K.convertTo(K, CV_64F);
+  xi.convertTo(xi, CV_64F);
+  D.convertTo(D, CV_64F);
+  idx.convertTo(idx, CV_32S);
+  f.model = make_model(pr, kMei,
+                       {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2),
+                        xi.at<double>(0), D.at<double>(0), D.at<double>(1), D.at<double>(2), D.at<double>(3)});
+  for (double x : f.model.intrinsics)
+    if (!std::isfinite(x)) {
+      f.error = "cv::omnidir::calibrate diverged";
+      return f;
+    }
+  std::vector<char> has_pose(views.size(), 0);
+  f.poses.assign(views.size(), Pose{});
+  for (size_t j = 0; j < idx.total(); ++j) {
+    const int in = idx.at<int>(int(j));
+    if (in < 0 || in >= int(vmap.size())) continue;
+    cv::Mat r, t;
+    rv[j].convertTo(r, CV_64F);
+    tv[j].convertTo(t, CV_64F);
+    const int vi = vmap[in];
+    f.poses[vi] = {r.at<double>(0), r.at<double>(1), r.at<double>(2), t.at<double>(0), t.at<double>(1),
+                   t.at<double>(2)};
+    has_pose[vi] = 1;
+  }
+  for (size_t i = 0; i < views.size(); ++i) {
+    auto view_sq = [&](const Pose& p) {
+      const auto r = view_residuals(pr, f.model, *views[i], p);
+      double s = 0;
+      for (size_t k = 0; k < r.size(); ++k)
+        if (views[i]->inlier[k]) s += std::isfinite(r[k][0]) ? r[k][0] * r[k][0] + r[k][1] * r[k][1] : 1e12;
+      return s;
+    };
+    const auto p = solve_pose(pr, f.model, *views[i]);
+    if (!has_pose[i] && !p) {
+      f.error = "cannot pose a view under the cv::omnidir seed";
+      return f;
+    }
+    if (p && (!has_pose[i] || view_sq(*p) < view_sq(f.poses[i]))) f.poses[i] = *p;
+  }
+  f.ok = true;
+  f.params = 9;
+  return refine_mei(pr, views, f);
 }
 
 // ---- mrcal solves, seeded from another fit ---------------------------------------------
@@ -363,6 +483,7 @@ class Fitter {
 
   Fit compute(const std::string& name) {
     if (name == kKB) return fit_kb(pr_, views_);
+    if (name == kMei) return fit_mei(pr_, views_);
     if (name == kPinhole) {
       const int fl = cv::CALIB_FIX_K1 | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3 | cv::CALIB_ZERO_TANGENT_DIST;
       return polish(fit_opencv_pinhole_family(pr_, views_, fl, kPinhole, 0), kPinhole, false);
@@ -428,6 +549,7 @@ Fit warm_refit(const Problem& pr, const Subset& views, const std::string& name, 
   Fit seed = from;
   seed.poses = poses;
   if (name == kKB) return refine_kb(pr, views, seed);
+  if (name == kMei) return refine_mei(pr, views, seed);
   if (pr.options.use_mrcal) {
     Fit f = fit_mrcal(pr, views, from.model.lensmodel, from.model.intrinsics, poses,
                       from.model.lensmodel.rfind(kSplined, 0) == 0);
@@ -493,26 +615,64 @@ Pose refine_pose(const Problem& pr, const CameraModel& m, const View& v, Pose p)
 }
 
 // Board pose of a view under fixed intrinsics: PnP on the unprojected rays (normalised
-// plane, rays in front of the camera), then refined on pixels.
+// plane, rays in front of the camera), then refined on pixels. When some rays are not in
+// front of the camera (catadioptric and > 180 deg lenses: boards beside or behind it),
+// the PnP runs in a frame turned so that the mean ray of the view is its axis.
 std::optional<Pose> solve_pose(const Problem& pr, const CameraModel& m, const View& v) {
-  std::vector<cv::Point3d> o;
-  std::vector<cv::Point2d> q;
+  std::vector<cv::Point3d> obj;
+  std::vector<cv::Vec3d> rays;
+  int inliers = 0;
   for (size_t k = 0; k < v.px.size(); ++k) {
     if (!v.inlier[k]) continue;
+    ++inliers;
     const auto d = unproject(m, {v.px[k][0], v.px[k][1]});
-    if (!d || d->z < 0.1) continue;
-    o.push_back(board_point(pr.board, int(k)));
-    q.push_back({d->x / d->z, d->y / d->z});
+    if (!d) continue;
+    obj.push_back(board_point(pr.board, int(k)));
+    rays.push_back({d->x, d->y, d->z});
   }
-  if (o.size() < 6) return std::nullopt;
-  cv::Vec3d rv, tv;
-  try {
-    if (!cv::solvePnP(o, q, cv::Matx33d::eye(), cv::noArray(), rv, tv, false, cv::SOLVEPNP_ITERATIVE))
+  auto pnp = [&](const cv::Matx33d& R0) -> std::optional<Pose> {  // R0: camera -> PnP frame
+    std::vector<cv::Point3d> o;
+    std::vector<cv::Point2d> q;
+    for (size_t k = 0; k < rays.size(); ++k) {
+      const cv::Vec3d d = R0 * rays[k];
+      if (d[2] < 0.1) continue;
+      o.push_back(obj[k]);
+      q.push_back({d[0] / d[2], d[1] / d[2]});
+    }
+    if (o.size() < 6) return std::nullopt;
+    cv::Vec3d rv, tv;
+    try {
+      if (!cv::solvePnP(o, q, cv::Matx33d::eye(), cv::noArray(), rv, tv, false, cv::SOLVEPNP_ITERATIVE))
+        return std::nullopt;
+    } catch (const cv::Exception&) {
       return std::nullopt;
-  } catch (const cv::Exception&) {
-    return std::nullopt;
+    }
+    cv::Matx33d R;
+    cv::Rodrigues(rv, R);
+    const cv::Matx33d Rc = R0.t() * R;
+    const cv::Vec3d tc = R0.t() * tv;
+    cv::Vec3d rc;
+    cv::Rodrigues(Rc, rc);
+    return Pose{rc[0], rc[1], rc[2], tc[0], tc[1], tc[2]};
+  };
+  std::optional<Pose> p0;
+  bool all_front = int(rays.size()) == inliers;
+  for (const auto& d : rays) all_front = all_front && d[2] >= 0.1;
+  if (all_front) {
+    p0 = pnp(cv::Matx33d::eye());
+  } else {
+    cv::Vec3d mean(0, 0, 0);
+    for (const auto& d : rays) mean += d;
+    if (cv::norm(mean) < 1e-9) return std::nullopt;
+    const cv::Vec3d z = mean / cv::norm(mean);
+    // Rotation taking z to (0, 0, 1): rows are an orthonormal frame with z last.
+    const cv::Vec3d a = std::abs(z[0]) < 0.9 ? cv::Vec3d(1, 0, 0) : cv::Vec3d(0, 1, 0);
+    const cv::Vec3d x = cv::normalize(a.cross(z)), y = z.cross(x);
+    const cv::Matx33d R0(x[0], x[1], x[2], y[0], y[1], y[2], z[0], z[1], z[2]);
+    p0 = pnp(R0);
   }
-  return refine_pose(pr, m, v, {rv[0], rv[1], rv[2], tv[0], tv[1], tv[2]});
+  if (!p0) return std::nullopt;
+  return refine_pose(pr, m, v, *p0);
 }
 
 // RMS of `views`' inlier corners under the intrinsics of `m` with their poses re-solved.
@@ -655,22 +815,38 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     return s;
   };
 
-  // 1. Outlier rejection with a reference model (the requested one, else Kannala-Brandt,
-  //    which fits narrow and wide lenses alike; rational / pinhole when it fails).
-  std::vector<std::string> refs = {options.model.empty() ? std::string(kKB) : options.model, kOpenCV8, kPinhole};
+  // 1. Outlier rejection with one reference model, chosen in the first round and kept:
+  //    the requested model (rational / pinhole when it cannot be fitted); else whichever
+  //    of Kannala-Brandt (narrow to > 180 deg lenses), Mei (catadioptric) and rational
+  //    fits all corners with the lowest RMS (earlier in that list on a tie), pinhole when
+  //    none can be fitted. A reference that cannot fit the lens at all (Kannala-Brandt on
+  //    a mirror camera) would call good corners outliers and throw whole views away.
   std::string ref;
   for (int round = 0; round < std::max(1, options.outlier_rounds); ++round) {
     Fitter fitter(pr, used_subset());
-    const Fit* f = nullptr;
-    for (const auto& r : refs) {
-      if (!ref.empty() && r != ref) continue;
-      if (fitter.get(r).ok) {
-        ref = r;
-        f = &fitter.get(r);
-        break;
+    if (ref.empty()) {
+      if (!options.model.empty()) {
+        for (const std::string& r : {options.model, std::string(kOpenCV8), std::string(kPinhole)})
+          if (fitter.get(r).ok) {
+            ref = r;
+            break;
+          }
+      } else {
+        double best_rms = std::numeric_limits<double>::infinity();
+        for (const char* r : {kKB, kMei, kOpenCV8}) {
+          const Fit& g = fitter.get(r);
+          if (!g.ok) continue;
+          const double e = fit_rms(pr, g, fitter.views());
+          if (e < best_rms) {
+            best_rms = e;
+            ref = r;
+          }
+        }
+        if (ref.empty() && fitter.get(kPinhole).ok) ref = kPinhole;
       }
     }
-    if (!f) throw InputError("calibrate: no model could be fitted to the corners");
+    if (ref.empty() || !fitter.get(ref).ok) throw InputError("calibrate: no model could be fitted to the corners");
+    const Fit* f = &fitter.get(ref);
     res.outlier_rounds = round + 1;
     const Subset& sub = fitter.views();
     std::vector<std::vector<std::array<double, 2>>> rs;
@@ -769,6 +945,10 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
         (c.params < pick->params || (c.params == pick->params && c.cross_validation_px < pick->cross_validation_px)))
       pick = &c;
   res.selected = pick->name;
+  res.no_model_fits = true;
+  for (const auto& c : res.table)
+    if (c.ok && c.rms_px <= options.fit_max_rms_px && c.cross_validation_px <= options.fit_max_cross_validation_px)
+      res.no_model_fits = false;
   res.model = pick->model;
   res.cross_validation_px = pick->cross_validation_px;
   res.cross_validation_median_px = pick->cross_validation_median_px;

@@ -1,7 +1,8 @@
 // Geometric calibration (issue 6): lens model + intrinsics from chessboard corners.
 //
-// Candidate models are fitted with OpenCV (cv::fisheye for Kannala-Brandt, calibrateCamera
-// for pinhole / plumb_bob / rational) and with mrcal (stereographic, OpenCV8 polish,
+// Candidate models are fitted with OpenCV (cv::fisheye for Kannala-Brandt and cv::omnidir
+// for Mei's unified model, each refined by a joint Ceres solve; calibrateCamera for
+// pinhole / plumb_bob / rational) and with mrcal (stereographic, OpenCV8 polish,
 // splined stereographic), every mrcal solve seeded deterministically from an OpenCV
 // solution, so the same corners always give bit-identical intrinsics.
 //
@@ -28,12 +29,20 @@ struct CalibrateOptions {
   std::string model;
   // Candidate names: "LENSMODEL_PINHOLE", "LENSMODEL_STEREOGRAPHIC", "plumb_bob" (OpenCV's
   // 5-coefficient model, stored as LENSMODEL_OPENCV8 with k4..k6 = 0),
-  // "LENSMODEL_KANNALA_BRANDT", "LENSMODEL_OPENCV8", "LENSMODEL_SPLINED_STEREOGRAPHIC".
+  // "LENSMODEL_KANNALA_BRANDT", "LENSMODEL_OPENCV8", "LENSMODEL_SPLINED_STEREOGRAPHIC",
+  // "LENSMODEL_OMNIDIR_MEI" (Mei's unified model, cv::omnidir: catadioptric cameras).
   // Empty = all of them.
   std::vector<std::string> candidates;
   bool use_mrcal = true;  // false: OpenCV paths only (stereographic/splined unavailable)
   // Splined model: cubic, Nx x Ny control points, fov from the seed.
   int spline_order = 3, spline_nx = 8, spline_ny = 6;
+  // A candidate "fits" when its reprojection RMS is at most fit_max_rms_px and its
+  // cross-validation at most fit_max_cross_validation_px; CalibrationResult::no_model_fits
+  // when none does. Chessboard corners are good to a few tenths of a pixel, so a model
+  // that misses them by 1.5 px RMS (or whose two halves disagree by 5 px) is the wrong
+  // lens model, not a noisy calibration.
+  double fit_max_rms_px = 1.5;
+  double fit_max_cross_validation_px = 5.0;
   // Outlier rejection: drop corners with |residual| > k * sigma (sigma = 1.4826 * MAD of
   // the residual components), never below `outlier_floor_px`; at most `outlier_rounds`.
   double outlier_k = 4.0;
@@ -91,6 +100,9 @@ struct ViewReport {
 struct CalibrationResult {
   CameraModel model;  // rms_reprojection_px, cross_validation_px filled
   std::string selected;  // candidate name
+  // No candidate fits (see CalibrateOptions::fit_max_rms_px): the model is the least bad
+  // one and should not be trusted; the CLI warns.
+  bool no_model_fits = false;
   std::vector<ModelCandidate> table;
   std::vector<double> view_rms_px;        // per view (0 for views without board)
   std::vector<CornerResidual> residuals;  // every detected corner of views with a board

@@ -131,6 +131,10 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
     if (r.views[v].influential)
       say(out, "influential view: {} (leaving it out moves the projection by {:.2f} px)\n", args.images[v],
           r.views[v].leverage_px);
+  if (r.no_model_fits)
+    say(out, "warning: no candidate model fits these views well (RMS {:.2f} px, cross-validation {:.2f} px): check the "
+             "board size, or the lens needs a model not fitted here\n",
+        r.model.rms_reprojection_px, r.cross_validation_px);
   if (r.corners_poorly_covered)
     say(out, "warning: the image corners/edges are poorly covered by the boards; the model is extrapolated there\n");
   say(out, "wrote {}; pictures {}_residuals.png, {}_coverage.png\n", fmt::join(written, ", "), stem, stem);
@@ -149,7 +153,7 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
                   {"intrinsics", r.model.intrinsics}, {"rms_px", r.model.rms_reprojection_px},
                   {"cross_validation_px", r.cross_validation_px}, {"heldout_rms_px", r.heldout_rms_px},
                   {"views_with_board", found}, {"detect_seconds", detect_s}, {"solve_seconds", solve_s},
-                  {"corners_poorly_covered", r.corners_poorly_covered}, {"table", table}, {"views", views},
+                  {"corners_poorly_covered", r.corners_poorly_covered}, {"no_model_fits", r.no_model_fits}, {"table", table}, {"views", views},
                   {"images", images}});
   return 0;
 }

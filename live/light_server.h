@@ -1,0 +1,83 @@
+// The light server: serves the latest state of a running pipeline over HTTP, decoupled
+// from the producer. The pipeline calls publish() / publish_metrics() whenever it has
+// something new; those calls never wait for a client (each stream client has its own
+// small bounded queue; a client that does not keep up loses lists, counted, instead of
+// slowing anything down).
+//
+// Routes (GET and HEAD only; other methods get 405, unknown paths 404):
+//   /               a self-contained live page (live/web_page.h): preview, lights, numbers
+//   /lights         the latest light list, CONVENTIONS.md JSON; 503 before the first frame
+//   /lights/stream  every new list as it comes: Server-Sent Events ("data: <json>\n\n"),
+//                   or NDJSON with ?format=ndjson (one list per line)
+//   /probe.png      tone-mapped preview of the latest map with its lights (sampling/overlay.h),
+//                   rendered lazily, at most `preview_max_rate` times a second, and cached
+//   /status         JSON numbers for the page: frame, lights, fps, latency, clients, drops
+//   /metrics        Prometheus text: the pipeline's (publish_metrics) plus the server's own
+// With a token, every route needs "Authorization: Bearer <token>" (or, for browsers whose
+// EventSource and <img> cannot send headers, the query parameter access_token=<token>);
+// without one the server only listens on the loopback interface.
+// Errors are JSON: {"error": "..."}. The library prints nothing.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "core/envmap.h"
+#include "core/light_list.h"
+
+namespace lp {
+
+struct LightServerOptions {
+  std::string host = "127.0.0.1";
+  int port = 8080;  // 0 = pick a free port (start() returns it)
+  std::optional<std::string> token;
+  int threads = 8;           // workers for ordinary requests
+  size_t stream_queue = 8;   // lists buffered per stream client before it drops the oldest
+  int max_streams = 32;      // concurrent /lights/stream clients (each holds a worker of its own)
+  int preview_width = 0;     // /probe.png width; 0: the map's width for latlong (<= 1024), else 1024
+  double preview_max_rate = 4;  // /probe.png renders per second at most
+};
+
+// Counters as /metrics reports them (for callers that want numbers, not text).
+struct LightServerStats {
+  uint64_t lists_published = 0;
+  uint64_t requests_served = 0;
+  uint64_t stream_lists_sent = 0;
+  uint64_t stream_lists_dropped = 0;
+  int64_t clients_connected = 0;  // connections being served or waiting for a worker
+  int64_t stream_clients = 0;
+};
+
+class LightServer {
+ public:
+  // Throws InputError on bad options, among them a host other than the loopback interface
+  // without a token ("listening on 0.0.0.0 needs --token").
+  explicit LightServer(LightServerOptions options = {});
+  ~LightServer();  // stop()
+  LightServer(const LightServer&) = delete;
+  LightServer& operator=(const LightServer&) = delete;
+
+  // Binds and serves from a thread of its own; returns the bound port. Throws InputError
+  // when the address cannot be bound, std::logic_error when already started.
+  int start();
+  // Clean shutdown: ends streams, waits for the workers. Idempotent.
+  void stop();
+  int port() const;  // 0 before start()
+
+  // Thread-safe, never blocks on clients. `map_for_preview` may be null (no /probe.png).
+  void publish(const LightList& list, std::shared_ptr<const EnvMap> map_for_preview);
+  // Prometheus exposition text from the pipeline, served as the head of /metrics.
+  void publish_metrics(const std::string& prometheus_text);
+
+  LightServerStats stats() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lp

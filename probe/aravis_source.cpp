@@ -1,0 +1,548 @@
+// Aravis (GenICam: GigE Vision, USB3 Vision, and Aravis' in-process fake camera) sources.
+#include <arv.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <mutex>
+#include <opencv2/imgproc.hpp>
+
+#include "core/error.h"
+#include "probe/camera_source.h"
+
+namespace lp {
+
+namespace detail {
+std::unique_ptr<CameraSource> open_aravis(const std::string& id, const std::string& spec, const SourceOptions& options);
+}
+
+namespace {
+
+void silence_glib_once() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    auto quiet = [](const gchar*, GLogLevelFlags, const gchar*, gpointer) {};
+    const auto levels = GLogLevelFlags(G_LOG_LEVEL_MASK | G_LOG_FLAG_FATAL | G_LOG_FLAG_RECURSION);
+    for (const char* domain : {"Aravis", "GLib-GObject", "GLib-GIO"}) g_log_set_handler(domain, levels, quiet, nullptr);
+  });
+}
+
+// GError -> message, freeing it.
+std::string take_error(GError*& error) {
+  std::string message = error && error->message ? error->message : "unknown error";
+  if (error) g_clear_error(&error);
+  return message;
+}
+
+std::string one_line(std::string s) {
+  for (char& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  return s;
+}
+
+template <class T>
+struct GUnref {
+  void operator()(T* p) const {
+    if (p) g_object_unref(p);
+  }
+};
+
+// ---- the fake camera's painter ------------------------------------------------------
+
+struct FakePainter {
+  std::mutex mutex;
+  FakeScene scene;
+  int width = 0, height = 0;      // size of the cached radiance
+  std::vector<float> radiance;    // render_fake_scene at (width, height)
+  bool dirty = true;
+  std::map<ArvBuffer*, double> exposure_us;  // what each filled buffer was exposed at
+  ArvFakeCamera* camera = nullptr;
+  size_t buffer_size = 0;  // every stream buffer is allocated this big
+};
+
+int bayer_channel(const std::string& pattern, int x, int y) {
+  // pattern: the two colours of row 0 ("RG", "BG", "GR", "GB"); row 1 is the complement.
+  static const std::map<std::string, std::array<int, 4>> layouts = {
+      {"RG", {0, 1, 1, 2}}, {"BG", {2, 1, 1, 0}}, {"GR", {1, 0, 2, 1}}, {"GB", {1, 2, 0, 1}}};
+  const auto& l = layouts.at(pattern);
+  return l[(y & 1) * 2 + (x & 1)];
+}
+
+std::string bayer_pattern_of(ArvPixelFormat f) {
+  switch (f) {
+    case ARV_PIXEL_FORMAT_BAYER_RG_8: case ARV_PIXEL_FORMAT_BAYER_RG_10: case ARV_PIXEL_FORMAT_BAYER_RG_12:
+    case ARV_PIXEL_FORMAT_BAYER_RG_16: return "RG";
+    case ARV_PIXEL_FORMAT_BAYER_BG_8: case ARV_PIXEL_FORMAT_BAYER_BG_10: case ARV_PIXEL_FORMAT_BAYER_BG_12:
+    case ARV_PIXEL_FORMAT_BAYER_BG_16: return "BG";
+    case ARV_PIXEL_FORMAT_BAYER_GR_8: case ARV_PIXEL_FORMAT_BAYER_GR_10: case ARV_PIXEL_FORMAT_BAYER_GR_12:
+    case ARV_PIXEL_FORMAT_BAYER_GR_16: return "GR";
+    case ARV_PIXEL_FORMAT_BAYER_GB_8: case ARV_PIXEL_FORMAT_BAYER_GB_10: case ARV_PIXEL_FORMAT_BAYER_GB_12:
+    case ARV_PIXEL_FORMAT_BAYER_GB_16: return "GB";
+    default: return "";
+  }
+}
+
+// Significant bits of an unpacked format (8 or a 16-bit container), 0 when not supported.
+int bits_of(ArvPixelFormat f) {
+  switch (f) {
+    case ARV_PIXEL_FORMAT_MONO_8: case ARV_PIXEL_FORMAT_BAYER_RG_8: case ARV_PIXEL_FORMAT_BAYER_BG_8:
+    case ARV_PIXEL_FORMAT_BAYER_GR_8: case ARV_PIXEL_FORMAT_BAYER_GB_8: case ARV_PIXEL_FORMAT_RGB_8_PACKED:
+    case ARV_PIXEL_FORMAT_BGR_8_PACKED: return 8;
+    case ARV_PIXEL_FORMAT_MONO_10: case ARV_PIXEL_FORMAT_BAYER_RG_10: case ARV_PIXEL_FORMAT_BAYER_BG_10:
+    case ARV_PIXEL_FORMAT_BAYER_GR_10: case ARV_PIXEL_FORMAT_BAYER_GB_10: return 10;
+    case ARV_PIXEL_FORMAT_MONO_12: case ARV_PIXEL_FORMAT_BAYER_RG_12: case ARV_PIXEL_FORMAT_BAYER_BG_12:
+    case ARV_PIXEL_FORMAT_BAYER_GR_12: case ARV_PIXEL_FORMAT_BAYER_GB_12: return 12;
+    case ARV_PIXEL_FORMAT_MONO_16: case ARV_PIXEL_FORMAT_BAYER_RG_16: case ARV_PIXEL_FORMAT_BAYER_BG_16:
+    case ARV_PIXEL_FORMAT_BAYER_GR_16: case ARV_PIXEL_FORMAT_BAYER_GB_16:
+      return 16;
+    default: return 0;
+  }
+}
+bool is_rgb(ArvPixelFormat f) {
+  return f == ARV_PIXEL_FORMAT_RGB_8_PACKED || f == ARV_PIXEL_FORMAT_BGR_8_PACKED;
+}
+
+// Runs on Aravis' fake stream thread, under the fake camera's fill mutex.
+void paint_fake(ArvBuffer* buffer, void* data, guint32 exposure_time_us, guint32 gain, ArvPixelFormat format) {
+  auto* painter = static_cast<FakePainter*>(data);
+  if (!buffer || !painter) return;
+  guint32 w = 0, h = 0;
+  arv_fake_camera_read_register(painter->camera, ARV_FAKE_CAMERA_REGISTER_WIDTH, &w);
+  arv_fake_camera_read_register(painter->camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT, &h);
+  size_t size = 0;
+  auto* bytes = static_cast<uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, &size)));
+  if (size == 0) size = painter->buffer_size;  // the fake does not record what it fills
+  const int bits = bits_of(format);
+  const bool rgb = is_rgb(format);
+  const int bytes_per_sample = bits > 8 ? 2 : 1;
+  const size_t needed = size_t(w) * h * bytes_per_sample * (rgb ? 3 : 1);
+  std::lock_guard lock(painter->mutex);
+  painter->exposure_us[buffer] = exposure_time_us;
+  if (!bytes || bits == 0 || size < needed || w == 0 || h == 0) return;
+  if (painter->dirty || painter->width != int(w) || painter->height != int(h)) {
+    RgbImage r = render_fake_scene(painter->scene, int(w), int(h));
+    painter->radiance = std::move(r.rgb);
+    painter->width = int(w), painter->height = int(h);
+    painter->dirty = false;
+  }
+  const double max_code = std::ldexp(1.0, bits) - 1;
+  const double scale = exposure_time_us * 1e-6 * std::pow(10.0, gain / 20.0) * max_code;
+  const std::string bayer = bayer_pattern_of(format);
+  const bool bgr = format == ARV_PIXEL_FORMAT_BGR_8_PACKED;
+  auto code = [&](float radiance) { return std::min(max_code, std::round(radiance * scale)); };
+  auto store = [&](size_t index, double value) {
+    if (bytes_per_sample == 1)
+      bytes[index] = uint8_t(value);
+    else {
+      const uint16_t v = uint16_t(value);
+      std::memcpy(bytes + 2 * index, &v, 2);  // GenICam unpacked formats are little-endian
+    }
+  };
+  const float* rad = painter->radiance.data();
+  for (guint32 y = 0; y < h; ++y)
+    for (guint32 x = 0; x < w; ++x) {
+      const size_t p = size_t(y) * w + x;
+      const float* px = rad + 3 * p;
+      if (rgb) {
+        for (int c = 0; c < 3; ++c) store(3 * p + c, code(px[bgr ? 2 - c : c]));
+      } else if (!bayer.empty()) {
+        store(p, code(px[bayer_channel(bayer, int(x), int(y))]));
+      } else {
+        store(p, code(0.2126f * px[0] + 0.7152f * px[1] + 0.0722f * px[2]));
+      }
+    }
+}
+
+// ---- decoding -----------------------------------------------------------------------
+
+RgbImage decode(const void* data, size_t size, int width, int height, ArvPixelFormat format, const std::string& name) {
+  const int bits = bits_of(format);
+  if (bits == 0) throw InputError("aravis: pixel format " + name + " is not supported (use Mono8/10/12/16, Bayer*8/10/12/16, RGB8)");
+  const int channels = is_rgb(format) ? 3 : 1;
+  const int depth = bits > 8 ? CV_16U : CV_8U;
+  const size_t needed = size_t(width) * height * channels * (bits > 8 ? 2 : 1);
+  if (size < needed) throw std::runtime_error("aravis: frame of " + std::to_string(size) + " bytes, " + std::to_string(needed) + " expected for " + name);
+  cv::Mat raw(height, width, CV_MAKETYPE(depth, channels), const_cast<void*>(data));
+  cv::Mat rgb;
+  const std::string bayer = bayer_pattern_of(format);
+  if (!bayer.empty()) {
+    // OpenCV names a Bayer pattern by row 1, columns 1-2: GenICam RG = OpenCV BG, etc.
+    static const std::map<std::string, int> codes = {{"RG", cv::COLOR_BayerBG2RGB}, {"BG", cv::COLOR_BayerRG2RGB},
+                                                     {"GR", cv::COLOR_BayerGB2RGB}, {"GB", cv::COLOR_BayerGR2RGB}};
+    cv::demosaicing(raw, rgb, codes.at(bayer));
+  } else if (channels == 1) {
+    cv::cvtColor(raw, rgb, cv::COLOR_GRAY2RGB);
+  } else if (format == ARV_PIXEL_FORMAT_BGR_8_PACKED) {
+    cv::cvtColor(raw, rgb, cv::COLOR_BGR2RGB);
+  } else {
+    rgb = raw;
+  }
+  cv::Mat f;
+  rgb.convertTo(f, CV_32FC3, 1.0 / (std::ldexp(1.0, bits) - 1));
+  RgbImage image;
+  image.width = width, image.height = height;
+  image.rgb.assign(f.ptr<float>(), f.ptr<float>() + size_t(width) * height * 3);
+  return image;
+}
+
+// ---- the source ---------------------------------------------------------------------
+
+class AravisSource final : public CameraSource {
+ public:
+  AravisSource(std::string id, std::string spec, SourceOptions options)
+      : id_(std::move(id)), spec_(std::move(spec)), options_(std::move(options)) {
+    painter_.scene = options_.fake_scene;
+    open();
+  }
+  ~AravisSource() override { close(); }
+
+  std::string describe() const override { return description_; }
+
+  std::optional<CameraFrame> next(double timeout_s) override {
+    if (!stream_) throw CameraLost(spec_ + ": camera not connected (call reconnect())");
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(std::max(0.0, timeout_s));
+    for (;;) {
+      if (lost_) throw CameraLost(spec_ + ": camera lost (control link down)");
+      const auto left = std::chrono::duration<double>(deadline - std::chrono::steady_clock::now()).count();
+      ArvBuffer* buffer = arv_stream_timeout_pop_buffer(stream_.get(), guint64(std::max(0.0, left) * 1e6));
+      if (!buffer) {
+        if (lost_) throw CameraLost(spec_ + ": camera lost (control link down)");
+        return std::nullopt;
+      }
+      std::optional<double> tagged_us = take_tag(buffer);
+      if (arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS) {
+        if (++failed_in_a_row_ > 100) {
+          arv_stream_push_buffer(stream_.get(), buffer);
+          throw CameraLost(spec_ + ": stream broken (100 incomplete frames in a row)");
+        }
+        arv_stream_push_buffer(stream_.get(), buffer);
+        continue;
+      }
+      failed_in_a_row_ = 0;
+      // Which exposure was this frame taken at?
+      double exposure_us = target_us_;
+      if (tagged_us) {
+        exposure_us = *tagged_us;
+      } else if (settle_left_ > 0) {
+        --settle_left_;
+        arv_stream_push_buffer(stream_.get(), buffer);
+        continue;
+      }
+      int bracket = -1;
+      if (!cycle_.empty()) {
+        if (std::abs(exposure_us - target_us_) > 0.5 + 1e-3 * target_us_) {
+          // Taken before the last exposure write reached the sensor: not part of the cycle.
+          arv_stream_push_buffer(stream_.get(), buffer);
+          if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
+          continue;
+        }
+        bracket = int(cycle_index_);
+      }
+      CameraFrame frame;
+      try {
+        size_t size = 0;
+        const void* data = arv_buffer_get_data(buffer, &size);
+        if (size == 0 && fake_) size = buffer_size_;  // the fake camera reports no received size
+        frame.image = decode(data, size, arv_buffer_get_image_width(buffer), arv_buffer_get_image_height(buffer),
+                             arv_buffer_get_image_pixel_format(buffer), pixel_format_);
+      } catch (...) {
+        arv_stream_push_buffer(stream_.get(), buffer);
+        throw;
+      }
+      guint64 ts = arv_buffer_get_timestamp(buffer);
+      if (ts == 0) ts = arv_buffer_get_system_timestamp(buffer);
+      frame.timestamp_s = double(ts) * 1e-9;
+      frame.exposure_s = exposure_us * 1e-6;
+      frame.gain_db = gain_db_;
+      frame.pixel_format = pixel_format_;
+      frame.sequence = int64_t(arv_buffer_get_frame_id(buffer));
+      frame.bracket_index = bracket;
+      arv_stream_push_buffer(stream_.get(), buffer);
+      if (!cycle_.empty()) {
+        cycle_index_ = (cycle_index_ + 1) % cycle_.size();
+        write_exposure(cycle_[cycle_index_]);
+      }
+      return frame;
+    }
+  }
+
+  void set_exposure_cycle(const std::vector<double>& seconds) override {
+    for (double s : seconds)
+      if (!(s > 0) || !std::isfinite(s)) throw InputError(spec_ + ": exposure time " + std::to_string(s) + " s is not positive");
+    cycle_ = seconds;
+    cycle_index_ = 0;
+    if (!cycle_.empty()) write_exposure(cycle_[0]);
+  }
+
+  bool reconnect() override {
+    close();
+    try {
+      open();
+      return true;
+    } catch (const std::exception&) {
+      close();
+      return false;
+    }
+  }
+
+  void set_scene(const FakeScene& scene) {
+    std::lock_guard lock(painter_.mutex);
+    painter_.scene = scene;
+    painter_.dirty = true;
+  }
+  bool is_fake() const { return fake_ != nullptr; }
+
+ private:
+  static void on_control_lost(ArvDevice*, gpointer self) { static_cast<AravisSource*>(self)->lost_ = true; }
+
+  [[noreturn]] void fail(const std::string& what, GError*& error) {
+    throw InputError(one_line(spec_ + ": " + what + ": " + take_error(error)));
+  }
+
+  void open() {
+    silence_glib_once();
+    lost_ = false;
+    GError* error = nullptr;
+    ArvCamera* camera = nullptr;
+    if (id_.rfind("Fake_", 0) == 0) {
+      // The in-process fake: built directly, so no interface is scanned and nothing
+      // goes on the network.
+      const std::string serial = id_.substr(5);
+      ArvDevice* device = arv_fake_device_new(serial.empty() ? "1" : serial.c_str(), &error);
+      if (!device) fail("cannot create the fake camera", error);
+      camera = arv_camera_new_with_device(device, &error);
+      g_object_unref(device);  // the camera holds its own reference
+      if (!camera) fail("cannot open the fake camera", error);
+      fake_ = arv_fake_device_get_fake_camera(ARV_FAKE_DEVICE(arv_camera_get_device(camera)));
+    } else {
+      if (id_.empty() && !options_.aravis_network) {
+        arv_enable_interface("Fake");
+        arv_disable_interface("GigEVision");
+        arv_disable_interface("USB3Vision");
+      } else if (id_.empty()) {
+        arv_enable_interface("GigEVision");
+        arv_enable_interface("USB3Vision");
+      }
+      if (id_.empty()) {
+        arv_update_device_list();
+        if (arv_get_n_devices() == 0) throw InputError(spec_ + ": no Aravis camera found");
+        camera = arv_camera_new(arv_get_device_id(0), &error);
+      } else {
+        camera = arv_camera_new(id_.c_str(), &error);
+      }
+      if (!camera) {
+        throw InputError(one_line(spec_ + ": no such Aravis camera" + (error ? std::string(" (") + take_error(error) + ")" : "")));
+      }
+      if (ArvDevice* device = arv_camera_get_device(camera); device && ARV_IS_FAKE_DEVICE(device))
+        fake_ = arv_fake_device_get_fake_camera(ARV_FAKE_DEVICE(device));
+    }
+    camera_.reset(camera);
+    lost_handler_ = g_signal_connect(arv_camera_get_device(camera), "control-lost", G_CALLBACK(on_control_lost), this);
+
+    if (fake_) {
+      painter_.camera = fake_;
+      arv_fake_camera_set_fill_pattern(fake_, paint_fake, &painter_);
+    }
+    configure();
+
+    const guint payload = arv_camera_get_payload(camera, &error);
+    if (error) fail("payload size", error);
+    ArvStream* stream = arv_camera_create_stream(camera, nullptr, nullptr, &error);
+    if (!stream) fail("cannot create a stream", error);
+    stream_.reset(stream);
+    buffer_size_ = payload;
+    {
+      std::lock_guard lock(painter_.mutex);
+      painter_.buffer_size = payload;
+    }
+    for (int i = 0; i < std::max(2, options_.n_buffers); ++i) arv_stream_push_buffer(stream, arv_buffer_new_allocate(payload));
+    arv_camera_set_acquisition_mode(camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
+    if (error) fail("acquisition mode", error);
+    arv_camera_start_acquisition(camera, &error);
+    if (error) fail("cannot start acquisition", error);
+
+    const char* vendor = arv_camera_get_vendor_name(camera, nullptr);
+    const char* model = arv_camera_get_model_name(camera, nullptr);
+    int x = 0, y = 0, w = 0, h = 0;
+    arv_camera_get_region(camera, &x, &y, &w, &h, nullptr);
+    description_ = spec_ + " (" + (vendor ? vendor : "?") + " " + (model ? model : "?") + ", " + std::to_string(w) + "x" +
+                   std::to_string(h) + " " + pixel_format_ + (chunks_ ? ", exposure from chunk data" : "") + ")";
+  }
+
+  void configure() {
+    ArvCamera* camera = camera_.get();
+    GError* error = nullptr;
+    if (!options_.pixel_format.empty()) {
+      arv_camera_set_pixel_format_from_string(camera, options_.pixel_format.c_str(), &error);
+      if (error) fail("pixel format " + options_.pixel_format, error);
+    }
+    const char* pf = arv_camera_get_pixel_format_as_string(camera, &error);
+    if (error) fail("pixel format", error);
+    pixel_format_ = pf ? pf : "?";
+    if (bits_of(arv_camera_get_pixel_format(camera, nullptr)) == 0)
+      throw InputError(spec_ + ": pixel format " + pixel_format_ + " is not supported (use Mono8/10/12/16, Bayer*8/10/12/16, RGB8)");
+    if (options_.roi) {
+      const auto& r = *options_.roi;
+      arv_camera_set_region(camera, r.x, r.y, r.width, r.height, &error);
+      if (error) fail("region " + std::to_string(r.width) + "x" + std::to_string(r.height) + "+" + std::to_string(r.x) + "+" + std::to_string(r.y), error);
+    }
+    if (options_.frame_rate > 0 && arv_camera_is_frame_rate_available(camera, nullptr)) {
+      arv_camera_set_frame_rate(camera, options_.frame_rate, &error);
+      if (error) fail("frame rate", error);
+    }
+    if (arv_camera_is_exposure_auto_available(camera, nullptr)) arv_camera_set_exposure_time_auto(camera, ARV_AUTO_OFF, nullptr);
+    if (arv_camera_is_gain_auto_available(camera, nullptr)) arv_camera_set_gain_auto(camera, ARV_AUTO_OFF, nullptr);
+    g_clear_error(&error);
+    if (options_.gain_db) {
+      if (fake_) {
+        arv_camera_set_integer(camera, "GainRaw", gint64(std::lround(*options_.gain_db)), &error);  // the fake paints GainRaw as dB
+      } else {
+        arv_camera_set_gain(camera, *options_.gain_db, &error);
+      }
+      if (error) fail("gain", error);
+    }
+    if (fake_) {
+      gain_db_ = double(arv_camera_get_integer(camera, "GainRaw", nullptr));
+    } else if (arv_camera_is_gain_available(camera, nullptr)) {
+      gain_db_ = arv_camera_get_gain(camera, nullptr);
+    }
+    g_clear_error(&error);
+    // Per-frame exposure from chunk data, when the camera has it (the fake paints its own).
+    chunks_ = false;
+    if (!fake_ && arv_camera_are_chunks_available(camera, nullptr)) {
+      arv_camera_set_chunks(camera, "ExposureTime", &error);
+      if (!error) {
+        chunk_parser_.reset(arv_camera_create_chunk_parser(camera));
+        chunks_ = chunk_parser_ != nullptr;
+      }
+      g_clear_error(&error);
+    }
+    if (!options_.exposure_cycle.empty()) {
+      set_exposure_cycle(options_.exposure_cycle);
+    } else if (!cycle_.empty()) {
+      set_exposure_cycle(cycle_);  // keep cycling across a reconnect
+    } else if (options_.exposure_s) {
+      write_exposure(*options_.exposure_s);
+    } else {
+      target_us_ = arv_camera_get_exposure_time(camera, nullptr);
+    }
+  }
+
+  void write_exposure(double seconds) {
+    GError* error = nullptr;
+    arv_camera_set_exposure_time(camera_.get(), seconds * 1e6, &error);
+    if (error) {
+      const std::string message = take_error(error);
+      if (lost_) throw CameraLost(spec_ + ": camera lost (control link down)");
+      throw InputError(one_line(spec_ + ": cannot set exposure " + std::to_string(seconds) + " s: " + message));
+    }
+    // What the camera really set (rounded to its resolution, clamped to its range).
+    target_us_ = arv_camera_get_exposure_time(camera_.get(), &error);
+    if (error) {
+      g_clear_error(&error);
+      target_us_ = seconds * 1e6;
+    }
+    settle_left_ = options_.exposure_settle_frames;
+  }
+
+  // The exposure a buffer was taken at, when the camera says so.
+  std::optional<double> take_tag(ArvBuffer* buffer) {
+    if (fake_) {
+      std::lock_guard lock(painter_.mutex);
+      auto it = painter_.exposure_us.find(buffer);
+      if (it == painter_.exposure_us.end()) return std::nullopt;
+      const double us = it->second;
+      painter_.exposure_us.erase(it);
+      return us;
+    }
+    if (chunks_ && arv_buffer_has_chunks(buffer)) {
+      GError* error = nullptr;
+      const double us = arv_chunk_parser_get_float_value(chunk_parser_.get(), buffer, "ChunkExposureTime", &error);
+      if (!error) return us;
+      g_clear_error(&error);
+    }
+    return std::nullopt;
+  }
+
+  void close() {
+    if (camera_) {
+      if (stream_) arv_camera_stop_acquisition(camera_.get(), nullptr);
+      if (lost_handler_) g_signal_handler_disconnect(arv_camera_get_device(camera_.get()), lost_handler_);
+      lost_handler_ = 0;
+    }
+    stream_.reset();  // joins the stream thread
+    if (fake_) arv_fake_camera_set_fill_pattern(fake_, nullptr, nullptr);  // waits for a fill in progress
+    chunk_parser_.reset();
+    camera_.reset();
+    fake_ = nullptr;
+    std::lock_guard lock(painter_.mutex);
+    painter_.exposure_us.clear();
+    painter_.camera = nullptr;
+  }
+
+  std::string id_, spec_;
+  SourceOptions options_;
+  std::unique_ptr<ArvCamera, GUnref<ArvCamera>> camera_;
+  std::unique_ptr<ArvStream, GUnref<ArvStream>> stream_;
+  std::unique_ptr<ArvChunkParser, GUnref<ArvChunkParser>> chunk_parser_;
+  ArvFakeCamera* fake_ = nullptr;  // owned by the camera's device
+  gulong lost_handler_ = 0;
+  std::atomic<bool> lost_{false};
+  FakePainter painter_;
+  std::string description_, pixel_format_;
+  bool chunks_ = false;
+  double gain_db_ = 0;
+  double target_us_ = 0;  // exposure the camera was last set to (read back)
+  int settle_left_ = 0;
+  std::vector<double> cycle_;
+  size_t cycle_index_ = 0;
+  int failed_in_a_row_ = 0;
+  size_t buffer_size_ = 0;
+};
+
+}  // namespace
+
+RgbImage render_fake_scene(const FakeScene& scene, int width, int height) {
+  RgbImage image;
+  image.width = width, image.height = height;
+  image.rgb.assign(size_t(std::max(0, width)) * std::max(0, height) * 3, 0.0f);
+  const double cx = 0.5 * (width - 1), cy = 0.5 * (height - 1);
+  const double radius = scene.circle_radius * std::min(width, height);
+  if (radius <= 0) return image;
+  const double deg = M_PI / 180;
+  const double se = scene.sun_elevation_deg * deg, sa = scene.sun_azimuth_deg * deg;
+  const double sun[3] = {std::cos(se) * std::cos(sa), std::cos(se) * std::sin(sa), std::sin(se)};
+  const double cos_sun = std::cos(scene.sun_radius_deg * deg);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const double dx = x - cx, dy = cy - y;
+      const double r = std::hypot(dx, dy) / radius;
+      if (r > 1) continue;
+      const double theta = r * M_PI / 2;  // zenith angle, equidistant fisheye
+      const double phi = std::atan2(dy, dx);
+      const double d[3] = {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+      const bool in_sun = d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2] >= cos_sun;
+      const double t = theta / (M_PI / 2);
+      float* px = &image.rgb[(size_t(y) * width + x) * 3];
+      for (int c = 0; c < 3; ++c)
+        px[c] = float(in_sun ? scene.sun_radiance[c] : (1 - t) * scene.sky_zenith[c] + t * scene.sky_horizon[c]);
+    }
+  return image;
+}
+
+bool set_fake_scene(CameraSource& source, const FakeScene& scene) {
+  auto* aravis = dynamic_cast<AravisSource*>(&source);
+  if (!aravis || !aravis->is_fake()) return false;
+  aravis->set_scene(scene);
+  return true;
+}
+
+namespace detail {
+std::unique_ptr<CameraSource> open_aravis(const std::string& id, const std::string& spec, const SourceOptions& options) {
+  return std::make_unique<AravisSource>(id, spec, options);
+}
+}  // namespace detail
+
+}  // namespace lp

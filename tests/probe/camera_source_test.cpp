@@ -247,3 +247,22 @@ TEST(CameraSourceSpecs, UnknownSpecsAndMissingDevices) {
   EXPECT_NE(message_of([] { lp::open_source("v4l2:x"); }).find("device number"), std::string::npos);
   EXPECT_NE(message_of([] { lp::open_source("replay:"); }).find("directory"), std::string::npos);
 }
+
+TEST(CameraSourceAravis, ReconnectKeepsSettingsAndCycle) {
+  SourceOptions options;
+  options.pixel_format = "Mono8";
+  options.frame_rate = 200;
+  options.exposure_cycle = {0.002, 0.008};
+  auto source = lp::open_source("aravis:Fake_1", options);
+  auto before = source->next(2.0);
+  ASSERT_TRUE(before);
+  EXPECT_EQ(before->bracket_index, 0);
+  ASSERT_TRUE(source->reconnect());
+  for (int k = 0; k < 4; ++k) {
+    auto frame = source->next(2.0);
+    ASSERT_TRUE(frame) << k;
+    ASSERT_GE(frame->bracket_index, 0);
+    EXPECT_NEAR(frame->exposure_s, options.exposure_cycle[size_t(frame->bracket_index)], 1e-9);
+    EXPECT_EQ(frame->pixel_format, "Mono8");
+  }
+}

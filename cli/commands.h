@@ -243,6 +243,27 @@ struct EvalUnwrapArgs {
 };
 int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out);
 
+struct StreamArgs {
+  std::string source = "aravis";    // replay:DIR | video:FILE | aravis[:ID] | libcamera[:ID] | v4l2:N
+  std::string listen = "127.0.0.1:8080";
+  std::string token;                // required to listen beyond localhost
+  std::string exposures;            // bracketing cycle, seconds
+  std::string response, photometric, camera;
+  double fov = 180;
+  std::string rotation;
+  bool maps = false;                // the source delivers environment maps (replayed .exr)
+  std::string layout = "hemisphere";
+  std::string size;
+  int nside = 0;
+  std::string method = "hemigon";
+  int n = 300;
+  int cluster = 0;
+  double fps = 0;                   // replay pacing; also the temporal filter's rate
+  bool loop = false;
+  double duration = 0;              // seconds; 0 = until interrupted (or the replay ends)
+};
+int run_stream(const StreamArgs& args, const Output& out);
+
 // Shared parsing helpers; throw lp::InputError naming the option.
 void parse_size(const std::string& text, const char* option, int* width, int* height);
 std::vector<int> parse_int_list(const std::string& text, const char* option);

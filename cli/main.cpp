@@ -285,6 +285,31 @@ int main(int argc, char** argv) {
   c_evu->add_option("-o,--output", evu.output_dir, "Directory for unwrap.csv")->required();
   c_evu->add_flag("--json", out.json, "Print the report as JSON");
 
+  // stream
+  StreamArgs strm;
+  auto* c_strm = app.add_subcommand("stream", "Run the whole chain live and serve light lists over HTTP");
+  c_strm->set_config("--config", "", "TOML file with these options (a rig's setup in one file)");
+  c_strm->add_option("--source", strm.source, "replay:DIR | video:FILE | aravis[:ID] | libcamera[:ID] | v4l2:N");
+  c_strm->add_option("--listen", strm.listen, "HOST:PORT to serve on (127.0.0.1 by default; port 0 picks one)");
+  c_strm->add_option("--token", strm.token, "Bearer token required on every route (needed beyond localhost)");
+  c_strm->add_option("--exposures", strm.exposures, "Bracketing: exposure times cycled by the camera, seconds");
+  c_strm->add_option("--response", strm.response, "Camera response (hdr response); default linear");
+  c_strm->add_option("--photometric", strm.photometric, "Photometric calibration: absolute units");
+  c_strm->add_option("--camera", strm.camera, "Calibrated camera model (default: equidistant fisheye)");
+  c_strm->add_option("--fov", strm.fov, "Fisheye field of view / image circle, deg");
+  c_strm->add_option("--rotation", strm.rotation, "Probe to world: 'yaw,pitch,roll' degrees");
+  c_strm->add_flag("--maps", strm.maps, "The source delivers environment maps already (replayed .exr)");
+  c_strm->add_option("--layout", strm.layout, "latlong|hemisphere|healpix");
+  c_strm->add_option("--size", strm.size, "Map size WxH");
+  c_strm->add_option("--nside", strm.nside, "healpix nside");
+  c_strm->add_option("--method", strm.method, "pharr|hemigon|q2tree|mediancut");
+  c_strm->add_option("--n", strm.n, "Lights per frame");
+  c_strm->add_option("--cluster", strm.cluster, "Cluster to at most this many lights");
+  c_strm->add_option("--fps", strm.fps, "Replay pacing and the temporal filter's frame rate");
+  c_strm->add_flag("--loop", strm.loop, "Replay: start over at the end");
+  c_strm->add_option("--duration", strm.duration, "Stop after this many seconds");
+  c_strm->add_flag("--json", out.json, "Print the final report as JSON");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -316,6 +341,7 @@ int main(int argc, char** argv) {
     if (*c_spr) return run_synth_probe(spr, out);
     if (*c_preg) return run_probe_register(preg, out);
     if (*c_evu) return run_eval_unwrap(evu, out);
+    if (*c_strm) return run_stream(strm, out);
   } catch (const lp::InputError& e) {
     std::fprintf(stderr, "lightprobe: %s\n", e.what());
     return 2;

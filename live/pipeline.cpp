@@ -1,0 +1,281 @@
+#include "live/pipeline.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+
+#include "core/error.h"
+#include "hdr/bracket.h"
+#include "hdr/merge.h"
+#include "probe/camera_unwrap.h"
+#include "probe/fisheye.h"
+#include "probe/remap.h"
+
+namespace lp {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+}  // namespace
+
+struct LivePipeline::Bracket {
+  std::vector<CameraFrame> frames;
+  Clock::time_point captured;
+};
+
+struct LivePipeline::RemapCache {
+  int width = 0, height = 0;
+  CompiledRemap compiled;
+  RgbImage out;
+};
+
+LivePipeline::LivePipeline(OpenSource open, LivePipelineOptions options, Publish publish)
+    : open_(std::move(open)), options_(std::move(options)), publish_(std::move(publish)) {
+  if (options_.queue_brackets < 1) throw InputError("the bracket queue needs room for at least one bracket");
+  sampler_ = std::make_unique<FramePipeline>(options_.sampling);
+}
+
+LivePipeline::~LivePipeline() { stop(); }
+
+void LivePipeline::start() {
+  if (running_) return;
+  source_ = open_();
+  if (!options_.exposure_cycle.empty()) source_->set_exposure_cycle(options_.exposure_cycle);
+  running_ = true;
+  capture_done_ = false;
+  capture_ = std::thread([this] { capture_loop(); });
+  processor_ = std::thread([this] { process_loop(); });
+}
+
+void LivePipeline::stop() {
+  running_ = false;
+  cv_.notify_all();
+  if (capture_.joinable()) capture_.join();
+  if (processor_.joinable()) processor_.join();
+  // Brackets still waiting at shutdown are accounted for as dropped.
+  std::lock_guard<std::mutex> lock(mutex_);
+  stats_.brackets_dropped += queue_.size();
+  queue_.clear();
+}
+
+void LivePipeline::wait() {
+  if (capture_.joinable()) capture_.join();
+  if (processor_.joinable()) processor_.join();
+  running_ = false;
+}
+
+LiveStats LivePipeline::stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stats_;
+}
+
+std::string LivePipeline::metrics() const {
+  const LiveStats s = stats();
+  std::string m;
+  auto counter = [&](const char* name, const char* help, double v) {
+    m += fmt::format("# HELP lightprobe_{0} {1}\n# TYPE lightprobe_{0} counter\nlightprobe_{0} {2}\n", name, help, v);
+  };
+  auto gauge = [&](const char* name, const char* help, double v) {
+    m += fmt::format("# HELP lightprobe_{0} {1}\n# TYPE lightprobe_{0} gauge\nlightprobe_{0} {2}\n", name, help, v);
+  };
+  counter("frames_in_total", "Frames received from the camera", double(s.frames_in));
+  counter("frames_dropped_partial_total", "Frames dropped because their bracket was incomplete",
+          double(s.frames_dropped_partial));
+  counter("brackets_dropped_total", "Whole brackets dropped because the back end was busy", double(s.brackets_dropped));
+  counter("brackets_processed_total", "Brackets turned into light lists", double(s.brackets_processed));
+  counter("camera_reconnects_total", "Times the camera was reopened", double(s.reconnects));
+  gauge("fps", "Light lists published per second", s.fps_out);
+  gauge("latency_ms", "Capture to publish latency of the last list, ms", s.capture_to_publish_ms);
+  gauge("stage_fuse_ms", "HDR fusion time of the last bracket, ms", s.fuse_ms);
+  gauge("stage_unwrap_ms", "Unwrapping time of the last frame, ms", s.unwrap_ms);
+  gauge("stage_sample_ms", "Sampling and temporal processing time of the last frame, ms", s.sample_ms);
+  return m;
+}
+
+void LivePipeline::capture_loop() {
+  const size_t cycle = std::max<size_t>(1, options_.exposure_cycle.size());
+  std::unique_ptr<Bracket> current;
+  while (running_) {
+    std::optional<CameraFrame> frame;
+    try {
+      frame = source_->next(0.2);
+    } catch (const std::exception& e) {
+      // The camera went away: keep the stream alive and reopen it.
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stats_.last_error = e.what();
+        if (current) stats_.frames_dropped_partial += current->frames.size();
+      }
+      current.reset();
+      std::this_thread::sleep_for(std::chrono::duration<double>(options_.reconnect_delay_s));
+      try {
+        if (!source_->reconnect()) {
+          source_ = open_();
+          if (!options_.exposure_cycle.empty()) source_->set_exposure_cycle(options_.exposure_cycle);
+        }
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++stats_.reconnects;
+      } catch (const std::exception& e2) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stats_.last_error = e2.what();
+      }
+      continue;
+    }
+    if (!frame) {
+      if (source_->finished()) break;
+      continue;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++stats_.frames_in;
+    }
+    // Group into whole brackets: a frame out of order starts over (the partial bracket is
+    // dropped and counted), so two brackets are never mixed.
+    const int index = cycle == 1 ? 0 : frame->bracket_index;
+    if (cycle > 1 && index < 0) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++stats_.frames_dropped_partial;
+      continue;
+    }
+    if (!current || int(current->frames.size()) != index) {
+      if (current) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stats_.frames_dropped_partial += current->frames.size();
+      }
+      current.reset();
+      if (index != 0) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++stats_.frames_dropped_partial;
+        continue;
+      }
+      current = std::make_unique<Bracket>();
+      current->captured = Clock::now();
+    }
+    current->frames.push_back(std::move(*frame));
+    if (current->frames.size() == cycle) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (queue_.size() >= options_.queue_brackets) {
+        queue_.pop_front();  // the oldest waiting bracket: keep latency low
+        ++stats_.brackets_dropped;
+      }
+      queue_.push_back(std::move(current));
+      cv_.notify_one();
+    }
+  }
+  if (current) {  // a bracket cut short by the end of the stream
+    std::lock_guard<std::mutex> lock(mutex_);
+    stats_.frames_dropped_partial += current->frames.size();
+  }
+  capture_done_ = true;
+  cv_.notify_all();
+}
+
+void LivePipeline::process_loop() {
+  auto last = Clock::now();
+  double fps = 0;
+  while (true) {
+    std::unique_ptr<Bracket> b;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [&] { return !queue_.empty() || !running_ || capture_done_; });
+      if (queue_.empty()) {
+        if (!running_ || capture_done_) break;
+        continue;
+      }
+      b = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    try {
+      process(*b);
+      const double dt = std::chrono::duration<double>(Clock::now() - last).count();
+      last = Clock::now();
+      fps = fps == 0 ? 1 / std::max(dt, 1e-6) : 0.8 * fps + 0.2 / std::max(dt, 1e-6);
+      std::lock_guard<std::mutex> lock(mutex_);
+      stats_.fps_out = fps;
+      ++stats_.brackets_processed;
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stats_.last_error = e.what();
+    }
+  }
+}
+
+void LivePipeline::process(Bracket& b) {
+  // 1. Radiance: fuse the bracket (or take the single frame).
+  auto t0 = Clock::now();
+  RgbImage radiance;
+  if (b.frames.size() > 1) {
+    lp::Bracket hb;
+    for (auto& f : b.frames) {
+      hb.exposure_seconds.push_back(f.exposure_s > 0 ? f.exposure_s : 1.0);
+      hb.frames.push_back(std::move(f.image));
+    }
+    const CameraResponse response = options_.response ? *options_.response : linear_response(256);
+    radiance = merge_bracket(hb, response);
+  } else {
+    radiance = std::move(b.frames[0].image);
+    if (b.frames[0].exposure_s > 0 && !options_.frames_are_maps)
+      for (float& v : radiance.rgb) v = float(v / b.frames[0].exposure_s);
+  }
+  if (options_.photometric) apply_photometric(radiance, *options_.photometric);
+  const double fuse_ms = ms_since(t0);
+
+  // 2. The environment map.
+  t0 = Clock::now();
+  auto map = std::make_shared<EnvMap>();
+  if (options_.frames_are_maps) {
+    *map = make_envmap(options_.layout, options_.width, options_.height);
+    if (radiance.width != map->width || radiance.height != map->height)
+      throw InputError(fmt::format("replayed map is {}x{}, the pipeline expects {}", radiance.width, radiance.height,
+                                   describe_size(*map)));
+    map->rgb = std::move(radiance.rgb);
+    map->valid = std::move(radiance.valid);
+    map->units = radiance.units;
+  } else {
+    if (!remap_ || remap_->width != radiance.width || remap_->height != radiance.height) {
+      CameraModel model;
+      if (options_.camera) {
+        model = *options_.camera;
+      } else {
+        const FisheyeModel f = equidistant_fisheye(radiance.width, radiance.height, options_.fov_deg);
+        model.lensmodel = "LENSMODEL_KANNALA_BRANDT";
+        model.intrinsics = {f.fx, f.fy, f.cx, f.cy, 0, 0, 0, 0};
+        model.width = f.width;
+        model.height = f.height;
+      }
+      if (model.width != radiance.width || model.height != radiance.height)
+        throw InputError(fmt::format("camera model is for {}x{}, frames are {}x{}", model.width, model.height,
+                                     radiance.width, radiance.height));
+      remap_ = std::make_unique<RemapCache>();
+      remap_->width = radiance.width;
+      remap_->height = radiance.height;
+      const Mat3 world_from_camera = options_.world_from_probe * upward_camera_world_from_camera();
+      remap_->compiled = compile_remap(camera_remap(model, world_from_camera, options_.layout, options_.width,
+                                                    options_.height, options_.fov_deg / 2),
+                                       radiance.width, radiance.height);
+    }
+    apply_remap(radiance, remap_->compiled, &remap_->out);
+    *map = make_envmap(options_.layout, options_.width, options_.height);
+    map->rgb = remap_->out.rgb;
+    map->valid = remap_->out.valid;
+    map->units = radiance.units;
+  }
+  const double unwrap_ms = ms_since(t0);
+
+  // 3. Lights, with the temporal processing of the stream.
+  t0 = Clock::now();
+  const double timestamp = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  const LightList lights = sampler_->process(*map, published_++, timestamp);
+  const double sample_ms = ms_since(t0);
+  publish_(lights, map);
+  std::lock_guard<std::mutex> lock(mutex_);
+  stats_.fuse_ms = fuse_ms;
+  stats_.unwrap_ms = unwrap_ms;
+  stats_.sample_ms = sample_ms;
+  stats_.capture_to_publish_ms = ms_since(b.captured);
+}
+
+}  // namespace lp

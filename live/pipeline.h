@@ -1,0 +1,98 @@
+// The live chain as threads with bounded queues:
+//   capture (camera source; frames grouped into whole brackets)
+//     -> [queue of brackets; when the back end is slower than the camera the OLDEST
+//        waiting bracket is dropped, never part of one: brackets are never mixed]
+//     -> process (HDR fusion or a single frame -> unwrap through a cached remap table
+//        -> sampler + temporal filtering) -> publish(lights, map)
+// Every frame is accounted for: processed, dropped in a partial bracket, or dropped with
+// a whole bracket. A lost camera is reopened by the capture thread, and the stream goes on.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "calib/camera_model.h"
+#include "calib/photometric.h"
+#include "core/envmap.h"
+#include "core/light_list.h"
+#include "hdr/response.h"
+#include "probe/camera_source.h"
+#include "sampling/frame_pipeline.h"
+
+namespace lp {
+
+struct LivePipelineOptions {
+  // Bracketing: exposure times cycled by the camera; empty = single frames (a linear or
+  // log sensor, or a replayed sequence of radiance maps).
+  std::vector<double> exposure_cycle;
+  std::optional<CameraResponse> response;         // default: linear
+  std::optional<PhotometricCalibration> photometric;
+  // Probe geometry: a fisheye through `camera` (default: equidistant 180 deg over the
+  // image's short side) looking up, turned by `world_from_probe`.
+  std::optional<CameraModel> camera;
+  double fov_deg = 180;
+  Mat3 world_from_probe{};
+  // Input frames that are already environment maps (replayed .exr maps) skip unwrapping.
+  bool frames_are_maps = false;
+  Layout layout = Layout::Hemisphere;
+  int width = 360, height = 90;
+  FramePipelineOptions sampling;
+  size_t queue_brackets = 2;        // brackets waiting for the back end
+  double reconnect_delay_s = 0.5;
+};
+
+struct LiveStats {
+  uint64_t frames_in = 0, frames_dropped_partial = 0, brackets_dropped = 0, brackets_processed = 0;
+  uint64_t reconnects = 0;
+  double fps_out = 0;                      // lists published per second (recent)
+  double capture_to_publish_ms = 0;        // latency of the last list
+  double fuse_ms = 0, unwrap_ms = 0, sample_ms = 0;  // last frame's stages
+  std::string last_error;
+};
+
+class LivePipeline {
+ public:
+  using Publish = std::function<void(const LightList&, std::shared_ptr<const EnvMap>)>;
+  using OpenSource = std::function<std::unique_ptr<CameraSource>()>;
+  LivePipeline(OpenSource open, LivePipelineOptions options, Publish publish);
+  ~LivePipeline();
+  void start();
+  void stop();
+  // Blocks until the source is finished (replay without loop) and everything is processed.
+  void wait();
+  LiveStats stats() const;
+  // Prometheus text exposition of stats().
+  std::string metrics() const;
+
+ private:
+  struct Bracket;
+  void capture_loop();
+  void process_loop();
+  void process(Bracket& bracket);
+
+  OpenSource open_;
+  LivePipelineOptions options_;
+  Publish publish_;
+  std::unique_ptr<CameraSource> source_;
+  std::thread capture_, processor_;
+  std::atomic<bool> running_{false};
+  std::atomic<bool> capture_done_{false};
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::unique_ptr<Bracket>> queue_;
+  LiveStats stats_;
+  std::unique_ptr<FramePipeline> sampler_;
+  // Unwrapping cache: rebuilt when the image size changes.
+  struct RemapCache;
+  std::unique_ptr<RemapCache> remap_;
+  int64_t published_ = 0;
+};
+
+}  // namespace lp

@@ -1,0 +1,119 @@
+// The threaded live chain: whole brackets or nothing, every frame accounted for, a lost
+// camera reopened without the stream stopping, slow back ends dropping whole brackets.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <thread>
+
+#include "core/synthetic_scene.h"
+#include "live/pipeline.h"
+
+namespace lp {
+namespace {
+
+// A bracketing camera painting a small fisheye sky; it can lose frames and die once.
+class ScriptedSource : public CameraSource {
+ public:
+  ScriptedSource(int frames, int skip_every, int die_at, std::atomic<int>* opened, double frame_interval_s = 0.002)
+      : frames_(frames), skip_every_(skip_every), die_at_(die_at), opened_(opened), interval_(frame_interval_s) {
+    ++*opened_;
+  }
+  std::string describe() const override { return "scripted"; }
+  void set_exposure_cycle(const std::vector<double>& s) override { cycle_ = s; }
+  bool finished() const override { return produced_ >= frames_; }
+  std::optional<CameraFrame> next(double) override {
+    if (produced_ >= frames_) return std::nullopt;
+    // A camera delivers at its frame rate.
+    std::this_thread::sleep_for(std::chrono::duration<double>(interval_));
+    const int i = produced_++;
+    if (die_at_ >= 0 && i == die_at_ && *opened_ == 1) throw CameraLost("camera unplugged");
+    if (skip_every_ > 0 && i % skip_every_ == skip_every_ - 1) {
+      ++seq_;  // a frame lost on the wire: the next one breaks its bracket
+      return next(0);
+    }
+    CameraFrame f;
+    const size_t k = cycle_.empty() ? 0 : size_t(seq_ % int64_t(cycle_.size()));
+    f.exposure_s = cycle_.empty() ? 1.0 : cycle_[k];
+    f.bracket_index = cycle_.empty() ? -1 : int(k);
+    f.sequence = seq_++;
+    f.image.width = 64;
+    f.image.height = 64;
+    f.image.rgb.assign(64 * 64 * 3, float(std::min(1.0, 0.3 * f.exposure_s / 0.01)));
+    return f;
+  }
+
+ private:
+  int frames_, skip_every_, die_at_;
+  std::atomic<int>* opened_;
+  double interval_;
+  int produced_ = 0;
+  int64_t seq_ = 0;
+  std::vector<double> cycle_;
+};
+
+LivePipelineOptions options() {
+  LivePipelineOptions o;
+  o.exposure_cycle = {0.001, 0.004, 0.016};
+  o.layout = Layout::Hemisphere;
+  o.width = 90;
+  o.height = 23;
+  o.sampling.method = Method::Pharr;
+  o.sampling.count = 16;
+  o.sampling.sampler.upper_only = true;
+  return o;
+}
+
+TEST(LivePipeline, EveryFrameIsProcessedInAWholeBracketOrCountedAsDropped) {
+  std::atomic<int> opened{0};
+  std::atomic<int> published{0};
+  LivePipeline p([&] { return std::make_unique<ScriptedSource>(300, 10, -1, &opened); }, options(),
+                 [&](const LightList& l, std::shared_ptr<const EnvMap>) {
+                   EXPECT_EQ(l.lights.size(), 16u);
+                   ++published;
+                 });
+  p.start();
+  p.wait();
+  const LiveStats s = p.stats();
+  EXPECT_EQ(s.frames_in, 300u - 30u);  // every 10th frame lost on the wire
+  EXPECT_EQ(uint64_t(published.load()), s.brackets_processed);
+  // Frames in = 3 x (processed + dropped whole) + frames of broken brackets.
+  EXPECT_EQ(s.frames_in, 3 * (s.brackets_processed + s.brackets_dropped) + s.frames_dropped_partial);
+  EXPECT_GT(s.frames_dropped_partial, 0u);
+  EXPECT_GT(s.brackets_processed, 40u);
+}
+
+TEST(LivePipeline, ALostCameraIsReopenedAndTheStreamGoesOn) {
+  std::atomic<int> opened{0};
+  std::atomic<int> published{0};
+  auto o = options();
+  o.reconnect_delay_s = 0.01;
+  LivePipeline p([&] { return std::make_unique<ScriptedSource>(90, 0, 30, &opened); }, o,
+                 [&](const LightList&, std::shared_ptr<const EnvMap>) { ++published; });
+  p.start();
+  p.wait();
+  EXPECT_EQ(p.stats().reconnects, 1u);
+  EXPECT_EQ(opened.load(), 2);
+  EXPECT_GT(published.load(), 25);  // the reopened camera's 90 frames: 30 brackets
+}
+
+TEST(LivePipeline, ASlowBackEndDropsWholeBracketsNotFrames) {
+  std::atomic<int> opened{0};
+  std::atomic<int> published{0};
+  LivePipeline p([&] { return std::make_unique<ScriptedSource>(600, 0, -1, &opened, 0.0); }, options(),
+                 [&](const LightList&, std::shared_ptr<const EnvMap>) {
+                   std::this_thread::sleep_for(std::chrono::milliseconds(20));
+                   ++published;
+                 });
+  p.start();
+  p.wait();
+  const LiveStats s = p.stats();
+  EXPECT_GT(s.brackets_dropped, 0u);
+  EXPECT_EQ(s.frames_dropped_partial, 0u);
+  EXPECT_EQ(s.frames_in, 3 * (s.brackets_processed + s.brackets_dropped));
+  EXPECT_NE(p.metrics().find("lightprobe_brackets_dropped_total"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace lp

@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "hdr/response.h"
 #include "live/light_server.h"
+#include "live/merge_client.h"
 #include "live/pipeline.h"
 #include "probe/camera_source.h"
 
@@ -99,6 +100,48 @@ int run_stream(const StreamArgs& args, const Output& out) {
   emit_json(out, {{"port", port}, {"frames_in", s.frames_in}, {"brackets_processed", s.brackets_processed},
                   {"brackets_dropped", s.brackets_dropped}, {"frames_dropped_partial", s.frames_dropped_partial},
                   {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error}});
+  return 0;
+}
+
+int run_merge(const MergeArgs& args, const Output& out) {
+  MergeClientOptions mo;
+  mo.timeout_s = args.timeout;
+  mo.token = args.upstream_token;
+  mo.merge.n = args.n;
+  if (!args.weights.empty()) mo.merge.weights = parse_numbers(args.weights, "--weights", args.urls.size());
+  LightServerOptions so;
+  parse_listen(args.listen, &so.host, &so.port);
+  if (!args.token.empty()) so.token = args.token;
+  LightServer server(so);
+  const int port = server.start();
+  say(out, "lightprobe merge: {} cameras -> http://{}:{}/lights\n", args.urls.size(), so.host, port);
+  std::fflush(stdout);
+  g_stop = false;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  std::atomic<bool> stop{false};
+  uint64_t published = 0;
+  std::thread watchdog([&] {
+    const auto start = std::chrono::steady_clock::now();
+    while (!g_stop && !(args.duration > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >= args.duration))
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    stop = true;
+  });
+  MergeState last;
+  run_merge_client(args.urls, mo,
+                   [&](const LightList& l, const MergeState& st) {
+                     server.publish(l, nullptr);
+                     server.publish_metrics(fmt::format("# TYPE lightprobe_merge_inputs_used gauge\nlightprobe_merge_inputs_used {}\n"
+                                                        "# TYPE lightprobe_merge_stale gauge\nlightprobe_merge_stale {}\n",
+                                                        st.used.size(), st.stale ? 1 : 0));
+                     ++published;
+                     last = st;
+                   },
+                   stop);
+  watchdog.join();
+  server.stop();
+  say(out, "merge stopped: {} lists published; last used {} of {} inputs\n", published, last.used.size(), args.urls.size());
+  emit_json(out, {{"port", port}, {"published", published}, {"used", last.used}, {"dropped", last.dropped}});
   return 0;
 }
 

@@ -264,6 +264,18 @@ struct StreamArgs {
 };
 int run_stream(const StreamArgs& args, const Output& out);
 
+struct MergeArgs {
+  std::vector<std::string> urls;    // light servers: http://HOST:PORT
+  std::string listen = "127.0.0.1:8090";
+  std::string token;                // for our server
+  std::string upstream_token;       // for the cameras' servers
+  std::string weights;              // one per URL (e.g. from camera positions)
+  int n = 256;                      // q2tree light count of the merge
+  double timeout = 2.0;             // drop a camera silent this long
+  double duration = 0;
+};
+int run_merge(const MergeArgs& args, const Output& out);
+
 // Shared parsing helpers; throw lp::InputError naming the option.
 void parse_size(const std::string& text, const char* option, int* width, int* height);
 std::vector<int> parse_int_list(const std::string& text, const char* option);

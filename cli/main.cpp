@@ -310,6 +310,18 @@ int main(int argc, char** argv) {
   c_strm->add_option("--duration", strm.duration, "Stop after this many seconds");
   c_strm->add_flag("--json", out.json, "Print the final report as JSON");
 
+  MergeArgs mrg;
+  auto* c_mrg = app.add_subcommand("merge", "Merge the lights of several cameras' servers and serve the result");
+  c_mrg->add_option("URL", mrg.urls, "Light servers, http://HOST:PORT")->required();
+  c_mrg->add_option("--listen", mrg.listen, "HOST:PORT to serve the merged lights on");
+  c_mrg->add_option("--token", mrg.token, "Bearer token for our server");
+  c_mrg->add_option("--upstream-token", mrg.upstream_token, "Bearer token for the cameras' servers");
+  c_mrg->add_option("--weights", mrg.weights, "Comma-separated weights, one per URL");
+  c_mrg->add_option("--n", mrg.n, "Light count of a Q2-tree merge");
+  c_mrg->add_option("--timeout", mrg.timeout, "Drop a camera silent for this many seconds");
+  c_mrg->add_option("--duration", mrg.duration, "Stop after this many seconds");
+  c_mrg->add_flag("--json", out.json, "Print the final report as JSON");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -342,6 +354,7 @@ int main(int argc, char** argv) {
     if (*c_preg) return run_probe_register(preg, out);
     if (*c_evu) return run_eval_unwrap(evu, out);
     if (*c_strm) return run_stream(strm, out);
+    if (*c_mrg) return run_merge(mrg, out);
   } catch (const lp::InputError& e) {
     std::fprintf(stderr, "lightprobe: %s\n", e.what());
     return 2;

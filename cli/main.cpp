@@ -27,6 +27,10 @@ int main(int argc, char** argv) {
   CLI::App app{kDescription, "lightprobe"};
   app.set_version_flag("--version", std::string("lightprobe ") + LIGHTPROBE_VERSION);
   app.require_subcommand(1);
+  // A rig's setup in one file: TOML with a section per command, e.g. [stream] source = "aravis"
+  // (usable after the subcommand too: lightprobe stream --config rig.toml).
+  app.set_config("--config", "", "TOML file of options, one [section] per command (e.g. [stream])");
+  app.fallthrough();
   Output out;
   app.add_flag("--json", out.json, "Print the report as one JSON object on stdout")->configurable(false);
   app.add_flag("!--no-progress", out.progress, "Never draw progress bars");
@@ -288,7 +292,6 @@ int main(int argc, char** argv) {
   // stream
   StreamArgs strm;
   auto* c_strm = app.add_subcommand("stream", "Run the whole chain live and serve light lists over HTTP");
-  c_strm->set_config("--config", "", "TOML file with these options (a rig's setup in one file)");
   c_strm->add_option("--source", strm.source, "replay:DIR | video:FILE | aravis[:ID] | libcamera[:ID] | v4l2:N");
   c_strm->add_option("--listen", strm.listen, "HOST:PORT to serve on (127.0.0.1 by default; port 0 picks one)");
   c_strm->add_option("--token", strm.token, "Bearer token required on every route (needed beyond localhost)");

@@ -435,3 +435,20 @@ TEST(Cli, GeometricCalibrationRecoversASyntheticFisheyeAndRefusesBadSets) {
                                    " --board 9x6 --square 30 -o " + (out / "mixed.yaml").string()),
                         "memorial0061.png");
 }
+
+TEST(Cli, StreamComesUpOnTheFakeCameraFromAConfigFileAndReportsEveryFrame) {
+  const fs::path cfg = scratch() / "rig.toml";
+  std::ofstream(cfg) << "[stream]\nsource = \"aravis:Fake_1\"\nlisten = \"127.0.0.1:0\"\nduration = 2\n"
+                        "exposures = \"0.0002,0.002,0.02\"\nmethod = \"q2tree\"\nn = 64\n";
+  CliRun r = lightprobe("stream --json --config " + cfg.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["brackets_processed"].get<int>(), 3);
+  EXPECT_EQ(j["frames_in"].get<int>(), 3 * (j["brackets_processed"].get<int>() + j["brackets_dropped"].get<int>()) +
+                                           j["frames_dropped_partial"].get<int>());
+  EXPECT_EQ(j["last_error"], "");
+  // No camera: libcamera has none here.
+  CliRun none = lightprobe("stream --source libcamera --duration 1 --listen 127.0.0.1:0");
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.err.find("no libcamera camera"), std::string::npos) << none.err;
+}

@@ -34,4 +34,6 @@ $lp preview out/ball.exr -o out/ball.png
 $lp synth sequence --scenario moving-light --frames 24 -o out/sequence
 $lp sample out/sequence --method hemigon --n 300 -o out/sequence_lights.ndjson
 $lp eval temporal scene --frames 32 -o out/temporal
+# Live: the whole chain from Aravis' simulated bracketing camera to the light server, 3 s.
+$lp stream --source aravis:Fake_1 --exposures 0.0002,0.002,0.02 --listen 127.0.0.1:0 --duration 3
 echo "demo: results in out/ (scene.exr, lights_*.png, eval/sampling.svg, hdr/hdr.svg, ball.png, ball_lights.png, sequence_lights.ndjson, temporal/temporal.svg)"

@@ -404,7 +404,9 @@ TEST(LightServer, MetricsHoldThePipelinesAndTheServersOwn) {
   ASSERT_EQ(res->status, 200);
   EXPECT_NE(res->get_header_value("Content-Type").find("text/plain"), std::string::npos);
   EXPECT_EQ(metric(res->body, "lightprobe_pipeline_fps"), 29.5);
-  EXPECT_GE(metric(res->body, "lightprobe_server_requests_total"), 2);
+  // The /lights request is counted when its response has gone out, which under load can be
+  // after /metrics was rendered: at least one of the two is in.
+  EXPECT_GE(metric(res->body, "lightprobe_server_requests_total"), 1);
   EXPECT_GE(metric(res->body, "lightprobe_server_clients_connected"), 1);
   EXPECT_EQ(metric(res->body, "lightprobe_server_stream_clients"), 0);
   EXPECT_EQ(metric(res->body, "lightprobe_server_stream_lists_dropped_total"), 0);

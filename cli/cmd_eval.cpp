@@ -21,6 +21,21 @@
 
 namespace lp::cli {
 
+std::vector<Method> parse_method_list(const std::string& text) {
+  if (text == "all") return all_methods();
+  std::vector<Method> methods;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string name = text.substr(start, comma - start);
+    auto m = method_from_string(name);
+    if (!m) throw InputError(fmt::format("--methods: unknown method '{}' (pharr, hemigon, q2tree, mediancut, all)", name));
+    methods.push_back(*m);
+    start = comma + 1;
+  }
+  return methods;
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -52,21 +67,6 @@ double median_ms(F&& f, int fixed, double budget_s) {
       break;
   }
   return median(t);
-}
-
-std::vector<Method> parse_methods(const std::string& text) {
-  if (text == "all") return all_methods();
-  std::vector<Method> methods;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = std::min(text.find(',', start), text.size());
-    const std::string name = text.substr(start, comma - start);
-    auto m = method_from_string(name);
-    if (!m) throw InputError(fmt::format("--methods: unknown method '{}' (pharr, hemigon, q2tree, mediancut, all)", name));
-    methods.push_back(*m);
-    start = comma + 1;
-  }
-  return methods;
 }
 
 std::string map_name(const std::string& path) { return path == "scene" ? "scene" : fs::path(path).stem().string(); }
@@ -101,7 +101,7 @@ std::vector<ChartPanel> panels_for(const std::vector<Point>& points, const std::
 }  // namespace
 
 int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
-  const std::vector<Method> methods = parse_methods(args.methods);
+  const std::vector<Method> methods = parse_method_list(args.methods);
   const std::vector<int> counts = parse_int_list(args.counts, "--n");
   std::error_code ec;
   fs::create_directories(args.output_dir, ec);

@@ -53,21 +53,6 @@ std::vector<Scenario> parse_scenarios(const std::string& text) {
   return out;
 }
 
-std::vector<Method> parse_method_list(const std::string& text) {
-  if (text == "all") return all_methods();
-  std::vector<Method> out;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = std::min(text.find(',', start), text.size());
-    const std::string name = text.substr(start, comma - start);
-    auto m = method_from_string(name);
-    if (!m) throw InputError(fmt::format("--methods: unknown method '{}' (pharr, hemigon, q2tree, mediancut, all)", name));
-    out.push_back(*m);
-    start = comma + 1;
-  }
-  return out;
-}
-
 double mean(const std::vector<double>& v) {
   double s = 0;
   for (double x : v) s += x;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/vec3.h"
+#include "sampling/sampler.h"
 
 namespace lp::cli {
 
@@ -277,6 +278,8 @@ struct MergeArgs {
 int run_merge(const MergeArgs& args, const Output& out);
 
 // Shared parsing helpers; throw lp::InputError naming the option.
+// --methods: comma-separated method names or "all".
+std::vector<Method> parse_method_list(const std::string& text);
 void parse_size(const std::string& text, const char* option, int* width, int* height);
 std::vector<int> parse_int_list(const std::string& text, const char* option);
 // --rotation: "yaw,pitch,roll" in degrees or 9 numbers (row-major world_from_probe).

@@ -92,9 +92,6 @@ ExportFormat format_for(const std::string& format, const std::string& output, bo
   return sequence ? ExportFormat::Ndjson : ExportFormat::Json;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 }  // namespace
 

@@ -125,8 +125,9 @@ TEST(Cli, ConvertWorksOnEveryRealLatlongMapAndKeepsPower) {
       CliRun r = lightprobe("convert --json " + shared(m) + " " + out.string() + " " + target);
       ASSERT_EQ(r.code, 0) << m << " " << target << ": " << r.err;
       const auto j = nlohmann::json::parse(r.out);
-      if (target.find("hemisphere") == std::string::npos)  // the hemisphere keeps only the upper half
+      if (target.find("hemisphere") == std::string::npos) {  // the hemisphere keeps only the upper half
         EXPECT_NEAR(j["power_out"].get<double>() / j["power_in"].get<double>(), 1.0, 1e-4) << m << " " << target;
+      }
       CliRun info = lightprobe("info --json " + out.string());
       ASSERT_EQ(info.code, 0) << info.err;
       EXPECT_NEAR(nlohmann::json::parse(info.out)["power_luminance"].get<double>(), j["power_out"].get<double>(),
@@ -289,7 +290,7 @@ TEST(Cli, EvalTemporalWritesTheAtlasAndRejectsUnknownScenarios) {
   const auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["rows"].size(), 4u);
   for (const auto& row : j["rows"])
-    if (row["scenario"] == "abrupt-switch" && row["method"] == "q2tree") EXPECT_LE(row["lag_frames"].get<double>(), 1.0);
+    if (row["scenario"] == "abrupt-switch" && row["method"] == "q2tree") { EXPECT_LE(row["lag_frames"].get<double>(), 1.0); }
   EXPECT_TRUE(fs::exists(dir / "temporal.csv"));
   EXPECT_TRUE(fs::exists(dir / "temporal.svg"));
   expect_one_line_error(lightprobe("eval temporal scene --scenarios earthquake -o " + dir.string()), "earthquake");

@@ -137,7 +137,7 @@ TEST(Accuracy, FibonacciSpherePointsAreUnitAndBalanced) {
       EXPECT_NEAR(length(p), 1.0, 1e-12);
       mean = mean + p;
     }
-    if (count >= 256) EXPECT_LT(length((1.0 / count) * mean), 0.01);
+    if (count >= 256) { EXPECT_LT(length((1.0 / count) * mean), 0.01); }
   }
   EXPECT_TRUE(fibonacci_sphere(0).empty());
   // First and last points straddle the poles symmetrically.

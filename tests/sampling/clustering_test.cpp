@@ -90,7 +90,7 @@ TEST(Clustering, NeverReturnsMoreThanQLightsAndPreservesPowerPerChannel) {
           const size_t index = (l.id - 1000) / 3;
           ASSERT_LT(index, lights.size());
           EXPECT_EQ(lights[index].id, l.id);
-          if (&l != &out.front()) EXPECT_GT(index, last);
+          if (&l != &out.front()) { EXPECT_GT(index, last); }
           last = index;
           EXPECT_NEAR(length(l.direction), 1.0, 1e-14);
         }

@@ -243,7 +243,7 @@ TEST(TemporalFilter, GreatCircleMotionIsFilteredToUnitVectorsBetweenPastPosition
     // Between the oldest position in the filter's window and the current one.
     EXPECT_GE(along, speed * std::max(0, t - 8) - 1e-14);
     EXPECT_LE(along, speed * t + 1e-14);
-    if (t >= 8) EXPECT_NEAR(along, speed * (t - 4), 1e-12);
+    if (t >= 8) { EXPECT_NEAR(along, speed * (t - 4), 1e-12); }
   }
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -83,9 +84,21 @@ bool try_classic(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Po
       cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK);
 }
 
-bool try_sb(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Point2f>& pts) {
-  return cv::findChessboardCornersSB(gray, cv::Size(board.cols, board.rows), pts,
-                                     cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
+bool try_sb(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Point2f>& pts,
+            int flags = cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY) {
+  return cv::findChessboardCornersSB(gray, cv::Size(board.cols, board.rows), pts, flags);
+}
+
+// Scale (<= 1) for the fast SB attempt: long side ~long_side_px, but never so small that a
+// square of a board spanning half the image's short side (its longer grid dimension) falls
+// below min_square_px; at most 1.
+double sb_scale(int width, int height, const BoardSpec& board, const DetectOptions& options) {
+  if (options.sb_long_side_px <= 0) return 1.0;
+  const double long_side = std::max(width, height), short_side = std::min(width, height);
+  double scale = options.sb_long_side_px / long_side;
+  const double square_full = 0.5 * short_side / (std::max(board.cols, board.rows) + 1);
+  scale = std::max(scale, options.sb_min_square_px / square_full);
+  return std::min(1.0, scale);
 }
 
 bool valid_points(const std::vector<cv::Point2f>& pts, const BoardSpec& board) {
@@ -148,29 +161,59 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
   std::vector<cv::Point2f> pts;
   std::string tried;
 
-  auto attempt = [&](const cv::Mat& img, bool sb, const std::string& name) {
+  // The fast SB attempt runs on a downscaled copy; its corners are mapped back to full
+  // resolution and refined there, with the move limit scaled by 1 / scale (SB's error grows
+  // with the downscaling). Full-resolution SB remains the fallback.
+  const double scale = options.sb ? sb_scale(image.width, image.height, board, options) : 1.0;
+  enum class Kind { classic, sb_small, sb_full };
+  auto attempt = [&](const cv::Mat& img, Kind kind, const std::string& name) {
     if (!tried.empty()) tried += ", ";
-    tried += name;
     pts.clear();
-    const bool ok = sb ? try_sb(img, board, pts) : try_classic(img, board, pts);
+    bool ok = false;
+    double limit = options.max_refine_shift_px;
+    if (kind == Kind::classic) {
+      tried += name;
+      ok = try_classic(img, board, pts);
+      limit = 0;
+    } else if (kind == Kind::sb_full) {
+      tried += name;
+      ok = try_sb(img, board, pts);
+    } else {
+      cv::Mat small = img;
+      if (scale < 1) cv::resize(img, small, cv::Size(), scale, scale, cv::INTER_AREA);
+      const double sx = double(small.cols) / img.cols, sy = double(small.rows) / img.rows;
+      char label[32];
+      std::snprintf(label, sizeof label, "@%.2f", std::min(sx, sy));
+      tried += name + label;
+      // No CALIB_CB_ACCURACY (it upsamples internally, ~2x the time): cornerSubPix at full
+      // resolution gives the precision.
+      ok = try_sb(small, board, pts, cv::CALIB_CB_EXHAUSTIVE);
+      for (auto& p : pts) {  // pixel centres at integers: x_full + 0.5 = (x_small + 0.5) / s
+        p.x = static_cast<float>((p.x + 0.5) / sx - 0.5);
+        p.y = static_cast<float>((p.y + 0.5) / sy - 0.5);
+      }
+      if (limit > 0) limit /= std::min(sx, sy);
+    }
     if (!ok || !valid_points(pts, board)) return false;
     // Refine on the original grey image: CLAHE changes edge profiles.
-    if (!sb || options.refine_sb) {
-      const RefineStats stats =
-          refine(gray, pts, board.cols, board.rows, sb ? options.max_refine_shift_px : 0.0);
+    if (kind == Kind::classic || options.refine_sb) {
+      const RefineStats stats = refine(gray, pts, board.cols, board.rows, limit);
       result.refine_reverted = stats.reverted;
       result.refine_median_shift_px = stats.median_shift;
     }
     result.method = name;
     return true;
   };
+  auto cascade = [&](const cv::Mat& img, const std::string& suffix) {
+    return (options.sb && attempt(img, Kind::sb_small, "sb" + suffix)) ||
+           (options.sb && attempt(img, Kind::sb_full, "sb" + suffix)) ||
+           (options.classic && attempt(img, Kind::classic, "classic" + suffix));
+  };
 
-  bool found = (options.classic && attempt(gray, false, "classic")) ||
-               (options.sb && attempt(gray, true, "sb"));
+  bool found = cascade(gray, "");
   if (!found && options.clahe && (options.classic || options.sb)) {
     cv::createCLAHE(2.0, cv::Size(8, 8))->apply(gray, equalised);
-    found = (options.classic && attempt(equalised, false, "classic+clahe")) ||
-            (options.sb && attempt(equalised, true, "sb+clahe"));
+    found = cascade(equalised, "+clahe");
   }
   if (found) {
     result.found = true;

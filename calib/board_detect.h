@@ -33,7 +33,14 @@ struct DetectOptions {
   bool sb = true;             // stage 2
   bool clahe = true;          // stage 3 (only when 1 and 2 fail)
   bool refine_sb = true;      // cornerSubPix after SB
-  double max_refine_shift_px = 1.0;
+  double max_refine_shift_px = 1.0;  // at full resolution; scaled by 1 / scale after a
+                                     // downscaled SB attempt
+  // SB first runs on a copy downscaled so its long side is ~sb_long_side_px (<= 0: never),
+  // but not so far that a square of a board spanning half the short side would fall below
+  // sb_min_square_px; its corners are refined at full resolution. Full-resolution SB is the
+  // fallback when the downscaled attempt fails.
+  int sb_long_side_px = 640;
+  double sb_min_square_px = 8;
 };
 
 struct BoardDetection {

@@ -45,6 +45,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
   SourceOptions so;
   so.loop = args.loop;
   so.frame_rate = args.fps;
+  so.bracketing = args.bracketing;
   LivePipelineOptions lo;
   if (!args.exposures.empty()) lo.exposure_cycle = parse_numbers(args.exposures, "--exposures");
   for (double t : lo.exposure_cycle)

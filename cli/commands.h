@@ -249,6 +249,7 @@ struct StreamArgs {
   std::string listen = "127.0.0.1:8080";
   std::string token;                // required to listen beyond localhost
   std::string exposures;            // bracketing cycle, seconds
+  std::string bracketing = "auto";  // auto|sequencer|writes (Aravis: camera sequencer or feature writes)
   std::string response, photometric, camera;
   double fov = 180;
   std::string rotation;

@@ -296,6 +296,9 @@ int main(int argc, char** argv) {
   c_strm->add_option("--listen", strm.listen, "HOST:PORT to serve on (127.0.0.1 by default; port 0 picks one)");
   c_strm->add_option("--token", strm.token, "Bearer token required on every route (needed beyond localhost)");
   c_strm->add_option("--exposures", strm.exposures, "Bracketing: exposure times cycled by the camera, seconds");
+  c_strm->add_option("--bracketing", strm.bracketing,
+                     "auto: the camera's sequencer when it has one, else per-frame writes; sequencer; writes")
+      ->check(CLI::IsMember({"auto", "sequencer", "writes"}));
   c_strm->add_option("--response", strm.response, "Camera response (hdr response); default linear");
   c_strm->add_option("--photometric", strm.photometric, "Photometric calibration: absolute units");
   c_strm->add_option("--camera", strm.camera, "Calibrated camera model (default: equidistant fisheye)");

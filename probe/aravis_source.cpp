@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "probe/camera_source.h"
+#include "probe/genicam_sequencer.h"
 
 namespace lp {
 
@@ -187,6 +188,58 @@ RgbImage decode(const void* data, size_t size, int width, int height, ArvPixelFo
   return image;
 }
 
+// ---- GenICam features for the sequencer program --------------------------------------
+
+class AravisFeatures final : public GenicamFeatures {
+ public:
+  explicit AravisFeatures(ArvCamera* camera) : camera_(camera) {}
+  bool available(const std::string& f) override {
+    GError* error = nullptr;
+    const bool yes = arv_camera_is_feature_available(camera_, f.c_str(), &error);
+    g_clear_error(&error);
+    return yes;
+  }
+  bool set_enum(const std::string& f, const std::string& v, std::string* e) override {
+    GError* error = nullptr;
+    arv_camera_set_string(camera_, f.c_str(), v.c_str(), &error);
+    return done(error, e);
+  }
+  bool set_integer(const std::string& f, int64_t v, std::string* e) override {
+    GError* error = nullptr;
+    arv_camera_set_integer(camera_, f.c_str(), v, &error);
+    return done(error, e);
+  }
+  bool set_float(const std::string& f, double v, std::string* e) override {
+    GError* error = nullptr;
+    arv_camera_set_float(camera_, f.c_str(), v, &error);
+    return done(error, e);
+  }
+  bool execute(const std::string& c, std::string* e) override {
+    GError* error = nullptr;
+    arv_camera_execute_command(camera_, c.c_str(), &error);
+    return done(error, e);
+  }
+  std::optional<int64_t> integer_max(const std::string& f) override {
+    GError* error = nullptr;
+    gint64 lo = 0, hi = 0;
+    arv_camera_get_integer_bounds(camera_, f.c_str(), &lo, &hi, &error);
+    if (error) {
+      g_clear_error(&error);
+      return std::nullopt;
+    }
+    return int64_t(hi);
+  }
+
+ private:
+  static bool done(GError*& error, std::string* e) {
+    if (!error) return true;
+    const std::string m = take_error(error);
+    if (e) *e = one_line(m);
+    return false;
+  }
+  ArvCamera* camera_;
+};
+
 // ---- the source ---------------------------------------------------------------------
 
 class AravisSource final : public CameraSource {
@@ -231,7 +284,14 @@ class AravisSource final : public CameraSource {
         continue;
       }
       int bracket = -1;
-      if (!cycle_.empty()) {
+      if (sequencer_) {
+        bracket = sequencer_index(buffer, tagged_us, exposure_us);
+        if (bracket < 0) {  // a frame the sequencer did not take (before it started)
+          arv_stream_push_buffer(stream_.get(), buffer);
+          if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
+          continue;
+        }
+      } else if (!cycle_.empty()) {
         if (std::abs(exposure_us - target_us_) > 0.5 + 1e-3 * target_us_) {
           // Taken before the last exposure write reached the sensor: not part of the cycle.
           arv_stream_push_buffer(stream_.get(), buffer);
@@ -260,7 +320,7 @@ class AravisSource final : public CameraSource {
       frame.sequence = int64_t(arv_buffer_get_frame_id(buffer));
       frame.bracket_index = bracket;
       arv_stream_push_buffer(stream_.get(), buffer);
-      if (!cycle_.empty()) {
+      if (!cycle_.empty() && !sequencer_) {
         cycle_index_ = (cycle_index_ + 1) % cycle_.size();
         write_exposure(cycle_[cycle_index_]);
       }
@@ -273,6 +333,29 @@ class AravisSource final : public CameraSource {
       if (!(s > 0) || !std::isfinite(s)) throw InputError(spec_ + ": exposure time " + std::to_string(s) + " s is not positive");
     cycle_ = seconds;
     cycle_index_ = 0;
+    sequencer_ = false;
+    if (cycle_.size() >= 2 && !fake_ && options_.bracketing != "writes") {
+      // The camera's own sequencer when it has one: no frame lost to a write's round
+      // trip. Sets can only be programmed with acquisition stopped.
+      AravisFeatures features(camera_.get());
+      const bool acquiring = stream_ != nullptr;
+      if (acquiring) arv_camera_stop_acquisition(camera_.get(), nullptr);
+      const SequencerSetup setup = start_exposure_sequencer(features, cycle_);
+      if (acquiring) {
+        GError* error = nullptr;
+        arv_camera_start_acquisition(camera_.get(), &error);
+        if (error) fail("cannot restart acquisition after programming the sequencer", error);
+      }
+      if (setup.ok) {
+        sequencer_ = true;
+        sequence_start_ = -1;
+        sequencer_exposure_us_ = setup.exposure_us;
+        return;
+      }
+      if (options_.bracketing == "sequencer") throw InputError(spec_ + ": " + setup.reason);
+    } else if (options_.bracketing == "sequencer") {
+      throw InputError(spec_ + (fake_ ? ": the fake camera has no sequencer" : ": a sequencer needs at least 2 exposures"));
+    }
     if (!cycle_.empty()) write_exposure(cycle_[0]);
   }
 
@@ -412,7 +495,11 @@ class AravisSource final : public CameraSource {
     // Per-frame exposure from chunk data, when the camera has it (the fake paints its own).
     chunks_ = false;
     if (!fake_ && arv_camera_are_chunks_available(camera, nullptr)) {
-      arv_camera_set_chunks(camera, "ExposureTime", &error);
+      arv_camera_set_chunks(camera, "ExposureTime,SequencerSetActive", &error);
+      if (error) {  // a camera without the sequencer chunk: exposure alone
+        g_clear_error(&error);
+        arv_camera_set_chunks(camera, "ExposureTime", &error);
+      }
       if (!error) {
         chunk_parser_.reset(arv_camera_create_chunk_parser(camera));
         chunks_ = chunk_parser_ != nullptr;
@@ -466,7 +553,40 @@ class AravisSource final : public CameraSource {
     return std::nullopt;
   }
 
+  // Which set of the sequencer took this frame: from chunk data when the camera sends
+  // it (the active set, else the exposure), otherwise by counting frame ids from the first
+  // frame after the sequencer started (block ids count every exposure, lost ones too).
+  // Sets exposure_us to the programmed exposure of that set; -1 when unknown.
+  int sequencer_index(ArvBuffer* buffer, std::optional<double> tagged_us, double& exposure_us) {
+    const int n = int(sequencer_exposure_us_.size());
+    int index = -1;
+    if (chunks_ && arv_buffer_has_chunks(buffer)) {
+      GError* error = nullptr;
+      const gint64 set = arv_chunk_parser_get_integer_value(chunk_parser_.get(), buffer, "ChunkSequencerSetActive", &error);
+      if (!error && set >= 0 && set < n) index = int(set);
+      g_clear_error(&error);
+    }
+    if (index < 0 && tagged_us) {
+      for (int i = 0; i < n; ++i)
+        if (std::abs(*tagged_us - sequencer_exposure_us_[size_t(i)]) <= 0.5 + 1e-3 * sequencer_exposure_us_[size_t(i)])
+          index = i;
+      if (index < 0) return -1;
+    }
+    if (index < 0) {
+      const int64_t id = int64_t(arv_buffer_get_frame_id(buffer));
+      if (sequence_start_ < 0) sequence_start_ = id;
+      index = int((id - sequence_start_) % n);
+    }
+    exposure_us = tagged_us ? *tagged_us : sequencer_exposure_us_[size_t(index)];
+    return index;
+  }
+
   void close() {
+    if (camera_ && sequencer_ && !lost_) {
+      AravisFeatures features(camera_.get());
+      if (stream_) arv_camera_stop_acquisition(camera_.get(), nullptr);
+      stop_exposure_sequencer(features);
+    }
     if (camera_) {
       if (stream_) arv_camera_stop_acquisition(camera_.get(), nullptr);
       if (lost_handler_) g_signal_handler_disconnect(arv_camera_get_device(camera_.get()), lost_handler_);
@@ -498,6 +618,9 @@ class AravisSource final : public CameraSource {
   int settle_left_ = 0;
   std::vector<double> cycle_;
   size_t cycle_index_ = 0;
+  bool sequencer_ = false;                      // the camera cycles exposures itself
+  std::vector<double> sequencer_exposure_us_;   // set -> programmed exposure
+  int64_t sequence_start_ = -1;                 // frame id of set 0 without chunk data
   int failed_in_a_row_ = 0;
   size_t buffer_size_ = 0;
 };

@@ -115,6 +115,10 @@ struct SourceOptions {
   // Aravis: frames to drop after an exposure write when the camera cannot tell which
   // exposure a frame was taken at (no chunk data); 0 trusts the next frame.
   int exposure_settle_frames = 1;
+  // Aravis bracketing: "auto" uses the camera's SFNC sequencer when it has one (the camera
+  // switches exposure itself, no frame lost per switch) and per-frame exposure writes
+  // otherwise; "sequencer" requires it; "writes" never uses it.
+  std::string bracketing = "auto";
   // Aravis "aravis" without id: also search GigE Vision / USB3 Vision (discovery broadcasts
   // on every interface). False: only the in-process Fake interface.
   bool aravis_network = true;

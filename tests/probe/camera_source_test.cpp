@@ -234,6 +234,21 @@ TEST(CameraSourceAravis, UnknownCameraAndPixelFormat) {
   EXPECT_FALSE(lp::set_fake_scene(*replay, {}));
 }
 
+TEST(CameraSourceAravis, RequiringASequencerOnACameraWithoutOneIsAClearError) {
+  SourceOptions options;
+  options.exposure_cycle = {0.001, 0.004};
+  options.bracketing = "sequencer";
+  const std::string message = message_of([&] { lp::open_source("aravis:Fake_1", options); });
+  EXPECT_NE(message.find("aravis:Fake_1"), std::string::npos) << message;
+  EXPECT_NE(message.find("no sequencer"), std::string::npos) << message;
+  options.bracketing = "auto";  // falls back to per-frame writes
+  auto source = lp::open_source("aravis:Fake_1", options);
+  std::optional<CameraFrame> frame;
+  for (int i = 0; i < 50 && !frame; ++i) frame = source->next(0.5);
+  ASSERT_TRUE(frame);
+  EXPECT_GE(frame->bracket_index, 0);
+}
+
 TEST(CameraSourceLibcamera, NoCameraIsAClearInputError) {
   EXPECT_EQ(message_of([] { lp::open_source("libcamera"); }), "libcamera: no libcamera camera found");
   EXPECT_NE(message_of([] { lp::open_source("libcamera:/base/soc/i2c0/imx477"); }).find("no libcamera camera"), std::string::npos);

@@ -38,6 +38,12 @@ start_simulator() {
 }
 
 start_simulator
+# The simulator has no SFNC sequencer: requiring one is a clear usage error (exit 2).
+"$LP" stream --source aravis:Aravis-Fake-GV01 --exposures 0.001,0.004 --bracketing sequencer \
+  --listen 127.0.0.1:0 --duration 5 >"$WORK/seq.out" 2>"$WORK/seq.err"
+code=$?
+[ "$code" -eq 2 ] && grep -q "no sequencer" "$WORK/seq.err" ||
+  fail "--bracketing sequencer on a camera without one: exit $code, said: $(tail -1 "$WORK/seq.err")"
 start_stream --source aravis:Aravis-Fake-GV01 --exposures 0.0002,0.002,0.02 --duration 40
 wait_for_lights 15
 

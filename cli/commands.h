@@ -278,6 +278,22 @@ struct MergeArgs {
 };
 int run_merge(const MergeArgs& args, const Output& out);
 
+struct EvalEstimatorsArgs {
+  std::vector<std::string> inputs;  // base maps ("scene": the procedural scene) or sequence directories
+  std::string estimators = "mis,bis,smc";
+  std::string budgets = "4,16,64,256";  // samples with a visibility test per estimate
+  std::string scenarios = "moving-light,abrupt-switch,flicker";  // applied to base maps
+  int frames = 12;                  // per scenario (a directory: its first `frames` maps)
+  int repeats = 4;                  // independent runs per estimate (variance across them)
+  std::string size = "256x128";     // every map is resampled to this latlong size first
+  int bis_m = 8;                    // BIS proposals per resampled sample (M = bis_m N)
+  bool sweep = true;                // the SMC parameter sweep (budget 16)
+  bool quick = false;               // demo: 4 frames, 2 repeats, budgets 4,16,64, no sweep
+  uint64_t seed = 1;
+  std::string output_dir;
+};
+int run_eval_estimators(const EvalEstimatorsArgs& args, const Output& out);
+
 // Shared parsing helpers; throw lp::InputError naming the option.
 // --methods: comma-separated method names or "all".
 std::vector<Method> parse_method_list(const std::string& text);

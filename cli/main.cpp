@@ -137,6 +137,22 @@ int main(int argc, char** argv) {
   c_evt->add_option("-o,--output", evt.output_dir, "Directory for temporal.csv and temporal.svg")->required();
   c_evt->add_flag("--json", out.json, "Print the report as JSON");
 
+  EvalEstimatorsArgs eve;
+  auto* c_eve = c_eval->add_subcommand("estimators", "MIS, BIS and SMC reflected-radiance estimators: error, temporal noise, time");
+  c_eve->add_option("SEQ|MAP", eve.inputs, "Sequence directories, base maps for the scenarios, or 'scene'")->required();
+  c_eve->add_option("--estimators", eve.estimators, "Comma-separated: mis, bis, smc");
+  c_eve->add_option("--budgets", eve.budgets, "Comma-separated samples per estimate (visibility tests)");
+  c_eve->add_option("--scenarios", eve.scenarios, "Scenarios built on base maps (comma-separated or 'all')");
+  c_eve->add_option("--frames", eve.frames, "Frames per scenario (a directory: its first frames)");
+  c_eve->add_option("--repeats", eve.repeats, "Independent runs per estimate (variance across them)");
+  c_eve->add_option("--size", eve.size, "Latlong size every map is resampled to (WxH)");
+  c_eve->add_option("--bis-m", eve.bis_m, "BIS/SMC-initialisation proposals per sample (M = m N)");
+  c_eve->add_option("--seed", eve.seed, "Random seed");
+  c_eve->add_flag("--no-sweep", [&](int64_t) { eve.sweep = false; }, "Skip the SMC parameter sweep");
+  c_eve->add_flag("--quick", eve.quick, "Demo: 4 frames, 2 runs, budgets 4,16,64, no sweep");
+  c_eve->add_option("-o,--output", eve.output_dir, "Directory for estimators.csv/.svg and smc_sweep.csv/.svg")->required();
+  c_eve->add_flag("--json", out.json, "Print the report as JSON");
+
   // hdr
   auto* c_hdr = app.add_subcommand("hdr", "Exposure brackets and log sensors -> radiance");
   c_hdr->require_subcommand(1);
@@ -346,6 +362,7 @@ int main(int argc, char** argv) {
     if (*c_evs) return run_eval_sampling(evs, out);
     if (*c_seq) return run_synth_sequence(seq, out);
     if (*c_evt) return run_eval_temporal(evt, out);
+    if (*c_eve) return run_eval_estimators(eve, out);
     if (*c_hresp) return run_hdr_response(hresp, out);
     if (*c_hfuse) return run_hdr_fuse(hfuse, out);
     if (*c_cphot) return run_calib_photometric(cphot, out);

@@ -1,0 +1,131 @@
+// `lightprobe eval estimators` as scripts use it: exit codes, one-line errors naming the
+// option or file, the --json report's fields, the CSV and charts written, a recorded
+// sequence directory and a real map accepted.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "core/envmap.h"
+#include "core/image_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+fs::path scratch() {
+  static const fs::path dir = [] {
+    fs::path d = fs::path(::testing::TempDir()) / ("lightprobe_estimators_cli_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+CliRun lightprobe(const std::string& args) {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
+  const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+int line_count(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+void expect_one_line_error(const CliRun& r, const std::string& needle) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+}
+
+}  // namespace
+
+TEST(EstimatorsCli, QuickRunWritesCsvChartAndJson) {
+  const fs::path dir = scratch() / "quick";
+  const CliRun r = lightprobe("eval estimators scene --quick --size 64x32 --scenarios abrupt-switch --json -o " + dir.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(fs::exists(j["csv"].get<std::string>()));
+  EXPECT_TRUE(fs::exists(j["chart"].get<std::string>()));
+  EXPECT_EQ(j["sequences"].size(), 1u);
+  EXPECT_EQ(j["shading_points"], 16);
+  // 3 estimators x 3 budgets x (4 lobes + all)
+  ASSERT_EQ(j["rows"].size(), 45u);
+  for (const auto& row : j["rows"]) {
+    for (const char* key : {"estimator", "lobe", "budget", "rel_rmse", "rel_variance", "temporal_noise", "us_per_estimate"})
+      EXPECT_TRUE(row.contains(key)) << key;
+    EXPECT_GE(row["rel_rmse"].get<double>(), 0.0);
+    EXPECT_GT(row["us_per_estimate"].get<double>(), 0.0);
+  }
+  EXPECT_FALSE(j.contains("sweep"));  // --quick skips it
+  const std::string csv = slurp(j["csv"].get<std::string>());
+  EXPECT_EQ(csv.rfind("estimator,variant,lobe,budget,rel_rmse", 0), 0u);
+  EXPECT_EQ(line_count(csv), 46);
+  EXPECT_NE(slurp(j["chart"].get<std::string>()).find("<svg"), std::string::npos);
+}
+
+TEST(EstimatorsCli, SweepAndASequenceDirectory) {
+  const fs::path seq = scratch() / "seq";
+  ASSERT_EQ(lightprobe("synth sequence --scenario flicker --frames 3 --size 64x32 -o " + seq.string()).code, 0);
+  const fs::path dir = scratch() / "sweep";
+  const CliRun r = lightprobe("eval estimators " + seq.string() +
+                              " --size 32x16 --budgets 4 --repeats 2 --estimators mis,smc --json -o " + dir.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["sequences"][0]["frames"], 3);
+  EXPECT_EQ(j["rows"].size(), 2u * 5u);
+  ASSERT_TRUE(j.contains("sweep"));
+  EXPECT_GE(j["sweep"].size(), 5u * 10u);
+  EXPECT_TRUE(fs::exists(dir / "smc_sweep.csv"));
+  EXPECT_TRUE(fs::exists(dir / "smc_sweep.svg"));
+}
+
+TEST(EstimatorsCli, RealMapIsAccepted) {
+  const std::string map = std::string(LIGHTPROBE_SHARED_DATA) + "/probes-probulator-latlong256/grace.hdr";
+  const CliRun r = lightprobe("eval estimators " + map + " --quick --size 64x32 --scenarios moving-light --estimators bis -o " +
+                              (scratch() / "real").string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("grace/moving-light"), std::string::npos) << r.out;
+}
+
+TEST(EstimatorsCli, BadInputIsOneLineAndExitTwo) {
+  const std::string o = " -o " + (scratch() / "bad").string();
+  expect_one_line_error(lightprobe("eval estimators scene --budgets 0" + o), "--budgets");
+  expect_one_line_error(lightprobe("eval estimators scene --estimators mis,foo" + o), "foo");
+  expect_one_line_error(lightprobe("eval estimators scene --repeats 1" + o), "--repeats");
+  expect_one_line_error(lightprobe("eval estimators scene --size 100x100" + o), "--size");
+  expect_one_line_error(lightprobe("eval estimators /nonexistent/map.exr" + o), "/nonexistent/map.exr");
+  // A black map: nothing to sample, and the error names the file.
+  const fs::path black = scratch() / "black.exr";
+  lp::write_envmap(black.string(), lp::make_latlong(32, 16));
+  const CliRun r = lightprobe("eval estimators " + black.string() + " --size 32x16" + o);
+  expect_one_line_error(r, "black.exr");
+  EXPECT_NE(r.err.find("black"), std::string::npos);
+  EXPECT_EQ(lightprobe("eval estimators --help").code, 0);
+}

@@ -293,6 +293,35 @@ struct EvalEstimatorsArgs {
   std::string output_dir;
 };
 int run_eval_estimators(const EvalEstimatorsArgs& args, const Output& out);
+// Many-light shading (Havran 2005 section 4): culling regions, glossy sets, clustering.
+struct ShadingTableArgs {
+  std::string method = "pharr";     // a progressive sampler: pharr|hemigon
+  int n = 256;                      // |H| (the lights of the diffuse tables)
+  int low_per_high = 8;             // |L| / |H|
+  int regions = 256;                // S_H culling regions
+  int cone_regions = 512;           // S_L regions
+  int lut = 64;                     // cube-map LUT texels per face edge
+  double cone_deg = 8;              // cone half-angle gamma/2 around the reflected direction
+  int k = 256;                      // at most k L lights per cone
+  int q = 0;                        // clustering to at most Q lights (0: |H| / 4)
+};
+
+struct EvalShadingArgs {
+  std::vector<std::string> maps;    // "scene" renders the procedural scene
+  std::string counts = "64,256,1024,4096";
+  ShadingTableArgs tables;          // n is taken from counts
+  int points = 0;                   // shading points per timing run (0: ~8M light evaluations)
+  std::string output_dir;
+};
+int run_eval_shading(const EvalShadingArgs& args, const Output& out);
+
+struct TablesArgs {
+  std::string input;                // a map
+  std::string layout;               // input layout override
+  ShadingTableArgs tables;
+  std::string output;               // .json, or the binary texture (.lpst / anything else)
+};
+int run_tables(const TablesArgs& args, const Output& out);
 
 // Shared parsing helpers; throw lp::InputError naming the option.
 // --methods: comma-separated method names or "all".

@@ -153,6 +153,35 @@ int main(int argc, char** argv) {
   c_eve->add_option("-o,--output", eve.output_dir, "Directory for estimators.csv/.svg and smc_sweep.csv/.svg")->required();
   c_eve->add_flag("--json", out.json, "Print the report as JSON");
 
+  EvalShadingArgs evsh;
+  auto* c_evsh = c_eval->add_subcommand(
+      "shading", "Speed-up and error of culled, glossy two-strata and clustered many-light shading");
+  auto add_table_options = [](CLI::App* c, ShadingTableArgs& t) {
+    c->add_option("--method", t.method, "Progressive sampler for the lights: pharr|hemigon");
+    c->add_option("--low-per-high", t.low_per_high, "|L| / |H|: dense lights per glossy-cone light");
+    c->add_option("--regions", t.regions, "Culling regions (S_H)");
+    c->add_option("--cone-regions", t.cone_regions, "Glossy-cone regions (S_L)");
+    c->add_option("--lut", t.lut, "Cube-map LUT texels per face edge");
+    c->add_option("--cone", t.cone_deg, "Cone half-angle around the reflected direction, degrees");
+    c->add_option("--k", t.k, "At most this many L lights per cone (power rescaled)");
+    c->add_option("--q", t.q, "Cluster to at most Q lights (0: |H| / 4)");
+  };
+  c_evsh->add_option("MAP", evsh.maps, "Maps to evaluate ('scene' for the procedural scene)")->required();
+  c_evsh->add_option("--n", evsh.counts, "Comma-separated light counts |H|");
+  c_evsh->add_option("--points", evsh.points, "Shading points per timing run (0: automatic)");
+  add_table_options(c_evsh, evsh.tables);
+  c_evsh->add_option("-o,--output", evsh.output_dir, "Directory for shading.csv and shading.svg")->required();
+  c_evsh->add_flag("--json", out.json, "Print the report as JSON");
+
+  TablesArgs tabl;
+  auto* c_tabl = app.add_subcommand("tables", "Shading tables of a map for a renderer (angular regions, glossy sets, clusters)");
+  c_tabl->add_option("MAP", tabl.input, "Environment map")->required();
+  c_tabl->add_option("--layout", tabl.layout, "Read the map as this layout");
+  c_tabl->add_option("--n", tabl.tables.n, "Lights |H| of the diffuse tables");
+  add_table_options(c_tabl, tabl.tables);
+  c_tabl->add_option("-o,--output", tabl.output, "Output: .json, or the RGBA32F texture file (any other name)")->required();
+  c_tabl->add_flag("--json", out.json, "Print the report as JSON");
+
   // hdr
   auto* c_hdr = app.add_subcommand("hdr", "Exposure brackets and log sensors -> radiance");
   c_hdr->require_subcommand(1);
@@ -363,6 +392,8 @@ int main(int argc, char** argv) {
     if (*c_seq) return run_synth_sequence(seq, out);
     if (*c_evt) return run_eval_temporal(evt, out);
     if (*c_eve) return run_eval_estimators(eve, out);
+    if (*c_evsh) return run_eval_shading(evsh, out);
+    if (*c_tabl) return run_tables(tabl, out);
     if (*c_hresp) return run_hdr_response(hresp, out);
     if (*c_hfuse) return run_hdr_fuse(hfuse, out);
     if (*c_cphot) return run_calib_photometric(cphot, out);

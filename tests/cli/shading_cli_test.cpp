@@ -1,0 +1,128 @@
+// `lightprobe eval shading` and `lightprobe tables` as a user and a script see them:
+// exit codes, one-line errors naming the option or file, --json fields, outputs exist.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+fs::path scratch() {
+  static const fs::path dir = [] {
+    fs::path d = fs::path(::testing::TempDir()) / ("lightprobe_shading_cli_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+CliRun lightprobe(const std::string& args) {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
+  const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+std::string shared(const std::string& rel) { return std::string(LIGHTPROBE_SHARED_DATA) + "/" + rel; }
+
+int line_count(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+void expect_one_line_error(const CliRun& r, const std::string& needle) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+}
+
+}  // namespace
+
+TEST(ShadingCli, EvalOnARealMapReportsEveryVariantAsJson) {
+  const fs::path dir = scratch() / "eval";
+  const CliRun r = lightprobe("eval shading " + shared("probes-probulator-latlong256/grace.hdr") +
+                              " --n 64,256 --points 2000 --json -o " + dir.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(fs::exists(dir / "shading.csv"));
+  EXPECT_TRUE(fs::exists(dir / "shading.svg"));
+  EXPECT_EQ(j["regions"], 256);
+  ASSERT_EQ(j["points"].size(), 8u);  // 2 counts x 4 variants
+  for (const auto& p : j["points"]) {
+    EXPECT_GT(p["ns_per_point"].get<double>(), 0);
+    EXPECT_GT(p["diffuse"].get<double>(), 0);
+    if (p["variant"] == "all") EXPECT_DOUBLE_EQ(p["speedup"].get<double>(), 1.0);
+  }
+  // Culling costs no accuracy: the culled rows carry the all-lights errors.
+  const auto& pts = j["points"];
+  EXPECT_EQ(pts[0]["variant"], "all");
+  EXPECT_EQ(pts[1]["variant"], "culled");
+  EXPECT_NEAR(pts[1]["diffuse"].get<double>(), pts[0]["diffuse"].get<double>(), 1e-6);
+  EXPECT_GT(pts[1]["visit_ratio"].get<double>(), 1.3);  // culling visits fewer lights
+  EXPECT_LT(pts[1]["visit_ratio"].get<double>(), 2.0);
+  const std::string csv = slurp(dir / "shading.csv");
+  EXPECT_EQ(line_count(csv), 9);
+  EXPECT_EQ(csv.rfind("map,n,variant,", 0), 0u);
+}
+
+TEST(ShadingCli, TablesExportJsonAndTexture) {
+  const fs::path json = scratch() / "tables.json", bin = scratch() / "tables.lpst";
+  CliRun r = lightprobe("tables scene --n 128 --regions 64 --json -o " + json.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["format"], "json");
+  EXPECT_EQ(j["high"], 128);
+  EXPECT_EQ(j["low"], 1024);
+  const auto doc = nlohmann::json::parse(slurp(json));
+  EXPECT_EQ(doc["format"], "lightprobe.shading_tables/1");
+  EXPECT_EQ(doc["tables"][0]["regions"].size(), 64u);
+
+  r = lightprobe("tables scene --n 128 --json -o " + bin.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["format"], "texture");
+  const std::string bytes = slurp(bin);
+  ASSERT_GT(bytes.size(), 16u);
+  EXPECT_EQ(bytes.substr(0, 8), "LPSHADE1");
+  EXPECT_EQ(bytes.size(), j["bytes"].get<size_t>());
+  EXPECT_EQ((bytes.size() - 16) % (1024 * 16), 0u);  // whole rows of 1024 RGBA32F texels
+}
+
+TEST(ShadingCli, BadInputIsAOneLineErrorNamingTheOptionOrFile) {
+  const std::string o = " -o " + (scratch() / "bad").string();
+  expect_one_line_error(lightprobe("eval shading scene --regions 0" + o), "--regions");
+  expect_one_line_error(lightprobe("eval shading scene --q -2" + o), "--q");
+  expect_one_line_error(lightprobe("eval shading scene --n 0" + o), "--n");
+  expect_one_line_error(lightprobe("eval shading scene --method q2tree" + o), "--method");
+  expect_one_line_error(lightprobe("eval shading scene --cone 120" + o), "--cone");
+  expect_one_line_error(lightprobe("eval shading /nonexistent/map.exr" + o), "/nonexistent/map.exr");
+  expect_one_line_error(lightprobe("tables scene --k 0 -o " + (scratch() / "t.bin").string()), "--k");
+  expect_one_line_error(lightprobe("tables /nonexistent/m.hdr -o " + (scratch() / "t.bin").string()), "/nonexistent/m.hdr");
+  EXPECT_FALSE(fs::exists(scratch() / "t.bin"));
+}

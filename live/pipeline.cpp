@@ -1,5 +1,7 @@
 #include "live/pipeline.h"
 
+#include "live/bracket_unwrap.h"
+
 #include <fmt/format.h>
 
 #include <chrono>
@@ -29,6 +31,7 @@ struct LivePipeline::Bracket {
 struct LivePipeline::RemapCache {
   int width = 0, height = 0;
   CompiledRemap compiled;
+  BracketUnwrapPlan plan;  // over `compiled`
   RgbImage out;
 };
 
@@ -155,6 +158,7 @@ void LivePipeline::capture_loop() {
       current->captured = Clock::now();
     }
     current->frames.push_back(std::move(*frame));
+    current->captured = Clock::now();  // latency counts from the bracket's last frame
     if (current->frames.size() == cycle) {
       std::lock_guard<std::mutex> lock(mutex_);
       if (queue_.size() >= options_.queue_brackets) {
@@ -203,67 +207,82 @@ void LivePipeline::process_loop() {
   }
 }
 
+void LivePipeline::ensure_remap(int width, int height) {
+  if (remap_ && remap_->width == width && remap_->height == height) return;
+  CameraModel model;
+  if (options_.camera) {
+    model = *options_.camera;
+  } else {
+    const FisheyeModel f = equidistant_fisheye(width, height, options_.fov_deg);
+    model.lensmodel = "LENSMODEL_KANNALA_BRANDT";
+    model.intrinsics = {f.fx, f.fy, f.cx, f.cy, 0, 0, 0, 0};
+    model.width = f.width;
+    model.height = f.height;
+  }
+  if (model.width != width || model.height != height)
+    throw InputError(fmt::format("camera model is for {}x{}, frames are {}x{}", model.width, model.height, width, height));
+  remap_ = std::make_unique<RemapCache>();
+  remap_->width = width;
+  remap_->height = height;
+  const Mat3 world_from_camera = options_.world_from_probe * upward_camera_world_from_camera();
+  remap_->compiled = compile_remap(
+      camera_remap(model, world_from_camera, options_.layout, options_.width, options_.height, options_.fov_deg / 2),
+      width, height);
+  remap_->plan = plan_bracket_unwrap(remap_->compiled);
+}
+
 void LivePipeline::process(Bracket& b) {
-  // 1. Radiance: fuse the bracket (or take the single frame).
   auto t0 = Clock::now();
-  RgbImage radiance;
-  if (b.frames.size() > 1) {
+  double fuse_ms = 0, unwrap_ms = 0;
+  auto map = std::make_shared<EnvMap>();
+  *map = make_envmap(options_.layout, options_.width, options_.height);
+  if (options_.frames_are_maps) {
+    RgbImage& radiance = b.frames[0].image;
+    if (radiance.width != map->width || radiance.height != map->height)
+      throw InputError(fmt::format("replayed map is {}x{}, the pipeline expects {}", radiance.width, radiance.height,
+                                   describe_size(*map)));
+    if (options_.photometric) apply_photometric(radiance, *options_.photometric);
+    map->rgb = std::move(radiance.rgb);
+    map->valid = std::move(radiance.valid);
+    map->units = radiance.units;
+    fuse_ms = ms_since(t0);
+  } else if (b.frames.size() > 1) {
+    // Fuse only the sensor pixels the unwrap reads (live/bracket_unwrap.h): the same map
+    // as merging every pixel and unwrapping, for a tenth of the work at 1280x960.
+    ensure_remap(b.frames[0].image.width, b.frames[0].image.height);
+    // A map this small is cheaper on the calling thread than the wake-up of TBB workers,
+    // which costs milliseconds when the cores are busy.
+    const bool small = size_t(options_.width) * size_t(options_.height) <= 512 * 256;
+    MergeOptions merge_options;
+    merge_options.threads = small ? 1 : 0;
+    RemapOptions ro;
+    ro.threads = small ? 1 : 0;
     lp::Bracket hb;
     for (auto& f : b.frames) {
       hb.exposure_seconds.push_back(f.exposure_s > 0 ? f.exposure_s : 1.0);
       hb.frames.push_back(std::move(f.image));
     }
     const CameraResponse response = options_.response ? *options_.response : linear_response(256);
-    radiance = merge_bracket(hb, response);
-  } else {
-    radiance = std::move(b.frames[0].image);
-    if (b.frames[0].exposure_s > 0 && !options_.frames_are_maps)
-      for (float& v : radiance.rgb) v = float(v / b.frames[0].exposure_s);
-  }
-  if (options_.photometric) apply_photometric(radiance, *options_.photometric);
-  const double fuse_ms = ms_since(t0);
-
-  // 2. The environment map.
-  t0 = Clock::now();
-  auto map = std::make_shared<EnvMap>();
-  if (options_.frames_are_maps) {
-    *map = make_envmap(options_.layout, options_.width, options_.height);
-    if (radiance.width != map->width || radiance.height != map->height)
-      throw InputError(fmt::format("replayed map is {}x{}, the pipeline expects {}", radiance.width, radiance.height,
-                                   describe_size(*map)));
+    RgbImage radiance = fuse_and_unwrap(hb, response, merge_options, remap_->plan, ro);
+    if (options_.photometric) apply_photometric(radiance, *options_.photometric);
     map->rgb = std::move(radiance.rgb);
     map->valid = std::move(radiance.valid);
     map->units = radiance.units;
+    fuse_ms = ms_since(t0);
   } else {
-    if (!remap_ || remap_->width != radiance.width || remap_->height != radiance.height) {
-      CameraModel model;
-      if (options_.camera) {
-        model = *options_.camera;
-      } else {
-        const FisheyeModel f = equidistant_fisheye(radiance.width, radiance.height, options_.fov_deg);
-        model.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-        model.intrinsics = {f.fx, f.fy, f.cx, f.cy, 0, 0, 0, 0};
-        model.width = f.width;
-        model.height = f.height;
-      }
-      if (model.width != radiance.width || model.height != radiance.height)
-        throw InputError(fmt::format("camera model is for {}x{}, frames are {}x{}", model.width, model.height,
-                                     radiance.width, radiance.height));
-      remap_ = std::make_unique<RemapCache>();
-      remap_->width = radiance.width;
-      remap_->height = radiance.height;
-      const Mat3 world_from_camera = options_.world_from_probe * upward_camera_world_from_camera();
-      remap_->compiled = compile_remap(camera_remap(model, world_from_camera, options_.layout, options_.width,
-                                                    options_.height, options_.fov_deg / 2),
-                                       radiance.width, radiance.height);
-    }
+    RgbImage radiance = std::move(b.frames[0].image);
+    if (b.frames[0].exposure_s > 0)
+      for (float& v : radiance.rgb) v = float(v / b.frames[0].exposure_s);
+    if (options_.photometric) apply_photometric(radiance, *options_.photometric);
+    fuse_ms = ms_since(t0);
+    t0 = Clock::now();
+    ensure_remap(radiance.width, radiance.height);
     apply_remap(radiance, remap_->compiled, &remap_->out);
-    *map = make_envmap(options_.layout, options_.width, options_.height);
     map->rgb = remap_->out.rgb;
     map->valid = remap_->out.valid;
     map->units = radiance.units;
+    unwrap_ms = ms_since(t0);
   }
-  const double unwrap_ms = ms_since(t0);
 
   // 3. Lights, with the temporal processing of the stream.
   t0 = Clock::now();

@@ -52,8 +52,8 @@ struct LiveStats {
   uint64_t frames_in = 0, frames_dropped_partial = 0, brackets_dropped = 0, brackets_processed = 0;
   uint64_t reconnects = 0;
   double fps_out = 0;                      // lists published per second (recent)
-  double capture_to_publish_ms = 0;        // latency of the last list
-  double fuse_ms = 0, unwrap_ms = 0, sample_ms = 0;  // last frame's stages
+  double capture_to_publish_ms = 0;        // last frame of the bracket in -> its list published
+  double fuse_ms = 0, unwrap_ms = 0, sample_ms = 0;  // last frame's stages (brackets: fuse_ms includes the unwrap)
   std::string last_error;
 };
 
@@ -76,6 +76,7 @@ class LivePipeline {
   void capture_loop();
   void process_loop();
   void process(Bracket& bracket);
+  void ensure_remap(int width, int height);  // compiles the unwrap table for this frame size
 
   OpenSource open_;
   LivePipelineOptions options_;

@@ -21,10 +21,11 @@
 // Exposure cycling (bracketing): set_exposure_cycle({t0, t1, t2}) makes the source take
 // frames at t0, t1, t2, t0, ... Each frame carries the exposure it was really taken at,
 // read back from the camera, and bracket_index = its position in the cycle. Aravis cameras
-// cycle by writing the exposure feature between frames; frames whose read-back exposure is
+// without a sequencer cycle by writing the exposure feature between frames; frames whose read-back exposure is
 // not the one expected (in flight while the feature changed) are dropped, so every delivered
-// frame's exposure_s is trustworthy. (A camera sequencer, where present, would avoid the
-// dropped frames; it is not used yet.) Replay and video cannot change exposure: they only
+// frame's exposure_s is trustworthy. Cameras with an SFNC sequencer cycle by themselves
+// instead (SourceOptions::bracketing, probe/genicam_sequencer.h), losing no frame to the
+// writes. Replay and video cannot change exposure: they only
 // label frames whose recorded exposure matches a cycle entry (within 1 %).
 //
 // Thread safety: one thread per source; different sources may run on different threads.

@@ -248,6 +248,7 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
     add("init-lobe-only", [](SmcOptions& o) { o.init_proposal_map_share = 0; });
     add("map-reset-1.5", [](SmcOptions& o) { o.map_power_reset_ratio = 1.5; });
     add("intermediate-3", [](SmcOptions& o) { o.intermediate = 3; });  // the paper's figure 3
+    add("reset-every-4", [](SmcOptions& o) { o.reset_every = 4; });
     add("ess-1/3", [](SmcOptions& o) { o.ess_fraction = 1.0 / 3.0; });
   }
 

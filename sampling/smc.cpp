@@ -15,6 +15,7 @@ void validate(const SmcOptions& o) {
   if (!(o.ess_fraction >= 0 && o.ess_fraction <= 1))
     throw InputError(fmt::format("smc: ess_fraction must be in [0, 1], got {}", o.ess_fraction));
   if (o.mh_moves < 0) throw InputError(fmt::format("smc: mh_moves must be >= 0, got {}", o.mh_moves));
+  if (o.reset_every < 0) throw InputError(fmt::format("smc: reset_every must be >= 0, got {}", o.reset_every));
   if (o.intermediate < 0) throw InputError(fmt::format("smc: intermediate must be >= 0, got {}", o.intermediate));
   if (!(o.local_move_probability >= 0 && o.local_move_probability <= 1))
     throw InputError(fmt::format("smc: local_move_probability must be in [0, 1], got {}", o.local_move_probability));
@@ -143,7 +144,7 @@ Rgb SmcEstimator::step(std::shared_ptr<const EnvDistribution> frame) {
   if (!frame) throw InputError("smc: no frame");
   const EnvDistribution& cur = *frame;
   stats_.last_reset = stats_.last_resampled = false;
-  bool reset = !previous_ || dir_.empty();
+  bool reset = !previous_ || dir_.empty() || (options_.reset_every > 0 && frames_since_reset_ >= options_.reset_every);
   if (!reset && options_.map_power_reset_ratio > 1) {
     const double r = cur.luminance_power() / previous_->luminance_power();
     reset = r > options_.map_power_reset_ratio || r < 1 / options_.map_power_reset_ratio;
@@ -173,7 +174,9 @@ Rgb SmcEstimator::step(std::shared_ptr<const EnvDistribution> frame) {
       stats_.last_reset = true;
     }
     initialise(cur);  // frame 0 and every reset are exactly BIS (unbiased)
+    frames_since_reset_ = 0;
   }
+  ++frames_since_reset_;
   ++stats_.frames;
   previous_ = std::move(frame);
   Rgb sum{0, 0, 0};

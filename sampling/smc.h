@@ -16,6 +16,9 @@
 // [1 / reset_ratio, reset_ratio], when every weight is zero, or when the map's luminance power
 // changes by more than map_power_reset_ratio. The last is ours: a light switched on where no
 // particle sits changes Z_t without changing any weight, so only the map can reveal it.
+// A light that moves is worse: each frame part of it lies where no particle was, the
+// reweighting underestimates Z_t / Z_{t-1} a little, and Z drifts down frame after frame
+// without ever tripping the ratio test; reset_every bounds that drift.
 // SMC is consistent, not unbiased: its Z carries the error of every frame since the last reset.
 #pragma once
 
@@ -41,6 +44,7 @@ struct SmcOptions {
   int intermediate = 0;               // K intermediate distributions between frames
   double reset_ratio = 2.0;           // reset when Z_t / Z_{t-1} leaves [1/r, r]; <= 1: never
   double map_power_reset_ratio = 1.1; // reset when map power changes by more than this; <= 1: never
+  int reset_every = 0;                // also reset after this many frames without one; 0: never
 };
 // Throws InputError on particles < 1, proposals < 1, ess_fraction outside [0, 1], negative
 // moves or intermediates, a probability outside [0, 1], or a non-positive cap angle.
@@ -82,6 +86,7 @@ class SmcEstimator {
   std::vector<double> gamma_;   // the current bridge target at each particle
   double z_ = 0;
   double ratio_sum_ = 0;        // sum of unnormalised weights of the last reweighting
+  int frames_since_reset_ = 0;
   SmcStats stats_;
 };
 

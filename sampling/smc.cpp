@@ -53,7 +53,7 @@ void SmcEstimator::initialise(const EnvDistribution& map) {
   z_ = r.z;
 }
 
-void SmcEstimator::reweight(double b0, double b1, const EnvDistribution& prev, const EnvDistribution& cur) {
+void SmcEstimator::reweight(double b1, const EnvDistribution& prev, const EnvDistribution& cur) {
   double sum = 0;
   for (size_t i = 0; i < dir_.size(); ++i) {
     const double g = bridge(b1, prev, cur, dir_[i]);
@@ -61,7 +61,6 @@ void SmcEstimator::reweight(double b0, double b1, const EnvDistribution& prev, c
     gamma_[i] = g;
     sum += weight_[i];
   }
-  (void)b0;
   ratio_sum_ = sum;
   z_ *= sum;
   double sq = 0;
@@ -154,8 +153,8 @@ Rgb SmcEstimator::step(std::shared_ptr<const EnvDistribution> frame) {
     const double z_prev = z_;
     const int steps = options_.intermediate + 1;
     for (int k = 1; k <= steps && !reset; ++k) {
-      const double b0 = double(k - 1) / steps, b1 = double(k) / steps;
-      reweight(b0, b1, prev, cur);
+      const double b1 = double(k) / steps;
+      reweight(b1, prev, cur);  // from the bridge at (k - 1) / steps, held in gamma_
       if (!(ratio_sum_ > 0)) {
         reset = true;  // every particle fell where the new target is zero
         break;

@@ -2,7 +2,8 @@
 // Kronander et al. 2015, seed 002, section 6 describe it): N weighted particles follow the
 // product target gamma_t = L_Y,t (f cos)_Y from frame to frame instead of being drawn anew.
 //
-// Per frame t (frame 0, and every reset, initialises by BIS: M = N x proposals_per_particle):
+// Per frame t (frame 0, and every reset, initialises by BIS: M = N x proposals_per_particle,
+// proposals from the lobe as in the paper, or partly from the map: init_proposal_map_share):
 //   1. propagate: w_i = W_i gamma_t(w_i) / gamma_{t-1}(w_i), Z_t = Z_{t-1} sum w_i (eq. 5, 8);
 //      with K intermediate distributions gamma_{t-1}^(1-b) gamma_t^b, b = 1/(K+1) ... 1, the
 //      reweighting runs in K + 1 steps, each followed by its MH moves (Ghosh et al.);
@@ -72,7 +73,7 @@ class SmcEstimator {
 
  private:
   void initialise(const EnvDistribution& map);
-  void reweight(double beta_from, double beta_to, const EnvDistribution& prev, const EnvDistribution& cur);
+  void reweight(double beta_to, const EnvDistribution& prev, const EnvDistribution& cur);
   void maybe_resample();
   void move(double beta, const EnvDistribution& prev, const EnvDistribution& cur);
   double bridge(double beta, const EnvDistribution& prev, const EnvDistribution& cur, Vec3 w) const;

@@ -13,6 +13,8 @@
 #include <map>
 #include <memory>
 
+#include <time.h>
+
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "cli/svg_chart.h"
@@ -97,7 +99,7 @@ std::vector<Scenario> parse_scenarios(const std::string& text) {
   return out;
 }
 
-enum class Kind { Mis, Bis, Smc };
+enum class Kind { Mis, Bis, BisMix, Smc, SmcMix };
 
 struct Config {
   std::string estimator, variant;  // variant: "" for the main comparison
@@ -116,19 +118,29 @@ struct Acc {
   long temporal_n = 0;
   double seconds = 0;
   long estimates = 0;
+  double rays = 0;  // visibility tests
+  double ray_cost_s = 0;  // modelled seconds per visibility test
   void merge(const Acc& o) {
-    sq += o.sq, sum += o.sum, n += o.n, var += o.var, var_n += o.var_n;
+    sq += o.sq, sum += o.sum, n += o.n, var += o.var, var_n += o.var_n, rays += o.rays, ray_cost_s = o.ray_cost_s;
     temporal += o.temporal, temporal_n += o.temporal_n, seconds += o.seconds, estimates += o.estimates;
   }
   double rmse() const { return n ? std::sqrt(sq / double(n)) : NAN; }
   double mean_error() const { return n ? sum / double(n) : NAN; }
   double variance() const { return var_n ? var / double(var_n) : NAN; }
   double temporal_noise() const { return temporal_n ? temporal / double(temporal_n) : NAN; }
-  double us() const { return estimates ? 1e6 * seconds / double(estimates) : NAN; }
+  // Measured CPU time plus the modelled cost of the visibility tests (--ray-cost-us).
+  double us() const { return estimates ? 1e6 * (seconds + rays * ray_cost_s) / double(estimates) : NAN; }
+  double rays_per_estimate() const { return estimates ? rays / double(estimates) : NAN; }
 };
 
 std::string num(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : std::string("nan"); }
 nlohmann::json jnum(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+double thread_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 uint64_t mix(uint64_t a, uint64_t b) { return (a ^ (b + 0x9E3779B97F4A7C15ull + (a << 6) + (a >> 2))) * 0xBF58476D1CE4E5B9ull; }
 
@@ -146,6 +158,7 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
   if (args.frames < 2) throw InputError(fmt::format("--frames must be at least 2 (temporal noise needs two), got {}", args.frames));
   if (args.repeats < 2)
     throw InputError(fmt::format("--repeats must be at least 2 (the variance is measured across runs), got {}", args.repeats));
+  if (!(args.ray_cost_us >= 0)) throw InputError(fmt::format("--ray-cost-us must be >= 0, got {}", args.ray_cost_us));
   if (args.bis_m < 1) throw InputError(fmt::format("--bis-m must be positive, got {}", args.bis_m));
   const std::vector<int> budgets = parse_int_list(args.budgets, "--budgets");
   std::vector<Kind> kinds;
@@ -157,8 +170,10 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
       const std::string name = args.estimators.substr(start, comma - start);
       if (name == "mis") kinds.push_back(Kind::Mis);
       else if (name == "bis") kinds.push_back(Kind::Bis);
+      else if (name == "bis-mix") kinds.push_back(Kind::BisMix);
       else if (name == "smc") kinds.push_back(Kind::Smc);
-      else throw InputError(fmt::format("--estimators: unknown estimator '{}' (mis, bis, smc)", name));
+      else if (name == "smc-mix") kinds.push_back(Kind::SmcMix);
+      else throw InputError(fmt::format("--estimators: unknown estimator '{}' (mis, bis, bis-mix, smc, smc-mix)", name));
       names.push_back(name);
       start = comma + 1;
     }
@@ -201,15 +216,22 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
   }
 
   // What runs: every estimator at every budget; the SMC sweep varies one parameter at a
-  // time from the defaults, at budget 16.
+  // time, at budget 16, from smc-mix (SMC initialised by BIS with half its proposals from
+  // the map: the paper's lobe-only initialisation inherits BIS's misses on small bright
+  // lights, which would drown every other parameter's effect).
   std::vector<Config> configs;
   for (size_t e = 0; e < kinds.size(); ++e)
-    for (int b : budgets) configs.push_back({names[e], "", kinds[e], b, {}});
+    for (int b : budgets) {
+      Config c{names[e], "", kinds[e], b, {}};
+      if (c.kind == Kind::SmcMix) c.smc.init_proposal_map_share = 0.5, c.kind = Kind::Smc;
+      configs.push_back(c);
+    }
   const size_t main_configs = configs.size();
   if (args.sweep) {
     const int b = 16;
     auto add = [&](const std::string& variant, auto change) {
-      Config c{"smc", variant, Kind::Smc, b, {}};
+      Config c{"smc-mix", variant, Kind::Smc, b, {}};
+      c.smc.init_proposal_map_share = 0.5;
       change(c.smc);
       configs.push_back(c);
     };
@@ -223,23 +245,40 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
     add("intermediate-2", [](SmcOptions& o) { o.intermediate = 2; });
     add("no-resets", [](SmcOptions& o) { o.reset_ratio = 0, o.map_power_reset_ratio = 0; });
     add("z-reset-only", [](SmcOptions& o) { o.map_power_reset_ratio = 0; });
-    add("init-map-proposals", [](SmcOptions& o) { o.init_proposal_map_share = 0.5; });
+    add("init-lobe-only", [](SmcOptions& o) { o.init_proposal_map_share = 0; });
+    add("map-reset-1.5", [](SmcOptions& o) { o.map_power_reset_ratio = 1.5; });
+    add("intermediate-3", [](SmcOptions& o) { o.intermediate = 3; });  // the paper's figure 3
+    add("reset-every-4", [](SmcOptions& o) { o.reset_every = 4; });
     add("ess-1/3", [](SmcOptions& o) { o.ess_fraction = 1.0 / 3.0; });
   }
 
   const std::vector<Lobe> lobe_list = lobes();
   const auto nv = normals_and_views();
+  // Every point has an occluder beside it (a cap of half-angle 30 deg centred 45 deg off
+  // the normal, like a box on the floor), so visibility matters; each point counts its
+  // visibility tests (the ray casts of a renderer).
+  const size_t np = lobe_list.size() * nv.size();
+  std::vector<long> ray_count(np, 0);
   std::vector<ShadingPoint> points;
   std::vector<size_t> lobe_of;
   for (size_t l = 0; l < lobe_list.size(); ++l)
     for (const auto& [n, v] : nv) {
-      points.push_back({n, v, lobe_list[l].brdf, {}});
+      Vec3 t, b;
+      orthonormal_basis(n, &t, &b);
+      const Vec3 cap = normalize(n + t);
+      const double cos_cap = std::cos(30 * M_PI / 180);
+      long* counter = &ray_count[points.size()];
+      points.push_back({n, v, lobe_list[l].brdf, [cap, cos_cap, counter](Vec3 w) {
+                          ++*counter;
+                          return dot(w, cap) < cos_cap;
+                        }});
       lobe_of.push_back(l);
     }
-  const size_t np = points.size();
   const int reps = args.repeats;
 
   std::vector<std::vector<Acc>> acc(configs.size(), std::vector<Acc>(lobe_list.size()));
+  // Over all lobes, per sequence: where each estimator gains or loses.
+  std::vector<std::vector<Acc>> acc_seq(configs.size(), std::vector<Acc>(sequences.size()));
   size_t total_frames = 0;
   for (const Sequence& s : sequences) total_frames += s.frames.size();
   Progress progress("eval estimators", total_frames * configs.size(), out.progress);
@@ -267,7 +306,11 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
       // est[r][f][p], luminance
       std::vector<std::vector<std::vector<double>>> est(size_t(reps), std::vector<std::vector<double>>(nf, std::vector<double>(np)));
       std::vector<double> seconds(lobe_list.size(), 0.0);
+      std::fill(ray_count.begin(), ray_count.end(), 0L);
       const uint64_t key = mix(mix(args.seed, si), mix(ci, uint64_t(c.budget)));
+      // Timed per lobe over its normals in CPU time of this thread, so that other
+      // processes on a shared machine do not inflate the numbers.
+      const size_t per_lobe = nv.size();
       if (c.kind == Kind::Smc) {
         SmcOptions o = c.smc;
         o.particles = c.budget;
@@ -277,30 +320,36 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
           chains.reserve(np);
           for (size_t p = 0; p < np; ++p) chains.emplace_back(points[p], o, mix(key, mix(uint64_t(r), p)));
           for (size_t f = 0; f < nf; ++f)
-            for (size_t p = 0; p < np; ++p) {
-              const auto t0 = Clock::now();
-              const Rgb v = chains[p].step(seq.frames[f]);
-              seconds[lobe_of[p]] += std::chrono::duration<double>(Clock::now() - t0).count();
-              est[size_t(r)][f][p] = luminance(v.data());
+            for (size_t l = 0; l < lobe_list.size(); ++l) {
+              const double t0 = thread_seconds();
+              for (size_t p = l * per_lobe; p < (l + 1) * per_lobe; ++p) {
+                const Rgb v = chains[p].step(seq.frames[f]);
+                est[size_t(r)][f][p] = luminance(v.data());
+              }
+              seconds[l] += thread_seconds() - t0;
             }
         }
       } else {
         const MisOptions mis{c.budget / 2, c.budget - c.budget / 2};
-        const BisOptions bis{c.budget, args.bis_m, 0.0};
+        const BisOptions bis{c.budget, args.bis_m, c.kind == Kind::BisMix ? 0.5 : 0.0};
+        std::vector<Rng> rngs;
         for (int r = 0; r < reps; ++r)
           for (size_t f = 0; f < nf; ++f)
-            for (size_t p = 0; p < np; ++p) {
-              Rng rng(key, mix(mix(uint64_t(r), f), p));
-              const auto t0 = Clock::now();
-              const Rgb v = c.kind == Kind::Mis ? estimate_mis(*seq.frames[f], points[p], mis, rng)
-                                                : estimate_bis(*seq.frames[f], points[p], bis, rng);
-              seconds[lobe_of[p]] += std::chrono::duration<double>(Clock::now() - t0).count();
-              est[size_t(r)][f][p] = luminance(v.data());
+            for (size_t l = 0; l < lobe_list.size(); ++l) {
+              rngs.clear();
+              for (size_t p = l * per_lobe; p < (l + 1) * per_lobe; ++p) rngs.emplace_back(key, mix(mix(uint64_t(r), f), p));
+              const double t0 = thread_seconds();
+              for (size_t p = l * per_lobe, k = 0; p < (l + 1) * per_lobe; ++p, ++k) {
+                const Rgb v = c.kind == Kind::Mis ? estimate_mis(*seq.frames[f], points[p], mis, rngs[k])
+                                                  : estimate_bis(*seq.frames[f], points[p], bis, rngs[k]);
+                est[size_t(r)][f][p] = luminance(v.data());
+              }
+              seconds[l] += thread_seconds() - t0;
             }
       }
       for (size_t p = 0; p < np; ++p) {
         if (!(norm[p] > 0)) continue;  // a point the map does not light at all
-        Acc& a = acc[ci][lobe_of[p]];
+        Acc a;  // this point's errors, merged below into its lobe and its sequence
         for (size_t f = 0; f < nf; ++f) {
           double m = 0;
           for (int r = 0; r < reps; ++r) {
@@ -321,10 +370,19 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
           a.var += v / double(reps - 1) / (norm[p] * norm[p]);
           ++a.var_n;
         }
+        acc[ci][lobe_of[p]].merge(a);
+        acc_seq[ci][si].merge(a);
       }
       for (size_t l = 0; l < lobe_list.size(); ++l) {
         acc[ci][l].seconds += seconds[l];
         acc[ci][l].estimates += long(nf) * long(reps) * long(nv.size());
+        for (size_t p = l * per_lobe; p < (l + 1) * per_lobe; ++p) {
+          acc[ci][l].rays += double(ray_count[p]);
+          acc_seq[ci][si].rays += double(ray_count[p]);
+        }
+        acc[ci][l].ray_cost_s = acc_seq[ci][si].ray_cost_s = 1e-6 * args.ray_cost_us;
+        acc_seq[ci][si].seconds += seconds[l];
+        acc_seq[ci][si].estimates += long(nf) * long(reps) * long(nv.size());
       }
       progress.advance(nf);
     }
@@ -352,17 +410,29 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
     }
     dest.push_back({configs[ci].estimator, configs[ci].variant, "all", configs[ci].budget, all});
   }
-  const std::string header = "estimator,variant,lobe,budget,rel_rmse,rel_variance,rel_mean_error,temporal_noise,us_per_estimate,estimates\n";
+  const std::string header =
+      "estimator,variant,lobe,budget,rel_rmse,rel_variance,rel_mean_error,temporal_noise,us_per_estimate,rays_per_estimate,estimates\n";
   auto csv_of = [&](const std::vector<Row>& rs) {
     std::string csv = header;
     for (const Row& r : rs)
-      csv += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", r.estimator, r.variant.empty() ? "-" : r.variant, r.lobe,
+      csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", r.estimator, r.variant.empty() ? "-" : r.variant, r.lobe,
                          r.budget, num(r.a.rmse()), num(r.a.variance()), num(r.a.mean_error()),
-                         num(r.a.temporal_noise()), num(r.a.us()), r.a.estimates);
+                         num(r.a.temporal_noise()), num(r.a.us()), num(r.a.rays_per_estimate()), r.a.estimates);
     return csv;
   };
   const std::string csv_path = (fs::path(args.output_dir) / "estimators.csv").string();
   write_file_atomically(csv_path, csv_of(rows));
+  {
+    std::string csv = "estimator,variant,sequence,budget,rel_rmse,rel_variance,rel_mean_error,temporal_noise,us_per_estimate\n";
+    for (size_t ci = 0; ci < configs.size(); ++ci)
+      for (size_t si = 0; si < sequences.size(); ++si) {
+        const Acc& a = acc_seq[ci][si];
+        csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", configs[ci].estimator,
+                           configs[ci].variant.empty() ? "-" : configs[ci].variant, sequences[si].name, configs[ci].budget,
+                           num(a.rmse()), num(a.variance()), num(a.mean_error()), num(a.temporal_noise()), num(a.us()));
+      }
+    write_file_atomically((fs::path(args.output_dir) / "estimators_by_sequence.csv").string(), csv);
+  }
   std::string sweep_path;
   if (!sweep_rows.empty()) {
     sweep_path = (fs::path(args.output_dir) / "smc_sweep.csv").string();
@@ -388,7 +458,8 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
       panels.push_back(std::move(panel));
     }
   const std::string svg_path = (fs::path(args.output_dir) / "estimators.svg").string();
-  write_file_atomically(svg_path, svg_chart("Reflected radiance estimators: error against time (labels: samples per estimate)",
+  write_file_atomically(svg_path, svg_chart("Reflected radiance estimators: error against time (labels: samples per estimate)" +
+                                                (args.ray_cost_us > 0 ? fmt::format(", {:g} us per visibility test", args.ray_cost_us) : std::string()),
                                             panels, int(lobe_list.size())));
   if (!sweep_rows.empty()) {
     std::vector<ChartPanel> sp;
@@ -405,7 +476,7 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
         }
       panel.series.push_back(variants);
       for (const Row& r : rows)
-        if (r.lobe == lobe && r.budget == 16 && r.estimator != "smc") {
+        if (r.lobe == lobe && r.budget == 16 && r.estimator.rfind("smc", 0) != 0) {
           ChartSeries s{r.estimator + " (16)", {r.a.us()}, {r.a.rmse()}, {r.estimator}};
           s.lines = false;
           panel.series.push_back(s);
@@ -413,16 +484,16 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
       sp.push_back(std::move(panel));
     }
     write_file_atomically((fs::path(args.output_dir) / "smc_sweep.svg").string(),
-                          svg_chart("SMC parameter sweep at 16 particles (one change at a time from the defaults)", sp, 3));
+                          svg_chart("SMC parameter sweep at 16 particles (one change at a time from smc-mix)", sp, 3));
   }
 
-  say(out, "{:<5} {:<18} {:<17} {:>6} {:>9} {:>10} {:>9} {:>10} {:>9}\n", "est", "variant", "lobe", "budget", "rmse",
-      "variance", "bias", "temporal", "us/est");
+  say(out, "{:<8} {:<18} {:<17} {:>6} {:>9} {:>10} {:>9} {:>10} {:>9} {:>6}\n", "est", "variant", "lobe", "budget", "rmse",
+      "variance", "bias", "temporal", "us/est", "rays");
   auto print = [&](const std::vector<Row>& rs) {
     for (const Row& r : rs)
-      say(out, "{:<5} {:<18} {:<17} {:>6} {:>8.2f}% {:>10.2e} {:>8.2f}% {:>9.2f}% {:>9.2f}\n", r.estimator,
+      say(out, "{:<8} {:<18} {:<17} {:>6} {:>8.2f}% {:>10.2e} {:>8.2f}% {:>9.2f}% {:>9.2f} {:>6.1f}\n", r.estimator,
           r.variant.empty() ? "-" : r.variant, r.lobe, r.budget, 100 * r.a.rmse(), r.a.variance(),
-          100 * r.a.mean_error(), 100 * r.a.temporal_noise(), r.a.us());
+          100 * r.a.mean_error(), 100 * r.a.temporal_noise(), r.a.us(), r.a.rays_per_estimate());
   };
   print(rows);
   print(sweep_rows);
@@ -439,12 +510,13 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
       j.push_back({{"estimator", r.estimator}, {"variant", r.variant}, {"lobe", r.lobe}, {"budget", r.budget},
                    {"rel_rmse", jnum(r.a.rmse())}, {"rel_variance", jnum(r.a.variance())},
                    {"rel_mean_error", jnum(r.a.mean_error())}, {"temporal_noise", jnum(r.a.temporal_noise())},
-                   {"us_per_estimate", jnum(r.a.us())}, {"estimates", r.a.estimates}});
+                   {"us_per_estimate", jnum(r.a.us())}, {"rays_per_estimate", jnum(r.a.rays_per_estimate())},
+                   {"estimates", r.a.estimates}});
     return j;
   };
   nlohmann::json seqs = nlohmann::json::array();
   for (const Sequence& s : sequences) seqs.push_back({{"name", s.name}, {"frames", s.frames.size()}});
-  nlohmann::json report = {{"csv", csv_path},        {"chart", svg_path},          {"sequences", seqs},
+  nlohmann::json report = {{"ray_cost_us", args.ray_cost_us}, {"csv", csv_path},        {"chart", svg_path},          {"sequences", seqs},
                            {"shading_points", np},   {"repeats", reps},            {"rows", json_rows(rows)},
                            {"seconds", total_seconds}, {"reference_seconds", reference_seconds}};
   if (!sweep_rows.empty()) {

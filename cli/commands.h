@@ -280,13 +280,15 @@ int run_merge(const MergeArgs& args, const Output& out);
 
 struct EvalEstimatorsArgs {
   std::vector<std::string> inputs;  // base maps ("scene": the procedural scene) or sequence directories
-  std::string estimators = "mis,bis,smc";
+  // bis-mix / smc-mix: BIS, and SMC's BIS initialisation, with half the proposals from the map
+  std::string estimators = "mis,bis,bis-mix,smc,smc-mix";
   std::string budgets = "4,16,64,256";  // samples with a visibility test per estimate
   std::string scenarios = "moving-light,abrupt-switch,flicker";  // applied to base maps
   int frames = 12;                  // per scenario (a directory: its first `frames` maps)
   int repeats = 4;                  // independent runs per estimate (variance across them)
   std::string size = "256x128";     // every map is resampled to this latlong size first
   int bis_m = 8;                    // BIS proposals per resampled sample (M = bis_m N)
+  double ray_cost_us = 0;           // modelled cost of one visibility test, added to the measured time
   bool sweep = true;                // the SMC parameter sweep (budget 16)
   bool quick = false;               // demo: 4 frames, 2 repeats, budgets 4,16,64, no sweep
   uint64_t seed = 1;

@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
   EvalEstimatorsArgs eve;
   auto* c_eve = c_eval->add_subcommand("estimators", "MIS, BIS and SMC reflected-radiance estimators: error, temporal noise, time");
   c_eve->add_option("SEQ|MAP", eve.inputs, "Sequence directories, base maps for the scenarios, or 'scene'")->required();
-  c_eve->add_option("--estimators", eve.estimators, "Comma-separated: mis, bis, smc");
+  c_eve->add_option("--estimators", eve.estimators, "Comma-separated: mis, bis, bis-mix, smc, smc-mix (-mix: half the BIS proposals from the map)");
   c_eve->add_option("--budgets", eve.budgets, "Comma-separated samples per estimate (visibility tests)");
   c_eve->add_option("--scenarios", eve.scenarios, "Scenarios built on base maps (comma-separated or 'all')");
   c_eve->add_option("--frames", eve.frames, "Frames per scenario (a directory: its first frames)");
@@ -148,6 +148,7 @@ int main(int argc, char** argv) {
   c_eve->add_option("--size", eve.size, "Latlong size every map is resampled to (WxH)");
   c_eve->add_option("--bis-m", eve.bis_m, "BIS/SMC-initialisation proposals per sample (M = m N)");
   c_eve->add_option("--seed", eve.seed, "Random seed");
+  c_eve->add_option("--ray-cost-us", eve.ray_cost_us, "Modelled microseconds per visibility test, added to the time");
   c_eve->add_flag("--no-sweep", [&](int64_t) { eve.sweep = false; }, "Skip the SMC parameter sweep");
   c_eve->add_flag("--quick", eve.quick, "Demo: 4 frames, 2 runs, budgets 4,16,64, no sweep");
   c_eve->add_option("-o,--output", eve.output_dir, "Directory for estimators.csv/.svg and smc_sweep.csv/.svg")->required();

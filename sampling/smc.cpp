@@ -15,6 +15,7 @@ void validate(const SmcOptions& o) {
   if (!(o.ess_fraction >= 0 && o.ess_fraction <= 1))
     throw InputError(fmt::format("smc: ess_fraction must be in [0, 1], got {}", o.ess_fraction));
   if (o.mh_moves < 0) throw InputError(fmt::format("smc: mh_moves must be >= 0, got {}", o.mh_moves));
+  if (o.reset_every < 0) throw InputError(fmt::format("smc: reset_every must be >= 0, got {}", o.reset_every));
   if (o.intermediate < 0) throw InputError(fmt::format("smc: intermediate must be >= 0, got {}", o.intermediate));
   if (!(o.local_move_probability >= 0 && o.local_move_probability <= 1))
     throw InputError(fmt::format("smc: local_move_probability must be in [0, 1], got {}", o.local_move_probability));
@@ -52,7 +53,7 @@ void SmcEstimator::initialise(const EnvDistribution& map) {
   z_ = r.z;
 }
 
-void SmcEstimator::reweight(double b0, double b1, const EnvDistribution& prev, const EnvDistribution& cur) {
+void SmcEstimator::reweight(double b1, const EnvDistribution& prev, const EnvDistribution& cur) {
   double sum = 0;
   for (size_t i = 0; i < dir_.size(); ++i) {
     const double g = bridge(b1, prev, cur, dir_[i]);
@@ -60,7 +61,6 @@ void SmcEstimator::reweight(double b0, double b1, const EnvDistribution& prev, c
     gamma_[i] = g;
     sum += weight_[i];
   }
-  (void)b0;
   ratio_sum_ = sum;
   z_ *= sum;
   double sq = 0;
@@ -143,7 +143,7 @@ Rgb SmcEstimator::step(std::shared_ptr<const EnvDistribution> frame) {
   if (!frame) throw InputError("smc: no frame");
   const EnvDistribution& cur = *frame;
   stats_.last_reset = stats_.last_resampled = false;
-  bool reset = !previous_ || dir_.empty();
+  bool reset = !previous_ || dir_.empty() || (options_.reset_every > 0 && frames_since_reset_ >= options_.reset_every);
   if (!reset && options_.map_power_reset_ratio > 1) {
     const double r = cur.luminance_power() / previous_->luminance_power();
     reset = r > options_.map_power_reset_ratio || r < 1 / options_.map_power_reset_ratio;
@@ -153,8 +153,8 @@ Rgb SmcEstimator::step(std::shared_ptr<const EnvDistribution> frame) {
     const double z_prev = z_;
     const int steps = options_.intermediate + 1;
     for (int k = 1; k <= steps && !reset; ++k) {
-      const double b0 = double(k - 1) / steps, b1 = double(k) / steps;
-      reweight(b0, b1, prev, cur);
+      const double b1 = double(k) / steps;
+      reweight(b1, prev, cur);  // from the bridge at (k - 1) / steps, held in gamma_
       if (!(ratio_sum_ > 0)) {
         reset = true;  // every particle fell where the new target is zero
         break;
@@ -173,7 +173,9 @@ Rgb SmcEstimator::step(std::shared_ptr<const EnvDistribution> frame) {
       stats_.last_reset = true;
     }
     initialise(cur);  // frame 0 and every reset are exactly BIS (unbiased)
+    frames_since_reset_ = 0;
   }
+  ++frames_since_reset_;
   ++stats_.frames;
   previous_ = std::move(frame);
   Rgb sum{0, 0, 0};

@@ -2,7 +2,8 @@
 // Kronander et al. 2015, seed 002, section 6 describe it): N weighted particles follow the
 // product target gamma_t = L_Y,t (f cos)_Y from frame to frame instead of being drawn anew.
 //
-// Per frame t (frame 0, and every reset, initialises by BIS: M = N x proposals_per_particle):
+// Per frame t (frame 0, and every reset, initialises by BIS: M = N x proposals_per_particle,
+// proposals from the lobe as in the paper, or partly from the map: init_proposal_map_share):
 //   1. propagate: w_i = W_i gamma_t(w_i) / gamma_{t-1}(w_i), Z_t = Z_{t-1} sum w_i (eq. 5, 8);
 //      with K intermediate distributions gamma_{t-1}^(1-b) gamma_t^b, b = 1/(K+1) ... 1, the
 //      reweighting runs in K + 1 steps, each followed by its MH moves (Ghosh et al.);
@@ -16,6 +17,9 @@
 // [1 / reset_ratio, reset_ratio], when every weight is zero, or when the map's luminance power
 // changes by more than map_power_reset_ratio. The last is ours: a light switched on where no
 // particle sits changes Z_t without changing any weight, so only the map can reveal it.
+// A light that moves is worse: each frame part of it lies where no particle was, the
+// reweighting underestimates Z_t / Z_{t-1} a little, and Z drifts down frame after frame
+// without ever tripping the ratio test; reset_every bounds that drift.
 // SMC is consistent, not unbiased: its Z carries the error of every frame since the last reset.
 #pragma once
 
@@ -41,6 +45,7 @@ struct SmcOptions {
   int intermediate = 0;               // K intermediate distributions between frames
   double reset_ratio = 2.0;           // reset when Z_t / Z_{t-1} leaves [1/r, r]; <= 1: never
   double map_power_reset_ratio = 1.1; // reset when map power changes by more than this; <= 1: never
+  int reset_every = 0;                // also reset after this many frames without one; 0: never
 };
 // Throws InputError on particles < 1, proposals < 1, ess_fraction outside [0, 1], negative
 // moves or intermediates, a probability outside [0, 1], or a non-positive cap angle.
@@ -68,7 +73,7 @@ class SmcEstimator {
 
  private:
   void initialise(const EnvDistribution& map);
-  void reweight(double beta_from, double beta_to, const EnvDistribution& prev, const EnvDistribution& cur);
+  void reweight(double beta_to, const EnvDistribution& prev, const EnvDistribution& cur);
   void maybe_resample();
   void move(double beta, const EnvDistribution& prev, const EnvDistribution& cur);
   double bridge(double beta, const EnvDistribution& prev, const EnvDistribution& cur, Vec3 w) const;
@@ -82,6 +87,7 @@ class SmcEstimator {
   std::vector<double> gamma_;   // the current bridge target at each particle
   double z_ = 0;
   double ratio_sum_ = 0;        // sum of unnormalised weights of the last reweighting
+  int frames_since_reset_ = 0;
   SmcStats stats_;
 };
 

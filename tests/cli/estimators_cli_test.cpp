@@ -75,8 +75,8 @@ TEST(EstimatorsCli, QuickRunWritesCsvChartAndJson) {
   EXPECT_TRUE(fs::exists(j["chart"].get<std::string>()));
   EXPECT_EQ(j["sequences"].size(), 1u);
   EXPECT_EQ(j["shading_points"], 16);
-  // 3 estimators x 3 budgets x (4 lobes + all)
-  ASSERT_EQ(j["rows"].size(), 45u);
+  // 5 estimators x 3 budgets x (4 lobes + all)
+  ASSERT_EQ(j["rows"].size(), 75u);
   for (const auto& row : j["rows"]) {
     for (const char* key : {"estimator", "lobe", "budget", "rel_rmse", "rel_variance", "temporal_noise", "us_per_estimate"})
       EXPECT_TRUE(row.contains(key)) << key;
@@ -86,7 +86,7 @@ TEST(EstimatorsCli, QuickRunWritesCsvChartAndJson) {
   EXPECT_FALSE(j.contains("sweep"));  // --quick skips it
   const std::string csv = slurp(j["csv"].get<std::string>());
   EXPECT_EQ(csv.rfind("estimator,variant,lobe,budget,rel_rmse", 0), 0u);
-  EXPECT_EQ(line_count(csv), 46);
+  EXPECT_EQ(line_count(csv), 76);
   EXPECT_NE(slurp(j["chart"].get<std::string>()).find("<svg"), std::string::npos);
 }
 
@@ -102,6 +102,7 @@ TEST(EstimatorsCli, SweepAndASequenceDirectory) {
   EXPECT_EQ(j["rows"].size(), 2u * 5u);
   ASSERT_TRUE(j.contains("sweep"));
   EXPECT_GE(j["sweep"].size(), 5u * 10u);
+  for (const auto& row : j["sweep"]) EXPECT_EQ(row["estimator"], "smc-mix");
   EXPECT_TRUE(fs::exists(dir / "smc_sweep.csv"));
   EXPECT_TRUE(fs::exists(dir / "smc_sweep.svg"));
 }

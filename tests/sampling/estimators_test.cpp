@@ -111,6 +111,23 @@ TEST(Estimators, UnbiasedOnAOnePixelSun) {
   }
 }
 
+TEST(Estimators, UnbiasedOnHealpixAndHemisphereLayouts) {
+  // A constant healpix sphere, and a constant hemisphere map (sky only) seen by an upward
+  // normal: both reflect albedo x L.
+  EnvMap healpix = make_healpix(8), hemi = make_hemisphere(72, 18);
+  std::fill(healpix.rgb.begin(), healpix.rgb.end(), 1.5f);
+  std::fill(hemi.rgb.begin(), hemi.rgb.end(), 1.5f);
+  ShadingPoint lam{{0, 0, 1}, {0, 0, 1}, Brdf{LobeType::Lambertian, {0.6, 0.6, 0.6}, 0}, {}};
+  ShadingPoint gl{{0, 0, 1}, {0, 0, 1}, Brdf{LobeType::BlinnPhong, {0.9, 0.9, 0.9}, 50}, {}};
+  for (const EnvMap* m : {&healpix, &hemi}) {
+    const EnvDistribution d(*m);
+    expect_unbiased(d, lam, 1.5 * 0.6, describe_size(*m) + " lambertian");
+    EXPECT_NEAR(lum(reference_reflected(*m, lam, {4})), 0.9, 2e-3) << describe_size(*m);
+    const double truth = 1.5 * 0.9 * (1 - std::pow(2.0, -51.0 / 2));
+    expect_unbiased(d, gl, truth, describe_size(*m) + " blinn-phong 50");
+  }
+}
+
 TEST(Estimators, VisibilityHalvesAConstantHemisphere) {
   const EnvDistribution d(constant_map(2.0f));
   ShadingPoint p{{0, 0, 1}, {0, 0, 1}, Brdf{LobeType::Lambertian, {1, 1, 1}, 0}, [](Vec3 w) { return w.x > 0; }};

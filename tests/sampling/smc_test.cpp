@@ -153,6 +153,20 @@ TEST(Smc, ALightSwitchedOnIsCaughtOnlyByTheMapPowerReset) {
   }
 }
 
+TEST(Smc, ResetEveryReinitialisesOnSchedule) {
+  EnvMap constant = make_latlong(32, 16);
+  std::fill(constant.rgb.begin(), constant.rgb.end(), 1.0f);
+  const auto d = dist(constant);
+  SmcOptions o;
+  o.reset_every = 3;
+  SmcEstimator smc(ShadingPoint{{0, 0, 1}, {0, 0, 1}, Brdf{}, {}}, o, 9);
+  for (int f = 0; f < 10; ++f) {
+    smc.step(d);
+    EXPECT_EQ(smc.stats().last_reset, f > 0 && f % 3 == 0) << "frame " << f;
+  }
+  EXPECT_EQ(smc.stats().resets, 3);
+}
+
 TEST(Smc, RefusesBadOptions) {
   const ShadingPoint p{{0, 0, 1}, {0, 0, 1}, Brdf{}, {}};
   SmcOptions o;
@@ -163,6 +177,9 @@ TEST(Smc, RefusesBadOptions) {
   EXPECT_THROW(SmcEstimator(p, o, 1), InputError);
   o = {};
   o.local_move_deg = 0;
+  EXPECT_THROW(SmcEstimator(p, o, 1), InputError);
+  o = {};
+  o.reset_every = -1;
   EXPECT_THROW(SmcEstimator(p, o, 1), InputError);
   ShadingPoint bad = p;
   bad.brdf = Brdf{LobeType::BlinnPhong, {1, 1, 1}, 0};

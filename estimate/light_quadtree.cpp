@@ -123,26 +123,10 @@ int LightQuadtree::max_depth() const {
   return d;
 }
 
-std::array<SectorLookup, kBipyramidSectors> LightQuadtree::lookup(double x, double y, int max_depth) const {
-  // The path from the root down to the leaf containing (x, y) (just the root outside it).
-  std::vector<int> path{0};
-  if (finite_position(x, y) && nodes_[0].contains(x, y)) {
-    while (!nodes_[path.back()].leaf() && (max_depth < 0 || nodes_[path.back()].depth < max_depth)) {
-      const QuadNode& n = nodes_[path.back()];
-      path.push_back(n.children[(x >= n.cx ? 1 : 0) + (y >= n.cy ? 2 : 0)]);
-    }
-  }
-  std::array<SectorLookup, kBipyramidSectors> out;
-  for (int s = 0; s < kBipyramidSectors; ++s) {
-    for (auto it = path.rbegin(); it != path.rend(); ++it) {
-      const SectorSample& sample = nodes_[*it].sectors[s];
-      if (sample.informed()) {
-        out[s] = {sample, *it, nodes_[*it].depth, false};
-        break;
-      }
-    }
-  }
-  // Fill never-observed sectors from the observed ones, same hemisphere first.
+namespace {
+
+// Fill never-observed sectors from the observed ones, same hemisphere first.
+void fill_missing(std::array<SectorLookup, kBipyramidSectors>& out) {
   auto fill = [&](int s, bool same_hemisphere) {
     SectorSample mean;
     int count = 0;
@@ -166,14 +150,70 @@ std::array<SectorLookup, kBipyramidSectors> LightQuadtree::lookup(double x, doub
   for (int s = 0; s < kBipyramidSectors; ++s) missing[s] = out[s].node < 0;
   for (int s = 0; s < kBipyramidSectors; ++s)
     if (missing[s] && !fill(s, true)) fill(s, false);
+}
+
+}  // namespace
+
+std::vector<int> LightQuadtree::path_to(double x, double y, int max_depth) const {
+  // The path from the root down to the leaf containing (x, y) (just the root outside it).
+  std::vector<int> path{0};
+  if (finite_position(x, y) && nodes_[0].contains(x, y)) {
+    while (!nodes_[path.back()].leaf() && (max_depth < 0 || nodes_[path.back()].depth < max_depth)) {
+      const QuadNode& n = nodes_[path.back()];
+      path.push_back(n.children[(x >= n.cx ? 1 : 0) + (y >= n.cy ? 2 : 0)]);
+    }
+  }
+  return path;
+}
+
+std::array<SectorLookup, kBipyramidSectors> LightQuadtree::lookup(double x, double y, int max_depth,
+                                                                   double min_weight) const {
+  const std::vector<int> path = path_to(x, y, max_depth);
+  std::array<SectorLookup, kBipyramidSectors> out;
+  for (int s = 0; s < kBipyramidSectors; ++s) {
+    for (auto it = path.rbegin(); it != path.rend(); ++it) {
+      const SectorSample& sample = nodes_[*it].sectors[s];
+      if (sample.informed() && (sample.weight >= min_weight || *it == 0)) {
+        out[s] = {sample, *it, nodes_[*it].depth, false};
+        break;
+      }
+    }
+  }
+  fill_missing(out);
   return out;
 }
 
-LightList LightQuadtree::lights_at(double x, double y, int max_depth) const {
+std::array<SectorLookup, kBipyramidSectors> LightQuadtree::lookup_shrunk(double x, double y,
+                                                                          double prior_weight) const {
+  const std::vector<int> path = path_to(x, y, -1);
+  std::array<SectorLookup, kBipyramidSectors> out;
+  for (int s = 0; s < kBipyramidSectors; ++s) {
+    if (!nodes_[0].sectors[s].informed()) continue;
+    SectorSample est = nodes_[0].sectors[s];
+    int node = 0;
+    for (size_t k = 1; k < path.size(); ++k) {
+      const SectorSample& m = nodes_[path[k]].sectors[s];
+      if (!m.informed()) break;  // children of an uninformed node are uninformed too
+      const double a = m.weight / (m.weight + prior_weight);
+      for (int c = 0; c < 3; ++c) est.radiance[c] += a * (m.radiance[c] - est.radiance[c]);
+      est.luminance += a * (m.luminance - est.luminance);
+      if (m.mired_weight > 0) est.mired += a * (m.mired - est.mired);
+      est.weight = m.weight;
+      est.last_frame = m.last_frame;
+      node = path[k];
+    }
+    out[s] = {est, node, nodes_[node].depth, false};
+  }
+  fill_missing(out);
+  return out;
+}
+
+namespace {
+
+LightList lights_of(const std::array<SectorLookup, kBipyramidSectors>& look) {
   LightList list;
   list.method = "metadata";
   list.units = Units::Radiance;
-  const auto look = lookup(x, y, max_depth);
   for (int s = 0; s < kBipyramidSectors; ++s) {
     if (look[s].node < 0 && !look[s].filled) continue;
     Light l;
@@ -184,6 +224,16 @@ LightList LightQuadtree::lights_at(double x, double y, int max_depth) const {
     list.lights.push_back(l);
   }
   return list;
+}
+
+}  // namespace
+
+LightList LightQuadtree::lights_at(double x, double y, int max_depth, double min_weight) const {
+  return lights_of(lookup(x, y, max_depth, min_weight));
+}
+
+LightList LightQuadtree::lights_shrunk(double x, double y, double prior_weight) const {
+  return lights_of(lookup_shrunk(x, y, prior_weight));
 }
 
 std::string LightQuadtree::to_json() const {

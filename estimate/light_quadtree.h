@@ -89,10 +89,20 @@ class LightQuadtree {
   int update(double x, double y, Vec3 view_direction, const LightReading& reading, int64_t frame);
 
   // Per-sector nearest informed ancestor at (x, y); max_depth limits the descent
-  // (0: the root only, i.e. one global estimate; -1: no limit).
-  std::array<SectorLookup, kBipyramidSectors> lookup(double x, double y, int max_depth = -1) const;
+  // (0: the root only, i.e. one global estimate; -1: no limit). `min_weight` is how many
+  // frames make a sector "informed": 1 is the paper's rule; more trades spatial detail for
+  // less noise (a sector mean from one or two 60-degree views depends on whether a lamp
+  // happened to be in them). When no node on the path has that many, the root is used.
+  std::array<SectorLookup, kBipyramidSectors> lookup(double x, double y, int max_depth = -1,
+                                                     double min_weight = 1) const;
+  // Alternative to the nearest informed ancestor (not in the paper): hierarchical shrinkage.
+  // Down the path from the root, each node's sector mean pulls the estimate with weight
+  // w / (w + prior_weight): est = (w m + prior_weight est_parent) / (w + prior_weight). A
+  // cell seen in a few frames moves the estimate a little, one seen in many moves it fully.
+  std::array<SectorLookup, kBipyramidSectors> lookup_shrunk(double x, double y, double prior_weight) const;
+  LightList lights_shrunk(double x, double y, double prior_weight) const;
   // Six directional lights (ids 0..5 = sectors, units radiance) for a renderer at (x, y).
-  LightList lights_at(double x, double y, int max_depth = -1) const;
+  LightList lights_at(double x, double y, int max_depth = -1, double min_weight = 1) const;
 
   int leaf_at(double x, double y) const;  // -1 outside the root
   const std::vector<QuadNode>& nodes() const { return nodes_; }
@@ -107,6 +117,7 @@ class LightQuadtree {
 
  private:
   void split(int node);
+  std::vector<int> path_to(double x, double y, int max_depth) const;
   QuadtreeOptions options_;
   std::vector<QuadNode> nodes_;
   int64_t updates_ = 0, outside_ = 0;

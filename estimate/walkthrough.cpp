@@ -206,9 +206,12 @@ std::vector<PathPoint> walkthrough_path(const Room& room, const WalkthroughOptio
     throw InputError("walk-through: speed, fps and row spacing must be positive and the margin leave a floor");
   // Waypoints of the serpentine.
   std::vector<Vec3> way;
+  // Rows evenly spaced from margin to depth - margin, no further apart than row_spacing.
   const double x0 = o.margin, x1 = room.width - o.margin;
-  int row = 0;
-  for (double y = o.margin; y <= room.depth - o.margin + 1e-9; y += o.row_spacing, ++row) {
+  const double span = room.depth - 2 * o.margin;
+  const int rows = 1 + int(std::ceil(span / o.row_spacing - 1e-9));
+  for (int row = 0; row < rows; ++row) {
+    const double y = o.margin + span * row / std::max(1, rows - 1);
     way.push_back({row % 2 ? x1 : x0, y, o.eye_height});
     way.push_back({row % 2 ? x0 : x1, y, o.eye_height});
   }

@@ -16,7 +16,7 @@
 // Y_rel = 683 Y / k (k the camera's photometric scale), exposure first (up to 1/30 s),
 // then gain (1..16, in 0.1 dB steps); its auto white balance is grey-world (gains G/R, 1,
 // G/B of the frame's mean raw RGB).
-// Path: a serpentine over the floor (rows `row_spacing` apart, `margin` from the walls) at
+// Path: a serpentine over the floor (rows at most `row_spacing` apart, `margin` from the walls) at
 // walking speed, the head turning (yaw +-70 deg around the heading, 4 s period) and nodding
 // (pitch -40..+60 deg, 5.3 s period) so that every sector gets looked at.
 #pragma once

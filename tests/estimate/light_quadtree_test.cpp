@@ -155,6 +155,12 @@ TEST(LightQuadtree, LookupTakesNearestInformedAncestorPerSector) {
   look = t.lookup(-2, -2);
   EXPECT_EQ(look[0].node, 0);
   EXPECT_NEAR(look[0].sample.luminance, 200, 1e-9);
+  // min_weight 2: the child's single frame is not enough, the root (2 frames) answers.
+  EXPECT_EQ(t.lookup(1, 1, -1, 2)[0].node, 0);
+  // Shrinkage: root mean 200 (weight 2) pulled towards the child's 300 by 1 / (1 + k).
+  EXPECT_NEAR(t.lookup_shrunk(1, 1, 1.0)[0].sample.luminance, 250, 1e-9);
+  EXPECT_NEAR(t.lookup_shrunk(1, 1, 3.0)[0].sample.luminance, 225, 1e-9);
+  EXPECT_NEAR(t.lookup_shrunk(-2, -2, 3.0)[0].sample.luminance, 200, 1e-9);
   // max_depth 0: the single global estimate.
   EXPECT_EQ(t.lookup(1, 1, 0)[0].node, 0);
   // Never-observed sectors: filled from the same hemisphere (up) and from all (down).

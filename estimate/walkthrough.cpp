@@ -236,8 +236,9 @@ std::vector<PathPoint> walkthrough_path(const Room& room, const WalkthroughOptio
   return path;
 }
 
-Track make_walkthrough_track(const Room& room, const WalkthroughOptions& o) {
-  const auto path = walkthrough_path(room, o);
+namespace {
+
+Track track_along(const Room& room, const WalkthroughOptions& o, const std::vector<PathPoint>& path) {
   Track track;
   track.has_camera = true;
   track.camera = o.camera;
@@ -251,6 +252,18 @@ Track make_walkthrough_track(const Room& room, const WalkthroughOptions& o) {
     f.metadata = render_camera_frame(room, path[i].position, path[i].view, o).metadata;
   });
   return track;
+}
+
+}  // namespace
+
+Track make_walkthrough_track(const Room& room, const WalkthroughOptions& o) {
+  return track_along(room, o, walkthrough_path(room, o));
+}
+
+Track make_standing_track(const Room& room, const WalkthroughOptions& o, Vec3 point) {
+  auto path = walkthrough_path(room, o);
+  for (PathPoint& p : path) p.position = point;
+  return track_along(room, o, path);
 }
 
 std::vector<Vec3> walkthrough_query_points(const Room& room, const WalkthroughOptions& o) {

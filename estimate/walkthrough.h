@@ -94,6 +94,10 @@ struct PathPoint {
 std::vector<PathPoint> walkthrough_path(const Room& room, const WalkthroughOptions& options);
 // Track of the whole path (camera header included).
 Track make_walkthrough_track(const Room& room, const WalkthroughOptions& options);
+// The same head motion (view directions, timing) but every frame taken standing at `point`:
+// separates the error of metering from views (what this track's model gets at `point`)
+// from the error of being elsewhere (what the walked track's model gets there).
+Track make_standing_track(const Room& room, const WalkthroughOptions& options, Vec3 point);
 // Query points: a 3 x 2 grid over the floor at eye height.
 std::vector<Vec3> walkthrough_query_points(const Room& room, const WalkthroughOptions& options);
 

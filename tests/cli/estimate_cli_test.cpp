@@ -131,7 +131,7 @@ TEST(EstimateCli, EvalMetadataReportsProbesAndModel) {
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(fs::exists(out / "metadata.csv"));
   EXPECT_TRUE(fs::exists(out / "metadata.svg"));
-  ASSERT_EQ(j["rows"].size(), 5u + 2u * 4u);
+  ASSERT_EQ(j["rows"].size(), 5u + 1u + 2u * 4u);  // probes, best six, standing, 4 variants x 2
   double q2 = -1, paper = -1;
   for (const auto& row : j["rows"]) {
     if (row["method"] == "probe q2tree 64") q2 = row["diffuse_mean"].get<double>();

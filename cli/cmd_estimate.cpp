@@ -22,6 +22,7 @@
 #include "estimate/light_quadtree.h"
 #include "estimate/metadata_track.h"
 #include "estimate/walkthrough.h"
+#include "estimate/white_balance_cct.h"
 #include "sampling/exporters.h"
 #include "sampling/sampler.h"
 
@@ -85,6 +86,20 @@ std::string slurp(const std::string& path) {
   std::stringstream s;
   s << f.rdbuf();
   return s.str();
+}
+
+// Mean |CCT error| (K) of six sector lights against the true map's sector colours.
+double sector_cct_error(const std::vector<Light>& lights, const EnvMap& probe) {
+  const std::vector<Light> truth = bipyramid_lights_of_map(probe);
+  double sum = 0;
+  int n = 0;
+  for (const Light& l : lights)
+    for (const Light& t : truth)
+      if (t.id == l.id && l.luminance() > 0 && t.luminance() > 0) {
+        sum += std::fabs(cct_robertson(chromaticity_of_rgb(l.rgb)).kelvin - cct_robertson(chromaticity_of_rgb(t.rgb)).kelvin);
+        ++n;
+      }
+  return n ? sum / n : NAN;
 }
 
 double percentile(std::vector<double> v, double p) {
@@ -302,6 +317,7 @@ int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
     double mean_error = 0, max_error = 0;
     double mean_distance = 0;  // query point to the nearest visited position
     double seconds_per_query = 0;
+    double cct_error = NAN;  // K, mean over sectors and query points (metadata rows)
   };
   std::vector<Row> rows;
   // Real probes at each query point: the same maps sampled by the existing samplers.
@@ -342,9 +358,11 @@ int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
     for (const Query& q : queries) {
       const Track standing = read_track(q.standing_track);
       const LightQuadtree model = build_model(standing, standing.camera, sb);
-      const double e = light_error(q.reference, model.lights_at(q.position.x, q.position.y).lights).diffuse;
+      const LightList l = model.lights_at(q.position.x, q.position.y);
+      const double e = light_error(q.reference, l.lights).diffuse;
       r.mean_error += e / double(queries.size());
       r.max_error = std::max(r.max_error, e);
+      r.cct_error = (std::isnan(r.cct_error) ? 0 : r.cct_error) + sector_cct_error(l.lights, q.probe) / double(queries.size());
       r.frames = standing.frames.size();
     }
     rows.push_back(r);
@@ -392,6 +410,7 @@ int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
         const double e = light_error(q.reference, l.lights).diffuse;
         r.mean_error += e / double(queries.size());
         r.max_error = std::max(r.max_error, e);
+        r.cct_error = (std::isnan(r.cct_error) ? 0 : r.cct_error) + sector_cct_error(l.lights, q.probe) / double(queries.size());
       }
       r.seconds_per_query = t / double(queries.size()) + build_s / double(count);  // + the update cost of a frame
       rows.push_back(r);
@@ -401,10 +420,11 @@ int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
   progress.finish();
 
   fs::create_directories(args.output_dir);
-  std::string csv = "method,path_fraction,frames,mean_distance_m,diffuse_mean,diffuse_max,seconds_per_query\n";
+  std::string csv = "method,path_fraction,frames,mean_distance_m,diffuse_mean,diffuse_max,cct_error_k,seconds_per_query\n";
   for (const Row& r : rows)
-    csv += fmt::format("\"{}\",{},{},{:.4f},{:.6f},{:.6f},{:.3e}\n", r.method, r.fraction, r.frames, r.mean_distance, r.mean_error,
-                       r.max_error, r.seconds_per_query);
+    csv += fmt::format("\"{}\",{},{},{:.4f},{:.6f},{:.6f},{},{:.3e}\n", r.method, r.fraction, r.frames, r.mean_distance,
+                       r.mean_error, r.max_error, std::isnan(r.cct_error) ? std::string() : fmt::format("{:.1f}", r.cct_error),
+                       r.seconds_per_query);
   const std::string csv_path = (fs::path(args.output_dir) / "metadata.csv").string();
   write_file_atomically(csv_path, csv);
 
@@ -436,13 +456,17 @@ int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
   const std::string svg_path = (fs::path(args.output_dir) / "metadata.svg").string();
   write_file_atomically(svg_path, svg_chart("Light without a probe: camera metadata against real probes", {panel}, 1));
 
-  say(out, "{:<38} {:>6} {:>6} {:>8} {:>9} {:>9} {:>11}\n", "method", "path", "frames", "dist m", "diffuse", "max", "s/query");
+  say(out, "{:<38} {:>6} {:>6} {:>8} {:>9} {:>9} {:>7} {:>11}\n", "method", "path", "frames", "dist m", "diffuse", "max",
+      "dCCT K", "s/query");
   nlohmann::json jrows = nlohmann::json::array();
   for (const Row& r : rows) {
-    say(out, "{:<38} {:>6.2f} {:>6} {:>8.2f} {:>9.3f} {:>9.3f} {:>11.2e}\n", r.method, r.fraction, r.frames, r.mean_distance,
-        r.mean_error, r.max_error, r.seconds_per_query);
-    jrows.push_back({{"method", r.method}, {"path_fraction", r.fraction}, {"frames", r.frames}, {"mean_distance_m", r.mean_distance},
-                     {"diffuse_mean", r.mean_error}, {"diffuse_max", r.max_error}, {"seconds_per_query", r.seconds_per_query}});
+    say(out, "{:<38} {:>6.2f} {:>6} {:>8.2f} {:>9.3f} {:>9.3f} {:>7} {:>11.2e}\n", r.method, r.fraction, r.frames,
+        r.mean_distance, r.mean_error, r.max_error, std::isnan(r.cct_error) ? std::string("-") : fmt::format("{:.0f}", r.cct_error),
+        r.seconds_per_query);
+    nlohmann::json jr{{"method", r.method}, {"path_fraction", r.fraction}, {"frames", r.frames}, {"mean_distance_m", r.mean_distance},
+                      {"diffuse_mean", r.mean_error}, {"diffuse_max", r.max_error}, {"seconds_per_query", r.seconds_per_query}};
+    jr["cct_error_k"] = std::isnan(r.cct_error) ? nlohmann::json() : nlohmann::json(r.cct_error);
+    jrows.push_back(jr);
   }
   say(out, "{} rows -> {}, {}\n", rows.size(), csv_path, svg_path);
   emit_json(out, {{"csv", csv_path}, {"chart", svg_path}, {"queries", queries.size()}, {"frames", track.frames.size()}, {"rows", jrows}});

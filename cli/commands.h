@@ -262,8 +262,16 @@ struct StreamArgs {
   double fps = 0;                   // replay pacing; also the temporal filter's rate
   bool loop = false;
   double duration = 0;              // seconds; 0 = until interrupted (or the replay ends)
+  // Probe-less mode (docs/metadata.md): each frame's exposure, gain and image mean update
+  // a metadata model (saved to this path) and the server serves its lights at --position.
+  std::string metadata_model;
+  std::string position = "0,0";     // where the rig stands, X,Y m (a fixed rig: no tracker)
+  std::string view_dir = "1,0,0";   // where it looks, world frame
+  double min_frames = 1;            // look-up rule (estimate query --min-frames)
 };
 int run_stream(const StreamArgs& args, const Output& out);
+// stream --metadata-model: the probe-less loop (cli/cmd_stream_metadata.cpp).
+int run_stream_metadata(const StreamArgs& args, const Output& out);
 
 struct MergeArgs {
   std::vector<std::string> urls;    // light servers: http://HOST:PORT

@@ -363,6 +363,11 @@ int main(int argc, char** argv) {
   c_strm->add_option("--fps", strm.fps, "Replay pacing and the temporal filter's frame rate");
   c_strm->add_flag("--loop", strm.loop, "Replay: start over at the end");
   c_strm->add_option("--duration", strm.duration, "Stop after this many seconds");
+  c_strm->add_option("--metadata-model", strm.metadata_model,
+                     "Probe-less mode: meter each frame's exposure/gain into this model and serve its lights");
+  c_strm->add_option("--position", strm.position, "Metadata mode: where the rig stands, X,Y m");
+  c_strm->add_option("--view-dir", strm.view_dir, "Metadata mode: where the camera looks, x,y,z");
+  c_strm->add_option("--min-frames", strm.min_frames, "Metadata mode: frames that make a sector informed");
   c_strm->add_flag("--json", out.json, "Print the final report as JSON");
 
   MergeArgs mrg;

@@ -165,3 +165,23 @@ TEST(EstimateCli, BadMetadataIsAOneLineErrorNamingFileAndLine) {
   expect_one_line_error(lightprobe("eval metadata " + scratch().string() + " -o " + (scratch() / "e").string()),
                         "truth.json");
 }
+
+// The probe-less mode fed live: Aravis' simulated camera, a fixed rig.
+TEST(EstimateCli, StreamFeedsTheMetadataModelLive) {
+  const fs::path model = scratch() / "live_model.json";
+  const CliRun r = lightprobe("stream --source aravis:Fake_1 --listen 127.0.0.1:0 --duration 1.5 --metadata-model " +
+                              model.string() + " --position 1,2 --view-dir 0,0,1 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["frames_used"].get<int>(), 5);
+  EXPECT_GT(j["last_luminance_cd_m2"].get<double>(), 0);
+  const auto m = nlohmann::json::parse(slurp(model));
+  EXPECT_EQ(m["format"], "lightprobe.metadata-model/1");
+  EXPECT_EQ(m["origin"][0], 1.0);
+  // Looking straight up fills an up sector (azimuth 0: sector 0) of the root.
+  EXPECT_GT(m["nodes"][0]["sectors"][0]["weight"].get<double>(), 5);
+  EXPECT_EQ(m["nodes"][0]["sectors"][3]["weight"].get<double>(), 0);
+  expect_one_line_error(lightprobe("stream --source aravis:Fake_1 --listen 127.0.0.1:0 --duration 1 --metadata-model " +
+                                   model.string() + " --view-dir 0,0,0"),
+                        "--view-dir");
+}

@@ -185,3 +185,24 @@ TEST(EstimateCli, StreamFeedsTheMetadataModelLive) {
                                    model.string() + " --view-dir 0,0,0"),
                         "--view-dir");
 }
+
+// The calibration route with a real `calib photometric` result: luminance scales with its k.
+TEST(EstimateCli, PhotometricCalibrationFileSetsTheScale) {
+  const fs::path d = walkthrough_dir();
+  const fs::path readings = scratch() / "readings.csv", cal = scratch() / "photometric.json";
+  // Noiseless readings of k = 5.5 cd/m2 per relative unit (about twice the synthetic camera's 2.78).
+  write(readings, "region,camera_value,measured,unit\np1,1.0,5.5,cd/m2\np2,2.0,11.0,cd/m2\np3,4.0,22.0,cd/m2\n");
+  CliRun r = lightprobe("calib photometric " + readings.string() + " -o " + cal.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = lightprobe("estimate metadata " + (d / "track.jsonl").string() + " -o " + (scratch() / "m3.json").string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto base = nlohmann::json::parse(r.out);
+  r = lightprobe("estimate metadata " + (d / "track.jsonl").string() + " -o " + (scratch() / "m4.json").string() +
+                 " --photometric " + cal.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto scaled = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(scaled["camera"]["photometric_scale"].get<double>(), 5.5, 1e-6);
+  const double k_track = base["camera"]["photometric_scale"].get<double>();
+  EXPECT_NEAR(scaled["luminance_cd_m2"]["median"].get<double>() / base["luminance_cd_m2"]["median"].get<double>(),
+              5.5 / k_track, 1e-6);
+}

@@ -65,6 +65,11 @@ MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
   if (a.ae_target >= 0) m.ae_target = a.ae_target;
   if (a.iso_base >= 0) m.iso_base = a.iso_base;
   if (a.meter_constant >= 0) m.meter_constant = a.meter_constant;
+  if (!a.colour_matrix.empty()) {
+    const auto v = parse_numbers(a.colour_matrix, "--colour-matrix", 9);
+    m.colour_matrix = std::array<double, 9>{};
+    std::copy(v.begin(), v.end(), m.colour_matrix->begin());
+  }
   validate_metering(m);
   return m;
 }

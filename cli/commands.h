@@ -294,6 +294,7 @@ struct EstimateMetadataArgs {
   bool meter_equation = false;      // ignore any photometric scale (also the track's)
   double calibration_f_number = -1; // -1: the track header's (or 0)
   double f_number = -1, ae_target = -1, iso_base = -1, meter_constant = -1;  // -1: the track's
+  std::string colour_matrix;        // 9 numbers, camera RGB -> Rec. 709 (default: the track's, else none)
   double root_size = 32, min_size = 1, max_weight = 0;
   std::string origin;               // "X,Y"; default the first frame's position
 };

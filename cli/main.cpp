@@ -303,6 +303,7 @@ int main(int argc, char** argv) {
   c_emd->add_option("--ae-target", emd.ae_target, "Mean code value the auto exposure aims at (0..1)");
   c_emd->add_option("--iso-base", emd.iso_base, "ISO at gain 1 (meter equation)");
   c_emd->add_option("--meter-constant", emd.meter_constant, "Reflected-light meter constant K, cd s m^-2");
+  c_emd->add_option("--colour-matrix", emd.colour_matrix, "Camera RGB -> Rec. 709: 9 numbers, row-major");
   c_emd->add_option("--root-size", emd.root_size, "Side of the root cell, m (must cover the scene)");
   c_emd->add_option("--min-size", emd.min_size, "Smallest cell side, m");
   c_emd->add_option("--max-weight", emd.max_weight, "Cap on a sector's frame count: old frames fade (0: no cap)");

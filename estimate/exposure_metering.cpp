@@ -19,6 +19,20 @@ void require_positive(const std::optional<double>& v, const char* name, const st
   if (v && !positive(*v)) throw InputError(fmt::format("{}: {} must be finite and positive, got {}", source, name, *v));
 }
 
+// Camera RGB -> Rec. 709 (when a matrix is given), normalised to luminance 1.
+std::array<double, 3> to_rec709_unit(std::array<double, 3> c, const MeteringOptions& o, const std::string& source,
+                                     const char* what) {
+  if (o.colour_matrix) {
+    const auto& m = *o.colour_matrix;
+    c = {m[0] * c[0] + m[1] * c[1] + m[2] * c[2], m[3] * c[0] + m[4] * c[1] + m[5] * c[2],
+         m[6] * c[0] + m[7] * c[1] + m[8] * c[2]};
+  }
+  const double y = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+  if (!(y > 0) || !std::isfinite(y))
+    throw InputError(fmt::format("{}: {} has no positive luminance after the colour matrix", source, what));
+  return {c[0] / y, c[1] / y, c[2] / y};
+}
+
 }  // namespace
 
 std::array<double, 3> LightReading::radiance() const {
@@ -37,6 +51,9 @@ void validate_metering(const MeteringOptions& o) {
   if (!positive(o.iso_base)) throw InputError(fmt::format("--iso-base must be positive, got {}", o.iso_base));
   if (!positive(o.meter_constant))
     throw InputError(fmt::format("--meter-constant must be positive, got {}", o.meter_constant));
+  if (o.colour_matrix)
+    for (double v : *o.colour_matrix)
+      if (!std::isfinite(v)) throw InputError("--colour-matrix must hold 9 finite numbers");
 }
 
 LightReading meter_frame(const FrameMetadata& f, const MeteringOptions& o, const std::string& source) {
@@ -83,12 +100,10 @@ LightReading meter_frame(const FrameMetadata& f, const MeteringOptions& o, const
       if (!positive(c))
         throw InputError(fmt::format("{}: bright_rgb must be finite and positive, got [{}, {}, {}]", source,
                                      (*f.bright_rgb)[0], (*f.bright_rgb)[1], (*f.bright_rgb)[2]));
-    const auto& b = *f.bright_rgb;
-    const double y = 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
-    r.colour = {b[0] / y, b[1] / y, b[2] / y};
+    r.colour = to_rec709_unit(*f.bright_rgb, o, source, "bright_rgb");
     r.colour_from = "bright_rgb";
   } else if (f.wb_gains) {
-    r.colour = illuminant_from_wb_gains(*f.wb_gains, source);
+    r.colour = to_rec709_unit(illuminant_from_wb_gains(*f.wb_gains, source), o, source, "the white-balance illuminant");
     r.colour_from = "wb_gains";
   } else if (f.cct_k) {
     r.colour = planckian_rgb(*f.cct_k);

@@ -26,7 +26,8 @@
 // iso / S_base when only an ISO is given. A frame without any of them is an error: a
 // missing gain is not 1.
 //
-// Colour (luminance-1 Rec. 709 RGB of the light): the brightest pixels' raw RGB when given
+// Colour (luminance-1 Rec. 709 RGB of the light; through `colour_matrix` when the camera's
+// raw RGB is not Rec. 709): the brightest pixels' raw RGB when given
 // (handles strongly coloured sources that are no black body), else the illuminant of the
 // white-balance gains, else the black body of a reported CCT, else neutral (flagged).
 #pragma once
@@ -59,6 +60,10 @@ struct MeteringOptions {
   double ae_target = 0.18;                  // Y_target, mean code the AE aims at
   double iso_base = 100;                    // S_base, ISO at gain 1
   double meter_constant = 12.5;             // K, cd s m^-2
+  // Camera raw RGB -> linear Rec. 709, row-major (a sensor's colour matrix, e.g. a DNG's
+  // forward matrix composed with XYZ -> Rec. 709). Applied to the WB illuminant and the
+  // brightest pixels' colour before their chromaticity is taken; none: raw RGB is Rec. 709.
+  std::optional<std::array<double, 9>> colour_matrix;
 };
 
 struct LightReading {

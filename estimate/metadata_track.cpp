@@ -40,6 +40,15 @@ void read_camera(const json& c, MeteringOptions& o, const std::string& source) {
   if (auto v = opt_number(c, "ae_target", source)) o.ae_target = *v;
   if (auto v = opt_number(c, "iso_base", source)) o.iso_base = *v;
   if (auto v = opt_number(c, "meter_constant", source)) o.meter_constant = *v;
+  if (auto it = c.find("colour_matrix"); it != c.end() && !it->is_null()) {
+    if (!it->is_array() || it->size() != 9) throw InputError(fmt::format("{}: colour_matrix must be 9 numbers", source));
+    std::array<double, 9> m{};
+    for (int i = 0; i < 9; ++i) {
+      if (!(*it)[i].is_number()) throw InputError(fmt::format("{}: colour_matrix must be 9 numbers", source));
+      m[i] = (*it)[i].get<double>();
+    }
+    o.colour_matrix = m;
+  }
 }
 
 }  // namespace
@@ -122,6 +131,7 @@ std::string track_to_jsonl(const Track& track) {
              {"meter_constant", track.camera.meter_constant}};
     if (track.camera.photometric_scale) cam["photometric_scale"] = *track.camera.photometric_scale;
     if (track.camera.calibration_f_number > 0) cam["calibration_f_number"] = track.camera.calibration_f_number;
+    if (track.camera.colour_matrix) cam["colour_matrix"] = *track.camera.colour_matrix;
     out += json{{"format", "lightprobe.track/1"}, {"camera", cam}}.dump() + "\n";
   }
   for (const TrackFrame& f : track.frames) {

@@ -4,7 +4,8 @@
 //
 // Optional first line, the camera (the same keys as MeteringOptions; CLI options override):
 //   {"format": "lightprobe.track/1", "camera": {"photometric_scale": 2.78, "f_number": 2.0,
-//    "calibration_f_number": 2.0, "ae_target": 0.18, "iso_base": 100, "meter_constant": 12.5}}
+//    "calibration_f_number": 2.0, "ae_target": 0.18, "iso_base": 100, "meter_constant": 12.5,
+//    "colour_matrix": [9 numbers, camera RGB -> Rec. 709, row-major]}}
 // Frame lines (required: position, view_dir, exposure_s and one of gain_db / analog_gain /
 // iso; the rest optional):
 //   {"frame": 0, "timestamp": 0.1, "position": [x, y] or [x, y, z], "view_dir": [x, y, z],

@@ -137,6 +137,32 @@ TEST(ExposureMetering, ColourFromBrightPixelsWbGainsOrCct) {
   EXPECT_LT(r.colour[2], r.colour[0]);
 }
 
+// A sensor whose raw RGB is not Rec. 709: its WB gains give the right CCT only through its
+// colour matrix.
+TEST(ExposureMetering, ColourMatrixMapsSensorRgbToRec709) {
+  const std::array<double, 9> m{1.6, -0.5, -0.1, -0.2, 1.5, -0.3, 0.0, -0.5, 1.5};  // camera -> Rec. 709
+  // Inverse by cofactors: Rec. 709 -> camera.
+  const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
+  const std::array<double, 9> inv{(m[4] * m[8] - m[5] * m[7]) / det, (m[2] * m[7] - m[1] * m[8]) / det, (m[1] * m[5] - m[2] * m[4]) / det,
+                                  (m[5] * m[6] - m[3] * m[8]) / det, (m[0] * m[8] - m[2] * m[6]) / det, (m[2] * m[3] - m[0] * m[5]) / det,
+                                  (m[3] * m[7] - m[4] * m[6]) / det, (m[1] * m[6] - m[0] * m[7]) / det, (m[0] * m[4] - m[1] * m[3]) / det};
+  MeteringOptions cam = walkthrough_camera();
+  for (double t : {2700.0, 4000.0, 6500.0}) {
+    const auto rec = planckian_rgb(t);
+    const std::array<double, 3> raw{inv[0] * rec[0] + inv[1] * rec[1] + inv[2] * rec[2],
+                                    inv[3] * rec[0] + inv[4] * rec[1] + inv[5] * rec[2],
+                                    inv[6] * rec[0] + inv[7] * rec[1] + inv[8] * rec[2]};
+    FrameMetadata f = metadata_for(100, cam);
+    f.wb_gains = wb_gains_for_illuminant(raw);
+    cam.colour_matrix.reset();
+    const double without = meter_frame(f, cam, "t").cct_k;
+    cam.colour_matrix = m;
+    EXPECT_NEAR(meter_frame(f, cam, "t").cct_k, t, 0.005 * t);
+    // The matrix keeps white (rows sum to 1), so it matters away from D65 only.
+    if (t < 5000) EXPECT_GT(std::fabs(without - t), 0.05 * t) << t;
+  }
+}
+
 TEST(ExposureMetering, BadMetadataNamesTheFrameAndTheField) {
   const MeteringOptions cam = walkthrough_camera();
   FrameMetadata m = metadata_for(100, cam);

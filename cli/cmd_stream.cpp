@@ -41,6 +41,7 @@ void parse_listen(const std::string& text, std::string* host, int* port) {
 }  // namespace
 
 int run_stream(const StreamArgs& args, const Output& out) {
+  if (!args.metadata_model.empty()) return run_stream_metadata(args, out);  // the probe-less mode
   // Options in, validated before anything starts.
   SourceOptions so;
   so.loop = args.loop;

@@ -263,8 +263,16 @@ struct StreamArgs {
   double fps = 0;                   // replay pacing; also the temporal filter's rate
   bool loop = false;
   double duration = 0;              // seconds; 0 = until interrupted (or the replay ends)
+  // Probe-less mode (docs/metadata.md): each frame's exposure, gain and image mean update
+  // a metadata model (saved to this path) and the server serves its lights at --position.
+  std::string metadata_model;
+  std::string position = "0,0";     // where the rig stands, X,Y m (a fixed rig: no tracker)
+  std::string view_dir = "1,0,0";   // where it looks, world frame
+  double min_frames = 1;            // look-up rule (estimate query --min-frames)
 };
 int run_stream(const StreamArgs& args, const Output& out);
+// stream --metadata-model: the probe-less loop (cli/cmd_stream_metadata.cpp).
+int run_stream_metadata(const StreamArgs& args, const Output& out);
 
 struct MergeArgs {
   std::vector<std::string> urls;    // light servers: http://HOST:PORT
@@ -324,6 +332,51 @@ struct TablesArgs {
   std::string output;               // .json, or the binary texture (.lpst / anything else)
 };
 int run_tables(const TablesArgs& args, const Output& out);
+// estimate metadata / query, synth walkthrough, eval metadata: lighting without a probe,
+// from camera metadata over a floor quadtree (seed 003; docs/metadata.md).
+struct EstimateMetadataArgs {
+  std::string track;                // JSONL track (estimate/metadata_track.h)
+  std::string output;               // model.json
+  std::string photometric;          // calib photometric result: k for the calibration route
+  bool meter_equation = false;      // ignore any photometric scale (also the track's)
+  double calibration_f_number = -1; // -1: the track header's (or 0)
+  double f_number = -1, ae_target = -1, iso_base = -1, meter_constant = -1;  // -1: the track's
+  std::string colour_matrix;        // 9 numbers, camera RGB -> Rec. 709 (default: the track's, else none)
+  double root_size = 32, min_size = 1, max_weight = 0;
+  std::string origin;               // "X,Y"; default the first frame's position
+};
+int run_estimate_metadata(const EstimateMetadataArgs& args, const Output& out);
+
+struct EstimateQueryArgs {
+  std::string model;
+  std::string at;                   // "X,Y" or "X,Y,Z" (z ignored: the model is 2D)
+  std::string output;               // light list; format from --format or the extension
+  std::string format;
+  double min_frames = 1;            // frames that make a sector informed (1: the paper's rule)
+  double shrink = 0;                // > 0: hierarchical shrinkage with this prior weight
+  int max_depth = -1;
+};
+int run_estimate_query(const EstimateQueryArgs& args, const Output& out);
+
+struct SynthWalkthroughArgs {
+  std::string output_dir;
+  double fps = 10, speed = 0.7;
+  int rays = 16;                    // camera rays across
+  int probe_size = 128;             // latlong width of the query probes
+  int samples = 4;                  // per pixel edge
+  bool no_mean_code = false;        // the camera does not report its metered mean
+  bool bright_rgb = false;          // record the brightest pixels' colour
+};
+int run_synth_walkthrough(const SynthWalkthroughArgs& args, const Output& out);
+
+struct EvalMetadataArgs {
+  std::string input_dir;            // from synth walkthrough
+  std::string output_dir;
+  std::string fractions = "0.1,0.25,0.5,0.75,1";
+  double root_size = 0;             // 0: twice the room's larger side
+  double min_size = 1;
+};
+int run_eval_metadata(const EvalMetadataArgs& args, const Output& out);
 
 // Shared parsing helpers; throw lp::InputError naming the option.
 // --methods: comma-separated method names or "all".

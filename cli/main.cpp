@@ -335,6 +335,59 @@ int main(int argc, char** argv) {
   c_evu->add_option("-o,--output", evu.output_dir, "Directory for unwrap.csv")->required();
   c_evu->add_flag("--json", out.json, "Print the report as JSON");
 
+  // estimate: lighting without a probe, from camera metadata (docs/metadata.md)
+  auto* c_est = app.add_subcommand("estimate", "Lighting without a probe, from camera metadata over space");
+  c_est->require_subcommand(1);
+  EstimateMetadataArgs emd;
+  auto* c_emd = c_est->add_subcommand("metadata", "A recorded track (position, view, exposure, gain, WB per frame) -> quadtree model");
+  c_emd->add_option("TRACK", emd.track, "JSONL track (see docs/metadata.md for the schema)")->required();
+  c_emd->add_option("-o,--output", emd.output, "Model JSON")->required();
+  c_emd->add_option("--photometric", emd.photometric, "Photometric calibration (calib photometric): k for the calibration route");
+  c_emd->add_flag("--meter-equation", emd.meter_equation, "Use the ISO 2720 meter equation even if a scale is known");
+  c_emd->add_option("--calibration-f-number", emd.calibration_f_number, "Aperture the photometric scale was fitted at");
+  c_emd->add_option("--f-number", emd.f_number, "Aperture of frames that record none");
+  c_emd->add_option("--ae-target", emd.ae_target, "Mean code value the auto exposure aims at (0..1)");
+  c_emd->add_option("--iso-base", emd.iso_base, "ISO at gain 1 (meter equation)");
+  c_emd->add_option("--meter-constant", emd.meter_constant, "Reflected-light meter constant K, cd s m^-2");
+  c_emd->add_option("--colour-matrix", emd.colour_matrix, "Camera RGB -> Rec. 709: 9 numbers, row-major");
+  c_emd->add_option("--root-size", emd.root_size, "Side of the root cell, m (must cover the scene)");
+  c_emd->add_option("--min-size", emd.min_size, "Smallest cell side, m");
+  c_emd->add_option("--max-weight", emd.max_weight, "Cap on a sector's frame count: old frames fade (0: no cap)");
+  c_emd->add_option("--origin", emd.origin, "Root centre X,Y in metres (default: the first frame's position)");
+  c_emd->add_flag("--json", out.json, "Print the report as JSON");
+
+  EstimateQueryArgs eq;
+  auto* c_eq = c_est->add_subcommand("query", "Six directional lights of a model at a position");
+  c_eq->add_option("MODEL", eq.model, "Model JSON (estimate metadata)")->required();
+  c_eq->add_option("--at", eq.at, "Position X,Y[,Z] in metres")->required();
+  c_eq->add_option("-o,--output", eq.output, "Light list (.json, .pbrt, .xml, .gltf, .csv)")->required();
+  c_eq->add_option("--format", eq.format, "json|ndjson|pbrt|mitsuba|gltf|csv (default from -o)");
+  c_eq->add_option("--min-frames", eq.min_frames, "Frames that make a sector informed (1: the paper's rule)");
+  c_eq->add_option("--shrink", eq.shrink, "Hierarchical shrinkage with this prior weight in frames (0: off)");
+  c_eq->add_option("--max-depth", eq.max_depth, "Descend at most this deep (0: the root's global estimate)");
+  c_eq->add_flag("--json", out.json, "Print the report as JSON");
+
+  SynthWalkthroughArgs swk;
+  auto* c_swk = c_synth->add_subcommand("walkthrough", "A room walked by a metadata camera, with true probes at query points");
+  c_swk->add_option("-o,--output", swk.output_dir, "Directory for track.jsonl, probes/, truth.json")->required();
+  c_swk->add_option("--fps", swk.fps, "Camera frame rate");
+  c_swk->add_option("--speed", swk.speed, "Walking speed, m/s");
+  c_swk->add_option("--rays", swk.rays, "Camera rays across the frame");
+  c_swk->add_option("--probe-size", swk.probe_size, "Latlong width of the query probes");
+  c_swk->add_option("--samples", swk.samples, "Probe rays per pixel edge");
+  c_swk->add_flag("--no-mean-code", swk.no_mean_code, "The camera does not report its metered mean (AE assumed on target)");
+  c_swk->add_flag("--bright-rgb", swk.bright_rgb, "Record the brightest pixels' colour");
+  c_swk->add_flag("--json", out.json, "Print the report as JSON");
+
+  EvalMetadataArgs evm;
+  auto* c_evm = c_eval->add_subcommand("metadata", "Diffuse error of the metadata model against real probes along a walk");
+  c_evm->add_option("DIR", evm.input_dir, "Directory from synth walkthrough")->required();
+  c_evm->add_option("-o,--output", evm.output_dir, "Directory for metadata.csv and metadata.svg")->required();
+  c_evm->add_option("--fractions", evm.fractions, "Parts of the path to build the model from");
+  c_evm->add_option("--root-size", evm.root_size, "Root cell side, m (0: twice the room's larger side)");
+  c_evm->add_option("--min-size", evm.min_size, "Smallest cell side, m");
+  c_evm->add_flag("--json", out.json, "Print the report as JSON");
+
   // stream
   StreamArgs strm;
   auto* c_strm = app.add_subcommand("stream", "Run the whole chain live and serve light lists over HTTP");
@@ -360,6 +413,11 @@ int main(int argc, char** argv) {
   c_strm->add_option("--fps", strm.fps, "Replay pacing and the temporal filter's frame rate");
   c_strm->add_flag("--loop", strm.loop, "Replay: start over at the end");
   c_strm->add_option("--duration", strm.duration, "Stop after this many seconds");
+  c_strm->add_option("--metadata-model", strm.metadata_model,
+                     "Probe-less mode: meter each frame's exposure/gain into this model and serve its lights");
+  c_strm->add_option("--position", strm.position, "Metadata mode: where the rig stands, X,Y m");
+  c_strm->add_option("--view-dir", strm.view_dir, "Metadata mode: where the camera looks, x,y,z");
+  c_strm->add_option("--min-frames", strm.min_frames, "Metadata mode: frames that make a sector informed");
   c_strm->add_flag("--json", out.json, "Print the final report as JSON");
 
   MergeArgs mrg;
@@ -408,6 +466,10 @@ int main(int argc, char** argv) {
     if (*c_spr) return run_synth_probe(spr, out);
     if (*c_preg) return run_probe_register(preg, out);
     if (*c_evu) return run_eval_unwrap(evu, out);
+    if (*c_emd) return run_estimate_metadata(emd, out);
+    if (*c_eq) return run_estimate_query(eq, out);
+    if (*c_swk) return run_synth_walkthrough(swk, out);
+    if (*c_evm) return run_eval_metadata(evm, out);
     if (*c_strm) return run_stream(strm, out);
     if (*c_mrg) return run_merge(mrg, out);
   } catch (const lp::InputError& e) {

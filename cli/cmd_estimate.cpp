@@ -1,0 +1,481 @@
+// estimate metadata / estimate query / synth walkthrough / eval metadata: lighting without a
+// probe, from the metadata a camera already has (exposure, gain, aperture, white balance),
+// stored over the floor in the quadtree of seed 003 (docs/metadata.md).
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "calib/photometric.h"
+#include "cli/commands.h"
+#include "cli/report.h"
+#include "cli/svg_chart.h"
+#include "core/accuracy.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/progress.h"
+#include "estimate/light_quadtree.h"
+#include "estimate/metadata_track.h"
+#include "estimate/walkthrough.h"
+#include "estimate/white_balance_cct.h"
+#include "sampling/exporters.h"
+#include "sampling/sampler.h"
+
+namespace lp::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+ExportFormat light_format(const std::string& format, const std::string& output) {
+  if (!format.empty()) {
+    auto f = export_format_from_string(format);
+    if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, csv)", format));
+    return *f;
+  }
+  const std::string e = fs::path(output).extension().string();
+  if (e == ".ndjson" || e == ".jsonl") return ExportFormat::Ndjson;
+  if (e == ".pbrt") return ExportFormat::Pbrt;
+  if (e == ".xml") return ExportFormat::Mitsuba;
+  if (e == ".gltf") return ExportFormat::Gltf;
+  if (e == ".csv") return ExportFormat::Csv;
+  return ExportFormat::Json;
+}
+
+// The camera: the track's header, then --photometric and the explicit options.
+MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
+  MeteringOptions m = track.camera;
+  if (!a.photometric.empty()) {
+    const PhotometricCalibration cal = load_photometric(a.photometric);
+    if (cal.log_sensor)
+      throw InputError(fmt::format("{}: a log-sensor calibration has no linear scale for exposure metering", a.photometric));
+    m.photometric_scale = cal.scale_luminance;
+  }
+  if (a.meter_equation) m.photometric_scale.reset();
+  if (a.calibration_f_number >= 0) m.calibration_f_number = a.calibration_f_number;
+  if (a.f_number >= 0) m.f_number = a.f_number;
+  if (a.ae_target >= 0) m.ae_target = a.ae_target;
+  if (a.iso_base >= 0) m.iso_base = a.iso_base;
+  if (a.meter_constant >= 0) m.meter_constant = a.meter_constant;
+  if (!a.colour_matrix.empty()) {
+    const auto v = parse_numbers(a.colour_matrix, "--colour-matrix", 9);
+    m.colour_matrix = std::array<double, 9>{};
+    std::copy(v.begin(), v.end(), m.colour_matrix->begin());
+  }
+  validate_metering(m);
+  return m;
+}
+
+nlohmann::json camera_json(const MeteringOptions& m) {
+  nlohmann::json j{{"route", m.photometric_scale ? "calibration" : "meter"},
+                   {"f_number", m.f_number},
+                   {"calibration_f_number", m.calibration_f_number},
+                   {"ae_target", m.ae_target},
+                   {"iso_base", m.iso_base},
+                   {"meter_constant", m.meter_constant}};
+  if (m.photometric_scale) j["photometric_scale"] = *m.photometric_scale;
+  return j;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw InputError(fmt::format("{}: cannot open", path));
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// Mean |CCT error| (K) of six sector lights against the true map's sector colours.
+double sector_cct_error(const std::vector<Light>& lights, const EnvMap& probe) {
+  const std::vector<Light> truth = bipyramid_lights_of_map(probe);
+  double sum = 0;
+  int n = 0;
+  for (const Light& l : lights)
+    for (const Light& t : truth)
+      if (t.id == l.id && l.luminance() > 0 && t.luminance() > 0) {
+        sum += std::fabs(cct_robertson(chromaticity_of_rgb(l.rgb)).kelvin - cct_robertson(chromaticity_of_rgb(t.rgb)).kelvin);
+        ++n;
+      }
+  return n ? sum / n : NAN;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
+}
+
+}  // namespace
+
+int run_estimate_metadata(const EstimateMetadataArgs& args, const Output& out) {
+  const auto t0 = Clock::now();
+  const Track track = read_track(args.track);
+  const MeteringOptions camera = camera_from(track, args);
+  // Meter every frame first: a bad line fails before anything is written.
+  std::vector<LightReading> readings;
+  readings.reserve(track.frames.size());
+  for (const TrackFrame& f : track.frames) readings.push_back(meter_frame(f.metadata, camera, f.source));
+
+  BuildModelOptions b;
+  b.quadtree.root_size = args.root_size;
+  b.quadtree.min_size = args.min_size;
+  b.quadtree.max_weight = args.max_weight;
+  if (!args.origin.empty()) {
+    const auto o = parse_numbers(args.origin, "--origin", 2);
+    b.quadtree.origin_x = o[0];
+    b.quadtree.origin_y = o[1];
+    b.origin_from_first_frame = false;
+  }
+  const auto t_build = Clock::now();
+  const LightQuadtree model = build_model(track, camera, b);
+  const double build_s = seconds_since(t_build);
+  save_model(args.output, model);
+
+  std::vector<double> lum, lux, cct;
+  for (const LightReading& r : readings) {
+    lum.push_back(r.luminance);
+    lux.push_back(r.illuminance);
+    if (r.cct_k > 0 && std::isfinite(r.cct_k)) cct.push_back(r.cct_k);
+  }
+  const std::string route = camera.photometric_scale ? "calibration" : "meter equation";
+  say(out, "{}: {} frames -> {} nodes (depth {}), {} outside the root; luminance by the {}\n", args.output,
+      track.frames.size(), model.nodes().size(), model.max_depth(), model.outside_updates(), route);
+  say(out, "  luminance cd/m2  median {:.1f}  5-95 %: {:.1f} .. {:.1f}\n", percentile(lum, 0.5), percentile(lum, 0.05),
+      percentile(lum, 0.95));
+  say(out, "  lux (pi L)       median {:.0f}  5-95 %: {:.0f} .. {:.0f}\n", percentile(lux, 0.5), percentile(lux, 0.05),
+      percentile(lux, 0.95));
+  if (!cct.empty())
+    say(out, "  CCT K            median {:.0f}  5-95 %: {:.0f} .. {:.0f}\n", percentile(cct, 0.5), percentile(cct, 0.05),
+        percentile(cct, 0.95));
+  say(out, "  build {:.2f} ms ({:.2f} us per frame)\n", build_s * 1e3, build_s * 1e6 / double(track.frames.size()));
+  emit_json(out, {{"output", args.output},
+                  {"frames", track.frames.size()},
+                  {"nodes", model.nodes().size()},
+                  {"max_depth", model.max_depth()},
+                  {"outside_updates", model.outside_updates()},
+                  {"camera", camera_json(camera)},
+                  {"luminance_cd_m2", {{"median", percentile(lum, 0.5)}, {"p05", percentile(lum, 0.05)}, {"p95", percentile(lum, 0.95)}}},
+                  {"illuminance_lux", {{"median", percentile(lux, 0.5)}, {"p05", percentile(lux, 0.05)}, {"p95", percentile(lux, 0.95)}}},
+                  {"cct_k", {{"median", percentile(cct, 0.5)}, {"p05", percentile(cct, 0.05)}, {"p95", percentile(cct, 0.95)}}},
+                  {"build_seconds", build_s},
+                  {"seconds", seconds_since(t0)}});
+  return 0;
+}
+
+int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
+  const LightQuadtree model = load_model(args.model);
+  const auto at = parse_numbers(args.at, "--at");
+  if (at.size() != 2 && at.size() != 3) throw InputError(fmt::format("--at: give X,Y or X,Y,Z in metres, got '{}'", args.at));
+  if (!(args.min_frames >= 1)) throw InputError(fmt::format("--min-frames must be >= 1, got {}", args.min_frames));
+  if (!(args.shrink >= 0)) throw InputError(fmt::format("--shrink must be >= 0, got {}", args.shrink));
+  const ExportFormat format = light_format(args.format, args.output);
+  const auto t0 = Clock::now();
+  const auto look = args.shrink > 0 ? model.lookup_shrunk(at[0], at[1], args.shrink)
+                                    : model.lookup(at[0], at[1], args.max_depth, args.min_frames);
+  LightList lights = args.shrink > 0 ? model.lights_shrunk(at[0], at[1], args.shrink)
+                                     : model.lights_at(at[0], at[1], args.max_depth, args.min_frames);
+  const double query_s = seconds_since(t0);
+  if (lights.lights.empty()) throw InputError(fmt::format("{}: the model holds no data yet", args.model));
+  write_file_atomically(args.output, export_lights(lights, format));
+  const bool outside = !model.nodes()[0].contains(at[0], at[1]);
+  nlohmann::json sectors = nlohmann::json::array();
+  say(out, "{}: {} lights at ({}, {}){}\n", args.output, lights.lights.size(), at[0], at[1],
+      outside ? " (outside the model: its root answers)" : "");
+  for (int s = 0; s < kBipyramidSectors; ++s) {
+    const SectorLookup& l = look[s];
+    const double cct = l.sample.mired > 0 ? 1e6 / l.sample.mired : 0.0;
+    say(out, "  sector {} ({}): {:8.1f} cd/m2  {:5.0f} K  from {}\n", s, s < 3 ? "up  " : "down", l.sample.luminance, cct,
+        l.filled ? std::string("other sectors (never observed)") : fmt::format("node {} (depth {}, {} frames)", l.node, l.depth, l.sample.weight));
+    sectors.push_back({{"sector", s},
+                       {"luminance_cd_m2", l.sample.luminance},
+                       {"cct_k", cct},
+                       {"node", l.node},
+                       {"depth", l.depth},
+                       {"frames", l.sample.weight},
+                       {"filled", l.filled}});
+  }
+  emit_json(out, {{"output", args.output},
+                  {"format", std::string(to_string(format))},
+                  {"lights", lights.lights.size()},
+                  {"outside", outside},
+                  {"sectors", sectors},
+                  {"query_seconds", query_s}});
+  return 0;
+}
+
+int run_synth_walkthrough(const SynthWalkthroughArgs& args, const Output& out) {
+  if (args.probe_size < 8 || args.probe_size % 2) throw InputError(fmt::format("--probe-size must be even and >= 8, got {}", args.probe_size));
+  if (args.rays < 2) throw InputError(fmt::format("--rays must be >= 2, got {}", args.rays));
+  const Room room = default_room();
+  WalkthroughOptions o;
+  o.fps = args.fps;
+  o.speed = args.speed;
+  o.rays_x = args.rays;
+  o.record_mean_code = !args.no_mean_code;
+  o.record_bright_rgb = args.bright_rgb;
+  const auto t0 = Clock::now();
+  const Track track = make_walkthrough_track(room, o);
+  fs::create_directories(fs::path(args.output_dir) / "probes");
+  const std::string track_path = (fs::path(args.output_dir) / "track.jsonl").string();
+  write_file_atomically(track_path, track_to_jsonl(track));
+  const auto queries = walkthrough_query_points(room, o);
+  nlohmann::json jq = nlohmann::json::array();
+  Progress progress("probes", queries.size(), out.progress);
+  for (size_t i = 0; i < queries.size(); ++i) {
+    const EnvMap probe = render_room_probe(room, queries[i], args.probe_size, args.samples);
+    const std::string rel = fmt::format("probes/q{}.exr", i);
+    write_envmap((fs::path(args.output_dir) / rel).string(), probe);
+    const std::string standing = fmt::format("probes/q{}_standing.jsonl", i);
+    write_file_atomically((fs::path(args.output_dir) / standing).string(),
+                          track_to_jsonl(make_standing_track(room, o, queries[i])));
+    jq.push_back({{"name", fmt::format("q{}", i)},
+                  {"position", {queries[i].x, queries[i].y, queries[i].z}},
+                  {"probe", rel},
+                  {"standing_track", standing},
+                  {"illuminance_up_lux", 683.0 * map_irradiance(probe, {0, 0, 1})}});
+    progress.advance();
+  }
+  progress.finish();
+  nlohmann::json lamps = nlohmann::json::array();
+  for (const RoomLamp& l : room.lamps)
+    lamps.push_back({{"position", {l.position.x, l.position.y, l.position.z}}, {"radius", l.radius}, {"luminance", l.luminance}, {"cct", l.cct_k}});
+  nlohmann::json jroom{{"width", room.width}, {"depth", room.depth}, {"height", room.height},
+                       {"albedo", {{"floor", room.floor_albedo}, {"walls", room.wall_albedo}, {"ceiling", room.ceiling_albedo}}},
+                       {"lamps", lamps}};
+  if (room.window)
+    jroom["window"] = {{"wall", "x=0"}, {"y", {room.window->y0, room.window->y1}}, {"z", {room.window->z0, room.window->z1}},
+                       {"luminance", room.window->luminance}, {"cct", room.window->cct_k}};
+  const nlohmann::json truth{{"format", "lightprobe.walkthrough/1"},
+                             {"units", "radiance"},
+                             {"room", jroom},
+                             {"frames", track.frames.size()},
+                             {"fps", o.fps},
+                             {"fov_deg", o.fov_deg},
+                             {"eye_height", o.eye_height},
+                             {"camera", camera_json(o.camera)},
+                             {"queries", jq}};
+  const std::string truth_path = (fs::path(args.output_dir) / "truth.json").string();
+  write_file_atomically(truth_path, truth.dump(2) + "\n");
+  say(out, "{}: {} frames along a {:.0f} s walk through an {}x{} m room, {} query probes ({}x{}), truth in {} ({:.1f} s)\n",
+      args.output_dir, track.frames.size(), track.frames.back().timestamp, room.width, room.depth, queries.size(),
+      args.probe_size, args.probe_size / 2, truth_path, seconds_since(t0));
+  emit_json(out, {{"output", args.output_dir}, {"track", track_path}, {"truth", truth_path}, {"frames", track.frames.size()},
+                  {"queries", queries.size()}, {"seconds", seconds_since(t0)}});
+  return 0;
+}
+
+int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
+  const fs::path dir(args.input_dir);
+  const std::string truth_path = (dir / "truth.json").string();
+  nlohmann::json truth;
+  try {
+    truth = nlohmann::json::parse(slurp(truth_path));
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(fmt::format("{}: not JSON ({})", truth_path, e.what()));
+  }
+  if (truth.value("format", "") != "lightprobe.walkthrough/1")
+    throw InputError(fmt::format("{}: not a lightprobe.walkthrough/1 truth file (make one with synth walkthrough)", truth_path));
+  const Track track = read_track((dir / "track.jsonl").string());
+  validate_track(track);
+  std::vector<double> fractions = parse_numbers(args.fractions, "--fractions");
+  for (double f : fractions)
+    if (!(f > 0 && f <= 1)) throw InputError(fmt::format("--fractions: each must be in (0, 1], got {}", f));
+  double root_size = args.root_size;
+  if (root_size <= 0) {
+    const auto& room = truth.at("room");
+    root_size = 2 * std::max(room.at("width").get<double>(), room.at("depth").get<double>());
+  }
+  struct Query {
+    std::string name;
+    Vec3 position;
+    EnvMap probe;
+    AccuracyReference reference;
+    std::string standing_track;  // optional: the walk's head motion, standing at the point
+  };
+  std::vector<Query> queries;
+  AccuracyOptions ao;
+  ao.shadowed = false;
+  ao.glossy_exponents.clear();
+  for (const auto& jq : truth.at("queries")) {
+    Query q;
+    q.name = jq.at("name").get<std::string>();
+    q.position = {jq.at("position").at(0).get<double>(), jq.at("position").at(1).get<double>(), jq.at("position").at(2).get<double>()};
+    q.probe = read_envmap((dir / jq.at("probe").get<std::string>()).string());
+    q.reference = make_accuracy_reference(q.probe, ao);
+    if (jq.contains("standing_track")) q.standing_track = (dir / jq["standing_track"].get<std::string>()).string();
+    queries.push_back(std::move(q));
+  }
+  if (queries.empty()) throw InputError(fmt::format("{}: no query points", truth_path));
+
+  struct Row {
+    std::string method;
+    double fraction = 1;  // of the path used (1 for probes)
+    size_t frames = 0;
+    double mean_error = 0, max_error = 0;
+    double mean_distance = 0;  // query point to the nearest visited position
+    double seconds_per_query = 0;
+    double cct_error = NAN;  // K, mean over sectors and query points (metadata rows)
+  };
+  std::vector<Row> rows;
+  // Real probes at each query point: the same maps sampled by the existing samplers.
+  const std::vector<std::pair<Method, int>> probe_methods{{Method::Pharr, 6}, {Method::MedianCut, 6}, {Method::Pharr, 64}, {Method::Q2Tree, 64}};
+  for (const auto& [method, n] : probe_methods) {
+    Row r;
+    r.method = fmt::format("probe {} {}", to_string(method), n);
+    double t = 0;
+    for (const Query& q : queries) {
+      const auto t0 = Clock::now();
+      const LightList l = sample(q.probe, n, method);
+      t += seconds_since(t0);
+      const double e = light_error(q.reference, l.lights).diffuse;
+      r.mean_error += e / double(queries.size());
+      r.max_error = std::max(r.max_error, e);
+    }
+    r.frames = 0;
+    r.seconds_per_query = t / double(queries.size());
+    rows.push_back(r);
+  }
+  {
+    Row r;
+    r.method = "best six sectors";  // the bipyramid filled with the true map's sector means
+    for (const Query& q : queries) {
+      const double e = light_error(q.reference, bipyramid_lights_of_map(q.probe)).diffuse;
+      r.mean_error += e / double(queries.size());
+      r.max_error = std::max(r.max_error, e);
+    }
+    rows.push_back(r);
+  }
+  // The same head motion standing at each query point: metering from views alone.
+  if (std::all_of(queries.begin(), queries.end(), [](const Query& q) { return !q.standing_track.empty(); })) {
+    Row r;
+    r.method = "metadata, standing at the point";
+    BuildModelOptions sb;
+    sb.quadtree.root_size = root_size;
+    sb.quadtree.min_size = root_size;  // one cell: every frame is at the point
+    for (const Query& q : queries) {
+      const Track standing = read_track(q.standing_track);
+      const LightQuadtree model = build_model(standing, standing.camera, sb);
+      const LightList l = model.lights_at(q.position.x, q.position.y);
+      const double e = light_error(q.reference, l.lights).diffuse;
+      r.mean_error += e / double(queries.size());
+      r.max_error = std::max(r.max_error, e);
+      r.cct_error = (std::isnan(r.cct_error) ? 0 : r.cct_error) + sector_cct_error(l.lights, q.probe) / double(queries.size());
+      r.frames = standing.frames.size();
+    }
+    rows.push_back(r);
+  }
+  // The metadata model on a growing part of the path.
+  struct Variant {
+    std::string name;
+    int max_depth;
+    double min_frames, shrink;
+  };
+  const std::vector<Variant> variants{{"metadata (paper: nearest informed)", -1, 1, 0},
+                                      {"metadata, >= 10 frames per sector", -1, 10, 0},
+                                      {"metadata, shrinkage k = 20", -1, 1, 20},
+                                      {"metadata, root only", 0, 1, 0}};
+  BuildModelOptions b;
+  b.quadtree.root_size = root_size;
+  b.quadtree.min_size = args.min_size;
+  Progress progress("fractions", fractions.size(), out.progress);
+  for (double f : fractions) {
+    const size_t count = std::max<size_t>(1, size_t(std::llround(f * double(track.frames.size()))));
+    const auto t0 = Clock::now();
+    const LightQuadtree model = build_model(track, track.camera, b, count);
+    const double build_s = seconds_since(t0);
+    double distance = 0;
+    for (const Query& q : queries) {
+      double best = INFINITY;
+      for (size_t i = 0; i < count; ++i) {
+        const Vec3 p = track.frames[i].position;
+        best = std::min(best, std::hypot(p.x - q.position.x, p.y - q.position.y));
+      }
+      distance += best / double(queries.size());
+    }
+    for (const Variant& v : variants) {
+      Row r;
+      r.method = v.name;
+      r.fraction = f;
+      r.frames = count;
+      r.mean_distance = distance;
+      double t = 0;
+      for (const Query& q : queries) {
+        const auto tq = Clock::now();
+        const LightList l = v.shrink > 0 ? model.lights_shrunk(q.position.x, q.position.y, v.shrink)
+                                         : model.lights_at(q.position.x, q.position.y, v.max_depth, v.min_frames);
+        t += seconds_since(tq);
+        const double e = light_error(q.reference, l.lights).diffuse;
+        r.mean_error += e / double(queries.size());
+        r.max_error = std::max(r.max_error, e);
+        r.cct_error = (std::isnan(r.cct_error) ? 0 : r.cct_error) + sector_cct_error(l.lights, q.probe) / double(queries.size());
+      }
+      r.seconds_per_query = t / double(queries.size()) + build_s / double(count);  // + the update cost of a frame
+      rows.push_back(r);
+    }
+    progress.advance();
+  }
+  progress.finish();
+
+  fs::create_directories(args.output_dir);
+  std::string csv = "method,path_fraction,frames,mean_distance_m,diffuse_mean,diffuse_max,cct_error_k,seconds_per_query\n";
+  for (const Row& r : rows)
+    csv += fmt::format("\"{}\",{},{},{:.4f},{:.6f},{:.6f},{},{:.3e}\n", r.method, r.fraction, r.frames, r.mean_distance,
+                       r.mean_error, r.max_error, std::isnan(r.cct_error) ? std::string() : fmt::format("{:.1f}", r.cct_error),
+                       r.seconds_per_query);
+  const std::string csv_path = (fs::path(args.output_dir) / "metadata.csv").string();
+  write_file_atomically(csv_path, csv);
+
+  ChartPanel panel;
+  panel.title = "Diffuse error at the query points as the walk covers the room";
+  panel.x_label = "part of the path walked";
+  panel.y_label = "diffuse rel. RMS error (mean over query points)";
+  panel.log_x = false;
+  panel.log_y = true;
+  // Seven series (the chart's palette): the rest are in the table and the CSV.
+  const std::vector<std::string> charted{"metadata (paper: nearest informed)", "metadata, shrinkage k = 20",
+                                         "metadata, standing at the point", "best six sectors", "probe pharr 6",
+                                         "probe mediancut 6", "probe q2tree 64"};
+  for (const Row& r : rows) {
+    if (std::find(charted.begin(), charted.end(), r.method) == charted.end()) continue;
+    auto it = std::find_if(panel.series.begin(), panel.series.end(), [&](const ChartSeries& s) { return s.name == r.method; });
+    if (it == panel.series.end()) {
+      panel.series.push_back({r.method, {}, {}, {}, true});
+      it = panel.series.end() - 1;
+    }
+    if (r.frames == 0 || r.method == "metadata, standing at the point") {  // flat across the walk
+      it->x = {fractions.front(), fractions.back()};
+      it->y = {r.mean_error, r.mean_error};
+    } else {
+      it->x.push_back(r.fraction);
+      it->y.push_back(r.mean_error);
+    }
+  }
+  const std::string svg_path = (fs::path(args.output_dir) / "metadata.svg").string();
+  write_file_atomically(svg_path, svg_chart("Light without a probe: camera metadata against real probes", {panel}, 1));
+
+  say(out, "{:<38} {:>6} {:>6} {:>8} {:>9} {:>9} {:>7} {:>11}\n", "method", "path", "frames", "dist m", "diffuse", "max",
+      "dCCT K", "s/query");
+  nlohmann::json jrows = nlohmann::json::array();
+  for (const Row& r : rows) {
+    say(out, "{:<38} {:>6.2f} {:>6} {:>8.2f} {:>9.3f} {:>9.3f} {:>7} {:>11.2e}\n", r.method, r.fraction, r.frames,
+        r.mean_distance, r.mean_error, r.max_error, std::isnan(r.cct_error) ? std::string("-") : fmt::format("{:.0f}", r.cct_error),
+        r.seconds_per_query);
+    nlohmann::json jr{{"method", r.method}, {"path_fraction", r.fraction}, {"frames", r.frames}, {"mean_distance_m", r.mean_distance},
+                      {"diffuse_mean", r.mean_error}, {"diffuse_max", r.max_error}, {"seconds_per_query", r.seconds_per_query}};
+    jr["cct_error_k"] = std::isnan(r.cct_error) ? nlohmann::json() : nlohmann::json(r.cct_error);
+    jrows.push_back(jr);
+  }
+  say(out, "{} rows -> {}, {}\n", rows.size(), csv_path, svg_path);
+  emit_json(out, {{"csv", csv_path}, {"chart", svg_path}, {"queries", queries.size()}, {"frames", track.frames.size()}, {"rows", jrows}});
+  return 0;
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,208 @@
+// `lightprobe estimate metadata|query`, `synth walkthrough`, `eval metadata` as scripts see
+// them: exit codes, one-line errors naming the file and line, --json fields, outputs.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+fs::path scratch() {
+  static const fs::path dir = [] {
+    fs::path d = fs::path(::testing::TempDir()) / ("lightprobe_estimate_cli_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+CliRun lightprobe(const std::string& args) {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
+  const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+int line_count(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+void expect_one_line_error(const CliRun& r, const std::string& needle) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+}
+
+void write(const fs::path& p, const std::string& text) {
+  std::ofstream f(p);
+  f << text;
+}
+
+// One small walk-through shared by the tests (probes 32 x 16, 4 x 3 rays per frame).
+const fs::path& walkthrough_dir() {
+  static const fs::path dir = [] {
+    const fs::path d = scratch() / "walk";
+    const CliRun r = lightprobe("synth walkthrough --probe-size 32 --samples 2 --rays 4 -o " + d.string() + " --json");
+    EXPECT_EQ(r.code, 0) << r.err;
+    return d;
+  }();
+  return dir;
+}
+
+}  // namespace
+
+TEST(EstimateCli, SynthWalkthroughWritesTrackProbesAndTruth) {
+  const fs::path d = walkthrough_dir();
+  EXPECT_TRUE(fs::exists(d / "track.jsonl"));
+  EXPECT_TRUE(fs::exists(d / "probes" / "q0.exr"));
+  EXPECT_TRUE(fs::exists(d / "probes" / "q5.exr"));
+  const auto truth = nlohmann::json::parse(slurp(d / "truth.json"));
+  EXPECT_EQ(truth["format"], "lightprobe.walkthrough/1");
+  EXPECT_EQ(truth["queries"].size(), 6u);
+  EXPECT_GT(truth["frames"].get<int>(), 100);
+}
+
+TEST(EstimateCli, MetadataThenQueryGivesSixLightsInRadianceUnits) {
+  const fs::path d = walkthrough_dir();
+  const fs::path model = scratch() / "model.json", lights = scratch() / "lights.json";
+  CliRun r = lightprobe("estimate metadata " + (d / "track.jsonl").string() + " -o " + model.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["nodes"].get<int>(), 5);
+  EXPECT_EQ(j["camera"]["route"], "calibration");
+  EXPECT_GT(j["illuminance_lux"]["median"].get<double>(), 10);
+  EXPECT_GT(j["cct_k"]["median"].get<double>(), 2500);
+  EXPECT_LT(j["cct_k"]["median"].get<double>(), 7000);
+  // The meter equation gives the same luminance here (the synthetic camera is built so).
+  CliRun m = lightprobe("estimate metadata " + (d / "track.jsonl").string() + " -o " + (scratch() / "m2.json").string() +
+                        " --meter-equation --json");
+  ASSERT_EQ(m.code, 0) << m.err;
+  const auto jm = nlohmann::json::parse(m.out);
+  EXPECT_EQ(jm["camera"]["route"], "meter");
+  EXPECT_NEAR(jm["luminance_cd_m2"]["median"].get<double>() / j["luminance_cd_m2"]["median"].get<double>(), 1.0, 1e-6);
+
+  r = lightprobe("estimate query " + model.string() + " --at 4,3 -o " + lights.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["lights"], 6);
+  EXPECT_EQ(j["sectors"].size(), 6u);
+  const auto list = nlohmann::json::parse(slurp(lights));
+  EXPECT_EQ(list["format"], "lightprobe.lights/1");
+  EXPECT_EQ(list["units"], "radiance");
+  EXPECT_EQ(list["lights"].size(), 6u);
+  // Other formats through the exporters.
+  r = lightprobe("estimate query " + model.string() + " --at 4,3 --shrink 20 -o " + (scratch() / "l.pbrt").string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(scratch() / "l.pbrt").find("distant"), std::string::npos);
+}
+
+TEST(EstimateCli, EvalMetadataReportsProbesAndModel) {
+  const fs::path d = walkthrough_dir();
+  const fs::path out = scratch() / "eval";
+  CliRun r = lightprobe("eval metadata " + d.string() + " -o " + out.string() + " --fractions 0.5,1 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(fs::exists(out / "metadata.csv"));
+  EXPECT_TRUE(fs::exists(out / "metadata.svg"));
+  ASSERT_EQ(j["rows"].size(), 5u + 1u + 2u * 4u);  // probes, best six, standing, 4 variants x 2
+  double q2 = -1, paper = -1;
+  for (const auto& row : j["rows"]) {
+    if (row["method"] == "probe q2tree 64") q2 = row["diffuse_mean"].get<double>();
+    if (row["method"] == "metadata (paper: nearest informed)" && row["path_fraction"] == 1) paper = row["diffuse_mean"].get<double>();
+  }
+  EXPECT_GT(q2, 0);
+  EXPECT_LT(q2, 0.05);   // a real probe with 64 lights
+  EXPECT_GT(paper, q2);  // the price of going probe-less
+}
+
+TEST(EstimateCli, BadMetadataIsAOneLineErrorNamingFileAndLine) {
+  const fs::path t = scratch() / "bad.jsonl";
+  write(t, "{\"position\":[0,0],\"view_dir\":[1,0,0],\"exposure_s\":0.01,\"gain_db\":0}\n"
+           "{\"position\":[0,0],\"view_dir\":[1,0,0],\"exposure_s\":0,\"gain_db\":0}\n");
+  expect_one_line_error(lightprobe("estimate metadata " + t.string() + " -o " + (scratch() / "x.json").string()),
+                        "bad.jsonl:2: exposure_s");
+  EXPECT_FALSE(fs::exists(scratch() / "x.json"));
+  write(t, "{\"position\":[0,0],\"view_dir\":[1,0,0],\"exposure_s\":0.01}\n");
+  expect_one_line_error(lightprobe("estimate metadata " + t.string() + " -o " + (scratch() / "x.json").string()),
+                        "bad.jsonl:1: no gain");
+  write(t, "{\"position\":[0,0],\"view_dir\":[0,0,0],\"exposure_s\":0.01,\"gain_db\":0}\n");
+  expect_one_line_error(lightprobe("estimate metadata " + t.string() + " -o " + (scratch() / "x.json").string()),
+                        "bad.jsonl:1: view_dir");
+  write(t, "not json\n");
+  expect_one_line_error(lightprobe("estimate metadata " + t.string() + " -o " + (scratch() / "x.json").string()),
+                        "bad.jsonl:1");
+  expect_one_line_error(lightprobe("estimate metadata " + (scratch() / "missing.jsonl").string() + " -o x.json"),
+                        "missing.jsonl");
+  expect_one_line_error(lightprobe("estimate query " + (scratch() / "nomodel.json").string() + " --at 1,2 -o l.json"),
+                        "nomodel.json");
+  expect_one_line_error(lightprobe("eval metadata " + scratch().string() + " -o " + (scratch() / "e").string()),
+                        "truth.json");
+}
+
+// The probe-less mode fed live: Aravis' simulated camera, a fixed rig.
+TEST(EstimateCli, StreamFeedsTheMetadataModelLive) {
+  const fs::path model = scratch() / "live_model.json";
+  const CliRun r = lightprobe("stream --source aravis:Fake_1 --listen 127.0.0.1:0 --duration 1.5 --metadata-model " +
+                              model.string() + " --position 1,2 --view-dir 0,0,1 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GT(j["frames_used"].get<int>(), 5);
+  EXPECT_GT(j["last_luminance_cd_m2"].get<double>(), 0);
+  const auto m = nlohmann::json::parse(slurp(model));
+  EXPECT_EQ(m["format"], "lightprobe.metadata-model/1");
+  EXPECT_EQ(m["origin"][0], 1.0);
+  // Looking straight up fills an up sector (azimuth 0: sector 0) of the root.
+  EXPECT_GT(m["nodes"][0]["sectors"][0]["weight"].get<double>(), 5);
+  EXPECT_EQ(m["nodes"][0]["sectors"][3]["weight"].get<double>(), 0);
+  expect_one_line_error(lightprobe("stream --source aravis:Fake_1 --listen 127.0.0.1:0 --duration 1 --metadata-model " +
+                                   model.string() + " --view-dir 0,0,0"),
+                        "--view-dir");
+}
+
+// The calibration route with a real `calib photometric` result: luminance scales with its k.
+TEST(EstimateCli, PhotometricCalibrationFileSetsTheScale) {
+  const fs::path d = walkthrough_dir();
+  const fs::path readings = scratch() / "readings.csv", cal = scratch() / "photometric.json";
+  // Noiseless readings of k = 5.5 cd/m2 per relative unit (about twice the synthetic camera's 2.78).
+  write(readings, "region,camera_value,measured,unit\np1,1.0,5.5,cd/m2\np2,2.0,11.0,cd/m2\np3,4.0,22.0,cd/m2\n");
+  CliRun r = lightprobe("calib photometric " + readings.string() + " -o " + cal.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = lightprobe("estimate metadata " + (d / "track.jsonl").string() + " -o " + (scratch() / "m3.json").string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto base = nlohmann::json::parse(r.out);
+  r = lightprobe("estimate metadata " + (d / "track.jsonl").string() + " -o " + (scratch() / "m4.json").string() +
+                 " --photometric " + cal.string() + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto scaled = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(scaled["camera"]["photometric_scale"].get<double>(), 5.5, 1e-6);
+  const double k_track = base["camera"]["photometric_scale"].get<double>();
+  EXPECT_NEAR(scaled["luminance_cd_m2"]["median"].get<double>() / base["luminance_cd_m2"]["median"].get<double>(),
+              5.5 / k_track, 1e-6);
+}

@@ -295,6 +295,7 @@ struct EvalShadingArgs {
   std::string counts = "64,256,1024,4096";
   ShadingTableArgs tables;          // n is taken from counts
   int points = 0;                   // shading points per timing run (0: ~8M light evaluations)
+  bool coherent = false;            // shade points in the order of their normal's region
   std::string output_dir;
 };
 int run_eval_shading(const EvalShadingArgs& args, const Output& out);

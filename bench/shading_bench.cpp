@@ -56,6 +56,20 @@ void BM_Shade(benchmark::State& state, ShadingVariant variant) {
   state.SetItemsProcessed(state.iterations());  // shaded points
 }
 
+// One point shaded again and again: its lists stay in cache, which isolates the
+// arithmetic from the memory traffic of jumping between regions.
+void BM_ShadeHotCache(benchmark::State& state, ShadingVariant variant) {
+  const ShadingScene& s = scene_for(int(state.range(0)));
+  std::vector<Vec3> normals, reflections;
+  make_shading_points(64, 7, normals, reflections);
+  size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(shade(s, variant, normals[i / 4096 % 64], reflections[i / 4096 % 64], 100));
+    ++i;
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
 void BM_PrepareShadingTables(benchmark::State& state) {
   const int high = int(state.range(0));
   const auto& low = low_lights(high);
@@ -72,5 +86,7 @@ BENCHMARK_CAPTURE(BM_Shade, all, ShadingVariant::All)->Arg(256)->Arg(4096);
 BENCHMARK_CAPTURE(BM_Shade, culled, ShadingVariant::Culled)->Arg(256)->Arg(4096);
 BENCHMARK_CAPTURE(BM_Shade, glossy, ShadingVariant::Glossy)->Arg(256)->Arg(4096);
 BENCHMARK_CAPTURE(BM_Shade, clustered, ShadingVariant::Clustered)->Arg(256)->Arg(4096);
+BENCHMARK_CAPTURE(BM_ShadeHotCache, all, ShadingVariant::All)->Arg(256)->Arg(4096);
+BENCHMARK_CAPTURE(BM_ShadeHotCache, culled, ShadingVariant::Culled)->Arg(256)->Arg(4096);
 BENCHMARK(BM_PrepareShadingTables)->Arg(256)->Arg(4096)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BuildRegions)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond);

@@ -61,6 +61,13 @@ inline void lobe_power(float* __restrict c, float s, int int_s) {
   }
 }
 
+inline float int_power(float x, unsigned e) {
+  float p = 1;
+  for (; e; e >>= 1, x *= x)
+    if (e & 1u) p *= x;
+  return p;
+}
+
 int integer_exponent(float s) { return s >= 0 && s <= 4096 && float(int(s)) == s ? int(s) : -1; }
 
 // G over lights [begin, end) whose cosine to r is in (0, upper]: upper >= 1 takes every
@@ -74,22 +81,32 @@ void glossy_sum(const LightBlock& L, size_t begin, size_t end, Vec3f rv, float s
   const float* __restrict b = L.b.data();
   const int int_s = integer_exponent(s);
   const float norm = float((double(s) + 1) / (2 * M_PI));
+  // Cosines whose power would fall below 1e-30 count as 0: their terms are far below float
+  // resolution of the sum, and the powers would pass through denormal floats, which cost
+  // x86 ~100 cycles each (GPUs flush them to zero). Without this, the culled lists - lights
+  // mostly above the horizon, many at small cosines - paid that penalty and the all-lights
+  // loop (half its cosines clamped to exactly 0) did not.
+  const float floor_cos = s > 0 ? float(std::pow(1e-30, 1.0 / double(s))) : 0.0f;
   float ar[kLanes] = {}, ag[kLanes] = {}, ab[kLanes] = {};
   float c[kLanes], keep[kLanes];
-  for (size_t i = begin; i < end; i += kLanes) {
-    const size_t m = std::min<size_t>(kLanes, end - i);
+  size_t i = begin;
+  for (; i + kLanes <= end; i += kLanes) {
     for (int l = 0; l < kLanes; ++l) {
-      const size_t k = i + size_t(l) < end ? i + size_t(l) : begin;  // pad with a valid index
-      const float cc = rv.x * x[k] + rv.y * y[k] + rv.z * z[k];
-      keep[l] = (size_t(l) < m && cc > 0 && cc <= upper) ? 1.0f : 0.0f;
-      c[l] = std::max(0.0f, cc);
+      const float cc = rv.x * x[i + l] + rv.y * y[i + l] + rv.z * z[i + l];
+      keep[l] = (cc > 0 && cc <= upper) ? 1.0f : 0.0f;
+      c[l] = cc > floor_cos ? cc : 0.0f;
     }
     lobe_power(c, s, int_s);
     for (int l = 0; l < kLanes; ++l) {
-      const size_t k = i + size_t(l) < end ? i + size_t(l) : begin;
       const float w = keep[l] * c[l];
-      ar[l] += w * r[k], ag[l] += w * g[k], ab[l] += w * b[k];
+      ar[l] += w * r[i + l], ag[l] += w * g[i + l], ab[l] += w * b[i + l];
     }
+  }
+  for (int l = 0; i < end; ++i, ++l) {  // the last < kLanes lights
+    const float cc = rv.x * x[i] + rv.y * y[i] + rv.z * z[i];
+    if (!(cc > 0 && cc <= upper)) continue;
+    const float w = cc > floor_cos ? (int_s >= 0 ? int_power(cc, unsigned(int_s)) : std::pow(cc, s)) : 0.0f;
+    ar[l] += w * r[i], ag[l] += w * g[i], ab[l] += w * b[i];
   }
   float sr = 0, sg = 0, sb = 0;
   for (int l = 0; l < kLanes; ++l) sr += ar[l], sg += ag[l], sb += ab[l];

@@ -36,16 +36,21 @@ const std::vector<Light>& low_lights(int high) {
   return it->second;
 }
 
-const ShadingScene& scene_for(int high) {
-  static std::map<int, ShadingScene> cache;
-  auto it = cache.find(high);
-  if (it == cache.end()) it = cache.emplace(high, prepare_shading(low_lights(high), high, culling_regions(), cone_regions())).first;
+// Per-region copies (range(1) = 1) or index lists into one light array (0).
+const ShadingScene& scene_for(int high, bool copies = false) {
+  static std::map<std::pair<int, bool>, ShadingScene> cache;
+  auto it = cache.find({high, copies});
+  if (it == cache.end()) {
+    ShadingOptions o;
+    o.region_copies = copies;
+    it = cache.emplace(std::pair{high, copies}, prepare_shading(low_lights(high), high, culling_regions(), cone_regions(), o)).first;
+  }
   return it->second;
 }
 
 void BM_Shade(benchmark::State& state, ShadingVariant variant) {
   const int high = int(state.range(0));
-  const ShadingScene& s = scene_for(high);
+  const ShadingScene& s = scene_for(high, state.range(1) != 0);
   std::vector<Vec3> normals, reflections;
   make_shading_points(1024, 7, normals, reflections);
   size_t i = 0;
@@ -59,7 +64,7 @@ void BM_Shade(benchmark::State& state, ShadingVariant variant) {
 // One point shaded again and again: its lists stay in cache, which isolates the
 // arithmetic from the memory traffic of jumping between regions.
 void BM_ShadeHotCache(benchmark::State& state, ShadingVariant variant) {
-  const ShadingScene& s = scene_for(int(state.range(0)));
+  const ShadingScene& s = scene_for(int(state.range(0)), state.range(1) != 0);
   std::vector<Vec3> normals, reflections;
   make_shading_points(64, 7, normals, reflections);
   size_t i = 0;
@@ -73,7 +78,9 @@ void BM_ShadeHotCache(benchmark::State& state, ShadingVariant variant) {
 void BM_PrepareShadingTables(benchmark::State& state) {
   const int high = int(state.range(0));
   const auto& low = low_lights(high);
-  for (auto _ : state) benchmark::DoNotOptimize(prepare_shading(low, high, culling_regions(), cone_regions()));
+  ShadingOptions o;
+  o.region_copies = state.range(1) != 0;
+  for (auto _ : state) benchmark::DoNotOptimize(prepare_shading(low, high, culling_regions(), cone_regions(), o));
 }
 
 void BM_BuildRegions(benchmark::State& state) {
@@ -82,11 +89,12 @@ void BM_BuildRegions(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK_CAPTURE(BM_Shade, all, ShadingVariant::All)->Arg(256)->Arg(4096);
-BENCHMARK_CAPTURE(BM_Shade, culled, ShadingVariant::Culled)->Arg(256)->Arg(4096);
-BENCHMARK_CAPTURE(BM_Shade, glossy, ShadingVariant::Glossy)->Arg(256)->Arg(4096);
-BENCHMARK_CAPTURE(BM_Shade, clustered, ShadingVariant::Clustered)->Arg(256)->Arg(4096);
-BENCHMARK_CAPTURE(BM_ShadeHotCache, all, ShadingVariant::All)->Arg(256)->Arg(4096);
-BENCHMARK_CAPTURE(BM_ShadeHotCache, culled, ShadingVariant::Culled)->Arg(256)->Arg(4096);
-BENCHMARK(BM_PrepareShadingTables)->Arg(256)->Arg(4096)->Unit(benchmark::kMillisecond);
+// Args: |H|, region copies (1) or index lists (0).
+BENCHMARK_CAPTURE(BM_Shade, all, ShadingVariant::All)->Args({256, 0})->Args({4096, 0});
+BENCHMARK_CAPTURE(BM_Shade, culled, ShadingVariant::Culled)->ArgsProduct({{256, 4096}, {0, 1}});
+BENCHMARK_CAPTURE(BM_Shade, glossy, ShadingVariant::Glossy)->ArgsProduct({{256, 4096}, {0, 1}});
+BENCHMARK_CAPTURE(BM_Shade, clustered, ShadingVariant::Clustered)->ArgsProduct({{256, 4096}, {0, 1}});
+BENCHMARK_CAPTURE(BM_ShadeHotCache, all, ShadingVariant::All)->Args({256, 0})->Args({4096, 0});
+BENCHMARK_CAPTURE(BM_ShadeHotCache, culled, ShadingVariant::Culled)->ArgsProduct({{256, 4096}, {0, 1}});
+BENCHMARK(BM_PrepareShadingTables)->ArgsProduct({{256, 4096}, {0, 1}})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BuildRegions)->Arg(256)->Arg(1024)->Unit(benchmark::kMillisecond);

@@ -288,6 +288,7 @@ struct ShadingTableArgs {
   double cone_deg = 8;              // cone half-angle gamma/2 around the reflected direction
   int k = 256;                      // at most k L lights per cone
   int q = 0;                        // clustering to at most Q lights (0: |H| / 4)
+  bool region_copies = false;       // shader reads per-region copies instead of index lists
 };
 
 struct EvalShadingArgs {

@@ -64,10 +64,14 @@ inline void lobe_power(float* __restrict c, float s, int int_s) {
   if (int_s >= 0) {
     float p[kLanes], base[kLanes];
     for (int l = 0; l < kLanes; ++l) p[l] = 1, base[l] = c[l];
-    for (unsigned e = unsigned(int_s); e; e >>= 1) {
+    // No squaring after the top bit: base^(2^k) beyond the exponent would underflow into
+    // denormals for cosines that the result itself keeps clear of them.
+    for (unsigned e = unsigned(int_s); e;) {
       if (e & 1u)
         for (int l = 0; l < kLanes; ++l) p[l] *= base[l];
-      for (int l = 0; l < kLanes; ++l) base[l] *= base[l];
+      e >>= 1;
+      if (e)
+        for (int l = 0; l < kLanes; ++l) base[l] *= base[l];
     }
     for (int l = 0; l < kLanes; ++l) c[l] = p[l];
   } else {
@@ -77,9 +81,12 @@ inline void lobe_power(float* __restrict c, float s, int int_s) {
 
 inline float int_power(float x, unsigned e) {
   float p = 1;
-  for (; e; e >>= 1, x *= x)
+  for (;;) {
     if (e & 1u) p *= x;
-  return p;
+    e >>= 1;
+    if (!e) return p;
+    x *= x;  // only while bits remain (see lobe_power)
+  }
 }
 
 int integer_exponent(float s) { return s >= 0 && s <= 4096 && float(int(s)) == s ? int(s) : -1; }
@@ -96,11 +103,12 @@ void glossy_sum(const LightBlock& L, At at, size_t begin, size_t end, Vec3f rv, 
   const float* __restrict b = L.b.data();
   const int int_s = integer_exponent(s);
   const float norm = float((double(s) + 1) / (2 * M_PI));
-  // Cosines whose power would fall below 1e-30 count as 0: their terms are far below float
-  // resolution of the sum, and the powers would pass through denormal floats, which cost
-  // x86 ~100 cycles each (GPUs flush them to zero). Without this, the culled lists - lights
-  // mostly above the horizon, many at small cosines - paid that penalty and the all-lights
-  // loop (half its cosines clamped to exactly 0) did not.
+  // Cosines whose power would fall below 1e-30 count as 0 (masked, and raised to the
+  // power at floor_cos): their terms are far below float resolution of the sum, and the
+  // powers would pass through denormal floats, which cost x86 ~100 cycles each (GPUs flush
+  // them to zero). Without this, the culled lists - lights mostly above the horizon, many
+  // at small cosines - paid that penalty and the all-lights loop (half its cosines
+  // clamped to exactly 0) did not.
   const float floor_cos = s > 0 ? float(std::pow(1e-30, 1.0 / double(s))) : 0.0f;
   float ar[kLanes] = {}, ag[kLanes] = {}, ab[kLanes] = {};
   float c[kLanes], keep[kLanes];
@@ -109,8 +117,10 @@ void glossy_sum(const LightBlock& L, At at, size_t begin, size_t end, Vec3f rv, 
     for (int l = 0; l < kLanes; ++l) {
       const size_t k = at(i + size_t(l));
       const float cc = rv.x * x[k] + rv.y * y[k] + rv.z * z[k];
-      keep[l] = (cc > 0 && cc <= upper) ? 1.0f : 0.0f;
-      c[l] = cc > floor_cos ? cc : 0.0f;
+      // Masks as products, not branches: whether a light is behind, in the cone or too
+      // dim is data-dependent, and mispredicted branches cost more than the arithmetic.
+      keep[l] = float(cc > floor_cos) * float(cc <= upper);
+      c[l] = std::max(cc, floor_cos);
     }
     lobe_power(c, s, int_s);
     for (int l = 0; l < kLanes; ++l) {

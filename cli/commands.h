@@ -314,6 +314,7 @@ struct ShadingTableArgs {
   double cone_deg = 8;              // cone half-angle gamma/2 around the reflected direction
   int k = 256;                      // at most k L lights per cone
   int q = 0;                        // clustering to at most Q lights (0: |H| / 4)
+  bool region_copies = false;       // shader reads per-region copies instead of index lists
 };
 
 struct EvalShadingArgs {
@@ -321,6 +322,7 @@ struct EvalShadingArgs {
   std::string counts = "64,256,1024,4096";
   ShadingTableArgs tables;          // n is taken from counts
   int points = 0;                   // shading points per timing run (0: ~8M light evaluations)
+  bool coherent = false;            // shade points in the order of their normal's region
   std::string output_dir;
 };
 int run_eval_shading(const EvalShadingArgs& args, const Output& out);

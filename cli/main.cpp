@@ -170,6 +170,10 @@ int main(int argc, char** argv) {
   c_evsh->add_option("MAP", evsh.maps, "Maps to evaluate ('scene' for the procedural scene)")->required();
   c_evsh->add_option("--n", evsh.counts, "Comma-separated light counts |H|");
   c_evsh->add_option("--points", evsh.points, "Shading points per timing run (0: automatic)");
+  c_evsh->add_flag("--region-copies", evsh.tables.region_copies,
+                   "Shade from per-region copies of the lights instead of index lists into one array");
+  c_evsh->add_flag("--coherent", evsh.coherent,
+                   "Shade points in the order of their normal's region, as neighbouring pixels come (default: random)");
   add_table_options(c_evsh, evsh.tables);
   c_evsh->add_option("-o,--output", evsh.output_dir, "Directory for shading.csv and shading.svg")->required();
   c_evsh->add_flag("--json", out.json, "Print the report as JSON");

@@ -22,8 +22,20 @@ struct Vec3f {
 };
 Vec3f to_f(Vec3 v) { return {float(v.x), float(v.y), float(v.z)}; }
 
-// E over lights [begin, end) of the block.
-void diffuse_sum(const LightBlock& L, size_t begin, size_t end, Vec3f n, Rgb& out) {
+// Which light of the block the i-th entry of a range is: itself (a contiguous range of
+// the all-lights block or of per-region copies), or through a region's index list. The
+// loops below are written once over these; the contiguous form vectorises its loads.
+struct Contiguous {
+  size_t operator()(size_t i) const { return i; }
+};
+struct Indexed {
+  const uint32_t* index;
+  size_t operator()(size_t i) const { return index[i]; }
+};
+
+// E over lights at(begin) .. at(end - 1) of the block.
+template <typename At>
+void diffuse_sum(const LightBlock& L, At at, size_t begin, size_t end, Vec3f n, Rgb& out) {
   const float* __restrict x = L.x.data();
   const float* __restrict y = L.y.data();
   const float* __restrict z = L.z.data();
@@ -34,12 +46,14 @@ void diffuse_sum(const LightBlock& L, size_t begin, size_t end, Vec3f n, Rgb& ou
   size_t i = begin;
   for (; i + kLanes <= end; i += kLanes)
     for (int l = 0; l < kLanes; ++l) {
-      const float c = std::max(0.0f, n.x * x[i + l] + n.y * y[i + l] + n.z * z[i + l]);
-      ar[l] += c * r[i + l], ag[l] += c * g[i + l], ab[l] += c * b[i + l];
+      const size_t k = at(i + size_t(l));
+      const float c = std::max(0.0f, n.x * x[k] + n.y * y[k] + n.z * z[k]);
+      ar[l] += c * r[k], ag[l] += c * g[k], ab[l] += c * b[k];
     }
   for (int l = 0; i < end; ++i, ++l) {
-    const float c = std::max(0.0f, n.x * x[i] + n.y * y[i] + n.z * z[i]);
-    ar[l] += c * r[i], ag[l] += c * g[i], ab[l] += c * b[i];
+    const size_t k = at(i);
+    const float c = std::max(0.0f, n.x * x[k] + n.y * y[k] + n.z * z[k]);
+    ar[l] += c * r[k], ag[l] += c * g[k], ab[l] += c * b[k];
   }
   for (int l = 0; l < kLanes; ++l) out.r += ar[l], out.g += ag[l], out.b += ab[l];
 }
@@ -50,10 +64,14 @@ inline void lobe_power(float* __restrict c, float s, int int_s) {
   if (int_s >= 0) {
     float p[kLanes], base[kLanes];
     for (int l = 0; l < kLanes; ++l) p[l] = 1, base[l] = c[l];
-    for (unsigned e = unsigned(int_s); e; e >>= 1) {
+    // No squaring after the top bit: base^(2^k) beyond the exponent would underflow into
+    // denormals for cosines that the result itself keeps clear of them.
+    for (unsigned e = unsigned(int_s); e;) {
       if (e & 1u)
         for (int l = 0; l < kLanes; ++l) p[l] *= base[l];
-      for (int l = 0; l < kLanes; ++l) base[l] *= base[l];
+      e >>= 1;
+      if (e)
+        for (int l = 0; l < kLanes; ++l) base[l] *= base[l];
     }
     for (int l = 0; l < kLanes; ++l) c[l] = p[l];
   } else {
@@ -61,11 +79,22 @@ inline void lobe_power(float* __restrict c, float s, int int_s) {
   }
 }
 
+inline float int_power(float x, unsigned e) {
+  float p = 1;
+  for (;;) {
+    if (e & 1u) p *= x;
+    e >>= 1;
+    if (!e) return p;
+    x *= x;  // only while bits remain (see lobe_power)
+  }
+}
+
 int integer_exponent(float s) { return s >= 0 && s <= 4096 && float(int(s)) == s ? int(s) : -1; }
 
 // G over lights [begin, end) whose cosine to r is in (0, upper]: upper >= 1 takes every
 // light in the upper hemisphere of r; upper = cos(cone) takes those outside the cone.
-void glossy_sum(const LightBlock& L, size_t begin, size_t end, Vec3f rv, float s, float upper, Rgb& out) {
+template <typename At>
+void glossy_sum(const LightBlock& L, At at, size_t begin, size_t end, Vec3f rv, float s, float upper, Rgb& out) {
   const float* __restrict x = L.x.data();
   const float* __restrict y = L.y.data();
   const float* __restrict z = L.z.data();
@@ -74,22 +103,38 @@ void glossy_sum(const LightBlock& L, size_t begin, size_t end, Vec3f rv, float s
   const float* __restrict b = L.b.data();
   const int int_s = integer_exponent(s);
   const float norm = float((double(s) + 1) / (2 * M_PI));
+  // Cosines whose power would fall below 1e-30 count as 0 (masked, and raised to the
+  // power at floor_cos): their terms are far below float resolution of the sum, and the
+  // powers would pass through denormal floats, which cost x86 ~100 cycles each (GPUs flush
+  // them to zero). Without this, the culled lists - lights mostly above the horizon, many
+  // at small cosines - paid that penalty and the all-lights loop (half its cosines
+  // clamped to exactly 0) did not.
+  const float floor_cos = s > 0 ? float(std::pow(1e-30, 1.0 / double(s))) : 0.0f;
   float ar[kLanes] = {}, ag[kLanes] = {}, ab[kLanes] = {};
   float c[kLanes], keep[kLanes];
-  for (size_t i = begin; i < end; i += kLanes) {
-    const size_t m = std::min<size_t>(kLanes, end - i);
+  size_t i = begin;
+  for (; i + kLanes <= end; i += kLanes) {
     for (int l = 0; l < kLanes; ++l) {
-      const size_t k = i + size_t(l) < end ? i + size_t(l) : begin;  // pad with a valid index
+      const size_t k = at(i + size_t(l));
       const float cc = rv.x * x[k] + rv.y * y[k] + rv.z * z[k];
-      keep[l] = (size_t(l) < m && cc > 0 && cc <= upper) ? 1.0f : 0.0f;
-      c[l] = std::max(0.0f, cc);
+      // Masks as products, not branches: whether a light is behind, in the cone or too
+      // dim is data-dependent, and mispredicted branches cost more than the arithmetic.
+      keep[l] = float(cc > floor_cos) * float(cc <= upper);
+      c[l] = std::max(cc, floor_cos);
     }
     lobe_power(c, s, int_s);
     for (int l = 0; l < kLanes; ++l) {
-      const size_t k = i + size_t(l) < end ? i + size_t(l) : begin;
+      const size_t k = at(i + size_t(l));
       const float w = keep[l] * c[l];
       ar[l] += w * r[k], ag[l] += w * g[k], ab[l] += w * b[k];
     }
+  }
+  for (int l = 0; i < end; ++i, ++l) {  // the last < kLanes lights
+    const size_t k = at(i);
+    const float cc = rv.x * x[k] + rv.y * y[k] + rv.z * z[k];
+    if (!(cc > 0 && cc <= upper)) continue;
+    const float w = cc > floor_cos ? (int_s >= 0 ? int_power(cc, unsigned(int_s)) : std::pow(cc, s)) : 0.0f;
+    ar[l] += w * r[k], ag[l] += w * g[k], ab[l] += w * b[k];
   }
   float sr = 0, sg = 0, sb = 0;
   for (int l = 0; l < kLanes; ++l) sr += ar[l], sg += ag[l], sb += ab[l];
@@ -98,12 +143,14 @@ void glossy_sum(const LightBlock& L, size_t begin, size_t end, Vec3f rv, float s
 
 // The L stratum: lights of [begin, end) strictly inside the cone (cos > cos_cone), the
 // first k of them, scaled to the luminance of all of them.
-void cone_sum(const LightBlock& L, size_t begin, size_t end, Vec3f rv, float s, float cos_cone, int k, Rgb& out) {
+template <typename At>
+void cone_sum(const LightBlock& L, At at, size_t begin, size_t end, Vec3f rv, float s, float cos_cone, int k, Rgb& out) {
   const float norm = float((double(s) + 1) / (2 * M_PI));
   double lum_in = 0, lum_used = 0;
   float sr = 0, sg = 0, sb = 0;
   int used = 0;
-  for (size_t i = begin; i < end; ++i) {
+  for (size_t q = begin; q < end; ++q) {
+    const size_t i = at(q);
     const float c = rv.x * L.x[i] + rv.y * L.y[i] + rv.z * L.z[i];
     if (!(c > cos_cone)) continue;
     lum_in += L.lum[i];
@@ -180,58 +227,78 @@ ShadingScene prepare_shading(std::vector<Light> low, int high_count, std::shared
 
   auto t0 = std::chrono::steady_clock::now();
   s.glossy = make_glossy_sets(std::move(low), high_count, *s.cone_regions, options.glossy);
-  s.cone_block = region_block(s.glossy.low, s.glossy.low_regions);
+  s.region_copies = options.region_copies;
+  s.low_block = whole_block(s.glossy.low);
+  if (s.region_copies) s.cone_block = region_block(s.glossy.low, s.glossy.low_regions);
   s.glossy_ms = ms_since(t0);
 
   t0 = std::chrono::steady_clock::now();
   s.lights = s.glossy.high;
   s.all = whole_block(s.lights);
   s.culled = assign_lights(*s.regions, s.lights);
-  s.culled_block = region_block(s.lights, s.culled);
+  if (s.region_copies) s.culled_block = region_block(s.lights, s.culled);
   s.culled_ms = ms_since(t0);
 
   t0 = std::chrono::steady_clock::now();
   const int q = options.cluster_max_lights == 0 ? std::max(1, high_count / 4) : options.cluster_max_lights;
   s.clustered = cluster_lights(s.lights, q, options.cluster);
   s.clustered_regions = assign_lights(*s.regions, s.clustered);
-  s.clustered_block = region_block(s.clustered, s.clustered_regions);
+  s.clustered_all = whole_block(s.clustered);
+  if (s.region_copies) s.clustered_block = region_block(s.clustered, s.clustered_regions);
   s.cluster_ms = ms_since(t0);
   return s;
 }
+
+namespace {
+
+// Calls f(block, at, begin, end) for region j's lights: the region's own copies, or the
+// whole list through the region's index list.
+template <typename F>
+void with_region(bool copies, const LightBlock& whole, const LightBlock& copy, const RegionLights& lists, int j, F&& f) {
+  const size_t b = lists.offsets[size_t(j)], e = lists.offsets[size_t(j) + 1];
+  if (copies)
+    f(copy, Contiguous{}, b, e);
+  else
+    f(whole, Indexed{lists.indices.data()}, b, e);
+}
+
+}  // namespace
 
 ShadingSample shade(const ShadingScene& s, ShadingVariant variant, Vec3 normal, Vec3 reflection, float exponent) {
   ShadingSample out;
   const Vec3f n = to_f(normal), r = to_f(reflection);
   constexpr float kNoUpper = 2.0f;  // every cosine is <= 1: no cone excluded
+  const bool copies = s.region_copies;
   switch (variant) {
     case ShadingVariant::All:
-      diffuse_sum(s.all, 0, s.all.size(), n, out.diffuse);
-      glossy_sum(s.all, 0, s.all.size(), r, exponent, kNoUpper, out.glossy);
+      diffuse_sum(s.all, Contiguous{}, 0, s.all.size(), n, out.diffuse);
+      glossy_sum(s.all, Contiguous{}, 0, s.all.size(), r, exponent, kNoUpper, out.glossy);
       break;
     case ShadingVariant::Culled:
     case ShadingVariant::Glossy: {
-      const int jn = s.regions->region_of(normal);
-      diffuse_sum(s.culled_block, s.culled.offsets[size_t(jn)], s.culled.offsets[size_t(jn) + 1], n, out.diffuse);
-      const int jr = s.regions->region_of(reflection);
-      const size_t b = s.culled.offsets[size_t(jr)], e = s.culled.offsets[size_t(jr) + 1];
-      if (variant == ShadingVariant::Culled) {
-        glossy_sum(s.culled_block, b, e, r, exponent, kNoUpper, out.glossy);
-      } else {
-        const float cos_cone = float(std::cos(s.glossy.cone_half_angle));
-        glossy_sum(s.culled_block, b, e, r, exponent, cos_cone, out.glossy);  // H outside C
-        const int jc = s.cone_regions->region_of(reflection);
-        cone_sum(s.cone_block, s.glossy.low_regions.offsets[size_t(jc)], s.glossy.low_regions.offsets[size_t(jc) + 1],
-                 r, exponent, cos_cone, s.glossy.max_cone_lights, out.glossy);  // L inside C
-      }
+      with_region(copies, s.all, s.culled_block, s.culled, s.regions->region_of(normal),
+                  [&](const LightBlock& L, auto at, size_t b, size_t e) { diffuse_sum(L, at, b, e, n, out.diffuse); });
+      const float upper = variant == ShadingVariant::Culled ? kNoUpper : float(std::cos(s.glossy.cone_half_angle));
+      // Glossy: H outside the cone C (every H light for Culled).
+      with_region(copies, s.all, s.culled_block, s.culled, s.regions->region_of(reflection),
+                  [&](const LightBlock& L, auto at, size_t b, size_t e) {
+                    glossy_sum(L, at, b, e, r, exponent, upper, out.glossy);
+                  });
+      if (variant == ShadingVariant::Glossy)  // L inside C
+        with_region(copies, s.low_block, s.cone_block, s.glossy.low_regions, s.cone_regions->region_of(reflection),
+                    [&](const LightBlock& L, auto at, size_t b, size_t e) {
+                      cone_sum(L, at, b, e, r, exponent, upper, s.glossy.max_cone_lights, out.glossy);
+                    });
       break;
     }
-    case ShadingVariant::Clustered: {
-      const auto& o = s.clustered_regions.offsets;
-      const int jn = s.regions->region_of(normal), jr = s.regions->region_of(reflection);
-      diffuse_sum(s.clustered_block, o[size_t(jn)], o[size_t(jn) + 1], n, out.diffuse);
-      glossy_sum(s.clustered_block, o[size_t(jr)], o[size_t(jr) + 1], r, exponent, kNoUpper, out.glossy);
+    case ShadingVariant::Clustered:
+      with_region(copies, s.clustered_all, s.clustered_block, s.clustered_regions, s.regions->region_of(normal),
+                  [&](const LightBlock& L, auto at, size_t b, size_t e) { diffuse_sum(L, at, b, e, n, out.diffuse); });
+      with_region(copies, s.clustered_all, s.clustered_block, s.clustered_regions, s.regions->region_of(reflection),
+                  [&](const LightBlock& L, auto at, size_t b, size_t e) {
+                    glossy_sum(L, at, b, e, r, exponent, kNoUpper, out.glossy);
+                  });
       break;
-    }
   }
   return out;
 }

@@ -13,9 +13,10 @@
 //              L lights of the S_L region of r inside the cone C (first k, rescaled)
 //              plus H lights of the S_H region of r outside C                   (c)
 //   Clustered  H clustered to at most Q lights (sampling/clustering.h), then culled (d)
-// Lights are float structure-of-arrays copied per region, so a region's lights are
-// contiguous - the layout of one texture row in the paper's TexL - and All and Culled run
-// the very same loop over a span. Arithmetic is float (as on a GPU).
+// Lights are float structure-of-arrays. A region's lights are read through its index list
+// from the one array (default), or from per-region copies (the paper's TexL rows, one
+// region per row); the loops are the same source for All and the culled variants, over a
+// contiguous or an indexed range. Arithmetic is float (as on a GPU).
 #pragma once
 
 #include <array>
@@ -66,20 +67,28 @@ struct ShadingOptions {
   GlossyOptions glossy;          // L/H ratio, cone, k, S_L regions
   int cluster_max_lights = 0;    // Q for the Clustered variant; 0: |H| / 4 (at least 1)
   ClusterOptions cluster;
+  // Copy each region's lights next to each other (the paper's TexL rows) instead of
+  // reading the one light array through the region's index list. Copies give contiguous
+  // loads but a working set ~(1 + sin alpha) / 2 * regions times the light array, which
+  // leaves the cache for large |H| (see docs/shading.md).
+  bool region_copies = false;
 };
 
 // One frame's tables and light copies. Build times are reported separately from shading.
 struct ShadingScene {
   std::shared_ptr<const AngularRegions> regions, cone_regions;  // S_H, S_L (fixed, reusable)
+  bool region_copies = false;           // see ShadingOptions
   std::vector<Light> lights;            // H, in progressive order (variants a, b)
   LightBlock all;                       // H as one block
   RegionLights culled;                  // S_H lists over H
-  LightBlock culled_block;              // per-region copies, at culled.offsets
+  LightBlock culled_block;              // per-region copies, at culled.offsets (region_copies only)
   GlossySets glossy;                    // L, and S_L lists over L
-  LightBlock cone_block;                // per-S_L-region copies of L, at glossy.low_regions.offsets
+  LightBlock low_block;                 // L as one block
+  LightBlock cone_block;                // per-S_L-region copies of L (region_copies only)
   std::vector<Light> clustered;         // at most Q lights
   RegionLights clustered_regions;
-  LightBlock clustered_block;
+  LightBlock clustered_all;             // the clustered lights as one block
+  LightBlock clustered_block;           // per-region copies (region_copies only)
   double culled_ms = 0, glossy_ms = 0, cluster_ms = 0;  // table build times
 };
 

@@ -91,6 +91,23 @@ TEST(ShadingCli, EvalOnARealMapReportsEveryVariantAsJson) {
   EXPECT_EQ(csv.rfind("map,n,variant,", 0), 0u);
 }
 
+TEST(ShadingCli, CoherentOrderAndRegionCopiesChangeTimesNotErrors) {
+  const std::string map = shared("probes-probulator-latlong256/uffizi.hdr");
+  const CliRun a = lightprobe("eval shading " + map + " --n 128 --points 500 --json -o " + (scratch() / "e1").string());
+  const CliRun b = lightprobe("eval shading " + map + " --n 128 --points 500 --coherent --region-copies --json -o " +
+                              (scratch() / "e2").string());
+  ASSERT_EQ(a.code, 0) << a.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  const auto ja = nlohmann::json::parse(a.out)["points"], jb = nlohmann::json::parse(b.out)["points"];
+  ASSERT_EQ(ja.size(), 4u);
+  ASSERT_EQ(jb.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(ja[i]["diffuse"].get<double>(), jb[i]["diffuse"].get<double>(), 1e-9);
+    EXPECT_NEAR(ja[i]["glossy100"].get<double>(), jb[i]["glossy100"].get<double>(), 1e-9);
+    EXPECT_DOUBLE_EQ(ja[i]["visits"].get<double>(), jb[i]["visits"].get<double>());
+  }
+}
+
 TEST(ShadingCli, TablesExportJsonAndTexture) {
   const fs::path json = scratch() / "tables.json", bin = scratch() / "tables.lpst";
   CliRun r = lightprobe("tables scene --n 128 --regions 64 --json -o " + json.string());

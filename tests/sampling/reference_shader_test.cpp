@@ -78,6 +78,22 @@ TEST(ReferenceShader, CullingChangesOnlyRounding) {
   }
 }
 
+TEST(ReferenceShader, RegionCopiesAndIndexListsShadeAlike) {
+  ShadingOptions o;
+  o.glossy.low_per_high = 4;
+  const auto low = scene_lights(1024);
+  const ShadingScene indexed = prepare_shading(low, 256, regions(128), regions(256), o);
+  o.region_copies = true;
+  const ShadingScene copies = prepare_shading(low, 256, regions(128), regions(256), o);
+  const Points p = points(500);
+  for (ShadingVariant v : {ShadingVariant::Culled, ShadingVariant::Glossy, ShadingVariant::Clustered})
+    for (size_t i = 0; i < p.n.size(); ++i) {
+      const ShadingSample a = shade(indexed, v, p.n[i], p.r[i], 100), b = shade(copies, v, p.n[i], p.r[i], 100);
+      EXPECT_FLOAT_EQ(a.diffuse.g, b.diffuse.g);  // the same lights in the same order
+      EXPECT_FLOAT_EQ(a.glossy.r, b.glossy.r);
+    }
+}
+
 TEST(ReferenceShader, TwoStrataEqualAllLightsForALambertianSurface) {
   const ShadingScene s = make_scene(128, 8, 8, 64);
   const Points p = points(1000);

@@ -34,6 +34,16 @@ $lp preview out/ball.exr -o out/ball.png
 $lp synth sequence --scenario moving-light --frames 24 -o out/sequence
 $lp sample out/sequence --method hemigon --n 300 -o out/sequence_lights.ndjson
 $lp eval temporal scene --frames 32 -o out/temporal
+# Rendering with the map itself: MIS, BIS and SMC estimators on dynamic scenarios (quick run).
+$lp eval estimators scene --quick -o out/estimators
+# Many lights in a renderer: the angular-region, glossy and cluster tables, and what they buy.
+$lp tables out/scene.exr --n 1024 -o out/tables.lpst
+$lp eval shading scene --n 256,1024 -o out/shading
+# No probe: a camera's metadata along a walk through a synthetic room, against real probes.
+$lp synth walkthrough -o out/walkthrough
+$lp estimate metadata out/walkthrough/track.jsonl -o out/metadata_model.json
+$lp estimate query out/metadata_model.json --at 4,3 -o out/metadata_lights.json
+$lp eval metadata out/walkthrough -o out/metadata
 # Live: the whole chain from Aravis' simulated bracketing camera to the light server, 3 s.
 $lp stream --source aravis:Fake_1 --exposures 0.0002,0.002,0.02 --listen 127.0.0.1:0 --duration 3
-echo "demo: results in out/ (scene.exr, lights_*.png, eval/sampling.svg, hdr/hdr.svg, ball.png, ball_lights.png, sequence_lights.ndjson, temporal/temporal.svg)"
+echo "demo: results in out/ (scene.exr, lights_*.png, eval/sampling.svg, hdr/hdr.svg, ball.png, ball_lights.png, sequence_lights.ndjson, temporal/temporal.svg, estimators/estimators.svg, shading/shading.svg, metadata/metadata.svg)"

@@ -77,7 +77,9 @@ TEST(ShadingCli, EvalOnARealMapReportsEveryVariantAsJson) {
   for (const auto& p : j["points"]) {
     EXPECT_GT(p["ns_per_point"].get<double>(), 0);
     EXPECT_GT(p["diffuse"].get<double>(), 0);
-    if (p["variant"] == "all") EXPECT_DOUBLE_EQ(p["speedup"].get<double>(), 1.0);
+    if (p["variant"] == "all") {
+      EXPECT_DOUBLE_EQ(p["speedup"].get<double>(), 1.0);
+    }
   }
   // Culling costs no accuracy: the culled rows carry the all-lights errors.
   const auto& pts = j["points"];

@@ -159,7 +159,9 @@ TEST(ExposureMetering, ColourMatrixMapsSensorRgbToRec709) {
     cam.colour_matrix = m;
     EXPECT_NEAR(meter_frame(f, cam, "t").cct_k, t, 0.005 * t);
     // The matrix keeps white (rows sum to 1), so it matters away from D65 only.
-    if (t < 5000) EXPECT_GT(std::fabs(without - t), 0.05 * t) << t;
+    if (t < 5000) {
+      EXPECT_GT(std::fabs(without - t), 0.05 * t) << t;
+    }
   }
 }
 

@@ -105,7 +105,9 @@ TEST(ShadingTables, JsonHoldsTheSameTables) {
   for (int j = 0; j < 60; ++j) {
     const auto list = diffuse["regions"][size_t(j)]["lights"].get<std::vector<uint32_t>>();
     EXPECT_EQ(list.size(), s.culled.size(j));
-    if (!list.empty()) EXPECT_EQ(list.front(), s.culled.indices[s.culled.offsets[size_t(j)]]);
+    if (!list.empty()) {
+      EXPECT_EQ(list.front(), s.culled.indices[s.culled.offsets[size_t(j)]]);
+    }
   }
   EXPECT_EQ(diffuse["lights"][5]["id"].get<uint64_t>(), s.lights[5].id);
   EXPECT_NEAR(doc["tables"][1]["cone_half_angle"].get<double>(), s.glossy.cone_half_angle, 1e-12);

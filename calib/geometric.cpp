@@ -1004,6 +1004,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     if (e < options.min_edge_observations) res.corners_poorly_covered = true;
 
   // 5. Jackknife leverage of each used view for the chosen model.
+  std::vector<CameraModel> leave_one_out;
   if (options.leverage) {
     std::vector<double> lev;
     std::vector<int> idx;
@@ -1021,6 +1022,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
       if (f.ok) {
         const ProjectionDiff d = projection_difference(f.model, res.model, mask, step);
         if (d.samples > 0) l = d.rms_px;
+        leave_one_out.push_back(f.model);
       }
       res.views[views[i].index].leverage_px = l;
       lev.push_back(l);
@@ -1032,6 +1034,48 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   }
   res.model.rms_reprojection_px = pick->rms_px;
   res.model.cross_validation_px = pick->cross_validation_px;
+
+  // 6. Projection uncertainty of the chosen model: linear (full fit over the image; each
+  //    half's own for the cross-validation forecast) and jackknife.
+  if (options.uncertainty) {
+    UncertaintyReport& u = res.uncertainty;
+    const auto grid = grid_pixels(res.model, std::max(1, options.uncertainty_nx), std::max(1, options.uncertainty_ny));
+    const auto cv_pixels = mask_pixels(mask, width, height, step);
+    const auto solved = [&](const Subset& s, const Fit& f) {
+      std::vector<SolvedView> out;
+      for (size_t i = 0; i < s.size(); ++i) out.push_back({f.poses[i], s[i]->px, s[i]->inlier});
+      return out;
+    };
+    const auto sv = solved(used, chosen);
+    const LinearCovariance cov = linearised_covariance(chosen.model, board, sv);
+    u.linear_ok = cov.ok;
+    u.linear_error = cov.error;
+    u.sigma_px = cov.sigma_px;
+    const int gx = std::max(1, options.uncertainty_nx), gy = std::max(1, options.uncertainty_ny);
+    u.mean_frames = linear_uncertainty_mean_frames(cov, chosen.model, sv, grid, gx, gy);
+    u.rotation_fitted = linear_uncertainty_rotation_fitted(cov, chosen.model, mask, step, grid, gx, gy);
+    u.predicted_cv_linear_px = std::numeric_limits<double>::quiet_NaN();
+    const Fit& a = fa.get(pick->name);
+    const Fit& b = fb.get(pick->name);
+    if (cov.ok && a.ok && b.ok) {
+      const LinearCovariance ca = linearised_covariance(a.model, board, solved(half[0], a));
+      const LinearCovariance cb = linearised_covariance(b.model, board, solved(half[1], b));
+      if (ca.ok && cb.ok) {
+        const int n = int(cv_pixels.size());
+        const double ra = rms_over(linear_uncertainty_rotation_fitted(ca, a.model, mask, step, cv_pixels, n, 1));
+        const double rb = rms_over(linear_uncertainty_rotation_fitted(cb, b.model, mask, step, cv_pixels, n, 1));
+        u.predicted_cv_linear_px = std::sqrt(ra * ra + rb * rb);
+      }
+    }
+    u.predicted_cv_jackknife_px = std::numeric_limits<double>::quiet_NaN();
+    if (leave_one_out.size() >= 3) {
+      u.jackknife = jackknife_uncertainty(res.model, leave_one_out, cv_pixels, grid, gx, gy);
+      const int n = int(cv_pixels.size());
+      u.predicted_cv_jackknife_px =
+          2 * rms_over(jackknife_uncertainty(res.model, leave_one_out, cv_pixels, cv_pixels, n, 1));
+    }
+    u.headline = leave_one_out.size() >= 3 ? "jackknife" : "linear";
+  }
   return res;
 }
 

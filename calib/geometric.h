@@ -21,6 +21,7 @@
 
 #include "calib/board_detect.h"
 #include "calib/camera_model.h"
+#include "calib/projection_uncertainty.h"
 
 namespace lp {
 
@@ -62,6 +63,32 @@ struct CalibrateOptions {
   int min_edge_observations = 10;
   // Step (px) of the pixel grid that projection differences are evaluated on; 0 = auto.
   int diff_step_px = 0;
+  // Projection uncertainty of the chosen model (calib/projection_uncertainty.h) on a grid
+  // of uncertainty_nx x uncertainty_ny cells over the image; the jackknife part needs
+  // `leverage` (its leave-one-out fits).
+  bool uncertainty = true;
+  int uncertainty_nx = 48, uncertainty_ny = 36;
+};
+
+// The chosen model's projection uncertainty (rays at infinity) and what each estimate
+// predicts for the cross-validation, next to the measured one.
+struct UncertaintyReport {
+  bool linear_ok = false;
+  std::string linear_error;        // why the linear estimate is missing (e.g. splined model)
+  double sigma_px = 0;             // residual sigma per component used by the linear estimate
+  UncertaintyGrid mean_frames;     // linear, mrcal's mean-frames (mean-pcam) method
+  UncertaintyGrid rotation_fitted; // linear, camera rotation fitted out as cross-validation does
+  UncertaintyGrid jackknife;       // empirical, leave-one-view-out spread (empty without leverage)
+  // Predicted RMS odd/even difference over the covered area (the measured cross-validation's
+  // pixels): linear from each half's own covariance (rotation fitted out), jackknife as
+  // 2 x the full model's spread (two independent halves of half the views each).
+  double predicted_cv_linear_px = 0;
+  double predicted_cv_jackknife_px = 0;
+  // The estimate reported as "the" uncertainty: "jackknife" when it was computed (it
+  // predicted the measured cross-validation on the real sets; the linear one is optimistic
+  // there, see docs/calibration.md), else "linear".
+  std::string headline;
+  const UncertaintyGrid& headline_grid() const { return headline == "jackknife" ? jackknife : rotation_fitted; }
 };
 
 struct ModelCandidate {
@@ -116,6 +143,7 @@ struct CalibrationResult {
   // Inlier corners in the outer edge_band of each side: left, right, top, bottom.
   std::array<int, 4> edge_observations{};
   bool corners_poorly_covered = false;  // some side has < min_edge_observations
+  UncertaintyReport uncertainty;        // empty unless options.uncertainty
 };
 
 // corners_per_view[i]: board.cols * board.rows pixel corners (row-major) or empty.

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 
 #include "calib/board_detect.h"
@@ -114,6 +115,10 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   const std::string stem = (fs::path(report_dir) / fs::path(args.output).stem()).string();
   write_residual_plot(stem + "_residuals.png", r, corners);
   write_coverage_plot(stem + "_coverage.png", r);
+  const UncertaintyReport& u = r.uncertainty;
+  const UncertaintyGrid& ug = u.headline_grid();
+  const bool have_uncertainty = ug.nx > 0 && std::isfinite(ug.median_px);
+  if (have_uncertainty) write_uncertainty_plot(stem + "_uncertainty.png", r);
 
   say(out, "{} of {} images have the {}x{} board ({:.2f} s); solved in {:.2f} s\n", found, args.images.size(),
       board.cols, board.rows, detect_s, solve_s);
@@ -137,7 +142,21 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
         r.model.rms_reprojection_px, r.cross_validation_px);
   if (r.corners_poorly_covered)
     say(out, "warning: the image corners/edges are poorly covered by the boards; the model is extrapolated there\n");
-  say(out, "wrote {}; pictures {}_residuals.png, {}_coverage.png\n", fmt::join(written, ", "), stem, stem);
+  // Uncertainty: worst-direction standard deviation of a ray at infinity's pixel.
+  auto line = [&](const char* name, const UncertaintyGrid& g) {
+    if (g.nx > 0 && std::isfinite(g.median_px))
+      say(out, "  {:<34} centre {:>7.3f}  median {:>7.3f}  image corners {}\n", name, g.centre_px, g.median_px,
+          std::isfinite(g.corner_px) ? fmt::format("{:.3g} px", g.corner_px) : "no ray");
+  };
+  say(out, "projection uncertainty (1 sigma, rays at infinity; headline: {}):\n", u.headline.empty() ? "none" : u.headline);
+  line("jackknife (leave one view out)", u.jackknife);
+  line("linear, rotation fitted out", u.rotation_fitted);
+  line("linear, mean frames (mrcal)", u.mean_frames);
+  if (!u.linear_ok && !u.linear_error.empty()) say(out, "  linear estimate: {}\n", u.linear_error);
+  say(out, "cross-validation {:.3f} px; predicted from the uncertainty: jackknife {:.3f}, linear {:.3f} px\n",
+      r.cross_validation_px, u.predicted_cv_jackknife_px, u.predicted_cv_linear_px);
+  say(out, "wrote {}; pictures {}_residuals.png, {}_coverage.png{}\n", fmt::join(written, ", "), stem, stem,
+      have_uncertainty ? fmt::format(", {}_uncertainty.png", stem) : "");
 
   nlohmann::json table = nlohmann::json::array();
   for (const ModelCandidate& c : r.table)
@@ -149,7 +168,26 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
     views.push_back({{"file", args.images[v]}, {"used", r.views[v].used}, {"why", r.views[v].why},
                      {"rms_px", r.views[v].rms_px}, {"leverage_px", r.views[v].leverage_px},
                      {"influential", r.views[v].influential}, {"rejected_corners", r.views[v].rejected_corners}});
+  auto grid_json = [](const UncertaintyGrid& g) -> nlohmann::json {
+    auto num = [](double x) -> nlohmann::json { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
+    if (g.nx <= 0) return nullptr;
+    return {{"centre_px", num(g.centre_px)}, {"median_px", num(g.median_px)}, {"corner_px", num(g.corner_px)}};
+  };
+  auto num = [](double x) -> nlohmann::json { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
+  const nlohmann::json uncertainty = {
+      {"headline", u.headline},
+      {"headline_px", grid_json(ug)},
+      {"jackknife_px", grid_json(u.jackknife)},
+      {"linear_rotation_fitted_px", grid_json(u.rotation_fitted)},
+      {"linear_mean_frames_px", grid_json(u.mean_frames)},
+      {"linear_ok", u.linear_ok},
+      {"linear_error", u.linear_error},
+      {"sigma_px", num(u.sigma_px)},
+      {"predicted_cross_validation_jackknife_px", num(u.predicted_cv_jackknife_px)},
+      {"predicted_cross_validation_linear_px", num(u.predicted_cv_linear_px)},
+      {"plot", have_uncertainty ? nlohmann::json(stem + "_uncertainty.png") : nlohmann::json()}};
   emit_json(out, {{"output", written}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
+                  {"uncertainty", uncertainty},
                   {"intrinsics", r.model.intrinsics}, {"rms_px", r.model.rms_reprojection_px},
                   {"cross_validation_px", r.cross_validation_px}, {"heldout_rms_px", r.heldout_rms_px},
                   {"views_with_board", found}, {"detect_seconds", detect_s}, {"solve_seconds", solve_s},

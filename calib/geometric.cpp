@@ -929,7 +929,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     res.table.push_back(c);
   }
 
-  // 3. Selection: fewest parameters within max(10 %, 0.05 px) of the best cross-validation.
+  // 3. Selection: fewest parameters within the noise of the best cross-validation.
   const ModelCandidate* best = nullptr;
   for (const auto& c : res.table)
     if (c.ok && (!best || c.cross_validation_px < best->cross_validation_px)) best = &c;
@@ -938,10 +938,49 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     for (const auto& c : res.table) why += (why.empty() ? "" : "; ") + c.name + ": " + c.error;
     throw InputError("calibrate: no candidate model could be fitted (" + why + ")");
   }
-  const double limit = best->cross_validation_px + std::max(0.1 * best->cross_validation_px, 0.05);
+  // The noise of a cross-validation: a jackknife standard error of the best model's. Each
+  // view is left out of its half in turn (that half refitted warm, the other kept); as the
+  // two halves are independent samples, Var = sum over halves of (m_h - 1) * s_h^2 (the
+  // two-sample jackknife), with s_h a robust spread (1.4826 MAD) of that half's values so
+  // that one influential view does not make every model "within noise".
+  {
+    Fitter* halves[2] = {&fa, &fb};
+    std::vector<double> cvs[2];
+    for (size_t i = 0; i < used.size(); ++i) {
+      const int h = int(i % 2), pos = int(i / 2);
+      Subset rest;
+      for (size_t j = 0; j < half[h].size(); ++j)
+        if (int(j) != pos) rest.push_back(half[h][j]);
+      const Fit& from = halves[h]->get(best->name);
+      std::vector<Pose> poses;
+      for (size_t j = 0; j < from.poses.size(); ++j)
+        if (int(j) != pos) poses.push_back(from.poses[j]);
+      const Fit refit = warm_refit(pr, rest, best->name, from, poses);
+      if (!refit.ok) continue;
+      const ProjectionDiff d = projection_difference(refit.model, halves[1 - h]->get(best->name).model, mask, step);
+      if (d.samples > 0) cvs[h].push_back(d.rms_px);
+    }
+    res.cv_noise_px = std::numeric_limits<double>::quiet_NaN();
+    if (cvs[0].size() >= 3 && cvs[1].size() >= 3) {
+      double var = 0;
+      for (const auto& v : cvs) {
+        const double med = median_of(v);
+        std::vector<double> dev;
+        for (double c : v) dev.push_back(std::abs(c - med));
+        const double sh = 1.4826 * median_of(dev);
+        var += double(v.size() - 1) * sh * sh;
+      }
+      res.cv_noise_px = std::sqrt(var);
+    }
+  }
+  const double noise = std::isfinite(res.cv_noise_px) ? res.cv_noise_px : 0.0;
   const ModelCandidate* pick = best;
+  for (auto& c : res.table)
+    c.within_noise = c.ok && c.cross_validation_px <= options.fit_max_cross_validation_px &&
+                     c.cross_validation_px - best->cross_validation_px <=
+                         options.selection_k * noise + options.selection_floor_px;
   for (const auto& c : res.table)
-    if (c.ok && c.cross_validation_px <= limit &&
+    if (c.ok && c.within_noise &&
         (c.params < pick->params || (c.params == pick->params && c.cross_validation_px < pick->cross_validation_px)))
       pick = &c;
   res.selected = pick->name;

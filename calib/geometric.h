@@ -11,7 +11,9 @@
 // covered (unproject with A, best rotation between the two camera frames, project with
 // B): the pixel disagreement is what a user can expect from recalibrating (mrcal's
 // "projection difference"). The model chosen is the one with the fewest parameters whose
-// cross-validation is within max(10 %, 0.05 px) of the best candidate's.
+// cross-validation is within the noise of the best candidate's: it exceeds the best's by at
+// most selection_k times the jackknife standard error of the best's cross-validation (each
+// view left out of its half in turn, that half refitted, the comparison repeated).
 #pragma once
 
 #include <array>
@@ -51,6 +53,18 @@ struct CalibrateOptions {
   int outlier_rounds = 5;
   // A view loses its board when more than this fraction of its corners are outliers.
   double max_view_outlier_fraction = 0.5;
+  // Model selection: the candidate with the fewest parameters among those with
+  // cv - cv_best <= selection_k * noise + selection_floor_px, where noise is the jackknife
+  // standard error of the best (lowest) cross-validation (CalibrationResult::cv_noise_px;
+  // one warm refit of a half per view). k = 2: a model whose cross-validation differs from
+  // the best's by less than two standard errors of such a measurement cannot be told apart
+  // from it by these views. (The standard error of the paired difference was tried first:
+  // a wrong model's cross-validation jumps so much when a view is left out that its own
+  // spread made a 1.5 px pinhole "within noise" of a 0.1 px rational fit.) The floor only
+  // matters for noise-free corners. Candidates with cross-validation above
+  // fit_max_cross_validation_px never qualify.
+  double selection_k = 2.0;
+  double selection_floor_px = 0.005;
   // Jackknife leverage of each view for the chosen model (one extra fit per view).
   bool leverage = true;
   // Flagged when leverage > factor * median and > leverage_min_px (a view that moves the
@@ -104,6 +118,7 @@ struct ModelCandidate {
   double heldout_rms_px = 0;
   double cross_validation_px = 0;    // RMS odd-vs-even projection difference, covered area
   double cross_validation_median_px = 0;
+  bool within_noise = false;  // cv - cv_best <= selection_k * cv_noise_px + floor (see options)
   CameraModel model;
 };
 
@@ -137,6 +152,8 @@ struct CalibrationResult {
   std::vector<int> coverage;  // coverage_ny x coverage_nx row-major, inlier corners per cell
   std::vector<ViewReport> views;
   double cross_validation_px = 0;  // chosen model
+  // Jackknife standard error of the best candidate's cross-validation: the selection's noise.
+  double cv_noise_px = 0;
   double cross_validation_median_px = 0;
   double heldout_rms_px = 0;
   int corners_total = 0, corners_rejected = 0, outlier_rounds = 0;

@@ -126,12 +126,12 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   for (const ModelCandidate& c : r.table)
     if (c.ok)
       say(out, "{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f}{}\n", c.name, c.params, c.rms_px, c.heldout_rms_px,
-          c.cross_validation_px, c.name == r.selected ? "   <- chosen" : "");
+          c.cross_validation_px, c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
     else
       say(out, "{:<44} failed: {}\n", c.name, c.error);
-  say(out, "chosen: {} (the simplest whose cross-validation is within the noise of the best); {} of {} corners "
-           "rejected as outliers\n",
-      r.selected, r.corners_rejected, r.corners_total);
+  say(out, "chosen: {}, the fewest parameters within 2 x {:.3f} px (the jackknife standard error of the best "
+           "cross-validation) of the best; {} of {} corners rejected as outliers\n",
+      r.selected, r.cv_noise_px, r.corners_rejected, r.corners_total);
   for (size_t v = 0; v < r.views.size(); ++v)
     if (r.views[v].influential)
       say(out, "influential view: {} (leaving it out moves the projection by {:.2f} px)\n", args.images[v],
@@ -162,7 +162,8 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   for (const ModelCandidate& c : r.table)
     table.push_back({{"model", c.name}, {"lensmodel", c.lensmodel}, {"params", c.params}, {"ok", c.ok},
                      {"error", c.error}, {"rms_px", c.rms_px}, {"heldout_rms_px", c.heldout_rms_px},
-                     {"cross_validation_px", c.cross_validation_px}});
+                     {"cross_validation_px", c.cross_validation_px},
+                     {"within_noise", c.within_noise}});
   nlohmann::json views = nlohmann::json::array();
   for (size_t v = 0; v < r.views.size(); ++v)
     views.push_back({{"file", args.images[v]}, {"used", r.views[v].used}, {"why", r.views[v].why},
@@ -189,7 +190,9 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   emit_json(out, {{"output", written}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
                   {"uncertainty", uncertainty},
                   {"intrinsics", r.model.intrinsics}, {"rms_px", r.model.rms_reprojection_px},
-                  {"cross_validation_px", r.cross_validation_px}, {"heldout_rms_px", r.heldout_rms_px},
+                  {"cross_validation_px", r.cross_validation_px},
+                  {"cross_validation_noise_px", std::isfinite(r.cv_noise_px) ? nlohmann::json(r.cv_noise_px) : nlohmann::json()},
+                  {"heldout_rms_px", r.heldout_rms_px},
                   {"views_with_board", found}, {"detect_seconds", detect_s}, {"solve_seconds", solve_s},
                   {"corners_poorly_covered", r.corners_poorly_covered}, {"no_model_fits", r.no_model_fits}, {"table", table}, {"views", views},
                   {"images", images}});

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -347,7 +348,7 @@ Fit refine_mei(const Problem& pr, const Subset& views, const Fit& seed) {
 // `idx` maps its poses back; the others are posed by PnP through the seed), every view
 // re-posed under the seed when that fits it better, then the joint Ceres solve as for
 // Kannala-Brandt.
-Fit fit_mei(const Problem& pr, const Subset& views) {
+Fit fit_opencv_omnidir(const Problem& pr, const Subset& views, std::vector<char>* has_pose_out) {
   Fit f;
   std::vector<cv::Mat> obj, img;
   std::vector<int> vmap;  // omnidir input index -> subset index
@@ -390,7 +391,8 @@ Fit fit_mei(const Problem& pr, const Subset& views) {
       f.error = "cv::omnidir::calibrate diverged";
       return f;
     }
-  std::vector<char> has_pose(views.size(), 0);
+  std::vector<char>& has_pose = *has_pose_out;
+  has_pose.assign(views.size(), 0);
   f.poses.assign(views.size(), Pose{});
   for (size_t j = 0; j < idx.total(); ++j) {
     const int in = idx.at<int>(int(j));
@@ -403,6 +405,16 @@ Fit fit_mei(const Problem& pr, const Subset& views) {
                    t.at<double>(2)};
     has_pose[vi] = 1;
   }
+  f.ok = true;
+  f.params = 9;
+  return f;
+}
+
+Fit fit_mei(const Problem& pr, const Subset& views) {
+  std::vector<char> has_pose;
+  Fit f = fit_opencv_omnidir(pr, views, &has_pose);
+  if (!f.ok) return f;
+  f.ok = false;
   for (size_t i = 0; i < views.size(); ++i) {
     auto view_sq = [&](const Pose& p) {
       const auto r = view_residuals(pr, f.model, *views[i], p);
@@ -974,11 +986,19 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     }
   }
   const double noise = std::isfinite(res.cv_noise_px) ? res.cv_noise_px : 0.0;
+  // The residual RMS is a far more precise statistic than a cross-validation (relative
+  // standard error ~1 / sqrt(2 n) over n residual components): a model whose RMS is
+  // significantly above the best's misses the corners, however noisy the cross-validation
+  // (with few views, its jackknife spread is wide).
+  int components = 0;
+  for (const View* v : used) components += 2 * int(std::count(v->inlier.begin(), v->inlier.end(), 1));
+  const double rms_limit = best->rms_px * (1 + options.selection_k / std::sqrt(double(std::max(1, components))));
   const ModelCandidate* pick = best;
   for (auto& c : res.table)
     c.within_noise = c.ok && c.cross_validation_px <= options.fit_max_cross_validation_px &&
                      c.cross_validation_px - best->cross_validation_px <=
-                         options.selection_k * noise + options.selection_floor_px;
+                         options.selection_k * noise + options.selection_floor_px &&
+                     c.rms_px <= rms_limit;
   for (const auto& c : res.table)
     if (c.ok && c.within_noise &&
         (c.params < pick->params || (c.params == pick->params && c.cross_validation_px < pick->cross_validation_px)))
@@ -1116,6 +1136,80 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     u.headline = leave_one_out.size() >= 3 ? "jackknife" : "linear";
   }
   return res;
+}
+
+}  // namespace lp
+
+namespace lp {
+
+std::vector<PeerCalibration> calibrate_opencv_alone(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                                                    const BoardSpec& board, int width, int height, int diff_step_px) {
+  CalibrateOptions o;
+  o.diff_step_px = diff_step_px;
+  Problem pr{board, width, height, o};
+  std::vector<View> views;
+  for (size_t i = 0; i < corners_per_view.size(); ++i)
+    if (!corners_per_view[i].empty()) {
+      if (int(corners_per_view[i].size()) != board.cols * board.rows)
+        throw InputError("calibrate_opencv_alone: view " + std::to_string(i) + " has the wrong number of corners");
+      views.push_back({int(i), corners_per_view[i], std::vector<char>(corners_per_view[i].size(), 1)});
+    }
+  if (views.size() < 4) throw InputError("calibrate_opencv_alone: need at least 4 views with a board");
+  Subset all, half[2];
+  for (size_t i = 0; i < views.size(); ++i) {
+    all.push_back(&views[i]);
+    half[i % 2].push_back(&views[i]);
+  }
+  const std::vector<uint8_t> mask = coverage_mask(pr, all);
+  const int step = auto_step(pr);
+  auto fit = [&](const std::string& name, const Subset& s, std::vector<char>& posed) -> Fit {
+    posed.assign(s.size(), 1);
+    if (name == "cv::fisheye") return fit_opencv_kb(pr, s, [](const std::array<double, 2>&) { return true; }, &posed);
+    if (name == "cv::omnidir") return fit_opencv_omnidir(pr, s, &posed);
+    if (name == "cv::calibrateCamera plumb_bob") return fit_opencv_pinhole_family(pr, s, 0, "LENSMODEL_OPENCV5", 5);
+    return fit_opencv_pinhole_family(pr, s, cv::CALIB_RATIONAL_MODEL, kOpenCV8, 8);
+  };
+  std::vector<PeerCalibration> out;
+  for (const std::string name :
+       {"cv::fisheye", "cv::calibrateCamera plumb_bob", "cv::calibrateCamera rational", "cv::omnidir"}) {
+    PeerCalibration p;
+    p.name = name;
+    std::vector<char> posed;
+    const auto t0 = std::chrono::steady_clock::now();
+    const Fit f = fit(name, all, posed);
+    p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!f.ok) {
+      p.error = f.error;
+      out.push_back(p);
+      continue;
+    }
+    p.lensmodel = f.model.lensmodel;
+    p.model = f.model;
+    Subset posed_views;
+    Fit fp = f;
+    fp.poses.clear();
+    for (size_t i = 0; i < all.size(); ++i)
+      if (posed[i]) {
+        posed_views.push_back(all[i]);
+        fp.poses.push_back(f.poses[i]);
+      }
+    p.views_posed = int(posed_views.size());
+    p.rms_px = fit_rms(pr, fp, posed_views);
+    std::vector<char> pa, pb;
+    const Fit a = fit(name, half[0], pa), b = fit(name, half[1], pb);
+    if (!a.ok || !b.ok) {
+      p.error = "a half of the views could not be fitted: " + (a.ok ? b.error : a.error);
+      p.cross_validation_px = std::numeric_limits<double>::infinity();
+      out.push_back(p);
+      continue;
+    }
+    const ProjectionDiff d = projection_difference(a.model, b.model, mask, step);
+    p.cross_validation_px = d.samples > 0 ? d.rms_px : std::numeric_limits<double>::infinity();
+    p.ok = std::isfinite(p.rms_px) && p.rms_px < 1e5 && std::isfinite(p.cross_validation_px);
+    if (!p.ok && p.error.empty()) p.error = "cannot image some corners or no covered pixel";
+    out.push_back(p);
+  }
+  return out;
 }
 
 }  // namespace lp

@@ -62,7 +62,10 @@ struct CalibrateOptions {
   // a wrong model's cross-validation jumps so much when a view is left out that its own
   // spread made a 1.5 px pinhole "within noise" of a 0.1 px rational fit.) The floor only
   // matters for noise-free corners. Candidates with cross-validation above
-  // fit_max_cross_validation_px never qualify.
+  // fit_max_cross_validation_px never qualify, nor those whose reprojection RMS exceeds the
+  // best's by more than selection_k / sqrt(residual components) (relative): the RMS is the
+  // precise statistic, and with few views the cross-validation's spread is too wide to
+  // reject a stereographic model 1.3 px RMS off on a 190 deg lens (0.28 px for the best).
   double selection_k = 2.0;
   double selection_floor_px = 0.005;
   // Jackknife leverage of each view for the chosen model (one extra fit per view).
@@ -118,7 +121,7 @@ struct ModelCandidate {
   double heldout_rms_px = 0;
   double cross_validation_px = 0;    // RMS odd-vs-even projection difference, covered area
   double cross_validation_median_px = 0;
-  bool within_noise = false;  // cv - cv_best <= selection_k * cv_noise_px + floor (see options)
+  bool within_noise = false;  // cv and RMS within the noise of the best's (see options)
   CameraModel model;
 };
 
@@ -180,5 +183,28 @@ struct ProjectionDiff {
 };
 ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const std::vector<uint8_t>& mask,
                                      int step_px, bool fit_rotation = true);
+
+}  // namespace lp
+
+namespace lp {
+
+// OpenCV run alone on the same corners, as a peer to compare with (docs/calibration.md):
+// cv::fisheye::calibrate, cv::calibrateCamera (plumb_bob, rational) and
+// cv::omnidir::calibrate, each as OpenCV returns it (no outlier rejection, no refinement),
+// every corner of every view with a board. rms_px is recomputed over the views OpenCV
+// posed (per corner, 2-D, as CalibrationResult's), cross-validation as calibrate's (odd /
+// even views, projection difference over the covered area, rotation fitted out); seconds:
+// the full-set solve.
+struct PeerCalibration {
+  std::string name;       // "cv::fisheye", "cv::calibrateCamera plumb_bob", ...
+  std::string lensmodel;  // camera_model.h name
+  bool ok = false;
+  std::string error;
+  double rms_px = 0, cross_validation_px = 0, seconds = 0;
+  int views_posed = 0;
+  CameraModel model;
+};
+std::vector<PeerCalibration> calibrate_opencv_alone(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                                                    const BoardSpec& board, int width, int height, int diff_step_px = 0);
 
 }  // namespace lp

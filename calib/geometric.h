@@ -101,6 +101,12 @@ struct UncertaintyReport {
   // 2 x the full model's spread (two independent halves of half the views each).
   double predicted_cv_linear_px = 0;
   double predicted_cv_jackknife_px = 0;
+  // The cross-validation of the chosen model repeated over cv_splits deterministic half
+  // balanced splits (odd/even and three pseudo-random ones with a fixed seed; halves
+  // refitted warm from the full fit), RMS over the splits: one split is one noisy draw, this is what the forecasts are
+  // checked against in docs/calibration.md.
+  double cv_repeated_px = 0;
+  int cv_splits = 0;
   // The estimate reported as "the" uncertainty: "jackknife" when it was computed (it
   // predicted the measured cross-validation on the real sets; the linear one is optimistic
   // there, see docs/calibration.md), else "linear".

@@ -153,8 +153,9 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   line("linear, rotation fitted out", u.rotation_fitted);
   line("linear, mean frames (mrcal)", u.mean_frames);
   if (!u.linear_ok && !u.linear_error.empty()) say(out, "  linear estimate: {}\n", u.linear_error);
-  say(out, "cross-validation {:.3f} px; predicted from the uncertainty: jackknife {:.3f}, linear {:.3f} px\n",
-      r.cross_validation_px, u.predicted_cv_jackknife_px, u.predicted_cv_linear_px);
+  say(out, "cross-validation {:.3f} px ({:.3f} px over {} splits); predicted from the uncertainty: jackknife {:.3f}, "
+           "linear {:.3f} px\n",
+      r.cross_validation_px, u.cv_repeated_px, u.cv_splits, u.predicted_cv_jackknife_px, u.predicted_cv_linear_px);
   say(out, "wrote {}; pictures {}_residuals.png, {}_coverage.png{}\n", fmt::join(written, ", "), stem, stem,
       have_uncertainty ? fmt::format(", {}_uncertainty.png", stem) : "");
 
@@ -186,6 +187,8 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
       {"sigma_px", num(u.sigma_px)},
       {"predicted_cross_validation_jackknife_px", num(u.predicted_cv_jackknife_px)},
       {"predicted_cross_validation_linear_px", num(u.predicted_cv_linear_px)},
+      {"cross_validation_repeated_px", num(u.cv_repeated_px)},
+      {"cross_validation_splits", u.cv_splits},
       {"plot", have_uncertainty ? nlohmann::json(stem + "_uncertainty.png") : nlohmann::json()}};
   emit_json(out, {{"output", written}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
                   {"uncertainty", uncertainty},

@@ -88,7 +88,7 @@ const BoardSpec kBoard{10, 7, 40};
 // intrinsics), the predicted spread must match the actual error against the truth.
 TEST(ProjectionUncertainty, PredictsTheErrorAgainstTheTrueModel) {
   const CameraModel truth = kb190();
-  double act2 = 0, lin2 = 0, mf2 = 0, jk2 = 0, cv2 = 0, pcv_lin2 = 0, pcv_jk2 = 0;
+  double act2 = 0, lin2 = 0, mf2 = 0, jk2 = 0, cv2 = 0, pcv_lin2 = 0, pcv_jk2 = 0, rep2 = 0;
   int draws = 0;
   for (unsigned seed = 1; seed <= 4; ++seed) {
     const Corners views = make_views(truth, kBoard, 14, 80, 600, 0.2, seed);
@@ -127,6 +127,8 @@ TEST(ProjectionUncertainty, PredictsTheErrorAgainstTheTrueModel) {
     mf2 += m / k;
     jk2 += j / k;
     cv2 += r.cross_validation_px * r.cross_validation_px;
+    rep2 += u.cv_repeated_px * u.cv_repeated_px;
+    EXPECT_EQ(u.cv_splits, 4);
     pcv_lin2 += u.predicted_cv_linear_px * u.predicted_cv_linear_px;
     pcv_jk2 += u.predicted_cv_jackknife_px * u.predicted_cv_jackknife_px;
     ++draws;
@@ -135,6 +137,8 @@ TEST(ProjectionUncertainty, PredictsTheErrorAgainstTheTrueModel) {
   std::printf("  predicted / actual: linear(rot) %.2f  mean frames %.2f  jackknife %.2f;  predicted / measured cv: "
               "linear %.2f jackknife %.2f\n",
               lin, mf, jk, std::sqrt(pcv_lin2 / cv2), std::sqrt(pcv_jk2 / cv2));
+  std::printf("  predicted / cross-validation over 4 splits: linear %.2f jackknife %.2f\n", std::sqrt(pcv_lin2 / rep2),
+              std::sqrt(pcv_jk2 / rep2));
   // Measured: linear (rotation fitted out) 1.08, mean frames 1.25 (it keeps the frame
   // uncertainty that fitting the rotation removes), jackknife 1.27; cross-validation
   // forecasts 1.03 (linear) and 1.18 (jackknife). With Gaussian noise and the right model
@@ -149,6 +153,12 @@ TEST(ProjectionUncertainty, PredictsTheErrorAgainstTheTrueModel) {
   EXPECT_LT(std::sqrt(pcv_lin2 / cv2), 1.5);
   EXPECT_GT(std::sqrt(pcv_jk2 / cv2), 0.5);
   EXPECT_LT(std::sqrt(pcv_jk2 / cv2), 2.0);
+  // Against the cross-validation repeated over 4 balanced splits (measured 0.88 linear,
+  // 1.00 jackknife).
+  EXPECT_GT(std::sqrt(pcv_lin2 / rep2), 1 / 1.5);
+  EXPECT_LT(std::sqrt(pcv_lin2 / rep2), 1.5);
+  EXPECT_GT(std::sqrt(pcv_jk2 / rep2), 1 / 1.5);
+  EXPECT_LT(std::sqrt(pcv_jk2 / rep2), 1.5);
 }
 
 TEST(ProjectionUncertainty, NoiseFreeCornersHaveNoUncertaintyAndSplinedIsRefused) {

@@ -111,6 +111,7 @@ UncertaintyGrid empty_grid(const std::vector<std::array<double, 2>>& pixels, int
   g.pixel = pixels;
   g.worst_px.assign(pixels.size(), kNaN);
   g.rms_px.assign(pixels.size(), kNaN);
+  g.centre_px = g.median_px = g.corner_px = kNaN;  // until summarised
   return g;
 }
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "calib/board_detect.h"
 #include "calib/calibration_report.h"
@@ -184,7 +185,7 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
       {"linear_mean_frames_px", grid_json(u.mean_frames)},
       {"linear_ok", u.linear_ok},
       {"linear_error", u.linear_error},
-      {"sigma_px", num(u.sigma_px)},
+      {"sigma_px", num(u.linear_ok ? u.sigma_px : std::numeric_limits<double>::quiet_NaN())},
       {"predicted_cross_validation_jackknife_px", num(u.predicted_cv_jackknife_px)},
       {"predicted_cross_validation_linear_px", num(u.predicted_cv_linear_px)},
       {"cross_validation_repeated_px", num(u.cv_repeated_px)},

@@ -175,7 +175,12 @@ TEST(ProjectionUncertainty, NoiseFreeCornersHaveNoUncertaintyAndSplinedIsRefused
   CameraModel spl;
   spl.lensmodel = "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=200";
   spl.intrinsics.assign(size_t(intrinsics_count(spl.lensmodel)), 0.0);
-  EXPECT_FALSE(linearised_covariance(spl, kBoard, {}).ok);
+  const LinearCovariance none = linearised_covariance(spl, kBoard, {});
+  EXPECT_FALSE(none.ok);
+  // No numbers that look like a perfect calibration where there is no estimate.
+  const UncertaintyGrid g = linear_uncertainty_rotation_fitted(none, spl, {}, 16, grid_pixels(truth, 4, 3), 4, 3);
+  EXPECT_TRUE(std::isnan(g.median_px));
+  EXPECT_TRUE(std::isnan(g.centre_px));
   SolvedView bad;
   bad.px.resize(3);
   bad.inlier.resize(3, 1);

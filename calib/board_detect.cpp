@@ -108,6 +108,53 @@ bool valid_points(const std::vector<cv::Point2f>& pts, const BoardSpec& board) {
   return true;
 }
 
+// The bright image circle of a fisheye inside a dark surround: centre and radius, or false
+// when the image has no such surround (the largest bright blob fills nearly the image) or
+// the circle is small.
+bool find_image_circle(const cv::Mat& gray, cv::Point2d& centre, double& radius) {
+  cv::Mat blurred, mask;
+  cv::GaussianBlur(gray, blurred, cv::Size(), 3);
+  cv::threshold(blurred, mask, 25, 255, cv::THRESH_BINARY);
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
+  if (contours.empty()) return false;
+  const auto& c = *std::max_element(contours.begin(), contours.end(), [](const auto& a, const auto& b) {
+    return cv::contourArea(a) < cv::contourArea(b);
+  });
+  const double area = cv::contourArea(c), image_area = double(gray.cols) * gray.rows;
+  if (area > 0.92 * image_area || area < 0.2 * image_area) return false;
+  cv::Point2f cf;
+  float r = 0;
+  cv::minEnclosingCircle(c, cf, r);
+  centre = {cf.x, cf.y};
+  radius = r;
+  return radius > 0.25 * std::min(gray.cols, gray.rows);
+}
+
+// Perspective view (size x size, field fov_deg, along the optical axis) of an equidistant
+// fisheye with the circle at half_field_deg: the source pixel of view pixel (u, v).
+struct RectifiedView {
+  cv::Point2d centre;
+  double f_fisheye = 1, f_view = 1;
+  int size = 0;
+  cv::Point2d source(double u, double v) const {
+    const double x = u - (size - 1) / 2.0, y = v - (size - 1) / 2.0;
+    const double rho = std::hypot(x, y);
+    if (rho < 1e-12) return centre;
+    const double r = f_fisheye * std::atan2(rho, f_view);
+    return {centre.x + r * x / rho, centre.y + r * y / rho};
+  }
+};
+
+RectifiedView make_view(const cv::Point2d& centre, double radius, double half_field_deg, double fov_deg, int size) {
+  RectifiedView v;
+  v.centre = centre;
+  v.f_fisheye = radius / (half_field_deg * M_PI / 180);
+  v.f_view = (size / 2.0) / std::tan(fov_deg * M_PI / 360);
+  v.size = size;
+  return v;
+}
+
 }  // namespace
 
 void canonicalize_corner_order(Corners& corners, int cols, int rows) {
@@ -165,7 +212,10 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
   // resolution and refined there, with the move limit scaled by 1 / scale (SB's error grows
   // with the downscaling). Full-resolution SB remains the fallback.
   const double scale = options.sb ? sb_scale(image.width, image.height, board, options) : 1.0;
-  enum class Kind { classic, sb_small, sb_full };
+  enum class Kind { classic, sb_small, sb_full, sb_rectified };
+  cv::Point2d circle_centre;
+  double circle_radius = 0;
+  const bool fisheye_circle = options.rectified && options.sb && find_image_circle(gray, circle_centre, circle_radius);
   auto attempt = [&](const cv::Mat& img, Kind kind, const std::string& name) {
     if (!tried.empty()) tried += ", ";
     pts.clear();
@@ -178,6 +228,34 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
     } else if (kind == Kind::sb_full) {
       tried += name;
       ok = try_sb(img, board, pts);
+    } else if (kind == Kind::sb_rectified) {
+      tried += name;
+      for (double fov : options.rectified_fov_deg) {
+        const RectifiedView view =
+            make_view(circle_centre, circle_radius, options.rectified_half_field_deg, fov, options.rectified_size_px);
+        cv::Mat mx(view.size, view.size, CV_32F), my(view.size, view.size, CV_32F);
+        for (int v = 0; v < view.size; ++v)
+          for (int u = 0; u < view.size; ++u) {
+            const cv::Point2d q = view.source(u, v);
+            mx.at<float>(v, u) = float(q.x);
+            my.at<float>(v, u) = float(q.y);
+          }
+        cv::Mat rect;
+        cv::remap(img, rect, mx, my, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+        pts.clear();
+        if (!try_sb(rect, board, pts, cv::CALIB_CB_EXHAUSTIVE) || !valid_points(pts, board)) continue;
+        // Back to the fisheye image; the move limit grows with the view's local
+        // magnification (a view pixel spans up to a few fisheye pixels near its centre).
+        double magnification = 1;
+        for (auto& p : pts) {
+          const cv::Point2d q = view.source(p.x, p.y), q1 = view.source(p.x + 1, p.y);
+          magnification = std::max(magnification, std::hypot(q1.x - q.x, q1.y - q.y));
+          p = cv::Point2f(float(q.x), float(q.y));
+        }
+        if (limit > 0) limit *= magnification;
+        ok = true;
+        break;
+      }
     } else {
       cv::Mat small = img;
       if (scale < 1) cv::resize(img, small, cv::Size(), scale, scale, cv::INTER_AREA);
@@ -207,7 +285,8 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
   auto cascade = [&](const cv::Mat& img, const std::string& suffix) {
     return (options.sb && attempt(img, Kind::sb_small, "sb" + suffix)) ||
            (options.sb && attempt(img, Kind::sb_full, "sb" + suffix)) ||
-           (options.classic && attempt(img, Kind::classic, "classic" + suffix));
+           (options.classic && attempt(img, Kind::classic, "classic" + suffix)) ||
+           (fisheye_circle && attempt(img, Kind::sb_rectified, "sb-rectified" + suffix));
   };
 
   bool found = cascade(gray, "");

@@ -10,7 +10,13 @@
 //   3. classic cv::findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE | FAST_CHECK)
 //      refined by cornerSubPix: last because it can take seconds on fisheye views where the
 //      FAST_CHECK passes (4.4 s on one synthetic 190 deg view);
-//   4. (optional) 1-3 again on a CLAHE-equalised image (dim or uneven lighting).
+//   4. fisheye rectification, only when the image shows a dark surround with a bright image
+//      circle: local perspective views (fields rectified_fov_deg, looking along the axis) of
+//      an approximate equidistant lens whose circle is rectified_half_field_deg from the
+//      axis, SB on each, corners mapped back and refined at full resolution (move limit
+//      scaled by the view's local magnification). Strongly curved boards filling a > 180
+//      deg field (OCamCalib's Fisheye190deg: 3 -> 6 of 8 views);
+//   5. (optional) 1-4 again on a CLAHE-equalised image (dim or uneven lighting).
 // Corner order is row-major over the board (`cols` corners per row) and deterministic:
 // corner 0 is the outer corner of the grid nearest the image origin (0, 0); of the grid
 // re-orderings with that first corner (and the board's shape), the one whose first row runs
@@ -45,12 +51,18 @@ struct DetectOptions {
   // fallback when the downscaled attempt fails.
   int sb_long_side_px = 640;
   double sb_min_square_px = 8;
+  // Stage 4 (see above). The field guess hardly matters (90-100 deg all work on the
+  // 190 deg set): SB tolerates the residual curvature of a wrong guess.
+  bool rectified = true;
+  std::vector<double> rectified_fov_deg = {120, 160};
+  int rectified_size_px = 640;
+  double rectified_half_field_deg = 95;
 };
 
 struct BoardDetection {
   bool found = false;
   std::vector<std::array<double, 2>> corners;  // row-major over the board, cols per row
-  std::string method;   // "classic", "sb", "classic+clahe", "sb+clahe"; "" when not found
+  std::string method;   // "classic", "sb", "sb-rectified", each maybe "+clahe"; "" when not found
   std::string reason;   // why nothing was found; empty when found
   double seconds = 0;   // wall time of detect_board
   int refine_reverted = 0;       // SB corners whose cornerSubPix move exceeded the limit

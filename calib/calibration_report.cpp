@@ -81,4 +81,59 @@ void write_coverage_plot(const std::string& path, const CalibrationResult& resul
   write_png(path, img);
 }
 
+void write_uncertainty_plot(const std::string& path, const CalibrationResult& result,
+                            const CalibrationPlotOptions& options) {
+  const UncertaintyGrid& g = result.uncertainty.headline_grid();
+  if (g.nx <= 0 || g.ny <= 0 || g.worst_px.size() != size_t(g.nx) * g.ny)
+    throw InputError(fmt::format("{}: the calibration has no projection uncertainty to plot", path));
+  const double s = scale_for(result.model, options);
+  const int w = int(std::lround(result.model.width * s)), h = int(std::lround(result.model.height * s));
+  const int legend = 40;
+  cv::Mat img(h + legend, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  // Log scale from 0.01 px to the largest value (at least 1 px), turbo colours.
+  double hi = 1;
+  for (double v : g.worst_px)
+    if (std::isfinite(v)) hi = std::max(hi, v);
+  hi = std::min(hi, 1000.0);
+  const double lo = 0.01;
+  auto colour = [&](double v) {
+    const double t = std::clamp(std::log(std::max(v, lo) / lo) / std::log(hi / lo), 0.0, 1.0);
+    cv::Mat one(1, 1, CV_8U, cv::Scalar(int(std::lround(255 * t)))), c;
+    cv::applyColorMap(one, c, cv::COLORMAP_TURBO);
+    const auto b = c.at<cv::Vec3b>(0, 0);
+    return cv::Scalar(b[0], b[1], b[2]);
+  };
+  for (int j = 0; j < g.ny; ++j)
+    for (int i = 0; i < g.nx; ++i) {
+      const double v = g.worst_px[size_t(j) * g.nx + i];
+      const cv::Rect cell(i * w / g.nx, j * h / g.ny, (i + 1) * w / g.nx - i * w / g.nx,
+                          (j + 1) * h / g.ny - j * h / g.ny);
+      cv::rectangle(img, cell, std::isfinite(v) ? colour(v) : cv::Scalar(0, 0, 0), cv::FILLED);
+    }
+  // Legend: a colour bar with ticks at decades.
+  const int bar_x0 = 8, bar_x1 = w - 8, bar_y = h + 6;
+  for (int x = bar_x0; x < bar_x1; ++x) {
+    const double v = lo * std::pow(hi / lo, double(x - bar_x0) / (bar_x1 - bar_x0 - 1));
+    cv::line(img, {x, bar_y}, {x, bar_y + 10}, colour(v));
+  }
+  for (double v = lo; v <= hi * 1.0001; v *= 10) {
+    const int x = bar_x0 + int(std::lround(std::log(v / lo) / std::log(hi / lo) * (bar_x1 - bar_x0 - 1)));
+    cv::line(img, {x, bar_y + 10}, {x, bar_y + 14}, cv::Scalar(0, 0, 0));
+    cv::putText(img, fmt::format("{:g} px", v), {std::min(x, w - 50), bar_y + 28}, cv::FONT_HERSHEY_SIMPLEX, 0.4,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  const UncertaintyReport& u = result.uncertainty;
+  const std::string title =
+      fmt::format("projection uncertainty ({}, 1 sigma), rays at infinity: centre {:.3f}  median {:.3f} px{}", u.headline,
+                  g.centre_px, g.median_px,
+                  std::isfinite(g.corner_px) ? fmt::format("  corners {:.3g} px", g.corner_px) : "");
+  cv::putText(img,
+              title,
+              cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255), 2, cv::LINE_AA);
+  cv::putText(img,
+              title,
+              cv::Point(8, 18), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(20, 20, 20), 1, cv::LINE_AA);
+  write_png(path, img);
+}
+
 }  // namespace lp

@@ -22,5 +22,11 @@ void write_residual_plot(const std::string& path, const CalibrationResult& resul
 // so poorly covered image corners show at a glance.
 void write_coverage_plot(const std::string& path, const CalibrationResult& result,
                          const CalibrationPlotOptions& options = {});
+// The headline projection uncertainty (CalibrationResult::uncertainty, rays at infinity) as
+// a heat map over the image, log colour scale with a legend (px), cells where the model has
+// no ray black; the covered area's outline is not drawn (see the coverage plot). InputError
+// when the result has no uncertainty grid.
+void write_uncertainty_plot(const std::string& path, const CalibrationResult& result,
+                            const CalibrationPlotOptions& options = {});
 
 }  // namespace lp

@@ -64,11 +64,17 @@ inline double kb_derivative(const double* k, double t) {
 }
 
 // Largest theta in (0, pi] up to which theta_d(theta) increases: the model's domain.
-// Cached per thread for the last coefficients (project/unproject run per pixel).
+// Cached per thread for the last 16 coefficient sets (project/unproject run per pixel,
+// often alternating between a few models: projection differences, numeric Jacobians).
 double kb_max_theta(const double* k) {
-  thread_local std::array<double, 4> cached_k{NAN, NAN, NAN, NAN};
-  thread_local double cached_max = 0;
-  if (std::equal(k, k + 4, cached_k.begin())) return cached_max;
+  struct Entry {
+    std::array<double, 4> k{NAN, NAN, NAN, NAN};
+    double max = 0;
+  };
+  thread_local std::array<Entry, 16> cache;
+  thread_local size_t next = 0;
+  for (const Entry& e : cache)
+    if (std::equal(k, k + 4, e.k.begin())) return e.max;
   constexpr int kSteps = 2048;
   double max_theta = M_PI;
   for (int i = 1; i <= kSteps; ++i) {
@@ -84,8 +90,10 @@ double kb_max_theta(const double* k) {
       break;
     }
   }
-  std::copy(k, k + 4, cached_k.begin());
-  cached_max = max_theta;
+  Entry& e = cache[next];
+  next = (next + 1) % cache.size();
+  std::copy(k, k + 4, e.k.begin());
+  e.max = max_theta;
   return max_theta;
 }
 

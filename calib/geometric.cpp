@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -11,6 +12,7 @@
 #include <opencv2/ccalib/omnidir.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <random>
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -347,7 +349,7 @@ Fit refine_mei(const Problem& pr, const Subset& views, const Fit& seed) {
 // `idx` maps its poses back; the others are posed by PnP through the seed), every view
 // re-posed under the seed when that fits it better, then the joint Ceres solve as for
 // Kannala-Brandt.
-Fit fit_mei(const Problem& pr, const Subset& views) {
+Fit fit_opencv_omnidir(const Problem& pr, const Subset& views, std::vector<char>* has_pose_out) {
   Fit f;
   std::vector<cv::Mat> obj, img;
   std::vector<int> vmap;  // omnidir input index -> subset index
@@ -390,7 +392,8 @@ Fit fit_mei(const Problem& pr, const Subset& views) {
       f.error = "cv::omnidir::calibrate diverged";
       return f;
     }
-  std::vector<char> has_pose(views.size(), 0);
+  std::vector<char>& has_pose = *has_pose_out;
+  has_pose.assign(views.size(), 0);
   f.poses.assign(views.size(), Pose{});
   for (size_t j = 0; j < idx.total(); ++j) {
     const int in = idx.at<int>(int(j));
@@ -403,6 +406,16 @@ Fit fit_mei(const Problem& pr, const Subset& views) {
                    t.at<double>(2)};
     has_pose[vi] = 1;
   }
+  f.ok = true;
+  f.params = 9;
+  return f;
+}
+
+Fit fit_mei(const Problem& pr, const Subset& views) {
+  std::vector<char> has_pose;
+  Fit f = fit_opencv_omnidir(pr, views, &has_pose);
+  if (!f.ok) return f;
+  f.ok = false;
   for (size_t i = 0; i < views.size(); ++i) {
     auto view_sq = [&](const Pose& p) {
       const auto r = view_residuals(pr, f.model, *views[i], p);
@@ -929,7 +942,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     res.table.push_back(c);
   }
 
-  // 3. Selection: fewest parameters within max(10 %, 0.05 px) of the best cross-validation.
+  // 3. Selection: fewest parameters within the noise of the best cross-validation.
   const ModelCandidate* best = nullptr;
   for (const auto& c : res.table)
     if (c.ok && (!best || c.cross_validation_px < best->cross_validation_px)) best = &c;
@@ -938,10 +951,57 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     for (const auto& c : res.table) why += (why.empty() ? "" : "; ") + c.name + ": " + c.error;
     throw InputError("calibrate: no candidate model could be fitted (" + why + ")");
   }
-  const double limit = best->cross_validation_px + std::max(0.1 * best->cross_validation_px, 0.05);
+  // The noise of a cross-validation: a jackknife standard error of the best model's. Each
+  // view is left out of its half in turn (that half refitted warm, the other kept); as the
+  // two halves are independent samples, Var = sum over halves of (m_h - 1) * s_h^2 (the
+  // two-sample jackknife), with s_h a robust spread (1.4826 MAD) of that half's values so
+  // that one influential view does not make every model "within noise".
+  {
+    Fitter* halves[2] = {&fa, &fb};
+    std::vector<double> cvs[2];
+    for (size_t i = 0; i < used.size(); ++i) {
+      const int h = int(i % 2), pos = int(i / 2);
+      Subset rest;
+      for (size_t j = 0; j < half[h].size(); ++j)
+        if (int(j) != pos) rest.push_back(half[h][j]);
+      const Fit& from = halves[h]->get(best->name);
+      std::vector<Pose> poses;
+      for (size_t j = 0; j < from.poses.size(); ++j)
+        if (int(j) != pos) poses.push_back(from.poses[j]);
+      const Fit refit = warm_refit(pr, rest, best->name, from, poses);
+      if (!refit.ok) continue;
+      const ProjectionDiff d = projection_difference(refit.model, halves[1 - h]->get(best->name).model, mask, step);
+      if (d.samples > 0) cvs[h].push_back(d.rms_px);
+    }
+    res.cv_noise_px = std::numeric_limits<double>::quiet_NaN();
+    if (cvs[0].size() >= 3 && cvs[1].size() >= 3) {
+      double var = 0;
+      for (const auto& v : cvs) {
+        const double med = median_of(v);
+        std::vector<double> dev;
+        for (double c : v) dev.push_back(std::abs(c - med));
+        const double sh = 1.4826 * median_of(dev);
+        var += double(v.size() - 1) * sh * sh;
+      }
+      res.cv_noise_px = std::sqrt(var);
+    }
+  }
+  const double noise = std::isfinite(res.cv_noise_px) ? res.cv_noise_px : 0.0;
+  // The residual RMS is a far more precise statistic than a cross-validation (relative
+  // standard error ~1 / sqrt(2 n) over n residual components): a model whose RMS is
+  // significantly above the best's misses the corners, however noisy the cross-validation
+  // (with few views, its jackknife spread is wide).
+  int components = 0;
+  for (const View* v : used) components += 2 * int(std::count(v->inlier.begin(), v->inlier.end(), 1));
+  const double rms_limit = best->rms_px * (1 + options.selection_k / std::sqrt(double(std::max(1, components))));
   const ModelCandidate* pick = best;
+  for (auto& c : res.table)
+    c.within_noise = c.ok && c.cross_validation_px <= options.fit_max_cross_validation_px &&
+                     c.cross_validation_px - best->cross_validation_px <=
+                         options.selection_k * noise + options.selection_floor_px &&
+                     c.rms_px <= rms_limit;
   for (const auto& c : res.table)
-    if (c.ok && c.cross_validation_px <= limit &&
+    if (c.ok && c.within_noise &&
         (c.params < pick->params || (c.params == pick->params && c.cross_validation_px < pick->cross_validation_px)))
       pick = &c;
   res.selected = pick->name;
@@ -1004,6 +1064,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     if (e < options.min_edge_observations) res.corners_poorly_covered = true;
 
   // 5. Jackknife leverage of each used view for the chosen model.
+  std::vector<CameraModel> leave_one_out;
   if (options.leverage) {
     std::vector<double> lev;
     std::vector<int> idx;
@@ -1021,6 +1082,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
       if (f.ok) {
         const ProjectionDiff d = projection_difference(f.model, res.model, mask, step);
         if (d.samples > 0) l = d.rms_px;
+        leave_one_out.push_back(f.model);
       }
       res.views[views[i].index].leverage_px = l;
       lev.push_back(l);
@@ -1032,7 +1094,159 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   }
   res.model.rms_reprojection_px = pick->rms_px;
   res.model.cross_validation_px = pick->cross_validation_px;
+
+  // 6. Projection uncertainty of the chosen model: linear (full fit over the image; each
+  //    half's own for the cross-validation forecast) and jackknife.
+  if (options.uncertainty) {
+    UncertaintyReport& u = res.uncertainty;
+    const auto grid = grid_pixels(res.model, std::max(1, options.uncertainty_nx), std::max(1, options.uncertainty_ny));
+    const auto cv_pixels = mask_pixels(mask, width, height, step);
+    const auto solved = [&](const Subset& s, const Fit& f) {
+      std::vector<SolvedView> out;
+      for (size_t i = 0; i < s.size(); ++i) out.push_back({f.poses[i], s[i]->px, s[i]->inlier});
+      return out;
+    };
+    const auto sv = solved(used, chosen);
+    const LinearCovariance cov = linearised_covariance(chosen.model, board, sv);
+    u.linear_ok = cov.ok;
+    u.linear_error = cov.error;
+    u.sigma_px = cov.sigma_px;
+    const int gx = std::max(1, options.uncertainty_nx), gy = std::max(1, options.uncertainty_ny);
+    u.mean_frames = linear_uncertainty_mean_frames(cov, chosen.model, sv, grid, gx, gy);
+    u.rotation_fitted = linear_uncertainty_rotation_fitted(cov, chosen.model, mask, step, grid, gx, gy);
+    u.predicted_cv_linear_px = std::numeric_limits<double>::quiet_NaN();
+    const Fit& a = fa.get(pick->name);
+    const Fit& b = fb.get(pick->name);
+    if (cov.ok && a.ok && b.ok) {
+      const LinearCovariance ca = linearised_covariance(a.model, board, solved(half[0], a));
+      const LinearCovariance cb = linearised_covariance(b.model, board, solved(half[1], b));
+      if (ca.ok && cb.ok) {
+        const int n = int(cv_pixels.size());
+        const double ra = rms_over(linear_uncertainty_rotation_fitted(ca, a.model, mask, step, cv_pixels, n, 1));
+        const double rb = rms_over(linear_uncertainty_rotation_fitted(cb, b.model, mask, step, cv_pixels, n, 1));
+        u.predicted_cv_linear_px = std::sqrt(ra * ra + rb * rb);
+      }
+    }
+    u.predicted_cv_jackknife_px = std::numeric_limits<double>::quiet_NaN();
+    if (leave_one_out.size() >= 3) {
+      u.jackknife = jackknife_uncertainty(res.model, leave_one_out, cv_pixels, grid, gx, gy);
+      const int n = int(cv_pixels.size());
+      u.predicted_cv_jackknife_px =
+          2 * rms_over(jackknife_uncertainty(res.model, leave_one_out, cv_pixels, cv_pixels, n, 1));
+    }
+    u.headline = leave_one_out.size() >= 3 ? "jackknife" : "linear";
+    // Repeated cross-validation over four balanced splits of the used views: odd/even and
+    // three pseudo-random ones (fixed seed; a split that follows the capture order, e.g.
+    // first/second half, puts the central boards in one half and the rim in the other and
+    // measures coverage, not noise).
+    {
+      const int n = int(used.size());
+      std::vector<std::vector<int>> splits;
+      std::vector<int> side(static_cast<size_t>(n));
+      for (int i = 0; i < n; ++i) side[size_t(i)] = i % 2;
+      splits.push_back(side);
+      std::mt19937 rng(12345);
+      for (int k = 0; k < 3; ++k) {
+        for (int i = n - 1; i > 0; --i) std::swap(side[size_t(i)], side[size_t(rng() % uint32_t(i + 1))]);
+        splits.push_back(side);
+      }
+      double sum = 0;
+      int count = 0;
+      for (const auto& sp : splits) {
+        Subset hs[2];
+        std::vector<Pose> ps[2];
+        for (int i = 0; i < n; ++i) {
+          hs[sp[size_t(i)]].push_back(used[size_t(i)]);
+          ps[sp[size_t(i)]].push_back(chosen.poses[size_t(i)]);
+        }
+        if (hs[0].size() < 3 || hs[1].size() < 3) continue;
+        const Fit fa2 = warm_refit(pr, hs[0], pick->name, chosen, ps[0]);
+        const Fit fb2 = warm_refit(pr, hs[1], pick->name, chosen, ps[1]);
+        if (!fa2.ok || !fb2.ok) continue;
+        const ProjectionDiff d = projection_difference(fa2.model, fb2.model, mask, step);
+        if (d.samples == 0) continue;
+        sum += d.rms_px * d.rms_px;
+        ++count;
+      }
+      u.cv_splits = count;
+      u.cv_repeated_px = count ? std::sqrt(sum / count) : std::numeric_limits<double>::quiet_NaN();
+    }
+  }
   return res;
+}
+
+}  // namespace lp
+
+namespace lp {
+
+std::vector<PeerCalibration> calibrate_opencv_alone(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                                                    const BoardSpec& board, int width, int height, int diff_step_px) {
+  CalibrateOptions o;
+  o.diff_step_px = diff_step_px;
+  Problem pr{board, width, height, o};
+  std::vector<View> views;
+  for (size_t i = 0; i < corners_per_view.size(); ++i)
+    if (!corners_per_view[i].empty()) {
+      if (int(corners_per_view[i].size()) != board.cols * board.rows)
+        throw InputError("calibrate_opencv_alone: view " + std::to_string(i) + " has the wrong number of corners");
+      views.push_back({int(i), corners_per_view[i], std::vector<char>(corners_per_view[i].size(), 1)});
+    }
+  if (views.size() < 4) throw InputError("calibrate_opencv_alone: need at least 4 views with a board");
+  Subset all, half[2];
+  for (size_t i = 0; i < views.size(); ++i) {
+    all.push_back(&views[i]);
+    half[i % 2].push_back(&views[i]);
+  }
+  const std::vector<uint8_t> mask = coverage_mask(pr, all);
+  const int step = auto_step(pr);
+  auto fit = [&](const std::string& name, const Subset& s, std::vector<char>& posed) -> Fit {
+    posed.assign(s.size(), 1);
+    if (name == "cv::fisheye") return fit_opencv_kb(pr, s, [](const std::array<double, 2>&) { return true; }, &posed);
+    if (name == "cv::omnidir") return fit_opencv_omnidir(pr, s, &posed);
+    if (name == "cv::calibrateCamera plumb_bob") return fit_opencv_pinhole_family(pr, s, 0, "LENSMODEL_OPENCV5", 5);
+    return fit_opencv_pinhole_family(pr, s, cv::CALIB_RATIONAL_MODEL, kOpenCV8, 8);
+  };
+  std::vector<PeerCalibration> out;
+  for (const std::string name :
+       {"cv::fisheye", "cv::calibrateCamera plumb_bob", "cv::calibrateCamera rational", "cv::omnidir"}) {
+    PeerCalibration p;
+    p.name = name;
+    std::vector<char> posed;
+    const auto t0 = std::chrono::steady_clock::now();
+    const Fit f = fit(name, all, posed);
+    p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!f.ok) {
+      p.error = f.error;
+      out.push_back(p);
+      continue;
+    }
+    p.lensmodel = f.model.lensmodel;
+    p.model = f.model;
+    Subset posed_views;
+    Fit fp = f;
+    fp.poses.clear();
+    for (size_t i = 0; i < all.size(); ++i)
+      if (posed[i]) {
+        posed_views.push_back(all[i]);
+        fp.poses.push_back(f.poses[i]);
+      }
+    p.views_posed = int(posed_views.size());
+    p.rms_px = fit_rms(pr, fp, posed_views);
+    std::vector<char> pa, pb;
+    const Fit a = fit(name, half[0], pa), b = fit(name, half[1], pb);
+    if (!a.ok || !b.ok) {
+      p.error = "a half of the views could not be fitted: " + (a.ok ? b.error : a.error);
+      p.cross_validation_px = std::numeric_limits<double>::infinity();
+      out.push_back(p);
+      continue;
+    }
+    const ProjectionDiff d = projection_difference(a.model, b.model, mask, step);
+    p.cross_validation_px = d.samples > 0 ? d.rms_px : std::numeric_limits<double>::infinity();
+    p.ok = std::isfinite(p.rms_px) && p.rms_px < 1e5 && std::isfinite(p.cross_validation_px);
+    if (!p.ok && p.error.empty()) p.error = "cannot image some corners or no covered pixel";
+    out.push_back(p);
+  }
+  return out;
 }
 
 }  // namespace lp

@@ -11,7 +11,9 @@
 // covered (unproject with A, best rotation between the two camera frames, project with
 // B): the pixel disagreement is what a user can expect from recalibrating (mrcal's
 // "projection difference"). The model chosen is the one with the fewest parameters whose
-// cross-validation is within max(10 %, 0.05 px) of the best candidate's.
+// cross-validation is within the noise of the best candidate's: it exceeds the best's by at
+// most selection_k times the jackknife standard error of the best's cross-validation (each
+// view left out of its half in turn, that half refitted, the comparison repeated).
 #pragma once
 
 #include <array>
@@ -21,6 +23,7 @@
 
 #include "calib/board_detect.h"
 #include "calib/camera_model.h"
+#include "calib/projection_uncertainty.h"
 
 namespace lp {
 
@@ -50,6 +53,21 @@ struct CalibrateOptions {
   int outlier_rounds = 5;
   // A view loses its board when more than this fraction of its corners are outliers.
   double max_view_outlier_fraction = 0.5;
+  // Model selection: the candidate with the fewest parameters among those with
+  // cv - cv_best <= selection_k * noise + selection_floor_px, where noise is the jackknife
+  // standard error of the best (lowest) cross-validation (CalibrationResult::cv_noise_px;
+  // one warm refit of a half per view). k = 2: a model whose cross-validation differs from
+  // the best's by less than two standard errors of such a measurement cannot be told apart
+  // from it by these views. (The standard error of the paired difference was tried first:
+  // a wrong model's cross-validation jumps so much when a view is left out that its own
+  // spread made a 1.5 px pinhole "within noise" of a 0.1 px rational fit.) The floor only
+  // matters for noise-free corners. Candidates with cross-validation above
+  // fit_max_cross_validation_px never qualify, nor those whose reprojection RMS exceeds the
+  // best's by more than selection_k / sqrt(residual components) (relative): the RMS is the
+  // precise statistic, and with few views the cross-validation's spread is too wide to
+  // reject a stereographic model 1.3 px RMS off on a 190 deg lens (0.28 px for the best).
+  double selection_k = 2.0;
+  double selection_floor_px = 0.005;
   // Jackknife leverage of each view for the chosen model (one extra fit per view).
   bool leverage = true;
   // Flagged when leverage > factor * median and > leverage_min_px (a view that moves the
@@ -62,6 +80,38 @@ struct CalibrateOptions {
   int min_edge_observations = 10;
   // Step (px) of the pixel grid that projection differences are evaluated on; 0 = auto.
   int diff_step_px = 0;
+  // Projection uncertainty of the chosen model (calib/projection_uncertainty.h) on a grid
+  // of uncertainty_nx x uncertainty_ny cells over the image; the jackknife part needs
+  // `leverage` (its leave-one-out fits).
+  bool uncertainty = true;
+  int uncertainty_nx = 48, uncertainty_ny = 36;
+};
+
+// The chosen model's projection uncertainty (rays at infinity) and what each estimate
+// predicts for the cross-validation, next to the measured one.
+struct UncertaintyReport {
+  bool linear_ok = false;
+  std::string linear_error;        // why the linear estimate is missing (e.g. splined model)
+  double sigma_px = 0;             // residual sigma per component used by the linear estimate
+  UncertaintyGrid mean_frames;     // linear, mrcal's mean-frames (mean-pcam) method
+  UncertaintyGrid rotation_fitted; // linear, camera rotation fitted out as cross-validation does
+  UncertaintyGrid jackknife;       // empirical, leave-one-view-out spread (empty without leverage)
+  // Predicted RMS odd/even difference over the covered area (the measured cross-validation's
+  // pixels): linear from each half's own covariance (rotation fitted out), jackknife as
+  // 2 x the full model's spread (two independent halves of half the views each).
+  double predicted_cv_linear_px = 0;
+  double predicted_cv_jackknife_px = 0;
+  // The cross-validation of the chosen model repeated over cv_splits deterministic half
+  // balanced splits (odd/even and three pseudo-random ones with a fixed seed; halves
+  // refitted warm from the full fit), RMS over the splits: one split is one noisy draw, this is what the forecasts are
+  // checked against in docs/calibration.md.
+  double cv_repeated_px = 0;
+  int cv_splits = 0;
+  // The estimate reported as "the" uncertainty: "jackknife" when it was computed (it
+  // predicted the measured cross-validation on the real sets; the linear one is optimistic
+  // there, see docs/calibration.md), else "linear".
+  std::string headline;
+  const UncertaintyGrid& headline_grid() const { return headline == "jackknife" ? jackknife : rotation_fitted; }
 };
 
 struct ModelCandidate {
@@ -77,6 +127,7 @@ struct ModelCandidate {
   double heldout_rms_px = 0;
   double cross_validation_px = 0;    // RMS odd-vs-even projection difference, covered area
   double cross_validation_median_px = 0;
+  bool within_noise = false;  // cv and RMS within the noise of the best's (see options)
   CameraModel model;
 };
 
@@ -110,12 +161,15 @@ struct CalibrationResult {
   std::vector<int> coverage;  // coverage_ny x coverage_nx row-major, inlier corners per cell
   std::vector<ViewReport> views;
   double cross_validation_px = 0;  // chosen model
+  // Jackknife standard error of the best candidate's cross-validation: the selection's noise.
+  double cv_noise_px = 0;
   double cross_validation_median_px = 0;
   double heldout_rms_px = 0;
   int corners_total = 0, corners_rejected = 0, outlier_rounds = 0;
   // Inlier corners in the outer edge_band of each side: left, right, top, bottom.
   std::array<int, 4> edge_observations{};
   bool corners_poorly_covered = false;  // some side has < min_edge_observations
+  UncertaintyReport uncertainty;        // empty unless options.uncertainty
 };
 
 // corners_per_view[i]: board.cols * board.rows pixel corners (row-major) or empty.
@@ -135,5 +189,28 @@ struct ProjectionDiff {
 };
 ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const std::vector<uint8_t>& mask,
                                      int step_px, bool fit_rotation = true);
+
+}  // namespace lp
+
+namespace lp {
+
+// OpenCV run alone on the same corners, as a peer to compare with (docs/calibration.md):
+// cv::fisheye::calibrate, cv::calibrateCamera (plumb_bob, rational) and
+// cv::omnidir::calibrate, each as OpenCV returns it (no outlier rejection, no refinement),
+// every corner of every view with a board. rms_px is recomputed over the views OpenCV
+// posed (per corner, 2-D, as CalibrationResult's), cross-validation as calibrate's (odd /
+// even views, projection difference over the covered area, rotation fitted out); seconds:
+// the full-set solve.
+struct PeerCalibration {
+  std::string name;       // "cv::fisheye", "cv::calibrateCamera plumb_bob", ...
+  std::string lensmodel;  // camera_model.h name
+  bool ok = false;
+  std::string error;
+  double rms_px = 0, cross_validation_px = 0, seconds = 0;
+  int views_posed = 0;
+  CameraModel model;
+};
+std::vector<PeerCalibration> calibrate_opencv_alone(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                                                    const BoardSpec& board, int width, int height, int diff_step_px = 0);
 
 }  // namespace lp

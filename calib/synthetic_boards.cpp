@@ -224,3 +224,55 @@ SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options, const L
 }
 
 }  // namespace lp
+
+namespace lp {
+
+std::vector<std::vector<std::array<double, 2>>> project_board_views(const CameraModel& cam, const BoardSpec& board,
+                                                                    int nviews, double max_theta_deg,
+                                                                    double distance, double noise_px, uint64_t seed,
+                                                                    double max_corner_deg) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> gauss(0.0, noise_px > 0 ? noise_px : 1.0);
+  const double scale = noise_px > 0 ? 1.0 : 0.0;
+  auto rotate = [](Vec3 axis, double angle, Vec3 v) {
+    const double c = std::cos(angle), s = std::sin(angle);
+    return c * v + s * cross(axis, v) + (1 - c) * dot(axis, v) * axis;
+  };
+  std::vector<std::vector<std::array<double, 2>>> out;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < nviews; ++i) {
+    double theta = max_theta_deg * M_PI / 180 * std::sqrt((i + 0.5) / nviews);
+    const double phi = i * golden;
+    for (int attempt = 0; attempt < 40; ++attempt, theta *= 0.95) {
+      const Vec3 dir = direction_from_angles(theta, phi);
+      const Vec3 a = std::abs(dir.y) > 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+      Vec3 e1 = normalize(cross(a, dir));
+      Vec3 e2 = cross(dir, e1);
+      const Vec3 axis = normalize(std::cos(1.3 * i) * e1 + std::sin(1.3 * i) * e2);
+      const double tilt = (15 + 20 * ((i * 7) % 5) / 4.0) * M_PI / 180;
+      e1 = rotate(axis, tilt, e1);
+      e2 = rotate(axis, tilt, e2);
+      const double cx = (board.cols - 1) * board.square_mm / 2, cy = (board.rows - 1) * board.square_mm / 2;
+      std::vector<std::array<double, 2>> v;
+      bool inside = true;
+      for (int k = 0; k < board.rows * board.cols && inside; ++k) {
+        const int r = k / board.cols, c = k % board.cols;
+        const Vec3 P = distance * dir + (c * board.square_mm - cx) * e1 + (r * board.square_mm - cy) * e2;
+        const auto q = project(cam, P);
+        inside = q && std::acos(P.z / length(P)) <= max_corner_deg * M_PI / 180 && q->x >= 2 && q->y >= 2 &&
+                 q->x <= cam.width - 3 && q->y <= cam.height - 3;
+        if (inside) v.push_back({q->x, q->y});
+      }
+      if (!inside) continue;
+      for (auto& q : v) {
+        q[0] += scale * gauss(rng);
+        q[1] += scale * gauss(rng);
+      }
+      out.push_back(std::move(v));
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace lp

@@ -4,7 +4,9 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "calib/board_detect.h"
 #include "calib/calibration_report.h"
@@ -114,6 +116,10 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   const std::string stem = (fs::path(report_dir) / fs::path(args.output).stem()).string();
   write_residual_plot(stem + "_residuals.png", r, corners);
   write_coverage_plot(stem + "_coverage.png", r);
+  const UncertaintyReport& u = r.uncertainty;
+  const UncertaintyGrid& ug = u.headline_grid();
+  const bool have_uncertainty = ug.nx > 0 && std::isfinite(ug.median_px);
+  if (have_uncertainty) write_uncertainty_plot(stem + "_uncertainty.png", r);
 
   say(out, "{} of {} images have the {}x{} board ({:.2f} s); solved in {:.2f} s\n", found, args.images.size(),
       board.cols, board.rows, detect_s, solve_s);
@@ -121,12 +127,12 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   for (const ModelCandidate& c : r.table)
     if (c.ok)
       say(out, "{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f}{}\n", c.name, c.params, c.rms_px, c.heldout_rms_px,
-          c.cross_validation_px, c.name == r.selected ? "   <- chosen" : "");
+          c.cross_validation_px, c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
     else
       say(out, "{:<44} failed: {}\n", c.name, c.error);
-  say(out, "chosen: {} (the simplest whose cross-validation is within the noise of the best); {} of {} corners "
-           "rejected as outliers\n",
-      r.selected, r.corners_rejected, r.corners_total);
+  say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation within 2 x {:.3f} px, "
+           "its jackknife standard error; RMS within 2 / sqrt(residuals)); {} of {} corners rejected as outliers\n",
+      r.selected, r.cv_noise_px, r.corners_rejected, r.corners_total);
   for (size_t v = 0; v < r.views.size(); ++v)
     if (r.views[v].influential)
       say(out, "influential view: {} (leaving it out moves the projection by {:.2f} px)\n", args.images[v],
@@ -137,21 +143,60 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
         r.model.rms_reprojection_px, r.cross_validation_px);
   if (r.corners_poorly_covered)
     say(out, "warning: the image corners/edges are poorly covered by the boards; the model is extrapolated there\n");
-  say(out, "wrote {}; pictures {}_residuals.png, {}_coverage.png\n", fmt::join(written, ", "), stem, stem);
+  // Uncertainty: worst-direction standard deviation of a ray at infinity's pixel.
+  auto line = [&](const char* name, const UncertaintyGrid& g) {
+    if (g.nx > 0 && std::isfinite(g.median_px))
+      say(out, "  {:<34} centre {:>7.3f}  median {:>7.3f}  image corners {}\n", name, g.centre_px, g.median_px,
+          std::isfinite(g.corner_px) ? fmt::format("{:.3g} px", g.corner_px) : "no ray");
+  };
+  say(out, "projection uncertainty (1 sigma, rays at infinity; headline: {}):\n", u.headline.empty() ? "none" : u.headline);
+  line("jackknife (leave one view out)", u.jackknife);
+  line("linear, rotation fitted out", u.rotation_fitted);
+  line("linear, mean frames (mrcal)", u.mean_frames);
+  if (!u.linear_ok && !u.linear_error.empty()) say(out, "  linear estimate: {}\n", u.linear_error);
+  say(out, "cross-validation {:.3f} px ({:.3f} px over {} splits); predicted from the uncertainty: jackknife {:.3f}, "
+           "linear {:.3f} px\n",
+      r.cross_validation_px, u.cv_repeated_px, u.cv_splits, u.predicted_cv_jackknife_px, u.predicted_cv_linear_px);
+  say(out, "wrote {}; pictures {}_residuals.png, {}_coverage.png{}\n", fmt::join(written, ", "), stem, stem,
+      have_uncertainty ? fmt::format(", {}_uncertainty.png", stem) : "");
 
   nlohmann::json table = nlohmann::json::array();
   for (const ModelCandidate& c : r.table)
     table.push_back({{"model", c.name}, {"lensmodel", c.lensmodel}, {"params", c.params}, {"ok", c.ok},
                      {"error", c.error}, {"rms_px", c.rms_px}, {"heldout_rms_px", c.heldout_rms_px},
-                     {"cross_validation_px", c.cross_validation_px}});
+                     {"cross_validation_px", c.cross_validation_px},
+                     {"within_noise", c.within_noise}});
   nlohmann::json views = nlohmann::json::array();
   for (size_t v = 0; v < r.views.size(); ++v)
     views.push_back({{"file", args.images[v]}, {"used", r.views[v].used}, {"why", r.views[v].why},
                      {"rms_px", r.views[v].rms_px}, {"leverage_px", r.views[v].leverage_px},
                      {"influential", r.views[v].influential}, {"rejected_corners", r.views[v].rejected_corners}});
+  auto grid_json = [](const UncertaintyGrid& g) -> nlohmann::json {
+    auto num = [](double x) -> nlohmann::json { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
+    if (g.nx <= 0) return nullptr;
+    return {{"centre_px", num(g.centre_px)}, {"median_px", num(g.median_px)}, {"corner_px", num(g.corner_px)}};
+  };
+  auto num = [](double x) -> nlohmann::json { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
+  const nlohmann::json uncertainty = {
+      {"headline", u.headline},
+      {"headline_px", grid_json(ug)},
+      {"jackknife_px", grid_json(u.jackknife)},
+      {"linear_rotation_fitted_px", grid_json(u.rotation_fitted)},
+      {"linear_mean_frames_px", grid_json(u.mean_frames)},
+      {"linear_ok", u.linear_ok},
+      {"linear_error", u.linear_error},
+      {"sigma_px", num(u.linear_ok ? u.sigma_px : std::numeric_limits<double>::quiet_NaN())},
+      {"predicted_cross_validation_jackknife_px", num(u.predicted_cv_jackknife_px)},
+      {"predicted_cross_validation_linear_px", num(u.predicted_cv_linear_px)},
+      {"cross_validation_repeated_px", num(u.cv_repeated_px)},
+      {"cross_validation_splits", u.cv_splits},
+      {"plot", have_uncertainty ? nlohmann::json(stem + "_uncertainty.png") : nlohmann::json()}};
   emit_json(out, {{"output", written}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
+                  {"uncertainty", uncertainty},
                   {"intrinsics", r.model.intrinsics}, {"rms_px", r.model.rms_reprojection_px},
-                  {"cross_validation_px", r.cross_validation_px}, {"heldout_rms_px", r.heldout_rms_px},
+                  {"cross_validation_px", r.cross_validation_px},
+                  {"cross_validation_noise_px", std::isfinite(r.cv_noise_px) ? nlohmann::json(r.cv_noise_px) : nlohmann::json()},
+                  {"heldout_rms_px", r.heldout_rms_px},
                   {"views_with_board", found}, {"detect_seconds", detect_s}, {"solve_seconds", solve_s},
                   {"corners_poorly_covered", r.corners_poorly_covered}, {"no_model_fits", r.no_model_fits}, {"table", table}, {"views", views},
                   {"images", images}});

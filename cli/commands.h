@@ -157,6 +157,17 @@ struct EvalHdrArgs {
 };
 int run_eval_hdr(const EvalHdrArgs& args, const Output& out);
 
+// eval calib: our calibration next to OpenCV run alone on the same detected corners
+// (images given), and/or a sweep on synthetic corners (views x noise -> error vs truth).
+struct EvalCalibArgs {
+  std::vector<std::string> images;  // one camera's chessboard views; may be empty with --sweep
+  std::string board = "9x6";
+  double square_mm = 30;
+  bool sweep = false;
+  std::string output_dir;
+};
+int run_eval_calib(const EvalCalibArgs& args, const Output& out);
+
 struct ProbeUnwrapArgs {
   std::vector<std::string> inputs;  // an image, several, or a directory (a sequence)
   std::string type = "mirrorball";  // mirrorball|fisheye

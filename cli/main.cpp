@@ -282,6 +282,15 @@ int main(int argc, char** argv) {
   c_evh->add_option("-o,--output", evh.output_dir, "Directory for hdr.csv and hdr.svg")->required();
   c_evh->add_flag("--json", out.json, "Print the report as JSON");
 
+  EvalCalibArgs evc;
+  auto* c_evc = c_eval->add_subcommand("calib", "Our geometric calibration against OpenCV run alone; synthetic sweep");
+  c_evc->add_option("IMAGE", evc.images, "Chessboard views of one camera (optional with --sweep)");
+  c_evc->add_option("--board", evc.board, "COLSxROWS inner corners");
+  c_evc->add_option("--square", evc.square_mm, "Square size, mm");
+  c_evc->add_flag("--sweep", evc.sweep, "Views 4..20 and noise 0.05..0.5 px on synthetic corners: error vs truth");
+  c_evc->add_option("-o,--output", evc.output_dir, "Directory for calib_compare.csv, calib_sweep.csv/.svg")->required();
+  c_evc->add_flag("--json", out.json, "Print the report as JSON");
+
   // probe
   auto* c_probe = app.add_subcommand("probe", "Mirror-ball and fisheye probes -> environment maps");
   c_probe->require_subcommand(1);
@@ -466,6 +475,7 @@ int main(int argc, char** argv) {
     if (*c_sbo) return run_synth_boards(sbo, out);
     if (*c_sbr) return run_synth_bracket(sbr, out);
     if (*c_evh) return run_eval_hdr(evh, out);
+    if (*c_evc) return run_eval_calib(evc, out);
     if (*c_pun) return run_probe_unwrap(pun, out);
     if (*c_spr) return run_synth_probe(spr, out);
     if (*c_preg) return run_probe_register(preg, out);

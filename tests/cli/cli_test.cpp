@@ -417,6 +417,16 @@ TEST(Cli, GeometricCalibrationRecoversASyntheticFisheyeAndRefusesBadSets) {
   EXPECT_FALSE(fs::exists(out / "cam.cameramodel"));
   EXPECT_NE(slurp(out / "cam.yaml").find("distortion_model: fisheye"), std::string::npos);
   EXPECT_TRUE(fs::exists(out / "cam_residuals.png"));
+  // Projection uncertainty: the headline (jackknife) at the centre below the median below the
+  // rim, the linear one alongside, and the heat map.
+  const auto u = j["uncertainty"];
+  EXPECT_EQ(u["headline"], "jackknife");
+  EXPECT_GT(u["headline_px"]["median_px"].get<double>(), 0);
+  EXPECT_LT(u["headline_px"]["centre_px"].get<double>(), u["headline_px"]["median_px"].get<double>());
+  EXPECT_TRUE(u["linear_ok"].get<bool>());
+  EXPECT_GT(u["predicted_cross_validation_linear_px"].get<double>(), 0);
+  EXPECT_GT(u["predicted_cross_validation_jackknife_px"].get<double>(), 0);
+  EXPECT_TRUE(fs::exists(out / "cam_uncertainty.png"));
   // The truth: fx of the rendering camera within 1 %.
   const auto truth = nlohmann::json::parse(slurp(boards / "truth.json"));
   EXPECT_NEAR(j["intrinsics"][0].get<double>(), truth["intrinsics"][0].get<double>(),

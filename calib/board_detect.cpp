@@ -9,6 +9,10 @@
 
 #include "core/error.h"
 
+// mrgingham.hh includes "point.hh" from its own directory, so its directory is on the
+// include path (calib/CMakeLists.txt); only this file sees it.
+#include <mrgingham/mrgingham.hh>
+
 namespace lp {
 namespace {
 
@@ -99,6 +103,24 @@ double sb_scale(int width, int height, const BoardSpec& board, const DetectOptio
   const double square_full = 0.5 * short_side / (std::max(board.cols, board.rows) + 1);
   scale = std::max(scale, options.sb_min_square_px / square_full);
   return std::min(1.0, scale);
+}
+
+// mrgingham on a CLAHE-equalised copy (its library call does no equalisation; its CLI does,
+// clip limit 8). Returns the corners row-major (gridn per row) and the pyramid level used
+// (each level halves the image, so SB-like accuracy is not expected before refinement).
+bool try_mrgingham(const cv::Mat& gray, const BoardSpec& board, int pyramid_level,
+                   std::vector<cv::Point2f>& pts, int& level_used) {
+  cv::Mat equalised;
+  auto clahe = cv::createCLAHE();
+  clahe->setClipLimit(8);
+  clahe->apply(gray, equalised);
+  std::vector<mrgingham::PointDouble> found;
+  level_used = mrgingham::find_chessboard_from_image_array(found, nullptr, board.cols, equalised,
+                                                           pyramid_level);
+  if (level_used < 0 || found.size() != static_cast<size_t>(board.cols) * board.rows) return false;
+  pts.clear();
+  for (const auto& p : found) pts.emplace_back(float(p.x), float(p.y));
+  return true;
 }
 
 bool valid_points(const std::vector<cv::Point2f>& pts, const BoardSpec& board) {
@@ -212,7 +234,7 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
   // resolution and refined there, with the move limit scaled by 1 / scale (SB's error grows
   // with the downscaling). Full-resolution SB remains the fallback.
   const double scale = options.sb ? sb_scale(image.width, image.height, board, options) : 1.0;
-  enum class Kind { classic, sb_small, sb_full, sb_rectified };
+  enum class Kind { classic, sb_small, sb_full, sb_rectified, mrgingham };
   cv::Point2d circle_centre;
   double circle_radius = 0;
   const bool fisheye_circle = options.rectified && options.sb && find_image_circle(gray, circle_centre, circle_radius);
@@ -228,6 +250,11 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
     } else if (kind == Kind::sb_full) {
       tried += name;
       ok = try_sb(img, board, pts);
+    } else if (kind == Kind::mrgingham) {
+      tried += name;
+      int level = 0;
+      ok = try_mrgingham(img, board, options.mrgingham_pyramid_level, pts, level);
+      if (limit > 0) limit *= double(1 << std::clamp(level, 0, 8));
     } else if (kind == Kind::sb_rectified) {
       tried += name;
       for (double fov : options.rectified_fov_deg) {
@@ -282,15 +309,18 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
     result.method = name;
     return true;
   };
+  // mrgingham finds only N x N grids and equalises by itself: one attempt, on the plain image.
+  const bool use_mrgingham = options.mrgingham && board.cols == board.rows;
   auto cascade = [&](const cv::Mat& img, const std::string& suffix) {
     return (options.sb && attempt(img, Kind::sb_small, "sb" + suffix)) ||
            (options.sb && attempt(img, Kind::sb_full, "sb" + suffix)) ||
+           (use_mrgingham && suffix.empty() && attempt(img, Kind::mrgingham, "mrgingham")) ||
            (options.classic && attempt(img, Kind::classic, "classic" + suffix)) ||
            (fisheye_circle && attempt(img, Kind::sb_rectified, "sb-rectified" + suffix));
   };
 
   bool found = cascade(gray, "");
-  if (!found && options.clahe && (options.classic || options.sb)) {
+  if (!found && options.clahe && (options.classic || options.sb)) {  // mrgingham equalised already
     cv::createCLAHE(2.0, cv::Size(8, 8))->apply(gray, equalised);
     found = cascade(equalised, "+clahe");
   }

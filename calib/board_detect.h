@@ -17,6 +17,9 @@
 //      scaled by the view's local magnification). Strongly curved boards filling a > 180
 //      deg field (OCamCalib's Fisheye190deg: 3 -> 6 of 8 views);
 //   5. (optional) 1-4 again on a CLAHE-equalised image (dim or uneven lighting).
+// Square boards (cols == rows) add mrgingham (the mrcal authors' finder) between stages 2
+// and 3: on a CLAHE-equalised copy as its CLI does, image pyramid levels tried
+// automatically, corners refined at full resolution like the others (method "mrgingham").
 // Corner order is row-major over the board (`cols` corners per row) and deterministic:
 // corner 0 is the outer corner of the grid nearest the image origin (0, 0); of the grid
 // re-orderings with that first corner (and the board's shape), the one whose first row runs
@@ -57,12 +60,16 @@ struct DetectOptions {
   std::vector<double> rectified_fov_deg = {120, 160};
   int rectified_size_px = 640;
   double rectified_half_field_deg = 95;
+  // mrgingham stage (square boards only; skipped otherwise). Alone: set sb, classic, clahe
+  // false and mrgingham true.
+  bool mrgingham = true;
+  int mrgingham_pyramid_level = -1;  // < 0: mrgingham tries levels itself; 0: full resolution
 };
 
 struct BoardDetection {
   bool found = false;
   std::vector<std::array<double, 2>> corners;  // row-major over the board, cols per row
-  std::string method;   // "classic", "sb", "sb-rectified", each maybe "+clahe"; "" when not found
+  std::string method;   // "classic", "sb", "mrgingham", "sb-rectified", each maybe "+clahe"; "" when not found
   std::string reason;   // why nothing was found; empty when found
   double seconds = 0;   // wall time of detect_board
   int refine_reverted = 0;       // SB corners whose cornerSubPix move exceeded the limit

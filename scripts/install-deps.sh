@@ -9,7 +9,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libfmt-dev libtbb-dev libeigen3-dev
   libchealpix-dev libexiv2-dev libraw-dev libceres-dev
   libaravis-dev libusb-1.0-0-dev aravis-tools aravis-tools-cli libcamera-dev libcpp-httplib-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libmrcal-dev python3-mrcal
+  libgtest-dev libgmock-dev libbenchmark-dev libmrcal-dev python3-mrcal libmrgingham-dev
   # whole-system tests: private network namespaces, a load generator, a headless browser
   iproute2 util-linux wrk chromium
 )

@@ -110,6 +110,7 @@ TEST(Mrgingham, DISABLED_RecallAndTime) {
         if (!d.found) continue;
         ++found;
         by_mrgingham += d.method == "mrgingham";
+        if (which == 2 && d.method != "sb") std::printf("  view %zu found by %s\n", v, d.method.c_str());
         Corners truth = s.true_corners[v];
         canonicalize_corner_order(truth, n, n);
         err += rms(d.corners, truth);

@@ -176,7 +176,9 @@ TEST(GeometricCalibration, SelectionToleranceFollowsTheCornerNoise) {
     EXPECT_EQ(r.selected, "plumb_bob");
     EXPECT_FALSE(r.table[0].within_noise);  // pinhole: pixels off
     for (const auto& c : r.table)
-      if (c.name == r.selected) EXPECT_TRUE(c.within_noise);
+      if (c.name == r.selected) {
+        EXPECT_TRUE(c.within_noise);
+      }
   }
   // Cross-validation is linear in the corner noise, so is its spread: 8x the noise (measured
   // 6.8x: 0.092 and 0.626 px; the robust spread of 8 values per half is itself noisy).

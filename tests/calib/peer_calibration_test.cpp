@@ -48,7 +48,9 @@ TEST(PeerCalibration, OpenCVAloneOnAFisheyeWithinNinetyDegrees) {
   EXPECT_NEAR(ours_err, err, 0.1 * err + 0.02);
   // A pinhole-family model cannot fit a 190 deg lens: pixels off.
   for (const auto& p : peers)
-    if (p.name == "cv::calibrateCamera plumb_bob" && p.ok) EXPECT_GT(p.rms_px, 1.0);
+    if (p.name == "cv::calibrateCamera plumb_bob" && p.ok) {
+      EXPECT_GT(p.rms_px, 1.0);
+    }
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "tests/hdr/synthetic_bracket.h"
@@ -15,7 +16,8 @@ const std::string kData = LIGHTPROBE_SHARED_DATA;
 namespace fs = std::filesystem;
 
 struct TempDir {
-  fs::path path = fs::temp_directory_path() / "lightprobe_hdr_bracket_test";
+  // One directory per test process: ctest runs these tests in parallel processes.
+  fs::path path = fs::temp_directory_path() / ("lightprobe_hdr_bracket_test_" + std::to_string(::getpid()));
   TempDir() { fs::create_directories(path); }
   ~TempDir() { fs::remove_all(path); }
   std::string png(const std::string& name, int w, int h) const {

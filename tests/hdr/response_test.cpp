@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "core/error.h"
 #include "hdr/opencv_peer.h"
@@ -110,7 +111,7 @@ TEST(LinearResponse, IsTheLogOfTheCodeLevelWithZeroAtTheMiddle) {
 }
 
 TEST(ResponseFile, RoundTripsExactlyAndRefusesBrokenFiles) {
-  const auto dir = std::filesystem::temp_directory_path() / "lightprobe_hdr_response_test";
+  const auto dir = std::filesystem::temp_directory_path() / ("lightprobe_hdr_response_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const CameraResponse r = test::true_response(test::film_curve());
   const std::string path = (dir / "response.json").string();

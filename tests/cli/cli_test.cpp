@@ -16,58 +16,15 @@
 
 #include <cmath>
 
+#include "tests/cli/cli_run.h"
+
 namespace fs = std::filesystem;
+
+using namespace lp::cli_test;
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-fs::path scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::path(::testing::TempDir()) / ("lightprobe_cli_" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
-}
-
-CliRun lightprobe(const std::string& args) {
-  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
-  const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
-
-std::string shared(const std::string& rel) { return std::string(LIGHTPROBE_SHARED_DATA) + "/" + rel; }
-
-int line_count(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
-
 std::string fmt_frame(const std::string& dir, int i) { return " " + dir + "/memorial00" + std::to_string(i) + ".png"; }
-
-// A bad input: exit 2, exactly one line on stderr, naming `needle` (the file or option).
-void expect_one_line_error(const CliRun& r, const std::string& needle) {
-  EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(line_count(r.err), 1) << r.err;
-  EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
-}
 
 }  // namespace
 

@@ -12,49 +12,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "tests/cli/cli_run.h"
+
 namespace fs = std::filesystem;
 
-namespace {
-
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-fs::path scratch() {
-  static const fs::path dir = [] {
-    fs::path d = fs::path(::testing::TempDir()) / ("lightprobe_eval_calib_" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
-}
-
-CliRun lightprobe(const std::string& args) {
-  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
-  const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
-
-int line_count(const std::string& s) {
-  int n = 0;
-  for (char c : s) n += c == '\n';
-  return n;
-}
-
-}  // namespace
+using namespace lp::cli_test;
 
 TEST(EvalCalibCli, ComparesWithOpenCVAloneOnVMRImage) {
   const fs::path dir = fs::path(LIGHTPROBE_SHARED_DATA) / "calib-ocamcalib-omni-samples" / "VMRImage";

@@ -1,0 +1,70 @@
+// Running the `lightprobe` binary from a test as a user or a script would: its exit code,
+// stdout and stderr, and the project's rule for bad input (exit 2, one line naming it).
+// Shared by every tests/cli/*_test.cpp; LIGHTPROBE_CLI and LIGHTPROBE_SHARED_DATA come
+// from tests/CMakeLists.txt.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace lp::cli_test {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+inline std::string slurp(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// A scratch directory per test process (ctest runs tests in parallel processes).
+inline fs::path scratch() {
+  static const fs::path dir = [] {
+    fs::path d = fs::path(::testing::TempDir()) / ("lightprobe_cli_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+inline CliRun lightprobe(const std::string& args) {
+  const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
+  const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+inline std::string shared(const std::string& rel) { return std::string(LIGHTPROBE_SHARED_DATA) + "/" + rel; }
+
+inline int line_count(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+// A bad input: exit 2, exactly one line on stderr, naming `needle` (the file or option).
+inline void expect_one_line_error(const CliRun& r, const std::string& needle) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(line_count(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+}
+
+}  // namespace lp::cli_test

@@ -161,12 +161,7 @@ namespace {
 // another core (as the capture thread leaves them), against merging every pixel and then
 // unwrapping (Arg 0). Cache-cold reads of the 14.7 MB float frames dominate the gather.
 void BM_Live_FuseUnwrapBracket(benchmark::State& state) {
-  const FisheyeModel f = equidistant_fisheye(kW, kH, 180);
-  CameraModel model;
-  model.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-  model.intrinsics = {f.fx, f.fy, f.cx, f.cy, 0, 0, 0, 0};
-  model.width = kW;
-  model.height = kH;
+  const CameraModel model = camera_model_from_fisheye(equidistant_fisheye(kW, kH, 180));
   const CompiledRemap remap =
       compile_remap(camera_remap(model, upward_camera_world_from_camera(), Layout::Hemisphere, 360, 90, 90), kW, kH);
   const BracketUnwrapPlan plan = plan_bracket_unwrap(remap);

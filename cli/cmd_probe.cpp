@@ -86,13 +86,7 @@ MirrorBallCamera ball_camera(const ProbeUnwrapArgs& a) {
 // A fisheye without --camera: the plain equidistant model of CONVENTIONS, as a KB model.
 CameraModel fisheye_model(const ProbeUnwrapArgs& a, const RgbImage& first) {
   if (!a.camera.empty()) return read_camera_model(a.camera);
-  const FisheyeModel f = equidistant_fisheye(first.width, first.height, a.fov > 0 ? a.fov : 180);
-  CameraModel m;
-  m.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-  m.intrinsics = {f.fx, f.fy, f.cx, f.cy, f.k[0], f.k[1], f.k[2], f.k[3]};
-  m.width = f.width;
-  m.height = f.height;
-  return m;
+  return camera_model_from_fisheye(equidistant_fisheye(first.width, first.height, a.fov > 0 ? a.fov : 180));
 }
 
 std::string output_for(const ProbeUnwrapArgs& a, size_t frame, size_t frames) {

@@ -209,16 +209,8 @@ void LivePipeline::process_loop() {
 
 void LivePipeline::ensure_remap(int width, int height) {
   if (remap_ && remap_->width == width && remap_->height == height) return;
-  CameraModel model;
-  if (options_.camera) {
-    model = *options_.camera;
-  } else {
-    const FisheyeModel f = equidistant_fisheye(width, height, options_.fov_deg);
-    model.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-    model.intrinsics = {f.fx, f.fy, f.cx, f.cy, 0, 0, 0, 0};
-    model.width = f.width;
-    model.height = f.height;
-  }
+  const CameraModel model =
+      options_.camera ? *options_.camera : camera_model_from_fisheye(equidistant_fisheye(width, height, options_.fov_deg));
   if (model.width != width || model.height != height)
     throw InputError(fmt::format("camera model is for {}x{}, frames are {}x{}", model.width, model.height, width, height));
   remap_ = std::make_unique<RemapCache>();

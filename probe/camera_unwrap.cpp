@@ -15,6 +15,15 @@ Mat3 upward_camera_world_from_camera() {
   return Mat3{{0, -1, 0, 1, 0, 0, 0, 0, 1}};
 }
 
+CameraModel camera_model_from_fisheye(const FisheyeModel& f) {
+  CameraModel m;
+  m.lensmodel = "LENSMODEL_KANNALA_BRANDT";
+  m.intrinsics = {f.fx, f.fy, f.cx, f.cy, f.k[0], f.k[1], f.k[2], f.k[3]};
+  m.width = f.width;
+  m.height = f.height;
+  return m;
+}
+
 RemapTable camera_remap(const CameraModel& model, const Mat3& world_from_camera, Layout layout, int width,
                         int height, double max_field_deg) {
   const double min_cos = max_field_deg > 0 ? std::cos(max_field_deg * M_PI / 180) : -2;

@@ -7,6 +7,7 @@
 #include "core/envmap.h"
 #include "core/image_io.h"
 #include "probe/fill.h"
+#include "probe/fisheye.h"
 #include "probe/remap.h"
 
 namespace lp {
@@ -14,6 +15,10 @@ namespace lp {
 // CONVENTIONS' fisheye frame: camera looking straight up (+Z), image up (row 0) is +X,
 // image right is +Y. Camera frame: x right, y down, z forward.
 Mat3 upward_camera_world_from_camera();
+
+// The probe/fisheye.h model (equidistant or calibrated Kannala-Brandt) as a CameraModel,
+// so the fisheye path and calibrated cameras share one unwrap.
+CameraModel camera_model_from_fisheye(const FisheyeModel& fisheye);
 
 // Per output map pixel, the source pixel (remap convention: centres at +0.5); directions
 // the model cannot image, or that fall outside the image, are invalid (NaN).

@@ -32,12 +32,7 @@ Bracket fake_bracket() {
 }
 
 CompiledRemap hemisphere_remap() {
-  const FisheyeModel f = equidistant_fisheye(kW, kH, 180);
-  CameraModel model;
-  model.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-  model.intrinsics = {f.fx, f.fy, f.cx, f.cy, 0, 0, 0, 0};
-  model.width = kW;
-  model.height = kH;
+  const CameraModel model = camera_model_from_fisheye(equidistant_fisheye(kW, kH, 180));
   return compile_remap(camera_remap(model, upward_camera_world_from_camera(), Layout::Hemisphere, 180, 45, 90), kW, kH);
 }
 

@@ -14,11 +14,7 @@ TEST(CameraUnwrap, AKannalaBrandtModelUnwrapsLikeTheFisheyePath) {
   const EnvMap world = render_scene(describe_scene(), Layout::LatLong, 512, 256);
   const FisheyeModel fish = equidistant_fisheye(400, 400, 190);
   const RgbImage image = render_fisheye(world, fish, 2);
-  CameraModel model;
-  model.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-  model.intrinsics = {fish.fx, fish.fy, fish.cx, fish.cy, fish.k[0], fish.k[1], fish.k[2], fish.k[3]};
-  model.width = 400;
-  model.height = 400;
+  const CameraModel model = camera_model_from_fisheye(fish);
   CameraUnwrapOptions o;
   o.max_field_deg = 95;  // the lens' 190 deg image circle
   const EnvMap a = unwrap_with_camera(image, model, upward_camera_world_from_camera(), Layout::LatLong, 256, 128, o);

@@ -123,16 +123,23 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
 
   say(out, "{} of {} images have the {}x{} board ({:.2f} s); solved in {:.2f} s\n", found, args.images.size(),
       board.cols, board.rows, detect_s, solve_s);
-  say(out, "{:<44} {:>6} {:>9} {:>10} {:>10}\n", "model", "params", "RMS px", "held-out", "cross-val");
+  const bool repeated = r.selected_on == "repeated";
+  const std::string splits_col = fmt::format("{} splits", r.cv_splits);
+  say(out, "{:<44} {:>6} {:>9} {:>10} {:>10} {:>10}\n", "model", "params", "RMS px", "held-out", "cv odd/even",
+      repeated ? splits_col : "");
   for (const ModelCandidate& c : r.table)
     if (c.ok)
-      say(out, "{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f}{}\n", c.name, c.params, c.rms_px, c.heldout_rms_px,
-          c.cross_validation_px, c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
+      say(out, "{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f} {:>10}{}\n", c.name, c.params, c.rms_px, c.heldout_rms_px,
+          c.cross_validation_px,
+          !repeated ? "" : (std::isnan(c.cross_validation_repeated_px) ? "screened" : fmt::format("{:.3f}", c.cross_validation_repeated_px)),
+          c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
     else
       say(out, "{:<44} failed: {}\n", c.name, c.error);
-  say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation within 2 x {:.3f} px, "
-           "its jackknife standard error; RMS within 2 / sqrt(residuals)); {} of {} corners rejected as outliers\n",
-      r.selected, r.cv_noise_px, r.corners_rejected, r.corners_total);
+  say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation {} within {} x {:.3f} px, "
+           "the jackknife standard error{}; held-out RMS within {} / sqrt(residuals)); {} of {} corners rejected as outliers\n",
+      r.selected, repeated ? "over " + splits_col : "odd/even", r.selection_k, r.selection_noise_px,
+      r.selection_noise_from_splits ? " of the per-split spread" : " of the odd/even one", r.selection_k,
+      r.corners_rejected, r.corners_total);
   for (size_t v = 0; v < r.views.size(); ++v)
     if (r.views[v].influential)
       say(out, "influential view: {} (leaving it out moves the projection by {:.2f} px)\n", args.images[v],
@@ -160,11 +167,14 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   say(out, "wrote {}; pictures {}_residuals.png, {}_coverage.png{}\n", fmt::join(written, ", "), stem, stem,
       have_uncertainty ? fmt::format(", {}_uncertainty.png", stem) : "");
 
+  auto num = [](double x) -> nlohmann::json { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
   nlohmann::json table = nlohmann::json::array();
   for (const ModelCandidate& c : r.table)
     table.push_back({{"model", c.name}, {"lensmodel", c.lensmodel}, {"params", c.params}, {"ok", c.ok},
                      {"error", c.error}, {"rms_px", c.rms_px}, {"heldout_rms_px", c.heldout_rms_px},
                      {"cross_validation_px", c.cross_validation_px},
+                     {"cross_validation_splits_px", c.cross_validation_splits_px},
+                     {"cross_validation_repeated_px", num(c.cross_validation_repeated_px)},
                      {"within_noise", c.within_noise}});
   nlohmann::json views = nlohmann::json::array();
   for (size_t v = 0; v < r.views.size(); ++v)
@@ -176,7 +186,6 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
     if (g.nx <= 0) return nullptr;
     return {{"centre_px", num(g.centre_px)}, {"median_px", num(g.median_px)}, {"corner_px", num(g.corner_px)}};
   };
-  auto num = [](double x) -> nlohmann::json { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
   const nlohmann::json uncertainty = {
       {"headline", u.headline},
       {"headline_px", grid_json(ug)},
@@ -196,6 +205,15 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
                   {"intrinsics", r.model.intrinsics}, {"rms_px", r.model.rms_reprojection_px},
                   {"cross_validation_px", r.cross_validation_px},
                   {"cross_validation_noise_px", std::isfinite(r.cv_noise_px) ? nlohmann::json(r.cv_noise_px) : nlohmann::json()},
+                  {"cross_validation_repeated_px", num(r.cross_validation_repeated_px)},
+                  {"selection", {{"ranked_on", r.selected_on == "repeated" ? "cross_validation_repeated_px"
+                                                                            : "cross_validation_px"},
+                                 {"splits", r.cv_splits},
+                                 {"noise_px", num(r.selection_noise_px)},
+                                 {"noise_from", r.selection_noise_from_splits ? "split_spread" : "jackknife"},
+                                 {"jackknife_noise_px", num(r.cv_noise_px)},
+                                 {"split_noise_px", num(r.cv_split_noise_px)},
+                                 {"k", r.selection_k}}},
                   {"heldout_rms_px", r.heldout_rms_px},
                   {"views_with_board", found}, {"detect_seconds", detect_s}, {"solve_seconds", solve_s},
                   {"corners_poorly_covered", r.corners_poorly_covered}, {"no_model_fits", r.no_model_fits}, {"table", table}, {"views", views},

@@ -11,9 +11,10 @@
 // covered (unproject with A, best rotation between the two camera frames, project with
 // B): the pixel disagreement is what a user can expect from recalibrating (mrcal's
 // "projection difference"). The model chosen is the one with the fewest parameters whose
-// cross-validation is within the noise of the best candidate's: it exceeds the best's by at
-// most selection_k times the jackknife standard error of the best's cross-validation (each
-// view left out of its half in turn, that half refitted, the comparison repeated).
+// cross-validation, repeated over cv_splits balanced splits (RMS over the splits), is within
+// the noise of the best candidate's: it exceeds the best's by at most selection_k times the
+// jackknife standard error of the best's odd/even cross-validation (each view left out of
+// its half in turn, that half refitted, the comparison repeated).
 #pragma once
 
 #include <array>

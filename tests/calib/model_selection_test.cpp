@@ -77,7 +77,8 @@ double error_vs_truth(const CameraModel& m, const CameraModel& truth, const std:
 // The measurement in docs/calibration.md ("Model selection uses the measured noise"): over 8
 // noise draws of three lenses, how close to the truth the selected model is when the
 // selection ranks on one odd/even split, and on the mean of 4 splits (with the jackknife
-// tolerance, and with the per-split spread's). About 4 minutes on 2 cores:
+// tolerance, and with the per-split spread's). 12 views: ~3 minutes, 20 views: ~15 on a shared
+// 2-core machine:
 //   calib_tests --gtest_also_run_disabled_tests --gtest_filter='ModelSelection.DISABLED_*'
 TEST(ModelSelection, DISABLED_RepeatedSplitsAgainstOneSplit) {
   struct Lens {

@@ -215,6 +215,36 @@ TEST(ModelSelection, RanksOnTheCrossValidationRepeatedOverSplits) {
   EXPECT_NEAR(pb.cross_validation_splits_px[2], by_hand, 0.05 * by_hand);
   EXPECT_NE(pb.cross_validation_splits_px[2], pb.cross_validation_splits_px[0]);
 
+  // The rule reads the 4-split values: with OpenCV8 among the candidates, "within the noise"
+  // is exactly |4-split value - the lowest one| <= k * noise (+ floor) and the held-out
+  // condition, and the pick has the fewest parameters among those.
+  CalibrateOptions three = o;
+  three.candidates = {"LENSMODEL_PINHOLE", "plumb_bob", "LENSMODEL_OPENCV8"};
+  const CalibrationResult t = calibrate(views, kBoard, truth.width, truth.height, three);
+  const ModelCandidate* lowest = nullptr;
+  for (const auto& c : t.table)
+    if (std::isfinite(c.cross_validation_repeated_px) &&
+        (!lowest || c.cross_validation_repeated_px < lowest->cross_validation_repeated_px))
+      lowest = &c;
+  ASSERT_NE(lowest, nullptr);
+  EXPECT_EQ(t.selection_noise_px, t.cv_noise_px);  // the jackknife, by default
+  int components = 0;
+  for (const auto& v : views) components += 2 * int(v.size());
+  const double ho_limit = lowest->heldout_rms_px * (1 + 2 / std::sqrt(double(components - 2 * t.corners_rejected)));
+  int fewest = 1 << 30;
+  for (const auto& c : t.table) {
+    std::printf("  %-20s odd/even %.3f  4 splits %.3f  held-out %.4f%s\n", c.name.c_str(), c.cross_validation_px,
+                c.cross_validation_repeated_px, c.heldout_rms_px, c.within_noise ? "  (within)" : "");
+    const bool expect = std::isfinite(c.cross_validation_repeated_px) &&
+                        c.cross_validation_repeated_px - lowest->cross_validation_repeated_px <=
+                            2 * t.selection_noise_px + 0.005 &&
+                        c.heldout_rms_px <= ho_limit;
+    EXPECT_EQ(c.within_noise, expect) << c.name;
+    if (c.within_noise) fewest = std::min(fewest, c.params);
+  }
+  for (const auto& c : t.table)
+    if (c.name == t.selected) EXPECT_EQ(c.params, fewest);
+
   CalibrateOptions single = o;
   single.cv_splits = 1;
   const CalibrationResult s = calibrate(views, kBoard, truth.width, truth.height, single);

@@ -2,6 +2,7 @@
 // cross-validation, and boards rendered through a known camera (ground truth).
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
 #include <chrono>
 #include <cmath>
@@ -51,31 +52,44 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
     if (!dir.empty() && !fs::is_directory(dir, ec))
       throw InputError(fmt::format("{}: cannot write: directory {} does not exist", args.output, dir.string()));
   }
-  // Detect the board in every image; all images must share one resolution.
+  // Detect the board in every image, in parallel (each image is independent, so the result
+  // does not depend on the order); all images must share one resolution.
   std::vector<std::vector<std::array<double, 2>>> corners(args.images.size());
-  int width = 0, height = 0, found = 0;
-  nlohmann::json images = nlohmann::json::array();
+  std::vector<BoardDetection> detections(args.images.size());
+  std::vector<std::array<int, 2>> sizes(args.images.size());
+  std::vector<std::string> errors(args.images.size());
   Progress progress("detect boards", args.images.size(), out.progress);
   const auto t0 = std::chrono::steady_clock::now();
-  for (size_t i = 0; i < args.images.size(); ++i) {
-    const CameraImage img = read_camera_image(args.images[i]);
-    if (i == 0) {
-      width = img.width;
-      height = img.height;
-    } else if (img.width != width || img.height != height) {
-      throw InputError(fmt::format("{}: {}x{} differs from the first image's {}x{} (one camera, one resolution)",
-                                   args.images[i], img.width, img.height, width, height));
+  tbb::parallel_for(size_t(0), args.images.size(), [&](size_t i) {
+    try {
+      const CameraImage img = read_camera_image(args.images[i]);
+      sizes[i] = {img.width, img.height};
+      detections[i] = detect_board(img, board);
+    } catch (const InputError& e) {
+      errors[i] = e.what();
     }
-    const BoardDetection d = detect_board(img, board);
+    progress.advance();
+  });
+  progress.finish();
+  int width = 0, height = 0, found = 0;
+  nlohmann::json images = nlohmann::json::array();
+  for (size_t i = 0; i < args.images.size(); ++i) {  // first error in the given order
+    if (!errors[i].empty()) throw InputError(errors[i]);
+    if (i == 0) {
+      width = sizes[i][0];
+      height = sizes[i][1];
+    } else if (sizes[i][0] != width || sizes[i][1] != height) {
+      throw InputError(fmt::format("{}: {}x{} differs from the first image's {}x{} (one camera, one resolution)",
+                                   args.images[i], sizes[i][0], sizes[i][1], width, height));
+    }
+    const BoardDetection& d = detections[i];
     if (d.found) {
       corners[i] = d.corners;
       ++found;
     }
     images.push_back({{"file", args.images[i]}, {"found", d.found}, {"method", d.method}, {"reason", d.reason},
-                      {"seconds", d.seconds}});
-    progress.advance();
+                      {"attempts", d.attempts}, {"seconds", d.seconds}});
   }
-  progress.finish();
   const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (found == 0)
     throw InputError(fmt::format("no {}x{} board found in any of the {} images (check --board: inner corners)",

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -46,6 +47,7 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   const std::string ext = fs::path(args.output).extension().string();
   if (ext != ".cameramodel" && ext != ".yaml" && ext != ".yml")
     throw InputError(fmt::format("{}: the output must be .cameramodel or .yaml", args.output));
+  if (args.drop_influential < 0) throw InputError("--drop-influential must be 0 or more");
   {  // Fail before minutes of work when the output cannot be written.
     std::error_code ec;
     const fs::path dir = fs::path(args.output).parent_path();
@@ -102,7 +104,47 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   co.model = args.model;
   co.use_mrcal = !args.no_mrcal;
   const auto t1 = std::chrono::steady_clock::now();
-  const CalibrationResult r = calibrate(corners, board, width, height, co);
+  CalibrationResult r = calibrate(corners, board, width, height, co);
+  // Influential views (a few close-ups can move the whole answer): on request, the worst
+  // flagged ones are left out and everything is solved again, and both answers are shown.
+  struct Dropped {
+    size_t view;
+    double leverage_px;
+  };
+  std::vector<Dropped> dropped;
+  nlohmann::json before = nullptr;
+  std::string drop_summary;
+  if (args.drop_influential > 0) {
+    std::vector<Dropped> flagged;
+    for (size_t v = 0; v < r.views.size(); ++v)
+      if (r.views[v].influential) flagged.push_back({v, r.views[v].leverage_px});
+    std::sort(flagged.begin(), flagged.end(), [](const Dropped& a, const Dropped& b) {
+      return a.leverage_px > b.leverage_px || (a.leverage_px == b.leverage_px && a.view < b.view);
+    });
+    int used = 0;
+    for (const auto& v : r.views) used += v.used;
+    // Never below the 4 views a calibration needs (plus one so each half keeps two).
+    const int can_drop = std::max(0, std::min<int>(args.drop_influential, used - 5));
+    if (int(flagged.size()) > can_drop) flagged.resize(size_t(can_drop));
+    if (!flagged.empty()) {
+      before = {{"selected", r.selected}, {"rms_px", r.model.rms_reprojection_px},
+                {"cross_validation_px", r.cross_validation_px}, {"heldout_rms_px", r.heldout_rms_px}};
+      const std::string was = fmt::format("{} (cross-validation {:.3f} px, RMS {:.3f} px)", r.selected,
+                                          r.cross_validation_px, r.model.rms_reprojection_px);
+      for (const Dropped& d : flagged) corners[d.view].clear();
+      r = calibrate(corners, board, width, height, co);
+      for (const Dropped& d : flagged)
+        r.views[d.view].why = fmt::format("dropped: influential (leaving it out moved the projection by {:.2f} px)",
+                                          d.leverage_px);
+      dropped = flagged;
+      drop_summary = fmt::format("with all views: {}; without the {} most influential: {} (cross-validation {:.3f} px, "
+                                 "RMS {:.3f} px){}\n",
+                                 was, dropped.size(), r.selected, r.cross_validation_px, r.model.rms_reprojection_px,
+                                 r.cross_validation_px > before["cross_validation_px"].get<double>()
+                                     ? "; the halves agree less without them: consider keeping all views"
+                                     : "");
+    }
+  }
   const double solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
 
   // Files: .cameramodel where mrcal has the model, OpenCV YAML wherever OpenCV has it.
@@ -147,10 +189,17 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation within 2 x {:.3f} px, "
            "its jackknife standard error; RMS within 2 / sqrt(residuals)); {} of {} corners rejected as outliers\n",
       r.selected, r.cv_noise_px, r.corners_rejected, r.corners_total);
+  for (const Dropped& d : dropped) say(out, "dropped influential view: {} ({:.2f} px)\n", args.images[d.view], d.leverage_px);
+  if (!drop_summary.empty()) say(out, "{}", drop_summary);
+  int influential = 0;
   for (size_t v = 0; v < r.views.size(); ++v)
-    if (r.views[v].influential)
+    if (r.views[v].influential) {
       say(out, "influential view: {} (leaving it out moves the projection by {:.2f} px)\n", args.images[v],
           r.views[v].leverage_px);
+      ++influential;
+    }
+  if (influential > 0 && args.drop_influential == 0)
+    say(out, "to solve again without the worst of them and compare: --drop-influential 1 (or more)\n");
   if (r.no_model_fits)
     say(out, "warning: no candidate model fits these views well (RMS {:.2f} px, cross-validation {:.2f} px): check the "
              "board size, or the lens needs a model not fitted here\n",
@@ -185,6 +234,8 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
     views.push_back({{"file", args.images[v]}, {"used", r.views[v].used}, {"why", r.views[v].why},
                      {"rms_px", r.views[v].rms_px}, {"leverage_px", r.views[v].leverage_px},
                      {"influential", r.views[v].influential}, {"rejected_corners", r.views[v].rejected_corners}});
+  nlohmann::json dropped_json = nlohmann::json::array();
+  for (const Dropped& d : dropped) dropped_json.push_back({{"file", args.images[d.view]}, {"leverage_px", d.leverage_px}});
   auto grid_json = [](const UncertaintyGrid& g) -> nlohmann::json {
     auto num = [](double x) -> nlohmann::json { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
     if (g.nx <= 0) return nullptr;
@@ -211,6 +262,7 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
                   {"cross_validation_px", r.cross_validation_px},
                   {"cross_validation_noise_px", std::isfinite(r.cv_noise_px) ? nlohmann::json(r.cv_noise_px) : nlohmann::json()},
                   {"heldout_rms_px", r.heldout_rms_px},
+                  {"dropped_views", dropped_json}, {"before_dropping", before},
                   {"views_with_board", found}, {"detect_seconds", detect_s}, {"solve_seconds", solve_s},
                   {"corners_poorly_covered", r.corners_poorly_covered}, {"no_model_fits", r.no_model_fits}, {"table", table}, {"views", views},
                   {"images", images}});

@@ -263,6 +263,7 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
         std::snprintf(at, sizeof at, "@%.2f", std::min(sx, sy));
         tried += at;
       }
+      if (st.flags & cv::CALIB_CB_ACCURACY) tried += " accuracy";
       // SB without CALIB_CB_ACCURACY: that costs ~4x the time (an internal upsampled pass),
       // cornerSubPix at full resolution gives the precision, and on the real sets it found
       // fewer views (Ladybug 2 and 3 only without it).
@@ -352,10 +353,15 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
   // mrgingham finds only N x N grids and equalises by itself: one attempt, on the plain image.
   if (options.mrgingham && board.cols == board.rows) stages.push_back({Kind::mrgingham, false, 0});
   if (options.classic && !classic_full_early) stages.push_back({Kind::classic, false, classic_adaptive});
+  // OpenCV's most thorough call as the recall floor: it found nothing the stages above
+  // missed on our sets, but its internal upsampling can resolve small boards; it costs
+  // 150-400 ms and only views that everything else missed pay for it.
+  if (options.sb) stages.push_back({Kind::sb, false, exhaustive | cv::CALIB_CB_ACCURACY});
 
   auto cascade = [&](const cv::Mat& img, const std::string& suffix) {
     for (const Stage& st : stages) {
-      if (st.kind == Kind::mrgingham && !suffix.empty()) continue;
+      // mrgingham equalises by itself; the ACCURACY call is the plain image's last resort.
+      if (!suffix.empty() && (st.kind == Kind::mrgingham || (st.flags & cv::CALIB_CB_ACCURACY))) continue;
       if (attempt(img, st, suffix)) return true;
     }
     return false;

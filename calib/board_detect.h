@@ -20,7 +20,9 @@
 //   6. classic with ADAPTIVE_THRESH at full resolution, last on images with a fisheye
 //      circle (on curved boards there it can take seconds when its FAST_CHECK passes),
 //      before 5 on the others (8-30 ms against SB's 70-240 ms when SB fails);
-//   7. (optional) 1-6 again on a CLAHE-equalised image (dim or uneven lighting).
+//   7. SB with CALIB_CB_ACCURACY at full resolution (OpenCV's most thorough call, 150-400
+//      ms): the recall floor, reached only by views every other stage missed;
+//   8. (optional) 1-6 again on a CLAHE-equalised image (dim or uneven lighting).
 // BoardDetection::attempts lists the stages tried with their times.
 // Square boards (cols == rows) add mrgingham (the mrcal authors' finder) between stages 5
 // and 6: on a CLAHE-equalised copy as its CLI does, image pyramid levels tried
@@ -48,8 +50,8 @@ struct BoardSpec {
 
 struct DetectOptions {
   bool classic = true;        // stages 1, 3 and 6
-  bool sb = true;             // stages 2 and 5 (and 4, which uses SB)
-  bool clahe = true;          // stage 7 (only when all others fail)
+  bool sb = true;             // stages 2, 5 and 7 (and 4, which uses SB)
+  bool clahe = true;          // stage 8 (only when all others fail)
   bool refine_sb = true;      // cornerSubPix after SB
   double max_refine_shift_px = 1.0;  // at full resolution; scaled by 1 / scale after a
                                      // downscaled SB attempt

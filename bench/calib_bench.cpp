@@ -1,9 +1,11 @@
 // Board detection per image over the real calibration sets (calib/board_detect.h).
-// Each benchmark detects every image of one set per iteration; counters report the time
-// per image and the recall. Sets missing from ../shared/data are skipped.
+// Each benchmark detects every image of one set per iteration; counters report the recall
+// and the CPU time per image (mean and worst). Sets missing from ../shared/data are skipped.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <ctime>
+#include <opencv2/core.hpp>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -15,6 +17,12 @@
 namespace fs = std::filesystem;
 
 namespace {
+
+double thread_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
 
 std::string shared_data() {
   if (const char* env = std::getenv("LIGHTPROBE_SHARED_DATA")) return env;
@@ -42,12 +50,26 @@ void detect_set(benchmark::State& state, const std::string& subdir, lp::BoardSpe
   }
   lp::DetectOptions options;
   options.classic = classic;
+  // Per image: this thread's CPU time with one OpenCV thread, so that the numbers stay
+  // comparable on a machine shared with other jobs (wall time is reported too).
+  cv::setNumThreads(1);
   int found = 0;
+  double worst_s = 0, total_s = 0;
   for (auto _ : state) {
     found = 0;
-    for (const auto& image : images) found += lp::detect_board(image, board, options).found;
+    for (const auto& image : images) {
+      const double t0 = thread_cpu_seconds();
+      const lp::BoardDetection d = lp::detect_board(image, board, options);
+      const double t = thread_cpu_seconds() - t0;
+      found += d.found;
+      total_s += t;
+      worst_s = std::max(worst_s, t);
+    }
   }
+  cv::setNumThreads(-1);
   state.counters["found"] = found;
+  state.counters["cpu_ms_mean"] = 1e3 * total_s / (double(images.size()) * double(state.iterations()));
+  state.counters["cpu_ms_worst"] = 1e3 * worst_s;
   state.counters["images"] = static_cast<double>(images.size());
   state.counters["s_per_image"] = benchmark::Counter(
       static_cast<double>(images.size()), benchmark::Counter::kIsIterationInvariantRate |

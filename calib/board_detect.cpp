@@ -82,10 +82,8 @@ RefineStats refine(const cv::Mat& gray, std::vector<cv::Point2f>& pts, int cols,
   return stats;
 }
 
-bool try_classic(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Point2f>& pts) {
-  return cv::findChessboardCorners(
-      gray, cv::Size(board.cols, board.rows), pts,
-      cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK);
+bool try_classic(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Point2f>& pts, int flags) {
+  return cv::findChessboardCorners(gray, cv::Size(board.cols, board.rows), pts, flags);
 }
 
 bool try_sb(const cv::Mat& gray, const BoardSpec& board, std::vector<cv::Point2f>& pts,
@@ -230,33 +228,57 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
   std::vector<cv::Point2f> pts;
   std::string tried;
 
-  // The fast SB attempt runs on a downscaled copy; its corners are mapped back to full
-  // resolution and refined there, with the move limit scaled by 1 / scale (SB's error grows
-  // with the downscaling). Full-resolution SB remains the fallback.
-  const double scale = options.sb ? sb_scale(image.width, image.height, board, options) : 1.0;
-  enum class Kind { classic, sb_small, sb_full, sb_rectified, mrgingham };
+  // SB and the early classic attempt run on a copy downscaled by `scale`; corners are mapped
+  // back to full resolution and refined there, the move limit scaled by 1 / scale (the
+  // detector's error grows with the downscaling).
+  const double scale = sb_scale(image.width, image.height, board, options);
   cv::Point2d circle_centre;
   double circle_radius = 0;
   const bool fisheye_circle = options.rectified && options.sb && find_image_circle(gray, circle_centre, circle_radius);
-  auto attempt = [&](const cv::Mat& img, Kind kind, const std::string& name) {
+
+  enum class Kind { classic, sb, sb_rectified, mrgingham };
+  struct Stage {
+    Kind kind;
+    bool downscaled;  // on the copy at `scale` (SB, classic)
+    int flags;        // of the OpenCV finder (SB, SB on rectified views, classic)
+  };
+  auto label = [](const Stage& st) {
+    return std::string(st.kind == Kind::classic     ? "classic"
+                       : st.kind == Kind::mrgingham ? "mrgingham"
+                       : st.kind == Kind::sb        ? "sb"
+                                                    : "sb-rectified");
+  };
+  auto attempt_once = [&](const cv::Mat& img, const Stage& st, const std::string& name) {
     if (!tried.empty()) tried += ", ";
+    tried += name;
     pts.clear();
     bool ok = false;
     double limit = options.max_refine_shift_px;
-    if (kind == Kind::classic) {
-      tried += name;
-      ok = try_classic(img, board, pts);
-      limit = 0;
-    } else if (kind == Kind::sb_full) {
-      tried += name;
-      ok = try_sb(img, board, pts);
-    } else if (kind == Kind::mrgingham) {
-      tried += name;
+    if (st.kind == Kind::classic || st.kind == Kind::sb) {
+      cv::Mat small = img;
+      if (st.downscaled && scale < 1) cv::resize(img, small, cv::Size(), scale, scale, cv::INTER_AREA);
+      const double sx = double(small.cols) / img.cols, sy = double(small.rows) / img.rows;
+      if (sx < 1) {
+        char at[32];
+        std::snprintf(at, sizeof at, "@%.2f", std::min(sx, sy));
+        tried += at;
+      }
+      if (st.flags & cv::CALIB_CB_ACCURACY) tried += " accuracy";
+      // SB without CALIB_CB_ACCURACY: that costs ~4x the time (an internal upsampled pass),
+      // cornerSubPix at full resolution gives the precision, and on the real sets it found
+      // fewer views (Ladybug 2 and 3 only without it).
+      ok = st.kind == Kind::classic ? try_classic(small, board, pts, st.flags) : try_sb(small, board, pts, st.flags);
+      for (auto& p : pts) {  // pixel centres at integers: x_full + 0.5 = (x_small + 0.5) / s
+        p.x = static_cast<float>((p.x + 0.5) / sx - 0.5);
+        p.y = static_cast<float>((p.y + 0.5) / sy - 0.5);
+      }
+      // classic's own corners are refined without a move limit (its quads are coarse).
+      limit = st.kind == Kind::classic ? 0 : limit / std::min(sx, sy);
+    } else if (st.kind == Kind::mrgingham) {
       int level = 0;
       ok = try_mrgingham(img, board, options.mrgingham_pyramid_level, pts, level);
       if (limit > 0) limit *= double(1 << std::clamp(level, 0, 8));
-    } else if (kind == Kind::sb_rectified) {
-      tried += name;
+    } else {  // sb_rectified
       for (double fov : options.rectified_fov_deg) {
         const RectifiedView view =
             make_view(circle_centre, circle_radius, options.rectified_half_field_deg, fov, options.rectified_size_px);
@@ -270,7 +292,7 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
         cv::Mat rect;
         cv::remap(img, rect, mx, my, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
         pts.clear();
-        if (!try_sb(rect, board, pts, cv::CALIB_CB_EXHAUSTIVE) || !valid_points(pts, board)) continue;
+        if (!try_sb(rect, board, pts, st.flags) || !valid_points(pts, board)) continue;
         // Back to the fisheye image; the move limit grows with the view's local
         // magnification (a view pixel spans up to a few fisheye pixels near its centre).
         double magnification = 1;
@@ -283,25 +305,10 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
         ok = true;
         break;
       }
-    } else {
-      cv::Mat small = img;
-      if (scale < 1) cv::resize(img, small, cv::Size(), scale, scale, cv::INTER_AREA);
-      const double sx = double(small.cols) / img.cols, sy = double(small.rows) / img.rows;
-      char label[32];
-      std::snprintf(label, sizeof label, "@%.2f", std::min(sx, sy));
-      tried += name + label;
-      // No CALIB_CB_ACCURACY (it upsamples internally, ~2x the time): cornerSubPix at full
-      // resolution gives the precision.
-      ok = try_sb(small, board, pts, cv::CALIB_CB_EXHAUSTIVE);
-      for (auto& p : pts) {  // pixel centres at integers: x_full + 0.5 = (x_small + 0.5) / s
-        p.x = static_cast<float>((p.x + 0.5) / sx - 0.5);
-        p.y = static_cast<float>((p.y + 0.5) / sy - 0.5);
-      }
-      if (limit > 0) limit /= std::min(sx, sy);
     }
     if (!ok || !valid_points(pts, board)) return false;
     // Refine on the original grey image: CLAHE changes edge profiles.
-    if (kind == Kind::classic || options.refine_sb) {
+    if (st.kind == Kind::classic || options.refine_sb) {
       const RefineStats stats = refine(gray, pts, board.cols, board.rows, limit);
       result.refine_reverted = stats.reverted;
       result.refine_median_shift_px = stats.median_shift;
@@ -309,14 +316,55 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
     result.method = name;
     return true;
   };
+  auto attempt = [&](const cv::Mat& img, const Stage& st, const std::string& suffix) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const bool ok = attempt_once(img, st, label(st) + suffix);
+    char ms[32];
+    std::snprintf(ms, sizeof ms, " %.0f ms",
+                  1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    tried += ms;
+    return ok;
+  };
+
+  // Cheapest first, measured per stage (thread CPU time, one OpenCV thread) on the seven
+  // real sets and on rendered 190 deg views (docs/calibration.md, "Board detection"):
+  // - classic with a global threshold on the downscaled copy: 4-14 ms mean, 35 ms worst,
+  //   finds every view of the pinhole set and half to two thirds of the fisheye ones, and
+  //   its corners are the precise ones; with ADAPTIVE_THRESH it finds a few more but costs
+  //   up to 180 ms when it fails (its FAST_CHECK passes on curved boards), so that variant
+  //   runs last, at full resolution;
+  // - SB (EXHAUSTIVE, no ACCURACY) on the downscaled copy: 30-60 ms when it finds the
+  //   board, 100-230 ms when not; the recall of the cascade;
+  // - the rectified views only on images with a fisheye circle; full-resolution SB and
+  //   mrgingham for small or far boards.
+  const int exhaustive = cv::CALIB_CB_EXHAUSTIVE;
+  const int classic_global = cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
+  const int classic_adaptive = classic_global | cv::CALIB_CB_ADAPTIVE_THRESH;
+  std::vector<Stage> stages;
+  if (options.classic) stages.push_back({Kind::classic, true, classic_global});
+  if (options.sb) stages.push_back({Kind::sb, true, exhaustive});
+  if (options.classic && scale < 1) stages.push_back({Kind::classic, true, classic_adaptive});
+  // Without a fisheye circle, full-resolution classic (8-30 ms on the real sets) before
+  // full-resolution SB (70-240 ms when it fails).
+  const bool classic_full_early = options.classic && !fisheye_circle && scale < 1;
+  if (classic_full_early) stages.push_back({Kind::classic, false, classic_adaptive});
+  if (fisheye_circle) stages.push_back({Kind::sb_rectified, false, exhaustive});
+  if (options.sb && scale < 1) stages.push_back({Kind::sb, false, exhaustive});
   // mrgingham finds only N x N grids and equalises by itself: one attempt, on the plain image.
-  const bool use_mrgingham = options.mrgingham && board.cols == board.rows;
+  if (options.mrgingham && board.cols == board.rows) stages.push_back({Kind::mrgingham, false, 0});
+  if (options.classic && !classic_full_early) stages.push_back({Kind::classic, false, classic_adaptive});
+  // OpenCV's most thorough call as the recall floor: it found nothing the stages above
+  // missed on our sets, but its internal upsampling can resolve small boards; it costs
+  // 150-400 ms and only views that everything else missed pay for it.
+  if (options.sb) stages.push_back({Kind::sb, false, exhaustive | cv::CALIB_CB_ACCURACY});
+
   auto cascade = [&](const cv::Mat& img, const std::string& suffix) {
-    return (options.sb && attempt(img, Kind::sb_small, "sb" + suffix)) ||
-           (options.sb && attempt(img, Kind::sb_full, "sb" + suffix)) ||
-           (use_mrgingham && suffix.empty() && attempt(img, Kind::mrgingham, "mrgingham")) ||
-           (options.classic && attempt(img, Kind::classic, "classic" + suffix)) ||
-           (fisheye_circle && attempt(img, Kind::sb_rectified, "sb-rectified" + suffix));
+    for (const Stage& st : stages) {
+      // mrgingham equalises by itself; the ACCURACY call is the plain image's last resort.
+      if (!suffix.empty() && (st.kind == Kind::mrgingham || (st.flags & cv::CALIB_CB_ACCURACY))) continue;
+      if (attempt(img, st, suffix)) return true;
+    }
+    return false;
   };
 
   bool found = cascade(gray, "");
@@ -335,6 +383,7 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
                     " inner-corner chessboard found (tried " + (tried.empty() ? "nothing" : tried) +
                     ")";
   }
+  result.attempts = tried;
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -1,24 +1,31 @@
 // Chessboard detection for geometric calibration, built for fisheye and wide lenses.
 //
-// Strategy (first success wins):
-//   1. fast cv::findChessboardCornersSB (EXHAUSTIVE, no ACCURACY) on a copy downscaled to a
-//      long side of ~sb_long_side_px (never below ~sb_min_square_px per square), corners mapped
-//      back and refined at full resolution by cv::cornerSubPix (window from the local square
-//      size; a move above max_refine_shift_px / scale keeps SB's position): 20-45 ms/image;
-//   2. cv::findChessboardCornersSB (EXHAUSTIVE | ACCURACY) at full resolution, refined the same
-//      way with the max_refine_shift_px limit: recall on curved fisheye boards, steep views;
-//   3. classic cv::findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE | FAST_CHECK)
-//      refined by cornerSubPix: last because it can take seconds on fisheye views where the
-//      FAST_CHECK passes (4.4 s on one synthetic 190 deg view);
+// Strategy (first success wins; cheapest first, each stage's measured cost and recall in
+// docs/calibration.md, "Board detection speed"). "Downscaled" is a copy whose long side is
+// ~sb_long_side_px (never below ~sb_min_square_px per square); corners found there are
+// mapped back and refined at full resolution by cv::cornerSubPix (window from the local
+// square size; for SB, a move above max_refine_shift_px / scale keeps SB's position):
+//   1. classic cv::findChessboardCorners with a global threshold (NORMALIZE_IMAGE |
+//      FAST_CHECK), downscaled: 4-14 ms, finds straight and mildly curved boards;
+//   2. cv::findChessboardCornersSB (EXHAUSTIVE, no ACCURACY), downscaled: the recall on
+//      curved fisheye boards and steep views, 30-60 ms when found;
+//   3. classic with ADAPTIVE_THRESH, downscaled (only when the copy is smaller);
 //   4. fisheye rectification, only when the image shows a dark surround with a bright image
 //      circle: local perspective views (fields rectified_fov_deg, looking along the axis) of
 //      an approximate equidistant lens whose circle is rectified_half_field_deg from the
 //      axis, SB on each, corners mapped back and refined at full resolution (move limit
 //      scaled by the view's local magnification). Strongly curved boards filling a > 180
-//      deg field (OCamCalib's Fisheye190deg: 3 -> 6 of 8 views);
-//   5. (optional) 1-4 again on a CLAHE-equalised image (dim or uneven lighting).
-// Square boards (cols == rows) add mrgingham (the mrcal authors' finder) between stages 2
-// and 3: on a CLAHE-equalised copy as its CLI does, image pyramid levels tried
+//      deg field (OCamCalib's Fisheye190deg: 3 -> 8 of 8 views);
+//   5. SB at full resolution (only when the copy is smaller): small or far boards;
+//   6. classic with ADAPTIVE_THRESH at full resolution, last on images with a fisheye
+//      circle (on curved boards there it can take seconds when its FAST_CHECK passes),
+//      before 5 on the others (8-30 ms against SB's 70-240 ms when SB fails);
+//   7. SB with CALIB_CB_ACCURACY at full resolution (OpenCV's most thorough call, 150-400
+//      ms): the recall floor, reached only by views every other stage missed;
+//   8. (optional) 1-6 again on a CLAHE-equalised image (dim or uneven lighting).
+// BoardDetection::attempts lists the stages tried with their times.
+// Square boards (cols == rows) add mrgingham (the mrcal authors' finder) between stages 5
+// and 6: on a CLAHE-equalised copy as its CLI does, image pyramid levels tried
 // automatically, corners refined at full resolution like the others (method "mrgingham").
 // Corner order is row-major over the board (`cols` corners per row) and deterministic:
 // corner 0 is the outer corner of the grid nearest the image origin (0, 0); of the grid
@@ -42,23 +49,22 @@ struct BoardSpec {
 };
 
 struct DetectOptions {
-  bool classic = true;        // stage 1
-  bool sb = true;             // stage 2
-  bool clahe = true;          // stage 3 (only when 1 and 2 fail)
+  bool classic = true;        // stages 1, 3 and 6
+  bool sb = true;             // stages 2, 5 and 7 (and 4, which uses SB)
+  bool clahe = true;          // stage 8 (only when all others fail)
   bool refine_sb = true;      // cornerSubPix after SB
   double max_refine_shift_px = 1.0;  // at full resolution; scaled by 1 / scale after a
                                      // downscaled SB attempt
-  // SB first runs on a copy downscaled so its long side is ~sb_long_side_px (<= 0: never),
+  // Stages 1-3 run on a copy downscaled so its long side is ~sb_long_side_px (<= 0: never),
   // but not so far that a square of a board spanning half the short side would fall below
-  // sb_min_square_px; its corners are refined at full resolution. Full-resolution SB is the
-  // fallback when the downscaled attempt fails.
+  // sb_min_square_px; their corners are refined at full resolution.
   int sb_long_side_px = 640;
   double sb_min_square_px = 8;
   // Stage 4 (see above). The field guess hardly matters (90-100 deg all work on the
   // 190 deg set): SB tolerates the residual curvature of a wrong guess.
   bool rectified = true;
   std::vector<double> rectified_fov_deg = {120, 160};
-  int rectified_size_px = 640;
+  int rectified_size_px = 480;  // 640: same recall on our sets, ~1.4x the time
   double rectified_half_field_deg = 95;
   // mrgingham stage (square boards only; skipped otherwise). Alone: set sb, classic, clahe
   // false and mrgingham true.
@@ -71,6 +77,7 @@ struct BoardDetection {
   std::vector<std::array<double, 2>> corners;  // row-major over the board, cols per row
   std::string method;   // "classic", "sb", "mrgingham", "sb-rectified", each maybe "+clahe"; "" when not found
   std::string reason;   // why nothing was found; empty when found
+  std::string attempts; // the stages tried, in order, each with its time ("sb@0.62 31 ms, ...")
   double seconds = 0;   // wall time of detect_board
   int refine_reverted = 0;       // SB corners whose cornerSubPix move exceeded the limit
   double refine_median_shift_px = 0;  // median move of the accepted refinements

@@ -2,7 +2,9 @@
 // cross-validation, and boards rendered through a known camera (ground truth).
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -45,37 +47,51 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   const std::string ext = fs::path(args.output).extension().string();
   if (ext != ".cameramodel" && ext != ".yaml" && ext != ".yml")
     throw InputError(fmt::format("{}: the output must be .cameramodel or .yaml", args.output));
+  if (args.drop_influential < 0) throw InputError("--drop-influential must be 0 or more");
   {  // Fail before minutes of work when the output cannot be written.
     std::error_code ec;
     const fs::path dir = fs::path(args.output).parent_path();
     if (!dir.empty() && !fs::is_directory(dir, ec))
       throw InputError(fmt::format("{}: cannot write: directory {} does not exist", args.output, dir.string()));
   }
-  // Detect the board in every image; all images must share one resolution.
+  // Detect the board in every image, in parallel (each image is independent, so the result
+  // does not depend on the order); all images must share one resolution.
   std::vector<std::vector<std::array<double, 2>>> corners(args.images.size());
-  int width = 0, height = 0, found = 0;
-  nlohmann::json images = nlohmann::json::array();
+  std::vector<BoardDetection> detections(args.images.size());
+  std::vector<std::array<int, 2>> sizes(args.images.size());
+  std::vector<std::string> errors(args.images.size());
   Progress progress("detect boards", args.images.size(), out.progress);
   const auto t0 = std::chrono::steady_clock::now();
-  for (size_t i = 0; i < args.images.size(); ++i) {
-    const CameraImage img = read_camera_image(args.images[i]);
-    if (i == 0) {
-      width = img.width;
-      height = img.height;
-    } else if (img.width != width || img.height != height) {
-      throw InputError(fmt::format("{}: {}x{} differs from the first image's {}x{} (one camera, one resolution)",
-                                   args.images[i], img.width, img.height, width, height));
+  tbb::parallel_for(size_t(0), args.images.size(), [&](size_t i) {
+    try {
+      const CameraImage img = read_camera_image(args.images[i]);
+      sizes[i] = {img.width, img.height};
+      detections[i] = detect_board(img, board);
+    } catch (const InputError& e) {
+      errors[i] = e.what();
     }
-    const BoardDetection d = detect_board(img, board);
+    progress.advance();
+  });
+  progress.finish();
+  int width = 0, height = 0, found = 0;
+  nlohmann::json images = nlohmann::json::array();
+  for (size_t i = 0; i < args.images.size(); ++i) {  // first error in the given order
+    if (!errors[i].empty()) throw InputError(errors[i]);
+    if (i == 0) {
+      width = sizes[i][0];
+      height = sizes[i][1];
+    } else if (sizes[i][0] != width || sizes[i][1] != height) {
+      throw InputError(fmt::format("{}: {}x{} differs from the first image's {}x{} (one camera, one resolution)",
+                                   args.images[i], sizes[i][0], sizes[i][1], width, height));
+    }
+    const BoardDetection& d = detections[i];
     if (d.found) {
       corners[i] = d.corners;
       ++found;
     }
     images.push_back({{"file", args.images[i]}, {"found", d.found}, {"method", d.method}, {"reason", d.reason},
-                      {"seconds", d.seconds}});
-    progress.advance();
+                      {"attempts", d.attempts}, {"seconds", d.seconds}});
   }
-  progress.finish();
   const double detect_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (found == 0)
     throw InputError(fmt::format("no {}x{} board found in any of the {} images (check --board: inner corners)",
@@ -88,7 +104,47 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   co.model = args.model;
   co.use_mrcal = !args.no_mrcal;
   const auto t1 = std::chrono::steady_clock::now();
-  const CalibrationResult r = calibrate(corners, board, width, height, co);
+  CalibrationResult r = calibrate(corners, board, width, height, co);
+  // Influential views (a few close-ups can move the whole answer): on request, the worst
+  // flagged ones are left out and everything is solved again, and both answers are shown.
+  struct Dropped {
+    size_t view;
+    double leverage_px;
+  };
+  std::vector<Dropped> dropped;
+  nlohmann::json before = nullptr;
+  std::string drop_summary;
+  if (args.drop_influential > 0) {
+    std::vector<Dropped> flagged;
+    for (size_t v = 0; v < r.views.size(); ++v)
+      if (r.views[v].influential) flagged.push_back({v, r.views[v].leverage_px});
+    std::sort(flagged.begin(), flagged.end(), [](const Dropped& a, const Dropped& b) {
+      return a.leverage_px > b.leverage_px || (a.leverage_px == b.leverage_px && a.view < b.view);
+    });
+    int used = 0;
+    for (const auto& v : r.views) used += v.used;
+    // Never below the 4 views a calibration needs (plus one so each half keeps two).
+    const int can_drop = std::max(0, std::min<int>(args.drop_influential, used - 5));
+    if (int(flagged.size()) > can_drop) flagged.resize(size_t(can_drop));
+    if (!flagged.empty()) {
+      before = {{"selected", r.selected}, {"rms_px", r.model.rms_reprojection_px},
+                {"cross_validation_px", r.cross_validation_px}, {"heldout_rms_px", r.heldout_rms_px}};
+      const std::string was = fmt::format("{} (cross-validation {:.3f} px, RMS {:.3f} px)", r.selected,
+                                          r.cross_validation_px, r.model.rms_reprojection_px);
+      for (const Dropped& d : flagged) corners[d.view].clear();
+      r = calibrate(corners, board, width, height, co);
+      for (const Dropped& d : flagged)
+        r.views[d.view].why = fmt::format("dropped: influential (leaving it out moved the projection by {:.2f} px)",
+                                          d.leverage_px);
+      dropped = flagged;
+      drop_summary = fmt::format("with all views: {}; without the {} most influential: {} (cross-validation {:.3f} px, "
+                                 "RMS {:.3f} px){}\n",
+                                 was, dropped.size(), r.selected, r.cross_validation_px, r.model.rms_reprojection_px,
+                                 r.cross_validation_px > before["cross_validation_px"].get<double>()
+                                     ? "; the halves agree less without them: consider keeping all views"
+                                     : "");
+    }
+  }
   const double solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
 
   // Files: .cameramodel where mrcal has the model, OpenCV YAML wherever OpenCV has it.
@@ -136,14 +192,22 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
     else
       say(out, "{:<44} failed: {}\n", c.name, c.error);
   say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation {} within {} x {:.3f} px, "
-           "the jackknife standard error{}; held-out RMS within {} / sqrt(residuals)); {} of {} corners rejected as outliers\n",
+           "{}; held-out RMS within {} / sqrt(residuals)); {} of {} corners rejected as outliers\n",
       r.selected, repeated ? "over " + splits_col : "odd/even", r.selection_k, r.selection_noise_px,
-      r.selection_noise_from_splits ? " of the per-split spread" : " of the odd/even one", r.selection_k,
-      r.corners_rejected, r.corners_total);
+      r.selection_noise_from_splits ? "the spread of the per-split values / sqrt(splits)"
+                                    : "the jackknife standard error of the odd/even one",
+      r.selection_k, r.corners_rejected, r.corners_total);
+  for (const Dropped& d : dropped) say(out, "dropped influential view: {} ({:.2f} px)\n", args.images[d.view], d.leverage_px);
+  if (!drop_summary.empty()) say(out, "{}", drop_summary);
+  int influential = 0;
   for (size_t v = 0; v < r.views.size(); ++v)
-    if (r.views[v].influential)
+    if (r.views[v].influential) {
       say(out, "influential view: {} (leaving it out moves the projection by {:.2f} px)\n", args.images[v],
           r.views[v].leverage_px);
+      ++influential;
+    }
+  if (influential > 0 && args.drop_influential == 0)
+    say(out, "to solve again without the worst of them and compare: --drop-influential 1 (or more)\n");
   if (r.no_model_fits)
     say(out, "warning: no candidate model fits these views well (RMS {:.2f} px, cross-validation {:.2f} px): check the "
              "board size, or the lens needs a model not fitted here\n",
@@ -181,6 +245,8 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
     views.push_back({{"file", args.images[v]}, {"used", r.views[v].used}, {"why", r.views[v].why},
                      {"rms_px", r.views[v].rms_px}, {"leverage_px", r.views[v].leverage_px},
                      {"influential", r.views[v].influential}, {"rejected_corners", r.views[v].rejected_corners}});
+  nlohmann::json dropped_json = nlohmann::json::array();
+  for (const Dropped& d : dropped) dropped_json.push_back({{"file", args.images[d.view]}, {"leverage_px", d.leverage_px}});
   auto grid_json = [](const UncertaintyGrid& g) -> nlohmann::json {
     auto num = [](double x) -> nlohmann::json { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
     if (g.nx <= 0) return nullptr;
@@ -215,6 +281,7 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
                                  {"split_noise_px", num(r.cv_split_noise_px)},
                                  {"k", r.selection_k}}},
                   {"heldout_rms_px", r.heldout_rms_px},
+                  {"dropped_views", dropped_json}, {"before_dropping", before},
                   {"views_with_board", found}, {"detect_seconds", detect_s}, {"solve_seconds", solve_s},
                   {"corners_poorly_covered", r.corners_poorly_covered}, {"no_model_fits", r.no_model_fits}, {"table", table}, {"views", views},
                   {"images", images}});

@@ -199,6 +199,7 @@ struct CalibGeometricArgs {
   bool no_mrcal = false;
   std::string report_dir;           // pictures; default beside the output
   std::string output;               // camera.cameramodel or camera.yaml
+  int drop_influential = 0;         // recalibrate without up to N flagged views, worst first
 };
 int run_calib_geometric(const CalibGeometricArgs& args, const Output& out);
 

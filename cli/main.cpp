@@ -233,6 +233,8 @@ int main(int argc, char** argv) {
   c_cgeo->add_option("--model", cgeo.model, "Use this model instead of the selection (see the printed table)");
   c_cgeo->add_flag("--no-mrcal", cgeo.no_mrcal, "OpenCV models only");
   c_cgeo->add_option("--report", cgeo.report_dir, "Directory for the residual and coverage pictures");
+  c_cgeo->add_option("--drop-influential", cgeo.drop_influential,
+                     "Recalibrate without up to N views flagged influential (highest leverage first)");
   c_cgeo->add_option("-o,--output", cgeo.output, "camera.cameramodel (and .yaml) or camera.yaml")->required();
   c_cgeo->add_flag("--json", out.json, "Print the report as JSON");
 

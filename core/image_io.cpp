@@ -67,6 +67,41 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
+// A JPEG that stops before its End Of Image marker: libjpeg decodes what is there, fills the
+// rest with grey and only warns, so OpenCV returns a plausible image. Walk the marker
+// segments and the entropy-coded scans (where 0xFF is followed by 0x00, a restart marker or
+// fill bytes) until EOI; data appended after EOI (some cameras add some) is ignored.
+bool jpeg_is_truncated(const std::string& b) {
+  const size_t n = b.size();
+  auto u8 = [&](size_t i) { return static_cast<unsigned char>(b[i]); };
+  if (n < 4 || u8(0) != 0xFF || u8(1) != 0xD8) return false;  // not a JPEG
+  size_t i = 2;
+  bool in_scan = false;
+  while (i + 1 < n) {
+    if (u8(i) != 0xFF) {
+      if (!in_scan) return false;  // not a marker where one must be: let the decoder judge
+      ++i;
+      continue;
+    }
+    const unsigned char m = u8(i + 1);
+    if (m == 0xFF) {  // fill byte
+      ++i;
+      continue;
+    }
+    if (m == 0x00 || (m >= 0xD0 && m <= 0xD7) || m == 0x01) {  // stuffed byte, restart, TEM
+      i += 2;
+      continue;
+    }
+    if (m == 0xD9) return false;  // End Of Image
+    if (i + 3 >= n) return true;
+    const size_t length = size_t(u8(i + 2)) << 8 | u8(i + 3);
+    if (length < 2) return false;
+    i += 2 + length;
+    in_scan = m == 0xDA;  // entropy-coded data follows a Start Of Scan header
+  }
+  return true;
+}
+
 std::string read_whole_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, fmt::format("cannot open: {}", std::strerror(errno ? errno : ENOENT)));
@@ -816,6 +851,7 @@ CameraImage read_camera_image(const std::string& path) {
   return guarded(path, "read", [&] {
     const std::string bytes = read_whole_file(path);
     if (bytes.empty()) fail(path, "cannot read: empty file");
+    if (jpeg_is_truncated(bytes)) fail(path, "truncated JPEG (no end-of-image marker)");
     const cv::Mat buf(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
     const cv::Mat img = cv::imdecode(buf, cv::IMREAD_UNCHANGED);
     if (img.empty()) fail(path, "cannot decode image (unsupported format or damaged file)");

@@ -142,6 +142,34 @@ TEST(BoardDetect, OpencvStereo9x6) {
   if (!have("calib-opencv-stereo-9x6")) GTEST_SKIP() << "no shared data";
   const auto r = run_set(images_in(set_dir("calib-opencv-stereo-9x6")), {9, 6, 25});
   EXPECT_GE(r.found, 26);  // measured 26/26 (SB alone: 21/26)
+  // The cheap first stage (classic, global threshold, ~7 ms per view) finds every view of
+  // this pinhole set, so no view pays for a failing SB search (130-230 ms each).
+  EXPECT_EQ(r.methods.count("classic") ? r.methods.at("classic") : 0, 26);
+}
+
+// Two independent finders, refined the same way, agree: classic (stage 1) and SB alone on
+// the views both find.
+TEST(BoardDetect, ClassicAndSbCornersAgreeAfterRefinement) {
+  if (!have("calib-opencv-stereo-9x6")) GTEST_SKIP() << "no shared data";
+  DetectOptions sb_only;
+  sb_only.classic = false;
+  std::vector<double> diffs;
+  for (const std::string name : {"left02.jpg", "left06.jpg", "left13.jpg", "right08.jpg"}) {
+    const CameraImage image = read_camera_image(set_dir("calib-opencv-stereo-9x6") + name);
+    const BoardDetection a = detect_board(image, {9, 6, 25});
+    const BoardDetection b = detect_board(image, {9, 6, 25}, sb_only);
+    if (!a.found || !b.found) continue;
+    EXPECT_EQ(a.method, "classic") << name;
+    EXPECT_EQ(b.method, "sb") << name;
+    for (size_t k = 0; k < a.corners.size(); ++k)
+      diffs.push_back(std::hypot(a.corners[k][0] - b.corners[k][0], a.corners[k][1] - b.corners[k][1]));
+  }
+  ASSERT_GE(diffs.size(), 3u * 54u);
+  std::sort(diffs.begin(), diffs.end());
+  std::printf("  classic vs SB: median %.3f px, 95th %.3f px over %zu corners\n", diffs[diffs.size() / 2],
+              diffs[diffs.size() * 95 / 100], diffs.size());
+  EXPECT_LT(diffs[diffs.size() / 2], 0.05);        // median, px
+  EXPECT_LT(diffs[diffs.size() * 95 / 100], 0.25);  // 95th percentile, px
 }
 
 TEST(BoardDetect, OcamcalibFisheye1) {
@@ -231,6 +259,10 @@ TEST(BoardDetect, WrongSizeFindsNothingWithReason) {
   EXPECT_FALSE(d.found);
   EXPECT_TRUE(d.corners.empty());
   EXPECT_NE(d.reason.find("10x7"), std::string::npos) << d.reason;
+  // Every stage is reported with its time, cheapest first.
+  EXPECT_EQ(d.attempts.rfind("classic", 0), 0u) << d.attempts;
+  EXPECT_LT(d.attempts.find("classic"), d.attempts.find("sb")) << d.attempts;
+  EXPECT_NE(d.attempts.find(" ms"), std::string::npos) << d.attempts;
   EXPECT_THROW(detect_board(image, {2, 7, 25}), InputError);
   EXPECT_THROW(detect_board(CameraImage{}, {9, 6, 25}), InputError);
 }

@@ -648,8 +648,8 @@ TEST(ImageIo, NanInfiniteAndNegativePixelsAreRefusedNamingThePixel) {
   expect_input_error([&] { read_envmap(dir + "inf.exr"); }, {dir + "inf.exr: pixel (11, 5) is infinite"});
   expect_input_error([&] { read_envmap(dir + "neg.exr"); }, {dir + "neg.exr: pixel (0, 7) is negative"});
   // Asked not to check, the values come through untouched.
-  EXPECT_TRUE(std::isnan(read_envmap(dir + "nan.pfm", {.reject_bad_pixels = false}).pixel(2 * 16 + 3)[1]));
-  EXPECT_EQ(read_envmap(dir + "neg.exr", {.reject_bad_pixels = false}).pixel(7 * 16)[2], -0.25f);
+  EXPECT_TRUE(std::isnan(read_envmap(dir + "nan.pfm", {.layout = std::nullopt, .reject_bad_pixels = false}).pixel(2 * 16 + 3)[1]));
+  EXPECT_EQ(read_envmap(dir + "neg.exr", {.layout = std::nullopt, .reject_bad_pixels = false}).pixel(7 * 16)[2], -0.25f);
   // RGBE cannot hold them at all.
   expect_input_error([&] { write_envmap(dir + "neg.hdr", neg); }, {dir + "neg.hdr", "negative"});
   EXPECT_FALSE(fs::exists(dir + "neg.hdr"));
@@ -758,4 +758,53 @@ TEST(ImageIo, DisplayImagesAreSrgbEncodedAndClamped) {
 }
 
 }  // namespace
+}  // namespace lp
+
+namespace lp {
+
+namespace {
+std::vector<std::string> shared_jpegs() {
+  std::vector<std::string> out;
+  if (!fs::exists(kData)) return out;
+  for (const auto& e : fs::recursive_directory_iterator(kData))
+    if (e.is_regular_file() && (e.path().extension() == ".jpg" || e.path().extension() == ".JPG"))
+      out.push_back(e.path().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+}  // namespace
+
+// libjpeg decodes a JPEG cut short into a plausible image (the missing part grey) with only a
+// warning; a truncated file must be refused by name instead, and a complete one never is.
+TEST(ImageIo, TruncatedJpegIsRefusedAndCompleteOnesAreRead) {
+  const auto jpegs = shared_jpegs();
+  if (jpegs.empty()) GTEST_SKIP() << "no shared data";
+  for (const auto& p : jpegs) EXPECT_NO_THROW(read_camera_image(p)) << p;  // every real JPEG we have
+  const std::string dir = temp_dir();
+  const std::string bytes = file_bytes(jpegs.front());
+  for (double keep : {0.02, 0.3, 0.7, 0.999}) {
+    const std::string cut = dir + "/cut.jpg";
+    std::ofstream(cut, std::ios::binary) << bytes.substr(0, size_t(keep * double(bytes.size())));
+    try {
+      read_camera_image(cut);
+      ADD_FAILURE() << "a JPEG cut at " << keep << " was read";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cut.jpg"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+    }
+  }
+  // Bytes appended after the end-of-image marker (some cameras add some) are not truncation.
+  const std::string padded = dir + "/padded.jpg";
+  std::ofstream(padded, std::ios::binary) << bytes << std::string(1000, '\xAB');
+  const CameraImage a = read_camera_image(jpegs.front()), b = read_camera_image(padded);
+  EXPECT_EQ(a.rgb, b.rgb);
+}
+
 }  // namespace lp

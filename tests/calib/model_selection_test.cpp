@@ -243,7 +243,9 @@ TEST(ModelSelection, RanksOnTheCrossValidationRepeatedOverSplits) {
     if (c.within_noise) fewest = std::min(fewest, c.params);
   }
   for (const auto& c : t.table)
-    if (c.name == t.selected) EXPECT_EQ(c.params, fewest);
+    if (c.name == t.selected) {
+      EXPECT_EQ(c.params, fewest);
+    }
 
   CalibrateOptions single = o;
   single.cv_splits = 1;

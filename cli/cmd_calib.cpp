@@ -191,12 +191,16 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
           c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
     else
       say(out, "{:<44} failed: {}\n", c.name, c.error);
-  say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation {} within {} x {:.3f} px, "
-           "{}; held-out RMS within {} / sqrt(residuals)); {} of {} corners rejected as outliers\n",
-      r.selected, repeated ? "over " + splits_col : "odd/even", r.selection_k, r.selection_noise_px,
-      r.selection_noise_from_splits ? "the spread of the per-split values / sqrt(splits)"
-                                    : "the jackknife standard error of the odd/even one",
-      r.selection_k, r.corners_rejected, r.corners_total);
+  if (r.table.size() == 1 || !std::isfinite(r.cv_noise_px))  // --model: no selection, so no noise estimate for it
+    say(out, "model {} as requested; {} of {} corners rejected as outliers\n", r.selected, r.corners_rejected,
+        r.corners_total);
+  else
+    say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation {} within {} x {:.3f} "
+             "px, {}; held-out RMS within {} / sqrt(residuals)); {} of {} corners rejected as outliers\n",
+        r.selected, repeated ? "over " + splits_col : "odd/even", r.selection_k, r.selection_noise_px,
+        r.selection_noise_from_splits ? "the spread of the per-split values / sqrt(splits)"
+                                      : "the jackknife standard error of the odd/even one",
+        r.selection_k, r.corners_rejected, r.corners_total);
   for (const Dropped& d : dropped) say(out, "dropped influential view: {} ({:.2f} px)\n", args.images[d.view], d.leverage_px);
   if (!drop_summary.empty()) say(out, "{}", drop_summary);
   int influential = 0;

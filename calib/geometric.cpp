@@ -1248,6 +1248,25 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
           2 * rms_over(jackknife_uncertainty(res.model, leave_one_out, cv_pixels, cv_pixels, n, 1));
     }
     u.headline = leave_one_out.size() >= 3 ? "jackknife" : "linear";
+    // Every candidate's own linear uncertainty over the covered area (the issue compares
+    // candidates by cross-validation and by projection uncertainty side by side). Sampled
+    // more coarsely than the cross-validation: a summary, not a map.
+    {
+      std::vector<std::array<double, 2>> coarse;
+      const size_t stride = std::max<size_t>(1, cv_pixels.size() / 400);
+      for (size_t k = 0; k < cv_pixels.size(); k += stride) coarse.push_back(cv_pixels[k]);
+      for (ModelCandidate& c : res.table) {
+        if (!c.ok) continue;
+        const Fit& f = full.get(c.name);
+        if (!f.ok) continue;
+        const LinearCovariance cc = linearised_covariance(f.model, board, solved(used, f));
+        if (!cc.ok) continue;
+        const double s = rms_over(
+            linear_uncertainty_rotation_fitted(cc, f.model, mask, step, coarse, int(coarse.size()), 1));
+        c.linear_sigma_px = s;
+        c.linear_forecast_cv_px = 2 * s;
+      }
+    }
     // The cross-validation repeated over balanced splits (the selection's, when it ranked
     // on them; else over four: odd/even and three pseudo-random).
     {

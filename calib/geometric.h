@@ -155,6 +155,13 @@ struct ModelCandidate {
   std::vector<double> cross_validation_splits_px;
   double cross_validation_repeated_px = std::numeric_limits<double>::quiet_NaN();
   bool within_noise = false;  // cv and held-out RMS within the noise of the best's (see options)
+  // mrcal-style linearised projection uncertainty of this candidate's full fit (a ray at
+  // infinity, rotation fitted out): the RMS 2-D sigma over the area the boards covered, and
+  // the cross-validation it forecasts (2x that). NaN when not computed (options.uncertainty
+  // off, splined models, singular normal equations). Reported beside the cross-validation;
+  // it does not take part in the pick (it is 1.4-3.3x optimistic on real corners).
+  double linear_sigma_px = std::numeric_limits<double>::quiet_NaN();
+  double linear_forecast_cv_px = std::numeric_limits<double>::quiet_NaN();
   CameraModel model;
 };
 

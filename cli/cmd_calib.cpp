@@ -181,13 +181,14 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
       board.cols, board.rows, detect_s, solve_s);
   const bool repeated = r.selected_on == "repeated";
   const std::string splits_col = fmt::format("{} splits", r.cv_splits);
-  say(out, "{:<44} {:>6} {:>9} {:>10} {:>10} {:>10}\n", "model", "params", "RMS px", "held-out", "cv odd/even",
-      repeated ? splits_col : "");
+  say(out, "{:<44} {:>6} {:>9} {:>10} {:>10} {:>10} {:>10}\n", "model", "params", "RMS px", "held-out", "cv odd/even",
+      repeated ? splits_col : "", "lin. sigma");
   for (const ModelCandidate& c : r.table)
     if (c.ok)
-      say(out, "{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f} {:>10}{}\n", c.name, c.params, c.rms_px, c.heldout_rms_px,
-          c.cross_validation_px,
+      say(out, "{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f} {:>10} {:>10}{}\n", c.name, c.params, c.rms_px,
+          c.heldout_rms_px, c.cross_validation_px,
           !repeated ? "" : (std::isnan(c.cross_validation_repeated_px) ? "screened" : fmt::format("{:.3f}", c.cross_validation_repeated_px)),
+          std::isfinite(c.linear_sigma_px) ? fmt::format("{:.3f}", c.linear_sigma_px) : "-",
           c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
     else
       say(out, "{:<44} failed: {}\n", c.name, c.error);
@@ -243,6 +244,8 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
                      {"cross_validation_px", c.cross_validation_px},
                      {"cross_validation_splits_px", c.cross_validation_splits_px},
                      {"cross_validation_repeated_px", num(c.cross_validation_repeated_px)},
+                     {"linear_sigma_px", num(c.linear_sigma_px)},
+                     {"linear_forecast_cross_validation_px", num(c.linear_forecast_cv_px)},
                      {"within_noise", c.within_noise}});
   nlohmann::json views = nlohmann::json::array();
   for (size_t v = 0; v < r.views.size(); ++v)

@@ -88,7 +88,7 @@ const BoardSpec kBoard{10, 7, 40};
 // intrinsics), the predicted spread must match the actual error against the truth.
 TEST(ProjectionUncertainty, PredictsTheErrorAgainstTheTrueModel) {
   const CameraModel truth = kb190();
-  double act2 = 0, lin2 = 0, mf2 = 0, jk2 = 0, cv2 = 0, pcv_lin2 = 0, pcv_jk2 = 0, rep2 = 0;
+  double act2 = 0, lin2 = 0, mf2 = 0, jk2 = 0, cv2 = 0, pcv_lin2 = 0, pcv_jk2 = 0, rep2 = 0, pcand2 = 0;
   int draws = 0;
   for (unsigned seed = 1; seed <= 4; ++seed) {
     const Corners views = make_views(truth, kBoard, 14, 80, 600, 0.2, seed);
@@ -130,6 +130,13 @@ TEST(ProjectionUncertainty, PredictsTheErrorAgainstTheTrueModel) {
     rep2 += u.cv_repeated_px * u.cv_repeated_px;
     EXPECT_EQ(u.cv_splits, 4);
     pcv_lin2 += u.predicted_cv_linear_px * u.predicted_cv_linear_px;
+    // The table's per-candidate forecast (full fit, 2 sigma) agrees with the one from the
+    // halves' own covariances, and forecasts the repeated cross-validation the same way.
+    ASSERT_EQ(r.table.size(), 1u);
+    const double cand = r.table[0].linear_forecast_cv_px;
+    EXPECT_GT(cand / u.predicted_cv_linear_px, 0.7) << cand;
+    EXPECT_LT(cand / u.predicted_cv_linear_px, 1.4) << cand;
+    pcand2 += cand * cand;
     pcv_jk2 += u.predicted_cv_jackknife_px * u.predicted_cv_jackknife_px;
     ++draws;
   }
@@ -137,8 +144,10 @@ TEST(ProjectionUncertainty, PredictsTheErrorAgainstTheTrueModel) {
   std::printf("  predicted / actual: linear(rot) %.2f  mean frames %.2f  jackknife %.2f;  predicted / measured cv: "
               "linear %.2f jackknife %.2f\n",
               lin, mf, jk, std::sqrt(pcv_lin2 / cv2), std::sqrt(pcv_jk2 / cv2));
-  std::printf("  predicted / cross-validation over 4 splits: linear %.2f jackknife %.2f\n", std::sqrt(pcv_lin2 / rep2),
-              std::sqrt(pcv_jk2 / rep2));
+  std::printf("  predicted / cross-validation over 4 splits: linear %.2f jackknife %.2f, table's linear %.2f\n",
+              std::sqrt(pcv_lin2 / rep2), std::sqrt(pcv_jk2 / rep2), std::sqrt(pcand2 / rep2));
+  EXPECT_GT(std::sqrt(pcand2 / rep2), 1 / 1.5);
+  EXPECT_LT(std::sqrt(pcand2 / rep2), 1.5);
   // Measured: linear (rotation fitted out) 1.08, mean frames 1.25 (it keeps the frame
   // uncertainty that fitting the rotation removes), jackknife 1.27; cross-validation
   // forecasts 1.03 (linear) and 1.18 (jackknife). With Gaussian noise and the right model

@@ -130,9 +130,13 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
           c.cross_validation_px, c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
     else
       say(out, "{:<44} failed: {}\n", c.name, c.error);
-  say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation within 2 x {:.3f} px, "
-           "its jackknife standard error; RMS within 2 / sqrt(residuals)); {} of {} corners rejected as outliers\n",
-      r.selected, r.cv_noise_px, r.corners_rejected, r.corners_total);
+  if (!std::isfinite(r.cv_noise_px))  // --model: no selection, so no noise estimate for it
+    say(out, "model {} as requested; {} of {} corners rejected as outliers\n", r.selected, r.corners_rejected,
+        r.corners_total);
+  else
+    say(out, "chosen: {}, the fewest parameters within the noise of the best (cross-validation within 2 x {:.3f} px, "
+             "its jackknife standard error; RMS within 2 / sqrt(residuals)); {} of {} corners rejected as outliers\n",
+        r.selected, r.cv_noise_px, r.corners_rejected, r.corners_total);
   for (size_t v = 0; v < r.views.size(); ++v)
     if (r.views[v].influential)
       say(out, "influential view: {} (leaving it out moves the projection by {:.2f} px)\n", args.images[v],

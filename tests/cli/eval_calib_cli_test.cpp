@@ -40,6 +40,18 @@ TEST(EvalCalibCli, ComparesWithOpenCVAloneOnVMRImage) {
                   row["cross_validation_px"].get<double>());
     }
   EXPECT_TRUE(fs::exists(out / "calib_compare.csv"));
+  // One solve of each of our models next to its OpenCV peer: Mei (cv::omnidir's seed refined
+  // jointly) fits the corners at least as well as cv::omnidir alone.
+  ASSERT_EQ(j["speed"].size(), 4u);
+  for (const auto& row : j["speed"]) {
+    if (row["model"] != "LENSMODEL_OMNIDIR_MEI") continue;
+    EXPECT_EQ(row["peer"], "cv::omnidir");
+    ASSERT_TRUE(row["ours_rms_px"].is_number() && row["peer_rms_px"].is_number()) << row.dump();
+    EXPECT_LE(row["ours_rms_px"].get<double>(), row["peer_rms_px"].get<double>() + 1e-6);
+    EXPECT_GT(row["ours_one_solve_seconds"].get<double>(), 0);
+    EXPECT_GT(row["model_command_seconds"].get<double>(), 0);
+  }
+  EXPECT_TRUE(fs::exists(out / "calib_speed.csv"));
 }
 
 TEST(EvalCalibCli, NothingToDoIsAUsageError) {

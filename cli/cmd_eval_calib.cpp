@@ -117,7 +117,8 @@ nlohmann::json compare_on_images(const EvalCalibArgs& args, const BoardSpec& boa
     const auto again = rep == 0 ? peers : calibrate_opencv_alone(corners, board, width, height);
     for (int k = 0; k < kPairs; ++k) {
       for (const PeerCalibration& p : again)
-        if (p.name == pairs[k].peer && p.ok) peer_s[k] = std::min(peer_s[k], p.seconds);
+        // The full-set solve counts even when a half failed (lensmodel set, cross-validation not).
+        if (p.name == pairs[k].peer && !p.lensmodel.empty()) peer_s[k] = std::min(peer_s[k], p.seconds);
       const SingleSolve one = solve_model_once(corners, board, width, height, pairs[k].ours);
       if (one.ok) ours_s1[k] = std::min(ours_s1[k], one.seconds);
       if (rep == 0) ours_one[k] = one;
@@ -132,7 +133,8 @@ nlohmann::json compare_on_images(const EvalCalibArgs& args, const BoardSpec& boa
     const PeerCalibration* peer = nullptr;
     for (const PeerCalibration& p : peers)
       if (p.name == pairs[k].peer) peer = &p;
-    const double peer_rms = peer && peer->ok ? peer->rms_px : std::numeric_limits<double>::quiet_NaN();
+    const double peer_rms =
+        peer && !peer->lensmodel.empty() ? peer->rms_px : std::numeric_limits<double>::quiet_NaN();
     CalibrateOptions forced;
     forced.model = pairs[k].ours;
     double command_s = std::numeric_limits<double>::quiet_NaN();
@@ -143,9 +145,15 @@ nlohmann::json compare_on_images(const EvalCalibArgs& args, const BoardSpec& boa
     } catch (const InputError&) {
     }
     const double ours_rms = ours_one[k].ok ? ours_one[k].rms_px : std::numeric_limits<double>::quiet_NaN();
-    const double ratio = ours_s1[k] / peer_s[k];
-    say(out, "{:<26} {:<30} {:>9.3f} {:>9.3f} {:>9.3f} {:>9.3f} {:>7.2f} {:>10.2f}\n", pairs[k].ours, pairs[k].peer,
-        ours_rms, peer_rms, ours_s1[k], peer_s[k], ratio, command_s);
+    const double ratio = std::isfinite(ours_s1[k]) && std::isfinite(peer_s[k]) ? ours_s1[k] / peer_s[k]
+                                                                                 : std::numeric_limits<double>::quiet_NaN();
+    // "failed" where that solver found no model on the full set.
+    auto cell = [](double x, int width, int digits) {
+      return std::isfinite(x) ? fmt::format("{:>{}.{}f}", x, width, digits) : fmt::format("{:>{}}", "failed", width);
+    };
+    say(out, "{:<26} {:<30} {} {} {} {} {} {}\n", pairs[k].ours, pairs[k].peer, cell(ours_rms, 9, 3),
+        cell(peer_rms, 9, 3), cell(ours_s1[k], 9, 3), cell(peer_s[k], 9, 3),
+        std::isfinite(ratio) ? fmt::format("{:>7.2f}", ratio) : fmt::format("{:>7}", "-"), cell(command_s, 10, 2));
     speed_csv += fmt::format("{},{},{},{},{},{},{},{}\n", pairs[k].ours, pairs[k].peer, ours_rms, peer_rms, ours_s1[k],
                              peer_s[k], ratio, command_s);
     speed.push_back({{"model", pairs[k].ours}, {"peer", pairs[k].peer}, {"ours_rms_px", num(ours_rms)},

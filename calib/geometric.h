@@ -261,6 +261,21 @@ struct PeerCalibration {
   int views_posed = 0;
   CameraModel model;
 };
+// ONE solve of one candidate model (CalibrateOptions::candidates names) on every corner of
+// every view with a board: no outlier rejection, no halves, no jackknifes. The unit that
+// `eval calib` times against the OpenCV calibrator of the same model (cv::fisheye for
+// Kannala-Brandt, cv::omnidir for Mei, calibrateCamera for plumb_bob / OpenCV8), on the
+// same corners. rms_px as PeerCalibration's; seconds: wall time of the solve.
+struct SingleSolve {
+  bool ok = false;
+  std::string error;
+  CameraModel model;
+  double rms_px = 0, seconds = 0;
+};
+SingleSolve solve_model_once(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                             const BoardSpec& board, int width, int height, const std::string& model,
+                             const CalibrateOptions& options = {});
+
 std::vector<PeerCalibration> calibrate_opencv_alone(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
                                                     const BoardSpec& board, int width, int height, int diff_step_px = 0);
 

@@ -32,7 +32,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 
 // Images -> our table and OpenCV's, side by side.
-nlohmann::json compare_on_images(const EvalCalibArgs& args, const BoardSpec& board, const Output& out) {
+// speed_out: one solve of each of our models against its OpenCV peer (see below).
+nlohmann::json compare_on_images(const EvalCalibArgs& args, const BoardSpec& board, const Output& out,
+                                 nlohmann::json* speed_out) {
   std::vector<std::vector<std::array<double, 2>>> corners(args.images.size());
   int width = 0, height = 0, found = 0;
   Progress progress("detect boards", args.images.size(), out.progress);
@@ -92,6 +94,74 @@ nlohmann::json compare_on_images(const EvalCalibArgs& args, const BoardSpec& boa
                     {"seconds", p.seconds}, {"views_posed", p.views_posed}});
   }
   write_file_atomically((fs::path(args.output_dir) / "calib_compare.csv").string(), csv);
+
+  // Speed, model for model: ONE solve of ours (OpenCV seed + re-posing + joint Ceres / mrcal
+  // refinement, every corner) against the OpenCV calibrator of the same model alone on the
+  // same corners, each the fastest of three interleaved runs (the machine is shared: a
+  // slow run measures the other jobs), and the whole `--model NAME` command (outlier
+  // rejection, halves, leverage, uncertainty) for scale.
+  struct Pair {
+    const char* peer;
+    const char* ours;
+  };
+  const Pair pairs[] = {{"cv::fisheye", "LENSMODEL_KANNALA_BRANDT"},
+                        {"cv::calibrateCamera plumb_bob", "plumb_bob"},
+                        {"cv::calibrateCamera rational", "LENSMODEL_OPENCV8"},
+                        {"cv::omnidir", "LENSMODEL_OMNIDIR_MEI"}};
+  constexpr int kPairs = 4, kRepeats = 3;
+  double peer_s[kPairs], ours_s1[kPairs];
+  SingleSolve ours_one[kPairs];
+  std::fill(peer_s, peer_s + kPairs, std::numeric_limits<double>::infinity());
+  std::fill(ours_s1, ours_s1 + kPairs, std::numeric_limits<double>::infinity());
+  for (int rep = 0; rep < kRepeats; ++rep) {
+    const auto again = rep == 0 ? peers : calibrate_opencv_alone(corners, board, width, height);
+    for (int k = 0; k < kPairs; ++k) {
+      for (const PeerCalibration& p : again)
+        // The full-set solve counts even when a half failed (lensmodel set, cross-validation not).
+        if (p.name == pairs[k].peer && !p.lensmodel.empty()) peer_s[k] = std::min(peer_s[k], p.seconds);
+      const SingleSolve one = solve_model_once(corners, board, width, height, pairs[k].ours);
+      if (one.ok) ours_s1[k] = std::min(ours_s1[k], one.seconds);
+      if (rep == 0) ours_one[k] = one;
+    }
+  }
+  say(out, "\nspeed, one solve on every corner (fastest of {}), and the whole --model command\n", kRepeats);
+  say(out, "{:<26} {:<30} {:>9} {:>9} {:>9} {:>9} {:>7} {:>10}\n", "our model", "OpenCV peer", "ours RMS", "cv RMS",
+      "ours 1 s", "cv s", "ratio", "--model s");
+  nlohmann::json speed = nlohmann::json::array();
+  std::string speed_csv = "model,peer,ours_rms_px,peer_rms_px,ours_one_solve_s,peer_s,ratio,model_command_s\n";
+  for (int k = 0; k < kPairs; ++k) {
+    const PeerCalibration* peer = nullptr;
+    for (const PeerCalibration& p : peers)
+      if (p.name == pairs[k].peer) peer = &p;
+    const double peer_rms =
+        peer && !peer->lensmodel.empty() ? peer->rms_px : std::numeric_limits<double>::quiet_NaN();
+    CalibrateOptions forced;
+    forced.model = pairs[k].ours;
+    double command_s = std::numeric_limits<double>::quiet_NaN();
+    try {
+      const auto tc = std::chrono::steady_clock::now();
+      calibrate(corners, board, width, height, forced);
+      command_s = seconds_since(tc);
+    } catch (const InputError&) {
+    }
+    const double ours_rms = ours_one[k].ok ? ours_one[k].rms_px : std::numeric_limits<double>::quiet_NaN();
+    const double ratio = std::isfinite(ours_s1[k]) && std::isfinite(peer_s[k]) ? ours_s1[k] / peer_s[k]
+                                                                                 : std::numeric_limits<double>::quiet_NaN();
+    // "failed" where that solver found no model on the full set.
+    auto cell = [](double x, int width, int digits) {
+      return std::isfinite(x) ? fmt::format("{:>{}.{}f}", x, width, digits) : fmt::format("{:>{}}", "failed", width);
+    };
+    say(out, "{:<26} {:<30} {} {} {} {} {} {}\n", pairs[k].ours, pairs[k].peer, cell(ours_rms, 9, 3),
+        cell(peer_rms, 9, 3), cell(ours_s1[k], 9, 3), cell(peer_s[k], 9, 3),
+        std::isfinite(ratio) ? fmt::format("{:>7.2f}", ratio) : fmt::format("{:>7}", "-"), cell(command_s, 10, 2));
+    speed_csv += fmt::format("{},{},{},{},{},{},{},{}\n", pairs[k].ours, pairs[k].peer, ours_rms, peer_rms, ours_s1[k],
+                             peer_s[k], ratio, command_s);
+    speed.push_back({{"model", pairs[k].ours}, {"peer", pairs[k].peer}, {"ours_rms_px", num(ours_rms)},
+                     {"peer_rms_px", num(peer_rms)}, {"ours_one_solve_seconds", num(ours_s1[k])},
+                     {"peer_seconds", num(peer_s[k])}, {"ratio", num(ratio)}, {"model_command_seconds", num(command_s)}});
+  }
+  write_file_atomically((fs::path(args.output_dir) / "calib_speed.csv").string(), speed_csv);
+  *speed_out = speed;
   return rows;
 }
 
@@ -132,6 +202,7 @@ nlohmann::json sweep(const EvalCalibArgs& args, const Output& out) {
   struct Row {
     Config c;
     double ours = 0, ours_kb = 0, cv_fisheye = 0, cv_rational = 0, ours_s = 0, ours_kb_s = 0, cv_fisheye_s = 0;
+    double ours_kb_one_s = 0;  // one solve (solve_model_once), against cv_fisheye_s
   };
   std::vector<Row> rows;
   Progress progress("calibration sweep", configs.size() * draws, out.progress);
@@ -167,6 +238,9 @@ nlohmann::json sweep(const EvalCalibArgs& args, const Output& out) {
         ++ok[1];
       } catch (const InputError&) {
       }
+      // One KB solve of ours right next to cv::fisheye's, on the same corners.
+      const SingleSolve one = solve_model_once(views, board, truth.width, truth.height, "LENSMODEL_KANNALA_BRANDT");
+      r.ours_kb_one_s += one.seconds;
       for (const PeerCalibration& p : calibrate_opencv_alone(views, board, truth.width, truth.height, 16)) {
         if (!p.ok) continue;
         if (p.name == "cv::fisheye") {
@@ -187,24 +261,26 @@ nlohmann::json sweep(const EvalCalibArgs& args, const Output& out) {
     r.cv_rational = finish(r.cv_rational, ok[3]);
     r.ours_s /= std::max(1, ok[0]);
     r.ours_kb_s /= std::max(1, ok[1]);
+    r.ours_kb_one_s /= draws;
     r.cv_fisheye_s /= std::max(1, ok[2]);
     rows.push_back(r);
   }
   progress.finish();
-  std::string csv = "views,noise_px,max_corner_deg,ours_selected_px,ours_kb_px,cv_fisheye_px,cv_rational_px,ours_s,ours_kb_s,cv_fisheye_s\n";
-  say(out, "{:>5} {:>6} {:>7} {:>14} {:>10} {:>14} {:>14} {:>8} {:>8} {:>8}\n", "views", "noise", "field", "ours (chosen)",
-      "ours KB", "cv::fisheye", "cv rational", "ours s", "KB s", "cv s");
+  std::string csv = "views,noise_px,max_corner_deg,ours_selected_px,ours_kb_px,cv_fisheye_px,cv_rational_px,ours_s,ours_kb_s,ours_kb_one_solve_s,cv_fisheye_s\n";
+  say(out, "{:>5} {:>6} {:>7} {:>14} {:>10} {:>14} {:>14} {:>8} {:>10} {:>9} {:>8}\n", "views", "noise", "field",
+      "ours (chosen)", "ours KB", "cv::fisheye", "cv rational", "ours s", "KB cmd s", "KB 1 s", "cv s");
   nlohmann::json j = nlohmann::json::array();
   for (const Row& r : rows) {
-    say(out, "{:>5} {:>6.2f} {:>7.0f} {:>14.3f} {:>10.3f} {:>14.3f} {:>14.3f} {:>8.2f} {:>8.3f} {:>8.3f}\n", r.c.views,
-        r.c.noise, r.c.max_corner_deg, r.ours, r.ours_kb, r.cv_fisheye, r.cv_rational, r.ours_s, r.ours_kb_s,
-        r.cv_fisheye_s);
-    csv += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", r.c.views, r.c.noise, r.c.max_corner_deg, r.ours, r.ours_kb,
-                       r.cv_fisheye, r.cv_rational, r.ours_s, r.ours_kb_s, r.cv_fisheye_s);
+    say(out, "{:>5} {:>6.2f} {:>7.0f} {:>14.3f} {:>10.3f} {:>14.3f} {:>14.3f} {:>8.2f} {:>10.3f} {:>9.3f} {:>8.3f}\n",
+        r.c.views, r.c.noise, r.c.max_corner_deg, r.ours, r.ours_kb, r.cv_fisheye, r.cv_rational, r.ours_s,
+        r.ours_kb_s, r.ours_kb_one_s, r.cv_fisheye_s);
+    csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", r.c.views, r.c.noise, r.c.max_corner_deg, r.ours, r.ours_kb,
+                       r.cv_fisheye, r.cv_rational, r.ours_s, r.ours_kb_s, r.ours_kb_one_s, r.cv_fisheye_s);
     j.push_back({{"views", r.c.views}, {"noise_px", r.c.noise}, {"max_corner_deg", r.c.max_corner_deg},
                  {"ours_selected_px", num(r.ours)},
                  {"ours_kb_px", num(r.ours_kb)}, {"cv_fisheye_px", num(r.cv_fisheye)},
                  {"cv_rational_px", num(r.cv_rational)}, {"ours_seconds", r.ours_s}, {"ours_kb_seconds", r.ours_kb_s},
+                 {"ours_kb_one_solve_seconds", r.ours_kb_one_s},
                  {"cv_fisheye_seconds", r.cv_fisheye_s}});
   }
   write_file_atomically((fs::path(args.output_dir) / "calib_sweep.csv").string(), csv);
@@ -257,7 +333,11 @@ int run_eval_calib(const EvalCalibArgs& args, const Output& out) {
   fs::create_directories(args.output_dir, ec);
   if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
   nlohmann::json report = {{"output", args.output_dir}};
-  if (!args.images.empty()) report["compare"] = compare_on_images(args, BoardSpec{cols, rows, args.square_mm}, out);
+  if (!args.images.empty()) {
+    nlohmann::json speed;
+    report["compare"] = compare_on_images(args, BoardSpec{cols, rows, args.square_mm}, out, &speed);
+    report["speed"] = speed;
+  }
   if (args.sweep) report["sweep"] = sweep(args, out);
   emit_json(out, report);
   return 0;

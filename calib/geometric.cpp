@@ -877,6 +877,9 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   if (views.size() < 4)
     throw InputError("calibrate: " + std::to_string(views.size()) + " views with a board, need at least 4");
 
+  auto report = [&](const char* stage, size_t done, size_t total) {
+    if (options.progress) options.progress(stage, int(done), int(total));
+  };
   CalibrationResult res;
   res.views.resize(corners_per_view.size());
   for (size_t i = 0; i < corners_per_view.size(); ++i) {
@@ -917,6 +920,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     return warm_refit(pr, now, ref, *last, poses);
   };
   for (int round = 0; round < std::max(1, options.outlier_rounds); ++round) {
+    report("outlier rejection", size_t(round), size_t(std::max(1, options.outlier_rounds)));
     Fitter fitter(pr, used_subset());
     if (last && last->ok && ref == kKB) fitter.adopt(ref, warm_from_last(fitter.views()));
     if (ref.empty()) {
@@ -1002,6 +1006,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
       full.adopt(ref, warm_from_last(used));
   }
   for (const auto& name : candidates) {
+    report("candidates", res.table.size(), candidates.size());
     ModelCandidate c;
     c.name = name;
     const Fit& f = full.get(name);
@@ -1050,6 +1055,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   bool repeated = false;
   if (splits.size() > 1)
     for (auto& c : res.table) {
+      report("repeated splits", size_t(&c - res.table.data()), res.table.size());
       if (!c.ok || c.cross_validation_px > options.fit_max_cross_validation_px ||
           c.cross_validation_px > options.selection_screen_factor * best_odd_even->cross_validation_px +
                                       options.selection_floor_px)
@@ -1093,6 +1099,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     Fitter* halves[2] = {&fa, &fb};
     std::vector<double> cvs[2];
     for (size_t i = 0; i < used.size(); ++i) {
+      report("noise jackknife", i, used.size());
       const int h = int(i % 2), pos = int(i / 2);
       Subset rest;
       for (size_t j = 0; j < half[h].size(); ++j)
@@ -1218,6 +1225,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     std::vector<double> lev;
     std::vector<int> idx;
     for (size_t i = 0; i < views.size(); ++i) {
+      report("leverage", i, views.size());
       if (!view_used[i]) continue;
       const Subset loo = used_subset(int(i));
       std::vector<Pose> poses;
@@ -1292,6 +1300,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
       const size_t stride = std::max<size_t>(1, cv_pixels.size() / 400);
       for (size_t k = 0; k < cv_pixels.size(); k += stride) coarse.push_back(cv_pixels[k]);
       for (ModelCandidate& c : res.table) {
+        report("uncertainty", size_t(&c - res.table.data()), res.table.size());
         if (!c.ok) continue;
         const Fit& f = full.get(c.name);
         if (!f.ok) continue;
@@ -1319,6 +1328,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
       u.cv_repeated_px = finite.empty() ? std::numeric_limits<double>::quiet_NaN() : rms_over_splits(finite);
     }
   }
+  report("done", 1, 1);
   return res;
 }
 

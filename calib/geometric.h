@@ -19,6 +19,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -106,6 +107,10 @@ struct CalibrateOptions {
   // `leverage` (its leave-one-out fits).
   bool uncertainty = true;
   int uncertainty_nx = 48, uncertainty_ny = 36;
+  // Called as the solve goes, from the calling thread: the stage ("outlier rejection",
+  // "candidates", "repeated splits", "noise jackknife", "leverage", "uncertainty"), steps
+  // done and steps in that stage. Empty: nothing is reported.
+  std::function<void(const std::string& stage, int done, int total)> progress;
 };
 
 // The chosen model's projection uncertainty (rays at infinity) and what each estimate

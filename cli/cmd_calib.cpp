@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <memory>
 
 #include "calib/board_detect.h"
 #include "calib/calibration_report.h"
@@ -103,6 +104,27 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   CalibrateOptions co;
   co.model = args.model;
   co.use_mrcal = !args.no_mrcal;
+  // One bar per stage of the solve (a 60-view solve takes most of a minute).
+  std::unique_ptr<Progress> solve_bar;
+  std::string solve_stage;
+  int solve_done = 0, solve_total = 0;
+  co.progress = [&](const std::string& stage, int done, int total) {
+    if (stage != solve_stage) {  // the library reports a step as it starts: close the last one
+      if (solve_bar) {
+        if (solve_total > solve_done) solve_bar->advance(uint64_t(solve_total - solve_done));
+        solve_bar->finish();
+      }
+      solve_bar.reset();
+      solve_stage = stage;
+      solve_done = 0;
+      solve_total = std::max(1, total);
+      if (stage != "done") solve_bar = std::make_unique<Progress>("solve: " + stage, uint64_t(std::max(1, total)), out.progress);
+    }
+    if (solve_bar && done > solve_done) {
+      solve_bar->advance(uint64_t(done - solve_done));
+      solve_done = done;
+    }
+  };
   const auto t1 = std::chrono::steady_clock::now();
   CalibrationResult r = calibrate(corners, board, width, height, co);
   // Influential views (a few close-ups can move the whole answer): on request, the worst

@@ -201,6 +201,30 @@ TEST(GeometricCalibration, CrossValidationOfNoiseFreeCornersIsZero) {
   EXPECT_LT(r.heldout_rms_px, 0.01);
 }
 
+// The progress callback walks the documented stages in order, each step count within its
+// stage's total and never going back, and ends with "done".
+TEST(GeometricCalibration, ReportsProgressStageByStage) {
+  const CameraModel truth = kb190();
+  const Corners views = make_views(truth, kBoard, 8, 80, 600, 0.1, 3);
+  CalibrateOptions opt;
+  opt.candidates = {"LENSMODEL_STEREOGRAPHIC", "LENSMODEL_KANNALA_BRANDT"};
+  std::vector<std::string> stages;
+  int last_done = -1;
+  opt.progress = [&](const std::string& stage, int done, int total) {
+    if (stages.empty() || stages.back() != stage) {
+      stages.push_back(stage);
+      last_done = -1;
+    }
+    EXPECT_GE(done, last_done) << stage;
+    EXPECT_LE(done, total) << stage;
+    last_done = done;
+  };
+  calibrate(views, kBoard, truth.width, truth.height, opt);
+  const std::vector<std::string> expected = {"outlier rejection", "candidates", "repeated splits", "noise jackknife",
+                                             "leverage", "uncertainty", "done"};
+  EXPECT_EQ(stages, expected);
+}
+
 TEST(GeometricCalibration, TwoRunsGiveBitIdenticalIntrinsics) {
   const CameraModel truth = kb190();
   const Corners views = make_views(truth, kBoard, 12, 80, 600, 0.1, 5);

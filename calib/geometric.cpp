@@ -931,17 +931,32 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
             break;
           }
       } else {
+        Subset sample = fitter.views();
+        const size_t cap = size_t(std::max(4, options.reference_views));
+        if (sample.size() > cap) {
+          Subset spaced;
+          for (size_t k = 0; k < cap; ++k) spaced.push_back(sample[k * sample.size() / cap]);
+          sample = spaced;
+        }
+        Fitter sampled(pr, sample);
+        Fitter& chooser = sample.size() == fitter.views().size() ? fitter : sampled;
         double best_rms = std::numeric_limits<double>::infinity();
         for (const char* r : {kKB, kMei, kOpenCV8}) {
-          const Fit& g = fitter.get(r);
+          const Fit& g = chooser.get(r);
           if (!g.ok) continue;
-          const double e = fit_rms(pr, g, fitter.views());
+          const double e = fit_rms(pr, g, sample);
           if (e < best_rms) {
             best_rms = e;
             ref = r;
           }
         }
-        if (ref.empty() && fitter.get(kPinhole).ok) ref = kPinhole;
+        if (!ref.empty() && !fitter.get(ref).ok) ref.clear();  // fits the sample, not all views
+        if (ref.empty())
+          for (const char* r : {kKB, kMei, kOpenCV8, kPinhole})
+            if (fitter.get(r).ok) {
+              ref = r;
+              break;
+            }
       }
     }
     if (ref.empty() || !fitter.get(ref).ok) throw InputError("calibrate: no model could be fitted to the corners");

@@ -301,16 +301,31 @@ UncertaintyGrid linear_uncertainty_rotation_fitted(const LinearCovariance& cov, 
   return g;
 }
 
-std::vector<std::array<double, 2>> projection_difference_vectors(const CameraModel& a, const CameraModel& b,
-                                                                 const std::vector<std::array<double, 2>>& fit_pixels,
-                                                                 const std::vector<std::array<double, 2>>& pixels,
-                                                                 bool fit_rotation) {
+namespace {
+
+// b's rays at fit_pixels (nullopt where b has none): the same for every model compared
+// with b, so the jackknife computes them once instead of once per leave-one-out model.
+std::vector<std::optional<Vec3>> rays_of(const CameraModel& b, const std::vector<std::array<double, 2>>& pixels) {
+  std::vector<std::optional<Vec3>> out;
+  out.reserve(pixels.size());
+  for (const auto& q : pixels) out.push_back(unproject(b, {q[0], q[1]}));
+  return out;
+}
+
+// projection_difference_vectors with b's rays at fit_pixels given (empty: not fitting the rotation).
+std::vector<std::array<double, 2>> difference_vectors(const CameraModel& a, const CameraModel& b,
+                                                      const std::vector<std::array<double, 2>>& fit_pixels,
+                                                      const std::vector<std::optional<Vec3>>& b_fit_rays,
+                                                      const std::vector<std::array<double, 2>>& pixels,
+                                                      bool fit_rotation) {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   if (fit_rotation) {
     Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
     int count = 0;
-    for (const auto& q : fit_pixels) {
-      const auto da = unproject(a, {q[0], q[1]}), db = unproject(b, {q[0], q[1]});
+    for (size_t i = 0; i < fit_pixels.size(); ++i) {
+      const auto& q = fit_pixels[i];
+      const auto da = unproject(a, {q[0], q[1]});
+      const auto& db = b_fit_rays[i];
       if (!da || !db) continue;
       H += Eigen::Vector3d(da->x, da->y, da->z) * Eigen::Vector3d(db->x, db->y, db->z).transpose();
       ++count;
@@ -335,6 +350,16 @@ std::vector<std::array<double, 2>> projection_difference_vectors(const CameraMod
   return out;
 }
 
+}  // namespace
+
+std::vector<std::array<double, 2>> projection_difference_vectors(const CameraModel& a, const CameraModel& b,
+                                                                 const std::vector<std::array<double, 2>>& fit_pixels,
+                                                                 const std::vector<std::array<double, 2>>& pixels,
+                                                                 bool fit_rotation) {
+  return difference_vectors(a, b, fit_pixels, fit_rotation ? rays_of(b, fit_pixels) : std::vector<std::optional<Vec3>>{},
+                            pixels, fit_rotation);
+}
+
 UncertaintyGrid jackknife_uncertainty(const CameraModel& full, const std::vector<CameraModel>& leave_one_out,
                                       const std::vector<std::array<double, 2>>& fit_pixels,
                                       const std::vector<std::array<double, 2>>& pixels, int nx, int ny) {
@@ -342,7 +367,8 @@ UncertaintyGrid jackknife_uncertainty(const CameraModel& full, const std::vector
   const size_t n = leave_one_out.size();
   if (n < 2) return g;
   std::vector<std::vector<std::array<double, 2>>> d;
-  for (const CameraModel& m : leave_one_out) d.push_back(projection_difference_vectors(m, full, fit_pixels, pixels));
+  const auto full_rays = rays_of(full, fit_pixels);
+  for (const CameraModel& m : leave_one_out) d.push_back(difference_vectors(m, full, fit_pixels, full_rays, pixels, true));
   for (size_t p = 0; p < pixels.size(); ++p) {
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     bool ok = true;

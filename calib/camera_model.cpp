@@ -397,7 +397,11 @@ std::optional<Vec3> unproject(const CameraModel& model, Pixel pixel) {
   mrcal_point2_t q;
   q.x = pixel.x;
   q.y = pixel.y;
+  // NaN unless mrcal writes it: for some pixels of an OpenCV-model lens its iterative
+  // unprojection returns success without writing the ray (valgrind: an uninitialised read),
+  // which made two identical calibrations differ.
   mrcal_point3_t v;
+  v.x = v.y = v.z = std::numeric_limits<double>::quiet_NaN();
   if (!mrcal_unproject(&v, &q, 1, &lm, model.intrinsics.data())) return std::nullopt;
   const Vec3 r{v.x, v.y, v.z};
   const double n = length(r);

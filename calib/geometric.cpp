@@ -493,11 +493,21 @@ class Fitter {
   }
 
  private:
-  Fit polish(const Fit& seed, const std::string& lensmodel, bool reg) {
-    if (!seed.ok || !pr_.options.use_mrcal) return seed;
+  Fit polish(const Fit& raw, const std::string& lensmodel, bool reg) {
+    if (!raw.ok || !pr_.options.use_mrcal) return raw;
+    // cv::calibrateCamera is not repeatable: the same call on the same corners in one
+    // process differs in the last digits now and then (measured: 1 of 5 calls). mrcal's
+    // polish is, so it starts from the seed rounded to well above that noise (1e-3 px,
+    // 1e-5 per distortion coefficient, 1e-6 rad, 1e-3 mm) and no longer carries it.
+    Fit seed = raw;
+    auto round_to = [](double x, double q) { return std::nearbyint(x / q) * q; };
+    for (size_t i = 0; i < seed.model.intrinsics.size(); ++i)
+      seed.model.intrinsics[i] = round_to(seed.model.intrinsics[i], i < 4 ? 1e-3 : 1e-5);
+    for (Pose& p : seed.poses)
+      for (int k = 0; k < 6; ++k) p[k] = round_to(p[k], k < 3 ? 1e-6 : 1e-3);
     Fit f = fit_mrcal(pr_, views_, lensmodel, seed.model.intrinsics, seed.poses, reg);
     // Keep OpenCV's solution when mrcal fails or does not improve it.
-    if (!f.ok || fit_rms(pr_, f, views_) > fit_rms(pr_, seed, views_)) return seed;
+    if (!f.ok || fit_rms(pr_, f, views_) > fit_rms(pr_, raw, views_)) return raw;
     return f;
   }
 

@@ -241,11 +241,11 @@ TEST(GeometricCalibration, TwoRunsGiveBitIdenticalIntrinsics) {
   for (size_t i = 0; i < a.table.size(); ++i) {
     const ModelCandidate &x = a.table[i], &y = b.table[i];
     EXPECT_EQ(x.ok, y.ok) << x.name;
-    if (x.name == "LENSMODEL_PINHOLE" || x.name == "plumb_bob" || x.name == "LENSMODEL_OPENCV8") {
-      // Seeded by cv::calibrateCamera and polished by mrcal: these still differ in the last
-      // digits between calls (source not found: no uninitialised read is left under
-      // valgrind, and neither OpenCV's threads nor its RNG are it). Not bit-identical, but
-      // to 1e-6 relative.
+    if (x.name == "LENSMODEL_OPENCV8") {
+      // Seeded by cv::calibrateCamera's rational model, which is not repeatable in one
+      // process (its RMS moved by 1e-5 relative between identical calls) and further than
+      // the rounding before mrcal's polish absorbs (pinhole and plumb_bob are now
+      // bit-identical). Not bit-identical, but to 1e-6 relative.
       ASSERT_EQ(x.model.intrinsics.size(), y.model.intrinsics.size());
       for (size_t k = 0; k < x.model.intrinsics.size(); ++k)
         EXPECT_NEAR(x.model.intrinsics[k], y.model.intrinsics[k], 1e-6 * (1 + std::abs(x.model.intrinsics[k]))) << x.name;

@@ -1361,20 +1361,32 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
 
 namespace lp {
 
+namespace {
+
+// The views that have a board, every corner an inlier (the peers' and one-solve paths use
+// every corner); `who` names the caller in the errors.
+std::vector<View> views_with_all_corners(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                                         const BoardSpec& board, const std::string& who) {
+  std::vector<View> views;
+  for (size_t i = 0; i < corners_per_view.size(); ++i)
+    if (!corners_per_view[i].empty()) {
+      if (int(corners_per_view[i].size()) != board.cols * board.rows)
+        throw InputError(who + ": view " + std::to_string(i) + " has the wrong number of corners");
+      views.push_back({int(i), corners_per_view[i], std::vector<char>(corners_per_view[i].size(), 1)});
+    }
+  if (views.size() < 4) throw InputError(who + ": need at least 4 views with a board");
+  return views;
+}
+
+}  // namespace
+
 SingleSolve solve_model_once(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
                              const BoardSpec& board, int width, int height, const std::string& model,
                              const CalibrateOptions& options) {
   if (std::find(all_candidates().begin(), all_candidates().end(), model) == all_candidates().end())
     throw InputError("solve_model_once: unknown model '" + model + "'");
   Problem pr{board, width, height, options};
-  std::vector<View> views;
-  for (size_t i = 0; i < corners_per_view.size(); ++i)
-    if (!corners_per_view[i].empty()) {
-      if (int(corners_per_view[i].size()) != board.cols * board.rows)
-        throw InputError("solve_model_once: view " + std::to_string(i) + " has the wrong number of corners");
-      views.push_back({int(i), corners_per_view[i], std::vector<char>(corners_per_view[i].size(), 1)});
-    }
-  if (views.size() < 4) throw InputError("solve_model_once: need at least 4 views with a board");
+  const std::vector<View> views = views_with_all_corners(corners_per_view, board, "solve_model_once");
   Subset all;
   for (const View& v : views) all.push_back(&v);
   SingleSolve out;
@@ -1395,14 +1407,7 @@ std::vector<PeerCalibration> calibrate_opencv_alone(const std::vector<std::vecto
   CalibrateOptions o;
   o.diff_step_px = diff_step_px;
   Problem pr{board, width, height, o};
-  std::vector<View> views;
-  for (size_t i = 0; i < corners_per_view.size(); ++i)
-    if (!corners_per_view[i].empty()) {
-      if (int(corners_per_view[i].size()) != board.cols * board.rows)
-        throw InputError("calibrate_opencv_alone: view " + std::to_string(i) + " has the wrong number of corners");
-      views.push_back({int(i), corners_per_view[i], std::vector<char>(corners_per_view[i].size(), 1)});
-    }
-  if (views.size() < 4) throw InputError("calibrate_opencv_alone: need at least 4 views with a board");
+  const std::vector<View> views = views_with_all_corners(corners_per_view, board, "calibrate_opencv_alone");
   Subset all, half[2];
   for (size_t i = 0; i < views.size(); ++i) {
     all.push_back(&views[i]);

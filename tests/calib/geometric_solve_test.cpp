@@ -7,18 +7,12 @@
 
 #include "calib/geometric.h"
 #include "calib/synthetic_boards.h"
+#include "tests/calib/test_cameras.h"
 
 namespace lp {
 namespace {
 
-CameraModel kb190() {
-  CameraModel m;
-  m.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-  m.intrinsics = {330, 331, 641.3, 478.6, 0.02, -0.01, 0.003, -0.0005};
-  m.width = 1280;
-  m.height = 960;
-  return m;
-}
+using calib_test::kb190;
 
 const BoardSpec kBoard{10, 7, 40};
 

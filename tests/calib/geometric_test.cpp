@@ -7,23 +7,15 @@
 #include <random>
 
 #include "calib/synthetic_boards.h"
+#include "tests/calib/test_cameras.h"
 #include "core/error.h"
 
 namespace lp {
 namespace {
 
-using Corners = std::vector<std::vector<std::array<double, 2>>>;
+using calib_test::kb190;
 
-// 190 deg Kannala-Brandt fisheye on a 1280x960 sensor: the 95 deg ray lands 554 px from
-// the centre (a circle cropped at top and bottom).
-CameraModel kb190() {
-  CameraModel m;
-  m.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-  m.intrinsics = {330, 331, 641.3, 478.6, 0.02, -0.01, 0.003, -0.0005};
-  m.width = 1280;
-  m.height = 960;
-  return m;
-}
+using Corners = std::vector<std::vector<std::array<double, 2>>>;
 
 CameraModel narrow(double k1) {
   CameraModel m;

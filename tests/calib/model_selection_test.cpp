@@ -12,17 +12,16 @@
 
 #include "calib/geometric.h"
 #include "calib/synthetic_boards.h"
+#include "tests/calib/test_cameras.h"
 
 namespace lp {
 namespace {
 
+using calib_test::kb190;
+
 using Corners = std::vector<std::vector<std::array<double, 2>>>;
 
 const BoardSpec kBoard{10, 7, 40};
-
-CameraModel kb190() {  // as geometric_test.cpp: a 190 deg fisheye on 1280x960
-  return {"LENSMODEL_KANNALA_BRANDT", {330, 331, 641.3, 478.6, 0.02, -0.01, 0.003, -0.0005}, 1280, 960};
-}
 
 CameraModel narrow(double k1) {  // pinhole (k1 = 0) or plumb_bob, 71 deg across
   CameraModel m{k1 == 0 ? "LENSMODEL_PINHOLE" : "LENSMODEL_OPENCV5", {900, 902, 639.2, 481.7}, 1280, 960};

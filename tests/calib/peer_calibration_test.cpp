@@ -6,12 +6,15 @@
 
 #include "calib/geometric.h"
 #include "calib/synthetic_boards.h"
+#include "tests/calib/test_cameras.h"
 
 namespace lp {
 namespace {
 
+using calib_test::kb190;
+
 TEST(PeerCalibration, OpenCVAloneOnAFisheyeWithinNinetyDegrees) {
-  const CameraModel truth{"LENSMODEL_KANNALA_BRANDT", {330, 331, 641.3, 478.6, 0.02, -0.01, 0.003, -0.0005}, 1280, 960};
+  const CameraModel truth = kb190();
   const BoardSpec board{10, 7, 40};
   const auto views = project_board_views(truth, board, 12, 70, 600, 0.1, 7, 88);
   ASSERT_EQ(views.size(), 12u);

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/calib/test_cameras.h"
+
 #include <cmath>
 #include <random>
 
@@ -13,16 +15,9 @@
 namespace lp {
 namespace {
 
-using Corners = std::vector<std::vector<std::array<double, 2>>>;
+using calib_test::kb190;
 
-CameraModel kb190() {
-  CameraModel m;
-  m.lensmodel = "LENSMODEL_KANNALA_BRANDT";
-  m.intrinsics = {330, 331, 641.3, 478.6, 0.02, -0.01, 0.003, -0.0005};
-  m.width = 1280;
-  m.height = 960;
-  return m;
-}
+using Corners = std::vector<std::vector<std::array<double, 2>>>;
 
 Vec3 rotate(Vec3 axis, double angle, Vec3 v) {
   const double c = std::cos(angle), s = std::sin(angle);

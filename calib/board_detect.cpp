@@ -263,7 +263,8 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
         std::snprintf(at, sizeof at, "@%.2f", std::min(sx, sy));
         tried += at;
       }
-      if (st.flags & cv::CALIB_CB_ACCURACY) tried += " accuracy";
+      if (st.kind == Kind::sb && (st.flags & cv::CALIB_CB_ACCURACY)) tried += " accuracy";
+      if (st.kind == Kind::classic && (st.flags & cv::CALIB_CB_ADAPTIVE_THRESH)) tried += " adaptive";
       // SB without CALIB_CB_ACCURACY: that costs ~4x the time (an internal upsampled pass),
       // cornerSubPix at full resolution gives the precision, and on the real sets it found
       // fewer views (Ladybug 2 and 3 only without it).

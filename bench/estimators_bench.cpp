@@ -8,9 +8,9 @@
 #include <map>
 #include <memory>
 
-#include "core/synthetic_scene.h"
-#include "sampling/estimators.h"
-#include "sampling/smc.h"
+#include "eval/synthetic_scene.h"
+#include "render/estimators.h"
+#include "render/smc.h"
 
 namespace {
 

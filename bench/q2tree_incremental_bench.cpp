@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "sampling/q2tree.h"
 #include "sampling/sampler.h"
 

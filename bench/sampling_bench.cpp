@@ -9,7 +9,7 @@
 #include <map>
 #include <vector>
 
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "sampling/sampler.h"
 
 namespace {

@@ -6,8 +6,8 @@
 #include <map>
 #include <memory>
 
-#include "core/synthetic_scene.h"
-#include "sampling/reference_shader.h"
+#include "eval/synthetic_scene.h"
+#include "render/reference_shader.h"
 #include "sampling/sampler.h"
 
 namespace {

@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "sampling/frame_pipeline.h"
 
 namespace {

@@ -14,7 +14,7 @@
 #include "calib/photometric.h"
 #include "cli/commands.h"
 #include "cli/report.h"
-#include "cli/svg_chart.h"
+#include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
 #include "core/image_io.h"

@@ -17,15 +17,15 @@
 
 #include "cli/commands.h"
 #include "cli/report.h"
-#include "cli/svg_chart.h"
+#include "eval/svg_chart.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "core/resample.h"
-#include "core/synthetic_scene.h"
-#include "core/synthetic_sequence.h"
-#include "sampling/estimators.h"
-#include "sampling/smc.h"
+#include "eval/synthetic_scene.h"
+#include "eval/synthetic_sequence.h"
+#include "render/estimators.h"
+#include "render/smc.h"
 
 namespace lp::cli {
 

@@ -11,12 +11,12 @@
 
 #include "cli/commands.h"
 #include "cli/report.h"
-#include "cli/svg_chart.h"
+#include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/progress.h"
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "sampling/sampler.h"
 
 namespace lp::cli {

@@ -14,7 +14,7 @@
 #include "calib/synthetic_boards.h"
 #include "cli/commands.h"
 #include "cli/report.h"
-#include "cli/svg_chart.h"
+#include "eval/svg_chart.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/progress.h"

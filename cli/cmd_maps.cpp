@@ -14,7 +14,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/resample.h"
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "core/tonemap.h"
 #include "probe/cube_map.h"
 

@@ -13,7 +13,7 @@
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "core/resample.h"
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "calib/colour_match.h"
 #include "hdr/bracket.h"
 #include "probe/ball_register.h"

@@ -18,15 +18,15 @@
 
 #include "cli/commands.h"
 #include "cli/report.h"
-#include "cli/svg_chart.h"
+#include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/progress.h"
-#include "core/synthetic_scene.h"
-#include "sampling/reference_shader.h"
+#include "eval/synthetic_scene.h"
+#include "render/reference_shader.h"
 #include "sampling/sampler.h"
-#include "sampling/shading_tables.h"
+#include "render/shading_tables.h"
 
 namespace lp::cli {
 namespace {

@@ -9,15 +9,15 @@
 
 #include "cli/commands.h"
 #include "cli/report.h"
-#include "cli/svg_chart.h"
+#include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "core/resample.h"
-#include "core/synthetic_scene.h"
-#include "core/synthetic_sequence.h"
-#include "core/temporal_accuracy.h"
+#include "eval/synthetic_scene.h"
+#include "eval/synthetic_sequence.h"
+#include "eval/temporal_accuracy.h"
 #include "sampling/frame_pipeline.h"
 
 namespace lp::cli {

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "hdr/hdr_accuracy.h"
 #include "hdr/merge.h"
 #include "hdr/synthetic_bracket.h"

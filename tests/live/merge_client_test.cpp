@@ -9,7 +9,7 @@
 #include <cmath>
 #include "core/error.h"
 
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "live/light_server.h"
 #include "live/merge_client.h"
 #include "sampling/sampler.h"

@@ -7,7 +7,7 @@
 #include <mutex>
 #include <thread>
 
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "live/pipeline.h"
 
 namespace lp {

@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "probe/camera_unwrap.h"
 #include "probe/fisheye.h"
 #include "probe/unwrap_accuracy.h"

@@ -6,7 +6,7 @@
 
 #include "core/accuracy.h"
 #include "core/error.h"
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "sampling/auto_count.h"
 
 namespace lp {

@@ -5,9 +5,9 @@
 
 #include "core/accuracy.h"
 #include "core/error.h"
-#include "core/synthetic_scene.h"
-#include "core/synthetic_sequence.h"
-#include "core/temporal_accuracy.h"
+#include "eval/synthetic_scene.h"
+#include "eval/synthetic_sequence.h"
+#include "eval/temporal_accuracy.h"
 #include "sampling/frame_pipeline.h"
 
 namespace lp {

@@ -13,7 +13,7 @@
 #include "core/envmap.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "core/synthetic_scene.h"
+#include "eval/synthetic_scene.h"
 #include "sampling/sampler.h"
 
 namespace lp {

@@ -212,132 +212,35 @@ void canonicalize_corner_order(Corners& corners, int cols, int rows) {
   corners = std::move(out);
 }
 
-BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
-                            const DetectOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  if (image.width <= 0 || image.height <= 0 ||
-      image.rgb.size() != static_cast<size_t>(image.width) * image.height * 3)
-    throw InputError("detect_board: empty or inconsistent image");
-  if (board.cols < 3 || board.rows < 3)
-    throw InputError("detect_board: board needs at least 3x3 inner corners, got " +
-                     std::to_string(board.cols) + "x" + std::to_string(board.rows));
+namespace {
 
-  BoardDetection result;
-  const cv::Mat gray = to_gray8(image);
-  cv::Mat equalised;
-  std::vector<cv::Point2f> pts;
-  std::string tried;
+enum class Kind { classic, sb, sb_rectified, mrgingham };
+struct Stage {
+  Kind kind;
+  bool downscaled;  // on the copy at `scale` (SB, classic)
+  int flags;        // of the OpenCV finder (SB, SB on rectified views, classic)
+};
 
-  // SB and the early classic attempt run on a copy downscaled by `scale`; corners are mapped
-  // back to full resolution and refined there, the move limit scaled by 1 / scale (the
-  // detector's error grows with the downscaling).
-  const double scale = sb_scale(image.width, image.height, board, options);
-  cv::Point2d circle_centre;
-  double circle_radius = 0;
-  const bool fisheye_circle = options.rectified && options.sb && find_image_circle(gray, circle_centre, circle_radius);
+std::string label(const Stage& st) {
+  return st.kind == Kind::classic     ? "classic"
+         : st.kind == Kind::mrgingham ? "mrgingham"
+         : st.kind == Kind::sb        ? "sb"
+                                      : "sb-rectified";
+}
 
-  enum class Kind { classic, sb, sb_rectified, mrgingham };
-  struct Stage {
-    Kind kind;
-    bool downscaled;  // on the copy at `scale` (SB, classic)
-    int flags;        // of the OpenCV finder (SB, SB on rectified views, classic)
-  };
-  auto label = [](const Stage& st) {
-    return std::string(st.kind == Kind::classic     ? "classic"
-                       : st.kind == Kind::mrgingham ? "mrgingham"
-                       : st.kind == Kind::sb        ? "sb"
-                                                    : "sb-rectified");
-  };
-  auto attempt_once = [&](const cv::Mat& img, const Stage& st, const std::string& name) {
-    if (!tried.empty()) tried += ", ";
-    tried += name;
-    pts.clear();
-    bool ok = false;
-    double limit = options.max_refine_shift_px;
-    if (st.kind == Kind::classic || st.kind == Kind::sb) {
-      cv::Mat small = img;
-      if (st.downscaled && scale < 1) cv::resize(img, small, cv::Size(), scale, scale, cv::INTER_AREA);
-      const double sx = double(small.cols) / img.cols, sy = double(small.rows) / img.rows;
-      if (sx < 1) {
-        char at[32];
-        std::snprintf(at, sizeof at, "@%.2f", std::min(sx, sy));
-        tried += at;
-      }
-      if (st.kind == Kind::sb && (st.flags & cv::CALIB_CB_ACCURACY)) tried += " accuracy";
-      if (st.kind == Kind::classic && (st.flags & cv::CALIB_CB_ADAPTIVE_THRESH)) tried += " adaptive";
-      // SB without CALIB_CB_ACCURACY: that costs ~4x the time (an internal upsampled pass),
-      // cornerSubPix at full resolution gives the precision, and on the real sets it found
-      // fewer views (Ladybug 2 and 3 only without it).
-      ok = st.kind == Kind::classic ? try_classic(small, board, pts, st.flags) : try_sb(small, board, pts, st.flags);
-      for (auto& p : pts) {  // pixel centres at integers: x_full + 0.5 = (x_small + 0.5) / s
-        p.x = static_cast<float>((p.x + 0.5) / sx - 0.5);
-        p.y = static_cast<float>((p.y + 0.5) / sy - 0.5);
-      }
-      // classic's own corners are refined without a move limit (its quads are coarse).
-      limit = st.kind == Kind::classic ? 0 : limit / std::min(sx, sy);
-    } else if (st.kind == Kind::mrgingham) {
-      int level = 0;
-      ok = try_mrgingham(img, board, options.mrgingham_pyramid_level, pts, level);
-      if (limit > 0) limit *= double(1 << std::clamp(level, 0, 8));
-    } else {  // sb_rectified
-      for (double fov : options.rectified_fov_deg) {
-        const RectifiedView view =
-            make_view(circle_centre, circle_radius, options.rectified_half_field_deg, fov, options.rectified_size_px);
-        cv::Mat mx(view.size, view.size, CV_32F), my(view.size, view.size, CV_32F);
-        for (int v = 0; v < view.size; ++v)
-          for (int u = 0; u < view.size; ++u) {
-            const cv::Point2d q = view.source(u, v);
-            mx.at<float>(v, u) = float(q.x);
-            my.at<float>(v, u) = float(q.y);
-          }
-        cv::Mat rect;
-        cv::remap(img, rect, mx, my, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-        pts.clear();
-        if (!try_sb(rect, board, pts, st.flags) || !valid_points(pts, board)) continue;
-        // Back to the fisheye image; the move limit grows with the view's local
-        // magnification (a view pixel spans up to a few fisheye pixels near its centre).
-        double magnification = 1;
-        for (auto& p : pts) {
-          const cv::Point2d q = view.source(p.x, p.y), q1 = view.source(p.x + 1, p.y);
-          magnification = std::max(magnification, std::hypot(q1.x - q.x, q1.y - q.y));
-          p = cv::Point2f(float(q.x), float(q.y));
-        }
-        if (limit > 0) limit *= magnification;
-        ok = true;
-        break;
-      }
-    }
-    if (!ok || !valid_points(pts, board)) return false;
-    // Refine on the original grey image: CLAHE changes edge profiles.
-    if (st.kind == Kind::classic || options.refine_sb) {
-      const RefineStats stats = refine(gray, pts, board.cols, board.rows, limit);
-      result.refine_reverted = stats.reverted;
-      result.refine_median_shift_px = stats.median_shift;
-    }
-    result.method = name;
-    return true;
-  };
-  auto attempt = [&](const cv::Mat& img, const Stage& st, const std::string& suffix) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const bool ok = attempt_once(img, st, label(st) + suffix);
-    char ms[32];
-    std::snprintf(ms, sizeof ms, " %.0f ms",
-                  1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    tried += ms;
-    return ok;
-  };
-
-  // Cheapest first, measured per stage (thread CPU time, one OpenCV thread) on the seven
-  // real sets and on rendered 190 deg views (docs/calibration.md, "Board detection"):
-  // - classic with a global threshold on the downscaled copy: 4-14 ms mean, 35 ms worst,
-  //   finds every view of the pinhole set and half to two thirds of the fisheye ones, and
-  //   its corners are the precise ones; with ADAPTIVE_THRESH it finds a few more but costs
-  //   up to 180 ms when it fails (its FAST_CHECK passes on curved boards), so that variant
-  //   runs last, at full resolution;
-  // - SB (EXHAUSTIVE, no ACCURACY) on the downscaled copy: 30-60 ms when it finds the
-  //   board, 100-230 ms when not; the recall of the cascade;
-  // - the rectified views only on images with a fisheye circle; full-resolution SB and
-  //   mrgingham for small or far boards.
+// Cheapest first, measured per stage (thread CPU time, one OpenCV thread) on the seven
+// real sets and on rendered 190 deg views (docs/calibration.md, "Board detection"):
+// - classic with a global threshold on the downscaled copy: 4-14 ms mean, 35 ms worst,
+//   finds every view of the pinhole set and half to two thirds of the fisheye ones, and
+//   its corners are the precise ones; with ADAPTIVE_THRESH it finds a few more but costs
+//   up to 180 ms when it fails (its FAST_CHECK passes on curved boards), so that variant
+//   runs last, at full resolution;
+// - SB (EXHAUSTIVE, no ACCURACY) on the downscaled copy: 30-60 ms when it finds the
+//   board, 100-230 ms when not; the recall of the cascade;
+// - the rectified views only on images with a fisheye circle; full-resolution SB and
+//   mrgingham for small or far boards.
+std::vector<Stage> detection_stages(const DetectOptions& options, const BoardSpec& board, double scale,
+                                    bool fisheye_circle) {
   const int exhaustive = cv::CALIB_CB_EXHAUSTIVE;
   const int classic_global = cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
   const int classic_adaptive = classic_global | cv::CALIB_CB_ADAPTIVE_THRESH;
@@ -358,35 +261,170 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
   // missed on our sets, but its internal upsampling can resolve small boards; it costs
   // 150-400 ms and only views that everything else missed pay for it.
   if (options.sb) stages.push_back({Kind::sb, false, exhaustive | cv::CALIB_CB_ACCURACY});
+  return stages;
+}
 
-  auto cascade = [&](const cv::Mat& img, const std::string& suffix) {
-    for (const Stage& st : stages) {
+// One image's cascade of attempts: the corners of the first that succeeds, and the list of
+// what was tried with its times.
+class Cascade {
+ public:
+  Cascade(const cv::Mat& gray, const BoardSpec& board, const DetectOptions& options, BoardDetection& result)
+      : gray_(gray), board_(board), options_(options), result_(result) {
+    // SB and the early classic attempt run on a copy downscaled by `scale`; corners are
+    // mapped back to full resolution and refined there, the move limit scaled by 1 / scale
+    // (the detector's error grows with the downscaling).
+    scale_ = sb_scale(gray.cols, gray.rows, board, options);
+    const bool fisheye_circle =
+        options.rectified && options.sb && find_image_circle(gray, circle_centre_, circle_radius_);
+    stages_ = detection_stages(options, board, scale_, fisheye_circle);
+  }
+
+  bool run(const cv::Mat& img, const std::string& suffix) {
+    for (const Stage& st : stages_) {
       // mrgingham equalises by itself; the ACCURACY call is the plain image's last resort.
       if (!suffix.empty() && (st.kind == Kind::mrgingham || (st.flags & cv::CALIB_CB_ACCURACY))) continue;
-      if (attempt(img, st, suffix)) return true;
+      const auto t0 = std::chrono::steady_clock::now();
+      const bool ok = attempt(img, st, label(st) + suffix);
+      char ms[32];
+      std::snprintf(ms, sizeof ms, " %.0f ms",
+                    1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      tried_ += ms;
+      if (ok) return true;
     }
     return false;
-  };
-
-  bool found = cascade(gray, "");
-  if (!found && options.clahe && (options.classic || options.sb)) {  // mrgingham equalised already
-    cv::createCLAHE(2.0, cv::Size(8, 8))->apply(gray, equalised);
-    found = cascade(equalised, "+clahe");
   }
+  const std::vector<cv::Point2f>& points() const { return pts_; }
+  const std::string& tried() const { return tried_; }
+
+ private:
+  // SB or classic, maybe on the downscaled copy: corners mapped back to full resolution;
+  // the refinement's move limit in `limit`.
+  bool find_scaled(const cv::Mat& img, const Stage& st, double& limit) {
+    cv::Mat small = img;
+    if (st.downscaled && scale_ < 1) cv::resize(img, small, cv::Size(), scale_, scale_, cv::INTER_AREA);
+    const double sx = double(small.cols) / img.cols, sy = double(small.rows) / img.rows;
+    if (sx < 1) {
+      char at[32];
+      std::snprintf(at, sizeof at, "@%.2f", std::min(sx, sy));
+      tried_ += at;
+    }
+    if (st.kind == Kind::sb && (st.flags & cv::CALIB_CB_ACCURACY)) tried_ += " accuracy";
+    if (st.kind == Kind::classic && (st.flags & cv::CALIB_CB_ADAPTIVE_THRESH)) tried_ += " adaptive";
+    // SB without CALIB_CB_ACCURACY: that costs ~4x the time (an internal upsampled pass),
+    // cornerSubPix at full resolution gives the precision, and on the real sets it found
+    // fewer views (Ladybug 2 and 3 only without it).
+    const bool ok =
+        st.kind == Kind::classic ? try_classic(small, board_, pts_, st.flags) : try_sb(small, board_, pts_, st.flags);
+    for (auto& p : pts_) {  // pixel centres at integers: x_full + 0.5 = (x_small + 0.5) / s
+      p.x = static_cast<float>((p.x + 0.5) / sx - 0.5);
+      p.y = static_cast<float>((p.y + 0.5) / sy - 0.5);
+    }
+    // classic's own corners are refined without a move limit (its quads are coarse).
+    limit = st.kind == Kind::classic ? 0 : limit / std::min(sx, sy);
+    return ok;
+  }
+
+  // SB on local perspective views of the fisheye circle, corners mapped back; the move
+  // limit grows with the view's local magnification (a view pixel spans up to a few fisheye
+  // pixels near its centre).
+  bool find_rectified(const cv::Mat& img, const Stage& st, double& limit) {
+    for (double fov : options_.rectified_fov_deg) {
+      const RectifiedView view =
+          make_view(circle_centre_, circle_radius_, options_.rectified_half_field_deg, fov, options_.rectified_size_px);
+      cv::Mat mx(view.size, view.size, CV_32F), my(view.size, view.size, CV_32F);
+      for (int v = 0; v < view.size; ++v)
+        for (int u = 0; u < view.size; ++u) {
+          const cv::Point2d q = view.source(u, v);
+          mx.at<float>(v, u) = float(q.x);
+          my.at<float>(v, u) = float(q.y);
+        }
+      cv::Mat rect;
+      cv::remap(img, rect, mx, my, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+      pts_.clear();
+      if (!try_sb(rect, board_, pts_, st.flags) || !valid_points(pts_, board_)) continue;
+      double magnification = 1;
+      for (auto& p : pts_) {
+        const cv::Point2d q = view.source(p.x, p.y), q1 = view.source(p.x + 1, p.y);
+        magnification = std::max(magnification, std::hypot(q1.x - q.x, q1.y - q.y));
+        p = cv::Point2f(float(q.x), float(q.y));
+      }
+      if (limit > 0) limit *= magnification;
+      return true;
+    }
+    return false;
+  }
+
+  bool attempt(const cv::Mat& img, const Stage& st, const std::string& name) {
+    if (!tried_.empty()) tried_ += ", ";
+    tried_ += name;
+    pts_.clear();
+    bool ok = false;
+    double limit = options_.max_refine_shift_px;
+    if (st.kind == Kind::classic || st.kind == Kind::sb) {
+      ok = find_scaled(img, st, limit);
+    } else if (st.kind == Kind::mrgingham) {
+      int level = 0;
+      ok = try_mrgingham(img, board_, options_.mrgingham_pyramid_level, pts_, level);
+      if (limit > 0) limit *= double(1 << std::clamp(level, 0, 8));
+    } else {
+      ok = find_rectified(img, st, limit);
+    }
+    if (!ok || !valid_points(pts_, board_)) return false;
+    // Refine on the original grey image: CLAHE changes edge profiles.
+    if (st.kind == Kind::classic || options_.refine_sb) {
+      const RefineStats stats = refine(gray_, pts_, board_.cols, board_.rows, limit);
+      result_.refine_reverted = stats.reverted;
+      result_.refine_median_shift_px = stats.median_shift;
+    }
+    result_.method = name;
+    return true;
+  }
+
+  const cv::Mat& gray_;
+  const BoardSpec& board_;
+  const DetectOptions& options_;
+  BoardDetection& result_;
+  double scale_ = 1;
+  cv::Point2d circle_centre_;
+  double circle_radius_ = 0;
+  std::vector<Stage> stages_;
+  std::vector<cv::Point2f> pts_;
+  std::string tried_;
+};
+
+}  // namespace
+
+BoardDetection detect_board(const CameraImage& image, const BoardSpec& board, const DetectOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgb.size() != static_cast<size_t>(image.width) * image.height * 3)
+    throw InputError("detect_board: empty or inconsistent image");
+  if (board.cols < 3 || board.rows < 3)
+    throw InputError("detect_board: board needs at least 3x3 inner corners, got " +
+                     std::to_string(board.cols) + "x" + std::to_string(board.rows));
+
+  BoardDetection result;
+  const cv::Mat gray = to_gray8(image);
+  Cascade cascade(gray, board, options, result);
+  bool found = cascade.run(gray, "");
+  if (!found && options.clahe && (options.classic || options.sb)) {  // mrgingham equalised already
+    cv::Mat equalised;
+    cv::createCLAHE(2.0, cv::Size(8, 8))->apply(gray, equalised);
+    found = cascade.run(equalised, "+clahe");
+  }
+  const std::string& tried = cascade.tried();
   if (found) {
     result.found = true;
-    result.corners.reserve(pts.size());
-    for (const auto& p : pts) result.corners.push_back({double(p.x), double(p.y)});
+    result.corners.reserve(cascade.points().size());
+    for (const auto& p : cascade.points()) result.corners.push_back({double(p.x), double(p.y)});
     canonicalize_corner_order(result.corners, board.cols, board.rows);
   } else {
     result.method.clear();
     result.reason = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-                    " inner-corner chessboard found (tried " + (tried.empty() ? "nothing" : tried) +
-                    ")";
+                    " inner-corner chessboard found (tried " + (tried.empty() ? "nothing" : tried) + ")";
   }
   result.attempts = tried;
-  result.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 

@@ -14,6 +14,7 @@
 #include <memory>
 #include <sstream>
 
+#include "calib/lens_model.h"
 #include "core/error.h"
 #include "core/image_io.h"
 
@@ -25,24 +26,33 @@ extern "C" {
 namespace lp {
 namespace {
 
-constexpr const char* kKannalaBrandt = "LENSMODEL_KANNALA_BRANDT";
-constexpr const char* kOmnidirMei = "LENSMODEL_OMNIDIR_MEI";
+// ---- lens models ----------------------------------------------------------------------
 
-// ---- mrcal lens models ----------------------------------------------------------------
-
-// mrcal's parsed lens model for a name; the last name is cached per thread because the
-// splined models' configuration is parsed with sscanf and project() is called per pixel.
-bool parse_mrcal_lensmodel(const std::string& name, mrcal_lensmodel_t* out) {
+// The parsed model of a name, with mrcal's form for mrcal models; the last name is cached
+// per thread because project() is called per pixel and the splined models' configuration
+// is parsed with sscanf. nullptr for a name the table does not know.
+struct ParsedLens {
+  LensModel model;
+  mrcal_lensmodel_t mrcal;
+};
+const ParsedLens* parsed_lens(const std::string& name) {
   thread_local std::string cached_name;
-  thread_local mrcal_lensmodel_t cached{};
-  thread_local bool cached_ok = false;
+  thread_local std::optional<ParsedLens> cached;
   if (name != cached_name || cached_name.empty()) {
     cached_name = name;
-    cached = mrcal_lensmodel_t{};
-    cached_ok = !name.empty() && mrcal_lensmodel_from_name(&cached, name.c_str());
+    cached.reset();
+    if (auto m = LensModel::try_parse(name)) {
+      mrcal_lensmodel_t lm{};
+      if (!m->is_mrcal() || mrcal_lensmodel_from_name(&lm, name.c_str())) cached = ParsedLens{*m, lm};
+    }
   }
-  *out = cached;
-  return cached_ok;
+  return cached ? &*cached : nullptr;
+}
+
+const ParsedLens& parsed_lens_or_throw(const std::string& name) {
+  if (const ParsedLens* p = parsed_lens(name)) return *p;
+  LensModel::parse(name);  // throws the table's one-line message
+  throw InputError("unknown lens model '" + name + "'");
 }
 
 void check_intrinsics(const CameraModel& m) {
@@ -338,36 +348,24 @@ std::string precheck_cameramodel(const std::string& text) {
 
 }  // namespace
 
-int intrinsics_count(const std::string& lensmodel) {
-  if (lensmodel == kKannalaBrandt) return 8;
-  if (lensmodel == kOmnidirMei) return 9;
-  mrcal_lensmodel_t m;
-  if (!parse_mrcal_lensmodel(lensmodel, &m)) throw InputError("unknown lens model '" + lensmodel + "'");
-  return mrcal_lensmodel_num_params(&m);
-}
+int intrinsics_count(const std::string& lensmodel) { return parsed_lens_or_throw(lensmodel).model.param_count(); }
 
 bool is_mrcal_model(const std::string& lensmodel) {
-  mrcal_lensmodel_t m;
-  return parse_mrcal_lensmodel(lensmodel, &m);
+  const ParsedLens* p = parsed_lens(lensmodel);
+  return p && p->model.is_mrcal();
 }
 
 std::optional<Pixel> project(const CameraModel& model, Vec3 d) {
   if (!std::isfinite(d.x) || !std::isfinite(d.y) || !std::isfinite(d.z)) return std::nullopt;
-  if (model.lensmodel == kKannalaBrandt) {
-    check_intrinsics(model);
-    return kb_project(model.intrinsics.data(), d);
-  }
-  if (model.lensmodel == kOmnidirMei) {
-    check_intrinsics(model);
-    return mei_project(model.intrinsics.data(), d);
-  }
-  mrcal_lensmodel_t lm;
-  if (!parse_mrcal_lensmodel(model.lensmodel, &lm)) throw InputError("unknown lens model '" + model.lensmodel + "'");
-  if (int(model.intrinsics.size()) != mrcal_lensmodel_num_params(&lm)) check_intrinsics(model);
+  const ParsedLens& pl = parsed_lens_or_throw(model.lensmodel);
+  if (int(model.intrinsics.size()) != pl.model.param_count()) check_intrinsics(model);
+  if (pl.model.type() == LensType::KannalaBrandt) return kb_project(model.intrinsics.data(), d);
+  if (pl.model.type() == LensType::OmnidirMei) return mei_project(model.intrinsics.data(), d);
+  const mrcal_lensmodel_t& lm = pl.mrcal;
   if (d.x == 0 && d.y == 0 && d.z == 0) return std::nullopt;
   const mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(&lm);
   if (!meta.can_project_behind_camera && !(d.z > 0)) return std::nullopt;
-  if (lm.type == MRCAL_LENSMODEL_STEREOGRAPHIC || lm.type == MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC) {
+  if (pl.model.info().family == LensFamily::Stereographic) {
     // The stereographic mapping sends the backward axis to infinity.
     if (d.x == 0 && d.y == 0 && d.z < 0) return std::nullopt;
   }
@@ -383,17 +381,11 @@ std::optional<Pixel> project(const CameraModel& model, Vec3 d) {
 
 std::optional<Vec3> unproject(const CameraModel& model, Pixel pixel) {
   if (!std::isfinite(pixel.x) || !std::isfinite(pixel.y)) return std::nullopt;
-  if (model.lensmodel == kKannalaBrandt) {
-    check_intrinsics(model);
-    return kb_unproject(model.intrinsics.data(), pixel);
-  }
-  if (model.lensmodel == kOmnidirMei) {
-    check_intrinsics(model);
-    return mei_unproject(model.intrinsics.data(), pixel);
-  }
-  mrcal_lensmodel_t lm;
-  if (!parse_mrcal_lensmodel(model.lensmodel, &lm)) throw InputError("unknown lens model '" + model.lensmodel + "'");
-  if (int(model.intrinsics.size()) != mrcal_lensmodel_num_params(&lm)) check_intrinsics(model);
+  const ParsedLens& pl = parsed_lens_or_throw(model.lensmodel);
+  if (int(model.intrinsics.size()) != pl.model.param_count()) check_intrinsics(model);
+  if (pl.model.type() == LensType::KannalaBrandt) return kb_unproject(model.intrinsics.data(), pixel);
+  if (pl.model.type() == LensType::OmnidirMei) return mei_unproject(model.intrinsics.data(), pixel);
+  const mrcal_lensmodel_t& lm = pl.mrcal;
   mrcal_point2_t q;
   q.x = pixel.x;
   q.y = pixel.y;
@@ -471,28 +463,21 @@ CameraModel read_cameramodel(const std::string& path) {
 void write_opencv_yaml(const std::string& path, const CameraModel& model) {
   const std::string& lm = model.lensmodel;
   const std::vector<double>& p = model.intrinsics;
-  std::string dist_model;
-  std::vector<double> dist;
-  if (lm == "LENSMODEL_OPENCV8" || lm == "LENSMODEL_OPENCV4" || lm == "LENSMODEL_OPENCV5") {
-    dist_model = lm == "LENSMODEL_OPENCV8" ? "rational" : "plumb_bob";
-  } else if (lm == kKannalaBrandt) {
-    dist_model = "fisheye";
-  } else if (lm == kOmnidirMei) {
-    dist_model = "omnidir";
-  } else if (lm == "LENSMODEL_PINHOLE") {
-    dist_model = "plumb_bob";  // with all-zero k1 k2 p1 p2
-  } else {
+  const std::optional<LensModel> lens = LensModel::try_parse(lm);
+  if (!lens || !lens->has_opencv_form())
     throw InputError(path + ": OpenCV has no form for lens model '" + lm +
                      "'; write it as mrcal .cameramodel instead");
-  }
-  const int n = intrinsics_count(lm);
+  const LensTypeInfo& info = lens->info();
+  const int n = lens->param_count();
   if (int(p.size()) != n)
     throw InputError(path + ": " + lm + " takes " + std::to_string(n) + " intrinsics, got " +
                      std::to_string(p.size()));
   check_finite(path, model);
-  if (lm == "LENSMODEL_PINHOLE") dist = {0, 0, 0, 0};
-  else if (lm == kOmnidirMei) dist.assign(p.begin() + 5, p.end());
-  else dist.assign(p.begin() + 4, p.end());
+  // After the core (and Mei's xi) come the distortion coefficients; a zero-padded form
+  // (pinhole as plumb_bob) writes zeros.
+  std::vector<double> dist;
+  if (info.opencv_zero_padded) dist.assign(size_t(info.opencv_coefficients), 0.0);
+  else dist.assign(p.end() - info.opencv_coefficients, p.end());
 
   const int format = ends_with(path, ".xml") ? cv::FileStorage::FORMAT_XML : cv::FileStorage::FORMAT_YAML;
   cv::FileStorage fs(path, cv::FileStorage::WRITE | cv::FileStorage::MEMORY | format);
@@ -500,8 +485,8 @@ void write_opencv_yaml(const std::string& path, const CameraModel& model) {
   const cv::Mat K = (cv::Mat_<double>(3, 3) << p[0], 0, p[2], 0, p[1], p[3], 0, 0, 1);
   fs << "camera_matrix" << K;
   fs << "distortion_coefficients" << cv::Mat(cv::Mat_<double>(1, int(dist.size()), dist.data())).clone();
-  fs << "distortion_model" << dist_model;
-  if (lm == kOmnidirMei) fs << "xi" << p[4];
+  fs << "distortion_model" << info.opencv_distortion_model;
+  if (lens->is_mei()) fs << "xi" << p[4];
   fs << "lensmodel" << lm;
   fs << "rms_reprojection_px" << model.rms_reprojection_px;
   fs << "cross_validation_px" << model.cross_validation_px;
@@ -523,15 +508,22 @@ CameraModel read_opencv_yaml(const std::string& path) {
     cv::Mat K, D;
     need("camera_matrix") >> K;
     need("distortion_coefficients") >> D;
-    // Files written by OpenCV's own samples carry no distortion_model: 5 or 8 coefficients
-    // can only be calibrateCamera's plumb_bob or rational model (4 stays ambiguous with
-    // the fisheye model and is refused).
+    // Files written by OpenCV's own samples carry no distortion_model: a coefficient count
+    // that only one model's form has (5: plumb_bob, 8: rational) names it; 4 stays
+    // ambiguous (plumb_bob, fisheye, omnidir) and is refused.
     std::string dist_model;
     if (fs["distortion_model"].empty()) {
-      const size_t n = size_t(D.total());
-      if (n == 5) dist_model = "plumb_bob";
-      else if (n == 8) dist_model = "rational";
-      else throw InputError(path + ": missing 'distortion_model' (needed with " + std::to_string(n) + " coefficients)");
+      const int n = int(D.total());
+      const LensTypeInfo* only = nullptr;
+      int matches = 0;
+      for (const LensTypeInfo& t : lens_types())
+        if (t.opencv_distortion_model && !t.opencv_zero_padded && t.opencv_coefficients == n) {
+          only = &t;
+          ++matches;
+        }
+      if (matches != 1)
+        throw InputError(path + ": missing 'distortion_model' (needed with " + std::to_string(n) + " coefficients)");
+      dist_model = only->opencv_distortion_model;
     } else {
       dist_model = std::string(fs["distortion_model"]);
     }
@@ -543,24 +535,22 @@ CameraModel read_opencv_yaml(const std::string& path) {
     D = D.reshape(1, 1);
     std::vector<double> dist(D.begin<double>(), D.end<double>());
     m.intrinsics = {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2)};
-    const size_t nd = dist.size();
-    auto bad_count = [&](const char* expected) {
-      return InputError(path + ": distortion_model " + dist_model + " takes " + expected +
-                        " distortion_coefficients, got " + std::to_string(nd));
-    };
-    if (dist_model == "rational") {
-      if (nd != 8) throw bad_count("8");
-      m.lensmodel = "LENSMODEL_OPENCV8";
-    } else if (dist_model == "plumb_bob") {
-      if (nd == 4) m.lensmodel = "LENSMODEL_OPENCV4";
-      else if (nd == 5) m.lensmodel = "LENSMODEL_OPENCV5";
-      else throw bad_count("4 or 5");
-    } else if (dist_model == "fisheye") {
-      if (nd != 4) throw bad_count("4");
-      m.lensmodel = kKannalaBrandt;
-    } else if (dist_model == "omnidir") {
-      if (nd != 4) throw bad_count("4");
-      m.lensmodel = kOmnidirMei;
+    const int nd = int(dist.size());
+    const std::optional<LensType> type = lens_type_from_opencv(dist_model, nd);
+    if (!type) {
+      std::string counts;
+      for (const LensTypeInfo& t : lens_types())
+        if (t.opencv_distortion_model && !t.opencv_zero_padded && dist_model == t.opencv_distortion_model)
+          counts += (counts.empty() ? "" : " or ") + std::to_string(t.opencv_coefficients);
+      if (counts.empty())
+        throw InputError(path + ": distortion_model '" + dist_model + "' is not one of " +
+                         opencv_distortion_model_names());
+      throw InputError(path + ": distortion_model " + dist_model + " takes " + counts +
+                       " distortion_coefficients, got " + std::to_string(nd));
+    }
+    const LensModel lens(*type);
+    m.lensmodel = lens.name();
+    if (lens.is_mei()) {
       cv::FileNode xi_node = need("xi");
       double xi;
       if (xi_node.isReal() || xi_node.isInt()) {
@@ -573,17 +563,19 @@ CameraModel read_opencv_yaml(const std::string& path) {
         xi = xm.at<double>(0);
       }
       m.intrinsics.push_back(xi);
-    } else {
-      throw InputError(path + ": distortion_model '" + dist_model +
-                       "' is not one of rational, plumb_bob, fisheye, omnidir");
     }
     m.intrinsics.insert(m.intrinsics.end(), dist.begin(), dist.end());
-    // Our own writer records the exact model (e.g. PINHOLE written as plumb_bob zeros).
+    // Our own writer records the exact model: one written in a zero-padded form (pinhole as
+    // plumb_bob zeros) comes back as itself.
     cv::FileNode lm_node = fs["lensmodel"];
-    if (lm_node.isString() && std::string(lm_node) == "LENSMODEL_PINHOLE" && m.lensmodel == "LENSMODEL_OPENCV4" &&
-        std::all_of(dist.begin(), dist.end(), [](double v) { return v == 0; })) {
-      m.lensmodel = "LENSMODEL_PINHOLE";
-      m.intrinsics.resize(4);
+    if (lm_node.isString()) {
+      const std::optional<LensModel> recorded = LensModel::try_parse(std::string(lm_node));
+      if (recorded && recorded->info().opencv_zero_padded && dist_model == recorded->info().opencv_distortion_model &&
+          nd == recorded->info().opencv_coefficients &&
+          std::all_of(dist.begin(), dist.end(), [](double v) { return v == 0; })) {
+        m.lensmodel = recorded->name();
+        m.intrinsics.resize(size_t(recorded->param_count()));
+      }
     }
     if (fs["rms_reprojection_px"].isReal()) m.rms_reprojection_px = double(fs["rms_reprojection_px"]);
     if (fs["cross_validation_px"].isReal()) m.cross_validation_px = double(fs["cross_validation_px"]);

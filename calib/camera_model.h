@@ -1,7 +1,8 @@
 // A calibrated camera: lens model + intrinsics + image size, with project/unproject for
 // every model, including rays beyond 90 deg from the axis for > 180 deg fisheyes.
 //
-// Models (names as mrcal spells them where mrcal has the model):
+// Models (calib/lens_model.h has the table: names, parameter counts, what each can do; mrcal's
+// other models, LONLAT, LATLON, OPENCV4/12, CAHVOR(E), also project through mrcal):
 //   LENSMODEL_PINHOLE                      fx fy cx cy
 //   LENSMODEL_STEREOGRAPHIC                fx fy cx cy
 //   LENSMODEL_OPENCV8                      fx fy cx cy k1 k2 p1 p2 k3 k4 k5 k6 (OpenCV rational)
@@ -22,7 +23,7 @@
 namespace lp {
 
 struct CameraModel {
-  std::string lensmodel;           // e.g. "LENSMODEL_OPENCV8"
+  std::string lensmodel;           // full name (LensModel::parse), e.g. LENSMODEL_OPENCV8
   std::vector<double> intrinsics;  // as listed above for the model
   int width = 0, height = 0;       // image size the model was calibrated for
   // Informational: where it came from and how well it fits (written to the files' comments).
@@ -30,8 +31,8 @@ struct CameraModel {
   double cross_validation_px = 0;  // headline accuracy: see calib/geometric.h
 };
 
-// Number of intrinsics a model takes (splined: from its configuration string); throws
-// InputError for an unknown model name.
+// Shorthands for LensModel::parse(lensmodel).param_count() (InputError for an unknown name)
+// and .is_mrcal() (false for an unknown name).
 int intrinsics_count(const std::string& lensmodel);
 bool is_mrcal_model(const std::string& lensmodel);
 

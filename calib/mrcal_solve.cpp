@@ -17,13 +17,6 @@ int mrcal_model_param_count(const std::string& lensmodel) {
   return mrcal_lensmodel_num_params(&m);
 }
 
-std::string mrcal_splined_name(int order, int nx, int ny, int fov_x_deg) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "LENSMODEL_SPLINED_STEREOGRAPHIC_order=%d_Nx=%d_Ny=%d_fov_x_deg=%d", order, nx, ny,
-                fov_x_deg);
-  return buf;
-}
-
 MrcalSolution mrcal_solve(const MrcalProblem& p) {
   MrcalSolution out;
   mrcal_lensmodel_t lensmodel;

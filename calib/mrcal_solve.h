@@ -1,6 +1,7 @@
 // Thin wrapper around mrcal 2.2's C solver (mrcal_optimize) for one stationary camera
-// observing a moving chessboard. This header and mrcal_solve.cpp are the only places
-// that see mrcal.h. mrcal's C API does no seeding: the caller passes a complete initial
+// observing a moving chessboard. The solver is the only part of
+// mrcal this file wraps (lens_model.cpp and camera_model.cpp use its lens-model and
+// projection calls). mrcal's C API does no seeding: the caller passes a complete initial
 // guess (intrinsics + board poses), so the result is a deterministic function of it.
 #pragma once
 
@@ -11,7 +12,7 @@
 namespace lp {
 
 struct MrcalProblem {
-  std::string lensmodel;                 // full mrcal name, e.g. "LENSMODEL_OPENCV8"
+  std::string lensmodel;                 // full mrcal name (calib/lens_model.h)
   std::vector<double> intrinsics_seed;   // mrcal_lensmodel_num_params values
   // Board -> camera pose per view (Rodrigues r, then t), the seed; updated on output.
   std::vector<std::array<double, 6>> poses_seed;
@@ -36,10 +37,8 @@ struct MrcalSolution {
 // weight < 0). Never prints on purpose (mrcal itself may complain on stderr on failure).
 MrcalSolution mrcal_solve(const MrcalProblem& problem);
 
-// Number of intrinsics of a configured mrcal model name; -1 when mrcal does not know it.
+// Number of intrinsics of a configured mrcal model name; -1 when mrcal does not know it
+// (mrcal's own answer: calib/lens_model.h's table is checked against it).
 int mrcal_model_param_count(const std::string& lensmodel);
-
-// "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=200"
-std::string mrcal_splined_name(int order, int nx, int ny, int fov_x_deg);
 
 }  // namespace lp

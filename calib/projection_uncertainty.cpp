@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 
+#include "calib/lens_model.h"
 #include "core/error.h"
 
 namespace lp {
@@ -120,7 +121,7 @@ UncertaintyGrid empty_grid(const std::vector<std::array<double, 2>>& pixels, int
 LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec& board,
                                        const std::vector<SolvedView>& views) {
   LinearCovariance out;
-  if (model.lensmodel.rfind("LENSMODEL_SPLINED", 0) == 0) {
+  if (LensModel::parse(model.lensmodel).is_splined()) {
     out.error = "splined models are not supported (their regularisation is not modelled)";
     return out;
   }

@@ -53,70 +53,73 @@ struct Scene {
   }
 };
 
-}  // namespace
+double angle_of(Vec3 d) { return std::atan2(std::hypot(d.x, d.y), d.z); }
 
-SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options, const LensFunctions& lens) {
-  const BoardSpec& board = options.board;
-  const int W = options.camera.width, H = options.camera.height;
-  if (options.views < 1) throw InputError("synth boards: views must be >= 1");
-  if (board.cols < 3 || board.rows < 3 || !(board.square_mm > 0))
-    throw InputError("synth boards: board needs >= 3x3 inner corners and a positive square size");
-  if (W < 16 || H < 16) throw InputError("synth boards: camera model has no image size");
-  if (!lens.project || !lens.unproject) throw InputError("synth boards: lens functions missing");
+// What every view of a synthetic set shares: the lens, the rays through every pixel corner,
+// the board points that must be imaged.
+struct Renderer {
+  const SyntheticBoardsOptions& options;
+  const LensFunctions& lens;
+  int W = 0, H = 0, GW = 0, GH = 0;
+  double max_angle = M_PI;
+  std::vector<Vec3> rays;  // through pixel corners (x - 0.5, y - 0.5), x in [0, W], y in [0, H]
+  std::vector<uint8_t> ray_ok;
+  std::vector<Vec3> must_see;  // the inner corners (first), then the outline of the white margin
 
-  const double max_angle = options.field_deg > 0 ? 0.5 * options.field_deg * M_PI / 180 : M_PI;
-  auto angle_of = [](Vec3 d) { return std::atan2(std::hypot(d.x, d.y), d.z); };
-
-  // Rays through pixel corners (x - 0.5, y - 0.5) for x in [0, W], y in [0, H]; rays inside
-  // a pixel are bilinear between its four corners (the lens is smooth at this scale).
-  const int GW = W + 1, GH = H + 1;
-  std::vector<Vec3> rays(static_cast<size_t>(GW) * GH);
-  std::vector<uint8_t> ray_ok(rays.size());
-  cv::parallel_for_(cv::Range(0, GH), [&](const cv::Range& range) {
-    for (int y = range.start; y < range.end; ++y)
-      for (int x = 0; x < GW; ++x) {
-        const auto r = lens.unproject(Pixel{x - 0.5, y - 0.5});
-        const size_t k = static_cast<size_t>(y) * GW + x;
-        ray_ok[k] = r.has_value();
-        if (r) rays[k] = *r;
-      }
-  });
+  Renderer(const SyntheticBoardsOptions& o, const LensFunctions& l) : options(o), lens(l) {
+    W = o.camera.width;
+    H = o.camera.height;
+    GW = W + 1;
+    GH = H + 1;
+    max_angle = o.field_deg > 0 ? 0.5 * o.field_deg * M_PI / 180 : M_PI;
+    // Rays inside a pixel are bilinear between its four corners (the lens is smooth at
+    // this scale).
+    rays.resize(static_cast<size_t>(GW) * GH);
+    ray_ok.resize(rays.size());
+    cv::parallel_for_(cv::Range(0, GH), [&](const cv::Range& range) {
+      for (int y = range.start; y < range.end; ++y)
+        for (int x = 0; x < GW; ++x) {
+          const auto r = lens.unproject(Pixel{x - 0.5, y - 0.5});
+          const size_t k = static_cast<size_t>(y) * GW + x;
+          ray_ok[k] = r.has_value();
+          if (r) rays[k] = *r;
+        }
+    });
+    const BoardSpec& board = o.board;
+    const double s = board.square_mm;
+    for (int r = 0; r < board.rows; ++r)
+      for (int c = 0; c < board.cols; ++c) must_see.push_back({c * s, r * s, 0});
+    for (int k = 0; k <= 20; ++k) {
+      const double u = k / 20.0;
+      const double x0 = -2 * s, x1 = (board.cols + 1) * s, y0 = -2 * s, y1 = (board.rows + 1) * s;
+      must_see.push_back({x0 + u * (x1 - x0), y0, 0});
+      must_see.push_back({x0 + u * (x1 - x0), y1, 0});
+      must_see.push_back({x0, y0 + u * (y1 - y0), 0});
+      must_see.push_back({x1, y0 + u * (y1 - y0), 0});
+    }
+  }
 
   // Angle spanned by the central `fraction` of the image width (through the centre row).
-  const double cx = 0.5 * (W - 1), cy = 0.5 * (H - 1);
-  auto width_angle = [&](double fraction) {
+  double width_angle(double fraction) const {
+    const double cx = 0.5 * (W - 1), cy = 0.5 * (H - 1);
     const auto a = lens.unproject(Pixel{cx - 0.5 * fraction * W, cy});
     const auto b = lens.unproject(Pixel{cx + 0.5 * fraction * W, cy});
     if (!a || !b) return 0.0;
     return angle_between(normalize(*a), normalize(*b));
-  };
-
-  std::mt19937_64 rng(options.seed);
-  std::uniform_real_distribution<double> uni(0.0, 1.0);
-  const double s = board.square_mm;
-  const Vec3 centre_board{0.5 * (board.cols - 1) * s, 0.5 * (board.rows - 1) * s, 0};
-  // Points that must be imaged: the inner corners and the outline of the white margin.
-  std::vector<Vec3> must_see;
-  for (int r = 0; r < board.rows; ++r)
-    for (int c = 0; c < board.cols; ++c) must_see.push_back({c * s, r * s, 0});
-  for (int k = 0; k <= 20; ++k) {
-    const double u = k / 20.0;
-    const double x0 = -2 * s, x1 = (board.cols + 1) * s, y0 = -2 * s, y1 = (board.rows + 1) * s;
-    must_see.push_back({x0 + u * (x1 - x0), y0, 0});
-    must_see.push_back({x0 + u * (x1 - x0), y1, 0});
-    must_see.push_back({x0, y0 + u * (y1 - y0), 0});
-    must_see.push_back({x1, y0 + u * (y1 - y0), 0});
   }
 
-  SyntheticBoards out;
-  for (int view = 0; view < options.views; ++view) {
-    Pose pose;
-    std::vector<std::array<double, 2>> corners;
-    bool placed = false;
-    for (int attempt = 0; attempt < 20000 && !placed; ++attempt) {
+  // A random pose (see the header) with every must-see point imaged inside the image and the
+  // board facing the camera at every corner; false after 20000 tries.
+  bool place(std::mt19937_64& rng, Pose& pose, std::vector<std::array<double, 2>>& corners) const {
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    const BoardSpec& board = options.board;
+    const double s = board.square_mm;
+    const Vec3 centre_board{0.5 * (board.cols - 1) * s, 0.5 * (board.rows - 1) * s, 0};
+    for (int attempt = 0; attempt < 20000; ++attempt) {
       const auto dir = lens.unproject(Pixel{uni(rng) * (W - 1), uni(rng) * (H - 1)});
       const double cover = options.min_cover + uni(rng) * (options.max_cover - options.min_cover);
-      const double tilt = (options.min_tilt_deg + uni(rng) * (options.max_tilt_deg - options.min_tilt_deg)) * M_PI / 180;
+      const double tilt =
+          (options.min_tilt_deg + uni(rng) * (options.max_tilt_deg - options.min_tilt_deg)) * M_PI / 180;
       const double spin = uni(rng) * 2 * M_PI, tilt_axis_angle = uni(rng) * 2 * M_PI;
       if (!dir || angle_of(*dir) > max_angle) continue;
       const double alpha = width_angle(cover);
@@ -131,38 +134,37 @@ SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options, const L
       const double board_width = (board.cols + 1) * s;
       const double distance = 0.5 * board_width / std::tan(0.5 * alpha);
       pose.t = distance * z - pose.R * centre_board;
-      placed = true;
-      for (const Vec3& p : must_see) {
-        const Vec3 pc = pose.R * p + pose.t;
-        const auto px = lens.project(pc);
-        if (!px || angle_of(pc) > max_angle - 0.01 || px->x < 3 || px->y < 3 || px->x > W - 4 ||
-            px->y > H - 4) {
-          placed = false;
-          break;
-        }
+      if (!visible(pose)) continue;
+      corners.clear();
+      for (int k = 0; k < board.rows * board.cols; ++k) {
+        const auto px = lens.project(pose.R * must_see[k] + pose.t);
+        corners.push_back({px->x, px->y});
       }
-      // The board must face the camera at every corner (no grazing views beyond 80 deg).
-      if (placed) {
-        const Vec3 n = column(pose.R, 2);
-        for (int k = 0; k < board.rows * board.cols && placed; ++k) {
-          const Vec3 pc = pose.R * must_see[k] + pose.t;
-          if (std::fabs(dot(n, normalize(pc))) < std::cos(80 * M_PI / 180)) placed = false;
-        }
-      }
-      if (placed) {
-        corners.clear();
-        for (int k = 0; k < board.rows * board.cols; ++k) {
-          const auto px = lens.project(pose.R * must_see[k] + pose.t);
-          corners.push_back({px->x, px->y});
-        }
-      }
+      return true;
     }
-    if (!placed)
-      throw InputError("synth boards: could not place the board " + std::to_string(view + 1) +
-                       " in the camera's view");
+    return false;
+  }
 
-    Scene scene{board, pose, max_angle};
-    // Shade at every pixel corner; pixels whose corners agree are flat, others supersampled.
+  bool visible(const Pose& pose) const {
+    for (const Vec3& p : must_see) {
+      const Vec3 pc = pose.R * p + pose.t;
+      const auto px = lens.project(pc);
+      if (!px || angle_of(pc) > max_angle - 0.01 || px->x < 3 || px->y < 3 || px->x > W - 4 || px->y > H - 4)
+        return false;
+    }
+    // The board must face the camera at every corner (no grazing views beyond 80 deg).
+    const Vec3 n = column(pose.R, 2);
+    for (int k = 0; k < options.board.rows * options.board.cols; ++k) {
+      const Vec3 pc = pose.R * must_see[k] + pose.t;
+      if (std::fabs(dot(n, normalize(pc))) < std::cos(80 * M_PI / 180)) return false;
+    }
+    return true;
+  }
+
+  // The view of the board at `pose`: shade at every pixel corner; pixels whose corners agree
+  // are flat, others supersampled 4x4; then blur.
+  cv::Mat render(const Pose& pose) const {
+    Scene scene{options.board, pose, max_angle};
     std::vector<float> node(rays.size());
     for (size_t k = 0; k < rays.size(); ++k) node[k] = ray_ok[k] ? scene.shade(rays[k]) : kOutside;
     cv::Mat img(H, W, CV_32F);
@@ -184,8 +186,7 @@ SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options, const L
           for (int j = 0; j < 4; ++j)
             for (int i = 0; i < 4; ++i) {
               const double u = (i + 0.5) / 4, w = (j + 0.5) / 4;
-              const Vec3 r = (1 - w) * ((1 - u) * rays[k00] + u * rays[k01]) +
-                             w * ((1 - u) * rays[k10] + u * rays[k11]);
+              const Vec3 r = (1 - w) * ((1 - u) * rays[k00] + u * rays[k01]) + w * ((1 - u) * rays[k10] + u * rays[k11]);
               sum += scene.shade(r);
             }
           row[x] = static_cast<float>(sum / 16);
@@ -193,32 +194,60 @@ SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options, const L
       }
     });
     if (options.blur_px > 0) cv::GaussianBlur(img, img, cv::Size(0, 0), options.blur_px);
+    return img;
+  }
+};
 
-    CameraImage image;
-    image.width = W;
-    image.height = H;
-    image.bit_depth = 8;
-    image.rgb.resize(static_cast<size_t>(W) * H * 3);
-    std::normal_distribution<double> noise(0.0, options.noise_sigma > 0 ? options.noise_sigma : 1.0);
-    for (int y = 0; y < H; ++y) {
-      const float* row = img.ptr<float>(y);
-      for (int x = 0; x < W; ++x) {
-        double v = row[x];
-        if (options.noise_sigma > 0) v += noise(rng);
-        const float f = static_cast<float>(std::clamp(v, 0.0, 1.0));
-        float* p = &image.rgb[(static_cast<size_t>(y) * W + x) * 3];
-        p[0] = p[1] = p[2] = f;
-      }
+// 8-bit-style camera image of a rendered view with Gaussian noise (drawn from `rng`).
+CameraImage to_camera_image(const cv::Mat& img, double noise_sigma, std::mt19937_64& rng) {
+  const int W = img.cols, H = img.rows;
+  CameraImage image;
+  image.width = W;
+  image.height = H;
+  image.bit_depth = 8;
+  image.rgb.resize(static_cast<size_t>(W) * H * 3);
+  std::normal_distribution<double> noise(0.0, noise_sigma > 0 ? noise_sigma : 1.0);
+  for (int y = 0; y < H; ++y) {
+    const float* row = img.ptr<float>(y);
+    for (int x = 0; x < W; ++x) {
+      double v = row[x];
+      if (noise_sigma > 0) v += noise(rng);
+      const float f = static_cast<float>(std::clamp(v, 0.0, 1.0));
+      float* p = &image.rgb[(static_cast<size_t>(y) * W + x) * 3];
+      p[0] = p[1] = p[2] = f;
     }
+  }
+  return image;
+}
 
+}  // namespace
+
+SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options, const LensFunctions& lens) {
+  const BoardSpec& board = options.board;
+  const int W = options.camera.width, H = options.camera.height;
+  if (options.views < 1) throw InputError("synth boards: views must be >= 1");
+  if (board.cols < 3 || board.rows < 3 || !(board.square_mm > 0))
+    throw InputError("synth boards: board needs >= 3x3 inner corners and a positive square size");
+  if (W < 16 || H < 16) throw InputError("synth boards: camera model has no image size");
+  if (!lens.project || !lens.unproject) throw InputError("synth boards: lens functions missing");
+
+  const Renderer renderer(options, lens);
+  std::mt19937_64 rng(options.seed);
+  SyntheticBoards out;
+  for (int view = 0; view < options.views; ++view) {
+    Pose pose;
+    std::vector<std::array<double, 2>> corners;
+    if (!renderer.place(rng, pose, corners))
+      throw InputError("synth boards: could not place the board " + std::to_string(view + 1) +
+                       " in the camera's view");
+    const cv::Mat img = renderer.render(pose);
     cv::Mat R(3, 3, CV_64F), rvec;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) R.at<double>(r, c) = pose.R(r, c);
     cv::Rodrigues(R, rvec);
-    out.images.push_back(std::move(image));
+    out.images.push_back(to_camera_image(img, options.noise_sigma, rng));
     out.true_corners.push_back(std::move(corners));
-    out.poses.push_back({rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2), pose.t.x,
-                         pose.t.y, pose.t.z});
+    out.poses.push_back({rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2), pose.t.x, pose.t.y, pose.t.z});
   }
   return out;
 }

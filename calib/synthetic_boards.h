@@ -20,6 +20,7 @@
 
 #include "calib/board_detect.h"
 #include "calib/camera_model.h"
+#include "calib/lens_model.h"
 #include "core/image_io.h"
 
 namespace lp {
@@ -28,7 +29,7 @@ struct SyntheticBoardsOptions {
   int views = 20;
   BoardSpec board{9, 6, 30};
   // 190 deg Kannala-Brandt fisheye, 1280x960.
-  CameraModel camera{"LENSMODEL_KANNALA_BRANDT", {360, 360, 639.5, 479.5, 0.02, -0.005, 0, 0}, 1280, 960};
+  CameraModel camera{lens_type_name(LensType::KannalaBrandt), {360, 360, 639.5, 479.5, 0.02, -0.005, 0, 0}, 1280, 960};
   double field_deg = 190;     // full angle of the image circle; 0: the model's own domain
   double noise_sigma = 0.01;  // image noise, [0, 1] units
   double blur_px = 0.7;       // Gaussian sigma

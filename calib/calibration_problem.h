@@ -1,0 +1,103 @@
+// What every stage of a geometric calibration shares (geometric.h composes the stages:
+// calibration_seed.h, calibration_solve.h, outlier_rejection.h, model_selection.h,
+// view_diagnostics.h, calibration_uncertainty.h): the views (detected corners with their
+// inlier flags), board poses, a model fitted to a subset of the views, and the residual and
+// pose helpers they all use.
+//
+// Board frame: inner corner k = r * cols + c at (c, r, 0) * square_mm. Poses map board to
+// camera (Rodrigues r, then t in mm). Pixels and camera frame as calib/camera_model.h.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/board_detect.h"
+#include "calib/camera_model.h"
+
+namespace lp {
+
+using BoardPose = std::array<double, 6>;  // board -> camera: Rodrigues r, t (mm)
+
+struct BoardView {
+  int index = 0;                           // view index as given to calibrate()
+  std::vector<std::array<double, 2>> px;   // cols * rows corners, row-major
+  std::vector<char> inlier;                // per corner: used by the fits
+};
+// Views a fit runs on (pointers into the calibration's views, which outlive it).
+using ViewSubset = std::vector<const BoardView*>;
+
+// A model fitted to a subset of views: intrinsics and one pose per view of the subset.
+struct ModelFit {
+  bool ok = false;
+  std::string error;         // why not, when !ok
+  CameraModel model;
+  std::vector<BoardPose> poses;  // aligned with the subset it was fitted on
+  int params = 0;            // free intrinsics
+  std::string solver;        // how it was obtained, e.g. "cv::fisheye + Ceres"
+};
+
+// What the solvers need to know beyond the corners.
+struct SolveOptions {
+  // false: OpenCV paths only (stereographic and splined models unavailable).
+  bool use_mrcal = true;
+  // The splined candidate: cubic, spline_nx x spline_ny control points, field of view from
+  // its stereographic seed.
+  int spline_order = 3, spline_nx = 8, spline_ny = 6;
+};
+
+struct CalibrationProblem {
+  BoardSpec board;
+  int width = 0, height = 0;
+  SolveOptions solve;
+  int diff_step_px = 0;  // grid step of projection differences; 0 = auto_step()
+};
+
+// Progress of a stage: (stage name, steps done, steps in the stage), from the calling thread.
+using StageProgress = std::function<void(const std::string& stage, int done, int total)>;
+void report_progress(const StageProgress& progress, const char* stage, size_t done, size_t total);
+
+// The views with a board, every corner an inlier. `who` names the caller in the one-line
+// InputErrors: a view with the wrong number of corners; with check_inside, a corner outside
+// width x height (images of another resolution); fewer than 4 views with a board.
+std::vector<BoardView> make_board_views(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
+                                        const CalibrationProblem& problem, const std::string& who,
+                                        bool check_inside);
+ViewSubset all_of(const std::vector<BoardView>& views);
+
+// Board-frame point of corner k (mm).
+std::array<double, 3> board_point(const BoardSpec& board, int k);
+CameraModel make_model(const CalibrationProblem& problem, const std::string& lensmodel, std::vector<double> intrinsics);
+
+// observed - projected per corner (every corner, inlier or not); NaN where the model cannot
+// image the corner.
+std::vector<std::array<double, 2>> view_residuals(const CalibrationProblem& problem, const CameraModel& model,
+                                                  const BoardView& view, const BoardPose& pose);
+// Sum of squared inlier residuals of a view; a corner the model cannot image counts 1e12.
+double view_squared_error(const CalibrationProblem& problem, const CameraModel& model, const BoardView& view,
+                          const BoardPose& pose);
+// RMS (2-D) of a fit over the inliers of its subset; 1e6 px per corner it cannot image.
+double fit_rms(const CalibrationProblem& problem, const ModelFit& fit, const ViewSubset& views);
+
+// Board pose of a view under fixed intrinsics: PnP on the unprojected rays (in a frame
+// turned towards the view's mean ray when some rays point sideways or backwards), then
+// refined on pixels. nullopt when too few rays are usable.
+std::optional<BoardPose> solve_pose(const CalibrationProblem& problem, const CameraModel& model,
+                                    const BoardView& view);
+// RMS of the views' inlier corners under `model`'s intrinsics with their poses re-solved;
+// inf when some view cannot be posed.
+double heldout_rms(const CalibrationProblem& problem, const CameraModel& model, const ViewSubset& views);
+
+// The area the boards covered: union of each view's convex hull of inlier corners
+// (width * height, row-major, 255 inside).
+std::vector<uint8_t> coverage_mask(const CalibrationProblem& problem, const ViewSubset& views);
+// diff_step_px, or about 5000 samples over the image (at least every 2 px).
+int auto_step(const CalibrationProblem& problem);
+
+double rms_of(const std::vector<double>& squares);  // sqrt(mean); 0 for none
+double median_of(std::vector<double> values);      // 0 for none; mean of the middle two
+
+}  // namespace lp

@@ -1,0 +1,71 @@
+// Stage "seed" of a geometric calibration: an initial guess (intrinsics + one pose per view)
+// for each candidate model, from OpenCV's closed-form calibrators, that the solve stage
+// (calibration_solve.h) refines. mrcal's C API does no seeding, so every mrcal solve starts
+// from one of these and is a deterministic function of it.
+//
+//   Kannala-Brandt   cv::fisheye::calibrate on every inlier corner; when it fails, on the
+//                    corners near the image centre (cv::fisheye cannot image rays near 90
+//                    deg); then every view re-posed under the seed (PnP on the rays + pixel
+//                    refinement), keeping whichever pose fits the view better.
+//   Mei              cv::omnidir::calibrate (it drops views its initialisation cannot use:
+//                    those are posed by PnP), then re-posed as Kannala-Brandt.
+//   pinhole, plumb_bob, rational (OpenCV5, OpenCV8)
+//                    cv::calibrateCamera with the model's flags.
+//   stereographic    the core (fx fy cx cy) and poses of a Kannala-Brandt fit (any field
+//                    of view), else of a pinhole fit.
+//   splined          a zero spline over a stereographic fit (exactly that model), its field
+//                    of view the widest horizontal angle of the image under it, with a margin.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "calib/calibration_problem.h"
+#include "calib/lens_model.h"
+
+namespace lp {
+
+struct SeedOptions {
+  // Kannala-Brandt fallback: corners within this fraction of the image's short side from
+  // the centre (where cv::fisheye's model, which cannot reach 90 deg, still holds).
+  double kb_central_radius = 0.45;
+  // The splined model's field of view: the stereographic seed's horizontal field times this
+  // margin (so that the image's edge columns fall inside the spline's domain).
+  double spline_fov_margin = 1.05;
+};
+
+// What a seed is, beside the fit (ModelFit::solver names the OpenCV call).
+struct SeedReport {
+  ModelFit fit;
+  bool central_corners_only = false;  // Kannala-Brandt: the fallback on the central corners ran
+  int views_reposed = 0;              // views whose OpenCV pose a PnP pose replaced
+};
+
+// The solved fit of another candidate on the same views (the stereographic seed needs the
+// Kannala-Brandt or pinhole fit, the splined one the stereographic fit).
+using SolvedFit = std::function<const ModelFit&(LensType)>;
+
+// The seed of candidate `type` on `views` (a calibration candidate: lens_model.h
+// candidate_lens_type). Not ok, with the reason, when the OpenCV call fails or diverges or
+// the model needs mrcal and problem.solve.use_mrcal is false.
+SeedReport seed_candidate(const CalibrationProblem& problem, const ViewSubset& views, LensType type,
+                          const SolvedFit& solved, const SeedOptions& options = {});
+
+// The OpenCV calls themselves, as OpenCV returns them (the peers of eval calib use them
+// alone). cv::fisheye::calibrate over the inlier corners `use` accepts: views with fewer than
+// 6 such corners get no pose (has_pose[i] = 0).
+ModelFit opencv_fisheye(const CalibrationProblem& problem, const ViewSubset& views,
+                        const std::function<bool(const std::array<double, 2>&)>& use, std::vector<char>* has_pose);
+// cv::calibrateCamera with the flags of pinhole, OpenCV5 (plumb_bob) or OpenCV8 (rational).
+ModelFit opencv_calibrate_camera(const CalibrationProblem& problem, const ViewSubset& views, LensType type);
+// cv::omnidir::calibrate (Mei); views it drops have has_pose[i] = 0.
+ModelFit opencv_omnidir(const CalibrationProblem& problem, const ViewSubset& views, std::vector<char>* has_pose);
+
+// The seed rounded to well above cv::calibrateCamera's run-to-run noise (1e-3 px core,
+// 1e-5 per distortion coefficient, 1e-6 rad, 1e-3 mm): what mrcal's polish starts from, so
+// that the polished model is the same on every run.
+ModelFit rounded_seed(const ModelFit& fit);
+
+}  // namespace lp

@@ -1,0 +1,63 @@
+// Stage "solve" of a geometric calibration: each candidate model fitted to a set of views
+// from its seed (calibration_seed.h), every inlier corner in one joint least-squares solve
+// of the intrinsics and all board poses.
+//
+//   Kannala-Brandt, Mei   Ceres (dense Schur, one thread) with camera_model.cpp's
+//                         projection (theta from atan2, so rays beyond 90 deg work);
+//   pinhole, plumb_bob, rational
+//                         mrcal's solver from the rounded cv::calibrateCamera seed; OpenCV's
+//                         own solution is kept when mrcal fails or does not improve it;
+//   stereographic, splined
+//                         mrcal (splined with its regularisation).
+// The result is a deterministic function of the corners: the same views always give
+// bit-identical intrinsics.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "calib/calibration_problem.h"
+#include "calib/calibration_seed.h"
+#include "calib/lens_model.h"
+
+namespace lp {
+
+// Ceres joint solve of a Kannala-Brandt or Mei fit from `seed` (poses aligned with `views`);
+// the seed when the solve fails or does not lower the cost.
+ModelFit refine_kannala_brandt(const CalibrationProblem& problem, const ViewSubset& views, const ModelFit& seed);
+ModelFit refine_mei(const CalibrationProblem& problem, const ViewSubset& views, const ModelFit& seed);
+// mrcal's solve of model `lensmodel` from the intrinsics and poses given (no outlier
+// rejection: outliers come in ignored); not ok with mrcal's reason when it fails.
+ModelFit solve_mrcal(const CalibrationProblem& problem, const ViewSubset& views, const std::string& lensmodel,
+                     std::vector<double> intrinsics, const std::vector<BoardPose>& poses, bool regularization);
+
+// Every candidate of one set of views, each solved once, on demand: a candidate's seed may
+// need another's solve (stereographic from Kannala-Brandt), which is then shared.
+class CandidateSolver {
+ public:
+  CandidateSolver(const CalibrationProblem& problem, ViewSubset views, SeedOptions seed = {})
+      : problem_(problem), views_(std::move(views)), seed_(seed) {}
+  const ViewSubset& views() const { return views_; }
+  // The solved fit of candidate `type` (not ok, with the reason, when it cannot be fitted or
+  // cannot image some inlier corner).
+  const ModelFit& get(LensType type);
+  // A fit of `type` on these views made elsewhere (warm-started): used instead of solving.
+  const ModelFit& adopt(LensType type, ModelFit fit);
+
+ private:
+  ModelFit solve(LensType type);
+  const CalibrationProblem& problem_;
+  ViewSubset views_;
+  SeedOptions seed_;
+  std::map<LensType, ModelFit> cache_;
+};
+
+// The fit of candidate `type` on `views` warm-started from `from`, a fit on a superset of
+// them (`poses`: from's poses of `views`, aligned): the jackknife's leave-one-out fits and
+// the repeated splits converge to the same minimum as a cold start, in a fraction of the
+// time. Falls back to a cold solve.
+ModelFit warm_refit(const CalibrationProblem& problem, const ViewSubset& views, LensType type, const ModelFit& from,
+                    const std::vector<BoardPose>& poses);
+
+}  // namespace lp

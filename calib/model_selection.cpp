@@ -1,0 +1,278 @@
+#include "calib/model_selection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numeric>
+#include <random>
+
+#include "calib/projection_difference.h"
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+ViewSubset half_of(const ViewSubset& used, int h) {
+  ViewSubset s;
+  for (size_t i = 0; i < used.size(); ++i)
+    if (int(i % 2) == h) s.push_back(used[i]);
+  return s;
+}
+
+// One table row: full fit, halves, cross-validation, held-out RMS.
+ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensType type) {
+  ModelCandidate c;
+  c.name = candidate_name(type);
+  const ModelFit& f = fits.full.get(type);
+  if (!f.ok) {
+    c.error = f.error;
+    return c;
+  }
+  c.lensmodel = f.model.lensmodel;
+  c.params = f.params;
+  c.rms_px = fit_rms(pr, f, fits.used);
+  c.model = f.model;
+  c.model.rms_reprojection_px = c.rms_px;
+  const ModelFit& a = fits.halves[0].get(type);
+  const ModelFit& b = fits.halves[1].get(type);
+  if (!a.ok || !b.ok) {
+    c.error = "a half of the views could not be fitted: " + (a.ok ? b.error : a.error);
+    return c;
+  }
+  const ProjectionDiff d = projection_difference(a.model, b.model, fits.mask, fits.step);
+  c.cross_validation_px = d.samples > 0 ? d.rms_px : kInf;
+  c.cross_validation_median_px = d.median_px;
+  const double h1 = heldout_rms(pr, a.model, fits.half[1]), h2 = heldout_rms(pr, b.model, fits.half[0]);
+  c.heldout_rms_px = std::sqrt(0.5 * (h1 * h1 + h2 * h2));
+  c.model.cross_validation_px = c.cross_validation_px;
+  c.ok = std::isfinite(c.cross_validation_px);
+  if (!c.ok) c.error = "no covered pixel both half-models can image";
+  return c;
+}
+
+// The cross-validation repeated over the splits for every candidate that can matter (the
+// first split, odd/even, is the table's, fitted cold); true when some candidate got a
+// finite repeated value.
+bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::vector<ModelCandidate>& table,
+                        const std::vector<std::vector<int>>& splits, double best_odd_even,
+                        const SelectionOptions& o, const StageProgress& progress) {
+  bool repeated = false;
+  if (splits.size() <= 1) return false;
+  for (auto& c : table) {
+    report_progress(progress, "repeated splits", size_t(&c - table.data()), table.size());
+    if (!c.ok || c.cross_validation_px > o.fit_max_cross_validation_px ||
+        c.cross_validation_px > o.screen_factor * best_odd_even + o.floor_px)
+      continue;
+    const LensType type = candidate_lens_type(c.name);
+    c.cross_validation_splits_px = {c.cross_validation_px};
+    for (size_t k = 1; k < splits.size(); ++k) {
+      c.cross_validation_splits_px.push_back(
+          split_cross_validation(pr, fits.used, splits[k], type, fits.full.get(type), fits.mask, fits.step));
+      if (!std::isfinite(c.cross_validation_splits_px.back())) break;  // cannot qualify: stop paying
+    }
+    c.cross_validation_repeated_px = rms_over_splits(c.cross_validation_splits_px);
+    if (std::isfinite(c.cross_validation_repeated_px)) repeated = true;
+  }
+  return repeated;
+}
+
+// The noise of a cross-validation: a jackknife standard error of the best model's. Each
+// view is left out of its half in turn (that half refitted warm, the other kept); as the two
+// halves are independent samples, Var = sum over halves of (m_h - 1) * s_h^2 (the two-sample
+// jackknife), with s_h a robust spread (1.4826 MAD) of that half's values so that one
+// influential view does not make every model "within noise". NaN with < 3 refits per half.
+double cross_validation_noise(const CalibrationProblem& pr, CandidateFits& fits, LensType best,
+                              const StageProgress& progress) {
+  std::vector<double> cvs[2];
+  for (size_t i = 0; i < fits.used.size(); ++i) {
+    report_progress(progress, "noise jackknife", i, fits.used.size());
+    const int h = int(i % 2), pos = int(i / 2);
+    ViewSubset rest;
+    for (size_t j = 0; j < fits.half[h].size(); ++j)
+      if (int(j) != pos) rest.push_back(fits.half[h][j]);
+    const ModelFit& from = fits.halves[h].get(best);
+    std::vector<BoardPose> poses;
+    for (size_t j = 0; j < from.poses.size(); ++j)
+      if (int(j) != pos) poses.push_back(from.poses[j]);
+    const ModelFit refit = warm_refit(pr, rest, best, from, poses);
+    if (!refit.ok) continue;
+    const ProjectionDiff d = projection_difference(refit.model, fits.halves[1 - h].get(best).model, fits.mask, fits.step);
+    if (d.samples > 0) cvs[h].push_back(d.rms_px);
+  }
+  if (cvs[0].size() < 3 || cvs[1].size() < 3) return kNaN;
+  double var = 0;
+  for (const auto& v : cvs) {
+    const double med = median_of(v);
+    std::vector<double> dev;
+    for (double c : v) dev.push_back(std::abs(c - med));
+    const double sh = 1.4826 * median_of(dev);
+    var += double(v.size() - 1) * sh * sh;
+  }
+  return std::sqrt(var);
+}
+
+// Sample SD / sqrt(K) of the per-split values; NaN with fewer than 2.
+double split_noise(const std::vector<double>& v) {
+  if (v.size() < 2) return kNaN;
+  const double mean = std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
+  double ss = 0;
+  for (double x : v) ss += (x - mean) * (x - mean);
+  return std::sqrt(ss / double(v.size() - 1)) / std::sqrt(double(v.size()));
+}
+
+// The pick: fewest parameters among the candidates within the noise of `best` (see the
+// header and SelectionOptions::k); marks within_noise.
+size_t pick_within_noise(const CandidateFits& fits, std::vector<ModelCandidate>& table, size_t best, double noise,
+                         const std::function<double(const ModelCandidate&)>& score, const SelectionOptions& o) {
+  // The held-out RMS (each half's model on the other half's corners, poses re-solved) is a
+  // far more precise statistic than a cross-validation (a mean over every corner, relative
+  // standard error ~1 / sqrt(2 n) over n residual components, and the same corners for every
+  // candidate): a model whose held-out error is significantly above the best's misses the
+  // corners, however noisy the cross-validation. Not the full fit's RMS: it falls with every
+  // parameter added, so once the best could be the 100-parameter spline (ranked on 4 splits,
+  // Ladybug: RMS 0.182 against Kannala-Brandt's 0.224, held-out 0.232 against 0.228) it
+  // disqualified every parametric model.
+  int components = 0;
+  for (const BoardView* v : fits.used) components += 2 * int(std::count(v->inlier.begin(), v->inlier.end(), 1));
+  const double heldout_limit = table[best].heldout_rms_px * (1 + o.k / std::sqrt(double(std::max(1, components))));
+  const double best_score = score(table[best]);
+  for (auto& c : table)
+    c.within_noise = c.ok && c.cross_validation_px <= o.fit_max_cross_validation_px &&
+                     score(c) <= o.fit_max_cross_validation_px && score(c) - best_score <= o.k * noise + o.floor_px &&
+                     c.heldout_rms_px <= heldout_limit;
+  size_t pick = best;
+  for (size_t i = 0; i < table.size(); ++i) {
+    const ModelCandidate& c = table[i];
+    if (c.ok && c.within_noise &&
+        (c.params < table[pick].params || (c.params == table[pick].params && score(c) < score(table[pick]))))
+      pick = i;
+  }
+  return pick;
+}
+
+}  // namespace
+
+CandidateFits::CandidateFits(const CalibrationProblem& pr, ViewSubset used_views)
+    : used(std::move(used_views)),
+      half{half_of(used, 0), half_of(used, 1)},
+      mask(coverage_mask(pr, used)),
+      step(auto_step(pr)),
+      full(pr, used),
+      halves{CandidateSolver(pr, half[0]), CandidateSolver(pr, half[1])} {}
+
+std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, CandidateFits& fits,
+                                             const std::vector<LensType>& candidates, const StageProgress& progress) {
+  std::vector<ModelCandidate> table;
+  for (LensType type : candidates) {
+    report_progress(progress, "candidates", table.size(), candidates.size());
+    table.push_back(evaluate(pr, fits, type));
+  }
+  return table;
+}
+
+SelectionReport select_model(const CalibrationProblem& pr, CandidateFits& fits, std::vector<ModelCandidate>& table,
+                             const SelectionOptions& o, const StageProgress& progress) {
+  SelectionReport rep;
+  // Fewest parameters within the noise of the best cross-validation, ranked on the
+  // cross-validation repeated over o.cv_splits balanced splits (one split is one noisy draw:
+  // it scattered by ~2x between noise draws of one setup).
+  const ModelCandidate* best_odd_even = nullptr;
+  for (const auto& c : table)
+    if (c.ok && (!best_odd_even || c.cross_validation_px < best_odd_even->cross_validation_px)) best_odd_even = &c;
+  if (!best_odd_even) {
+    std::string why;
+    for (const auto& c : table) why += (why.empty() ? "" : "; ") + c.name + ": " + c.error;
+    throw InputError("calibrate: no candidate model could be fitted (" + why + ")");
+  }
+  rep.splits = balanced_view_splits(int(fits.used.size()), std::max(1, o.cv_splits));
+  const bool repeated =
+      repeat_over_splits(pr, fits, table, rep.splits, best_odd_even->cross_validation_px, o, progress);
+  rep.selected_on = repeated ? "repeated" : "odd/even";
+  rep.cv_splits = repeated ? int(rep.splits.size()) : 1;
+  const auto score = [&](const ModelCandidate& c) {
+    if (!c.ok) return kInf;
+    if (!repeated) return c.cross_validation_px;
+    return std::isfinite(c.cross_validation_repeated_px) ? c.cross_validation_repeated_px : kInf;
+  };
+  size_t best = size_t(best_odd_even - table.data());
+  if (repeated) {
+    bool found = false;
+    for (size_t i = 0; i < table.size(); ++i)
+      if (std::isfinite(score(table[i])) && (!found || score(table[i]) < score(table[best]))) {
+        best = i;
+        found = true;
+      }
+    rep.cv_split_noise_px = split_noise(table[best].cross_validation_splits_px);
+  }
+  // Only the selection uses the jackknife noise: skipped (NaN) when the model is forced.
+  if (o.measure_noise) rep.cv_noise_px = cross_validation_noise(pr, fits, candidate_lens_type(table[best].name), progress);
+  // The tolerance. The K-split mean scatters less than one split, by up to sqrt(K) (less:
+  // the splits share the views, and the data's own noise is common to all of them), so the
+  // odd/even jackknife SE is a conservative bound on its noise; the per-split spread /
+  // sqrt(K) measures only the split-to-split part, from K values. docs/calibration.md
+  // ("Model selection uses the measured noise") has the measurement that chose the default.
+  const bool from_splits = o.noise_from_splits && std::isfinite(rep.cv_split_noise_px);
+  const double noise_used = from_splits ? rep.cv_split_noise_px : rep.cv_noise_px;
+  rep.noise_px = std::isfinite(noise_used) ? noise_used : 0.0;
+  rep.k = o.k;
+  rep.noise_from_splits = from_splits;
+  rep.selected = pick_within_noise(fits, table, best, rep.noise_px, score, o);
+  rep.no_model_fits = true;
+  for (const auto& c : table)
+    if (c.ok && c.rms_px <= o.fit_max_rms_px && c.cross_validation_px <= o.fit_max_cross_validation_px)
+      rep.no_model_fits = false;
+  return rep;
+}
+
+// A split that follows the capture order (first/second half) would put the central boards
+// in one half and the rim in the other and measure coverage, not noise: odd/even first, then
+// pseudo-random ones (deterministic).
+std::vector<std::vector<int>> balanced_view_splits(int n, int k) {
+  std::vector<std::vector<int>> out;
+  std::vector<int> side(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) side[size_t(i)] = i % 2;
+  out.push_back(side);
+  std::mt19937 rng(12345);
+  for (int tries = 0; int(out.size()) < k && tries < 100 * k; ++tries) {
+    for (int i = n - 1; i > 0; --i) std::swap(side[size_t(i)], side[size_t(rng() % uint32_t(i + 1))]);
+    const bool seen = std::any_of(out.begin(), out.end(), [&](const std::vector<int>& s) {
+      bool same = true, complement = true;
+      for (size_t i = 0; i < s.size(); ++i) {
+        same = same && s[i] == side[i];
+        complement = complement && s[i] != side[i];
+      }
+      return same || complement;
+    });
+    if (!seen) out.push_back(side);
+  }
+  return out;
+}
+
+double split_cross_validation(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side,
+                              LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step) {
+  ViewSubset hs[2];
+  std::vector<BoardPose> ps[2];
+  for (size_t i = 0; i < used.size(); ++i) {
+    hs[side[i]].push_back(used[i]);
+    ps[side[i]].push_back(full.poses[i]);
+  }
+  if (hs[0].size() < 3 || hs[1].size() < 3) return kInf;
+  const ModelFit a = warm_refit(pr, hs[0], type, full, ps[0]);
+  if (!a.ok) return kInf;
+  const ModelFit b = warm_refit(pr, hs[1], type, full, ps[1]);
+  if (!b.ok) return kInf;
+  const ProjectionDiff d = projection_difference(a.model, b.model, mask, step);
+  return d.samples > 0 ? d.rms_px : kInf;
+}
+
+double rms_over_splits(const std::vector<double>& v) {
+  if (v.empty()) return kNaN;
+  double s = 0;
+  for (double x : v) s += x * x;
+  return std::sqrt(s / double(v.size()));
+}
+
+}  // namespace lp

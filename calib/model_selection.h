@@ -1,0 +1,161 @@
+// Stages "solve candidates" and "cross-validate and select" of a geometric calibration.
+//
+// Every candidate is solved (calibration_solve.h) on the views left after outlier rejection
+// and on each odd/even half of them. Accuracy is cross-validation: the two half-models
+// compared over the area the boards covered (unproject with A, best rotation between the
+// two camera frames, project with B): the pixel disagreement is what a user can expect from
+// recalibrating (mrcal's "projection difference"). The held-out RMS is each half's model on
+// the other half's corners, poses re-solved.
+//
+// The model chosen is the one with the fewest parameters whose cross-validation, repeated
+// over cv_splits balanced splits (RMS over the splits), is within the noise of the best
+// candidate's: it exceeds the best's by at most selection_k times the jackknife standard
+// error of the best's odd/even cross-validation (each view left out of its half in turn,
+// that half refitted, the comparison repeated), and whose held-out RMS is not significantly
+// above the best's.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "calib/calibration_problem.h"
+#include "calib/calibration_solve.h"
+#include "calib/lens_model.h"
+
+namespace lp {
+
+struct ModelCandidate {
+  std::string name;       // candidate name as in CalibrateOptions::candidates (lens_model.h)
+  std::string lensmodel;  // camera_model.h name of the fitted model
+  int params = 0;         // free intrinsics
+  bool ok = false;
+  std::string error;      // why the fit failed (when !ok)
+  double rms_px = 0;                 // reprojection RMS (per corner, 2-D) of the full fit
+  // One half's intrinsics on the other half's corners (poses re-solved with intrinsics
+  // fixed: PnP on the unprojected rays, then pixel refinement), both ways; inf when some
+  // view cannot be posed under the model (e.g. a pinhole model and rays near 90 deg).
+  double heldout_rms_px = 0;
+  double cross_validation_px = 0;    // RMS odd-vs-even projection difference, covered area
+  double cross_validation_median_px = 0;
+  // The cross-validation of each balanced split (CalibrateOptions::cv_splits; the first is
+  // the odd/even one above) and their RMS, which ranks the candidates. Empty / NaN when the
+  // candidate was screened out (see SelectionOptions::screen_factor) or cv_splits = 1; inf
+  // when a half of some split could not be fitted.
+  std::vector<double> cross_validation_splits_px;
+  double cross_validation_repeated_px = std::numeric_limits<double>::quiet_NaN();
+  bool within_noise = false;  // cv and held-out RMS within the noise of the best's (see options)
+  // mrcal-style linearised projection uncertainty of this candidate's full fit (a ray at
+  // infinity, rotation fitted out): the RMS 2-D sigma over the area the boards covered, and
+  // the cross-validation it forecasts (2x that). NaN when not computed (options.uncertainty
+  // off, splined models, singular normal equations). Reported beside the cross-validation;
+  // it does not take part in the pick (it is 1.4-3.3x optimistic on real corners).
+  double linear_sigma_px = std::numeric_limits<double>::quiet_NaN();
+  double linear_forecast_cv_px = std::numeric_limits<double>::quiet_NaN();
+  CameraModel model;
+};
+
+// The fits the stages after outlier rejection share: every candidate solved on the used
+// views and on each odd/even half (on demand, once), and the area they are compared over.
+struct CandidateFits {
+  CandidateFits(const CalibrationProblem& problem, ViewSubset used_views);
+  ViewSubset used, half[2];      // half[i % 2] holds used[i]
+  std::vector<uint8_t> mask;     // coverage_mask of the used views
+  int step = 2;                  // auto_step
+  CandidateSolver full, halves[2];
+};
+
+// Stage "solve candidates": one table row per candidate, in the order given (full fit,
+// halves, odd/even cross-validation, held-out RMS). Progress stage "candidates".
+std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& problem, CandidateFits& fits,
+                                             const std::vector<LensType>& candidates,
+                                             const StageProgress& progress = {});
+
+struct SelectionOptions {
+  // A candidate "fits" when its reprojection RMS is at most fit_max_rms_px and its
+  // cross-validation at most fit_max_cross_validation_px; SelectionReport::no_model_fits
+  // when none does. Chessboard corners are good to a few tenths of a pixel, so a model that
+  // misses them by 1.5 px RMS (or whose two halves disagree by 5 px) is the wrong lens model,
+  // not a noisy calibration.
+  double fit_max_rms_px = 1.5;
+  double fit_max_cross_validation_px = 5.0;
+  // The candidate with the fewest parameters among those with
+  // cv - cv_best <= k * noise + floor_px, where noise is the jackknife standard error of the
+  // best (lowest) cross-validation (one warm refit of a half per view). k = 2: a model whose
+  // cross-validation differs from the best's by less than two standard errors of such a
+  // measurement cannot be told apart from it by these views. (The standard error of the
+  // paired difference was tried first: a wrong model's cross-validation jumps so much when a
+  // view is left out that its own spread made a 1.5 px pinhole "within noise" of a 0.1 px
+  // rational fit.) The floor only matters for noise-free corners. Candidates with
+  // cross-validation above fit_max_cross_validation_px never qualify, nor those whose
+  // held-out RMS exceeds the best's by more than k / sqrt(residual components) (relative):
+  // it is the precise statistic, and with few views the cross-validation's spread is too wide
+  // to reject a stereographic model 1.3 px off on a 190 deg lens (0.31 px for the best). (The
+  // full fit's RMS was used before: it falls with every parameter, so a 100-parameter spline
+  // as the best disqualified every other model.)
+  double k = 2.0;
+  double floor_px = 0.005;
+  // The cross-validation that ranks the candidates: repeated over cv_splits balanced splits
+  // of the views (odd/even, then cv_splits - 1 pseudo-random ones from a fixed seed, none
+  // repeated; each half refitted warm from the candidate's full fit), RMS over the splits.
+  // One split is one noisy draw (its value for one setup scattered 0.18-0.77 px over four
+  // noise draws); the mean of 4 was predicted within 0.69-1.35x by the jackknife on seven
+  // real sets (docs/calibration.md). 4: the repeated value the forecasts were checked
+  // against, at 3 extra splits' cost. 1 = the odd/even split alone. Each extra split costs
+  // two warm refits per candidate that is not screened out: failed, odd/even
+  // cross-validation above fit_max_cross_validation_px, or above screen_factor x the best
+  // odd/even one (a single split scatters by ~2x, so 10x is hopeless, not noise).
+  int cv_splits = 4;
+  double screen_factor = 10.0;
+  // The tolerance's noise: false = the jackknife standard error of the best candidate's
+  // odd/even cross-validation, a conservative bound for the K-split mean; true = the spread
+  // of the best's K per-split values / sqrt(K). See docs/calibration.md for the measurement
+  // that chose.
+  bool noise_from_splits = false;
+  // false when the model is forced (one candidate): no noise jackknife (cv_noise_px NaN).
+  bool measure_noise = true;
+};
+
+struct SelectionReport {
+  size_t selected = 0;  // index into the table
+  // What ranked the candidates: "repeated" (RMS over cv_splits splits) or "odd/even" (cv_splits
+  // = 1, or no candidate survived the screening with every split fitted).
+  std::string selected_on;
+  int cv_splits = 1;
+  std::vector<std::vector<int>> splits;  // the balanced splits of the used views
+  // Jackknife standard error of the best candidate's odd/even cross-validation; NaN when not
+  // measured or with fewer than 3 refits per half.
+  double cv_noise_px = std::numeric_limits<double>::quiet_NaN();
+  // Standard error of the best candidate's K-split mean from the spread of its per-split
+  // values (sample SD / sqrt(K)); NaN with fewer than 2 splits.
+  double cv_split_noise_px = std::numeric_limits<double>::quiet_NaN();
+  // The tolerance applied: cv <= cv_best + k * noise_px (+ floor).
+  double noise_px = 0, k = 0;
+  bool noise_from_splits = false;
+  bool no_model_fits = false;  // no candidate fits (see SelectionOptions::fit_max_rms_px)
+};
+
+// Stage "cross-validate and select": fills the table's repeated splits and within_noise.
+// Progress stages "repeated splits" and "noise jackknife". InputError when no candidate
+// could be fitted (the reasons listed).
+SelectionReport select_model(const CalibrationProblem& problem, CandidateFits& fits,
+                             std::vector<ModelCandidate>& table, const SelectionOptions& options = {},
+                             const StageProgress& progress = {});
+
+// The balanced splits the selection's repeated cross-validation uses, of `views` used views
+// (in their order) into two halves: side 0/1 per view, odd/even first, then pseudo-random
+// ones from a fixed seed, none equal to an earlier one or its complement; at most `splits`.
+std::vector<std::vector<int>> balanced_view_splits(int views, int splits);
+
+// Cross-validation of candidate `type` on one split of `used` (sides from
+// balanced_view_splits): each half refitted warm from `full` (the candidate's fit on every
+// used view), projection difference over `mask`. inf when a half has < 3 views, cannot be
+// fitted, or the two half-models share no covered pixel.
+double split_cross_validation(const CalibrationProblem& problem, const ViewSubset& used, const std::vector<int>& side,
+                              LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
+
+// RMS of per-split cross-validations (inf if any is; NaN for none).
+double rms_over_splits(const std::vector<double>& values);
+
+}  // namespace lp

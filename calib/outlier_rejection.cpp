@@ -1,0 +1,155 @@
+#include "calib/outlier_rejection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "calib/calibration_solve.h"
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+// The requested model (rational, then pinhole, when it cannot be fitted); else the best of
+// options.references on a sample of the views (see the header).
+std::optional<LensType> choose_reference(const CalibrationProblem& pr, CandidateSolver& fitter,
+                                         const OutlierOptions& options) {
+  if (options.model) {
+    for (LensType r : {*options.model, LensType::OpenCV8, LensType::Pinhole})
+      if (fitter.get(r).ok) return r;
+    return std::nullopt;
+  }
+  ViewSubset sample = fitter.views();
+  const size_t cap = size_t(std::max(4, options.reference_views));
+  if (sample.size() > cap) {
+    ViewSubset spaced;
+    for (size_t k = 0; k < cap; ++k) spaced.push_back(sample[k * sample.size() / cap]);
+    sample = spaced;
+  }
+  CandidateSolver sampled(pr, sample);
+  CandidateSolver& chooser = sample.size() == fitter.views().size() ? fitter : sampled;
+  std::optional<LensType> ref;
+  double best_rms = std::numeric_limits<double>::infinity();
+  for (LensType r : options.references) {
+    const ModelFit& g = chooser.get(r);
+    if (!g.ok) continue;
+    const double e = fit_rms(pr, g, sample);
+    if (e < best_rms) {
+      best_rms = e;
+      ref = r;
+    }
+  }
+  if (ref && !fitter.get(*ref).ok) ref.reset();  // fits the sample, not all views
+  if (!ref) {
+    std::vector<LensType> fallbacks = options.references;
+    fallbacks.push_back(LensType::Pinhole);
+    for (LensType r : fallbacks)
+      if (fitter.get(r).ok) return r;
+  }
+  return ref;
+}
+
+// One round's inlier flags from the fit's residuals; true when some flag changed.
+bool update_inliers(const CalibrationProblem& pr, std::vector<BoardView>& views, const ViewSubset& sub,
+                    const ModelFit& f, const OutlierOptions& options, OutlierReport& rep) {
+  std::vector<std::vector<std::array<double, 2>>> rs;
+  std::vector<double> comps;
+  for (size_t i = 0; i < sub.size(); ++i) {
+    rs.push_back(view_residuals(pr, f.model, *sub[i], f.poses[i]));
+    for (size_t k = 0; k < rs.back().size(); ++k)
+      if (sub[i]->inlier[k] && std::isfinite(rs.back()[k][0])) {
+        comps.push_back(std::abs(rs.back()[k][0]));
+        comps.push_back(std::abs(rs.back()[k][1]));
+      }
+  }
+  rep.sigma_px = 1.4826 * median_of(comps);
+  rep.threshold_px = std::max(options.k * rep.sigma_px, options.floor_px);
+  bool changed = false;
+  for (size_t i = 0; i < sub.size(); ++i) {
+    BoardView& v = views[size_t(sub[i] - views.data())];
+    for (size_t k = 0; k < v.px.size(); ++k) {
+      const char in = std::hypot(rs[i][k][0], rs[i][k][1]) <= rep.threshold_px;
+      if (v.inlier[k] != in) {
+        v.inlier[k] = in;
+        changed = true;
+      }
+    }
+  }
+  return changed;
+}
+
+// Views with too many outliers lose their board; true when one did.
+bool drop_views(const CalibrationProblem& pr, const std::vector<BoardView>& views, const OutlierOptions& options,
+                OutlierReport& rep) {
+  const int ncorners = pr.board.cols * pr.board.rows;
+  bool changed = false;
+  for (size_t i = 0; i < views.size(); ++i) {
+    if (!rep.view_used[i]) continue;
+    const int bad = int(std::count(views[i].inlier.begin(), views[i].inlier.end(), 0));
+    if (bad > options.max_view_outlier_fraction * ncorners || ncorners - bad < 4) {
+      rep.view_used[i] = 0;
+      rep.why[i] = "too many outlier corners (" + std::to_string(bad) + " of " + std::to_string(ncorners) + ")";
+      changed = true;
+    }
+  }
+  return changed;
+}
+
+// The last round's fit warm-started on `now` (a subset of the views it was fitted on).
+ModelFit warm_from_last(const CalibrationProblem& pr, const OutlierReport& rep, const ViewSubset& now) {
+  std::vector<BoardPose> poses;
+  for (const BoardView* v : now)
+    poses.push_back(rep.last_fit->poses[size_t(std::find(rep.last_views.begin(), rep.last_views.end(), v) -
+                                               rep.last_views.begin())]);
+  return warm_refit(pr, now, rep.reference, *rep.last_fit, poses);
+}
+
+}  // namespace
+
+ViewSubset used_views(const std::vector<BoardView>& views, const std::vector<char>& used, int skip) {
+  ViewSubset s;
+  for (size_t i = 0; i < views.size(); ++i)
+    if (used[i] && int(i) != skip) s.push_back(&views[i]);
+  return s;
+}
+
+OutlierReport reject_outliers(const CalibrationProblem& pr, std::vector<BoardView>& views,
+                              const OutlierOptions& options, const StageProgress& progress) {
+  OutlierReport rep;
+  rep.view_used.assign(views.size(), 1);
+  rep.why.assign(views.size(), "");
+  std::optional<LensType> ref;
+  const int rounds = std::max(1, options.rounds);
+  for (int round = 0; round < rounds; ++round) {
+    report_progress(progress, "outlier rejection", size_t(round), size_t(rounds));
+    CandidateSolver fitter(pr, used_views(views, rep.view_used));
+    if (rep.last_fit && rep.last_fit->ok && ref == LensType::KannalaBrandt)
+      fitter.adopt(*ref, warm_from_last(pr, rep, fitter.views()));
+    if (!ref) ref = choose_reference(pr, fitter, options);
+    if (!ref || !fitter.get(*ref).ok) throw InputError("calibrate: no model could be fitted to the corners");
+    rep.reference = *ref;
+    const ModelFit& f = fitter.get(*ref);
+    rep.rounds = round + 1;
+    bool changed = update_inliers(pr, views, fitter.views(), f, options, rep);
+    changed = drop_views(pr, views, options, rep) || changed;
+    rep.last_fit = f;
+    rep.last_views = fitter.views();
+    rep.refit_needed = changed;
+    if (!changed) break;
+  }
+  const ViewSubset used = used_views(views, rep.view_used);
+  if (used.size() < 4)
+    throw InputError("calibrate: only " + std::to_string(used.size()) +
+                     " views left after outlier rejection, need at least 4");
+  for (const BoardView* v : used) rep.corners_rejected += int(std::count(v->inlier.begin(), v->inlier.end(), 0));
+  return rep;
+}
+
+std::optional<ModelFit> reference_fit(const CalibrationProblem& pr, const OutlierReport& rep, const ViewSubset& used) {
+  if (!rep.last_fit || !rep.last_fit->ok) return std::nullopt;
+  if (!rep.refit_needed) return *rep.last_fit;
+  if (rep.reference == LensType::KannalaBrandt) return warm_from_last(pr, rep, used);
+  return std::nullopt;
+}
+
+}  // namespace lp

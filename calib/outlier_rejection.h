@@ -1,0 +1,79 @@
+// Stage "reject outliers" of a geometric calibration: corners a reference model misses by
+// far more than the detector's noise are marked outliers, and views that lose most of their
+// corners are left out, before the candidates are solved (model_selection.h).
+//
+// One reference model, chosen in the first round and kept: the requested model (rational,
+// then pinhole, when it cannot be fitted); else whichever of `references` (Kannala-Brandt:
+// narrow to > 180 deg lenses, Mei: catadioptric, rational: perspective; one per lens
+// family) fits every corner with the lowest RMS (earlier in the list on a tie), pinhole when
+// none can be fitted. A reference that cannot fit the lens at all (Kannala-Brandt on a
+// mirror camera) would call good corners outliers and throw whole views away.
+// Each round refits the reference on the views left and recomputes every corner's flag from
+// scratch (so corners a gross outlier dragged off come back once it is gone): outlier when
+// |residual| > max(k * sigma, floor_px), sigma = 1.4826 * MAD of the residual components.
+// Rounds stop when nothing changes. With Kannala-Brandt as the reference, later rounds
+// re-solve warm from the previous round's fit: no OpenCV seed, no re-posing, the same minimum
+// (within 1.5e-4 px of cold solves on the three KB real sets). Not the others: Mei's
+// xi/focal valley and the rational model's free extrapolation make where a solve stops
+// depend on its start (on Ladybug warm rounds moved Mei by 0.17 px RMS and rejected other
+// corners); those re-solve from scratch.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/calibration_problem.h"
+#include "calib/lens_model.h"
+
+namespace lp {
+
+struct OutlierOptions {
+  // Outlier when |residual| > k * sigma, never below floor_px (chessboard corners are good
+  // to ~0.1 px: below that a noise-free set would lose good corners); at most `rounds`.
+  double k = 4.0;
+  double floor_px = 0.25;
+  int rounds = 5;
+  // The reference is chosen on at most this many views, evenly spaced, when there are more:
+  // on 63 views fitting all three references cost ~20 s, and the choice only needs to tell
+  // the lens family apart.
+  int reference_views = 16;
+  // A view loses its board when more than this fraction of its corners are outliers (or
+  // fewer than 4 are left).
+  double max_view_outlier_fraction = 0.5;
+  // The requested model (calibrate's `model`): the reference, no choice.
+  std::optional<LensType> model;
+  // The candidates for the reference, one per lens family, in order of preference on a tie.
+  std::vector<LensType> references = {LensType::KannalaBrandt, LensType::OmnidirMei, LensType::OpenCV8};
+};
+
+struct OutlierReport {
+  LensType reference = LensType::Pinhole;
+  int rounds = 0;
+  double sigma_px = 0, threshold_px = 0;  // of the last round
+  std::vector<char> view_used;            // per view as passed in
+  std::vector<std::string> why;           // per view: "" or why it lost its board
+  int corners_rejected = 0;               // outlier corners of the views left
+  // The reference's fit in the last round, on last_views; refit_needed when the inlier flags
+  // changed after it was fitted (rounds ran out).
+  std::optional<ModelFit> last_fit;
+  ViewSubset last_views;
+  bool refit_needed = false;
+};
+
+// Updates the inlier flags of `views` (every view with a board, as make_board_views gives
+// them). Progress stage "outlier rejection", one step per round. InputError when no model
+// can be fitted to the corners or fewer than 4 views are left.
+OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<BoardView>& views,
+                              const OutlierOptions& options = {}, const StageProgress& progress = {});
+
+// The views `used` flags (skipping index `skip`), in order.
+ViewSubset used_views(const std::vector<BoardView>& views, const std::vector<char>& used, int skip = -1);
+
+// The reference's fit on `used` (the views left) where the last round's can stand for it:
+// that fit when nothing changed after it, a warm re-solve for Kannala-Brandt; nullopt
+// otherwise (the candidate stage solves it cold).
+std::optional<ModelFit> reference_fit(const CalibrationProblem& problem, const OutlierReport& report,
+                                      const ViewSubset& used);
+
+}  // namespace lp

@@ -2,12 +2,15 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <memory>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 
 #include "cli/commands.h"
+#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -26,6 +29,34 @@
 #include "probe/unwrap_accuracy.h"
 
 namespace lp::cli {
+
+struct ProbeUnwrapArgs {
+  std::vector<std::string> inputs;  // an image, several, or a directory (a sequence)
+  std::string type = "mirrorball";  // mirrorball|fisheye
+  std::string camera;               // fisheye: OpenCV fisheye YAML (default: equidistant)
+  double fov = 0;                   // fisheye: equidistant field of view; ball: camera fov
+  double distance = 0;              // ball: camera distance in ball radii (0: orthographic)
+  std::string ball;                 // "cx,cy,r" instead of detection
+  double reflectivity = 1.0;
+  bool fresnel = false;
+  double blind_spot_deg = 15;
+  bool fill = false;
+  bool stabilise = false;           // smooth the per-frame ball / circle track
+  bool static_probe = false;        // with stabilise: one median position for all frames
+  bool fixed_ball = false;          // use frame 0's geometry for every frame (no tracking)
+  std::string colour_match;         // 3x3 transform to the backplate camera (calib colour)
+  std::string rotation;
+  std::string layout = "latlong";
+  std::string size;
+  int nside = 0;
+  std::string output;               // a map, or a directory for a sequence
+};
+
+struct ProbeRegisterArgs {
+  std::vector<std::string> images;  // photos of one ball, cropped differently
+  int size = 512;                   // output square, px
+  std::string output_dir;
+};
 
 namespace {
 
@@ -231,16 +262,6 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   return 0;
 }
 
-int run_calib_colour(const CalibColourArgs& args, const Output& out) {
-  const ColourMatch m = fit_colour_match(read_colour_patches_csv(args.patches));
-  save_colour_match(args.output, m);
-  say(out, "{}: 3x3 colour match from {} patches, residual RMS {:.2f} %\n", args.output, m.patches,
-      100 * m.rms_relative);
-  emit_json(out, {{"output", args.output}, {"patches", m.patches}, {"rms_relative", m.rms_relative},
-                  {"matrix", m.matrix.m}});
-  return 0;
-}
-
 int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   // Differently cropped photos of one ball (a bracket shot by hand): find the ball in
   // each, then resample every photo so the ball is centred with one radius, code values
@@ -273,53 +294,6 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
       registered.size(), args.size, args.size, ball.cx, ball.cy, ball.radius_px);
   emit_json(out, {{"output", args.output_dir}, {"frames", found},
                   {"registered_ball", {ball.cx, ball.cy, ball.radius_px}}});
-  return 0;
-}
-
-int run_synth_probe(const SynthProbeArgs& args, const Output& out) {
-  const EnvMap world = args.input == "scene" ? render_scene(describe_scene(), Layout::LatLong, 1024, 512)
-                                             : read_envmap(args.input);
-  int w = 0, h = 0;
-  parse_size(args.size, "--size", &w, &h);
-  const bool sequence = args.frames > 1;
-  if (args.frames < 1) throw InputError("--frames must be at least 1");
-  if (sequence) {
-    std::error_code ec;
-    fs::create_directories(args.output, ec);
-    if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output, ec.message()));
-  }
-  nlohmann::json truth = {{"type", args.type}, {"input", args.input}, {"frames", args.frames}};
-  nlohmann::json per_frame = nlohmann::json::array();
-  if (args.type == "mirrorball") {
-    const double r = args.radius > 0 ? args.radius : 0.4 * std::min(w, h);
-    const BallInImage ball{w / 2.0, h / 2.0, r};
-    MirrorBallCamera cam;
-    if (args.distance > 0) cam.distance_in_radii = args.distance;
-    const auto track = jittered_track(ball, args.frames, sequence ? args.jitter : 0, args.seed);
-    for (int f = 0; f < args.frames; ++f) {
-      RenderBallOptions ro;
-      ro.noise_relative = args.noise;
-      ro.seed = args.seed + uint64_t(f);
-      const RgbImage img = render_mirror_ball(world, track[size_t(f)], cam, w, h, ro);
-      const std::string path = sequence ? (fs::path(args.output) / fmt::format("frame_{:04d}.exr", f)).string() : args.output;
-      write_rgb_image(path, img);
-      per_frame.push_back({{"frame", f}, {"ball", {track[size_t(f)].cx, track[size_t(f)].cy, track[size_t(f)].radius_px}}});
-    }
-    if (args.distance > 0) truth["distance_in_radii"] = args.distance;
-  } else if (args.type == "fisheye") {
-    const FisheyeModel m = equidistant_fisheye(w, h, args.fov);
-    const RgbImage img = render_fisheye(world, m, 4);
-    write_rgb_image(args.output, img);
-    truth["fov_deg"] = args.fov;
-    if (sequence) throw InputError("--frames applies to mirror balls only");
-  } else {
-    throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", args.type));
-  }
-  truth["per_frame"] = per_frame;
-  if (sequence) write_file_atomically((fs::path(args.output) / "truth.json").string(), truth.dump(2) + "\n");
-  say(out, "{}: synthetic {} probe {}x{}{}\n", args.output, args.type, w, h,
-      sequence ? fmt::format(", {} frames, truth.json", args.frames) : "");
-  emit_json(out, truth);
   return 0;
 }
 
@@ -386,6 +360,45 @@ int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out) {
                   {"centre_error_px", r.centre_error_px}, {"ms", r.ms}});
   emit_json(out, {{"csv", csv_path}, {"rows", jr}});
   return 0;
+}
+
+std::vector<Command> probe_commands() {
+  return {
+      {"probe unwrap", "Unwrap a probe image (or a sequence) into a map in the world frame",
+       "lightprobe probe unwrap ball.exr --type mirrorball --fill --layout latlong --size 1024x512 -o map.exr\nlightprobe probe unwrap sky.png --type fisheye --camera fisheye.yaml --layout hemisphere -o sky.exr\nlightprobe probe unwrap frames/ --type mirrorball -o maps/",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<ProbeUnwrapArgs>();
+         f.arg("IMAGE", a->inputs, "Probe image(s) or a directory of frames").required();
+         f.opt("--type", a->type, "mirrorball|fisheye");
+         f.opt("--camera", a->camera, "fisheye: calibrated model (.cameramodel or OpenCV YAML, any lens model)");
+         f.opt("--fov", a->fov, "fisheye: field of view (deg): of the equidistant default model, or the image circle of --camera; " "ball: the camera's field of view");
+         f.opt("--distance", a->distance, "ball: camera distance in ball radii (default orthographic)");
+         f.opt("--ball", a->ball, "ball: 'cx,cy,r' in pixels instead of detection");
+         f.opt("--reflectivity", a->reflectivity, "ball: reflectivity at normal incidence (chrome ~0.6-0.7)");
+         f.flag("--fresnel", a->fresnel, "ball: reflectivity rises towards the rim (Schlick)");
+         f.opt("--blind-spot", a->blind_spot_deg, "ball: half-angle (deg) masked around the blind spot");
+         f.flag("--fill", a->fill, "Fill what the camera cannot see smoothly (mask kept)");
+         f.flag("--smooth-track", a->stabilise, "Sequences: smooth the per-frame ball / image-circle track (a fixed probe, noisy detection)");
+         f.flag("--static-probe", a->static_probe, "With --smooth-track: one median position for every frame");
+         f.flag("--fixed-ball", a->fixed_ball, "Sequences: no tracking, frame 0's geometry for all (for comparison)");
+         f.opt("--colour-match", a->colour_match, "3x3 colour transform to the backplate (calib colour)");
+         f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers");
+         f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
+         f.opt("--size", a->size, "WxH");
+         f.opt("--nside", a->nside, "healpix nside");
+         f.output(a->output, "Output map (or directory for a sequence)");
+         return [a](const Output& out) { return run_probe_unwrap(*a, out); };
+       }},
+      {"probe register", "Centre one ball in differently cropped photos (for hdr fuse)",
+       "lightprobe probe register a.jpg b.jpg c.jpg -o registered/",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<ProbeRegisterArgs>();
+         f.arg("IMAGE", a->images, "Photos of the same mirror ball").required();
+         f.opt("--size", a->size, "Output square size, px");
+         f.output(a->output_dir, "Directory for the registered photos (PNG)");
+         return [a](const Output& out) { return run_probe_register(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

@@ -2,6 +2,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <memory>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -21,6 +23,25 @@
 #include "sampling/sampler.h"
 
 namespace lp::cli {
+
+struct SampleArgs {
+  std::vector<std::string> inputs;  // one map, several maps (a sequence) or a directory
+  std::string method = "pharr";
+  std::string n = "256";            // a count or "auto"
+  double target_error = 0.01;
+  std::string format;               // json|ndjson|pbrt|mitsuba|gltf|csv (default from -o)
+  std::string output;
+  std::string overlay;              // PNG of the lights on the map
+  std::string layout;               // input layout override
+  bool upper_only = false;
+  bool lloyd = false;
+  double q2_a = 1.0, q2_b = 0.25;
+  bool q2_jitter = false;
+  int q2_nside = 0;
+  std::string filter = "auto";      // FIR filtering of power and directions: auto|on|off
+  double fps = 21;                  // frame rate the filter is designed for
+  int cluster = 0;                  // cluster to at most this many lights (0: off)
+};
 
 namespace {
 
@@ -209,6 +230,34 @@ int run_sample(const SampleArgs& args, const Output& out) {
     report.update(frames[0]);
   emit_json(out, report);
   return 0;
+}
+
+std::vector<Command> sample_commands() {
+  return {
+      {"sample", "Environment map -> directional lights",
+       "lightprobe sample probe.exr --method q2tree --n 256 -o lights.json --overlay lights.png\nlightprobe sample probe.exr --method pharr --n auto --target-error 0.01 -o lights.pbrt\nlightprobe sample frames/ --method hemigon --n 300 -o lights.ndjson",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<SampleArgs>();
+         f.arg("MAP", a->inputs, "A map, several maps (a sequence: NDJSON, one frame each) or a directory").required();
+         f.opt("--method", a->method, "pharr|hemigon|q2tree|mediancut");
+         f.opt("--n", a->n, "Number of lights, or 'auto' with --target-error");
+         f.opt("--target-error", a->target_error, "With --n auto: largest diffuse error (0.01 = 1 %)");
+         f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|csv (default: from -o's extension)");
+         f.output(a->output, "Output file");
+         f.opt("--overlay", a->overlay, "Also draw the lights on the tone-mapped map (PNG)");
+         f.opt("--layout", a->layout, "Read the input as this layout");
+         f.flag("--upper-only", a->upper_only, "hemigon: sample only the upper hemisphere (sky probes)");
+         f.flag("--lloyd", a->lloyd, "hemigon: Lloyd-relaxed Halton points");
+         f.opt("--q2-a", a->q2_a, "q2tree: luminance exponent a of p = L^a dw^b");
+         f.opt("--q2-b", a->q2_b, "q2tree: solid-angle exponent b of p = L^a dw^b");
+         f.flag("--q2-jitter", a->q2_jitter, "q2tree: deterministic jitter instead of leaf centroids");
+         f.opt("--q2-nside", a->q2_nside, "q2tree: HEALPix resolution to bin to (0: from the input)");
+         f.opt("--filter", a->filter, "Temporal FIR filter on power and directions: auto (hemigon only), on, off");
+         f.opt("--fps", a->fps, "Frame rate of a sequence (the FIR filter is designed for it)");
+         f.opt("--cluster", a->cluster, "Cluster the lights to at most this many (Havran 2005 4.3)");
+         return [a](const Output& out) { return run_sample(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

@@ -62,21 +62,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-ExportFormat light_format(const std::string& format, const std::string& output) {
-  if (!format.empty()) {
-    auto f = export_format_from_string(format);
-    if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, csv)", format));
-    return *f;
-  }
-  const std::string e = fs::path(output).extension().string();
-  if (e == ".ndjson" || e == ".jsonl") return ExportFormat::Ndjson;
-  if (e == ".pbrt") return ExportFormat::Pbrt;
-  if (e == ".xml") return ExportFormat::Mitsuba;
-  if (e == ".gltf") return ExportFormat::Gltf;
-  if (e == ".csv") return ExportFormat::Csv;
-  return ExportFormat::Json;
-}
-
 // The camera: the track's header, then --photometric and the explicit options.
 MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
   MeteringOptions m = track.camera;
@@ -192,7 +177,7 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
   if (at.size() != 2 && at.size() != 3) throw InputError(fmt::format("--at: give X,Y or X,Y,Z in metres, got '{}'", args.at));
   if (!(args.min_frames >= 1)) throw InputError(fmt::format("--min-frames must be >= 1, got {}", args.min_frames));
   if (!(args.shrink >= 0)) throw InputError(fmt::format("--shrink must be >= 0, got {}", args.shrink));
-  const ExportFormat format = light_format(args.format, args.output);
+  const ExportFormat format = export_format_for(args.format, args.output, false);
   const auto t0 = Clock::now();
   const auto look = args.shrink > 0 ? model.lookup_shrunk(at[0], at[1], args.shrink)
                                     : model.lookup(at[0], at[1], args.max_depth, args.min_frames);

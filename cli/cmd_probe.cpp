@@ -14,6 +14,7 @@
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/map_sequence.h"
 #include "core/progress.h"
 #include "core/resample.h"
 #include "eval/synthetic_scene.h"
@@ -25,6 +26,7 @@
 #include "probe/fisheye.h"
 #include "probe/mirror_ball.h"
 #include "probe/stabilise.h"
+#include "probe/unwrap_sequence.h"
 #include "probe/synthetic_probe.h"
 #include "probe/unwrap_accuracy.h"
 
@@ -62,31 +64,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool is_image_file(const fs::path& p) {
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return e == ".exr" || e == ".hdr" || e == ".pfm" || e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".tif" ||
-         e == ".tiff";
-}
-
-std::vector<std::string> expand_images(const std::vector<std::string>& inputs) {
-  std::vector<std::string> files;
-  for (const std::string& in : inputs) {
-    std::error_code ec;
-    if (fs::is_directory(in, ec)) {
-      std::vector<std::string> found;
-      for (const auto& e : fs::directory_iterator(in))
-        if (e.is_regular_file() && is_image_file(e.path())) found.push_back(e.path().string());
-      std::sort(found.begin(), found.end());
-      if (found.empty()) throw InputError(fmt::format("{}: directory holds no images", in));
-      files.insert(files.end(), found.begin(), found.end());
-    } else {
-      files.push_back(in);
-    }
-  }
-  return files;
-}
-
 void target_size(const std::string& layout_name, const std::string& size, int nside, Layout* layout, int* w, int* h) {
   const auto l = layout_from_string(layout_name);
   if (!l) throw InputError(fmt::format("--layout: unknown layout '{}' (latlong, hemisphere, healpix)", layout_name));
@@ -103,162 +80,85 @@ void target_size(const std::string& layout_name, const std::string& size, int ns
   }
 }
 
-MirrorBallCamera ball_camera(const ProbeUnwrapArgs& a) {
-  MirrorBallCamera c;
-  if (a.distance > 0) c.distance_in_radii = a.distance;
-  if (a.fov > 0) c.fov_deg = a.fov;
-  if (!a.rotation.empty()) c.world_from_probe = parse_rotation(a.rotation);
+UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
+  UnwrapSequenceOptions o;
+  if (a.type == "mirrorball") o.type = ProbeType::MirrorBall;
+  else if (a.type == "fisheye") o.type = ProbeType::Fisheye;
+  else throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", a.type));
+  target_size(a.layout, a.size, a.nside, &o.layout, &o.width, &o.height);
+  o.fill = a.fill;
+  if (a.distance > 0) o.ball_camera.distance_in_radii = a.distance;
+  if (a.fov > 0) o.ball_camera.fov_deg = a.fov;
   if (!(a.reflectivity > 0 && a.reflectivity <= 1)) throw InputError("--reflectivity must be in (0, 1]");
-  c.reflectivity = a.reflectivity;
-  c.fresnel = a.fresnel;
-  return c;
+  o.ball_camera.reflectivity = a.reflectivity;
+  o.ball_camera.fresnel = a.fresnel;
+  if (!a.ball.empty()) {
+    const auto v = parse_numbers(a.ball, "--ball", 3);
+    o.ball = BallInImage{v[0], v[1], v[2]};
+  }
+  o.blind_spot_deg = a.blind_spot_deg;
+  if (!a.camera.empty()) o.camera = read_camera_model(a.camera);
+  o.fisheye_fov_deg = a.fov;
+  if (!a.rotation.empty()) o.world_from_probe = parse_rotation(a.rotation);
+  o.smooth_track = a.stabilise;
+  o.static_probe = a.static_probe;
+  o.fixed_geometry = a.fixed_ball;
+  if (!a.colour_match.empty()) o.colour = load_colour_match(a.colour_match);
+  return o;
 }
 
-// A fisheye without --camera: the plain equidistant model of CONVENTIONS, as a KB model.
-CameraModel fisheye_model(const ProbeUnwrapArgs& a, const RgbImage& first) {
-  if (!a.camera.empty()) return read_camera_model(a.camera);
-  return camera_model_from_fisheye(equidistant_fisheye(first.width, first.height, a.fov > 0 ? a.fov : 180));
-}
-
-std::string output_for(const ProbeUnwrapArgs& a, size_t frame, size_t frames) {
-  if (frames == 1) return a.output;
-  return (fs::path(a.output) / fmt::format("frame_{:04d}.exr", frame)).string();
+nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions& o, const UnwrapSequenceReport& r) {
+  nlohmann::json per_frame = nlohmann::json::array();
+  for (const auto& f : r.frames) {
+    nlohmann::json fj = {{"file", f.file}};
+    if (f.ball) {
+      fj["ball"] = {f.ball->cx, f.ball->cy, f.ball->radius_px};
+      fj["ball_raw"] = {f.ball_detected->cx, f.ball_detected->cy, f.ball_detected->radius_px};
+      fj["valid_fraction"] = f.valid_fraction;
+    }
+    if (f.circle) fj["circle"] = {f.circle->cx, f.circle->cy, f.circle->r};
+    per_frame.push_back(fj);
+  }
+  nlohmann::json report = {{"output", a.output}, {"type", a.type}, {"frames", r.frames.size()},
+                           {"layout", a.layout}, {"width", o.width}, {"height", o.height},
+                           {"milliseconds", 1e3 * r.unwrap_seconds}, {"per_frame", per_frame}};
+  if (a.fill) report["fill_power_share"] = r.fill_power_share;
+  if (r.map_jitter_deg) report["map_jitter_deg"] = *r.map_jitter_deg;
+  if (r.detected.cx.size() > 1) {
+    report["detected_jitter_px"] = residual_jitter_px(r.detected);
+    report["used_jitter_px"] = residual_jitter_px(r.used);
+  }
+  return report;
 }
 
 }  // namespace
 
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
-  const std::vector<std::string> files = expand_images(args.inputs);
-  if (args.type != "mirrorball" && args.type != "fisheye")
-    throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", args.type));
-  Layout layout;
-  int w = 0, h = 0;
-  target_size(args.layout, args.size, args.nside, &layout, &w, &h);
-  if (files.size() > 1) {
-    std::error_code ec;
-    fs::create_directories(args.output, ec);
-    if (ec) throw InputError(fmt::format("{}: cannot create the output directory for a sequence: {}", args.output, ec.message()));
-  }
-  // Pass 1: per-frame probe geometry (ball or image circle), then a smoothed track.
-  std::vector<RgbImage> frames;
-  CircleTrack raw;
-  Progress progress("probe unwrap", 2 * files.size(), out.progress && files.size() > 1);
-  for (const std::string& f : files) {
-    RgbImage img = read_rgb_image(f);
-    if (!frames.empty() && (img.width != frames[0].width || img.height != frames[0].height))
-      throw InputError(fmt::format("{}: {}x{} differs from the sequence's {}x{}", f, img.width, img.height,
-                                   frames[0].width, frames[0].height));
-    if (args.type == "mirrorball") {
-      BallInImage ball;
-      if (!args.ball.empty()) {
-        const auto v = parse_numbers(args.ball, "--ball", 3);
-        ball = {v[0], v[1], v[2]};
-      } else {
-        try {
-          ball = find_ball(img);
-        } catch (const InputError& e) {
-          throw InputError(fmt::format("{}: {}", f, e.what()));
-        }
-      }
-      raw.cx.push_back(ball.cx), raw.cy.push_back(ball.cy), raw.r.push_back(ball.radius_px);
-    } else if (files.size() > 1 && !args.fixed_ball) {
-      const ImageCircle c = find_image_circle(img);
-      raw.cx.push_back(c.cx), raw.cy.push_back(c.cy), raw.r.push_back(c.r);
-    }
-    frames.push_back(std::move(img));
-    progress.advance();
-  }
-  // Stabilisation: every frame is unwrapped with its own ball (or image circle), so the
-  // map stays put when the camera shakes. --smooth-track additionally smooths that track,
-  // for a fixed probe whose per-frame detection is noisy; --fixed-ball uses frame 0's
-  // geometry for every frame (what an unstabilised pipeline does), for comparison.
-  CircleTrack track = raw;
-  if (args.fixed_ball && !raw.cx.empty())
-    for (size_t i = 0; i < raw.cx.size(); ++i) track.cx[i] = raw.cx[0], track.cy[i] = raw.cy[0], track.r[i] = raw.r[0];
-  if (args.stabilise && raw.cx.size() > 1) {
-    SmoothOptions so;
-    so.static_probe = args.static_probe;
-    track = smooth_track(raw, so);
-  }
-  // Pass 2: unwrap every frame with its (smoothed) geometry.
-  nlohmann::json per_frame = nlohmann::json::array();
-  double fill_share = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  std::optional<CameraModel> base_model;
-  std::vector<Vec3> centroids;
-  std::optional<ColourMatch> colour;
-  if (!args.colour_match.empty()) colour = load_colour_match(args.colour_match);
-  for (size_t i = 0; i < frames.size(); ++i) {
-    EnvMap map;
-    nlohmann::json fj = {{"file", files[i]}};
-    if (args.type == "mirrorball") {
-      const BallInImage ball{track.cx[i], track.cy[i], track.r[i]};
-      UnwrapOptions uo;
-      uo.blind_spot_deg = args.blind_spot_deg;
-      uo.fill = args.fill;
-      UnwrapReport ur;
-      map = unwrap_mirror_ball(frames[i], ball, ball_camera(args), layout, w, h, uo, &ur);
-      fill_share = ur.fill_power_share;
-      fj["ball"] = {ball.cx, ball.cy, ball.radius_px};
-      fj["ball_raw"] = {raw.cx[i], raw.cy[i], raw.r[i]};
-      fj["valid_fraction"] = ur.valid_solid_angle_fraction;
-    } else {
-      if (!base_model) base_model = fisheye_model(args, frames[0]);
-      CameraModel m = *base_model;
-      if (!track.cx.empty()) {
-        // Move the optical centre with the image circle, relative to the track's first frame.
-        m.intrinsics[2] += track.cx[i] - track.cx[0];
-        m.intrinsics[3] += track.cy[i] - track.cy[0];
-        fj["circle"] = {track.cx[i], track.cy[i], track.r[i]};
-      }
-      CameraUnwrapOptions co;
-      co.max_field_deg = args.fov > 0 ? args.fov / 2 : (args.camera.empty() ? 90 : 0);
-      if (args.fill) co.fill.method = FillMethod::PushPull;
-      const Mat3 world_from_camera = (args.rotation.empty() ? Mat3{} : parse_rotation(args.rotation)) *
-                                     upward_camera_world_from_camera();
-      FillReport fr;
-      map = unwrap_with_camera(frames[i], m, world_from_camera, layout, w, h, co, &fr);
-      fill_share = fr.filled_power_share;
-    }
-    map.units = frames[i].units;
-    if (colour) apply_colour_match(map, *colour);
-    // Power-weighted mean direction of the valid map: a static world must keep it still.
-    Vec3 c{0, 0, 0};
-    for (size_t p = 0; p < map.pixel_count(); ++p)
-      if (map.is_valid(p)) {
-        const float* q = map.pixel(p);
-        c = c + (luminance(q[0], q[1], q[2]) * pixel_solid_angle(map, p)) * pixel_direction(map, p);
-      }
-    if (length(c) > 0) centroids.push_back(normalize(c));
-    write_envmap(output_for(args, i, frames.size()), map);
-    per_frame.push_back(fj);
-    progress.advance();
-  }
+  const std::vector<std::string> files = find_images(args.inputs);
+  const UnwrapSequenceOptions o = unwrap_options(args);
+  const bool sequence = files.size() > 1;
+  if (sequence) make_output_dir(args.output);
+  Progress progress("probe unwrap", 2 * files.size(), out.progress && sequence);
+  const UnwrapSequenceReport r = unwrap_probe_sequence(
+      files, o,
+      [&](size_t i, EnvMap& map) {
+        write_envmap(sequence ? (fs::path(args.output) / fmt::format("frame_{:04d}.exr", i)).string() : args.output, map);
+      },
+      [&] { progress.advance(); });
   progress.finish();
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  nlohmann::json report = {{"output", args.output}, {"type", args.type}, {"frames", frames.size()},
-                           {"layout", args.layout}, {"width", w}, {"height", h}, {"milliseconds", ms},
-                           {"per_frame", per_frame}};
-  if (args.fill) report["fill_power_share"] = fill_share;
-  double map_jitter_deg = 0;
-  for (size_t i = 1; i < centroids.size(); ++i) map_jitter_deg += angle_between(centroids[i - 1], centroids[i]) * 180 / M_PI;
-  if (centroids.size() > 1) {
-    map_jitter_deg /= double(centroids.size() - 1);
-    report["map_jitter_deg"] = map_jitter_deg;
-  }
-  if (raw.cx.size() > 1) {
-    report["detected_jitter_px"] = residual_jitter_px(raw);
-    report["used_jitter_px"] = residual_jitter_px(track);
-  }
-  if (args.type == "mirrorball" && frames.size() == 1)
-    say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px -> {} {}x{}{}\n", args.output, track.cx[0], track.cy[0],
-        track.r[0], args.layout, w, h, args.fill ? fmt::format(", fill holds {:.2f} % of the power", 100 * fill_share) : "");
+  const UnwrapSequenceReport::Frame& first = r.frames[0];
+  if (first.ball && !sequence)
+    say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px -> {} {}x{}{}\n", args.output, first.ball->cx, first.ball->cy,
+        first.ball->radius_px, args.layout, o.width, o.height,
+        args.fill ? fmt::format(", fill holds {:.2f} % of the power", 100 * r.fill_power_share) : "");
   else
-    say(out, "{}: {} frame(s) -> {} {}x{} in {:.0f} ms{}\n", args.output, frames.size(), args.layout, w, h, ms,
-        raw.cx.size() > 1 ? fmt::format("; probe centre moved {:.3f} px per frame, unwrapped map {:.4f} deg per frame",
-                                        residual_jitter_px(raw), map_jitter_deg)
-                          : "");
-  emit_json(out, report);
+    say(out, "{}: {} frame(s) -> {} {}x{} in {:.0f} ms{}\n", args.output, files.size(), args.layout, o.width, o.height,
+        1e3 * r.unwrap_seconds,
+        r.detected.cx.size() > 1
+            ? fmt::format("; probe centre moved {:.3f} px per frame, unwrapped map {:.4f} deg per frame",
+                          residual_jitter_px(r.detected), r.map_jitter_deg.value_or(0))
+            : "");
+  emit_json(out, report_json(args, o, r));
   return 0;
 }
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +20,32 @@ namespace fs = std::filesystem;
 bool is_map_file(const fs::path& p) {
   const std::string e = p.extension().string();
   return e == ".exr" || e == ".hdr" || e == ".pfm";
+}
+
+bool is_image_file(const fs::path& p) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return e == ".exr" || e == ".hdr" || e == ".pfm" || e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".tif" ||
+         e == ".tiff";
+}
+
+// The files named, a directory standing for the files inside it that `keep` accepts.
+std::vector<std::string> expand(const std::vector<std::string>& inputs, bool (*keep)(const fs::path&), const char* what) {
+  std::vector<std::string> files;
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (fs::is_directory(in, ec)) {
+      std::vector<std::string> found;
+      for (const auto& entry : fs::directory_iterator(in))
+        if (entry.is_regular_file() && keep(entry.path())) found.push_back(entry.path().string());
+      std::sort(found.begin(), found.end());
+      if (found.empty()) throw InputError(fmt::format("{}: directory holds no {}", in, what));
+      files.insert(files.end(), found.begin(), found.end());
+    } else {
+      files.push_back(in);
+    }
+  }
+  return files;
 }
 
 std::vector<double> read_timestamps(const fs::path& path, size_t frames) {
@@ -45,25 +72,17 @@ std::vector<double> read_timestamps(const fs::path& path, size_t frames) {
 
 MapSequence find_map_sequence(const std::vector<std::string>& inputs) {
   MapSequence seq;
-  for (const std::string& in : inputs) {
-    std::error_code ec;
-    if (fs::is_directory(in, ec)) {
-      std::vector<std::string> found;
-      for (const auto& entry : fs::directory_iterator(in))
-        if (entry.is_regular_file() && is_map_file(entry.path())) found.push_back(entry.path().string());
-      std::sort(found.begin(), found.end());
-      if (found.empty()) throw InputError(fmt::format("{}: directory holds no .exr/.hdr/.pfm maps", in));
-      seq.files.insert(seq.files.end(), found.begin(), found.end());
-    } else {
-      seq.files.push_back(in);
-    }
-  }
+  seq.files = expand(inputs, is_map_file, ".exr/.hdr/.pfm maps");
   std::error_code ec;
   if (inputs.size() == 1 && fs::is_directory(inputs[0], ec)) {
     const fs::path path = fs::path(inputs[0]) / "timestamps.txt";
     if (fs::exists(path, ec)) seq.timestamps_s = read_timestamps(path, seq.files.size());
   }
   return seq;
+}
+
+std::vector<std::string> find_images(const std::vector<std::string>& inputs) {
+  return expand(inputs, is_image_file, "images");
 }
 
 }  // namespace lp

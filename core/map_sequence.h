@@ -20,4 +20,8 @@ struct MapSequence {
 // that is not a finite time, or whose count differs from the maps'.
 MapSequence find_map_sequence(const std::vector<std::string>& inputs);
 
+// Probe images named, or inside the directories named (.exr .hdr .pfm .png .jpg .jpeg
+// .tif .tiff, any case), in name order. Throws InputError naming a directory with none.
+std::vector<std::string> find_images(const std::vector<std::string>& inputs);
+
 }  // namespace lp

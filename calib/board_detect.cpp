@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <tbb/parallel_for.h>
 
 #include "core/error.h"
 
@@ -426,6 +427,45 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board, co
   result.attempts = tried;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+BoardDetections detect_boards(const std::vector<std::string>& images, const BoardSpec& board,
+                              const DetectOptions& options, const std::function<void()>& on_image) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t n = images.size();
+  BoardDetections out;
+  out.images = images;
+  out.per_image.resize(n);
+  out.corners.resize(n);
+  std::vector<std::array<int, 2>> sizes(n);
+  std::vector<std::string> errors(n);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    try {
+      const CameraImage img = read_camera_image(images[i]);
+      sizes[i] = {img.width, img.height};
+      out.per_image[i] = detect_board(img, board, options);
+    } catch (const InputError& e) {
+      errors[i] = e.what();
+    }
+    if (on_image) on_image();
+  });
+  for (size_t i = 0; i < n; ++i) {  // the first error in the given order
+    if (!errors[i].empty()) throw InputError(errors[i]);
+    if (i == 0) {
+      out.width = sizes[i][0];
+      out.height = sizes[i][1];
+    } else if (sizes[i][0] != out.width || sizes[i][1] != out.height) {
+      throw InputError(images[i] + ": " + std::to_string(sizes[i][0]) + "x" + std::to_string(sizes[i][1]) +
+                       " differs from the first image's " + std::to_string(out.width) + "x" +
+                       std::to_string(out.height) + " (one camera, one resolution)");
+    }
+    if (out.per_image[i].found) {
+      out.corners[i] = out.per_image[i].corners;
+      ++out.found;
+    }
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
 }
 
 }  // namespace lp

@@ -36,6 +36,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,22 @@ struct BoardDetection {
 // Throws InputError for an empty image or a board with fewer than 3 inner corners per side.
 BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
                             const DetectOptions& options = {});
+
+// Stage "detect" of a calibration: every image read (core/image_io.h read_camera_image) and
+// its board detected, in parallel (each image independent, so the result does not depend on
+// the order). on_image is called once per image as it finishes, from the worker threads.
+// InputError: the first image (in the given order) that cannot be read, or one whose size
+// differs from the first's (one camera, one resolution).
+struct BoardDetections {
+  std::vector<std::string> images;                        // as given
+  std::vector<BoardDetection> per_image;
+  std::vector<std::vector<std::array<double, 2>>> corners;  // per image; empty: no board
+  int width = 0, height = 0;  // the images' size
+  int found = 0;              // images with the board
+  double seconds = 0;         // wall time of the whole stage
+};
+BoardDetections detect_boards(const std::vector<std::string>& images, const BoardSpec& board,
+                              const DetectOptions& options = {}, const std::function<void()>& on_image = {});
 
 // Put `corners` (row-major, cols per row) into the canonical order described above.
 void canonicalize_corner_order(std::vector<std::array<double, 2>>& corners, int cols, int rows);

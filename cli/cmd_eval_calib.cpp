@@ -11,6 +11,7 @@
 
 #include "calib/board_detect.h"
 #include "calib/geometric.h"
+#include "calib/lens_model.h"
 #include "calib/synthetic_boards.h"
 #include "cli/commands.h"
 #include "cli/eval_handlers.h"
@@ -103,12 +104,12 @@ nlohmann::json compare_on_images(const EvalCalibArgs& args, const BoardSpec& boa
   // rejection, halves, leverage, uncertainty) for scale.
   struct Pair {
     const char* peer;
-    const char* ours;
+    std::string ours;  // the candidate OpenCV's calibrator solves
   };
-  const Pair pairs[] = {{"cv::fisheye", "LENSMODEL_KANNALA_BRANDT"},
-                        {"cv::calibrateCamera plumb_bob", "plumb_bob"},
-                        {"cv::calibrateCamera rational", "LENSMODEL_OPENCV8"},
-                        {"cv::omnidir", "LENSMODEL_OMNIDIR_MEI"}};
+  const Pair pairs[] = {{"cv::fisheye", candidate_name(LensType::KannalaBrandt)},
+                        {"cv::calibrateCamera plumb_bob", candidate_name(LensType::OpenCV5)},
+                        {"cv::calibrateCamera rational", candidate_name(LensType::OpenCV8)},
+                        {"cv::omnidir", candidate_name(LensType::OmnidirMei)}};
   constexpr int kPairs = 4, kRepeats = 3;
   double peer_s[kPairs], ours_s1[kPairs];
   SingleSolve ours_one[kPairs];
@@ -174,7 +175,7 @@ nlohmann::json compare_on_images(const EvalCalibArgs& args, const BoardSpec& boa
 // mean square over three noise draws.
 nlohmann::json sweep(const EvalCalibArgs& args, const Output& out) {
   CameraModel truth;
-  truth.lensmodel = "LENSMODEL_KANNALA_BRANDT";
+  truth.lensmodel = lens_type_name(LensType::KannalaBrandt);
   truth.intrinsics = {330, 331, 641.3, 478.6, 0.02, -0.01, 0.003, -0.0005};
   truth.width = 1280;
   truth.height = 960;
@@ -230,7 +231,7 @@ nlohmann::json sweep(const EvalCalibArgs& args, const Output& out) {
         ++ok[0];
       } catch (const InputError&) {
       }
-      sel.model = "LENSMODEL_KANNALA_BRANDT";
+      sel.model = candidate_name(LensType::KannalaBrandt);
       t0 = std::chrono::steady_clock::now();
       try {
         const CalibrationResult b = calibrate(views, board, truth.width, truth.height, sel);
@@ -240,7 +241,7 @@ nlohmann::json sweep(const EvalCalibArgs& args, const Output& out) {
       } catch (const InputError&) {
       }
       // One KB solve of ours right next to cv::fisheye's, on the same corners.
-      const SingleSolve one = solve_model_once(views, board, truth.width, truth.height, "LENSMODEL_KANNALA_BRANDT");
+      const SingleSolve one = solve_model_once(views, board, truth.width, truth.height, sel.model);
       r.ours_kb_one_s += one.seconds;
       for (const PeerCalibration& p : calibrate_opencv_alone(views, board, truth.width, truth.height, 16)) {
         if (!p.ok) continue;

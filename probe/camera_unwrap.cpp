@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "calib/lens_model.h"
 #include "core/error.h"
 
 namespace lp {
@@ -17,7 +18,7 @@ Mat3 upward_camera_world_from_camera() {
 
 CameraModel camera_model_from_fisheye(const FisheyeModel& f) {
   CameraModel m;
-  m.lensmodel = "LENSMODEL_KANNALA_BRANDT";
+  m.lensmodel = lens_type_name(LensType::KannalaBrandt);
   m.intrinsics = {f.fx, f.fy, f.cx, f.cy, f.k[0], f.k[1], f.k[2], f.k[3]};
   m.width = f.width;
   m.height = f.height;

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "calib/lens_model.h"
 #include "core/error.h"
 
 namespace lp {
@@ -93,9 +94,10 @@ FisheyeModel read_fisheye_yaml(const std::string& path) {
   };
   std::string dist_model;
   need("distortion_model") >> dist_model;
-  if (dist_model != "fisheye")
-    throw InputError(path + ": distortion_model is '" + dist_model +
-                     "', only 'fisheye' (Kannala-Brandt, cv::fisheye) is read here");
+  const std::string kb_form = lens_type_info(LensType::KannalaBrandt).opencv_distortion_model;
+  if (dist_model != kb_form)
+    throw InputError(path + ": distortion_model is '" + dist_model + "', only '" + kb_form +
+                     "' (Kannala-Brandt, cv::fisheye) is read here");
   FisheyeModel m;
   need("image_width") >> m.width;
   need("image_height") >> m.height;
@@ -125,7 +127,8 @@ void write_fisheye_yaml(const std::string& path, const FisheyeModel& model) {
   fs << "image_width" << model.width << "image_height" << model.height;
   cv::Mat K = (cv::Mat_<double>(3, 3) << model.fx, 0, model.cx, 0, model.fy, model.cy, 0, 0, 1);
   cv::Mat D = (cv::Mat_<double>(4, 1) << model.k[0], model.k[1], model.k[2], model.k[3]);
-  fs << "camera_matrix" << K << "distortion_coefficients" << D << "distortion_model" << "fisheye";
+  fs << "camera_matrix" << K << "distortion_coefficients" << D << "distortion_model"
+     << lens_type_info(LensType::KannalaBrandt).opencv_distortion_model;
 }
 
 Vec3 fisheye_unproject(const FisheyeModel& model, double x, double y) {

@@ -18,7 +18,7 @@
 // on the left: world_from_camera = R * default.
 //
 // Files: OpenCV FileStorage YAML/XML with image_width, image_height, camera_matrix,
-// distortion_coefficients (4 values) and distortion_model "fisheye". mrcal
+// distortion_coefficients (4 values) and distortion_model fisheye (calib/lens_model.h). mrcal
 // .cameramodel files are refused with a one-line InputError (mrcal has no
 // Kannala-Brandt model; export OpenCV YAML).
 #pragma once
@@ -52,7 +52,7 @@ struct FisheyeModel {
 FisheyeModel equidistant_fisheye(int width, int height, double fov_deg);
 
 // OpenCV FileStorage YAML (keys above). Throws InputError on a missing file or key, a
-// distortion model other than "fisheye", or a .cameramodel file.
+// distortion model other than Kannala-Brandt's (fisheye), or a .cameramodel file.
 FisheyeModel read_fisheye_yaml(const std::string& path);
 // The same keys, readable by cv::FileStorage alone.
 void write_fisheye_yaml(const std::string& path, const FisheyeModel& model);

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 #include <set>
 #include <string>
+#include <unistd.h>
 
 #include "calib/camera_model.h"
 #include "calib/lens_model.h"
@@ -44,7 +45,8 @@ CameraModel example_model(const LensTypeInfo& t) {
 }
 
 std::string temp_path(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / "lightprobe_lens_model_test";
+  // The pid: other checkouts may run the same tests at the same time.
+  const fs::path dir = fs::temp_directory_path() / ("lightprobe_lens_model_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   return (dir / name).string();
 }

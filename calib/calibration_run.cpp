@@ -1,0 +1,323 @@
+#include "calib/calibration_run.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "calib/calibration_report.h"
+#include "calib/lens_model.h"
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string with_extension(const std::string& path, const std::string& ext) {
+  return (fs::path(path).parent_path() / (fs::path(path).stem().string() + ext)).string();
+}
+
+bool has_uncertainty(const CalibrationResult& r) {
+  const UncertaintyGrid& g = r.uncertainty.headline_grid();
+  return g.nx > 0 && std::isfinite(g.median_px);
+}
+
+// The flagged views to leave out, worst first, as many as may go.
+std::vector<DroppedView> views_to_drop(const CalibrationResult& r, int drop_influential) {
+  std::vector<DroppedView> flagged;
+  for (size_t v = 0; v < r.views.size(); ++v)
+    if (r.views[v].influential) flagged.push_back({v, r.views[v].leverage_px});
+  std::sort(flagged.begin(), flagged.end(), [](const DroppedView& a, const DroppedView& b) {
+    return a.leverage_px > b.leverage_px || (a.leverage_px == b.leverage_px && a.view < b.view);
+  });
+  int used = 0;
+  for (const auto& v : r.views) used += v.used;
+  const int can_drop = std::max(0, std::min<int>(drop_influential, used - 5));
+  if (int(flagged.size()) > can_drop) flagged.resize(size_t(can_drop));
+  return flagged;
+}
+
+// ---- summary ---------------------------------------------------------------------------
+
+std::string table_text(const CalibrationResult& r) {
+  std::string s;
+  const bool repeated = r.selected_on == "repeated";
+  const std::string splits_col = fmt::format("{} splits", r.cv_splits);
+  s += fmt::format("{:<44} {:>6} {:>9} {:>10} {:>10} {:>10} {:>10}\n", "model", "params", "RMS px", "held-out",
+                   "cv odd/even", repeated ? splits_col : "", "lin. sigma");
+  for (const ModelCandidate& c : r.table)
+    if (c.ok)
+      s += fmt::format("{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f} {:>10} {:>10}{}\n", c.name, c.params, c.rms_px,
+                       c.heldout_rms_px, c.cross_validation_px,
+                       !repeated ? ""
+                                 : (std::isnan(c.cross_validation_repeated_px)
+                                        ? "screened"
+                                        : fmt::format("{:.3f}", c.cross_validation_repeated_px)),
+                       std::isfinite(c.linear_sigma_px) ? fmt::format("{:.3f}", c.linear_sigma_px) : "-",
+                       c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
+    else
+      s += fmt::format("{:<44} failed: {}\n", c.name, c.error);
+  if (r.table.size() == 1 || !std::isfinite(r.cv_noise_px))  // a forced model: no selection, no noise estimate
+    s += fmt::format("model {} as requested; {} of {} corners rejected as outliers\n", r.selected, r.corners_rejected,
+                     r.corners_total);
+  else
+    s += fmt::format(
+        "chosen: {}, the fewest parameters within the noise of the best (cross-validation {} within {} x {:.3f} "
+        "px, {}; held-out RMS within {} / sqrt(residuals)); {} of {} corners rejected as outliers\n",
+        r.selected, repeated ? "over " + splits_col : "odd/even", r.selection_k, r.selection_noise_px,
+        r.selection_noise_from_splits ? "the spread of the per-split values / sqrt(splits)"
+                                      : "the jackknife standard error of the odd/even one",
+        r.selection_k, r.corners_rejected, r.corners_total);
+  return s;
+}
+
+std::string views_text(const GeometricCalibration& run) {
+  const CalibrationResult& r = run.result;
+  const std::vector<std::string>& images = run.detections.images;
+  std::string s;
+  for (const DroppedView& d : run.dropped)
+    s += fmt::format("dropped influential view: {} ({:.2f} px)\n", images[d.view], d.leverage_px);
+  if (run.before_dropping) {
+    const auto& b = *run.before_dropping;
+    s += fmt::format("with all views: {} (cross-validation {:.3f} px, RMS {:.3f} px); without the {} most influential: "
+                     "{} (cross-validation {:.3f} px, RMS {:.3f} px){}\n",
+                     b.selected, b.cross_validation_px, b.rms_px, run.dropped.size(), r.selected,
+                     r.cross_validation_px, r.model.rms_reprojection_px,
+                     r.cross_validation_px > b.cross_validation_px
+                         ? "; the halves agree less without them: consider keeping all views"
+                         : "");
+  }
+  int influential = 0;
+  for (size_t v = 0; v < r.views.size(); ++v)
+    if (r.views[v].influential) {
+      s += fmt::format("influential view: {} (leaving it out moves the projection by {:.2f} px)\n", images[v],
+                       r.views[v].leverage_px);
+      ++influential;
+    }
+  if (influential > 0 && run.drop_influential == 0)
+    s += "to solve again without the worst of them and compare: --drop-influential 1 (or more)\n";
+  if (r.no_model_fits)
+    s += fmt::format("warning: no candidate model fits these views well (RMS {:.2f} px, cross-validation {:.2f} px): "
+                     "check the board size, or the lens needs a model not fitted here\n",
+                     r.model.rms_reprojection_px, r.cross_validation_px);
+  if (r.corners_poorly_covered)
+    s += "warning: the image corners/edges are poorly covered by the boards; the model is extrapolated there\n";
+  return s;
+}
+
+// Worst-direction standard deviation of a ray at infinity's pixel, per estimate.
+std::string uncertainty_text(const CalibrationResult& r) {
+  const UncertaintyReport& u = r.uncertainty;
+  std::string s;
+  auto line = [&](const char* name, const UncertaintyGrid& g) {
+    if (g.nx > 0 && std::isfinite(g.median_px))
+      s += fmt::format("  {:<34} centre {:>7.3f}  median {:>7.3f}  image corners {}\n", name, g.centre_px,
+                       g.median_px, std::isfinite(g.corner_px) ? fmt::format("{:.3g} px", g.corner_px) : "no ray");
+  };
+  s += fmt::format("projection uncertainty (1 sigma, rays at infinity; headline: {}):\n",
+                   u.headline.empty() ? "none" : u.headline);
+  line("jackknife (leave one view out)", u.jackknife);
+  line("linear, rotation fitted out", u.rotation_fitted);
+  line("linear, mean frames (mrcal)", u.mean_frames);
+  if (!u.linear_ok && !u.linear_error.empty()) s += fmt::format("  linear estimate: {}\n", u.linear_error);
+  s += fmt::format(
+      "cross-validation {:.3f} px ({:.3f} px over {} splits); predicted from the uncertainty: jackknife {:.3f}, "
+      "linear {:.3f} px\n",
+      r.cross_validation_px, u.cv_repeated_px, u.cv_splits, u.predicted_cv_jackknife_px, u.predicted_cv_linear_px);
+  return s;
+}
+
+// ---- JSON ------------------------------------------------------------------------------
+
+nlohmann::json num(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
+
+nlohmann::json grid_json(const UncertaintyGrid& g) {
+  if (g.nx <= 0) return nullptr;
+  return {{"centre_px", num(g.centre_px)}, {"median_px", num(g.median_px)}, {"corner_px", num(g.corner_px)}};
+}
+
+nlohmann::json uncertainty_json(const GeometricCalibration& run) {
+  const UncertaintyReport& u = run.result.uncertainty;
+  return {{"headline", u.headline},
+          {"headline_px", grid_json(u.headline_grid())},
+          {"jackknife_px", grid_json(u.jackknife)},
+          {"linear_rotation_fitted_px", grid_json(u.rotation_fitted)},
+          {"linear_mean_frames_px", grid_json(u.mean_frames)},
+          {"linear_ok", u.linear_ok},
+          {"linear_error", u.linear_error},
+          {"sigma_px", num(u.linear_ok ? u.sigma_px : std::numeric_limits<double>::quiet_NaN())},
+          {"predicted_cross_validation_jackknife_px", num(u.predicted_cv_jackknife_px)},
+          {"predicted_cross_validation_linear_px", num(u.predicted_cv_linear_px)},
+          {"cross_validation_repeated_px", num(u.cv_repeated_px)},
+          {"cross_validation_splits", u.cv_splits},
+          {"plot", run.uncertainty_picture ? nlohmann::json(run.picture_stem + "_uncertainty.png") : nlohmann::json()}};
+}
+
+nlohmann::json table_json(const CalibrationResult& r) {
+  nlohmann::json table = nlohmann::json::array();
+  for (const ModelCandidate& c : r.table)
+    table.push_back({{"model", c.name}, {"lensmodel", c.lensmodel}, {"params", c.params}, {"ok", c.ok},
+                     {"error", c.error}, {"rms_px", c.rms_px}, {"heldout_rms_px", c.heldout_rms_px},
+                     {"cross_validation_px", c.cross_validation_px},
+                     {"cross_validation_splits_px", c.cross_validation_splits_px},
+                     {"cross_validation_repeated_px", num(c.cross_validation_repeated_px)},
+                     {"linear_sigma_px", num(c.linear_sigma_px)},
+                     {"linear_forecast_cross_validation_px", num(c.linear_forecast_cv_px)},
+                     {"within_noise", c.within_noise}});
+  return table;
+}
+
+nlohmann::json views_json(const GeometricCalibration& run) {
+  const CalibrationResult& r = run.result;
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t v = 0; v < r.views.size(); ++v)
+    views.push_back({{"file", run.detections.images[v]}, {"used", r.views[v].used}, {"why", r.views[v].why},
+                     {"rms_px", r.views[v].rms_px}, {"leverage_px", r.views[v].leverage_px},
+                     {"influential", r.views[v].influential}, {"rejected_corners", r.views[v].rejected_corners}});
+  return views;
+}
+
+nlohmann::json images_json(const BoardDetections& d) {
+  nlohmann::json images = nlohmann::json::array();
+  for (size_t i = 0; i < d.images.size(); ++i) {
+    const BoardDetection& b = d.per_image[i];
+    images.push_back({{"file", d.images[i]}, {"found", b.found}, {"method", b.method}, {"reason", b.reason},
+                      {"attempts", b.attempts}, {"seconds", b.seconds}});
+  }
+  return images;
+}
+
+nlohmann::json selection_json(const CalibrationResult& r) {
+  return {{"ranked_on", r.selected_on == "repeated" ? "cross_validation_repeated_px" : "cross_validation_px"},
+          {"splits", r.cv_splits},
+          {"noise_px", num(r.selection_noise_px)},
+          {"noise_from", r.selection_noise_from_splits ? "split_spread" : "jackknife"},
+          {"jackknife_noise_px", num(r.cv_noise_px)},
+          {"split_noise_px", num(r.cv_split_noise_px)},
+          {"k", r.selection_k}};
+}
+
+}  // namespace
+
+std::string GeometricCalibration::summary() const {
+  std::string s;
+  for (const std::string& n : notes) s += n + "\n";
+  s += fmt::format("{} of {} images have the {}x{} board ({:.2f} s); solved in {:.2f} s\n", detections.found,
+                   detections.images.size(), board.cols, board.rows, detections.seconds, solve_seconds);
+  s += table_text(result);
+  s += views_text(*this);
+  s += uncertainty_text(result);
+  s += fmt::format("wrote {}; pictures {}_residuals.png, {}_coverage.png{}\n", fmt::join(written, ", "), picture_stem,
+                   picture_stem, uncertainty_picture ? fmt::format(", {}_uncertainty.png", picture_stem) : "");
+  return s;
+}
+
+std::string GeometricCalibration::to_json() const {
+  const CalibrationResult& r = result;
+  nlohmann::json dropped_json = nlohmann::json::array();
+  for (const DroppedView& d : dropped)
+    dropped_json.push_back({{"file", detections.images[d.view]}, {"leverage_px", d.leverage_px}});
+  nlohmann::json before = nullptr;
+  if (before_dropping)
+    before = {{"selected", before_dropping->selected}, {"rms_px", before_dropping->rms_px},
+              {"cross_validation_px", before_dropping->cross_validation_px},
+              {"heldout_rms_px", before_dropping->heldout_rms_px}};
+  const nlohmann::json j = {
+      {"output", written}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
+      {"uncertainty", uncertainty_json(*this)}, {"intrinsics", r.model.intrinsics},
+      {"rms_px", r.model.rms_reprojection_px}, {"cross_validation_px", r.cross_validation_px},
+      {"cross_validation_noise_px", num(r.cv_noise_px)},
+      {"cross_validation_repeated_px", num(r.cross_validation_repeated_px)}, {"selection", selection_json(r)},
+      {"heldout_rms_px", r.heldout_rms_px}, {"dropped_views", dropped_json}, {"before_dropping", before},
+      {"views_with_board", detections.found}, {"detect_seconds", detections.seconds},
+      {"solve_seconds", solve_seconds}, {"corners_poorly_covered", r.corners_poorly_covered},
+      {"no_model_fits", r.no_model_fits}, {"table", table_json(r)}, {"views", views_json(*this)},
+      {"images", images_json(detections)}};
+  return j.dump();
+}
+
+void check_calibration_output(const std::string& output) {
+  const std::string ext = fs::path(output).extension().string();
+  if (ext != ".cameramodel" && ext != ".yaml" && ext != ".yml")
+    throw InputError(output + ": the output must be .cameramodel or .yaml");
+  std::error_code ec;
+  const fs::path dir = fs::path(output).parent_path();
+  if (!dir.empty() && !fs::is_directory(dir, ec))
+    throw InputError(output + ": cannot write: directory " + dir.string() + " does not exist");
+}
+
+GeometricCalibration calibrate_images(const std::vector<std::string>& images, const BoardSpec& board,
+                                      const GeometricCalibrationOptions& options,
+                                      const std::function<void()>& on_image_detected) {
+  return calibrate_detections(detect_boards(images, board, options.detect, on_image_detected), board, options);
+}
+
+GeometricCalibration calibrate_detections(BoardDetections detections, const BoardSpec& board,
+                                          const GeometricCalibrationOptions& options) {
+  GeometricCalibration run;
+  run.board = board;
+  run.drop_influential = options.drop_influential;
+  run.detections = std::move(detections);
+  const BoardDetections& d = run.detections;
+  const size_t n = d.images.size();
+  if (d.found == 0)
+    throw InputError(fmt::format("no {}x{} board found in any of the {} images (check --board: inner corners)",
+                                 board.cols, board.rows, n));
+  if (d.found < 4)
+    throw InputError(fmt::format("a {}x{} board was found in only {} of {} images; at least 4 views are needed",
+                                 board.cols, board.rows, d.found, n));
+  const auto t0 = std::chrono::steady_clock::now();
+  run.corners = d.corners;
+  run.result = calibrate(run.corners, board, d.width, d.height, options.calibrate);
+  if (options.drop_influential > 0) {
+    const std::vector<DroppedView> drop = views_to_drop(run.result, options.drop_influential);
+    if (!drop.empty()) {
+      const CalibrationResult& r = run.result;
+      run.before_dropping =
+          GeometricCalibration::Answer{r.selected, r.model.rms_reprojection_px, r.cross_validation_px, r.heldout_rms_px};
+      for (const DroppedView& v : drop) run.corners[v.view].clear();
+      run.result = calibrate(run.corners, board, d.width, d.height, options.calibrate);
+      for (const DroppedView& v : drop)
+        run.result.views[v.view].why =
+            fmt::format("dropped: influential (leaving it out moved the projection by {:.2f} px)", v.leverage_px);
+      run.dropped = drop;
+    }
+  }
+  run.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return run;
+}
+
+void write_calibration_files(GeometricCalibration& run, const std::string& output, const std::string& report_dir) {
+  const CameraModel& model = run.result.model;
+  const bool cameramodel = fs::path(output).extension() == ".cameramodel";
+  const std::string yaml = cameramodel ? with_extension(output, ".yaml") : output;
+  if (cameramodel) {
+    if (is_mrcal_model(model.lensmodel)) {
+      write_cameramodel(output, model);
+      run.written.push_back(output);
+    } else {
+      run.notes.push_back(model.lensmodel + " is not an mrcal model: writing OpenCV YAML only (" + yaml + ")");
+    }
+  }
+  if (LensModel::parse(model.lensmodel).has_opencv_form()) {
+    write_opencv_yaml(yaml, model);
+    run.written.push_back(yaml);
+  } else {
+    if (run.written.empty()) write_opencv_yaml(yaml, model);  // throws the writer's one-line reason
+    run.notes.push_back(model.lensmodel + " has no OpenCV form: " + output + " only");
+  }
+  const std::string dir = report_dir.empty() ? fs::path(output).parent_path().string() : report_dir;
+  if (!dir.empty()) fs::create_directories(dir);
+  run.picture_stem = (fs::path(dir) / fs::path(output).stem()).string();
+  write_residual_plot(run.picture_stem + "_residuals.png", run.result, run.corners);
+  write_coverage_plot(run.picture_stem + "_coverage.png", run.result);
+  run.uncertainty_picture = has_uncertainty(run.result);
+  if (run.uncertainty_picture) write_uncertainty_plot(run.picture_stem + "_uncertainty.png", run.result);
+}
+
+}  // namespace lp

@@ -1,0 +1,204 @@
+// From image files to camera files and the report (calib/calibration_run.h, board_detect.h
+// detect_boards): what `lightprobe calib geometric` prints and writes.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <unistd.h>
+
+#include "calib/calibration_run.h"
+#include "calib/synthetic_boards.h"
+#include "core/error.h"
+#include "tests/calib/test_cameras.h"
+
+namespace lp {
+namespace {
+
+namespace fs = std::filesystem;
+using calib_test::kb190;
+
+const BoardSpec kBoard{10, 7, 40};
+
+fs::path temp_dir(const std::string& name) {
+  // The pid: other checkouts may run the same tests at the same time.
+  const fs::path d = fs::temp_directory_path() /
+                     ("lightprobe_calibration_run_test_" + std::to_string(::getpid()) + "_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+// Detections as detect_boards gives them, from corners projected through a camera.
+BoardDetections detections_of(const std::vector<std::vector<std::array<double, 2>>>& corners, const CameraModel& cam) {
+  BoardDetections d;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    d.images.push_back("view_" + std::to_string(i) + ".png");
+    BoardDetection b;
+    b.found = !corners[i].empty();
+    b.corners = corners[i];
+    b.method = "projected";
+    d.per_image.push_back(b);
+    d.found += b.found;
+  }
+  d.corners = corners;
+  d.width = cam.width;
+  d.height = cam.height;
+  return d;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  for (std::string l; std::getline(ss, l);) out.push_back(l);
+  return out;
+}
+
+TEST(CalibrationRun, DetectsEveryImageAndRefusesMixedSizes) {
+  SyntheticBoardsOptions o;
+  o.views = 4;
+  o.board = BoardSpec{9, 6, 30};
+  o.camera = CameraModel{"LENSMODEL_PINHOLE", {600, 600, 399.5, 299.5}, 800, 600};
+  o.field_deg = 0;
+  const SyntheticBoards boards = synthesize_boards(o);
+  const fs::path dir = temp_dir("detect");
+  std::vector<std::string> paths;
+  for (size_t i = 0; i < boards.images.size(); ++i) {
+    const CameraImage& im = boards.images[i];
+    cv::Mat m(im.height, im.width, CV_8U);
+    for (int k = 0; k < im.width * im.height; ++k) m.data[k] = uint8_t(std::lround(im.rgb[size_t(3 * k)] * 255));
+    paths.push_back((dir / ("board_" + std::to_string(i) + ".png")).string());
+    ASSERT_TRUE(cv::imwrite(paths.back(), m));
+  }
+  int calls = 0;
+  const BoardDetections d = detect_boards(paths, o.board, {}, [&] { ++calls; });  // from worker threads
+  EXPECT_EQ(calls, 4);
+  EXPECT_EQ(d.found, 4);
+  EXPECT_EQ(d.width, 800);
+  EXPECT_EQ(d.height, 600);
+  ASSERT_EQ(d.corners.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) {
+    ASSERT_EQ(d.corners[i].size(), 54u);
+    EXPECT_EQ(d.corners[i], d.per_image[i].corners);
+    EXPECT_EQ(d.corners[i], detect_board(read_camera_image(paths[i]), o.board).corners);  // order-independent
+  }
+  // Another resolution, or a file that cannot be read: the first such image, by name.
+  const std::string small = (dir / "small.png").string();
+  cv::imwrite(small, cv::Mat(300, 400, CV_8U, cv::Scalar(128)));
+  try {
+    detect_boards({paths[0], small, "/nonexistent.png"}, o.board);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("small.png: 400x300 differs"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(detect_boards({"/nonexistent.png", paths[0]}, o.board), InputError);
+}
+
+TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
+  const CameraModel truth = kb190();
+  const auto corners = project_board_views(truth, kBoard, 8, 70, 600, 0.1, 3, 93);
+  GeometricCalibrationOptions o;
+  o.calibrate.model = "LENSMODEL_KANNALA_BRANDT";
+  GeometricCalibration run = calibrate_detections(detections_of(corners, truth), kBoard, o);
+  const fs::path dir = temp_dir("report");
+  const std::string out = (dir / "cam.cameramodel").string();
+  write_calibration_files(run, out);
+  // Kannala-Brandt is not an mrcal model: YAML only, said in one line.
+  ASSERT_EQ(run.written.size(), 1u);
+  EXPECT_EQ(run.written[0], (dir / "cam.yaml").string());
+  EXPECT_TRUE(fs::exists(dir / "cam.yaml"));
+  EXPECT_FALSE(fs::exists(out));
+  ASSERT_EQ(run.notes.size(), 1u);
+  EXPECT_EQ(run.notes[0], "LENSMODEL_KANNALA_BRANDT is not an mrcal model: writing OpenCV YAML only (" + run.written[0] + ")");
+  EXPECT_TRUE(run.uncertainty_picture);
+  for (const char* p : {"_residuals.png", "_coverage.png", "_uncertainty.png"})
+    EXPECT_TRUE(fs::exists(run.picture_stem + p)) << p;
+
+  const std::string text = run.summary();
+  std::printf("%s", text.c_str());
+  const auto lines = lines_of(text);
+  ASSERT_GE(lines.size(), 9u);
+  EXPECT_EQ(lines[0], run.notes[0]);
+  EXPECT_EQ(lines[1].rfind("8 of 8 images have the 10x7 board (0.00 s); solved in ", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[2].rfind("model ", 0), 0u);
+  EXPECT_EQ(lines[3].rfind("LENSMODEL_KANNALA_BRANDT ", 0), 0u);
+  EXPECT_NE(lines[3].find("<- chosen"), std::string::npos);
+  EXPECT_EQ(lines[4], "model LENSMODEL_KANNALA_BRANDT as requested; " + std::to_string(run.result.corners_rejected) +
+                          " of 560 corners rejected as outliers");
+  EXPECT_NE(text.find("projection uncertainty (1 sigma, rays at infinity; headline: jackknife):\n"), std::string::npos);
+  EXPECT_EQ(lines.back(), "wrote " + run.written[0] + "; pictures " + run.picture_stem + "_residuals.png, " +
+                              run.picture_stem + "_coverage.png, " + run.picture_stem + "_uncertainty.png");
+
+  const nlohmann::json j = nlohmann::json::parse(run.to_json());
+  EXPECT_EQ(j["selected"], "LENSMODEL_KANNALA_BRANDT");
+  EXPECT_EQ(j["lensmodel"], "LENSMODEL_KANNALA_BRANDT");
+  EXPECT_EQ(j["intrinsics"].get<std::vector<double>>(), run.result.model.intrinsics);
+  EXPECT_EQ(j["output"].get<std::vector<std::string>>(), run.written);
+  EXPECT_EQ(j["rms_px"].get<double>(), run.result.model.rms_reprojection_px);
+  EXPECT_TRUE(j["cross_validation_noise_px"].is_null());  // a forced model: not measured (NaN)
+  EXPECT_TRUE(j["before_dropping"].is_null());
+  EXPECT_EQ(j["views"].size(), 8u);
+  EXPECT_EQ(j["images"][3]["file"], "view_3.png");
+  EXPECT_EQ(j["table"].size(), 1u);
+  EXPECT_EQ(j["uncertainty"]["headline"], "jackknife");
+  EXPECT_EQ(j["uncertainty"]["plot"], run.picture_stem + "_uncertainty.png");
+  EXPECT_EQ(j["views_with_board"], 8);
+}
+
+TEST(CalibrationRun, DropsTheMostInfluentialViewAndReportsBothAnswers) {
+  const CameraModel truth = kb190();
+  auto corners = project_board_views(truth, kBoard, 9, 40, 600, 0.1, 11, 93);
+  corners.push_back(project_board_views(truth, kBoard, 1, 85, 500, 0.1, 12, 93).at(0));  // the only rim view
+  GeometricCalibrationOptions o;
+  o.calibrate.model = "LENSMODEL_KANNALA_BRANDT";
+  o.calibrate.uncertainty = false;
+  o.drop_influential = 1;
+  GeometricCalibration run = calibrate_detections(detections_of(corners, truth), kBoard, o);
+  ASSERT_EQ(run.dropped.size(), 1u);
+  const size_t rim = corners.size() - 1;
+  EXPECT_EQ(run.dropped[0].view, rim);
+  ASSERT_TRUE(run.before_dropping.has_value());
+  EXPECT_TRUE(run.corners[rim].empty());
+  EXPECT_FALSE(run.result.views[rim].used);
+  EXPECT_EQ(run.result.views[rim].why.rfind("dropped: influential", 0), 0u) << run.result.views[rim].why;
+  const std::string text = run.summary();
+  EXPECT_NE(text.find("dropped influential view: view_" + std::to_string(rim) + ".png ("), std::string::npos) << text;
+  EXPECT_NE(text.find("with all views: LENSMODEL_KANNALA_BRANDT (cross-validation "), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(run.to_json());
+  EXPECT_EQ(j["dropped_views"][0]["file"], "view_" + std::to_string(rim) + ".png");
+  EXPECT_EQ(j["before_dropping"]["selected"], "LENSMODEL_KANNALA_BRANDT");
+}
+
+TEST(CalibrationRun, WritesBothFormatsForAnMrcalModelWithAnOpenCVForm) {
+  const CameraModel truth{"LENSMODEL_PINHOLE", {900, 902, 639.2, 481.7}, 1280, 960};
+  const auto corners = project_board_views(truth, kBoard, 8, 25, 900, 0.1, 5, 34);
+  GeometricCalibrationOptions o;
+  o.calibrate.model = "LENSMODEL_PINHOLE";
+  o.calibrate.leverage = false;
+  o.calibrate.uncertainty = false;
+  GeometricCalibration run = calibrate_detections(detections_of(corners, truth), kBoard, o);
+  const fs::path dir = temp_dir("both");
+  write_calibration_files(run, (dir / "cam.cameramodel").string(), (dir / "pictures").string());
+  EXPECT_EQ(run.written, (std::vector<std::string>{(dir / "cam.cameramodel").string(), (dir / "cam.yaml").string()}));
+  EXPECT_TRUE(run.notes.empty());
+  EXPECT_EQ(run.picture_stem, (dir / "pictures" / "cam").string());
+  EXPECT_FALSE(run.uncertainty_picture);
+  EXPECT_EQ(read_camera_model((dir / "cam.yaml").string()).intrinsics, run.result.model.intrinsics);
+  EXPECT_EQ(read_camera_model((dir / "cam.cameramodel").string()).intrinsics, run.result.model.intrinsics);
+  // Checked before the work: the output's type and directory.
+  EXPECT_THROW(check_calibration_output((dir / "cam.txt").string()), InputError);
+  EXPECT_THROW(check_calibration_output((dir / "missing" / "cam.yaml").string()), InputError);
+  EXPECT_NO_THROW(check_calibration_output((dir / "cam.yml").string()));
+  // Too few views with the board.
+  auto three = detections_of(corners, truth);
+  for (size_t i = 3; i < three.corners.size(); ++i) {
+    three.corners[i].clear();
+    three.per_image[i].found = false;
+  }
+  three.found = 3;
+  EXPECT_THROW(calibrate_detections(three, kBoard, o), InputError);
+}
+
+}  // namespace
+}  // namespace lp

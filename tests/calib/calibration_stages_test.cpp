@@ -1,0 +1,328 @@
+// Each stage of calibrate() on its own (calib/calibration_seed.h, calibration_solve.h,
+// outlier_rejection.h, model_selection.h, view_diagnostics.h, calibration_uncertainty.h), on
+// corners projected through known cameras, so that a stage that breaks fails its own test.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "calib/calibration_problem.h"
+#include "calib/calibration_seed.h"
+#include "calib/calibration_solve.h"
+#include "calib/calibration_uncertainty.h"
+#include "calib/model_selection.h"
+#include "calib/outlier_rejection.h"
+#include "calib/projection_difference.h"
+#include "calib/synthetic_boards.h"
+#include "calib/view_diagnostics.h"
+#include "core/error.h"
+#include "tests/calib/test_cameras.h"
+
+namespace lp {
+namespace {
+
+using calib_test::kb190;
+using Corners = std::vector<std::vector<std::array<double, 2>>>;
+
+const BoardSpec kBoard{10, 7, 40};
+
+CalibrationProblem problem_for(const CameraModel& cam) {
+  CalibrationProblem pr;
+  pr.board = kBoard;
+  pr.width = cam.width;
+  pr.height = cam.height;
+  return pr;
+}
+
+// 71 deg pinhole with plumb_bob distortion.
+CameraModel narrow() {
+  return {"LENSMODEL_OPENCV5", {900, 902, 639.2, 481.7, -0.08, 0.02, 0, 0, 0}, 1280, 960};
+}
+
+// RMS pixel error against the truth over the pixels whose true ray is within `deg` of the axis.
+double error_within(const CameraModel& m, const CameraModel& truth, double deg) {
+  std::vector<uint8_t> mask(size_t(truth.width) * truth.height, 0);
+  for (int y = 0; y < truth.height; ++y)
+    for (int x = 0; x < truth.width; ++x) {
+      const auto d = unproject(truth, {double(x), double(y)});
+      mask[size_t(y) * truth.width + x] = d && d->z >= std::cos(deg * M_PI / 180);
+    }
+  return projection_difference(m, truth, mask, 8).rms_px;
+}
+
+TEST(CalibrationSeed, KannalaBrandtSeedIsNearTheTrueCameraWithinNinetyDegrees) {
+  const CameraModel truth = kb190();
+  const auto corners = project_board_views(truth, kBoard, 12, 70, 600, 0.2, 3, 85);
+  const CalibrationProblem pr = problem_for(truth);
+  const auto views = make_board_views(corners, pr, "test", true);
+  const SeedReport s = seed_candidate(pr, all_of(views), LensType::KannalaBrandt, {});
+  ASSERT_TRUE(s.fit.ok) << s.fit.error;
+  EXPECT_FALSE(s.central_corners_only);
+  EXPECT_EQ(s.fit.model.lensmodel, "LENSMODEL_KANNALA_BRANDT");
+  EXPECT_EQ(s.fit.poses.size(), views.size());
+  const double err = error_within(s.fit.model, truth, 85);
+  std::printf("  KB seed: fx %.2f (true %.2f), cx %.2f (true %.2f), %.3f px from the truth within 85 deg\n",
+              s.fit.model.intrinsics[0], truth.intrinsics[0], s.fit.model.intrinsics[2], truth.intrinsics[2], err);
+  EXPECT_NEAR(s.fit.model.intrinsics[0], truth.intrinsics[0], 0.01 * truth.intrinsics[0]);
+  EXPECT_NEAR(s.fit.model.intrinsics[2], truth.intrinsics[2], 2.0);
+  EXPECT_NEAR(s.fit.model.intrinsics[3], truth.intrinsics[3], 2.0);
+  EXPECT_LT(err, 0.5);
+}
+
+TEST(CalibrationSeed, CalibrateCameraSeedOfANarrowLensAndTheMrcalSeedsBuiltOnFits) {
+  const CameraModel truth = narrow();
+  const auto corners = project_board_views(truth, kBoard, 12, 25, 900, 0.1, 5, 34);
+  const CalibrationProblem pr = problem_for(truth);
+  const auto views = make_board_views(corners, pr, "test", true);
+  const ViewSubset all = all_of(views);
+  const ModelFit plumb = opencv_calibrate_camera(pr, all, LensType::OpenCV5);
+  ASSERT_TRUE(plumb.ok) << plumb.error;
+  EXPECT_EQ(plumb.model.lensmodel, "LENSMODEL_OPENCV5");
+  EXPECT_EQ(plumb.params, 9);
+  EXPECT_LT(error_within(plumb.model, truth, 34), 0.2);
+  // Rounded to the documented quanta.
+  const ModelFit r = rounded_seed(plumb);
+  EXPECT_NEAR(r.model.intrinsics[0], plumb.model.intrinsics[0], 0.5e-3 + 1e-12);
+  EXPECT_DOUBLE_EQ(r.model.intrinsics[0], std::nearbyint(plumb.model.intrinsics[0] / 1e-3) * 1e-3);
+  EXPECT_NEAR(r.model.intrinsics[4], plumb.model.intrinsics[4], 0.5e-5 + 1e-15);
+  // Stereographic from the pinhole fit (the Kannala-Brandt one is made to fail); splined as a
+  // zero spline over the stereographic fit.
+  ModelFit kb_failed;
+  kb_failed.error = "no";
+  const ModelFit pinhole = opencv_calibrate_camera(pr, all, LensType::Pinhole);
+  ASSERT_TRUE(pinhole.ok);
+  const SolvedFit solved = [&](LensType t) -> const ModelFit& {
+    return t == LensType::KannalaBrandt ? kb_failed : pinhole;
+  };
+  const SeedReport st = seed_candidate(pr, all, LensType::Stereographic, solved);
+  ASSERT_TRUE(st.fit.ok) << st.fit.error;
+  EXPECT_EQ(st.fit.model.intrinsics, std::vector<double>(pinhole.model.intrinsics.begin(), pinhole.model.intrinsics.begin() + 4));
+  EXPECT_EQ(st.fit.poses, pinhole.poses);
+  const SeedReport sp =
+      seed_candidate(pr, all, LensType::SplinedStereographic, [&](LensType) -> const ModelFit& { return st.fit; });
+  ASSERT_TRUE(sp.fit.ok) << sp.fit.error;
+  EXPECT_TRUE(LensModel::parse(sp.fit.model.lensmodel).is_splined());
+  EXPECT_EQ(sp.fit.params, 4 + 2 * 8 * 6);
+  const ProjectionDiff same = projection_difference(sp.fit.model, st.fit.model, {}, 32, false);
+  EXPECT_LT(same.max_px, 1e-6);  // a zero spline is the stereographic model
+  // Without mrcal the mrcal-only candidates have no seed.
+  CalibrationProblem no_mrcal = pr;
+  no_mrcal.solve.use_mrcal = false;
+  EXPECT_FALSE(seed_candidate(no_mrcal, all, LensType::Stereographic, solved).fit.ok);
+}
+
+TEST(CalibrationSolve, JointSolveReachesTheTruthFromAPerturbedSeedAndWarmEqualsCold) {
+  const CameraModel truth = kb190();
+  const auto corners = project_board_views(truth, kBoard, 12, 80, 600, 0.0, 7, 93);  // noise-free, to 93 deg
+  const CalibrationProblem pr = problem_for(truth);
+  const auto views = make_board_views(corners, pr, "test", true);
+  const ViewSubset all = all_of(views);
+  CandidateSolver solver(pr, all);
+  const ModelFit& kb = solver.get(LensType::KannalaBrandt);
+  ASSERT_TRUE(kb.ok) << kb.error;
+  EXPECT_EQ(&solver.get(LensType::KannalaBrandt), &kb);  // solved once
+  EXPECT_NE(kb.solver.find("Ceres"), std::string::npos) << kb.solver;
+  EXPECT_LT(fit_rms(pr, kb, all), 1e-4);
+  EXPECT_LT(projection_difference(kb.model, truth, {}, 16).rms_px, 1e-3);
+  // From a seed 2 % off in focal length and 5 px off centre.
+  ModelFit seed = kb;
+  seed.model.intrinsics[0] *= 1.02;
+  seed.model.intrinsics[1] *= 0.98;
+  seed.model.intrinsics[2] += 5;
+  const ModelFit refined = refine_kannala_brandt(pr, all, seed);
+  EXPECT_LT(projection_difference(refined.model, truth, {}, 16).rms_px, 1e-3);
+  // Warm from the full fit on a subset = cold on it.
+  const ViewSubset some(all.begin(), all.begin() + 8);
+  const std::vector<BoardPose> poses(kb.poses.begin(), kb.poses.begin() + 8);
+  const ModelFit warm = warm_refit(pr, some, LensType::KannalaBrandt, kb, poses);
+  CandidateSolver cold(pr, some);
+  const ModelFit& c = cold.get(LensType::KannalaBrandt);
+  ASSERT_TRUE(warm.ok && c.ok);
+  EXPECT_LT(projection_difference(warm.model, c.model, {}, 16, false).rms_px, 1e-3);
+  // mrcal's stereographic fit is seeded from it and cannot reach the truth (wrong model).
+  const ModelFit& st = solver.get(LensType::Stereographic);
+  ASSERT_TRUE(st.ok) << st.error;
+  EXPECT_GT(fit_rms(pr, st, all), 0.5);
+}
+
+TEST(OutlierRejection, RemovesTheInjectedOutliersAndOnlyThem) {
+  const CameraModel truth = kb190();
+  Corners corners = project_board_views(truth, kBoard, 12, 80, 600, 0.1, 7, 93);
+  ASSERT_GE(corners.size(), 10u);
+  const std::set<std::pair<int, int>> bad = {{1, 5}, {4, 23}, {4, 60}, {7, 0}, {9, 33}};
+  int sign = 1;
+  for (const auto& [v, k] : bad) {
+    corners[size_t(v)][size_t(k)][0] += 6 * sign;
+    corners[size_t(v)][size_t(k)][1] -= 4 * sign;
+    sign = -sign;
+  }
+  // A view whose corners are mostly wrong (every other row shifted) loses its board.
+  for (int k = 0; k < kBoard.cols * kBoard.rows; ++k)
+    if ((k / kBoard.cols) % 4 != 0) corners[2][size_t(k)][0] += 3 + k % 5;
+  const CalibrationProblem pr = problem_for(truth);
+  auto views = make_board_views(corners, pr, "test", true);
+  // k = 6: at the default 4 sigma one of ~800 good corners is expected beyond the threshold
+  // (the 2-D residual of 0.1 px noise exceeds 0.4 px with probability exp(-8)).
+  OutlierOptions o;
+  o.k = 6;
+  const OutlierReport rep = reject_outliers(pr, views, o);
+  // A wide-angle family fits a 190 deg lens (Kannala-Brandt or Mei), never the rational model.
+  EXPECT_TRUE(rep.reference == LensType::KannalaBrandt || rep.reference == LensType::OmnidirMei)
+      << lens_type_name(rep.reference);
+  EXPECT_GE(rep.rounds, 2);
+  EXPECT_FALSE(rep.view_used[2]);
+  EXPECT_NE(rep.why[2].find("too many outlier corners"), std::string::npos) << rep.why[2];
+  std::printf("  sigma %.3f px, threshold %.3f px, %d rounds\n", rep.sigma_px, rep.threshold_px, rep.rounds);
+  EXPECT_NEAR(rep.sigma_px, 0.1, 0.03);  // the corners' noise
+  for (size_t i = 0; i < views.size(); ++i) {
+    if (i == 2) continue;
+    EXPECT_TRUE(rep.view_used[i]) << i;
+    for (size_t k = 0; k < views[i].inlier.size(); ++k)
+      EXPECT_EQ(!views[i].inlier[k], bad.count({int(i), int(k)}) == 1) << "view " << i << " corner " << k;
+  }
+  EXPECT_EQ(rep.corners_rejected, int(bad.size()));
+  // The last round's fit stands for the reference on the views left.
+  const auto f = reference_fit(pr, rep, used_views(views, rep.view_used));
+  ASSERT_TRUE(f.has_value());
+  EXPECT_LT(projection_difference(f->model, truth, {}, 16).median_px, 0.3);
+}
+
+TEST(ModelSelection, BalancedSplitsAreBalancedDistinctAndOddEvenFirst) {
+  const auto splits = balanced_view_splits(13, 4);
+  ASSERT_EQ(splits.size(), 4u);
+  for (int i = 0; i < 13; ++i) EXPECT_EQ(splits[0][size_t(i)], i % 2);
+  for (size_t a = 0; a < splits.size(); ++a) {
+    EXPECT_EQ(std::count(splits[a].begin(), splits[a].end(), 0), 7);
+    for (size_t b = 0; b < a; ++b) {
+      bool same = true, complement = true;
+      for (int i = 0; i < 13; ++i) {
+        same = same && splits[a][size_t(i)] == splits[b][size_t(i)];
+        complement = complement && splits[a][size_t(i)] != splits[b][size_t(i)];
+      }
+      EXPECT_FALSE(same || complement) << a << " " << b;
+    }
+  }
+}
+
+TEST(ModelSelection, PicksTheFewestParametersWithinTheMeasuredNoise) {
+  // A pinhole camera: plumb_bob and rational fit as well, within noise; the pinhole is picked.
+  const CameraModel truth{"LENSMODEL_PINHOLE", {900, 902, 639.2, 481.7}, 1280, 960};
+  const auto corners = project_board_views(truth, kBoard, 12, 25, 900, 0.15, 5, 34);
+  const CalibrationProblem pr = problem_for(truth);
+  auto views = make_board_views(corners, pr, "test", true);
+  CandidateFits fits(pr, all_of(views));
+  EXPECT_EQ(fits.half[0].size() + fits.half[1].size(), views.size());
+  auto table = solve_candidates(pr, fits, {LensType::Pinhole, LensType::OpenCV5, LensType::OpenCV8});
+  ASSERT_EQ(table.size(), 3u);
+  for (const auto& c : table) ASSERT_TRUE(c.ok) << c.name << ": " << c.error;
+  EXPECT_EQ(table[0].name, "LENSMODEL_PINHOLE");
+  EXPECT_EQ(table[1].name, "plumb_bob");
+  EXPECT_EQ(table[1].lensmodel, "LENSMODEL_OPENCV5");
+  SelectionOptions o;
+  o.cv_splits = 2;
+  const SelectionReport sel = select_model(pr, fits, table, o);
+  EXPECT_EQ(table[sel.selected].name, "LENSMODEL_PINHOLE");
+  EXPECT_FALSE(sel.no_model_fits);
+  EXPECT_EQ(sel.selected_on, "repeated");
+  EXPECT_EQ(sel.cv_splits, 2);
+  ASSERT_TRUE(std::isfinite(sel.cv_noise_px));
+  EXPECT_GT(sel.cv_noise_px, 0);
+  // The rule, recomputed from the report: within noise = repeated cv within k * noise + floor
+  // of the best and held-out RMS not significantly above the best's.
+  size_t best = 0;
+  for (size_t i = 0; i < table.size(); ++i)
+    if (table[i].cross_validation_repeated_px < table[best].cross_validation_repeated_px) best = i;
+  for (const auto& c : table) {
+    const bool cv_ok =
+        c.cross_validation_repeated_px - table[best].cross_validation_repeated_px <= sel.k * sel.noise_px + o.floor_px;
+    if (!cv_ok) {
+      EXPECT_FALSE(c.within_noise) << c.name;
+    }
+  }
+  EXPECT_TRUE(table[sel.selected].within_noise);
+  for (const auto& c : table)
+    if (c.within_noise) {
+      EXPECT_GE(c.params, table[sel.selected].params) << c.name;
+    }
+}
+
+TEST(ViewDiagnostics, CoverageCountsTheUsedInliersAndLeverageFlagsTheRimView) {
+  const CameraModel truth = kb190();
+  Corners corners = project_board_views(truth, kBoard, 10, 40, 600, 0.1, 11, 93);
+  ASSERT_GE(corners.size(), 8u);
+  // One view near the rim: the only one out there, so leaving it out moves the model most.
+  const auto rim = project_board_views(truth, kBoard, 1, 85, 500, 0.1, 12, 93);
+  ASSERT_EQ(rim.size(), 1u);
+  corners.push_back(rim[0]);
+  const CalibrationProblem pr = problem_for(truth);
+  auto views = make_board_views(corners, pr, "test", true);
+  views[0].inlier[3] = 0;  // an outlier of an earlier stage
+  std::vector<char> used(views.size(), 1);
+  CandidateSolver solver(pr, all_of(views));
+  const ModelFit& fit = solver.get(LensType::KannalaBrandt);
+  ASSERT_TRUE(fit.ok);
+  std::vector<ViewReport> reports(views.size());
+  CoverageOptions co;
+  const ViewDiagnostics d = diagnose_views(pr, views, used, fit, reports, co);
+  int cells = 0;
+  for (int c : d.coverage) cells += c;
+  EXPECT_EQ(cells, int(views.size()) * kBoard.cols * kBoard.rows - 1);
+  EXPECT_EQ(d.corners_total, int(views.size()) * kBoard.cols * kBoard.rows);
+  EXPECT_EQ(d.corners_rejected, 1);
+  EXPECT_EQ(reports[0].rejected_corners, 1);
+  EXPECT_NEAR(reports[1].rms_px, 0.1 * std::sqrt(2.0), 0.06);  // 2-D RMS of 0.1 px noise per axis
+  const CoverageOptions centre_only{16, 12, 0.15, 100000};
+  EXPECT_TRUE(diagnose_views(pr, views, used, fit, reports, centre_only).corners_poorly_covered);
+  const std::vector<uint8_t> mask = coverage_mask(pr, all_of(views));
+  const auto loo = view_leverage(pr, views, used, LensType::KannalaBrandt, fit, mask, auto_step(pr), reports);
+  EXPECT_EQ(loo.size(), views.size());
+  size_t top = 0;
+  for (size_t i = 0; i < reports.size(); ++i)
+    if (reports[i].leverage_px > reports[top].leverage_px) top = i;
+  std::printf("  rim view leverage %.3f px (the others up to %.3f)\n", reports.back().leverage_px,
+              [&] {
+                double m = 0;
+                for (size_t i = 0; i + 1 < reports.size(); ++i) m = std::max(m, reports[i].leverage_px);
+                return m;
+              }());
+  EXPECT_EQ(top, views.size() - 1);
+  EXPECT_TRUE(reports.back().influential);
+}
+
+TEST(CalibrationUncertainty, HeadlineIsTheJackknifeWhenThereAreLeaveOneOutFits) {
+  const CameraModel truth = kb190();
+  const auto corners = project_board_views(truth, kBoard, 10, 70, 600, 0.1, 3, 93);
+  const CalibrationProblem pr = problem_for(truth);
+  auto views = make_board_views(corners, pr, "test", true);
+  CandidateFits fits(pr, all_of(views));
+  auto table = solve_candidates(pr, fits, {LensType::KannalaBrandt});
+  ASSERT_TRUE(table[0].ok) << table[0].error;
+  SelectionOptions so;
+  so.measure_noise = false;
+  const SelectionReport sel = select_model(pr, fits, table, so);
+  UncertaintyOptions uo;
+  uo.nx = 16;
+  uo.ny = 12;
+  const UncertaintyReport lin = calibration_uncertainty(pr, fits, table, sel.selected, sel, {}, uo);
+  EXPECT_EQ(lin.headline, "linear");
+  EXPECT_TRUE(lin.linear_ok) << lin.linear_error;
+  EXPECT_NEAR(lin.sigma_px, 0.1, 0.03);
+  EXPECT_EQ(lin.rotation_fitted.nx, 16);
+  EXPECT_TRUE(std::isfinite(table[0].linear_sigma_px));
+  EXPECT_DOUBLE_EQ(table[0].linear_forecast_cv_px, 2 * table[0].linear_sigma_px);
+  EXPECT_EQ(lin.cv_splits, int(sel.splits.size()));
+  std::vector<char> used(views.size(), 1);
+  std::vector<ViewReport> reports(views.size());
+  const auto loo = view_leverage(pr, views, used, LensType::KannalaBrandt, fits.full.get(LensType::KannalaBrandt),
+                                 fits.mask, fits.step, reports);
+  const UncertaintyReport jk = calibration_uncertainty(pr, fits, table, sel.selected, sel, loo, uo);
+  EXPECT_EQ(jk.headline, "jackknife");
+  EXPECT_EQ(&jk.headline_grid(), &jk.jackknife);
+  // Both estimates of one calibration agree within a factor of a few on noise-only corners.
+  std::printf("  median sigma: jackknife %.4f, linear %.4f px\n", jk.jackknife.median_px, jk.rotation_fitted.median_px);
+  EXPECT_GT(jk.jackknife.median_px, jk.rotation_fitted.median_px / 3);
+  EXPECT_LT(jk.jackknife.median_px, jk.rotation_fitted.median_px * 3);
+}
+
+}  // namespace
+}  // namespace lp

@@ -1,7 +1,8 @@
 // Thin wrapper around mrcal 2.2's C solver (mrcal_optimize) for one stationary camera
 // observing a moving chessboard (lens_model.cpp and camera_model.cpp call mrcal's lens-model
-// and projection functions themselves). mrcal's C API does no seeding: the caller passes a complete initial
-// guess (intrinsics + board poses), so the result is a deterministic function of it.
+// and projection functions themselves). mrcal's C API does no seeding: the caller passes a
+// complete initial guess (intrinsics + board poses), so the result is a deterministic
+// function of it.
 #pragma once
 
 #include <array>

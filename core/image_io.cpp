@@ -20,6 +20,7 @@
 #include <Iex.h>
 #include <algorithm>
 #include <bit>
+#include <filesystem>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -915,6 +916,12 @@ void write_display_image(const std::string& path, int width, int height, const s
     return std::string(buf.begin(), buf.end());
   });
   write_file_atomically(path, bytes);
+}
+
+void make_output_directory(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", dir, ec.message()));
 }
 
 void write_file_atomically(const std::string& path, const std::string& bytes) {

@@ -80,6 +80,8 @@ void write_display_image(const std::string& path, int width, int height, const s
 
 // Write `bytes` to `path` through a temporary file and rename (text outputs: JSON, CSV, SVG).
 void write_file_atomically(const std::string& path, const std::string& bytes);
+// Creates `dir` and its parents (an output directory); InputError naming it on failure.
+void make_output_directory(const std::string& dir);
 
 // Healpix NESTED index <-> (face, ix, iy) within the face, used by the file layout above.
 size_t healpix_nested_index(int nside, int face, int ix, int iy);

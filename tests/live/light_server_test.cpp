@@ -370,14 +370,20 @@ TEST(LightServer, ProbePngIsAPngOfTheLatestMap) {
   s.server->stop();
 }
 
-TEST(LightServer, PageIsSelfContainedAndUsesEventSource) {
+TEST(LightServer, PageIsSelfContainedAndSendsTheTokenAsAHeader) {
   auto s = start_server();
   auto c = client(s.port);
   auto res = c->Get("/");
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 200);
   EXPECT_NE(res->get_header_value("Content-Type").find("text/html"), std::string::npos);
-  EXPECT_NE(res->body.find("EventSource"), std::string::npos);
+  // Everything through fetch() with the Authorization header: the stream read from a
+  // fetch body (EventSource cannot send headers), the picture as a blob URL.
+  EXPECT_NE(res->body.find("getReader()"), std::string::npos);
+  EXPECT_NE(res->body.find("\"Authorization\": \"Bearer \" + token"), std::string::npos);
+  EXPECT_NE(res->body.find("location.hash"), std::string::npos);
+  EXPECT_NE(res->body.find("createObjectURL"), std::string::npos);
+  EXPECT_EQ(res->body.find("access_token"), std::string::npos);
   EXPECT_NE(res->body.find("/lights/stream"), std::string::npos);
   EXPECT_NE(res->body.find("/probe.png"), std::string::npos);
   EXPECT_EQ(res->body.find("src=\"http"), std::string::npos);
@@ -470,32 +476,41 @@ TEST(LightServer, BadRequestsGet4xxAndTheServerCarriesOn) {
   s.server->stop();
 }
 
-TEST(LightServer, TokenGuardsEveryRoute) {
+TEST(LightServer, TokenGuardsEveryRouteButThePageWithTheExactBearerScheme) {
   lp::LightServerOptions options;
   options.token = "s3cret";
   auto s = start_server(options);
   s.server->publish(make_list(1, 2), make_map());
   auto c = client(s.port);
-  for (const char* path : {"/", "/lights", "/probe.png", "/metrics", "/status", "/nope"}) {
+  for (const char* path : {"/lights", "/lights/stream", "/probe.png", "/metrics", "/status", "/nope"}) {
     auto res = c->Get(path);
     ASSERT_TRUE(res) << path;
     EXPECT_EQ(res->status, 401) << path;
+    EXPECT_EQ(res->get_header_value("WWW-Authenticate"), "Bearer realm=\"lightprobe\"") << path;
     res = c->Get(path, httplib::Headers{{"Authorization", "Bearer wrong"}});
     ASSERT_TRUE(res) << path;
     EXPECT_EQ(res->status, 401) << path;
   }
-  for (const char* path : {"/", "/lights", "/probe.png", "/metrics", "/status"}) {
+  for (const char* path : {"/lights", "/probe.png", "/metrics", "/status"}) {
     auto res = c->Get(path, httplib::Headers{{"Authorization", "Bearer s3cret"}});
     ASSERT_TRUE(res) << path;
     EXPECT_EQ(res->status, 200) << path;
   }
-  // Browsers' EventSource and <img> cannot send headers: the page passes access_token.
-  auto res = c->Get("/lights?access_token=s3cret");
+  // The page is static and holds no data: it loads without the token (a browser cannot
+  // send a header when it opens a URL) and reads the token from the URL fragment.
+  auto res = c->Get("/");
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 200);
-  res = c->Get("/lights?access_token=s3cre");
+  // Issue 22: only the capitalised scheme, one space, the token exactly; no query token.
+  for (const char* auth : {"bearer s3cret", "BEARER s3cret", "Bearer  s3cret", "Bearer s3cre",
+                           "Bearer s3crett", "Basic czNjcmV0", "s3cret", "Bearer"}) {
+    res = c->Get("/lights", httplib::Headers{{"Authorization", auth}});
+    ASSERT_TRUE(res) << auth;
+    EXPECT_EQ(res->status, 401) << "'" << auth << "' was accepted";
+  }
+  res = c->Get("/lights?access_token=s3cret");
   ASSERT_TRUE(res);
-  EXPECT_EQ(res->status, 401);
+  EXPECT_EQ(res->status, 401) << "the query token is accepted";
   s.server->stop();
 }
 
@@ -518,7 +533,7 @@ TEST(LightServer, RefusesToListenBeyondLoopbackWithoutAToken) {
   EXPECT_NO_THROW(lp::LightServer{options});
   // Bad numbers.
   lp::LightServerOptions bad;
-  bad.threads = 0;
+  bad.limits.max_connections = 0;
   EXPECT_THROW(lp::LightServer{bad}, lp::InputError);
   bad = {};
   bad.stream_queue = 0;

@@ -18,8 +18,8 @@
 //     compile.
 // This one answers every connection: past the caps with 503 and Retry-After (then a
 // lingering close, so the answer is read before the socket goes), a request head that is
-// too slow with 408, and it measured /lights at p95 < 1 ms under the attack above (see
-// docs/live.md for the numbers the test prints).
+// too slow with 408; under the attack above /lights answered in 0.24 ms (p50), 1.9 ms
+// (p95), 24 ms at worst, none failed (docs/live.md; the test prints its own numbers).
 //
 // Policy (HttpServerOptions): a cap on connections per client address and a global cap;
 // a timeout per header line and a deadline for the whole request head; an idle timeout

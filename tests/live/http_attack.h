@@ -56,40 +56,44 @@ inline int status_of(const std::string& answer) {
   return std::atoi(answer.c_str() + 9);
 }
 
-// One GET on a fresh connection from `source`; the status (0: none) and the time to the
-// whole answer (headers and Content-Length body, or until close).
-struct TimedGet {
+// Sends `request` as is on a fresh connection from `source` and reads until the peer
+// closes, `timeout_s` passes, or (with `one_answer`) one whole answer has come (head and
+// Content-Length body). The status of the first answer (0: none) and the time taken.
+struct RawAnswer {
   int status = 0;
   double seconds = 0;
+  bool closed = false;  // the server closed the connection
   std::string answer;
 };
-inline TimedGet timed_get(int port, const std::string& path, double timeout_s, const char* source = "127.0.0.1",
-                          const std::string& extra_headers = "") {
-  TimedGet r;
+inline RawAnswer raw_request(int port, const std::string& request, double timeout_s, bool one_answer = true,
+                             const char* source = "127.0.0.1") {
+  RawAnswer r;
   const auto t0 = AttackClock::now();
   const auto deadline = t0 + std::chrono::duration_cast<AttackClock::duration>(std::chrono::duration<double>(timeout_s));
   const int fd = start_connect(source, port);
   if (fd < 0) return r;
-  const std::string request = "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + extra_headers + "\r\n";
   size_t sent = 0;
   bool done = false;
   char buf[65536];
   while (!done && AttackClock::now() < deadline) {
-    pollfd p{fd, short(sent < request.size() ? POLLOUT : POLLIN), 0};
+    pollfd p{fd, short(sent < request.size() ? POLLOUT | POLLIN : POLLIN), 0};
     const int ms = int(std::chrono::duration_cast<std::chrono::milliseconds>(deadline - AttackClock::now()).count());
     if (::poll(&p, 1, std::max(1, ms)) <= 0) continue;
-    if (sent < request.size()) {
+    if (sent < request.size() && (p.revents & POLLOUT)) {
       const ssize_t n = ::send(fd, request.data() + sent, request.size() - sent, MSG_NOSIGNAL);
-      if (n < 0 && errno != EAGAIN) break;
       if (n > 0) sent += size_t(n);
-      continue;
+      else if (n < 0 && errno != EAGAIN) sent = request.size();  // the server closed: read what it said
     }
+    if (!(p.revents & (POLLIN | POLLHUP | POLLERR))) continue;
     const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
     if (n < 0 && errno == EAGAIN) continue;
-    if (n <= 0) break;
+    if (n <= 0) {
+      r.closed = true;
+      break;
+    }
     r.answer.append(buf, size_t(n));
     const size_t head = r.answer.find("\r\n\r\n");
-    if (head == std::string::npos) continue;
+    if (!one_answer || head == std::string::npos) continue;
     size_t length = 0;
     std::string lower = r.answer.substr(0, head);
     std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
@@ -99,8 +103,46 @@ inline TimedGet timed_get(int port, const std::string& path, double timeout_s, c
   }
   ::close(fd);
   r.seconds = std::chrono::duration<double>(AttackClock::now() - t0).count();
-  r.status = done ? status_of(r.answer) : 0;
+  r.status = status_of(r.answer);
   return r;
+}
+
+// One GET on a fresh connection from `source`; the status (0: none) and the time to the
+// whole answer.
+struct TimedGet {
+  int status = 0;
+  double seconds = 0;
+  std::string answer;
+};
+inline TimedGet timed_get(int port, const std::string& path, double timeout_s, const char* source = "127.0.0.1",
+                          const std::string& extra_headers = "") {
+  const RawAnswer a =
+      raw_request(port, "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + extra_headers + "\r\n", timeout_s, true, source);
+  TimedGet r;
+  r.seconds = a.seconds;
+  r.answer = a.answer;
+  // Whole answers only: a status line without its body does not count.
+  const size_t head = a.answer.find("\r\n\r\n");
+  if (head != std::string::npos) r.status = a.status;
+  return r;
+}
+
+// The value of a header in an answer (name in any case); "" when absent.
+inline std::string header_of(const std::string& answer, const std::string& name) {
+  std::string lower = answer.substr(0, answer.find("\r\n\r\n"));
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::string key = "\r\n" + name + ":";
+  std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const size_t at = lower.find(key);
+  if (at == std::string::npos) return "";
+  const size_t begin = answer.find_first_not_of(' ', at + key.size()), end = answer.find("\r\n", at + key.size());
+  return answer.substr(begin, end - begin);
+}
+
+// The body of an answer (after the head).
+inline std::string body_of(const std::string& answer) {
+  const size_t head = answer.find("\r\n\r\n");
+  return head == std::string::npos ? "" : answer.substr(head + 4);
 }
 
 struct AttackOptions {

@@ -75,7 +75,7 @@ Clock::duration seconds(double s) {
 
 constexpr uint64_t kListenerId = 0, kWakeId = 1;
 constexpr size_t kReadChunk = 16 * 1024;
-constexpr size_t kMaxLingering = 4096;     // 503-and-close sockets draining at once
+constexpr size_t kMaxLingering = 4096;     // closing sockets draining at once (below the file limit too)
 constexpr auto kLingerTime = 2s;           // how long a closing socket is drained
 constexpr size_t kMaxLingerBytes = 1 << 20;
 constexpr auto kSweepInterval = 25ms;
@@ -332,6 +332,7 @@ struct HttpServer::Impl {
   bool accept_paused = false;
   Clock::time_point accept_resume{}, last_sweep{};
   int max_connections = 0;
+  size_t max_lingering = kMaxLingering;
 
   // Counters, read by stats() from any thread.
   std::atomic<uint64_t> accepted{0}, rejected_address{0}, rejected_global{0}, head_timeouts{0}, idle_closed{0},
@@ -433,8 +434,11 @@ void HttpServer::Impl::bind_and_listen() {
   // The global cap must stay below the file limit, or accept() fails before it applies.
   rlimit rl{};
   max_connections = options.limits.max_connections;
-  if (::getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY)
-    max_connections = int(std::min<rlim_t>(rlim_t(max_connections), rl.rlim_cur > 128 ? (rl.rlim_cur - 64) / 2 : 32));
+  if (::getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
+    const rlim_t budget = rl.rlim_cur > 128 ? (rl.rlim_cur - 64) / 2 : 32;  // half for open, half for closing
+    max_connections = int(std::min<rlim_t>(rlim_t(max_connections), budget));
+    max_lingering = size_t(std::min<rlim_t>(kMaxLingering, budget));
+  }
   epoll_fd = ::epoll_create1(EPOLL_CLOEXEC);
   mailbox->wake_fd = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
   if (epoll_fd < 0 || mailbox->wake_fd < 0) throw std::runtime_error("light server: epoll/eventfd failed");
@@ -496,6 +500,10 @@ void HttpServer::Impl::handle_event(uint64_t id, uint32_t events) {
   auto it = conns.find(id);
   if (it == conns.end()) return;
   Conn& c = *it->second;
+  if (c.peer_eof && (events & (EPOLLHUP | EPOLLERR))) {  // gone for good while we answered
+    close_conn(c);
+    return;
+  }
   if (events & (EPOLLIN | EPOLLRDHUP | EPOLLHUP | EPOLLERR)) {
     read_from(c);
     if (!conns.count(id)) return;
@@ -545,7 +553,7 @@ void HttpServer::Impl::reject(int fd, const std::string& address, bool global) {
       http_date(), options.limits.retry_after_s, body.size(), body);
   [[maybe_unused]] auto n = ::send(fd, answer.data(), answer.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
   ::shutdown(fd, SHUT_WR);
-  if (lingering >= kMaxLingering) {
+  if (lingering >= max_lingering) {
     ::close(fd);
     return;
   }
@@ -616,7 +624,7 @@ void HttpServer::Impl::read_from(Conn& c) {
     const ssize_t n = ::recv(c.fd, buf, sizeof buf, 0);
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) break;
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0 || c.phase == Phase::Lingering || c.phase == Phase::Streaming) {  // reset, or done
+    if (n < 0 || (n == 0 && (c.phase == Phase::Lingering || c.phase == Phase::Streaming))) {  // reset, or done
       close_conn(c);
       return;
     }
@@ -918,6 +926,10 @@ void HttpServer::Impl::fill_stream(Conn& c) {
 }
 
 void HttpServer::Impl::start_lingering(Conn& c) {
+  if (c.peer_eof) {  // everything the client sent is read: closing cannot reset anything
+    close_conn(c);
+    return;
+  }
   ::shutdown(c.fd, SHUT_WR);
   if (c.counted) {  // no longer holds a slot of its address
     auto it = per_address.find(c.address);
@@ -926,7 +938,7 @@ void HttpServer::Impl::start_lingering(Conn& c) {
     open.fetch_sub(1);
     c.counted = false;
   }
-  if (lingering >= kMaxLingering) {
+  if (lingering >= max_lingering) {
     close_conn(c);
     return;
   }

@@ -59,6 +59,32 @@ const char* http_reason(int status) {
   }
 }
 
+bool http_etag_matches(const std::string* if_none_match, const std::string& etag) {
+  if (!if_none_match || etag.empty()) return false;
+  const auto opaque = [](std::string_view t) {
+    while (!t.empty() && (t.front() == ' ' || t.front() == '\t')) t.remove_prefix(1);
+    while (!t.empty() && (t.back() == ' ' || t.back() == '\t')) t.remove_suffix(1);
+    if (t.substr(0, 2) == "W/") t.remove_prefix(2);
+    return t;
+  };
+  const std::string_view mine = opaque(etag);
+  std::string_view list = *if_none_match;
+  while (!list.empty()) {
+    const size_t comma = list.find(',');
+    const std::string_view tag = opaque(list.substr(0, comma));
+    if (tag == "*" || (!tag.empty() && tag == mine)) return true;
+    list = comma == std::string_view::npos ? std::string_view{} : list.substr(comma + 1);
+  }
+  return false;
+}
+
+HttpResponse http_not_modified(const std::string& etag, const std::string& cache_control) {
+  HttpResponse r;
+  r.status = 304;
+  r.headers = {{"ETag", etag}, {"Cache-Control", cache_control}};
+  return r;
+}
+
 void HttpResponse::set_body(std::string text, std::string type) {
   body = std::make_shared<const std::string>(std::move(text));
   content_type = std::move(type);

@@ -167,6 +167,12 @@ class HttpServer {
   std::unique_ptr<Impl> impl_;
 };
 
+// Whether an If-None-Match header (null: absent) matches `etag` by weak comparison
+// (RFC 9110 13.1.2: a list of tags, "W/" ignored, "*" matches anything).
+bool http_etag_matches(const std::string* if_none_match, const std::string& etag);
+// 304 Not Modified for `etag`, no body, with the given Cache-Control.
+HttpResponse http_not_modified(const std::string& etag, const std::string& cache_control);
+
 // {"error": message} and a newline; bytes that are not UTF-8 are replaced.
 std::string http_error_json(const std::string& message);
 // Standard reason phrase ("Not Found"); "Unknown" for codes it does not know.

@@ -15,11 +15,13 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
+
+#include <random>
 
 #include "core/error.h"
+#include "live/map_views.h"
+#include "live/metrics.h"
 #include "live/web_page.h"
-#include "sampling/overlay.h"
 
 namespace lp {
 namespace {
@@ -67,7 +69,9 @@ HttpResponse error_response(int status, const std::string& message) {
 // One published frame, shared read-only by every request that serves it.
 struct Snapshot {
   uint64_t generation = 0;
-  LightList list;
+  std::shared_ptr<const LightList> lists;
+  const LightList& list() const { return *lists; }
+  std::string etag;                          // of /lights
   std::shared_ptr<const EnvMap> map;
   std::shared_ptr<const std::string> json;  // one line, no trailing newline
   std::shared_ptr<const std::string> body;  // json + "\n", as /lights and NDJSON streams send it
@@ -75,32 +79,14 @@ struct Snapshot {
   double latency = NAN;                      // publish wall time - list timestamp (s)
 };
 
-std::string encode_png(const std::vector<float>& rgb, int width, int height) {
-  cv::Mat img(height, width, CV_8UC3);
-  auto encode = [](float v) {
-    if (!(v > 0.0f)) return uint8_t(0);  // also NaN
-    if (v >= 1.0f) return uint8_t(255);
-    const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(double(v), 1.0 / 2.4) - 0.055;
-    return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
-  };
-  for (int y = 0; y < height; ++y) {
-    uint8_t* row = img.ptr<uint8_t>(y);
-    for (int x = 0; x < width; ++x) {
-      const float* p = &rgb[3 * (size_t(y) * size_t(width) + size_t(x))];
-      row[3 * x] = encode(p[2]);  // OpenCV is BGR
-      row[3 * x + 1] = encode(p[1]);
-      row[3 * x + 2] = encode(p[0]);
-    }
-  }
-  std::vector<uint8_t> buf;
-  if (!cv::imencode(".png", img, buf)) throw std::runtime_error("light server: PNG encoder failed");
-  return std::string(buf.begin(), buf.end());
+// FNV-1a, for the ETag of /status (a change detector, not a secret).
+uint64_t fnv1a(std::string_view text) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  return h;
 }
 
-void append_metric(std::string& out, const char* name, const char* type, const char* help, double value) {
-  if (!std::isfinite(value)) return;
-  out += fmt::format("# HELP {0} {1}\n# TYPE {0} {2}\n{0} {3}\n", name, help, type, value);
-}
+constexpr const char* kRevalidate = "no-cache";  // clients may keep answers but must ask (ETag) every time
 
 }  // namespace
 
@@ -123,16 +109,9 @@ struct LightServer::Impl {
   std::mutex clients_mutex;
   std::map<std::shared_ptr<HttpStream>, bool> clients;  // -> NDJSON (else SSE)
 
-  // The preview: rendered on a thread of its own (never on the server's loop), at most
-  // preview_max_rate times a second, for every request that waits for it.
-  std::mutex render_mutex;
-  std::condition_variable render_cv;
-  std::vector<std::shared_ptr<HttpDeferred>> render_waiting;
-  std::thread render_thread;
-  bool render_quit = false;
-  uint64_t preview_generation = 0;
-  Clock::time_point preview_time{};
-  std::shared_ptr<const std::string> preview_png;
+  MapFrame latest_map;  // under state_mutex: the newest frame published with a map
+  std::string etag_prefix;  // random per server: tags of an earlier run never match
+  std::unique_ptr<MapViews> views;  // /probe.png, /probe.exr
 
   // Counters.
   std::atomic<uint64_t> published{0}, stream_sent{0}, stream_dropped{0};
@@ -165,13 +144,10 @@ struct LightServer::Impl {
 
   void handle(const HttpRequest& req, HttpExchange& ex);
   void handle_stream(const HttpRequest& req, HttpExchange& ex);
-  void handle_probe(HttpExchange& ex);
-  HttpResponse lights_response() const;
-  HttpResponse status_response() const;
+  void handle_map(MapView view, const HttpRequest& req, HttpExchange& ex);
+  HttpResponse lights_response(const HttpRequest& req) const;
+  HttpResponse status_response(const HttpRequest& req) const;
   HttpResponse metrics_response() const;
-  bool preview_fresh(const Snapshot& snap, Clock::time_point now) const;  // under render_mutex
-  void render_loop();
-  std::shared_ptr<const std::string> render_preview(const Snapshot& snap);
   nlohmann::json status_json() const;
 };
 
@@ -189,25 +165,31 @@ void LightServer::Impl::handle(const HttpRequest& req, HttpExchange& ex) {
     ex.respond(std::move(r));
     return;
   }
-  if (req.path == "/lights") return ex.respond(lights_response());
+  if (req.path == "/lights") return ex.respond(lights_response(req));
   if (req.path == "/lights/stream") return handle_stream(req, ex);
-  if (req.path == "/probe.png") return handle_probe(ex);
-  if (req.path == "/status") return ex.respond(status_response());
+  if (req.path == "/probe.png") return handle_map(MapView::Png, req, ex);
+  if (req.path == "/probe.exr") return handle_map(MapView::Exr, req, ex);
+  if (req.path == "/status") return ex.respond(status_response(req));
   if (req.path == "/metrics") return ex.respond(metrics_response());
+  // GET /sh (spherical harmonics of the latest map) and SH inside the light list come
+  // with the SH task: its route goes here, answered from the Snapshot (computed once per
+  // publish, like Snapshot::body) with an ETag as /lights has.
   ex.respond(error_response(404, "no such path: " + req.path.substr(0, 200)));
 }
 
-HttpResponse LightServer::Impl::lights_response() const {
+HttpResponse LightServer::Impl::lights_response(const HttpRequest& req) const {
   const auto snap = snapshot();
   if (!snap) {
     HttpResponse r = error_response(503, "no light list published yet");
     r.headers.emplace_back("Retry-After", "1");
     return r;
   }
+  // A poller that has this list already gets 304 and no body.
+  if (http_etag_matches(req.header("if-none-match"), snap->etag)) return http_not_modified(snap->etag, kRevalidate);
   HttpResponse r;
   r.body = snap->body;
   r.content_type = "application/json";
-  r.headers.emplace_back("Cache-Control", "no-store");
+  r.headers = {{"ETag", snap->etag}, {"Cache-Control", kRevalidate}};
   return r;
 }
 
@@ -246,84 +228,28 @@ void LightServer::Impl::handle_stream(const HttpRequest& req, HttpExchange& ex) 
   if (auto snap = snapshot()) stream->push(ndjson ? snap->body : snap->sse);
 }
 
-bool LightServer::Impl::preview_fresh(const Snapshot& snap, Clock::time_point now) const {
-  const double rate = options.preview_max_rate > 0 ? options.preview_max_rate : 4;
-  const auto min_interval = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
-  // A frame published without a map keeps the last preview.
-  return preview_png && (preview_generation == snap.generation || !snap.map || now - preview_time < min_interval);
-}
-
-void LightServer::Impl::handle_probe(HttpExchange& ex) {
-  const auto snap = snapshot();
-  if (!snap) {
+void LightServer::Impl::handle_map(MapView view, const HttpRequest& req, HttpExchange& ex) {
+  if (!snapshot()) {
     HttpResponse r = error_response(503, "no frame published yet");
     r.headers.emplace_back("Retry-After", "1");
     return ex.respond(std::move(r));
   }
-  std::lock_guard lock(render_mutex);
-  if (preview_fresh(*snap, Clock::now()) || (!snap->map && !preview_png)) {
-    if (!preview_png) return ex.respond(error_response(503, "no map published for the preview"));
-    HttpResponse r;
-    r.body = preview_png;
-    r.content_type = "image/png";
-    r.headers.emplace_back("Cache-Control", "no-store");
-    return ex.respond(std::move(r));
+  MapFrame frame;
+  {
+    std::lock_guard lock(state_mutex);
+    frame = latest_map;
   }
-  render_waiting.push_back(ex.defer());
-  render_cv.notify_one();
-}
-
-void LightServer::Impl::render_loop() {
-  std::unique_lock lock(render_mutex);
-  while (true) {
-    render_cv.wait(lock, [&] { return render_quit || !render_waiting.empty(); });
-    if (render_quit) break;
-    auto waiting = std::move(render_waiting);
-    render_waiting.clear();
-    const auto snap = snapshot();
-    if (snap && snap->map && !preview_fresh(*snap, Clock::now())) {
-      lock.unlock();  // requests for a fresh preview are answered meanwhile
-      std::shared_ptr<const std::string> png;
-      try {
-        png = render_preview(*snap);
-      } catch (const std::exception&) {
-        // The waiting requests get 500 (their promises die unkept).
-      }
-      lock.lock();
-      if (png) {
-        preview_png = png;
-        preview_generation = snap->generation;
-        preview_time = Clock::now();
-      }
-    }
-    HttpResponse r = preview_png ? HttpResponse{} : error_response(503, "no map published for the preview");
-    if (preview_png) {
-      r.body = preview_png;
-      r.content_type = "image/png";
-      r.headers.emplace_back("Cache-Control", "no-store");
-    }
-    for (auto& w : waiting) w->send(r);
-  }
-  render_waiting.clear();
-}
-
-std::shared_ptr<const std::string> LightServer::Impl::render_preview(const Snapshot& snap) {
-  const EnvMap& map = *snap.map;
-  int width = options.preview_width;
-  if (width <= 0) width = map.layout == Layout::LatLong ? std::min(map.width, 1024) : 1024;
-  width = std::max(2, width - width % 2);
-  const std::vector<float> rgb = render_overlay(map, snap.list.lights, width);
-  return std::make_shared<const std::string>(encode_png(rgb, width, width / 2));
+  views->answer(view, frame, req, ex);
 }
 
 nlohmann::json LightServer::Impl::status_json() const {
   const auto snap = snapshot();
   const HttpServerStats h = http ? http->stats() : HttpServerStats{};
   nlohmann::json j;
-  j["frame"] = snap ? nlohmann::json(snap->list.frame) : nlohmann::json(nullptr);
-  j["timestamp"] = snap ? nlohmann::json(snap->list.timestamp) : nlohmann::json(nullptr);
-  j["method"] = snap ? nlohmann::json(snap->list.method) : nlohmann::json(nullptr);
-  j["lights"] = snap ? snap->list.lights.size() : 0;
+  j["frame"] = snap ? nlohmann::json(snap->list().frame) : nlohmann::json(nullptr);
+  j["timestamp"] = snap ? nlohmann::json(snap->list().timestamp) : nlohmann::json(nullptr);
+  j["method"] = snap ? nlohmann::json(snap->list().method) : nlohmann::json(nullptr);
+  j["lights"] = snap ? snap->list().lights.size() : 0;
   j["fps"] = fps();
   j["latency_seconds"] = snap && std::isfinite(snap->latency) ? nlohmann::json(snap->latency) : nlohmann::json(nullptr);
   j["lists_published"] = published.load();
@@ -339,9 +265,18 @@ nlohmann::json LightServer::Impl::status_json() const {
   return j;
 }
 
-HttpResponse LightServer::Impl::status_response() const {
-  HttpResponse r = json_response(200, dump(status_json()) + "\n");
-  r.headers.emplace_back("Cache-Control", "no-store");
+// The ETag of /status is weak: it covers every field but the three that move with every
+// request (uptime, requests served, connections open), so a poller of an idle server
+// gets 304 while the body it keeps differs from a fresh one only in those.
+HttpResponse LightServer::Impl::status_response(const HttpRequest& req) const {
+  nlohmann::json j = status_json();
+  nlohmann::json stable = j;
+  for (const char* volatile_field : {"uptime_seconds", "requests_served", "clients_connected"})
+    stable.erase(volatile_field);
+  const std::string etag = fmt::format("W/\"{}-s{:016x}\"", etag_prefix, fnv1a(dump(stable)));
+  if (http_etag_matches(req.header("if-none-match"), etag)) return http_not_modified(etag, kRevalidate);
+  HttpResponse r = json_response(200, dump(j) + "\n");
+  r.headers = {{"ETag", etag}, {"Cache-Control", kRevalidate}};
   return r;
 }
 
@@ -354,39 +289,34 @@ HttpResponse LightServer::Impl::metrics_response() const {
   if (!out.empty() && out.back() != '\n') out += '\n';
   const auto snap = snapshot();
   const HttpServerStats h = http ? http->stats() : HttpServerStats{};
-  append_metric(out, "lightprobe_server_clients_connected", "gauge", "Open HTTP connections.",
-                double(h.connections_open));
-  append_metric(out, "lightprobe_server_stream_clients", "gauge", "Clients connected to /lights/stream.",
-                double(stream_clients.load()));
-  append_metric(out, "lightprobe_server_requests_total", "counter", "HTTP requests served.", double(h.requests));
-  append_metric(out, "lightprobe_server_stream_lists_sent_total", "counter",
-                "Light lists queued to stream clients and not dropped.", double(stream_sent.load()));
-  append_metric(out, "lightprobe_server_stream_lists_dropped_total", "counter",
-                "Light lists dropped because a stream client's queue was full.", double(stream_dropped.load()));
-  append_metric(out, "lightprobe_server_lists_published_total", "counter", "Light lists published by the pipeline.",
-                double(published.load()));
-  append_metric(out, "lightprobe_server_publish_fps", "gauge", "Lists published per second, recently.", fps());
-  out += fmt::format(
-      "# HELP lightprobe_server_connections_rejected_total Connections answered 503 by the connection caps.\n"
-      "# TYPE lightprobe_server_connections_rejected_total counter\n"
-      "lightprobe_server_connections_rejected_total{{cap=\"per_address\"}} {}\n"
-      "lightprobe_server_connections_rejected_total{{cap=\"global\"}} {}\n",
-      h.rejected_per_address, h.rejected_global);
-  append_metric(out, "lightprobe_server_request_timeouts_total", "counter",
-                "Request heads too slow (a line or the whole head), answered 408.", double(h.head_timeouts));
-  append_metric(out, "lightprobe_server_bad_requests_total", "counter",
-                "Requests refused by the request policy (400, 405, 413, 417, 431).", double(h.bad_requests));
-  append_metric(out, "lightprobe_server_write_timeouts_total", "counter",
-                "Answers or streams abandoned because the client did not read.", double(h.write_timeouts));
+  MetricsText m;
+  m.gauge("lightprobe_frame_rate_hertz", "Light lists published per second, over the last 32.", fps());
+  m.counter("lightprobe_server_lists_published_total", "Light lists published.", double(published.load()));
+  m.gauge("lightprobe_server_clients_connected", "Open HTTP connections.", double(h.connections_open));
+  m.gauge("lightprobe_server_stream_clients", "Clients connected to /lights/stream.", double(stream_clients.load()));
+  m.counter("lightprobe_server_requests_total", "HTTP requests handled.", double(h.requests));
+  m.counter("lightprobe_server_stream_lists_sent_total", "Light lists queued to stream clients and not dropped.",
+            double(stream_sent.load()));
+  m.counter("lightprobe_server_stream_lists_dropped_total",
+            "Light lists dropped because a stream client's queue was full.", double(stream_dropped.load()));
+  m.family("lightprobe_server_connections_rejected_total", "counter",
+           "Connections answered 503 by the connection caps.");
+  m.sample("lightprobe_server_connections_rejected_total", double(h.rejected_per_address), "cap=\"per_address\"");
+  m.sample("lightprobe_server_connections_rejected_total", double(h.rejected_global), "cap=\"global\"");
+  m.counter("lightprobe_server_request_timeouts_total", "Request heads too slow (a line or the whole head): 408.",
+            double(h.head_timeouts));
+  m.counter("lightprobe_server_bad_requests_total", "Requests refused by the request policy (400, 405, 413, 417, 431).",
+            double(h.bad_requests));
+  m.counter("lightprobe_server_write_timeouts_total", "Answers or streams abandoned because the client did not read.",
+            double(h.write_timeouts));
   if (snap) {
-    append_metric(out, "lightprobe_server_frame", "gauge", "Frame number of the latest list.", double(snap->list.frame));
-    append_metric(out, "lightprobe_server_lights", "gauge", "Lights in the latest list.",
-                  double(snap->list.lights.size()));
-    append_metric(out, "lightprobe_server_latency_seconds", "gauge",
-                  "Publish time minus the latest list's timestamp.", snap->latency);
+    m.gauge("lightprobe_server_frame", "Frame number of the latest list.", double(snap->list().frame));
+    m.gauge("lightprobe_server_lights", "Lights in the latest list.", double(snap->list().lights.size()));
+    if (std::isfinite(snap->latency))
+      m.gauge("lightprobe_server_list_age_seconds", "Publish time minus the latest list's timestamp.", snap->latency);
   }
   HttpResponse r;
-  r.set_body(std::move(out), "text/plain; version=0.0.4; charset=utf-8");
+  r.set_body(out + m.text(), "text/plain; version=0.0.4; charset=utf-8");
   r.headers.emplace_back("Cache-Control", "no-store");
   return r;
 }
@@ -403,6 +333,13 @@ LightServer::LightServer(LightServerOptions options) {
   if (!options.token && !is_loopback(options.host))
     throw InputError(fmt::format("listening on {} needs --token", options.host));
   impl_ = std::make_unique<Impl>(std::move(options));
+  std::random_device rd;
+  impl_->etag_prefix = fmt::format("{:08x}{:08x}", rd(), rd());
+  MapViewOptions mv;
+  mv.png_width = impl_->options.preview_width;
+  mv.max_png_rate = impl_->options.preview_max_rate;
+  mv.etag_prefix = impl_->etag_prefix;
+  impl_->views = std::make_unique<MapViews>(mv);
   HttpServerOptions ho;
   ho.host = impl_->options.host;
   ho.port = impl_->options.port;
@@ -417,9 +354,9 @@ int LightServer::start() {
   Impl& s = *impl_;
   std::lock_guard lock(s.lifecycle);
   if (s.started || s.stopped) throw std::logic_error("LightServer::start: already started");
+  s.views->start();
   const int port = s.http->start();
   s.started = true;
-  s.render_thread = std::thread([&s] { s.render_loop(); });
   return port;
 }
 
@@ -430,12 +367,7 @@ void LightServer::stop() {
   if (!s.started) return;
   s.stopping = true;
   s.http->stop();  // ends the streams, closes every connection
-  {
-    std::lock_guard render_lock(s.render_mutex);
-    s.render_quit = true;
-    s.render_cv.notify_all();
-  }
-  if (s.render_thread.joinable()) s.render_thread.join();
+  s.views->stop();
   {
     std::lock_guard clients_lock(s.clients_mutex);
     s.clients.clear();
@@ -450,7 +382,7 @@ int LightServer::port() const { return impl_->http->port(); }
 void LightServer::publish(const LightList& list, std::shared_ptr<const EnvMap> map_for_preview) {
   Impl& s = *impl_;
   auto snap = std::make_shared<Snapshot>();
-  snap->list = list;
+  snap->lists = std::make_shared<const LightList>(list);
   snap->map = std::move(map_for_preview);
   const std::string json = to_json(list, false);
   snap->json = std::make_shared<const std::string>(json);
@@ -464,6 +396,8 @@ void LightServer::publish(const LightList& list, std::shared_ptr<const EnvMap> m
   {
     std::lock_guard lock(s.state_mutex);
     snap->generation = s.latest ? s.latest->generation + 1 : 1;
+    snap->etag = fmt::format("\"{}-l{}\"", s.etag_prefix, snap->generation);
+    if (snap->map) s.latest_map = {snap->generation, snap->map, snap->lists};
     s.latest = snap;
     s.publish_times.push_back(Clock::now());
     while (s.publish_times.size() > 32) s.publish_times.pop_front();

@@ -57,23 +57,17 @@ double now_s() {
 struct Upstream {
   Endpoint endpoint;
   std::unique_ptr<httplib::Client> client;
-  std::string etag;             // of the list held, for If-None-Match
   std::optional<std::string> malformed;  // why its last answer was not a light list
 };
 
 // Fetches one upstream's list into `input` (and `status`); never throws.
 void poll(Upstream& up, MergeInput& input, MergeInputStatus& status, const MergeClientOptions& options, double t) {
-  httplib::Headers headers;
-  if (!up.etag.empty() && input.latest) headers.emplace("If-None-Match", up.etag);
+  // No If-None-Match: cpp-httplib 0.11 reads a 304 (which has no body and no length) until
+  // the connection closes, so every conditional poll would time out.
   // The whole request within request_timeout_s, however the upstream trickles its bytes.
   const double deadline = now_s() + options.request_timeout_s;
   auto progress = [&](uint64_t current, uint64_t) { return now_s() < deadline && current <= options.max_body_bytes; };
-  httplib::Result r = up.client->Get(up.endpoint.path, headers, progress);
-  if (r && r->status == 304 && input.latest) {
-    ++status.polls_ok;
-    input.last_seen_s = t;
-    return;
-  }
+  httplib::Result r = up.client->Get(up.endpoint.path, httplib::Headers{}, progress);
   if (!r || r->status != 200) {
     ++status.polls_failed;
     return;
@@ -82,12 +76,10 @@ void poll(Upstream& up, MergeInput& input, MergeInputStatus& status, const Merge
   try {
     input.latest = light_list_from_json(r->body, up.endpoint.url);
     input.last_seen_s = t;
-    up.etag = r->get_header_value("ETag");
     up.malformed.reset();
   } catch (const std::exception& e) {
     // Alive but unusable: its older list must not stand in for it.
     input.latest.reset();
-    up.etag.clear();
     up.malformed = e.what();
   }
 }

@@ -33,7 +33,7 @@ struct MergeInputStatus {
   std::string name;                // its URL
   std::string state = "waiting";   // "used", "silent" (none or too old), "skipped" (cannot be merged), "waiting"
   std::string reason, detail;      // why it was skipped (reason codes: merge_problem's, "units", "malformed")
-  uint64_t polls_ok = 0;           // answers with a light list (200, or 304: unchanged)
+  uint64_t polls_ok = 0;           // answers 200
   uint64_t polls_failed = 0;       // no answer, or another status
   std::map<std::string, uint64_t> skipped;  // merge rounds that left its list out, by reason
 };

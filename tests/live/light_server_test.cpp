@@ -25,7 +25,9 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/light_list.h"
+#include "tests/live/http_attack.h"
 
 namespace {
 
@@ -367,6 +369,87 @@ TEST(LightServer, ProbePngIsAPngOfTheLatestMap) {
     ASSERT_GE(res->body.size(), 8u);
     EXPECT_EQ(res->body.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
   }
+  s.server->stop();
+}
+
+// Issue 18: pollers that have the current answer get 304 and no body.
+TEST(LightServer, ETagsTurnRepeatedPollsInto304s) {
+  auto s = start_server();
+  s.server->publish(make_list(1, 4), make_map());
+  const auto get = [&](const std::string& path, const std::string& inm = "", const char* method = "GET") {
+    const std::string h = inm.empty() ? "" : "If-None-Match: " + inm + "\r\n";
+    return lp::test::raw_request(s.port, std::string(method) + " " + path + " HTTP/1.1\r\nHost: x\r\n" + h + "\r\n", 10);
+  };
+  for (const char* path : {"/lights", "/probe.png", "/probe.exr", "/status"}) {
+    const auto first = get(path);
+    ASSERT_EQ(first.status, 200) << path;
+    const std::string etag = lp::test::header_of(first.answer, "ETag");
+    ASSERT_FALSE(etag.empty()) << path;
+    EXPECT_EQ(lp::test::header_of(first.answer, "Cache-Control"), "no-cache") << path;
+    // The same tag, alone, weak, in a list, or "*": 304 with the tag and no body.
+    const std::string weak = etag.rfind("W/", 0) == 0 ? etag : "W/" + etag;
+    for (const std::string& inm : {etag, weak, "\"nope\", " + etag, std::string("*")}) {
+      const auto again = get(path, inm);
+      EXPECT_EQ(again.status, 304) << path << " If-None-Match: " << inm;
+      EXPECT_EQ(lp::test::header_of(again.answer, "ETag"), etag) << path;
+      EXPECT_EQ(lp::test::body_of(again.answer), "") << path;
+      EXPECT_EQ(lp::test::header_of(again.answer, "Content-Length"), "") << path;
+    }
+    EXPECT_EQ(get(path, etag, "HEAD").status, 304) << path;
+    EXPECT_EQ(get(path, "\"nope\"").status, 200) << path;
+  }
+  // /status is a weak tag: it leaves out what changes with every request (uptime...).
+  EXPECT_EQ(lp::test::header_of(get("/status").answer, "ETag").rfind("W/\"", 0), 0u);
+  // Something new: new tags, full answers. (The PNG waits out its rate limit first.)
+  std::vector<std::string> old_tags;
+  for (const char* path : {"/lights", "/probe.png", "/probe.exr", "/status"})
+    old_tags.push_back(lp::test::header_of(get(path).answer, "ETag"));
+  std::this_thread::sleep_for(300ms);
+  s.server->publish(make_list(2, 4), make_map());
+  int k = 0;
+  for (const char* path : {"/lights", "/probe.png", "/probe.exr", "/status"}) {
+    const auto after = get(path, old_tags[size_t(k)]);
+    EXPECT_EQ(after.status, 200) << path;
+    EXPECT_NE(lp::test::header_of(after.answer, "ETag"), old_tags[size_t(k++)]) << path;
+  }
+  // Another server's tags never match this one's (a random prefix per server).
+  auto other = start_server();
+  other.server->publish(make_list(2, 4), nullptr);
+  const auto theirs = lp::test::raw_request(other.port, "GET /lights HTTP/1.1\r\nHost: x\r\n\r\n", 10);
+  EXPECT_NE(lp::test::header_of(theirs.answer, "ETag"), lp::test::header_of(get("/lights").answer, "ETag"));
+  other.server->stop();
+  s.server->stop();
+}
+
+// Issue 18: the live float map as an EXR, as core/image_io writes one.
+TEST(LightServer, ProbeExrIsTheLatestFloatMapWithItsLayoutAndUnits) {
+  auto s = start_server();
+  auto res = lp::test::raw_request(s.port, "GET /probe.exr HTTP/1.1\r\nHost: x\r\n\r\n", 10);
+  EXPECT_EQ(res.status, 503);
+  s.server->publish(make_list(1, 4), nullptr);
+  EXPECT_EQ(lp::test::raw_request(s.port, "GET /probe.exr HTTP/1.1\r\nHost: x\r\n\r\n", 10).status, 503);
+  auto map = std::make_shared<lp::EnvMap>(*make_map());
+  map->units = lp::Units::Radiance;
+  map->rgb[7] = 12345.678f;  // float, not half
+  s.server->publish(make_list(2, 4), map);
+  res = lp::test::raw_request(s.port, "GET /probe.exr HTTP/1.1\r\nHost: x\r\n\r\n", 10);
+  ASSERT_EQ(res.status, 200);
+  EXPECT_EQ(lp::test::header_of(res.answer, "Content-Type"), "image/x-exr");
+  const std::string body = lp::test::body_of(res.answer);
+  EXPECT_EQ(body, lp::encode_envmap_exr(*map));  // the bytes write_envmap writes
+  const std::string path = ::testing::TempDir() + "/probe_from_server.exr";
+  lp::write_file_atomically(path, body);
+  const lp::EnvMap back = lp::read_envmap(path);
+  EXPECT_EQ(back.layout, lp::Layout::LatLong);
+  EXPECT_EQ(back.units, lp::Units::Radiance);
+  ASSERT_EQ(back.width, map->width);
+  ASSERT_EQ(back.height, map->height);
+  EXPECT_EQ(back.rgb, map->rgb);
+  // A frame without a map keeps the last map.
+  s.server->publish(make_list(3, 4), nullptr);
+  res = lp::test::raw_request(s.port, "GET /probe.exr HTTP/1.1\r\nHost: x\r\n\r\n", 10);
+  EXPECT_EQ(lp::test::body_of(res.answer), body);
+  std::remove(path.c_str());
   s.server->stop();
 }
 

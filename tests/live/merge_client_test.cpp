@@ -135,7 +135,9 @@ TEST(MergeClient, DifferentMethodsMergeAndBadUpstreamsAreSkippedWithTheReason) {
   for (size_t i = 0; i < 6; ++i) {
     EXPECT_EQ(last.inputs[i].state, i < 2 ? "used" : "skipped") << urls[i];
     EXPECT_EQ(last.inputs[i].reason, reasons[i]) << urls[i];
-    if (i >= 2) EXPECT_GE(last.inputs[i].skipped.at(reasons[i]), 5u) << urls[i];
+    if (i >= 2) {
+      EXPECT_GE(last.inputs[i].skipped.at(reasons[i]), 5u) << urls[i];
+    }
   }
   EXPECT_NEAR(lum_total(last_list), 0.5 * (lum_total(q) + lum_total(p)), 1e-9 * lum_total(q));
   for (const Light& l : last_list.lights) ASSERT_NEAR(length(l.direction), 1.0, 1e-12);

@@ -87,7 +87,9 @@ TEST(ServerPolicy, BytesThatAreNotUtf8AreAnsweredNotFatal) {
       }
     }
     // Without the token the same paths are 401, and the server is still there.
-    if (with_token) EXPECT_EQ(raw_request(port, get("/%ff"), 5).status, 401);
+    if (with_token) {
+      EXPECT_EQ(raw_request(port, get("/%ff"), 5).status, 401);
+    }
     EXPECT_EQ(raw_request(port, get("/lights", auth), 5).status, 200);
     s->stop();
   }
@@ -269,7 +271,9 @@ TEST(ServerPolicy, BodiesAndExpectationsAreRefusedAtOnce) {
     EXPECT_EQ(a.status, c.status) << c.request.substr(0, 120);
     EXPECT_LT(a.seconds, 1.0) << c.request.substr(0, 120);  // at once, not after a read timeout
     EXPECT_EQ(a.answer.find("100 Continue"), std::string::npos) << c.request.substr(0, 120);
-    if (c.status == 405) EXPECT_EQ(test::header_of(a.answer, "Allow"), "GET, HEAD");
+    if (c.status == 405) {
+      EXPECT_EQ(test::header_of(a.answer, "Allow"), "GET, HEAD");
+    }
   }
   // Expect: 100-continue without a body is harmless; HEAD has no body.
   EXPECT_EQ(raw_request(port, get("/lights", "Expect: 100-continue\r\n"), 5).status, 200);

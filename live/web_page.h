@@ -135,7 +135,8 @@ async function refreshImage() {
   if (loading || now - lastLoad < 300) { pending = true; return; }
   loading = true; pending = false; lastLoad = now;
   try {
-    const r = await fetch(url("/probe.png", { t: now }), { headers: headers, cache: "no-store" });
+    // "no-cache": the browser revalidates with the ETag; an unchanged picture costs a 304.
+    const r = await fetch(url("/probe.png"), { headers: headers, cache: "no-cache" });
     if (r.status === 401) needToken();
     if (r.ok) {
       const next = URL.createObjectURL(await r.blob());
@@ -176,7 +177,7 @@ async function connect() {
 
 async function pollStatus() {
   try {
-    const r = await fetch(url("/status"), { headers: headers, cache: "no-store" });
+    const r = await fetch(url("/status"), { headers: headers, cache: "no-cache" });
     if (r.ok) {
       const s = await r.json();
       $("fps").textContent = fmt(s.fps, 1);

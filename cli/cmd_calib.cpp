@@ -14,6 +14,8 @@
 #include "calib/board_detect.h"
 #include "calib/calibration_report.h"
 #include "calib/camera_model.h"
+#include "calib/colour_match.h"
+#include "calib/photometric.h"
 #include "calib/geometric.h"
 #include "calib/synthetic_boards.h"
 #include "cli/commands.h"
@@ -25,17 +27,38 @@
 
 namespace lp::cli {
 
+struct CalibGeometricArgs {
+  std::vector<std::string> images;
+  std::string board;                // COLSxROWS inner corners
+  double square_mm = 0;
+  std::string model;                // override the selection
+  bool no_mrcal = false;
+  std::string report_dir;           // pictures; default beside the output
+  std::string output;               // camera.cameramodel or camera.yaml
+  int drop_influential = 0;         // recalibrate without up to N flagged views, worst first
+};
+
+struct CalibCompareArgs {
+  std::string a, b;                 // two model files of one camera
+  int step_px = 4;
+  bool no_rotation = false;
+};
+
+struct CalibPhotometricArgs {
+  std::string readings;
+  std::string model = "linear";     // linear|log
+  std::string loss = "huber";       // huber|cauchy|none
+  std::string output;
+};
+
+struct CalibColourArgs {
+  std::string patches;              // CSV probe_r,probe_g,probe_b,plate_r,plate_g,plate_b
+  std::string output;
+};
+
 namespace {
 
 namespace fs = std::filesystem;
-
-BoardSpec board_from(const std::string& text, double square_mm) {
-  int cols = 0, rows = 0;
-  parse_size(text, "--board", &cols, &rows);
-  if (cols < 2 || rows < 2) throw InputError("--board counts inner corners and needs at least 2x2");
-  if (!(square_mm > 0)) throw InputError("--square must be positive (mm)");
-  return BoardSpec{cols, rows, square_mm};
-}
 
 std::string with_extension(const std::string& path, const std::string& ext) {
   return (fs::path(path).parent_path() / (fs::path(path).stem().string() + ext)).string();
@@ -317,44 +340,6 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   return 0;
 }
 
-int run_synth_boards(const SynthBoardsArgs& args, const Output& out) {
-  SyntheticBoardsOptions o;
-  o.views = args.views;
-  o.board = board_from(args.board, args.square_mm);
-  o.noise_sigma = args.noise;
-  o.seed = args.seed;
-  o.field_deg = args.fov;
-  if (!args.camera.empty()) o.camera = read_camera_model(args.camera);
-  if (o.views < 1) throw InputError("--views must be at least 1");
-  const SyntheticBoards b = synthesize_boards(o);
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
-  nlohmann::json truth = {{"board", {o.board.cols, o.board.rows}}, {"square_mm", o.board.square_mm},
-                          {"lensmodel", o.camera.lensmodel}, {"intrinsics", o.camera.intrinsics},
-                          {"width", o.camera.width}, {"height", o.camera.height}};
-  nlohmann::json views = nlohmann::json::array();
-  for (size_t i = 0; i < b.images.size(); ++i) {
-    const std::string name = fmt::format("board_{:02d}.png", i);
-    RgbImage rgb;
-    rgb.width = b.images[i].width;
-    rgb.height = b.images[i].height;
-    rgb.rgb = b.images[i].rgb;
-    write_code_image((fs::path(args.output_dir) / name).string(), rgb, 8);
-    views.push_back({{"file", name}, {"corners", b.true_corners[i]}, {"pose", b.poses[i]}});
-  }
-  truth["views"] = views;
-  write_file_atomically((fs::path(args.output_dir) / "truth.json").string(), truth.dump(1) + "\n");
-  try {
-    write_opencv_yaml((fs::path(args.output_dir) / "true_camera.yaml").string(), o.camera);
-  } catch (const InputError&) {
-  }
-  say(out, "{}: {} views of a {}x{} board through {} ({}x{}), truth.json\n", args.output_dir, b.images.size(),
-      o.board.cols, o.board.rows, o.camera.lensmodel, o.camera.width, o.camera.height);
-  emit_json(out, {{"output", args.output_dir}, {"views", b.images.size()}});
-  return 0;
-}
-
 int run_calib_compare(const CalibCompareArgs& args, const Output& out) {
   // How far two calibrations of one camera disagree, in pixels over the whole image, with
   // the rotation between their camera frames fitted out (what cross-validation measures).
@@ -367,6 +352,95 @@ int run_calib_compare(const CalibCompareArgs& args, const Output& out) {
       d.median_px, d.max_px, d.samples, args.no_rotation ? "" : " (rotation fitted out)");
   emit_json(out, {{"rms_px", d.rms_px}, {"median_px", d.median_px}, {"max_px", d.max_px}, {"samples", d.samples}});
   return 0;
+}
+
+int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out) {
+  auto readings = read_readings_csv(args.readings);
+  resolve_regions(readings, fs::path(args.readings).parent_path().string());
+  PhotometricOptions o;
+  if (args.model == "linear") o.model = PhotometricOptions::Model::Linear;
+  else if (args.model == "log") o.model = PhotometricOptions::Model::LogSensor;
+  else throw InputError(fmt::format("--model must be linear or log, got '{}'", args.model));
+  if (args.loss == "huber") o.loss = RobustLoss::Huber;
+  else if (args.loss == "cauchy") o.loss = RobustLoss::Cauchy;
+  else if (args.loss == "none") o.loss = RobustLoss::None;
+  else throw InputError(fmt::format("--loss must be huber, cauchy or none, got '{}'", args.loss));
+  const PhotometricCalibration cal = fit_photometric(readings, o);
+  save_photometric(args.output, cal);
+  if (cal.log_sensor)
+    say(out, "{}: log sensor value = {:.5g} + {:.5g} ln L (+-{:.2g}, +-{:.2g}); ", args.output, cal.log_sensor->a,
+        cal.log_sensor->b, cal.log_sensor->sigma_a, cal.log_sensor->sigma_b);
+  else
+    say(out, "{}: k = {:.6g} cd/m2 per relative unit (+-{:.2f} %); ", args.output, cal.scale_luminance,
+        100 * cal.scale_relative_error);
+  say(out, "{} readings, residual RMS {:.2f} %, max {:.2f} %, held-out RMS {:.2f} %\n", cal.readings,
+      100 * cal.rms_relative, 100 * cal.max_abs_relative, 100 * cal.held_out_rms_relative);
+  nlohmann::json j = {{"output", args.output},
+                      {"readings", cal.readings},
+                      {"scale_luminance", cal.scale_luminance},
+                      {"scale_relative_error", cal.scale_relative_error},
+                      {"rms_relative", cal.rms_relative},
+                      {"max_abs_relative", cal.max_abs_relative},
+                      {"held_out_rms_relative", cal.held_out_rms_relative}};
+  if (cal.log_sensor) j["log_sensor"] = {{"a", cal.log_sensor->a}, {"b", cal.log_sensor->b}};
+  emit_json(out, j);
+  return 0;
+}
+
+int run_calib_colour(const CalibColourArgs& args, const Output& out) {
+  const ColourMatch m = fit_colour_match(read_colour_patches_csv(args.patches));
+  save_colour_match(args.output, m);
+  say(out, "{}: 3x3 colour match from {} patches, residual RMS {:.2f} %\n", args.output, m.patches,
+      100 * m.rms_relative);
+  emit_json(out, {{"output", args.output}, {"patches", m.patches}, {"rms_relative", m.rms_relative},
+                  {"matrix", m.matrix.m}});
+  return 0;
+}
+std::vector<Command> calib_commands() {
+  return {
+      {"calib geometric", "Chessboard calibration with model selection by cross-validation",
+       "lightprobe calib geometric views/*.jpg --board 9x6 --square 25 -o camera.cameramodel\nlightprobe calib geometric views/*.jpg --board 9x6 --square 25 --drop-influential 1 -o camera.cameramodel",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<CalibGeometricArgs>();
+         f.arg("IMAGE", a->images, "Chessboard views (one camera, one resolution)").required();
+         f.opt("--board", a->board, "COLSxROWS inner corners, e.g. 9x6").required();
+         f.opt("--square", a->square_mm, "Square size, mm").required();
+         f.opt("--model", a->model, "Use this model instead of the selection (see the printed table)");
+         f.flag("--no-mrcal", a->no_mrcal, "OpenCV models only");
+         f.opt("--report", a->report_dir, "Directory for the residual and coverage pictures");
+         f.opt("--drop-influential", a->drop_influential, "Recalibrate without up to N views flagged influential (highest leverage first)");
+         f.output(a->output, "camera.cameramodel (and .yaml) or camera.yaml");
+         return [a](const Output& out) { return run_calib_geometric(*a, out); };
+       }},
+      {"calib compare", "Projection difference (px) between two models of one camera",
+       "lightprobe calib compare camera_a.cameramodel camera_b.yaml",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<CalibCompareArgs>();
+         f.arg("A", a->a, "Model file (.cameramodel or OpenCV YAML)").required();
+         f.arg("B", a->b, "Model file").required();
+         f.opt("--step", a->step_px, "Sampling step over the image, px");
+         f.flag("--no-rotation", a->no_rotation, "Do not fit the rotation between the two camera frames");
+         return [a](const Output& out) { return run_calib_compare(*a, out); };
+       }},
+      {"calib photometric", "Absolute scale (or log-sensor curve) from meter readings",
+       "lightprobe calib photometric readings.csv -o photometric.json\nlightprobe hdr fuse IMG_*.jpg --photometric photometric.json -o probe.exr",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<CalibPhotometricArgs>();
+         f.arg("READINGS", a->readings, "CSV: region,camera_value,measured,unit").required();
+         f.opt("--model", a->model, "linear|log");
+         f.opt("--loss", a->loss, "Robust loss: huber|cauchy|none");
+         f.output(a->output, "photometric.json");
+         return [a](const Output& out) { return run_calib_photometric(*a, out); };
+       }},
+      {"calib colour", "3x3 colour match of the probe camera to a backplate camera",
+       "lightprobe calib colour patches.csv -o colour.json\nlightprobe probe unwrap ball.exr --type mirrorball --colour-match colour.json -o map.exr",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<CalibColourArgs>();
+         f.arg("PATCHES", a->patches, "CSV: probe_r,probe_g,probe_b,plate_r,plate_g,plate_b").required();
+         f.output(a->output, "colour.json");
+         return [a](const Output& out) { return run_calib_colour(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

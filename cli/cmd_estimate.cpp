@@ -4,6 +4,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <memory>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,6 +15,7 @@
 
 #include "calib/photometric.h"
 #include "cli/commands.h"
+#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "eval/svg_chart.h"
 #include "core/accuracy.h"
@@ -28,27 +31,36 @@
 
 namespace lp::cli {
 
+// estimate metadata / query, synth walkthrough, eval metadata: lighting without a probe,
+// from camera metadata over a floor quadtree (seed 003; docs/metadata.md).
+struct EstimateMetadataArgs {
+  std::string track;                // JSONL track (estimate/metadata_track.h)
+  std::string output;               // model.json
+  std::string photometric;          // calib photometric result: k for the calibration route
+  bool meter_equation = false;      // ignore any photometric scale (also the track's)
+  double calibration_f_number = -1; // -1: the track header's (or 0)
+  double f_number = -1, ae_target = -1, iso_base = -1, meter_constant = -1;  // -1: the track's
+  std::string colour_matrix;        // 9 numbers, camera RGB -> Rec. 709 (default: the track's, else none)
+  double root_size = 32, min_size = 1, max_weight = 0;
+  std::string origin;               // "X,Y"; default the first frame's position
+};
+
+struct EstimateQueryArgs {
+  std::string model;
+  std::string at;                   // "X,Y" or "X,Y,Z" (z ignored: the model is 2D)
+  std::string output;               // light list; format from --format or the extension
+  std::string format;
+  double min_frames = 1;            // frames that make a sector informed (1: the paper's rule)
+  double shrink = 0;                // > 0: hierarchical shrinkage with this prior weight
+  int max_depth = -1;
+};
+
 namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-ExportFormat light_format(const std::string& format, const std::string& output) {
-  if (!format.empty()) {
-    auto f = export_format_from_string(format);
-    if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, csv)", format));
-    return *f;
-  }
-  const std::string e = fs::path(output).extension().string();
-  if (e == ".ndjson" || e == ".jsonl") return ExportFormat::Ndjson;
-  if (e == ".pbrt") return ExportFormat::Pbrt;
-  if (e == ".xml") return ExportFormat::Mitsuba;
-  if (e == ".gltf") return ExportFormat::Gltf;
-  if (e == ".csv") return ExportFormat::Csv;
-  return ExportFormat::Json;
-}
 
 // The camera: the track's header, then --photometric and the explicit options.
 MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
@@ -72,17 +84,6 @@ MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
   }
   validate_metering(m);
   return m;
-}
-
-nlohmann::json camera_json(const MeteringOptions& m) {
-  nlohmann::json j{{"route", m.photometric_scale ? "calibration" : "meter"},
-                   {"f_number", m.f_number},
-                   {"calibration_f_number", m.calibration_f_number},
-                   {"ae_target", m.ae_target},
-                   {"iso_base", m.iso_base},
-                   {"meter_constant", m.meter_constant}};
-  if (m.photometric_scale) j["photometric_scale"] = *m.photometric_scale;
-  return j;
 }
 
 std::string slurp(const std::string& path) {
@@ -161,7 +162,7 @@ int run_estimate_metadata(const EstimateMetadataArgs& args, const Output& out) {
                   {"nodes", model.nodes().size()},
                   {"max_depth", model.max_depth()},
                   {"outside_updates", model.outside_updates()},
-                  {"camera", camera_json(camera)},
+                  {"camera", metering_json(camera)},
                   {"luminance_cd_m2", {{"median", percentile(lum, 0.5)}, {"p05", percentile(lum, 0.05)}, {"p95", percentile(lum, 0.95)}}},
                   {"illuminance_lux", {{"median", percentile(lux, 0.5)}, {"p05", percentile(lux, 0.05)}, {"p95", percentile(lux, 0.95)}}},
                   {"cct_k", {{"median", percentile(cct, 0.5)}, {"p05", percentile(cct, 0.05)}, {"p95", percentile(cct, 0.95)}}},
@@ -176,7 +177,7 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
   if (at.size() != 2 && at.size() != 3) throw InputError(fmt::format("--at: give X,Y or X,Y,Z in metres, got '{}'", args.at));
   if (!(args.min_frames >= 1)) throw InputError(fmt::format("--min-frames must be >= 1, got {}", args.min_frames));
   if (!(args.shrink >= 0)) throw InputError(fmt::format("--shrink must be >= 0, got {}", args.shrink));
-  const ExportFormat format = light_format(args.format, args.output);
+  const ExportFormat format = export_format_for(args.format, args.output, false);
   const auto t0 = Clock::now();
   const auto look = args.shrink > 0 ? model.lookup_shrunk(at[0], at[1], args.shrink)
                                     : model.lookup(at[0], at[1], args.max_depth, args.min_frames);
@@ -208,67 +209,6 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
                   {"outside", outside},
                   {"sectors", sectors},
                   {"query_seconds", query_s}});
-  return 0;
-}
-
-int run_synth_walkthrough(const SynthWalkthroughArgs& args, const Output& out) {
-  if (args.probe_size < 8 || args.probe_size % 2) throw InputError(fmt::format("--probe-size must be even and >= 8, got {}", args.probe_size));
-  if (args.rays < 2) throw InputError(fmt::format("--rays must be >= 2, got {}", args.rays));
-  const Room room = default_room();
-  WalkthroughOptions o;
-  o.fps = args.fps;
-  o.speed = args.speed;
-  o.rays_x = args.rays;
-  o.record_mean_code = !args.no_mean_code;
-  o.record_bright_rgb = args.bright_rgb;
-  const auto t0 = Clock::now();
-  const Track track = make_walkthrough_track(room, o);
-  fs::create_directories(fs::path(args.output_dir) / "probes");
-  const std::string track_path = (fs::path(args.output_dir) / "track.jsonl").string();
-  write_file_atomically(track_path, track_to_jsonl(track));
-  const auto queries = walkthrough_query_points(room, o);
-  nlohmann::json jq = nlohmann::json::array();
-  Progress progress("probes", queries.size(), out.progress);
-  for (size_t i = 0; i < queries.size(); ++i) {
-    const EnvMap probe = render_room_probe(room, queries[i], args.probe_size, args.samples);
-    const std::string rel = fmt::format("probes/q{}.exr", i);
-    write_envmap((fs::path(args.output_dir) / rel).string(), probe);
-    const std::string standing = fmt::format("probes/q{}_standing.jsonl", i);
-    write_file_atomically((fs::path(args.output_dir) / standing).string(),
-                          track_to_jsonl(make_standing_track(room, o, queries[i])));
-    jq.push_back({{"name", fmt::format("q{}", i)},
-                  {"position", {queries[i].x, queries[i].y, queries[i].z}},
-                  {"probe", rel},
-                  {"standing_track", standing},
-                  {"illuminance_up_lux", 683.0 * map_irradiance(probe, {0, 0, 1})}});
-    progress.advance();
-  }
-  progress.finish();
-  nlohmann::json lamps = nlohmann::json::array();
-  for (const RoomLamp& l : room.lamps)
-    lamps.push_back({{"position", {l.position.x, l.position.y, l.position.z}}, {"radius", l.radius}, {"luminance", l.luminance}, {"cct", l.cct_k}});
-  nlohmann::json jroom{{"width", room.width}, {"depth", room.depth}, {"height", room.height},
-                       {"albedo", {{"floor", room.floor_albedo}, {"walls", room.wall_albedo}, {"ceiling", room.ceiling_albedo}}},
-                       {"lamps", lamps}};
-  if (room.window)
-    jroom["window"] = {{"wall", "x=0"}, {"y", {room.window->y0, room.window->y1}}, {"z", {room.window->z0, room.window->z1}},
-                       {"luminance", room.window->luminance}, {"cct", room.window->cct_k}};
-  const nlohmann::json truth{{"format", "lightprobe.walkthrough/1"},
-                             {"units", "radiance"},
-                             {"room", jroom},
-                             {"frames", track.frames.size()},
-                             {"fps", o.fps},
-                             {"fov_deg", o.fov_deg},
-                             {"eye_height", o.eye_height},
-                             {"camera", camera_json(o.camera)},
-                             {"queries", jq}};
-  const std::string truth_path = (fs::path(args.output_dir) / "truth.json").string();
-  write_file_atomically(truth_path, truth.dump(2) + "\n");
-  say(out, "{}: {} frames along a {:.0f} s walk through an {}x{} m room, {} query probes ({}x{}), truth in {} ({:.1f} s)\n",
-      args.output_dir, track.frames.size(), track.frames.back().timestamp, room.width, room.depth, queries.size(),
-      args.probe_size, args.probe_size / 2, truth_path, seconds_since(t0));
-  emit_json(out, {{"output", args.output_dir}, {"track", track_path}, {"truth", truth_path}, {"frames", track.frames.size()},
-                  {"queries", queries.size()}, {"seconds", seconds_since(t0)}});
   return 0;
 }
 
@@ -476,6 +416,44 @@ int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
   say(out, "{} rows -> {}, {}\n", rows.size(), csv_path, svg_path);
   emit_json(out, {{"csv", csv_path}, {"chart", svg_path}, {"queries", queries.size()}, {"frames", track.frames.size()}, {"rows", jrows}});
   return 0;
+}
+
+std::vector<Command> estimate_commands() {
+  return {
+      {"estimate metadata", "A recorded track (position, view, exposure, gain, WB per frame) -> quadtree model",
+       "lightprobe estimate metadata track.jsonl [--photometric photometric.json] -o model.json",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<EstimateMetadataArgs>();
+         f.arg("TRACK", a->track, "JSONL track (see docs/metadata.md for the schema)").required();
+         f.output(a->output, "Model JSON");
+         f.opt("--photometric", a->photometric, "Photometric calibration (calib photometric): k for the calibration route");
+         f.flag("--meter-equation", a->meter_equation, "Use the ISO 2720 meter equation even if a scale is known");
+         f.opt("--calibration-f-number", a->calibration_f_number, "Aperture the photometric scale was fitted at");
+         f.opt("--f-number", a->f_number, "Aperture of frames that record none");
+         f.opt("--ae-target", a->ae_target, "Mean code value the auto exposure aims at (0..1)");
+         f.opt("--iso-base", a->iso_base, "ISO at gain 1 (meter equation)");
+         f.opt("--meter-constant", a->meter_constant, "Reflected-light meter constant K, cd s m^-2");
+         f.opt("--colour-matrix", a->colour_matrix, "Camera RGB -> Rec. 709: 9 numbers, row-major");
+         f.opt("--root-size", a->root_size, "Side of the root cell, m (must cover the scene)");
+         f.opt("--min-size", a->min_size, "Smallest cell side, m");
+         f.opt("--max-weight", a->max_weight, "Cap on a sector's frame count: old frames fade (0: no cap)");
+         f.opt("--origin", a->origin, "Root centre X,Y in metres (default: the first frame's position)");
+         return [a](const Output& out) { return run_estimate_metadata(*a, out); };
+       }},
+      {"estimate query", "Six directional lights of a model at a position",
+       "lightprobe estimate query model.json --at 4,3 -o lights.json",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<EstimateQueryArgs>();
+         f.arg("MODEL", a->model, "Model JSON (estimate metadata)").required();
+         f.opt("--at", a->at, "Position X,Y[,Z] in metres").required();
+         f.output(a->output, "Light list (.json, .pbrt, .xml, .gltf, .csv)");
+         f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|csv (default from -o)");
+         f.opt("--min-frames", a->min_frames, "Frames that make a sector informed (1: the paper's rule)");
+         f.opt("--shrink", a->shrink, "Hierarchical shrinkage with this prior weight in frames (0: off)");
+         f.opt("--max-depth", a->max_depth, "Descend at most this deep (0: the root's global estimate)");
+         return [a](const Output& out) { return run_estimate_query(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

@@ -16,6 +16,7 @@
 #include <time.h>
 
 #include "cli/commands.h"
+#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "eval/svg_chart.h"
 #include "core/error.h"

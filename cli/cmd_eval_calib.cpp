@@ -13,6 +13,7 @@
 #include "calib/geometric.h"
 #include "calib/synthetic_boards.h"
 #include "cli/commands.h"
+#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "eval/svg_chart.h"
 #include "core/error.h"

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <memory>
+
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
@@ -11,6 +13,7 @@
 
 #include "calib/photometric.h"
 #include "cli/commands.h"
+#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "eval/svg_chart.h"
 #include "core/error.h"
@@ -29,36 +32,27 @@
 
 namespace lp::cli {
 
-std::vector<double> parse_numbers(const std::string& text, const char* option, size_t count) {
-  std::vector<double> v;
-  std::istringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      // Fractions such as 1/40 are common for exposure times.
-      const auto slash = item.find('/');
-      double x;
-      if (slash != std::string::npos) {
-        size_t u2 = 0;
-        const std::string a = item.substr(0, slash), b = item.substr(slash + 1);
-        x = std::stod(a, &used) / std::stod(b, &u2);
-        if (used != a.size() || u2 != b.size()) throw std::invalid_argument("x");
-      } else {
-        x = std::stod(item, &used);
-        if (used != item.size()) throw std::invalid_argument("x");
-      }
-      if (!std::isfinite(x)) throw std::invalid_argument("x");
-      v.push_back(x);
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("{}: '{}' is not a number", option, item));
-    }
-  }
-  if (v.empty() || (count && v.size() != count))
-    throw InputError(count ? fmt::format("{} takes {} comma-separated numbers, got '{}'", option, count, text)
-                           : fmt::format("{} is empty", option));
-  return v;
-}
+struct HdrResponseArgs {
+  std::vector<std::string> images;
+  std::string exposure_times;       // "1/10,1/40" or a list file; default: EXIF
+  std::string method = "debevec";   // debevec|robertson
+  double lambda = 50;
+  std::string ignore_colour;        // "r,g,b" of registration borders to leave out
+  std::string output;
+};
+
+struct HdrFuseArgs {
+  std::vector<std::string> images;
+  std::string exposure_times;
+  std::string response;             // saved response; default: recovered from this bracket
+  bool linear = false;              // a linear sensor: no response curve
+  std::string photometric;          // calibration: absolute units (or a log sensor's decode)
+  std::string align = "none";       // none|mtb|ecc
+  bool deghost = false;
+  bool no_exposure_weighting = false;
+  std::string ignore_colour;
+  std::string output;
+};
 
 namespace {
 
@@ -184,87 +178,9 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
   return 0;
 }
 
-int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out) {
-  auto readings = read_readings_csv(args.readings);
-  resolve_regions(readings, fs::path(args.readings).parent_path().string());
-  PhotometricOptions o;
-  if (args.model == "linear") o.model = PhotometricOptions::Model::Linear;
-  else if (args.model == "log") o.model = PhotometricOptions::Model::LogSensor;
-  else throw InputError(fmt::format("--model must be linear or log, got '{}'", args.model));
-  if (args.loss == "huber") o.loss = RobustLoss::Huber;
-  else if (args.loss == "cauchy") o.loss = RobustLoss::Cauchy;
-  else if (args.loss == "none") o.loss = RobustLoss::None;
-  else throw InputError(fmt::format("--loss must be huber, cauchy or none, got '{}'", args.loss));
-  const PhotometricCalibration cal = fit_photometric(readings, o);
-  save_photometric(args.output, cal);
-  if (cal.log_sensor)
-    say(out, "{}: log sensor value = {:.5g} + {:.5g} ln L (+-{:.2g}, +-{:.2g}); ", args.output, cal.log_sensor->a,
-        cal.log_sensor->b, cal.log_sensor->sigma_a, cal.log_sensor->sigma_b);
-  else
-    say(out, "{}: k = {:.6g} cd/m2 per relative unit (+-{:.2f} %); ", args.output, cal.scale_luminance,
-        100 * cal.scale_relative_error);
-  say(out, "{} readings, residual RMS {:.2f} %, max {:.2f} %, held-out RMS {:.2f} %\n", cal.readings,
-      100 * cal.rms_relative, 100 * cal.max_abs_relative, 100 * cal.held_out_rms_relative);
-  nlohmann::json j = {{"output", args.output},
-                      {"readings", cal.readings},
-                      {"scale_luminance", cal.scale_luminance},
-                      {"scale_relative_error", cal.scale_relative_error},
-                      {"rms_relative", cal.rms_relative},
-                      {"max_abs_relative", cal.max_abs_relative},
-                      {"held_out_rms_relative", cal.held_out_rms_relative}};
-  if (cal.log_sensor) j["log_sensor"] = {{"a", cal.log_sensor->a}, {"b", cal.log_sensor->b}};
-  emit_json(out, j);
-  return 0;
-}
-
 namespace {
 
-ResponseCurve curve_from(const std::string& name) {
-  if (name == "linear") return ResponseCurve::Linear;
-  if (name == "gamma") return ResponseCurve::Gamma22;
-  if (name == "scurve") return ResponseCurve::SCurve;
-  throw InputError(fmt::format("--response must be linear, gamma or scurve, got '{}'", name));
-}
-
-RgbImage radiance_from(const std::string& path) {
-  if (path == "scene") return image_from_envmap(render_scene(describe_scene(), Layout::LatLong, 512, 256));
-  return read_rgb_image(path);
-}
-
 }  // namespace
-
-int run_synth_bracket(const SynthBracketArgs& args, const Output& out) {
-  SyntheticBracketOptions o;
-  if (!args.exposure_times.empty()) o.exposure_seconds = parse_numbers(args.exposure_times, "--exposure-times");
-  o.response = curve_from(args.response);
-  o.add_noise = !args.no_noise;
-  o.bit_depth = args.bit_depth;
-  o.shake_px = args.shake_px;
-  o.moving_object = args.moving_object;
-  o.seed = args.seed;
-  if (o.bit_depth != 8 && o.bit_depth != 16) throw InputError("--bit-depth must be 8 or 16");
-  const SyntheticBracket b = make_synthetic_bracket(radiance_from(args.input), o);
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
-  std::string csv = "file,seconds\n";
-  for (size_t f = 0; f < b.frames.size(); ++f) {
-    const std::string name = fmt::format("frame_{:02d}.png", f);
-    write_code_image((fs::path(args.output_dir) / name).string(), b.frames[f], o.bit_depth);
-    csv += fmt::format("{},{:.9g}\n", name, b.exposure_seconds[f]);
-  }
-  write_file_atomically((fs::path(args.output_dir) / "exposures.csv").string(), csv);
-  write_rgb_image((fs::path(args.output_dir) / "truth.exr").string(), b.true_radiance);
-  CameraResponse truth;
-  truth.levels = int(b.true_log_exposure[0].size());
-  truth.log_exposure = b.true_log_exposure;
-  save_response((fs::path(args.output_dir) / "true_response.json").string(), truth);
-  say(out, "{}: {} frames ({}-bit, {} response{}{}), exposures.csv, truth.exr, true_response.json\n", args.output_dir,
-      b.frames.size(), o.bit_depth, args.response, o.shake_px ? fmt::format(", shake {} px", o.shake_px) : "",
-      o.moving_object ? ", moving object" : "");
-  emit_json(out, {{"output", args.output_dir}, {"frames", b.frames.size()}});
-  return 0;
-}
 
 int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
   std::error_code ec;
@@ -387,6 +303,39 @@ int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
                   {"recover_ms", r.recover_ms}, {"merge_ms", r.merge_ms}});
   emit_json(out, {{"csv", csv_path}, {"chart", svg_path}, {"rows", jr}});
   return 0;
+}
+
+std::vector<Command> hdr_commands() {
+  return {
+      {"hdr response", "Recover a camera's response curve from brackets",
+       "lightprobe hdr response IMG_1.jpg IMG_2.jpg IMG_3.jpg -o response.json",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<HdrResponseArgs>();
+         f.arg("IMAGE", a->images, "Bracket frames (8/16-bit PNG, JPEG, TIFF)").required();
+         f.opt("--exposure-times", a->exposure_times, "Seconds per frame ('1/40' allowed) or a list file; default EXIF");
+         f.opt("--method", a->method, "debevec|robertson");
+         f.opt("--lambda", a->lambda, "Debevec smoothness weight");
+         f.opt("--ignore-colour", a->ignore_colour, "r,g,b of registration borders to leave out");
+         f.output(a->output, "response.json");
+         return [a](const Output& out) { return run_hdr_response(*a, out); };
+       }},
+      {"hdr fuse", "Fuse a bracket (or decode a log sensor frame) into radiance",
+       "lightprobe hdr fuse IMG_1.jpg IMG_2.jpg IMG_3.jpg --response response.json --align mtb -o probe.exr",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<HdrFuseArgs>();
+         f.arg("IMAGE", a->images, "Bracket frames, or one frame of a log sensor").required();
+         f.opt("--exposure-times", a->exposure_times, "Seconds per frame or a list file; default EXIF");
+         f.opt("--response", a->response, "Saved response (hdr response); default: recovered here");
+         f.flag("--linear", a->linear, "Linear sensor: no response curve");
+         f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");
+         f.opt("--align", a->align, "Align hand-held frames: none|mtb|ecc");
+         f.flag("--deghost", a->deghost, "Drop moving objects from the frames that disagree");
+         f.flag("--no-exposure-weighting", a->no_exposure_weighting, "Plain hat weights instead of noise-aware ones (every frame trusted alike)");
+         f.opt("--ignore-colour", a->ignore_colour, "r,g,b of registration borders to leave out");
+         f.output(a->output, "probe.exr");
+         return [a](const Output& out) { return run_hdr_fuse(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

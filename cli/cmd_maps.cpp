@@ -2,6 +2,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <memory>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,98 +22,27 @@
 
 namespace lp::cli {
 
-void parse_size(const std::string& text, const char* option, int* width, int* height) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  std::istringstream in(text);
-  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || (in >> extra) || w <= 0 || h <= 0)
-    throw InputError(fmt::format("{} must be WxH with positive integers, got '{}'", option, text));
-  *width = w;
-  *height = h;
-}
+struct InfoArgs {
+  std::vector<std::string> files;
+  std::string layout;  // override
+};
 
-std::vector<int> parse_int_list(const std::string& text, const char* option) {
-  std::vector<int> values;
-  std::istringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      const int v = std::stoi(item, &used);
-      if (used != item.size() || v <= 0) throw std::invalid_argument("x");
-      values.push_back(v);
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("{} must be a comma-separated list of positive integers, got '{}'", option, text));
-    }
-  }
-  if (values.empty()) throw InputError(fmt::format("{} is empty", option));
-  return values;
-}
+struct ConvertArgs {
+  std::string input, output;
+  std::string layout;    // target layout
+  std::string size;      // WxH
+  int nside = 0;
+  std::string in_layout; // override of the input's layout
+  std::string rotation;  // "yaw,pitch,roll" degrees or 9 numbers
+  bool half = false;     // EXR half floats
+};
 
-Mat3 parse_rotation(const std::string& text) {
-  std::vector<double> v;
-  std::string item;
-  std::istringstream in(text);
-  while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stod(item, &used));
-      if (used != item.size()) throw std::invalid_argument("x");
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("--rotation: '{}' is not a number", item));
-    }
-  }
-  if (v.size() == 3) return rotation_from_yaw_pitch_roll_deg(v[0], v[1], v[2]);
-  if (v.size() == 9) {
-    Mat3 m;
-    std::copy(v.begin(), v.end(), m.m.begin());
-    if (!is_rotation(m, 1e-4)) throw InputError("--rotation: the 9 numbers are not a rotation matrix");
-    return m;
-  }
-  throw InputError("--rotation takes 'yaw,pitch,roll' (degrees) or 9 comma-separated numbers");
-}
+struct PreviewArgs {
+  std::string input, output;
+  double percentile = 0.99;
+};
 
 namespace {
-
-std::optional<Layout> optional_layout(const std::string& name, const char* option) {
-  if (name.empty()) return std::nullopt;
-  auto l = layout_from_string(name);
-  if (!l) throw InputError(fmt::format("{}: unknown layout '{}' (latlong, hemisphere, healpix)", option, name));
-  return l;
-}
-
-// Target (layout, width, height) of convert/synth from --layout/--size/--nside.
-void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h) {
-  if (layout == Layout::Healpix) {
-    *w = nside > 0 ? nside : (like && like->layout == Layout::Healpix ? like->nside : 0);
-    if (*w == 0) {
-      // About as many pixels as the source.
-      const double px = like ? double(like->pixel_count()) : 12.0 * 64 * 64;
-      *w = 1;
-      while (12.0 * (2 * *w) * (2 * *w) <= px * 1.5) *w *= 2;
-    }
-    *h = 1;
-    return;
-  }
-  if (!size.empty()) {
-    parse_size(size, "--size", w, h);
-    return;
-  }
-  if (like && like->layout == layout) {
-    *w = like->width;
-    *h = like->height;
-    return;
-  }
-  if (layout == Layout::Hemisphere) {
-    *w = 360;
-    *h = 90;
-    return;
-  }
-  // latlong with about as many pixels as the source
-  const double px = like ? double(like->pixel_count()) : 1024.0 * 512;
-  *h = std::max(2, int(std::lround(std::sqrt(px / 2))));
-  *w = 2 * *h;
-}
 
 }  // namespace
 
@@ -241,31 +172,6 @@ int run_convert(const ConvertArgs& args, const Output& out) {
   return 0;
 }
 
-int run_synth_scene(const SynthSceneArgs& args, const Output& out) {
-  const auto layout = optional_layout(args.layout, "--layout").value_or(Layout::LatLong);
-  if (layout == Layout::Healpix && !args.size.empty())
-    throw InputError("--size does not apply to healpix: use --nside");
-  int w = 0, h = 0;
-  target_geometry(layout, args.size, args.nside > 0 ? args.nside : 128, nullptr, &w, &h);
-  SceneOptions so;
-  if (!(args.sun_scale >= 0)) throw InputError("--sun-scale must be >= 0");
-  for (double& c : so.sun_rgb) c *= args.no_sun ? 0.0 : args.sun_scale;
-  const SceneDescription scene = describe_scene(so);
-  const EnvMap map = render_scene(scene, layout, w, h);
-  write_envmap(args.output, map);
-  const auto sun = scene.sun_power();
-  const double total = total_luminance_power(map);
-  say(out, "{}: procedural scene, {}; power {:.6g}, sun {:.1f} %\n", args.output, describe_size(map), total,
-      total > 0 ? 100 * luminance(sun.data()) / total : 0.0);
-  emit_json(out, {{"output", args.output},
-                  {"layout", std::string(to_string(map.layout))},
-                  {"width", map.width},
-                  {"height", map.height},
-                  {"power_luminance", total},
-                  {"sun_power_luminance", luminance(sun.data())}});
-  return 0;
-}
-
 int run_preview(const PreviewArgs& args, const Output& out) {
   // Any radiance image or map file as stored (no unwrapping), tone-mapped for people.
   const RgbImage img = read_rgb_image(args.input);
@@ -276,6 +182,42 @@ int run_preview(const PreviewArgs& args, const Output& out) {
   say(out, "{} -> {} ({}x{})\n", args.input, args.output, img.width, img.height);
   emit_json(out, {{"input", args.input}, {"output", args.output}, {"width", img.width}, {"height", img.height}});
   return 0;
+}
+
+std::vector<Command> map_commands() {
+  return {
+      {"info", "Layout, size, dynamic range, power and luminance of maps",
+       "lightprobe info probe.exr\nlightprobe info scene.exr probe.hdr --json",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<InfoArgs>();
+         f.arg("FILE", a->files, "Environment maps (.exr, .hdr, .pfm)").required();
+         f.opt("--layout", a->layout, "Read as this layout: latlong|hemisphere|healpix");
+         return [a](const Output& out) { return run_info(*a, out); };
+       }},
+      {"convert", "Convert a map between layouts, sizes, formats and frames",
+       "lightprobe convert probe.hdr probe_polar.exr --layout hemisphere --size 360x90\nlightprobe convert probe.exr probe_hp.exr --layout healpix --nside 128 --rotation 90,0,0\nlightprobe convert pisa_cube/ pisa.exr --layout latlong --size 512x256",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<ConvertArgs>();
+         f.arg("IN", a->input, "Input map, or a directory of cube faces px nx py ny pz nz").required();
+         f.arg("OUT", a->output, "Output map (.exr, .hdr, .pfm)").required();
+         f.opt("--layout", a->layout, "Target layout: latlong|hemisphere|healpix (default: the input's)");
+         f.opt("--size", a->size, "Target size WxH (latlong, hemisphere)");
+         f.opt("--nside", a->nside, "Target HEALPix nside (power of two)");
+         f.opt("--in-layout", a->in_layout, "Read the input as this layout");
+         f.opt("--rotation", a->rotation, "Turn the map into the world: 'yaw,pitch,roll' in degrees or 9 numbers (row-major)");
+         f.flag("--half", a->half, "Write EXR as half floats");
+         return [a](const Output& out) { return run_convert(*a, out); };
+       }},
+      {"preview", "Tone-mapped PNG/JPEG of a radiance image or map, as stored",
+       "lightprobe preview probe.exr -o probe.png",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<PreviewArgs>();
+         f.arg("IMAGE", a->input, "Radiance image or map (.exr, .hdr, .pfm) or a camera image").required();
+         f.output(a->output, "PNG or JPEG");
+         f.opt("--percentile", a->percentile, "Luminance percentile shown at 0.8 after Reinhard");
+         return [a](const Output& out) { return run_preview(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

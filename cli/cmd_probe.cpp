@@ -2,15 +2,19 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <memory>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 
 #include "cli/commands.h"
+#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/map_sequence.h"
 #include "core/progress.h"
 #include "core/resample.h"
 #include "eval/synthetic_scene.h"
@@ -22,39 +26,43 @@
 #include "probe/fisheye.h"
 #include "probe/mirror_ball.h"
 #include "probe/stabilise.h"
+#include "probe/unwrap_sequence.h"
 #include "probe/synthetic_probe.h"
 #include "probe/unwrap_accuracy.h"
 
 namespace lp::cli {
 
+struct ProbeUnwrapArgs {
+  std::vector<std::string> inputs;  // an image, several, or a directory (a sequence)
+  std::string type = "mirrorball";  // mirrorball|fisheye
+  std::string camera;               // fisheye: OpenCV fisheye YAML (default: equidistant)
+  double fov = 0;                   // fisheye: equidistant field of view; ball: camera fov
+  double distance = 0;              // ball: camera distance in ball radii (0: orthographic)
+  std::string ball;                 // "cx,cy,r" instead of detection
+  double reflectivity = 1.0;
+  bool fresnel = false;
+  double blind_spot_deg = 15;
+  bool fill = false;
+  bool stabilise = false;           // smooth the per-frame ball / circle track
+  bool static_probe = false;        // with stabilise: one median position for all frames
+  bool fixed_ball = false;          // use frame 0's geometry for every frame (no tracking)
+  std::string colour_match;         // 3x3 transform to the backplate camera (calib colour)
+  std::string rotation;
+  std::string layout = "latlong";
+  std::string size;
+  int nside = 0;
+  std::string output;               // a map, or a directory for a sequence
+};
+
+struct ProbeRegisterArgs {
+  std::vector<std::string> images;  // photos of one ball, cropped differently
+  int size = 512;                   // output square, px
+  std::string output_dir;
+};
+
 namespace {
 
 namespace fs = std::filesystem;
-
-bool is_image_file(const fs::path& p) {
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return e == ".exr" || e == ".hdr" || e == ".pfm" || e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".tif" ||
-         e == ".tiff";
-}
-
-std::vector<std::string> expand_images(const std::vector<std::string>& inputs) {
-  std::vector<std::string> files;
-  for (const std::string& in : inputs) {
-    std::error_code ec;
-    if (fs::is_directory(in, ec)) {
-      std::vector<std::string> found;
-      for (const auto& e : fs::directory_iterator(in))
-        if (e.is_regular_file() && is_image_file(e.path())) found.push_back(e.path().string());
-      std::sort(found.begin(), found.end());
-      if (found.empty()) throw InputError(fmt::format("{}: directory holds no images", in));
-      files.insert(files.end(), found.begin(), found.end());
-    } else {
-      files.push_back(in);
-    }
-  }
-  return files;
-}
 
 void target_size(const std::string& layout_name, const std::string& size, int nside, Layout* layout, int* w, int* h) {
   const auto l = layout_from_string(layout_name);
@@ -72,172 +80,85 @@ void target_size(const std::string& layout_name, const std::string& size, int ns
   }
 }
 
-MirrorBallCamera ball_camera(const ProbeUnwrapArgs& a) {
-  MirrorBallCamera c;
-  if (a.distance > 0) c.distance_in_radii = a.distance;
-  if (a.fov > 0) c.fov_deg = a.fov;
-  if (!a.rotation.empty()) c.world_from_probe = parse_rotation(a.rotation);
+UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
+  UnwrapSequenceOptions o;
+  if (a.type == "mirrorball") o.type = ProbeType::MirrorBall;
+  else if (a.type == "fisheye") o.type = ProbeType::Fisheye;
+  else throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", a.type));
+  target_size(a.layout, a.size, a.nside, &o.layout, &o.width, &o.height);
+  o.fill = a.fill;
+  if (a.distance > 0) o.ball_camera.distance_in_radii = a.distance;
+  if (a.fov > 0) o.ball_camera.fov_deg = a.fov;
   if (!(a.reflectivity > 0 && a.reflectivity <= 1)) throw InputError("--reflectivity must be in (0, 1]");
-  c.reflectivity = a.reflectivity;
-  c.fresnel = a.fresnel;
-  return c;
+  o.ball_camera.reflectivity = a.reflectivity;
+  o.ball_camera.fresnel = a.fresnel;
+  if (!a.ball.empty()) {
+    const auto v = parse_numbers(a.ball, "--ball", 3);
+    o.ball = BallInImage{v[0], v[1], v[2]};
+  }
+  o.blind_spot_deg = a.blind_spot_deg;
+  if (!a.camera.empty()) o.camera = read_camera_model(a.camera);
+  o.fisheye_fov_deg = a.fov;
+  if (!a.rotation.empty()) o.world_from_probe = parse_rotation(a.rotation);
+  o.smooth_track = a.stabilise;
+  o.static_probe = a.static_probe;
+  o.fixed_geometry = a.fixed_ball;
+  if (!a.colour_match.empty()) o.colour = load_colour_match(a.colour_match);
+  return o;
 }
 
-// A fisheye without --camera: the plain equidistant model of CONVENTIONS, as a KB model.
-CameraModel fisheye_model(const ProbeUnwrapArgs& a, const RgbImage& first) {
-  if (!a.camera.empty()) return read_camera_model(a.camera);
-  return camera_model_from_fisheye(equidistant_fisheye(first.width, first.height, a.fov > 0 ? a.fov : 180));
-}
-
-std::string output_for(const ProbeUnwrapArgs& a, size_t frame, size_t frames) {
-  if (frames == 1) return a.output;
-  return (fs::path(a.output) / fmt::format("frame_{:04d}.exr", frame)).string();
+nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions& o, const UnwrapSequenceReport& r) {
+  nlohmann::json per_frame = nlohmann::json::array();
+  for (const auto& f : r.frames) {
+    nlohmann::json fj = {{"file", f.file}};
+    if (f.ball) {
+      fj["ball"] = {f.ball->cx, f.ball->cy, f.ball->radius_px};
+      fj["ball_raw"] = {f.ball_detected->cx, f.ball_detected->cy, f.ball_detected->radius_px};
+      fj["valid_fraction"] = f.valid_fraction;
+    }
+    if (f.circle) fj["circle"] = {f.circle->cx, f.circle->cy, f.circle->r};
+    per_frame.push_back(fj);
+  }
+  nlohmann::json report = {{"output", a.output}, {"type", a.type}, {"frames", r.frames.size()},
+                           {"layout", a.layout}, {"width", o.width}, {"height", o.height},
+                           {"milliseconds", 1e3 * r.unwrap_seconds}, {"per_frame", per_frame}};
+  if (a.fill) report["fill_power_share"] = r.fill_power_share;
+  if (r.map_jitter_deg) report["map_jitter_deg"] = *r.map_jitter_deg;
+  if (r.detected.cx.size() > 1) {
+    report["detected_jitter_px"] = residual_jitter_px(r.detected);
+    report["used_jitter_px"] = residual_jitter_px(r.used);
+  }
+  return report;
 }
 
 }  // namespace
 
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
-  const std::vector<std::string> files = expand_images(args.inputs);
-  if (args.type != "mirrorball" && args.type != "fisheye")
-    throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", args.type));
-  Layout layout;
-  int w = 0, h = 0;
-  target_size(args.layout, args.size, args.nside, &layout, &w, &h);
-  if (files.size() > 1) {
-    std::error_code ec;
-    fs::create_directories(args.output, ec);
-    if (ec) throw InputError(fmt::format("{}: cannot create the output directory for a sequence: {}", args.output, ec.message()));
-  }
-  // Pass 1: per-frame probe geometry (ball or image circle), then a smoothed track.
-  std::vector<RgbImage> frames;
-  CircleTrack raw;
-  Progress progress("probe unwrap", 2 * files.size(), out.progress && files.size() > 1);
-  for (const std::string& f : files) {
-    RgbImage img = read_rgb_image(f);
-    if (!frames.empty() && (img.width != frames[0].width || img.height != frames[0].height))
-      throw InputError(fmt::format("{}: {}x{} differs from the sequence's {}x{}", f, img.width, img.height,
-                                   frames[0].width, frames[0].height));
-    if (args.type == "mirrorball") {
-      BallInImage ball;
-      if (!args.ball.empty()) {
-        const auto v = parse_numbers(args.ball, "--ball", 3);
-        ball = {v[0], v[1], v[2]};
-      } else {
-        try {
-          ball = find_ball(img);
-        } catch (const InputError& e) {
-          throw InputError(fmt::format("{}: {}", f, e.what()));
-        }
-      }
-      raw.cx.push_back(ball.cx), raw.cy.push_back(ball.cy), raw.r.push_back(ball.radius_px);
-    } else if (files.size() > 1 && !args.fixed_ball) {
-      const ImageCircle c = find_image_circle(img);
-      raw.cx.push_back(c.cx), raw.cy.push_back(c.cy), raw.r.push_back(c.r);
-    }
-    frames.push_back(std::move(img));
-    progress.advance();
-  }
-  // Stabilisation: every frame is unwrapped with its own ball (or image circle), so the
-  // map stays put when the camera shakes. --smooth-track additionally smooths that track,
-  // for a fixed probe whose per-frame detection is noisy; --fixed-ball uses frame 0's
-  // geometry for every frame (what an unstabilised pipeline does), for comparison.
-  CircleTrack track = raw;
-  if (args.fixed_ball && !raw.cx.empty())
-    for (size_t i = 0; i < raw.cx.size(); ++i) track.cx[i] = raw.cx[0], track.cy[i] = raw.cy[0], track.r[i] = raw.r[0];
-  if (args.stabilise && raw.cx.size() > 1) {
-    SmoothOptions so;
-    so.static_probe = args.static_probe;
-    track = smooth_track(raw, so);
-  }
-  // Pass 2: unwrap every frame with its (smoothed) geometry.
-  nlohmann::json per_frame = nlohmann::json::array();
-  double fill_share = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  std::optional<CameraModel> base_model;
-  std::vector<Vec3> centroids;
-  std::optional<ColourMatch> colour;
-  if (!args.colour_match.empty()) colour = load_colour_match(args.colour_match);
-  for (size_t i = 0; i < frames.size(); ++i) {
-    EnvMap map;
-    nlohmann::json fj = {{"file", files[i]}};
-    if (args.type == "mirrorball") {
-      const BallInImage ball{track.cx[i], track.cy[i], track.r[i]};
-      UnwrapOptions uo;
-      uo.blind_spot_deg = args.blind_spot_deg;
-      uo.fill = args.fill;
-      UnwrapReport ur;
-      map = unwrap_mirror_ball(frames[i], ball, ball_camera(args), layout, w, h, uo, &ur);
-      fill_share = ur.fill_power_share;
-      fj["ball"] = {ball.cx, ball.cy, ball.radius_px};
-      fj["ball_raw"] = {raw.cx[i], raw.cy[i], raw.r[i]};
-      fj["valid_fraction"] = ur.valid_solid_angle_fraction;
-    } else {
-      if (!base_model) base_model = fisheye_model(args, frames[0]);
-      CameraModel m = *base_model;
-      if (!track.cx.empty()) {
-        // Move the optical centre with the image circle, relative to the track's first frame.
-        m.intrinsics[2] += track.cx[i] - track.cx[0];
-        m.intrinsics[3] += track.cy[i] - track.cy[0];
-        fj["circle"] = {track.cx[i], track.cy[i], track.r[i]};
-      }
-      CameraUnwrapOptions co;
-      co.max_field_deg = args.fov > 0 ? args.fov / 2 : (args.camera.empty() ? 90 : 0);
-      if (args.fill) co.fill.method = FillMethod::PushPull;
-      const Mat3 world_from_camera = (args.rotation.empty() ? Mat3{} : parse_rotation(args.rotation)) *
-                                     upward_camera_world_from_camera();
-      FillReport fr;
-      map = unwrap_with_camera(frames[i], m, world_from_camera, layout, w, h, co, &fr);
-      fill_share = fr.filled_power_share;
-    }
-    map.units = frames[i].units;
-    if (colour) apply_colour_match(map, *colour);
-    // Power-weighted mean direction of the valid map: a static world must keep it still.
-    Vec3 c{0, 0, 0};
-    for (size_t p = 0; p < map.pixel_count(); ++p)
-      if (map.is_valid(p)) {
-        const float* q = map.pixel(p);
-        c = c + (luminance(q[0], q[1], q[2]) * pixel_solid_angle(map, p)) * pixel_direction(map, p);
-      }
-    if (length(c) > 0) centroids.push_back(normalize(c));
-    write_envmap(output_for(args, i, frames.size()), map);
-    per_frame.push_back(fj);
-    progress.advance();
-  }
+  const std::vector<std::string> files = find_images(args.inputs);
+  const UnwrapSequenceOptions o = unwrap_options(args);
+  const bool sequence = files.size() > 1;
+  if (sequence) make_output_dir(args.output);
+  Progress progress("probe unwrap", 2 * files.size(), out.progress && sequence);
+  const UnwrapSequenceReport r = unwrap_probe_sequence(
+      files, o,
+      [&](size_t i, EnvMap& map) {
+        write_envmap(sequence ? (fs::path(args.output) / fmt::format("frame_{:04d}.exr", i)).string() : args.output, map);
+      },
+      [&] { progress.advance(); });
   progress.finish();
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  nlohmann::json report = {{"output", args.output}, {"type", args.type}, {"frames", frames.size()},
-                           {"layout", args.layout}, {"width", w}, {"height", h}, {"milliseconds", ms},
-                           {"per_frame", per_frame}};
-  if (args.fill) report["fill_power_share"] = fill_share;
-  double map_jitter_deg = 0;
-  for (size_t i = 1; i < centroids.size(); ++i) map_jitter_deg += angle_between(centroids[i - 1], centroids[i]) * 180 / M_PI;
-  if (centroids.size() > 1) {
-    map_jitter_deg /= double(centroids.size() - 1);
-    report["map_jitter_deg"] = map_jitter_deg;
-  }
-  if (raw.cx.size() > 1) {
-    report["detected_jitter_px"] = residual_jitter_px(raw);
-    report["used_jitter_px"] = residual_jitter_px(track);
-  }
-  if (args.type == "mirrorball" && frames.size() == 1)
-    say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px -> {} {}x{}{}\n", args.output, track.cx[0], track.cy[0],
-        track.r[0], args.layout, w, h, args.fill ? fmt::format(", fill holds {:.2f} % of the power", 100 * fill_share) : "");
+  const UnwrapSequenceReport::Frame& first = r.frames[0];
+  if (first.ball && !sequence)
+    say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px -> {} {}x{}{}\n", args.output, first.ball->cx, first.ball->cy,
+        first.ball->radius_px, args.layout, o.width, o.height,
+        args.fill ? fmt::format(", fill holds {:.2f} % of the power", 100 * r.fill_power_share) : "");
   else
-    say(out, "{}: {} frame(s) -> {} {}x{} in {:.0f} ms{}\n", args.output, frames.size(), args.layout, w, h, ms,
-        raw.cx.size() > 1 ? fmt::format("; probe centre moved {:.3f} px per frame, unwrapped map {:.4f} deg per frame",
-                                        residual_jitter_px(raw), map_jitter_deg)
-                          : "");
-  emit_json(out, report);
-  return 0;
-}
-
-int run_calib_colour(const CalibColourArgs& args, const Output& out) {
-  const ColourMatch m = fit_colour_match(read_colour_patches_csv(args.patches));
-  save_colour_match(args.output, m);
-  say(out, "{}: 3x3 colour match from {} patches, residual RMS {:.2f} %\n", args.output, m.patches,
-      100 * m.rms_relative);
-  emit_json(out, {{"output", args.output}, {"patches", m.patches}, {"rms_relative", m.rms_relative},
-                  {"matrix", m.matrix.m}});
+    say(out, "{}: {} frame(s) -> {} {}x{} in {:.0f} ms{}\n", args.output, files.size(), args.layout, o.width, o.height,
+        1e3 * r.unwrap_seconds,
+        r.detected.cx.size() > 1
+            ? fmt::format("; probe centre moved {:.3f} px per frame, unwrapped map {:.4f} deg per frame",
+                          residual_jitter_px(r.detected), r.map_jitter_deg.value_or(0))
+            : "");
+  emit_json(out, report_json(args, o, r));
   return 0;
 }
 
@@ -273,53 +194,6 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
       registered.size(), args.size, args.size, ball.cx, ball.cy, ball.radius_px);
   emit_json(out, {{"output", args.output_dir}, {"frames", found},
                   {"registered_ball", {ball.cx, ball.cy, ball.radius_px}}});
-  return 0;
-}
-
-int run_synth_probe(const SynthProbeArgs& args, const Output& out) {
-  const EnvMap world = args.input == "scene" ? render_scene(describe_scene(), Layout::LatLong, 1024, 512)
-                                             : read_envmap(args.input);
-  int w = 0, h = 0;
-  parse_size(args.size, "--size", &w, &h);
-  const bool sequence = args.frames > 1;
-  if (args.frames < 1) throw InputError("--frames must be at least 1");
-  if (sequence) {
-    std::error_code ec;
-    fs::create_directories(args.output, ec);
-    if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output, ec.message()));
-  }
-  nlohmann::json truth = {{"type", args.type}, {"input", args.input}, {"frames", args.frames}};
-  nlohmann::json per_frame = nlohmann::json::array();
-  if (args.type == "mirrorball") {
-    const double r = args.radius > 0 ? args.radius : 0.4 * std::min(w, h);
-    const BallInImage ball{w / 2.0, h / 2.0, r};
-    MirrorBallCamera cam;
-    if (args.distance > 0) cam.distance_in_radii = args.distance;
-    const auto track = jittered_track(ball, args.frames, sequence ? args.jitter : 0, args.seed);
-    for (int f = 0; f < args.frames; ++f) {
-      RenderBallOptions ro;
-      ro.noise_relative = args.noise;
-      ro.seed = args.seed + uint64_t(f);
-      const RgbImage img = render_mirror_ball(world, track[size_t(f)], cam, w, h, ro);
-      const std::string path = sequence ? (fs::path(args.output) / fmt::format("frame_{:04d}.exr", f)).string() : args.output;
-      write_rgb_image(path, img);
-      per_frame.push_back({{"frame", f}, {"ball", {track[size_t(f)].cx, track[size_t(f)].cy, track[size_t(f)].radius_px}}});
-    }
-    if (args.distance > 0) truth["distance_in_radii"] = args.distance;
-  } else if (args.type == "fisheye") {
-    const FisheyeModel m = equidistant_fisheye(w, h, args.fov);
-    const RgbImage img = render_fisheye(world, m, 4);
-    write_rgb_image(args.output, img);
-    truth["fov_deg"] = args.fov;
-    if (sequence) throw InputError("--frames applies to mirror balls only");
-  } else {
-    throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", args.type));
-  }
-  truth["per_frame"] = per_frame;
-  if (sequence) write_file_atomically((fs::path(args.output) / "truth.json").string(), truth.dump(2) + "\n");
-  say(out, "{}: synthetic {} probe {}x{}{}\n", args.output, args.type, w, h,
-      sequence ? fmt::format(", {} frames, truth.json", args.frames) : "");
-  emit_json(out, truth);
   return 0;
 }
 
@@ -386,6 +260,45 @@ int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out) {
                   {"centre_error_px", r.centre_error_px}, {"ms", r.ms}});
   emit_json(out, {{"csv", csv_path}, {"rows", jr}});
   return 0;
+}
+
+std::vector<Command> probe_commands() {
+  return {
+      {"probe unwrap", "Unwrap a probe image (or a sequence) into a map in the world frame",
+       "lightprobe probe unwrap ball.exr --type mirrorball --fill --layout latlong --size 1024x512 -o map.exr\nlightprobe probe unwrap sky.png --type fisheye --camera fisheye.yaml --layout hemisphere -o sky.exr\nlightprobe probe unwrap frames/ --type mirrorball -o maps/",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<ProbeUnwrapArgs>();
+         f.arg("IMAGE", a->inputs, "Probe image(s) or a directory of frames").required();
+         f.opt("--type", a->type, "mirrorball|fisheye");
+         f.opt("--camera", a->camera, "fisheye: calibrated model (.cameramodel or OpenCV YAML, any lens model)");
+         f.opt("--fov", a->fov, "fisheye: field of view (deg): of the equidistant default model, or the image circle of --camera; " "ball: the camera's field of view");
+         f.opt("--distance", a->distance, "ball: camera distance in ball radii (default orthographic)");
+         f.opt("--ball", a->ball, "ball: 'cx,cy,r' in pixels instead of detection");
+         f.opt("--reflectivity", a->reflectivity, "ball: reflectivity at normal incidence (chrome ~0.6-0.7)");
+         f.flag("--fresnel", a->fresnel, "ball: reflectivity rises towards the rim (Schlick)");
+         f.opt("--blind-spot", a->blind_spot_deg, "ball: half-angle (deg) masked around the blind spot");
+         f.flag("--fill", a->fill, "Fill what the camera cannot see smoothly (mask kept)");
+         f.flag("--smooth-track", a->stabilise, "Sequences: smooth the per-frame ball / image-circle track (a fixed probe, noisy detection)");
+         f.flag("--static-probe", a->static_probe, "With --smooth-track: one median position for every frame");
+         f.flag("--fixed-ball", a->fixed_ball, "Sequences: no tracking, frame 0's geometry for all (for comparison)");
+         f.opt("--colour-match", a->colour_match, "3x3 colour transform to the backplate (calib colour)");
+         f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers");
+         f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
+         f.opt("--size", a->size, "WxH");
+         f.opt("--nside", a->nside, "healpix nside");
+         f.output(a->output, "Output map (or directory for a sequence)");
+         return [a](const Output& out) { return run_probe_unwrap(*a, out); };
+       }},
+      {"probe register", "Centre one ball in differently cropped photos (for hdr fuse)",
+       "lightprobe probe register a.jpg b.jpg c.jpg -o registered/",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<ProbeRegisterArgs>();
+         f.arg("IMAGE", a->images, "Photos of the same mirror ball").required();
+         f.opt("--size", a->size, "Output square size, px");
+         f.output(a->output_dir, "Directory for the registered photos (PNG)");
+         return [a](const Output& out) { return run_probe_register(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

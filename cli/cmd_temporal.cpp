@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "cli/commands.h"
+#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "eval/svg_chart.h"
 #include "core/accuracy.h"
@@ -26,13 +27,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// "scene" is the procedural scene at latlong 512x256; anything else a map file.
-EnvMap load_base(const std::string& base) {
-  if (base == "scene") return render_scene(describe_scene(), Layout::LatLong, 512, 256);
-  return read_envmap(base);
-}
-
-std::string base_name(const std::string& base) { return base == "scene" ? "scene" : fs::path(base).stem().string(); }
 
 std::vector<Scenario> parse_scenarios(const std::string& text) {
   if (text == "all") return all_scenarios();
@@ -61,65 +55,6 @@ double mean(const std::vector<double>& v) {
 
 }  // namespace
 
-int run_synth_sequence(const SynthSequenceArgs& args, const Output& out) {
-  const auto scenario = scenario_from_string(args.scenario);
-  if (!scenario) throw InputError(fmt::format("--scenario: unknown scenario '{}'", args.scenario));
-  SequenceOptions so;
-  so.scenario = *scenario;
-  so.frames = args.frames;
-  so.frame_rate_hz = args.fps;
-  so.seed = args.seed;
-  try {
-    validate(so);
-  } catch (const InputError& e) {
-    throw InputError(fmt::format("synth sequence: {}", e.what()));
-  }
-  EnvMap base = load_base(args.base);
-  if (!args.size.empty()) {
-    int w = 0, h = 0;
-    parse_size(args.size, "--size", &w, &h);
-    base = resample(base, base.layout == Layout::Healpix ? Layout::LatLong : base.layout, w, h);
-  }
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
-
-  nlohmann::json truth = {{"scenario", std::string(to_string(*scenario))},
-                          {"base", args.base},
-                          {"frames", so.frames},
-                          {"frame_rate_hz", so.frame_rate_hz},
-                          {"layout", std::string(to_string(base.layout))}};
-  if (*scenario == Scenario::AbruptSwitch) truth["step_frame"] = step_frame(so);
-  if (*scenario == Scenario::Flicker) truth["alias_hz"] = flicker_alias_hz(so);
-  nlohmann::json per_frame = nlohmann::json::array();
-  Progress progress("synth sequence", size_t(so.frames), out.progress);
-  for (int f = 0; f < so.frames; ++f) {
-    const EnvMap frame = render_sequence_frame(base, so, f);
-    const std::string path = (fs::path(args.output_dir) / fmt::format("frame_{:04d}.exr", f)).string();
-    write_envmap(path, frame);
-    nlohmann::json j = {{"frame", f}, {"file", fs::path(path).filename().string()},
-                        {"power_luminance", total_luminance_power(frame)}};
-    if (auto d = added_light_direction(so, f)) {
-      const auto rgb = added_light_rgb(base, so, f);
-      j["light_direction"] = {d->x, d->y, d->z};
-      j["light_rgb"] = {rgb[0], rgb[1], rgb[2]};
-    }
-    per_frame.push_back(j);
-    progress.advance();
-  }
-  progress.finish();
-  truth["per_frame"] = per_frame;
-  std::string times;
-  for (int f = 0; f < so.frames; ++f) times += fmt::format("{:.9g}\n", f / so.frame_rate_hz);
-  write_file_atomically((fs::path(args.output_dir) / "timestamps.txt").string(), times);
-  const std::string truth_path = (fs::path(args.output_dir) / "truth.json").string();
-  write_file_atomically(truth_path, truth.dump(2) + "\n");
-  say(out, "{}: {} frames of '{}' on {} ({}), ground truth in {}\n", args.output_dir, so.frames, to_string(*scenario),
-      base_name(args.base), describe_size(base), truth_path);
-  emit_json(out, {{"output", args.output_dir}, {"frames", so.frames}, {"truth", truth_path}});
-  return 0;
-}
-
 int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
   const std::vector<Method> methods = parse_method_list(args.methods);
   const std::vector<Scenario> scenarios = parse_scenarios(args.scenarios);
@@ -141,7 +76,7 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
   ao.shadowed = false;
   ao.glossy_exponents.clear();
   for (const std::string& map_path : args.maps) {
-    const EnvMap base = load_base(map_path);
+    const EnvMap base = map_or_scene(map_path, 512);
     for (Scenario scenario : scenarios) {
       SequenceOptions so;
       so.scenario = scenario;
@@ -159,10 +94,10 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
         po.filter = args.filter == "on" ? FilterMode::On : args.filter == "off" ? FilterMode::Off : FilterMode::Auto;
         pipelines.emplace_back(po);
       }
-      ChartPanel panel{fmt::format("{}: {} (power)", base_name(map_path), to_string(scenario)), "frame",
+      ChartPanel panel{fmt::format("{}: {} (power)", map_label(map_path), to_string(scenario)), "frame",
                        "mean irradiance over 256 normals", {}};
       panel.log_x = panel.log_y = false;
-      ChartPanel error_panel{fmt::format("{}: {} (error)", base_name(map_path), to_string(scenario)), "frame",
+      ChartPanel error_panel{fmt::format("{}: {} (error)", map_label(map_path), to_string(scenario)), "frame",
                              "diffuse error of the frame", {}};
       error_panel.log_x = false;
       ChartSeries truth{"reference", {}, {}, {}};
@@ -192,7 +127,7 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
       const std::optional<int> step =
           scenario == Scenario::AbruptSwitch ? std::optional<int>(step_frame(so)) : std::nullopt;
       for (size_t i = 0; i < methods.size(); ++i)
-        rows.push_back({base_name(map_path), std::string(to_string(scenario)), std::string(to_string(methods[i])),
+        rows.push_back({map_label(map_path), std::string(to_string(scenario)), std::string(to_string(methods[i])),
                         scorers[i].report(step), ms[i] / so.frames, pipelines[i].delay_frames()});
       for (auto& s : series) panel.series.push_back(std::move(s));
       panel.series.push_back(truth);  // last, so the truth is drawn on top

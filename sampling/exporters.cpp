@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <unordered_set>
@@ -217,6 +218,28 @@ std::string export_lights(const LightList& list, ExportFormat format) {
       return export_csv(list);
   }
   return {};
+}
+
+std::string export_light_sequence(const std::vector<LightList>& lists, ExportFormat format) {
+  std::string text;
+  for (size_t f = 0; f < lists.size(); ++f) {
+    const std::string body = export_lights(lists[f], format);
+    text += format == ExportFormat::Csv && f > 0 ? body.substr(body.find('\n') + 1) : body;
+  }
+  return text;
+}
+
+ExportFormat export_format_for(const std::string& name, const std::string& path, bool sequence) {
+  if (!name.empty()) {
+    auto f = export_format_from_string(name);
+    if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, csv)", name));
+    return *f;
+  }
+  const std::string e = std::filesystem::path(path).extension().string();
+  if (e == ".jsonl") return ExportFormat::Ndjson;
+  for (const FormatInfo& f : kFormats)
+    if (f.extension == e && f.format != ExportFormat::Json) return f.format;
+  return sequence ? ExportFormat::Ndjson : ExportFormat::Json;
 }
 
 }  // namespace lp

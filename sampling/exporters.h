@@ -83,5 +83,13 @@ std::string_view file_extension(ExportFormat format);
 
 // The whole file text for one light list.
 std::string export_lights(const LightList& list, ExportFormat format);
+// The text of a sequence in one file: the lists one after another (NDJSON: a line each),
+// and for CSV one header over every frame's rows.
+std::string export_light_sequence(const std::vector<LightList>& lists, ExportFormat format);
+
+// The format of an output: `name` (--format) when given, else from the extension of
+// `path` (.json, .ndjson or .jsonl, .pbrt, .xml, .gltf, .csv); any other extension is
+// JSON, or NDJSON for a sequence. Throws InputError on an unknown `name`.
+ExportFormat export_format_for(const std::string& name, const std::string& path, bool sequence);
 
 }  // namespace lp

@@ -10,6 +10,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <memory>
+
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
@@ -17,6 +19,7 @@
 #include <time.h>
 
 #include "cli/commands.h"
+#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "eval/svg_chart.h"
 #include "core/accuracy.h"
@@ -29,6 +32,13 @@
 #include "render/shading_tables.h"
 
 namespace lp::cli {
+
+struct TablesArgs {
+  std::string input;                // a map
+  std::string layout;               // input layout override
+  ShadingTableArgs tables;
+  std::string output;               // .json, or the binary texture (.lpst / anything else)
+};
 namespace {
 
 namespace fs = std::filesystem;
@@ -352,6 +362,22 @@ int run_tables(const TablesArgs& args, const Output& out) {
                   {"mean_region_lights", mean_list},
                   {"time_ms", ms}});
   return 0;
+}
+
+std::vector<Command> render_commands() {
+  return {
+      {"tables", "Shading tables of a map for a renderer (angular regions, glossy sets, clusters)",
+       "lightprobe tables probe.exr --n 1024 -o tables.lpst",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<TablesArgs>();
+         f.arg("MAP", a->input, "Environment map").required();
+         f.opt("--layout", a->layout, "Read the map as this layout");
+         f.opt("--n", a->tables.n, "Lights |H| of the diffuse tables");
+         declare_table_options(f, a->tables);
+         f.output(a->output, "Output: .json, or the RGBA32F texture file (any other name)");
+         return [a](const Output& out) { return run_tables(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

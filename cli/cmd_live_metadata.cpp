@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "calib/photometric.h"
+#include "cli/cmd_live.h"
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"

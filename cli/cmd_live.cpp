@@ -2,6 +2,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <memory>
+
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -9,6 +11,7 @@
 
 #include "calib/camera_model.h"
 #include "calib/photometric.h"
+#include "cli/cmd_live.h"
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
@@ -19,6 +22,18 @@
 #include "probe/camera_source.h"
 
 namespace lp::cli {
+
+
+struct MergeArgs {
+  std::vector<std::string> urls;    // light servers: http://HOST:PORT
+  std::string listen = "127.0.0.1:8090";
+  std::string token;                // for our server
+  std::string upstream_token;       // for the cameras' servers
+  std::string weights;              // one per URL (e.g. from camera positions)
+  int n = 256;                      // q2tree light count of the merge
+  double timeout = 2.0;             // drop a camera silent this long
+  double duration = 0;
+};
 
 namespace {
 
@@ -154,6 +169,55 @@ int run_merge(const MergeArgs& args, const Output& out) {
   emit_json(out, {{"port", port}, {"published", published}, {"used", last.state.used}, {"dropped", last.state.dropped},
                   {"skipped", skipped}, {"mode", last.mode}});
   return 0;
+}
+
+std::vector<Command> live_commands() {
+  return {
+      {"stream", "Run the whole chain live and serve light lists over HTTP",
+       "lightprobe stream --source aravis:Fake_1\nlightprobe stream --source aravis --exposures 0.0002,0.002,0.02 --camera fisheye.yaml --fov 185\nlightprobe stream --config rig.toml",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<StreamArgs>();
+         f.opt("--source", a->source, "replay:DIR | video:FILE | aravis[:ID] | libcamera[:ID] | v4l2:N");
+         f.opt("--listen", a->listen, "HOST:PORT to serve on (127.0.0.1 by default; port 0 picks one)");
+         f.opt("--token", a->token, "Bearer token required on every route (needed beyond localhost)");
+         f.opt("--exposures", a->exposures, "Bracketing: exposure times cycled by the camera, seconds");
+         f.opt("--bracketing", a->bracketing, "auto: the camera's sequencer when it has one, else per-frame writes; sequencer; writes").one_of({"auto", "sequencer", "writes"});
+         f.opt("--response", a->response, "Camera response (hdr response); default linear");
+         f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");
+         f.opt("--camera", a->camera, "Calibrated camera model (default: equidistant fisheye)");
+         f.opt("--fov", a->fov, "Fisheye field of view / image circle, deg");
+         f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees");
+         f.flag("--maps", a->maps, "The source delivers environment maps already (replayed .exr)");
+         f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
+         f.opt("--size", a->size, "Map size WxH");
+         f.opt("--nside", a->nside, "healpix nside");
+         f.opt("--method", a->method, "pharr|hemigon|q2tree|mediancut");
+         f.opt("--n", a->n, "Lights per frame");
+         f.opt("--cluster", a->cluster, "Cluster to at most this many lights");
+         f.opt("--fps", a->fps, "Replay pacing and the temporal filter's frame rate");
+         f.flag("--loop", a->loop, "Replay: start over at the end");
+         f.opt("--duration", a->duration, "Stop after this many seconds");
+         f.opt("--metadata-model", a->metadata_model, "Probe-less mode: meter each frame's exposure/gain into this model and serve its lights");
+         f.opt("--position", a->position, "Metadata mode: where the rig stands, X,Y m");
+         f.opt("--view-dir", a->view_dir, "Metadata mode: where the camera looks, x,y,z");
+         f.opt("--min-frames", a->min_frames, "Metadata mode: frames that make a sector informed");
+         return [a](const Output& out) { return run_stream(*a, out); };
+       }},
+      {"merge", "Merge the lights of several cameras' servers and serve the result",
+       "lightprobe merge http://cam1:8080 http://cam2:8080 --listen 127.0.0.1:8090",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<MergeArgs>();
+         f.arg("URL", a->urls, "Light servers, http://HOST:PORT").required();
+         f.opt("--listen", a->listen, "HOST:PORT to serve the merged lights on");
+         f.opt("--token", a->token, "Bearer token for our server");
+         f.opt("--upstream-token", a->upstream_token, "Bearer token for the cameras' servers");
+         f.opt("--weights", a->weights, "Comma-separated weights, one per URL");
+         f.opt("--n", a->n, "Light count of a Q2-tree merge");
+         f.opt("--timeout", a->timeout, "Drop a camera silent for this many seconds");
+         f.opt("--duration", a->duration, "Stop after this many seconds");
+         return [a](const Output& out) { return run_merge(*a, out); };
+       }},
+  };
 }
 
 }  // namespace lp::cli

@@ -1,0 +1,151 @@
+// The command table over CLI11: the only translation unit that includes it.
+#include "cli/command_table.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+#include <map>
+#include <sstream>
+#include <utility>
+
+#include "core/error.h"
+
+namespace lp::cli {
+
+namespace {
+
+constexpr const char* kDescription =
+    "lightprobe: calibrate cameras, capture HDR light probes and turn them into\n"
+    "directional lights for renderers, live.\n\n"
+    "Example session:\n"
+    "  lightprobe synth scene -o scene.exr --size 1024x512\n"
+    "  lightprobe info scene.exr\n"
+    "  lightprobe sample scene.exr --method q2tree --n 256 -o lights.json --overlay lights.png\n"
+    "  lightprobe eval sampling scene.exr --methods all -o eval/\n";
+
+constexpr const char* kSharedOptions =
+    "Every command also takes --json (its report as one JSON object on stdout),\n"
+    "--no-progress (no progress bars) and --config FILE (TOML, one [section] per command).";
+
+// The groups of two-word commands, by stage.
+const std::map<std::string, std::string>& group_help() {
+  static const std::map<std::string, std::string> help = {
+      {"synth", "Ground-truth makers"},
+      {"calib", "Camera calibration"},
+      {"hdr", "Exposure brackets and log sensors -> radiance"},
+      {"probe", "Mirror-ball and fisheye probes -> environment maps"},
+      {"estimate", "Lighting without a probe, from camera metadata over space"},
+      {"eval", "Speed against accuracy of each method"},
+  };
+  return help;
+}
+
+class CliFlags final : public Flags {
+ public:
+  explicit CliFlags(CLI::App* app) : app_(app) {}
+  Flags& arg(const char* name, std::string& target, const char* help) override { return keep(app_->add_option(name, target, help)); }
+  Flags& arg(const char* name, std::vector<std::string>& target, const char* help) override {
+    return keep(app_->add_option(name, target, help)->default_str(""));  // not "[]"
+  }
+  Flags& opt(const char* names, std::string& target, const char* help) override { return keep(app_->add_option(names, target, help)); }
+  Flags& opt(const char* names, int& target, const char* help) override { return keep(app_->add_option(names, target, help)); }
+  Flags& opt(const char* names, double& target, const char* help) override { return keep(app_->add_option(names, target, help)); }
+  Flags& opt(const char* names, uint64_t& target, const char* help) override { return keep(app_->add_option(names, target, help)); }
+  Flags& flag(const char* names, bool& target, const char* help) override { return keep(app_->add_flag(names, target, help)); }
+  Flags& required() override {
+    last_->required();
+    return *this;
+  }
+  Flags& one_of(std::vector<std::string> values) override {
+    last_->check(CLI::IsMember(std::move(values)));
+    return *this;
+  }
+
+ private:
+  Flags& keep(CLI::Option* option) {
+    last_ = option;
+    return *this;
+  }
+  CLI::App* app_;
+  CLI::Option* last_ = nullptr;
+};
+
+std::vector<Command> all_commands() {
+  std::vector<Command> all;
+  for (auto stage : {map_commands, calib_commands, hdr_commands, probe_commands, sample_commands, render_commands,
+                     estimate_commands, live_commands, synth_commands, eval_commands}) {
+    for (Command& c : stage()) all.push_back(std::move(c));
+  }
+  return all;
+}
+
+std::string example_footer(const std::string& example) {
+  std::ostringstream s;
+  s << "Example:\n";
+  std::istringstream lines(example);
+  for (std::string line; std::getline(lines, line);) s << "  " << line << "\n";
+  s << "\n" << kSharedOptions;
+  return s.str();
+}
+
+}  // namespace
+
+int run_command_line(int argc, char** argv) {
+  CLI::App app{kDescription, "lightprobe"};
+  app.set_version_flag("--version", std::string("lightprobe ") + LIGHTPROBE_VERSION);
+  app.require_subcommand(1);
+  // A rig's setup in one file: TOML with a section per command, e.g. [stream] source = "aravis"
+  // (usable after the subcommand too: lightprobe stream --config rig.toml).
+  app.set_config("--config", "", "TOML file of options, one [section] per command (e.g. [stream])");
+  app.fallthrough();  // shared options may follow the subcommand
+  app.option_defaults()->always_capture_default();
+  Output out;
+  app.add_flag("--json", out.json, "Print the report as one JSON object on stdout")->configurable(false);
+  app.add_flag("!--no-progress", out.progress, "Never draw progress bars");
+
+  std::map<std::string, CLI::App*> groups;
+  std::vector<std::pair<CLI::App*, Handler>> handlers;
+  for (const Command& command : all_commands()) {
+    CLI::App* parent = &app;
+    std::string name = command.path;
+    if (const size_t space = name.find(' '); space != std::string::npos) {
+      const std::string group = name.substr(0, space);
+      name = name.substr(space + 1);
+      CLI::App*& g = groups[group];
+      if (!g) {
+        g = app.add_subcommand(group, group_help().at(group));
+        g->require_subcommand(1);
+      }
+      parent = g;
+    }
+    CLI::App* sub = parent->add_subcommand(name, command.help);
+    sub->footer(example_footer(command.example));
+    CliFlags flags(sub);
+    handlers.emplace_back(sub, command.declare(flags));
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  }
+
+  try {
+    for (const auto& [sub, handler] : handlers) {
+      if (sub->parsed()) return handler(out);
+    }
+  } catch (const lp::InputError& e) {
+    std::fprintf(stderr, "lightprobe: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lightprobe: internal error: %s\n", e.what());
+    return 1;
+  }
+  return 1;
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,215 @@
+// The helpers the command handlers share (cli/commands.h).
+#include "cli/commands.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "calib/board_detect.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "estimate/exposure_metering.h"
+#include "eval/synthetic_scene.h"
+#include "hdr/synthetic_bracket.h"
+
+namespace lp::cli {
+
+void parse_size(const std::string& text, const char* option, int* width, int* height) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  std::istringstream in(text);
+  if (!(in >> w >> x >> h) || (x != 'x' && x != 'X') || (in >> extra) || w <= 0 || h <= 0)
+    throw InputError(fmt::format("{} must be WxH with positive integers, got '{}'", option, text));
+  *width = w;
+  *height = h;
+}
+
+std::vector<int> parse_int_list(const std::string& text, const char* option) {
+  std::vector<int> values;
+  std::istringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      const int v = std::stoi(item, &used);
+      if (used != item.size() || v <= 0) throw std::invalid_argument("x");
+      values.push_back(v);
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("{} must be a comma-separated list of positive integers, got '{}'", option, text));
+    }
+  }
+  if (values.empty()) throw InputError(fmt::format("{} is empty", option));
+  return values;
+}
+
+Mat3 parse_rotation(const std::string& text) {
+  std::vector<double> v;
+  std::string item;
+  std::istringstream in(text);
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument("x");
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("--rotation: '{}' is not a number", item));
+    }
+  }
+  if (v.size() == 3) return rotation_from_yaw_pitch_roll_deg(v[0], v[1], v[2]);
+  if (v.size() == 9) {
+    Mat3 m;
+    std::copy(v.begin(), v.end(), m.m.begin());
+    if (!is_rotation(m, 1e-4)) throw InputError("--rotation: the 9 numbers are not a rotation matrix");
+    return m;
+  }
+  throw InputError("--rotation takes 'yaw,pitch,roll' (degrees) or 9 comma-separated numbers");
+}
+
+std::optional<Layout> optional_layout(const std::string& name, const char* option) {
+  if (name.empty()) return std::nullopt;
+  auto l = layout_from_string(name);
+  if (!l) throw InputError(fmt::format("{}: unknown layout '{}' (latlong, hemisphere, healpix)", option, name));
+  return l;
+}
+
+// Target (layout, width, height) of convert/synth from --layout/--size/--nside.
+void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h) {
+  if (layout == Layout::Healpix) {
+    *w = nside > 0 ? nside : (like && like->layout == Layout::Healpix ? like->nside : 0);
+    if (*w == 0) {
+      // About as many pixels as the source.
+      const double px = like ? double(like->pixel_count()) : 12.0 * 64 * 64;
+      *w = 1;
+      while (12.0 * (2 * *w) * (2 * *w) <= px * 1.5) *w *= 2;
+    }
+    *h = 1;
+    return;
+  }
+  if (!size.empty()) {
+    parse_size(size, "--size", w, h);
+    return;
+  }
+  if (like && like->layout == layout) {
+    *w = like->width;
+    *h = like->height;
+    return;
+  }
+  if (layout == Layout::Hemisphere) {
+    *w = 360;
+    *h = 90;
+    return;
+  }
+  // latlong with about as many pixels as the source
+  const double px = like ? double(like->pixel_count()) : 1024.0 * 512;
+  *h = std::max(2, int(std::lround(std::sqrt(px / 2))));
+  *w = 2 * *h;
+}
+
+std::vector<double> parse_numbers(const std::string& text, const char* option, size_t count) {
+  std::vector<double> v;
+  std::istringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    try {
+      size_t used = 0;
+      // Fractions such as 1/40 are common for exposure times.
+      const auto slash = item.find('/');
+      double x;
+      if (slash != std::string::npos) {
+        size_t u2 = 0;
+        const std::string a = item.substr(0, slash), b = item.substr(slash + 1);
+        x = std::stod(a, &used) / std::stod(b, &u2);
+        if (used != a.size() || u2 != b.size()) throw std::invalid_argument("x");
+      } else {
+        x = std::stod(item, &used);
+        if (used != item.size()) throw std::invalid_argument("x");
+      }
+      if (!std::isfinite(x)) throw std::invalid_argument("x");
+      v.push_back(x);
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("{}: '{}' is not a number", option, item));
+    }
+  }
+  if (v.empty() || (count && v.size() != count))
+    throw InputError(count ? fmt::format("{} takes {} comma-separated numbers, got '{}'", option, count, text)
+                           : fmt::format("{} is empty", option));
+  return v;
+}
+
+ResponseCurve curve_from(const std::string& name) {
+  if (name == "linear") return ResponseCurve::Linear;
+  if (name == "gamma") return ResponseCurve::Gamma22;
+  if (name == "scurve") return ResponseCurve::SCurve;
+  throw InputError(fmt::format("--response must be linear, gamma or scurve, got '{}'", name));
+}
+
+RgbImage radiance_from(const std::string& path) {
+  if (path == "scene") return image_from_envmap(render_scene(describe_scene(), Layout::LatLong, 512, 256));
+  return read_rgb_image(path);
+}
+
+std::vector<Method> parse_method_list(const std::string& text) {
+  if (text == "all") return all_methods();
+  std::vector<Method> methods;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string name = text.substr(start, comma - start);
+    auto m = method_from_string(name);
+    if (!m) throw InputError(fmt::format("--methods: unknown method '{}' (pharr, hemigon, q2tree, mediancut, all)", name));
+    methods.push_back(*m);
+    start = comma + 1;
+  }
+  return methods;
+}
+
+BoardSpec board_from(const std::string& text, double square_mm) {
+  int cols = 0, rows = 0;
+  parse_size(text, "--board", &cols, &rows);
+  if (cols < 2 || rows < 2) throw InputError("--board counts inner corners and needs at least 2x2");
+  if (!(square_mm > 0)) throw InputError("--square must be positive (mm)");
+  return BoardSpec{cols, rows, square_mm};
+}
+
+EnvMap map_or_scene(const std::string& name, int scene_width) {
+  if (name == "scene") return render_scene(describe_scene(), Layout::LatLong, scene_width, scene_width / 2);
+  return read_envmap(name);
+}
+
+std::string map_label(const std::string& name) {
+  return name == "scene" ? "scene" : std::filesystem::path(name).stem().string();
+}
+
+void make_output_dir(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", dir, ec.message()));
+}
+
+nlohmann::json metering_json(const MeteringOptions& m) {
+  nlohmann::json j{{"route", m.photometric_scale ? "calibration" : "meter"},
+                   {"f_number", m.f_number},
+                   {"calibration_f_number", m.calibration_f_number},
+                   {"ae_target", m.ae_target},
+                   {"iso_base", m.iso_base},
+                   {"meter_constant", m.meter_constant}};
+  if (m.photometric_scale) j["photometric_scale"] = *m.photometric_scale;
+  return j;
+}
+
+void declare_table_options(Flags& f, ShadingTableArgs& t) {
+  f.opt("--method", t.method, "Progressive sampler for the lights: pharr|hemigon");
+  f.opt("--low-per-high", t.low_per_high, "|L| / |H|: dense lights per glossy-cone light");
+  f.opt("--regions", t.regions, "Culling regions (S_H)");
+  f.opt("--cone-regions", t.cone_regions, "Glossy-cone regions (S_L)");
+  f.opt("--lut", t.lut, "Cube-map LUT texels per face edge");
+  f.opt("--cone", t.cone_deg, "Cone half-angle around the reflected direction, degrees");
+  f.opt("--k", t.k, "At most this many L lights per cone (power rescaled)");
+  f.opt("--q", t.q, "Cluster to at most Q lights (0: |H| / 4)");
+}
+
+}  // namespace lp::cli

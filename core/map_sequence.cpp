@@ -1,0 +1,88 @@
+#include "core/map_sequence.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "core/error.h"
+
+namespace lp {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_map_file(const fs::path& p) {
+  const std::string e = p.extension().string();
+  return e == ".exr" || e == ".hdr" || e == ".pfm";
+}
+
+bool is_image_file(const fs::path& p) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return e == ".exr" || e == ".hdr" || e == ".pfm" || e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".tif" ||
+         e == ".tiff";
+}
+
+// The files named, a directory standing for the files inside it that `keep` accepts.
+std::vector<std::string> expand(const std::vector<std::string>& inputs, bool (*keep)(const fs::path&), const char* what) {
+  std::vector<std::string> files;
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (fs::is_directory(in, ec)) {
+      std::vector<std::string> found;
+      for (const auto& entry : fs::directory_iterator(in))
+        if (entry.is_regular_file() && keep(entry.path())) found.push_back(entry.path().string());
+      std::sort(found.begin(), found.end());
+      if (found.empty()) throw InputError(fmt::format("{}: directory holds no {}", in, what));
+      files.insert(files.end(), found.begin(), found.end());
+    } else {
+      files.push_back(in);
+    }
+  }
+  return files;
+}
+
+std::vector<double> read_timestamps(const fs::path& path, size_t frames) {
+  std::ifstream in(path);
+  std::vector<double> times;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    try {
+      size_t used = 0;
+      const double t = std::stod(line, &used);
+      if (!std::isfinite(t)) throw std::invalid_argument("x");
+      times.push_back(t);
+    } catch (const std::exception&) {
+      throw InputError(fmt::format("{}: line {} is not a time in seconds: '{}'", path.string(), times.size() + 1, line));
+    }
+  }
+  if (times.size() != frames)
+    throw InputError(fmt::format("{}: {} times for {} maps", path.string(), times.size(), frames));
+  return times;
+}
+
+}  // namespace
+
+MapSequence find_map_sequence(const std::vector<std::string>& inputs) {
+  MapSequence seq;
+  seq.files = expand(inputs, is_map_file, ".exr/.hdr/.pfm maps");
+  std::error_code ec;
+  if (inputs.size() == 1 && fs::is_directory(inputs[0], ec)) {
+    const fs::path path = fs::path(inputs[0]) / "timestamps.txt";
+    if (fs::exists(path, ec)) seq.timestamps_s = read_timestamps(path, seq.files.size());
+  }
+  return seq;
+}
+
+std::vector<std::string> find_images(const std::vector<std::string>& inputs) {
+  return expand(inputs, is_image_file, "images");
+}
+
+}  // namespace lp

@@ -1,0 +1,137 @@
+#include "probe/unwrap_sequence.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "core/accuracy.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "probe/fisheye.h"
+
+namespace lp {
+
+namespace {
+
+// Pass 1: the frames and their raw geometry.
+std::vector<RgbImage> read_frames(const std::vector<std::string>& files, const UnwrapSequenceOptions& o,
+                                  CircleTrack& raw, const std::function<void()>& step) {
+  std::vector<RgbImage> frames;
+  for (const std::string& f : files) {
+    RgbImage img = read_rgb_image(f);
+    if (!frames.empty() && (img.width != frames[0].width || img.height != frames[0].height))
+      throw InputError(fmt::format("{}: {}x{} differs from the sequence's {}x{}", f, img.width, img.height,
+                                   frames[0].width, frames[0].height));
+    if (o.type == ProbeType::MirrorBall) {
+      BallInImage ball;
+      if (o.ball) {
+        ball = *o.ball;
+      } else {
+        try {
+          ball = find_ball(img);
+        } catch (const InputError& e) {
+          throw InputError(fmt::format("{}: {}", f, e.what()));
+        }
+      }
+      raw.cx.push_back(ball.cx), raw.cy.push_back(ball.cy), raw.r.push_back(ball.radius_px);
+    } else if (files.size() > 1 && !o.fixed_geometry) {
+      const ImageCircle c = find_image_circle(img);
+      raw.cx.push_back(c.cx), raw.cy.push_back(c.cy), raw.r.push_back(c.r);
+    }
+    frames.push_back(std::move(img));
+    if (step) step();
+  }
+  return frames;
+}
+
+CircleTrack track_to_use(const CircleTrack& raw, const UnwrapSequenceOptions& o) {
+  CircleTrack track = raw;
+  if (o.fixed_geometry && !raw.cx.empty())
+    for (size_t i = 0; i < raw.cx.size(); ++i) track.cx[i] = raw.cx[0], track.cy[i] = raw.cy[0], track.r[i] = raw.r[0];
+  if (o.smooth_track && raw.cx.size() > 1) {
+    SmoothOptions so;
+    so.static_probe = o.static_probe;
+    track = smooth_track(raw, so);
+  }
+  return track;
+}
+
+// Power-weighted mean direction of the valid map (nullopt for a black map).
+std::optional<Vec3> centroid(const EnvMap& map) {
+  Vec3 c{0, 0, 0};
+  for (size_t p = 0; p < map.pixel_count(); ++p)
+    if (map.is_valid(p)) {
+      const float* q = map.pixel(p);
+      c = c + (luminance(q[0], q[1], q[2]) * pixel_solid_angle(map, p)) * pixel_direction(map, p);
+    }
+  if (!(length(c) > 0)) return std::nullopt;
+  return normalize(c);
+}
+
+}  // namespace
+
+UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files, const UnwrapSequenceOptions& o,
+                                           const std::function<void(size_t frame, EnvMap& map)>& emit,
+                                           const std::function<void()>& step) {
+  UnwrapSequenceReport report;
+  const std::vector<RgbImage> frames = read_frames(files, o, report.detected, step);
+  report.used = track_to_use(report.detected, o);
+  const CircleTrack& track = report.used;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::optional<CameraModel> base_model;
+  std::vector<Vec3> centroids;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    EnvMap map;
+    UnwrapSequenceReport::Frame fr;
+    fr.file = files[i];
+    if (o.type == ProbeType::MirrorBall) {
+      const BallInImage ball{track.cx[i], track.cy[i], track.r[i]};
+      UnwrapOptions uo;
+      uo.blind_spot_deg = o.blind_spot_deg;
+      uo.fill = o.fill;
+      UnwrapReport ur;
+      MirrorBallCamera cam = o.ball_camera;
+      cam.world_from_probe = o.world_from_probe;
+      map = unwrap_mirror_ball(frames[i], ball, cam, o.layout, o.width, o.height, uo, &ur);
+      report.fill_power_share = ur.fill_power_share;
+      fr.ball = ball;
+      fr.ball_detected = BallInImage{report.detected.cx[i], report.detected.cy[i], report.detected.r[i]};
+      fr.valid_fraction = ur.valid_solid_angle_fraction;
+    } else {
+      if (!base_model)
+        base_model = o.camera ? *o.camera
+                              : camera_model_from_fisheye(equidistant_fisheye(
+                                    frames[0].width, frames[0].height, o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg : 180));
+      CameraModel m = *base_model;
+      if (!track.cx.empty()) {
+        // Move the optical centre with the image circle, relative to the track's first frame.
+        m.intrinsics[2] += track.cx[i] - track.cx[0];
+        m.intrinsics[3] += track.cy[i] - track.cy[0];
+        fr.circle = ImageCircle{track.cx[i], track.cy[i], track.r[i]};
+      }
+      CameraUnwrapOptions co;
+      co.max_field_deg = o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg / 2 : (o.camera ? 0 : 90);
+      if (o.fill) co.fill.method = FillMethod::PushPull;
+      FillReport fill;
+      map = unwrap_with_camera(frames[i], m, o.world_from_probe * upward_camera_world_from_camera(), o.layout, o.width,
+                               o.height, co, &fill);
+      report.fill_power_share = fill.filled_power_share;
+    }
+    map.units = frames[i].units;
+    if (o.colour) apply_colour_match(map, *o.colour);
+    if (auto c = centroid(map)) centroids.push_back(*c);
+    emit(i, map);
+    report.frames.push_back(std::move(fr));
+    if (step) step();
+  }
+  report.unwrap_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (centroids.size() > 1) {
+    double sum_deg = 0;
+    for (size_t i = 1; i < centroids.size(); ++i) sum_deg += angle_between(centroids[i - 1], centroids[i]) * 180 / M_PI;
+    report.map_jitter_deg = sum_deg / double(centroids.size() - 1);
+  }
+  return report;
+}
+
+}  // namespace lp

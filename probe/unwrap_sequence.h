@@ -1,0 +1,74 @@
+// `lightprobe probe unwrap` as one call: probe images (one, or a sequence of frames of
+// one probe) -> environment maps in the world frame.
+//   pass 1  each frame's geometry: the mirror ball (probe/mirror_ball.h find_ball, or the
+//           ball given), or a fisheye sequence's image circle (probe/stabilise.h); the
+//           track is smoothed when asked (a fixed probe whose detection is noisy), or
+//           frame 0's geometry used for all (no stabilisation, for comparison)
+//   pass 2  each frame unwrapped with its own geometry, so that the map stays put when
+//           the camera shakes; the optional colour match to a backplate camera applied.
+// Reports the map's stability: the power-weighted mean direction of each map, which a
+// static world must keep still, and the detected and used tracks' jitter.
+#pragma once
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/camera_model.h"
+#include "calib/colour_match.h"
+#include "core/envmap.h"
+#include "probe/camera_unwrap.h"
+#include "probe/mirror_ball.h"
+#include "probe/stabilise.h"
+
+namespace lp {
+
+enum class ProbeType { MirrorBall, Fisheye };
+
+struct UnwrapSequenceOptions {
+  ProbeType type = ProbeType::MirrorBall;
+  Layout layout = Layout::LatLong;
+  int width = 1024, height = 512;     // healpix: width = nside
+  bool fill = false;                  // fill what the camera cannot see (mask kept)
+  // Mirror ball.
+  MirrorBallCamera ball_camera;
+  std::optional<BallInImage> ball;    // instead of detection
+  double blind_spot_deg = 15;
+  // Fisheye: the calibrated model, or (nullopt) the equidistant model of
+  // `fisheye_fov_deg` (180 when 0); fisheye_fov_deg also limits a calibrated model's
+  // field to its image circle (0: no limit).
+  std::optional<CameraModel> camera;
+  double fisheye_fov_deg = 0;
+  Mat3 world_from_probe;              // after CONVENTIONS.md's default orientation
+  // Sequences.
+  bool smooth_track = false;          // smooth the per-frame ball / image-circle track
+  bool static_probe = false;          // with smooth_track: one median position for all
+  bool fixed_geometry = false;        // frame 0's geometry for every frame
+  std::optional<ColourMatch> colour;  // 3x3 transform to the backplate camera
+};
+
+struct UnwrapSequenceReport {
+  struct Frame {
+    std::string file;
+    std::optional<BallInImage> ball, ball_detected;  // mirror ball: used, and as found
+    std::optional<ImageCircle> circle;               // fisheye sequence
+    double valid_fraction = 0;                       // mirror ball
+  };
+  std::vector<Frame> frames;
+  CircleTrack detected, used;         // empty for a single fisheye image
+  double fill_power_share = 0;        // of the last frame
+  std::optional<double> map_jitter_deg;  // mean angle between consecutive maps' centroids
+  double unwrap_seconds = 0;          // pass 2
+};
+
+// Unwraps every file in order and hands each map to `emit` (frame index, map); `step`
+// is called after each frame of each pass (2 * files.size() calls). Throws InputError
+// naming the file that cannot be read, has another size than frame 0, or holds no ball.
+UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files, const UnwrapSequenceOptions& options,
+                                           const std::function<void(size_t frame, EnvMap& map)>& emit,
+                                           const std::function<void()>& step = {});
+
+}  // namespace lp

@@ -504,6 +504,10 @@ void HttpServer::Impl::run() {
       }
       if (accept_paused && now >= accept_resume) {
         accept_paused = false;
+        epoll_event ev{};
+        ev.events = EPOLLIN;
+        ev.data.u64 = kListenerId;
+        ::epoll_ctl(epoll_fd, EPOLL_CTL_MOD, listen_fd, &ev);
         accept_all();
       }
     } catch (const std::exception&) {
@@ -545,9 +549,12 @@ void HttpServer::Impl::accept_all() {
     if (fd < 0) {
       if (errno == EINTR || errno == ECONNABORTED) continue;
       if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
-        // Out of descriptors: stop accepting for a moment instead of spinning on it.
+        // Out of descriptors: stop watching the listener for a moment instead of spinning on it.
         accept_paused = true;
         accept_resume = Clock::now() + 100ms;
+        epoll_event ev{};
+        ev.data.u64 = kListenerId;
+        ::epoll_ctl(epoll_fd, EPOLL_CTL_MOD, listen_fd, &ev);
       }
       return;
     }

@@ -814,6 +814,11 @@ void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOpti
   write_file_atomically(path, bytes);
 }
 
+std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options) {
+  const std::string name = "EXR in memory";
+  return guarded(name, "write", [&] { return encode_exr(name, map, options); });
+}
+
 RgbImage read_rgb_image(const std::string& path) {
   const std::string ext = lower_extension(path);
   RgbImage img;

@@ -52,6 +52,9 @@ struct WriteMapOptions {
   bool record_layout = true;
 };
 void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOptions& options = {});
+// The bytes write_envmap writes to a .exr file, in memory (OpenEXR's memory stream, no
+// temporary file): for servers. InputError as write_envmap, naming "EXR in memory".
+std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options = {});
 
 // Camera images (8/16-bit PNG, JPEG, TIFF via OpenCV) as linear-in-code float RGB in
 // [0, 1] (no response curve applied), row-major, 3 floats per pixel.

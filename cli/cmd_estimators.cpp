@@ -391,9 +391,7 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
   progress.finish();
   const double total_seconds = std::chrono::duration<double>(Clock::now() - t_start).count();
 
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
 
   // Rows: per config x lobe, and over all lobes.
   struct Row {

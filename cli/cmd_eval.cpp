@@ -91,9 +91,7 @@ std::vector<ChartPanel> panels_for(const std::vector<Point>& points, const std::
 int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
   const std::vector<Method> methods = parse_method_list(args.methods);
   const std::vector<int> counts = parse_int_list(args.counts, "--n");
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
 
   AccuracyOptions ao;
   ao.shadowed = !args.no_shadowed;

@@ -331,9 +331,7 @@ int run_eval_calib(const EvalCalibArgs& args, const Output& out) {
   if (cols < 2 || rows < 2) throw InputError("--board counts inner corners and needs at least 2x2");
   if (!(args.square_mm > 0)) throw InputError("--square must be positive (mm)");
   if (args.images.empty() && !args.sweep) throw InputError("eval calib: give chessboard images, --sweep, or both");
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
   nlohmann::json report = {{"output", args.output_dir}};
   if (!args.images.empty()) {
     nlohmann::json speed;

@@ -183,9 +183,7 @@ namespace {
 }  // namespace
 
 int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
   struct Row {
     std::string map, method;
     HdrError error;

@@ -144,21 +144,30 @@ int run_merge(const MergeArgs& args, const Output& out) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     stop = true;
   });
-  MergeState last;
-  run_merge_client(args.urls, mo,
-                   [&](const LightList& l, const MergeState& st) {
-                     server.publish(l, nullptr);
-                     server.publish_metrics(fmt::format("# TYPE lightprobe_merge_inputs_used gauge\nlightprobe_merge_inputs_used {}\n"
-                                                        "# TYPE lightprobe_merge_stale gauge\nlightprobe_merge_stale {}\n",
-                                                        st.used.size(), st.stale ? 1 : 0));
-                     ++published;
-                     last = st;
-                   },
-                   stop);
+  MergeClientStatus last;
+  try {
+    run_merge_client(args.urls, mo,
+                     [&](const LightList& l, const MergeClientStatus& st) {
+                       server.publish(l, nullptr);
+                       server.publish_metrics(merge_metrics_text(st));
+                       server.publish_status("merge", merge_status_json(st));
+                       ++published;
+                       last = st;
+                     },
+                     stop);
+  } catch (...) {
+    g_stop = true;  // a joinable watchdog must not outlive the error (std::terminate)
+    watchdog.join();
+    throw;
+  }
   watchdog.join();
   server.stop();
-  say(out, "merge stopped: {} lists published; last used {} of {} inputs\n", published, last.used.size(), args.urls.size());
-  emit_json(out, {{"port", port}, {"published", published}, {"used", last.used}, {"dropped", last.dropped}});
+  size_t skipped = 0;
+  for (const MergeInputStatus& in : last.inputs) skipped += in.state == "skipped";
+  say(out, "merge stopped: {} lists published; last used {} of {} inputs ({} skipped){}\n", published,
+      last.state.used.size(), args.urls.size(), skipped, last.error.empty() ? "" : "; last error: " + last.error);
+  emit_json(out, {{"port", port}, {"published", published}, {"used", last.state.used}, {"dropped", last.state.dropped},
+                  {"skipped", skipped}, {"mode", last.mode}});
   return 0;
 }
 

@@ -137,7 +137,7 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   const std::vector<std::string> files = find_images(args.inputs);
   const UnwrapSequenceOptions o = unwrap_options(args);
   const bool sequence = files.size() > 1;
-  if (sequence) make_output_dir(args.output);
+  if (sequence) make_output_directory(args.output);
   Progress progress("probe unwrap", 2 * files.size(), out.progress && sequence);
   const UnwrapSequenceReport r = unwrap_probe_sequence(
       files, o,
@@ -181,9 +181,7 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
     found.push_back({{"file", f}, {"ball", {balls.back().cx, balls.back().cy, balls.back().radius_px}}});
   }
   const std::vector<RgbImage> registered = register_balls(frames, balls, args.size);
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
   for (size_t i = 0; i < registered.size(); ++i) {
     const std::string name = fs::path(args.images[i]).stem().string() + ".png";
     write_code_image((fs::path(args.output_dir) / name).string(), registered[i], 8);
@@ -204,9 +202,7 @@ int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out) {
     double centre_error_px = 0, radius_error_px = 0, ms = 0;
   };
   std::vector<Row> rows;
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
   Progress progress("eval unwrap", args.maps.size(), out.progress);
   for (const std::string& path : args.maps) {
     const EnvMap world = path == "scene" ? render_scene(describe_scene(), Layout::LatLong, 1024, 512) : read_envmap(path);

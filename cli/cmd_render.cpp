@@ -202,9 +202,7 @@ int run_eval_shading(const EvalShadingArgs& args, const Output& out) {
   if (args.points < 0) throw InputError(fmt::format("--points must be positive (or 0: automatic), got {}", args.points));
   const ShadingOptions options = shading_options(args.tables);
   const Method method = progressive_method(args.tables.method);
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
 
   // Regions and LUTs are fixed for a renderer: built once, shared by every map and count.
   auto t0 = Clock::now();

@@ -154,41 +154,11 @@ int run_synth_sequence(const SynthSequenceArgs& args, const Output& out) {
     parse_size(args.size, "--size", &w, &h);
     base = resample(base, base.layout == Layout::Healpix ? Layout::LatLong : base.layout, w, h);
   }
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
-
-  nlohmann::json truth = {{"scenario", std::string(to_string(*scenario))},
-                          {"base", args.base},
-                          {"frames", so.frames},
-                          {"frame_rate_hz", so.frame_rate_hz},
-                          {"layout", std::string(to_string(base.layout))}};
-  if (*scenario == Scenario::AbruptSwitch) truth["step_frame"] = step_frame(so);
-  if (*scenario == Scenario::Flicker) truth["alias_hz"] = flicker_alias_hz(so);
-  nlohmann::json per_frame = nlohmann::json::array();
   Progress progress("synth sequence", size_t(so.frames), out.progress);
-  for (int f = 0; f < so.frames; ++f) {
-    const EnvMap frame = render_sequence_frame(base, so, f);
-    const std::string path = (fs::path(args.output_dir) / fmt::format("frame_{:04d}.exr", f)).string();
-    write_envmap(path, frame);
-    nlohmann::json j = {{"frame", f}, {"file", fs::path(path).filename().string()},
-                        {"power_luminance", total_luminance_power(frame)}};
-    if (auto d = added_light_direction(so, f)) {
-      const auto rgb = added_light_rgb(base, so, f);
-      j["light_direction"] = {d->x, d->y, d->z};
-      j["light_rgb"] = {rgb[0], rgb[1], rgb[2]};
-    }
-    per_frame.push_back(j);
-    progress.advance();
-  }
+  const std::string truth_path =
+      write_sequence_files(args.output_dir, base, args.base, so, [&] { progress.advance(); });
   progress.finish();
-  truth["per_frame"] = per_frame;
-  std::string times;
-  for (int f = 0; f < so.frames; ++f) times += fmt::format("{:.9g}\n", f / so.frame_rate_hz);
-  write_file_atomically((fs::path(args.output_dir) / "timestamps.txt").string(), times);
-  const std::string truth_path = (fs::path(args.output_dir) / "truth.json").string();
-  write_file_atomically(truth_path, truth.dump(2) + "\n");
-  say(out, "{}: {} frames of '{}' on {} ({}), ground truth in {}\n", args.output_dir, so.frames, to_string(*scenario),
+  say(out, "{}: {} frames of '{}' on {} ({}), ground truth in {}\n", args.output_dir, so.frames, to_string(so.scenario),
       map_label(args.base), describe_size(base), truth_path);
   emit_json(out, {{"output", args.output_dir}, {"frames", so.frames}, {"truth", truth_path}});
   return 0;
@@ -204,9 +174,7 @@ int run_synth_boards(const SynthBoardsArgs& args, const Output& out) {
   if (!args.camera.empty()) o.camera = read_camera_model(args.camera);
   if (o.views < 1) throw InputError("--views must be at least 1");
   const SyntheticBoards b = synthesize_boards(o);
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
   nlohmann::json truth = {{"board", {o.board.cols, o.board.rows}}, {"square_mm", o.board.square_mm},
                           {"lensmodel", o.camera.lensmodel}, {"intrinsics", o.camera.intrinsics},
                           {"width", o.camera.width}, {"height", o.camera.height}};
@@ -243,21 +211,7 @@ int run_synth_bracket(const SynthBracketArgs& args, const Output& out) {
   o.seed = args.seed;
   if (o.bit_depth != 8 && o.bit_depth != 16) throw InputError("--bit-depth must be 8 or 16");
   const SyntheticBracket b = make_synthetic_bracket(radiance_from(args.input), o);
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
-  std::string csv = "file,seconds\n";
-  for (size_t f = 0; f < b.frames.size(); ++f) {
-    const std::string name = fmt::format("frame_{:02d}.png", f);
-    write_code_image((fs::path(args.output_dir) / name).string(), b.frames[f], o.bit_depth);
-    csv += fmt::format("{},{:.9g}\n", name, b.exposure_seconds[f]);
-  }
-  write_file_atomically((fs::path(args.output_dir) / "exposures.csv").string(), csv);
-  write_rgb_image((fs::path(args.output_dir) / "truth.exr").string(), b.true_radiance);
-  CameraResponse truth;
-  truth.levels = int(b.true_log_exposure[0].size());
-  truth.log_exposure = b.true_log_exposure;
-  save_response((fs::path(args.output_dir) / "true_response.json").string(), truth);
+  write_synthetic_bracket(args.output_dir, b, o.bit_depth);
   say(out, "{}: {} frames ({}-bit, {} response{}{}), exposures.csv, truth.exr, true_response.json\n", args.output_dir,
       b.frames.size(), o.bit_depth, args.response, o.shake_px ? fmt::format(", shake {} px", o.shake_px) : "",
       o.moving_object ? ", moving object" : "");
@@ -273,9 +227,7 @@ int run_synth_probe(const SynthProbeArgs& args, const Output& out) {
   const bool sequence = args.frames > 1;
   if (args.frames < 1) throw InputError("--frames must be at least 1");
   if (sequence) {
-    std::error_code ec;
-    fs::create_directories(args.output, ec);
-    if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output, ec.message()));
+    make_output_directory(args.output);
   }
   nlohmann::json truth = {{"type", args.type}, {"input", args.input}, {"frames", args.frames}};
   nlohmann::json per_frame = nlohmann::json::array();
@@ -324,53 +276,15 @@ int run_synth_walkthrough(const SynthWalkthroughArgs& args, const Output& out) {
   o.record_mean_code = !args.no_mean_code;
   o.record_bright_rgb = args.bright_rgb;
   const auto t0 = Clock::now();
-  const Track track = make_walkthrough_track(room, o);
-  fs::create_directories(fs::path(args.output_dir) / "probes");
-  const std::string track_path = (fs::path(args.output_dir) / "track.jsonl").string();
-  write_file_atomically(track_path, track_to_jsonl(track));
-  const auto queries = walkthrough_query_points(room, o);
-  nlohmann::json jq = nlohmann::json::array();
-  Progress progress("probes", queries.size(), out.progress);
-  for (size_t i = 0; i < queries.size(); ++i) {
-    const EnvMap probe = render_room_probe(room, queries[i], args.probe_size, args.samples);
-    const std::string rel = fmt::format("probes/q{}.exr", i);
-    write_envmap((fs::path(args.output_dir) / rel).string(), probe);
-    const std::string standing = fmt::format("probes/q{}_standing.jsonl", i);
-    write_file_atomically((fs::path(args.output_dir) / standing).string(),
-                          track_to_jsonl(make_standing_track(room, o, queries[i])));
-    jq.push_back({{"name", fmt::format("q{}", i)},
-                  {"position", {queries[i].x, queries[i].y, queries[i].z}},
-                  {"probe", rel},
-                  {"standing_track", standing},
-                  {"illuminance_up_lux", 683.0 * map_irradiance(probe, {0, 0, 1})}});
-    progress.advance();
-  }
+  Progress progress("probes", walkthrough_query_points(room, o).size(), out.progress);
+  const WalkthroughFiles files =
+      write_walkthrough(args.output_dir, room, o, args.probe_size, args.samples, [&] { progress.advance(); });
   progress.finish();
-  nlohmann::json lamps = nlohmann::json::array();
-  for (const RoomLamp& l : room.lamps)
-    lamps.push_back({{"position", {l.position.x, l.position.y, l.position.z}}, {"radius", l.radius}, {"luminance", l.luminance}, {"cct", l.cct_k}});
-  nlohmann::json jroom{{"width", room.width}, {"depth", room.depth}, {"height", room.height},
-                       {"albedo", {{"floor", room.floor_albedo}, {"walls", room.wall_albedo}, {"ceiling", room.ceiling_albedo}}},
-                       {"lamps", lamps}};
-  if (room.window)
-    jroom["window"] = {{"wall", "x=0"}, {"y", {room.window->y0, room.window->y1}}, {"z", {room.window->z0, room.window->z1}},
-                       {"luminance", room.window->luminance}, {"cct", room.window->cct_k}};
-  const nlohmann::json truth{{"format", "lightprobe.walkthrough/1"},
-                             {"units", "radiance"},
-                             {"room", jroom},
-                             {"frames", track.frames.size()},
-                             {"fps", o.fps},
-                             {"fov_deg", o.fov_deg},
-                             {"eye_height", o.eye_height},
-                             {"camera", metering_json(o.camera)},
-                             {"queries", jq}};
-  const std::string truth_path = (fs::path(args.output_dir) / "truth.json").string();
-  write_file_atomically(truth_path, truth.dump(2) + "\n");
   say(out, "{}: {} frames along a {:.0f} s walk through an {}x{} m room, {} query probes ({}x{}), truth in {} ({:.1f} s)\n",
-      args.output_dir, track.frames.size(), track.frames.back().timestamp, room.width, room.depth, queries.size(),
-      args.probe_size, args.probe_size / 2, truth_path, seconds_since(t0));
-  emit_json(out, {{"output", args.output_dir}, {"track", track_path}, {"truth", truth_path}, {"frames", track.frames.size()},
-                  {"queries", queries.size()}, {"seconds", seconds_since(t0)}});
+      args.output_dir, files.frames, files.duration_s, room.width, room.depth, files.queries, args.probe_size,
+      args.probe_size / 2, files.truth_path, seconds_since(t0));
+  emit_json(out, {{"output", args.output_dir}, {"track", files.track_path}, {"truth", files.truth_path},
+                  {"frames", files.frames}, {"queries", files.queries}, {"seconds", seconds_since(t0)}});
   return 0;
 }
 

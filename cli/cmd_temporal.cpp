@@ -59,9 +59,7 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
   const std::vector<Method> methods = parse_method_list(args.methods);
   const std::vector<Scenario> scenarios = parse_scenarios(args.scenarios);
   if (args.n <= 0) throw InputError(fmt::format("--n must be positive, got {}", args.n));
-  std::error_code ec;
-  fs::create_directories(args.output_dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", args.output_dir, ec.message()));
+  make_output_directory(args.output_dir);
 
   struct Row {
     std::string map, scenario, method;

@@ -3,8 +3,6 @@
 // lp::InputError naming the option (or the file) it refuses.
 #pragma once
 
-#include <nlohmann/json_fwd.hpp>
-
 #include <optional>
 #include <string>
 #include <vector>
@@ -16,7 +14,6 @@
 
 namespace lp {
 struct BoardSpec;
-struct MeteringOptions;
 struct RgbImage;
 enum class ResponseCurve;
 }  // namespace lp
@@ -46,10 +43,6 @@ EnvMap map_or_scene(const std::string& name, int scene_width);
 std::string map_label(const std::string& name);
 // A radiance image file as stored, or "scene" (latlong 512x256).
 RgbImage radiance_from(const std::string& path);
-// Creates `dir` (and its parents) or refuses naming it.
-void make_output_dir(const std::string& dir);
-// The camera of a metadata track, as the reports write it.
-nlohmann::json metering_json(const MeteringOptions& m);
 
 // The table options shared by `tables` and `eval shading` (Havran 2005 section 4).
 struct ShadingTableArgs {

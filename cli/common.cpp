@@ -12,7 +12,6 @@
 #include "calib/board_detect.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "estimate/exposure_metering.h"
 #include "eval/synthetic_scene.h"
 #include "hdr/synthetic_bracket.h"
 
@@ -182,23 +181,6 @@ EnvMap map_or_scene(const std::string& name, int scene_width) {
 
 std::string map_label(const std::string& name) {
   return name == "scene" ? "scene" : std::filesystem::path(name).stem().string();
-}
-
-void make_output_dir(const std::string& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", dir, ec.message()));
-}
-
-nlohmann::json metering_json(const MeteringOptions& m) {
-  nlohmann::json j{{"route", m.photometric_scale ? "calibration" : "meter"},
-                   {"f_number", m.f_number},
-                   {"calibration_f_number", m.calibration_f_number},
-                   {"ae_target", m.ae_target},
-                   {"iso_base", m.iso_base},
-                   {"meter_constant", m.meter_constant}};
-  if (m.photometric_scale) j["photometric_scale"] = *m.photometric_scale;
-  return j;
 }
 
 void declare_table_options(Flags& f, ShadingTableArgs& t) {

@@ -20,6 +20,7 @@
 #include <Iex.h>
 #include <algorithm>
 #include <bit>
+#include <filesystem>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -813,6 +814,11 @@ void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOpti
   write_file_atomically(path, bytes);
 }
 
+std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options) {
+  const std::string name = "EXR in memory";
+  return guarded(name, "write", [&] { return encode_exr(name, map, options); });
+}
+
 RgbImage read_rgb_image(const std::string& path) {
   const std::string ext = lower_extension(path);
   RgbImage img;
@@ -915,6 +921,12 @@ void write_display_image(const std::string& path, int width, int height, const s
     return std::string(buf.begin(), buf.end());
   });
   write_file_atomically(path, bytes);
+}
+
+void make_output_directory(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create the output directory: {}", dir, ec.message()));
 }
 
 void write_file_atomically(const std::string& path, const std::string& bytes) {

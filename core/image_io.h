@@ -52,6 +52,9 @@ struct WriteMapOptions {
   bool record_layout = true;
 };
 void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOptions& options = {});
+// The bytes write_envmap writes to a .exr file, in memory (OpenEXR's memory stream, no
+// temporary file): for servers. InputError as write_envmap, naming "EXR in memory".
+std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options = {});
 
 // Camera images (8/16-bit PNG, JPEG, TIFF via OpenCV) as linear-in-code float RGB in
 // [0, 1] (no response curve applied), row-major, 3 floats per pixel.
@@ -80,6 +83,8 @@ void write_display_image(const std::string& path, int width, int height, const s
 
 // Write `bytes` to `path` through a temporary file and rename (text outputs: JSON, CSV, SVG).
 void write_file_atomically(const std::string& path, const std::string& bytes);
+// Creates `dir` and its parents (an output directory); InputError naming it on failure.
+void make_output_directory(const std::string& dir);
 
 // Healpix NESTED index <-> (face, ix, iy) within the face, used by the file layout above.
 size_t healpix_nested_index(int nside, int face, int ix, int iy);

@@ -1,5 +1,7 @@
 #include "estimate/exposure_metering.h"
 
+#include <nlohmann/json.hpp>
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -119,6 +121,17 @@ LightReading meter_frame(const FrameMetadata& f, const MeteringOptions& o, const
     r.duv = c.duv;
   }
   return r;
+}
+
+nlohmann::json metering_json(const MeteringOptions& m) {
+  nlohmann::json j{{"route", m.photometric_scale ? "calibration" : "meter"},
+                   {"f_number", m.f_number},
+                   {"calibration_f_number", m.calibration_f_number},
+                   {"ae_target", m.ae_target},
+                   {"iso_base", m.iso_base},
+                   {"meter_constant", m.meter_constant}};
+  if (m.photometric_scale) j["photometric_scale"] = *m.photometric_scale;
+  return j;
 }
 
 }  // namespace lp

@@ -32,6 +32,8 @@
 // white-balance gains, else the black body of a reported CCT, else neutral (flagged).
 #pragma once
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <array>
 #include <optional>
 #include <string>
@@ -86,5 +88,9 @@ LightReading meter_frame(const FrameMetadata& frame, const MeteringOptions& opti
 
 // Checks the camera options themselves (InputError naming the option).
 void validate_metering(const MeteringOptions& options);
+
+// The camera as reports and truth files record it: the metering route, f-number, AE
+// target, ISO base, meter constant and the photometric scale when known.
+nlohmann::json metering_json(const MeteringOptions& m);
 
 }  // namespace lp

@@ -1,11 +1,16 @@
 #include "estimate/walkthrough.h"
 
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
+#include "core/accuracy.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "estimate/light_quadtree.h"
 #include "estimate/white_balance_cct.h"
 
@@ -294,6 +299,63 @@ std::vector<Light> bipyramid_lights_of_map(const EnvMap& map) {
     lights.push_back(l);
   }
   return lights;
+}
+
+namespace {
+
+nlohmann::json room_json(const Room& room) {
+  nlohmann::json lamps = nlohmann::json::array();
+  for (const RoomLamp& l : room.lamps)
+    lamps.push_back({{"position", {l.position.x, l.position.y, l.position.z}}, {"radius", l.radius}, {"luminance", l.luminance}, {"cct", l.cct_k}});
+  nlohmann::json j{{"width", room.width}, {"depth", room.depth}, {"height", room.height},
+                   {"albedo", {{"floor", room.floor_albedo}, {"walls", room.wall_albedo}, {"ceiling", room.ceiling_albedo}}},
+                   {"lamps", lamps}};
+  if (room.window)
+    j["window"] = {{"wall", "x=0"}, {"y", {room.window->y0, room.window->y1}}, {"z", {room.window->z0, room.window->z1}},
+                   {"luminance", room.window->luminance}, {"cct", room.window->cct_k}};
+  return j;
+}
+
+}  // namespace
+
+WalkthroughFiles write_walkthrough(const std::string& dir, const Room& room, const WalkthroughOptions& o,
+                                   int probe_size, int samples, const std::function<void()>& probe_done) {
+  namespace fs = std::filesystem;
+  const Track track = make_walkthrough_track(room, o);
+  make_output_directory((fs::path(dir) / "probes").string());
+  WalkthroughFiles files;
+  files.track_path = (fs::path(dir) / "track.jsonl").string();
+  write_file_atomically(files.track_path, track_to_jsonl(track));
+  const auto queries = walkthrough_query_points(room, o);
+  nlohmann::json jq = nlohmann::json::array();
+  for (size_t i = 0; i < queries.size(); ++i) {
+    const EnvMap probe = render_room_probe(room, queries[i], probe_size, samples);
+    const std::string rel = fmt::format("probes/q{}.exr", i);
+    write_envmap((fs::path(dir) / rel).string(), probe);
+    const std::string standing = fmt::format("probes/q{}_standing.jsonl", i);
+    write_file_atomically((fs::path(dir) / standing).string(), track_to_jsonl(make_standing_track(room, o, queries[i])));
+    jq.push_back({{"name", fmt::format("q{}", i)},
+                  {"position", {queries[i].x, queries[i].y, queries[i].z}},
+                  {"probe", rel},
+                  {"standing_track", standing},
+                  {"illuminance_up_lux", 683.0 * map_irradiance(probe, {0, 0, 1})}});
+    if (probe_done) probe_done();
+  }
+  const nlohmann::json truth{{"format", "lightprobe.walkthrough/1"},
+                             {"units", "radiance"},
+                             {"room", room_json(room)},
+                             {"frames", track.frames.size()},
+                             {"fps", o.fps},
+                             {"fov_deg", o.fov_deg},
+                             {"eye_height", o.eye_height},
+                             {"camera", metering_json(o.camera)},
+                             {"queries", jq}};
+  files.truth_path = (fs::path(dir) / "truth.json").string();
+  write_file_atomically(files.truth_path, truth.dump(2) + "\n");
+  files.frames = track.frames.size();
+  files.queries = queries.size();
+  files.duration_s = track.frames.back().timestamp;
+  return files;
 }
 
 }  // namespace lp

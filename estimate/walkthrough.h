@@ -22,7 +22,9 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/envmap.h"
@@ -105,5 +107,17 @@ std::vector<Vec3> walkthrough_query_points(const Room& room, const WalkthroughOp
 // over each sector (sector of each pixel's direction), at the sector directions. Separates
 // the error of the six-direction representation from the error of metering and space.
 std::vector<Light> bipyramid_lights_of_map(const EnvMap& map);
+
+// A walk written for `eval metadata` into `dir` (created): track.jsonl, the true probes
+// at the query points (probes/qN.exr, probe_size wide, `samples` rays per pixel edge)
+// with a standing track each (probes/qN_standing.jsonl), and truth.json (room, camera,
+// query points with their true illuminance). `probe_done` is called after each probe.
+struct WalkthroughFiles {
+  std::string track_path, truth_path;
+  size_t frames = 0, queries = 0;
+  double duration_s = 0;  // of the walk
+};
+WalkthroughFiles write_walkthrough(const std::string& dir, const Room& room, const WalkthroughOptions& options,
+                                   int probe_size, int samples, const std::function<void()>& probe_done = {});
 
 }  // namespace lp

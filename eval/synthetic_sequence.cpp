@@ -1,13 +1,18 @@
 #include "eval/synthetic_sequence.h"
 
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 
+#include "core/accuracy.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/resample.h"
 
 namespace lp {
@@ -224,6 +229,40 @@ EnvMap render_sequence_frame(const EnvMap& base, const SequenceOptions& o, int f
   const double sigma = effective_noise_sigma(o);
   if (sigma > 0) add_noise(map, sigma, o.seed, frame);
   return map;
+}
+
+std::string write_sequence_files(const std::string& dir, const EnvMap& base, const std::string& base_label,
+                                 const SequenceOptions& so, const std::function<void()>& frame_done) {
+  namespace fs = std::filesystem;
+  make_output_directory(dir);
+  nlohmann::json truth = {{"scenario", std::string(to_string(so.scenario))},
+                          {"base", base_label},
+                          {"frames", so.frames},
+                          {"frame_rate_hz", so.frame_rate_hz},
+                          {"layout", std::string(to_string(base.layout))}};
+  if (so.scenario == Scenario::AbruptSwitch) truth["step_frame"] = step_frame(so);
+  if (so.scenario == Scenario::Flicker) truth["alias_hz"] = flicker_alias_hz(so);
+  nlohmann::json per_frame = nlohmann::json::array();
+  std::string times;
+  for (int f = 0; f < so.frames; ++f) {
+    const EnvMap frame = render_sequence_frame(base, so, f);
+    const std::string name = fmt::format("frame_{:04d}.exr", f);
+    write_envmap((fs::path(dir) / name).string(), frame);
+    nlohmann::json j = {{"frame", f}, {"file", name}, {"power_luminance", total_luminance_power(frame)}};
+    if (auto d = added_light_direction(so, f)) {
+      const auto rgb = added_light_rgb(base, so, f);
+      j["light_direction"] = {d->x, d->y, d->z};
+      j["light_rgb"] = {rgb[0], rgb[1], rgb[2]};
+    }
+    per_frame.push_back(j);
+    times += fmt::format("{:.9g}\n", f / so.frame_rate_hz);
+    if (frame_done) frame_done();
+  }
+  truth["per_frame"] = per_frame;
+  write_file_atomically((fs::path(dir) / "timestamps.txt").string(), times);
+  const std::string truth_path = (fs::path(dir) / "truth.json").string();
+  write_file_atomically(truth_path, truth.dump(2) + "\n");
+  return truth_path;
 }
 
 }  // namespace lp

@@ -40,7 +40,9 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -105,5 +107,12 @@ Mat3 camera_rotation(const SequenceOptions& options, int frame);
 // Frame `frame` (0 <= frame < frames, else InputError) of the sequence built on `base`, in
 // the base's layout, size, mask and units.
 EnvMap render_sequence_frame(const EnvMap& base, const SequenceOptions& options, int frame);
+
+// Writes a sequence as tools and replays read it into `dir` (created): frame_NNNN.exr,
+// timestamps.txt (frame / rate, seconds) and truth.json (scenario, step frame or alias
+// frequency, per-frame power and the added light), `base_label` recorded as the base.
+// `frame_done` is called after each frame. Returns truth.json's path.
+std::string write_sequence_files(const std::string& dir, const EnvMap& base, const std::string& base_label,
+                                 const SequenceOptions& options, const std::function<void()>& frame_done = {});
 
 }  // namespace lp

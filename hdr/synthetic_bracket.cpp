@@ -1,11 +1,17 @@
 #include "hdr/synthetic_bracket.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <random>
 #include <string>
 
 #include "core/error.h"
+#include "core/image_io.h"
+#include "hdr/bracket.h"
+#include "hdr/response.h"
 
 namespace lp {
 namespace {
@@ -212,6 +218,23 @@ SyntheticBracket make_synthetic_bracket(const RgbImage& radiance, const Syntheti
     out.frames.push_back(std::move(frame));
   }
   return out;
+}
+
+void write_synthetic_bracket(const std::string& dir, const SyntheticBracket& b, int bit_depth) {
+  namespace fs = std::filesystem;
+  make_output_directory(dir);
+  std::string csv = "file,seconds\n";
+  for (size_t f = 0; f < b.frames.size(); ++f) {
+    const std::string name = fmt::format("frame_{:02d}.png", f);
+    write_code_image((fs::path(dir) / name).string(), b.frames[f], bit_depth);
+    csv += fmt::format("{},{:.9g}\n", name, b.exposure_seconds[f]);
+  }
+  write_file_atomically((fs::path(dir) / "exposures.csv").string(), csv);
+  write_rgb_image((fs::path(dir) / "truth.exr").string(), b.true_radiance);
+  CameraResponse truth;
+  truth.levels = int(b.true_log_exposure[0].size());
+  truth.log_exposure = b.true_log_exposure;
+  save_response((fs::path(dir) / "true_response.json").string(), truth);
 }
 
 }  // namespace lp

@@ -81,4 +81,9 @@ RgbImage image_from_envmap(const EnvMap& map);
 double apply_response(const SyntheticBracketOptions& options, double x);
 double invert_response(const SyntheticBracketOptions& options, double z);
 
+// A bracket written as `hdr fuse` and `eval hdr` read it into `dir` (created): the
+// frames as bit_depth PNGs (frame_NN.png), exposures.csv (file,seconds), the true
+// radiance (truth.exr) and response (true_response.json, hdr/response.h's format).
+void write_synthetic_bracket(const std::string& dir, const SyntheticBracket& bracket, int bit_depth);
+
 }  // namespace lp

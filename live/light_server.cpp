@@ -1,13 +1,12 @@
 #include "live/light_server.h"
 
-#include <httplib.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <map>
 #include <mutex>
 #include <set>
 #include <stdexcept>
@@ -16,22 +15,19 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
+
+#include <random>
 
 #include "core/error.h"
+#include "live/map_views.h"
+#include "live/metrics.h"
 #include "live/web_page.h"
-#include "sampling/overlay.h"
 
 namespace lp {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 using namespace std::chrono_literals;
-
-constexpr size_t kMaxPayload = 64 * 1024;       // we accept no bodies at all
-constexpr size_t kMaxHeaderBytes = 32 * 1024;   // all header lines together
-constexpr auto kStreamPoll = 200ms;             // how often an idle stream checks for stop
-constexpr auto kHeartbeat = 2s;                 // SSE comment so dead peers are noticed
 
 bool is_loopback(const std::string& host) {
   if (host == "localhost" || host == "::1" || host == "[::1]") return true;
@@ -45,101 +41,60 @@ bool is_loopback(const std::string& host) {
   return dots == 3;
 }
 
-bool constant_time_equal(const std::string& a, const std::string& b) {
-  unsigned char diff = a.size() == b.size() ? 0 : 1;
-  const size_t n = std::max(a.size(), b.size());
-  for (size_t i = 0; i < n; ++i) {
-    const unsigned char x = i < a.size() ? static_cast<unsigned char>(a[i]) : 0;
-    const unsigned char y = i < b.size() ? static_cast<unsigned char>(b[i]) : 0;
-    diff |= static_cast<unsigned char>(x ^ y);
+// Time depends on the token's length only, never on where a guess first differs.
+bool constant_time_equal(std::string_view given, const std::string& token) {
+  unsigned char diff = given.size() == token.size() ? 0 : 1;
+  for (size_t i = 0; i < token.size(); ++i) {
+    const unsigned char x = i < given.size() ? static_cast<unsigned char>(given[i]) : 0;
+    diff |= static_cast<unsigned char>(x ^ static_cast<unsigned char>(token[i]));
   }
   return diff == 0;
 }
 
-std::string json_error(const std::string& message) { return nlohmann::json{{"error", message}}.dump() + "\n"; }
+std::string dump(const nlohmann::json& j) {
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
-void set_error(httplib::Response& res, int status, const std::string& message) {
-  res.status = status;
-  res.set_content(json_error(message), "application/json");
+HttpResponse json_response(int status, std::string body) {
+  HttpResponse r;
+  r.status = status;
+  r.set_body(std::move(body), "application/json");
+  return r;
+}
+
+HttpResponse error_response(int status, const std::string& message) {
+  return json_response(status, http_error_json(message));
 }
 
 // One published frame, shared read-only by every request that serves it.
 struct Snapshot {
   uint64_t generation = 0;
-  LightList list;
+  std::shared_ptr<const LightList> lists;
+  const LightList& list() const { return *lists; }
+  std::string etag;                          // of /lights
   std::shared_ptr<const EnvMap> map;
   std::shared_ptr<const std::string> json;  // one line, no trailing newline
+  std::shared_ptr<const std::string> body;  // json + "\n", as /lights and NDJSON streams send it
+  std::shared_ptr<const std::string> sse;   // "data: " json "\n\n"
   double latency = NAN;                      // publish wall time - list timestamp (s)
 };
 
-// A /lights/stream client: its own bounded queue of one-line JSON lists.
-struct StreamClient {
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::deque<std::shared_ptr<const std::string>> queue;
-  uint64_t dropped = 0;
-  bool ndjson = false;
-};
-
-// The server's task queue: a fixed pool that also counts the connections it holds
-// (each task is one connection, served or waiting for a worker).
-class CountingPool : public httplib::TaskQueue {
- public:
-  CountingPool(size_t threads, std::atomic<int64_t>& active) : pool_(threads), active_(active) {}
-  void enqueue(std::function<void()> fn) override {
-    active_.fetch_add(1);
-    pool_.enqueue([fn = std::move(fn), &active = active_] {
-      struct Done {
-        std::atomic<int64_t>& a;
-        ~Done() { a.fetch_sub(1); }
-      } done{active};
-      fn();
-    });
-  }
-  void shutdown() override { pool_.shutdown(); }
-
- private:
-  httplib::ThreadPool pool_;
-  std::atomic<int64_t>& active_;
-};
-
-std::string encode_png(const std::vector<float>& rgb, int width, int height) {
-  cv::Mat img(height, width, CV_8UC3);
-  auto encode = [](float v) {
-    if (!(v > 0.0f)) return uint8_t(0);  // also NaN
-    if (v >= 1.0f) return uint8_t(255);
-    const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(double(v), 1.0 / 2.4) - 0.055;
-    return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
-  };
-  for (int y = 0; y < height; ++y) {
-    uint8_t* row = img.ptr<uint8_t>(y);
-    for (int x = 0; x < width; ++x) {
-      const float* p = &rgb[3 * (size_t(y) * size_t(width) + size_t(x))];
-      row[3 * x] = encode(p[2]);  // OpenCV is BGR
-      row[3 * x + 1] = encode(p[1]);
-      row[3 * x + 2] = encode(p[0]);
-    }
-  }
-  std::vector<uint8_t> buf;
-  if (!cv::imencode(".png", img, buf)) throw std::runtime_error("light server: PNG encoder failed");
-  return std::string(buf.begin(), buf.end());
+// FNV-1a, for the ETag of /status (a change detector, not a secret).
+uint64_t fnv1a(std::string_view text) {
+  uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  return h;
 }
 
-void append_metric(std::string& out, const char* name, const char* type, const char* help, double value) {
-  if (!std::isfinite(value)) return;
-  out += fmt::format("# HELP {0} {1}\n# TYPE {0} {2}\n{0} {3}\n", name, help, type, value);
-}
+constexpr const char* kRevalidate = "no-cache";  // clients may keep answers but must ask (ETag) every time
 
 }  // namespace
 
 struct LightServer::Impl {
   LightServerOptions options;
-  httplib::Server server;
-  std::thread thread;
-  std::mutex lifecycle;  // start/stop
-  bool started = false;
-  bool stopped = false;  // an httplib::Server does not start twice
-  int bound_port = 0;
+  std::unique_ptr<HttpServer> http;
+  std::mutex lifecycle;
+  bool started = false, stopped = false;
   std::atomic<bool> stopping{false};
   const Clock::time_point created = Clock::now();
 
@@ -147,21 +102,20 @@ struct LightServer::Impl {
   mutable std::mutex state_mutex;
   std::shared_ptr<const Snapshot> latest;
   std::string pipeline_metrics;
+  std::map<std::string, nlohmann::json> status_sections;
   std::deque<Clock::time_point> publish_times;  // the last few, for fps
 
   // Stream clients.
   std::mutex clients_mutex;
-  std::set<std::shared_ptr<StreamClient>> clients;
+  std::map<std::shared_ptr<HttpStream>, bool> clients;  // -> NDJSON (else SSE)
 
-  // Preview cache; render_mutex serialises rendering so a burst of requests renders once.
-  std::mutex render_mutex;
-  uint64_t preview_generation = 0;
-  Clock::time_point preview_time{};
-  std::shared_ptr<const std::string> preview_png;
+  MapFrame latest_map;  // under state_mutex: the newest frame published with a map
+  std::string etag_prefix;  // random per server: tags of an earlier run never match
+  std::unique_ptr<MapViews> views;  // /probe.png, /probe.exr
 
   // Counters.
-  std::atomic<uint64_t> published{0}, requests{0}, stream_sent{0}, stream_dropped{0};
-  std::atomic<int64_t> connections{0}, stream_clients{0};
+  std::atomic<uint64_t> published{0}, stream_sent{0}, stream_dropped{0};
+  std::atomic<int64_t> stream_clients{0};
 
   explicit Impl(LightServerOptions o) : options(std::move(o)) {}
 
@@ -178,268 +132,155 @@ struct LightServer::Impl {
     return span > 0 ? double(publish_times.size() - 1) / span : 0;
   }
 
-  bool authorized(const httplib::Request& req) const {
+  // "Authorization: Bearer <token>", the scheme exactly so (issue 22: no lower-case
+  // variants, no query parameter that would end up in logs and browser history).
+  bool authorized(const HttpRequest& req) const {
     if (!options.token) return true;
-    const std::string& token = *options.token;
-    const std::string auth = req.get_header_value("Authorization");
+    const std::string* auth = req.header("authorization");
     static constexpr std::string_view kBearer = "Bearer ";
-    if (auth.size() > kBearer.size() && std::equal(kBearer.begin(), kBearer.end(), auth.begin(), [](char a, char b) {
-          return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
-        })) {
-      if (constant_time_equal(auth.substr(kBearer.size()), token)) return true;
-    }
-    if (req.has_param("access_token") && constant_time_equal(req.get_param_value("access_token"), token)) return true;
-    return false;
+    if (!auth || auth->size() <= kBearer.size() || auth->compare(0, kBearer.size(), kBearer) != 0) return false;
+    return constant_time_equal(std::string_view(*auth).substr(kBearer.size()), *options.token);
   }
 
-  void setup();
-  void handle_lights(const httplib::Request& req, httplib::Response& res);
-  void handle_stream(const httplib::Request& req, httplib::Response& res);
-  void handle_probe(const httplib::Request& req, httplib::Response& res);
-  void handle_status(const httplib::Request& req, httplib::Response& res);
-  void handle_metrics(const httplib::Request& req, httplib::Response& res);
-  std::shared_ptr<const std::string> render_preview(const Snapshot& snap);
+  void handle(const HttpRequest& req, HttpExchange& ex);
+  void handle_stream(const HttpRequest& req, HttpExchange& ex);
+  void handle_map(MapView view, const HttpRequest& req, HttpExchange& ex);
+  HttpResponse lights_response(const HttpRequest& req) const;
+  HttpResponse status_response(const HttpRequest& req) const;
+  HttpResponse metrics_response() const;
   nlohmann::json status_json() const;
 };
 
-void LightServer::Impl::setup() {
-  const size_t stream_threads = size_t(std::max(0, options.max_streams));
-  server.new_task_queue = [this, n = size_t(options.threads) + stream_threads] {
-    return new CountingPool(n, connections);
-  };
-  server.set_payload_max_length(kMaxPayload);
-  server.set_read_timeout(5, 0);
-  server.set_write_timeout(5, 0);
-  server.set_keep_alive_max_count(100);
-  server.set_keep_alive_timeout(2);
-
-  // Method filter, header limit and the token, before any route runs.
-  server.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    if (req.method != "GET" && req.method != "HEAD") {
-      const bool has_body = req.has_header("Transfer-Encoding") ||
-                            (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
-      const bool body_method = req.method == "POST" || req.method == "PUT" || req.method == "PATCH" ||
-                               req.method == "DELETE";
-      // A body is read (within the payload limit) by the 405 handlers below so that the
-      // connection stays in step; without one, answer right here.
-      if (has_body && body_method) return httplib::Server::HandlerResponse::Unhandled;
-      res.set_header("Allow", "GET, HEAD");
-      set_error(res, 405, "method " + req.method + " not allowed (GET or HEAD only)");
-      return httplib::Server::HandlerResponse::Handled;
-    }
-    size_t header_bytes = 0;
-    for (const auto& [key, value] : req.headers) header_bytes += key.size() + value.size() + 4;
-    if (header_bytes > kMaxHeaderBytes) {
-      set_error(res, 431, "request headers too large");
-      return httplib::Server::HandlerResponse::Handled;
-    }
-    if (!authorized(req)) {
-      res.set_header("WWW-Authenticate", "Bearer realm=\"lightprobe\"");
-      set_error(res, 401, "missing or wrong bearer token");
-      return httplib::Server::HandlerResponse::Handled;
-    }
-    return httplib::Server::HandlerResponse::Unhandled;
-  });
-
-  auto not_allowed = [](const httplib::Request& req, httplib::Response& res) {
-    res.set_header("Allow", "GET, HEAD");
-    set_error(res, 405, "method " + req.method + " not allowed (GET or HEAD only)");
-  };
-  server.Post(".*", not_allowed);
-  server.Put(".*", not_allowed);
-  server.Patch(".*", not_allowed);
-  server.Delete(".*", not_allowed);
-
-  server.Get("/", [](const httplib::Request&, httplib::Response& res) {
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(std::string(kWebPage), "text/html; charset=utf-8");
-  });
-  server.Get("/lights", [this](const httplib::Request& q, httplib::Response& r) { handle_lights(q, r); });
-  server.Get("/lights/stream", [this](const httplib::Request& q, httplib::Response& r) { handle_stream(q, r); });
-  server.Get("/probe.png", [this](const httplib::Request& q, httplib::Response& r) { handle_probe(q, r); });
-  server.Get("/status", [this](const httplib::Request& q, httplib::Response& r) { handle_status(q, r); });
-  server.Get("/metrics", [this](const httplib::Request& q, httplib::Response& r) { handle_metrics(q, r); });
-
-  // Every error gets a JSON body unless its handler already wrote one.
-  server.set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request& req, httplib::Response& res) {
-    if (!res.body.empty() || res.content_provider_) return httplib::Server::HandlerResponse::Unhandled;
-    std::string message;
-    switch (res.status) {
-      case 400: message = "bad request"; break;
-      case 404: message = "no such path: " + req.path.substr(0, 200); break;
-      case 413: message = "payload too large"; break;
-      case 414: message = "request URI too long"; break;
-      case 416: message = "range not satisfiable"; break;
-      default: message = fmt::format("HTTP error {}", res.status);
-    }
-    res.set_content(json_error(message), "application/json");
-    return httplib::Server::HandlerResponse::Handled;
-  }));
-  server.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr) {
-    set_error(res, 500, "internal error");
-  });
-  server.set_logger([this](const httplib::Request&, const httplib::Response&) { requests.fetch_add(1); });
+void LightServer::Impl::handle(const HttpRequest& req, HttpExchange& ex) {
+  if (req.path == "/") {  // static, public: it holds no data (the token comes from the fragment)
+    HttpResponse r;
+    r.set_body(std::string(kWebPage), "text/html; charset=utf-8");
+    r.headers.emplace_back("Cache-Control", "no-cache");
+    ex.respond(std::move(r));
+    return;
+  }
+  if (!authorized(req)) {
+    HttpResponse r = error_response(401, "missing or wrong bearer token (Authorization: Bearer <token>)");
+    r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"lightprobe\"");
+    ex.respond(std::move(r));
+    return;
+  }
+  if (req.path == "/lights") return ex.respond(lights_response(req));
+  if (req.path == "/lights/stream") return handle_stream(req, ex);
+  if (req.path == "/probe.png") return handle_map(MapView::Png, req, ex);
+  if (req.path == "/probe.exr") return handle_map(MapView::Exr, req, ex);
+  if (req.path == "/status") return ex.respond(status_response(req));
+  if (req.path == "/metrics") return ex.respond(metrics_response());
+  // GET /sh (spherical harmonics of the latest map) and SH inside the light list come
+  // with the SH task: its route goes here, answered from the Snapshot (computed once per
+  // publish, like Snapshot::body) with an ETag as /lights has.
+  ex.respond(error_response(404, "no such path: " + req.path.substr(0, 200)));
 }
 
-void LightServer::Impl::handle_lights(const httplib::Request&, httplib::Response& res) {
-  res.set_header("Cache-Control", "no-store");
+HttpResponse LightServer::Impl::lights_response(const HttpRequest& req) const {
   const auto snap = snapshot();
   if (!snap) {
-    res.set_header("Retry-After", "1");
-    set_error(res, 503, "no light list published yet");
-    return;
+    HttpResponse r = error_response(503, "no light list published yet");
+    r.headers.emplace_back("Retry-After", "1");
+    return r;
   }
-  res.set_content(*snap->json + "\n", "application/json");
+  // A poller that has this list already gets 304 and no body.
+  if (http_etag_matches(req.header("if-none-match"), snap->etag)) return http_not_modified(snap->etag, kRevalidate);
+  HttpResponse r;
+  r.body = snap->body;
+  r.content_type = "application/json";
+  r.headers = {{"ETag", snap->etag}, {"Cache-Control", kRevalidate}};
+  return r;
 }
 
-void LightServer::Impl::handle_stream(const httplib::Request& req, httplib::Response& res) {
-  const std::string format = req.has_param("format") ? req.get_param_value("format") : "sse";
-  if (format != "sse" && format != "ndjson") {
-    set_error(res, 400, "format must be sse or ndjson");
-    return;
-  }
+void LightServer::Impl::handle_stream(const HttpRequest& req, HttpExchange& ex) {
+  const std::string format = req.query_param("format").value_or("sse");
+  if (format != "sse" && format != "ndjson") return ex.respond(error_response(400, "format must be sse or ndjson"));
   const bool ndjson = format == "ndjson";
-  const char* content_type = ndjson ? "application/x-ndjson" : "text/event-stream";
-  res.set_header("Cache-Control", "no-cache");
-  res.set_header("X-Accel-Buffering", "no");
-  if (req.method == "HEAD") {
-    res.set_header("Content-Type", content_type);
-    return;
-  }
-  if (stopping) {
-    set_error(res, 503, "server is stopping");
-    return;
-  }
+  HttpResponse head;
+  head.content_type = ndjson ? "application/x-ndjson" : "text/event-stream";
+  head.headers = {{"Cache-Control", "no-cache"}, {"X-Accel-Buffering", "no"}};
+  if (req.is_head()) return ex.respond(std::move(head));
+  if (stopping) return ex.respond(error_response(503, "server is stopping"));
   if (stream_clients.fetch_add(1) >= options.max_streams) {
     stream_clients.fetch_sub(1);
-    res.set_header("Retry-After", "5");
-    set_error(res, 503, fmt::format("too many stream clients (at most {})", options.max_streams));
-    return;
+    HttpResponse r = error_response(503, fmt::format("too many stream clients (at most {})", options.max_streams));
+    r.headers.emplace_back("Retry-After", "5");
+    return ex.respond(std::move(r));
   }
-  auto client = std::make_shared<StreamClient>();
-  client->ndjson = ndjson;
-  {
+  auto holder = std::make_shared<std::weak_ptr<HttpStream>>();
+  HttpStreamOptions so;
+  so.queue_pieces = options.stream_queue;
+  if (!ndjson) so.heartbeat = ": lightprobe\n\n";
+  so.on_close = [this, holder] {  // on the server's loop thread
     std::lock_guard lock(clients_mutex);
-    clients.insert(client);
+    if (auto s = holder->lock(); s && clients.erase(s)) stream_clients.fetch_sub(1);
+  };
+  auto stream = ex.stream(std::move(head), std::move(so));
+  std::lock_guard lock(clients_mutex);
+  if (stream->closed()) {  // gone already (on_close ran before it was registered)
+    stream_clients.fetch_sub(1);
+    return;
   }
+  *holder = stream;
+  clients.emplace(stream, ndjson);
   // The current list first, so that a new client has something to show at once.
-  if (auto snap = snapshot()) {
-    std::lock_guard lock(client->mutex);
-    client->queue.push_back(snap->json);
-  }
-
-  auto last_write = std::make_shared<Clock::time_point>(Clock::time_point{});  // first call writes a hello
-  res.set_chunked_content_provider(
-      content_type,
-      [this, client, last_write](size_t, httplib::DataSink& sink) -> bool {
-        std::vector<std::shared_ptr<const std::string>> batch;
-        {
-          std::unique_lock lock(client->mutex);
-          client->cv.wait_for(lock, kStreamPoll, [&] { return !client->queue.empty() || stopping.load(); });
-          if (stopping) {
-            lock.unlock();
-            sink.done();
-            return true;
-          }
-          batch.assign(client->queue.begin(), client->queue.end());
-          client->queue.clear();
-        }
-        std::string out;
-        for (const auto& json : batch) {
-          if (client->ndjson) {
-            out += *json;
-            out += '\n';
-          } else {
-            out += "data: ";
-            out += *json;
-            out += "\n\n";
-          }
-        }
-        const auto now = Clock::now();
-        if (out.empty()) {
-          // SSE comments keep proxies from timing out and let a dead peer be noticed.
-          if (client->ndjson || now - *last_write < kHeartbeat) return true;
-          out = ": lightprobe\n\n";
-        }
-        if (!sink.write(out.data(), out.size())) return false;
-        *last_write = now;
-        stream_sent.fetch_add(batch.size());
-        return true;
-      },
-      [this, client](bool) {
-        std::lock_guard lock(clients_mutex);
-        if (clients.erase(client)) stream_clients.fetch_sub(1);
-      });
+  if (auto snap = snapshot()) stream->push(ndjson ? snap->body : snap->sse);
 }
 
-std::shared_ptr<const std::string> LightServer::Impl::render_preview(const Snapshot& snap) {
-  const EnvMap& map = *snap.map;
-  int width = options.preview_width;
-  if (width <= 0) width = map.layout == Layout::LatLong ? std::min(map.width, 1024) : 1024;
-  width = std::max(2, width - width % 2);
-  const std::vector<float> rgb = render_overlay(map, snap.list.lights, width);
-  return std::make_shared<const std::string>(encode_png(rgb, width, width / 2));
-}
-
-void LightServer::Impl::handle_probe(const httplib::Request&, httplib::Response& res) {
-  res.set_header("Cache-Control", "no-store");
-  const auto snap = snapshot();
-  if (!snap) {
-    res.set_header("Retry-After", "1");
-    set_error(res, 503, "no frame published yet");
-    return;
+void LightServer::Impl::handle_map(MapView view, const HttpRequest& req, HttpExchange& ex) {
+  if (!snapshot()) {
+    HttpResponse r = error_response(503, "no frame published yet");
+    r.headers.emplace_back("Retry-After", "1");
+    return ex.respond(std::move(r));
   }
-  std::shared_ptr<const std::string> png;
+  MapFrame frame;
   {
-    std::lock_guard lock(render_mutex);
-    const auto now = Clock::now();
-    const double rate = options.preview_max_rate > 0 ? options.preview_max_rate : 4;
-    const auto min_interval = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
-    const bool fresh = preview_png && (preview_generation == snap->generation || now - preview_time < min_interval);
-    if (fresh) {
-      png = preview_png;
-    } else {
-      // The newest frame with a map; a frame published without one keeps the last preview.
-      std::shared_ptr<const Snapshot> source = snap->map ? snap : nullptr;
-      if (source) {
-        preview_png = render_preview(*source);
-        preview_generation = source->generation;
-        preview_time = now;
-      }
-      png = preview_png;
-    }
+    std::lock_guard lock(state_mutex);
+    frame = latest_map;
   }
-  if (!png) {
-    set_error(res, 503, "no map published for the preview");
-    return;
-  }
-  res.set_content(*png, "image/png");
+  views->answer(view, frame, req, ex);
 }
 
 nlohmann::json LightServer::Impl::status_json() const {
   const auto snap = snapshot();
+  const HttpServerStats h = http ? http->stats() : HttpServerStats{};
   nlohmann::json j;
-  j["frame"] = snap ? nlohmann::json(snap->list.frame) : nlohmann::json(nullptr);
-  j["timestamp"] = snap ? nlohmann::json(snap->list.timestamp) : nlohmann::json(nullptr);
-  j["method"] = snap ? nlohmann::json(snap->list.method) : nlohmann::json(nullptr);
-  j["lights"] = snap ? snap->list.lights.size() : 0;
+  j["frame"] = snap ? nlohmann::json(snap->list().frame) : nlohmann::json(nullptr);
+  j["timestamp"] = snap ? nlohmann::json(snap->list().timestamp) : nlohmann::json(nullptr);
+  j["method"] = snap ? nlohmann::json(snap->list().method) : nlohmann::json(nullptr);
+  j["lights"] = snap ? snap->list().lights.size() : 0;
   j["fps"] = fps();
   j["latency_seconds"] = snap && std::isfinite(snap->latency) ? nlohmann::json(snap->latency) : nlohmann::json(nullptr);
   j["lists_published"] = published.load();
-  j["clients_connected"] = connections.load();
+  j["clients_connected"] = h.connections_open;
   j["stream_clients"] = stream_clients.load();
-  j["requests_served"] = requests.load();
+  j["requests_served"] = h.requests;
   j["stream_lists_dropped"] = stream_dropped.load();
+  j["connections_rejected"] = h.rejected_per_address + h.rejected_global;
+  j["request_timeouts"] = h.head_timeouts;
   j["uptime_seconds"] = std::chrono::duration<double>(Clock::now() - created).count();
+  std::lock_guard lock(state_mutex);
+  for (const auto& [section, value] : status_sections) j[section] = value;
   return j;
 }
 
-void LightServer::Impl::handle_status(const httplib::Request&, httplib::Response& res) {
-  res.set_header("Cache-Control", "no-store");
-  res.set_content(status_json().dump() + "\n", "application/json");
+// The ETag of /status is weak: it covers every field but the three that move with every
+// request (uptime, requests served, connections open), so a poller of an idle server
+// gets 304 while the body it keeps differs from a fresh one only in those.
+HttpResponse LightServer::Impl::status_response(const HttpRequest& req) const {
+  nlohmann::json j = status_json();
+  nlohmann::json stable = j;
+  for (const char* volatile_field : {"uptime_seconds", "requests_served", "clients_connected"})
+    stable.erase(volatile_field);
+  const std::string etag = fmt::format("W/\"{}-s{:016x}\"", etag_prefix, fnv1a(dump(stable)));
+  if (http_etag_matches(req.header("if-none-match"), etag)) return http_not_modified(etag, kRevalidate);
+  HttpResponse r = json_response(200, dump(j) + "\n");
+  r.headers = {{"ETag", etag}, {"Cache-Control", kRevalidate}};
+  return r;
 }
 
-void LightServer::Impl::handle_metrics(const httplib::Request&, httplib::Response& res) {
+HttpResponse LightServer::Impl::metrics_response() const {
   std::string out;
   {
     std::lock_guard lock(state_mutex);
@@ -447,38 +288,44 @@ void LightServer::Impl::handle_metrics(const httplib::Request&, httplib::Respons
   }
   if (!out.empty() && out.back() != '\n') out += '\n';
   const auto snap = snapshot();
-  append_metric(out, "lightprobe_server_clients_connected", "gauge",
-                "HTTP connections being served or waiting for a worker.", double(connections.load()));
-  append_metric(out, "lightprobe_server_stream_clients", "gauge", "Clients connected to /lights/stream.",
-                double(stream_clients.load()));
-  // This request is counted when its response is written; report it as served already.
-  append_metric(out, "lightprobe_server_requests_total", "counter", "HTTP requests served.",
-                double(requests.load() + 1));
-  append_metric(out, "lightprobe_server_stream_lists_sent_total", "counter",
-                "Light lists written to stream clients.", double(stream_sent.load()));
-  append_metric(out, "lightprobe_server_stream_lists_dropped_total", "counter",
-                "Light lists dropped because a stream client's queue was full.", double(stream_dropped.load()));
-  append_metric(out, "lightprobe_server_lists_published_total", "counter", "Light lists published by the pipeline.",
-                double(published.load()));
-  append_metric(out, "lightprobe_server_publish_fps", "gauge", "Lists published per second, recently.", fps());
+  const HttpServerStats h = http ? http->stats() : HttpServerStats{};
+  MetricsText m;
+  m.gauge("lightprobe_frame_rate_hertz", "Light lists published per second, over the last 32.", fps());
+  m.counter("lightprobe_server_lists_published_total", "Light lists published.", double(published.load()));
+  m.gauge("lightprobe_server_clients_connected", "Open HTTP connections.", double(h.connections_open));
+  m.gauge("lightprobe_server_stream_clients", "Clients connected to /lights/stream.", double(stream_clients.load()));
+  m.counter("lightprobe_server_requests_total", "HTTP requests handled.", double(h.requests));
+  m.counter("lightprobe_server_stream_lists_sent_total", "Light lists queued to stream clients and not dropped.",
+            double(stream_sent.load()));
+  m.counter("lightprobe_server_stream_lists_dropped_total",
+            "Light lists dropped because a stream client's queue was full.", double(stream_dropped.load()));
+  m.family("lightprobe_server_connections_rejected_total", "counter",
+           "Connections answered 503 by the connection caps.");
+  m.sample("lightprobe_server_connections_rejected_total", double(h.rejected_per_address), "cap=\"per_address\"");
+  m.sample("lightprobe_server_connections_rejected_total", double(h.rejected_global), "cap=\"global\"");
+  m.counter("lightprobe_server_request_timeouts_total", "Request heads too slow (a line or the whole head): 408.",
+            double(h.head_timeouts));
+  m.counter("lightprobe_server_bad_requests_total", "Requests refused by the request policy (400, 405, 413, 417, 431).",
+            double(h.bad_requests));
+  m.counter("lightprobe_server_write_timeouts_total", "Answers or streams abandoned because the client did not read.",
+            double(h.write_timeouts));
   if (snap) {
-    append_metric(out, "lightprobe_server_frame", "gauge", "Frame number of the latest list.", double(snap->list.frame));
-    append_metric(out, "lightprobe_server_lights", "gauge", "Lights in the latest list.",
-                  double(snap->list.lights.size()));
-    append_metric(out, "lightprobe_server_latency_seconds", "gauge",
-                  "Publish time minus the latest list's timestamp.", snap->latency);
+    m.gauge("lightprobe_server_frame", "Frame number of the latest list.", double(snap->list().frame));
+    m.gauge("lightprobe_server_lights", "Lights in the latest list.", double(snap->list().lights.size()));
+    if (std::isfinite(snap->latency))
+      m.gauge("lightprobe_server_list_age_seconds", "Publish time minus the latest list's timestamp.", snap->latency);
   }
-  res.set_header("Cache-Control", "no-store");
-  res.set_content(out, "text/plain; version=0.0.4; charset=utf-8");
+  HttpResponse r;
+  r.set_body(out + m.text(), "text/plain; version=0.0.4; charset=utf-8");
+  r.headers.emplace_back("Cache-Control", "no-store");
+  return r;
 }
 
 LightServer::LightServer(LightServerOptions options) {
-  if (options.threads < 1 || options.threads > 1024)
-    throw InputError(fmt::format("light server: threads is {}, expected 1..1024", options.threads));
   if (options.stream_queue < 1 || options.stream_queue > 100000)
     throw InputError(fmt::format("light server: stream queue is {}, expected 1..100000", options.stream_queue));
-  if (options.max_streams < 0 || options.max_streams > 1024)
-    throw InputError(fmt::format("light server: max streams is {}, expected 0..1024", options.max_streams));
+  if (options.max_streams < 0 || options.max_streams > 100000)
+    throw InputError(fmt::format("light server: max streams is {}, expected 0..100000", options.max_streams));
   if (options.port < 0 || options.port > 65535)
     throw InputError(fmt::format("light server: port {} is not in 0..65535", options.port));
   if (options.host.empty()) throw InputError("light server: empty host");
@@ -486,7 +333,19 @@ LightServer::LightServer(LightServerOptions options) {
   if (!options.token && !is_loopback(options.host))
     throw InputError(fmt::format("listening on {} needs --token", options.host));
   impl_ = std::make_unique<Impl>(std::move(options));
-  impl_->setup();
+  std::random_device rd;
+  impl_->etag_prefix = fmt::format("{:08x}{:08x}", rd(), rd());
+  MapViewOptions mv;
+  mv.png_width = impl_->options.preview_width;
+  mv.max_png_rate = impl_->options.preview_max_rate;
+  mv.etag_prefix = impl_->etag_prefix;
+  impl_->views = std::make_unique<MapViews>(mv);
+  HttpServerOptions ho;
+  ho.host = impl_->options.host;
+  ho.port = impl_->options.port;
+  ho.limits = impl_->options.limits;
+  Impl* s = impl_.get();
+  impl_->http = std::make_unique<HttpServer>(ho, [s](const HttpRequest& req, HttpExchange& ex) { s->handle(req, ex); });
 }
 
 LightServer::~LightServer() { stop(); }
@@ -495,20 +354,9 @@ int LightServer::start() {
   Impl& s = *impl_;
   std::lock_guard lock(s.lifecycle);
   if (s.started || s.stopped) throw std::logic_error("LightServer::start: already started");
-  const std::string host = s.options.host == "[::1]" ? "::1" : s.options.host;
-  int port = s.options.port;
-  if (port == 0) {
-    port = s.server.bind_to_any_port(host);
-    if (port <= 0) throw InputError(fmt::format("light server: cannot listen on {} (no free port)", host));
-  } else if (!s.server.bind_to_port(host, port)) {
-    throw InputError(fmt::format("light server: cannot listen on {}:{} (address in use or not available)", host, port));
-  }
-  s.bound_port = port;
+  s.views->start();
+  const int port = s.http->start();
   s.started = true;
-  s.thread = std::thread([&s] { s.server.listen_after_bind(); });
-  // stop() only works once the accept loop runs; wait for it (bounded).
-  const auto deadline = Clock::now() + 10s;
-  while (!s.server.is_running() && Clock::now() < deadline) std::this_thread::sleep_for(1ms);
   return port;
 }
 
@@ -518,28 +366,28 @@ void LightServer::stop() {
   std::lock_guard lock(s.lifecycle);
   if (!s.started) return;
   s.stopping = true;
+  s.http->stop();  // ends the streams, closes every connection
+  s.views->stop();
   {
     std::lock_guard clients_lock(s.clients_mutex);
-    for (const auto& client : s.clients) {
-      std::lock_guard client_lock(client->mutex);
-      client->cv.notify_all();
-    }
+    s.clients.clear();
+    s.stream_clients = 0;
   }
-  s.server.stop();
-  // listen_after_bind returns once the workers are done (streams end within kStreamPoll).
-  if (s.thread.joinable()) s.thread.join();
   s.started = false;
   s.stopped = true;
 }
 
-int LightServer::port() const { return impl_->bound_port; }
+int LightServer::port() const { return impl_->http->port(); }
 
 void LightServer::publish(const LightList& list, std::shared_ptr<const EnvMap> map_for_preview) {
   Impl& s = *impl_;
   auto snap = std::make_shared<Snapshot>();
-  snap->list = list;
+  snap->lists = std::make_shared<const LightList>(list);
   snap->map = std::move(map_for_preview);
-  snap->json = std::make_shared<const std::string>(to_json(list, false));
+  const std::string json = to_json(list, false);
+  snap->json = std::make_shared<const std::string>(json);
+  snap->body = std::make_shared<const std::string>(json + "\n");
+  snap->sse = std::make_shared<const std::string>("data: " + json + "\n\n");
   const double now_wall = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   if (list.timestamp > 1e9) {  // looks like Unix time: latency is meaningful
     const double latency = now_wall - list.timestamp;
@@ -548,23 +396,20 @@ void LightServer::publish(const LightList& list, std::shared_ptr<const EnvMap> m
   {
     std::lock_guard lock(s.state_mutex);
     snap->generation = s.latest ? s.latest->generation + 1 : 1;
+    snap->etag = fmt::format("\"{}-l{}\"", s.etag_prefix, snap->generation);
+    if (snap->map) s.latest_map = {snap->generation, snap->map, snap->lists};
     s.latest = snap;
     s.publish_times.push_back(Clock::now());
     while (s.publish_times.size() > 32) s.publish_times.pop_front();
   }
   s.published.fetch_add(1);
   std::lock_guard lock(s.clients_mutex);
-  for (const auto& client : s.clients) {
-    {
-      std::lock_guard client_lock(client->mutex);
-      while (client->queue.size() >= s.options.stream_queue) {
-        client->queue.pop_front();  // the oldest goes: a live view wants the newest
-        ++client->dropped;
-        s.stream_dropped.fetch_add(1);
-      }
-      client->queue.push_back(snap->json);
-    }
-    client->cv.notify_one();
+  for (const auto& [client, ndjson] : s.clients) {
+    const int dropped = client->push(ndjson ? snap->body : snap->sse);
+    if (dropped < 0) continue;  // closing: on_close removes it
+    s.stream_dropped.fetch_add(uint64_t(dropped));
+    s.stream_sent.fetch_add(1);
+    if (dropped > 0) s.stream_sent.fetch_sub(uint64_t(dropped));
   }
 }
 
@@ -573,14 +418,23 @@ void LightServer::publish_metrics(const std::string& prometheus_text) {
   impl_->pipeline_metrics = prometheus_text;
 }
 
+void LightServer::publish_status(const std::string& section, const std::string& json_object) {
+  nlohmann::json j = nlohmann::json::parse(json_object, nullptr, false);
+  if (j.is_discarded() || !j.is_object())
+    throw InputError(fmt::format("light server: status section '{}' is not a JSON object", section));
+  std::lock_guard lock(impl_->state_mutex);
+  impl_->status_sections[section] = std::move(j);
+}
+
 LightServerStats LightServer::stats() const {
   const Impl& s = *impl_;
   LightServerStats st;
+  st.http = s.http->stats();
   st.lists_published = s.published.load();
-  st.requests_served = s.requests.load();
+  st.requests_served = st.http.requests;
   st.stream_lists_sent = s.stream_sent.load();
   st.stream_lists_dropped = s.stream_dropped.load();
-  st.clients_connected = s.connections.load();
+  st.clients_connected = st.http.connections_open;
   st.stream_clients = s.stream_clients.load();
   return st;
 }

@@ -13,10 +13,12 @@
 //                   rendered lazily, at most `preview_max_rate` times a second, and cached
 //   /status         JSON numbers for the page: frame, lights, fps, latency, clients, drops
 //   /metrics        Prometheus text: the pipeline's (publish_metrics) plus the server's own
-// With a token, every route needs "Authorization: Bearer <token>" (or, for browsers whose
-// EventSource and <img> cannot send headers, the query parameter access_token=<token>);
-// without one the server only listens on the loopback interface.
-// Errors are JSON: {"error": "..."}. The library prints nothing.
+// The connection policy (caps per address and in all, answered with 503; timeouts per
+// header line and for the whole request head; no request bodies) is live/http_server.h's.
+// With a token, every route but the page needs "Authorization: Bearer <token>" exactly
+// (the page is static; it reads the token from the URL fragment, /#token=T, which no
+// browser sends, and sends the header itself); without one the server only listens on
+// the loopback interface. Errors are JSON: {"error": "..."}. The library prints nothing.
 #pragma once
 
 #include <cstddef>
@@ -27,6 +29,7 @@
 
 #include "core/envmap.h"
 #include "core/light_list.h"
+#include "live/http_server.h"
 
 namespace lp {
 
@@ -34,9 +37,9 @@ struct LightServerOptions {
   std::string host = "127.0.0.1";
   int port = 8080;  // 0 = pick a free port (start() returns it)
   std::optional<std::string> token;
-  int threads = 8;           // workers for ordinary requests
+  HttpLimits limits;         // connection caps and timeouts (live/http_server.h)
   size_t stream_queue = 8;   // lists buffered per stream client before it drops the oldest
-  int max_streams = 32;      // concurrent /lights/stream clients (each holds a worker of its own)
+  int max_streams = 32;      // concurrent /lights/stream clients; past it, 503
   int preview_width = 0;     // /probe.png width; 0: the map's width for latlong (<= 1024), else 1024
   double preview_max_rate = 4;  // /probe.png renders per second at most
 };
@@ -47,8 +50,9 @@ struct LightServerStats {
   uint64_t requests_served = 0;
   uint64_t stream_lists_sent = 0;
   uint64_t stream_lists_dropped = 0;
-  int64_t clients_connected = 0;  // connections being served or waiting for a worker
+  int64_t clients_connected = 0;  // open connections (gauge)
   int64_t stream_clients = 0;
+  HttpServerStats http;           // the connection policy's counters
 };
 
 class LightServer {
@@ -71,6 +75,9 @@ class LightServer {
   void publish(const LightList& list, std::shared_ptr<const EnvMap> map_for_preview);
   // Prometheus exposition text from the pipeline, served as the head of /metrics.
   void publish_metrics(const std::string& prometheus_text);
+  // A JSON object served inside /status under `section` (e.g. the merge's inputs);
+  // InputError when the text is not a JSON object.
+  void publish_status(const std::string& section, const std::string& json_object);
 
   LightServerStats stats() const;
 

@@ -2,9 +2,12 @@
 
 #include <fmt/format.h>
 #include <httplib.h>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "core/error.h"
@@ -35,7 +38,9 @@ Endpoint parse_url(const std::string& url) {
   e.host = rest.substr(0, colon);
   if (colon != std::string::npos) {
     try {
-      e.port = std::stoi(rest.substr(colon + 1));
+      size_t used = 0;
+      e.port = std::stoi(rest.substr(colon + 1), &used);
+      if (used != rest.size() - colon - 1 || e.port < 1 || e.port > 65535) throw std::invalid_argument("port");
     } catch (const std::exception&) {
       throw InputError(fmt::format("{}: bad port", url));
     }
@@ -48,45 +53,158 @@ double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// One upstream: its connection, its latest list and what it last sent.
+struct Upstream {
+  Endpoint endpoint;
+  std::unique_ptr<httplib::Client> client;
+  std::optional<std::string> malformed;  // why its last answer was not a light list
+};
+
+// Fetches one upstream's list into `input` (and `status`); never throws.
+void poll(Upstream& up, MergeInput& input, MergeInputStatus& status, const MergeClientOptions& options, double t) {
+  // No If-None-Match: cpp-httplib 0.11 reads a 304 (which has no body and no length) until
+  // the connection closes, so every conditional poll would time out.
+  // The whole request within request_timeout_s, however the upstream trickles its bytes.
+  const double deadline = now_s() + options.request_timeout_s;
+  auto progress = [&](uint64_t current, uint64_t) { return now_s() < deadline && current <= options.max_body_bytes; };
+  httplib::Result r = up.client->Get(up.endpoint.path, httplib::Headers{}, progress);
+  if (!r || r->status != 200) {
+    ++status.polls_failed;
+    return;
+  }
+  ++status.polls_ok;
+  try {
+    input.latest = light_list_from_json(r->body, up.endpoint.url);
+    input.last_seen_s = t;
+    up.malformed.reset();
+  } catch (const std::exception& e) {
+    // Alive but unusable: its older list must not stand in for it.
+    input.latest.reset();
+    up.malformed = e.what();
+  }
+}
+
+// Fills the per-input states from the round's merge report.
+void update_status(MergeClientStatus& status, const std::vector<Upstream>& ups, const MergeState& st) {
+  for (size_t i = 0; i < ups.size(); ++i) {
+    MergeInputStatus& in = status.inputs[i];
+    in.reason.clear();
+    in.detail.clear();
+    in.state = "silent";
+    if (std::find(st.used.begin(), st.used.end(), in.name) != st.used.end()) in.state = "used";
+    for (const MergeSkip& s : st.skipped)
+      if (s.name == in.name) in.state = "skipped", in.reason = s.code, in.detail = s.detail;
+    if (ups[i].malformed) in.state = "skipped", in.reason = "malformed", in.detail = *ups[i].malformed;
+    if (in.state == "skipped") ++in.skipped[in.reason];
+  }
+}
+
+std::string label_value(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '\\' || c == '"') out += '\\';
+    if (c == '\n') {
+      out += "\\n";
+      continue;
+    }
+    out += c;
+  }
+  return out;
+}
+
 }  // namespace
 
 void run_merge_client(const std::vector<std::string>& urls, const MergeClientOptions& options,
-                      const std::function<void(const LightList&, const MergeState&)>& publish,
+                      const std::function<void(const LightList&, const MergeClientStatus&)>& publish,
                       const std::atomic<bool>& stop) {
   if (urls.empty()) throw InputError("merge needs at least one server URL");
-  std::vector<Endpoint> endpoints;
-  for (const auto& u : urls) endpoints.push_back(parse_url(u));
-  std::vector<std::unique_ptr<httplib::Client>> clients;
+  std::vector<Upstream> ups;
   std::vector<MergeInput> inputs;
-  for (const Endpoint& e : endpoints) {
-    auto c = std::make_unique<httplib::Client>(e.host, e.port);
+  MergeClientStatus status;
+  for (const std::string& u : urls) {
+    Upstream up;
+    up.endpoint = parse_url(u);
+    up.client = std::make_unique<httplib::Client>(up.endpoint.host, up.endpoint.port);
     const auto secs = time_t(options.request_timeout_s);
     const auto usecs = time_t((options.request_timeout_s - double(secs)) * 1e6);
-    c->set_connection_timeout(secs, usecs);
-    c->set_read_timeout(secs, usecs);
-    if (!options.token.empty()) c->set_bearer_token_auth(options.token.c_str());
-    clients.push_back(std::move(c));
-    inputs.push_back({e.url, std::nullopt, 0});
+    up.client->set_connection_timeout(secs, usecs);
+    up.client->set_read_timeout(secs, usecs);
+    up.client->set_write_timeout(secs, usecs);
+    up.client->set_keep_alive(true);
+    if (!options.token.empty()) up.client->set_bearer_token_auth(options.token.c_str());
+    inputs.push_back({u, std::nullopt, 0});
+    MergeInputStatus s;
+    s.name = u;
+    status.inputs.push_back(s);
+    ups.push_back(std::move(up));
   }
-  MergeState state;
   int64_t last_frame_out = -1;
   while (!stop) {
-    const double t = now_s();
-    for (size_t i = 0; i < clients.size(); ++i) {
-      auto r = clients[i]->Get(endpoints[i].path.c_str());
-      if (!r || r->status != 200) continue;
-      try {
-        inputs[i].latest = light_list_from_json(r->body, endpoints[i].url);
-        inputs[i].last_seen_s = t;
-      } catch (const InputError&) {
-        // A malformed answer counts as silence.
+    try {
+      const double t = now_s();
+      for (size_t i = 0; i < ups.size(); ++i) poll(ups[i], inputs[i], status.inputs[i], options, t);
+      LightList merged = merge_available(inputs, now_s(), options.timeout_s, status.state, options.merge);
+      ++status.rounds;
+      update_status(status, ups, status.state);
+      status.error = status.state.error;
+      if (status.state.stale) {
+        ++status.stale_rounds;
+      } else {
+        status.mode = to_string(status.state.mode);
+        merged.frame = ++last_frame_out;
+        publish(merged, status);
       }
+    } catch (const std::exception& e) {
+      // A bad option is found before the loop; anything else ends this round only.
+      status.error = e.what();
+      ++status.stale_rounds;
     }
-    LightList merged = merge_available(inputs, now_s(), options.timeout_s, state, options.merge);
-    merged.frame = ++last_frame_out;
-    publish(merged, state);
     std::this_thread::sleep_for(std::chrono::duration<double>(options.poll_interval_s));
   }
+}
+
+std::string merge_status_json(const MergeClientStatus& status) {
+  nlohmann::json j;
+  j["rounds"] = status.rounds;
+  j["stale_rounds"] = status.stale_rounds;
+  j["mode"] = status.mode;
+  j["error"] = status.error;
+  j["inputs"] = nlohmann::json::array();
+  for (const MergeInputStatus& in : status.inputs) {
+    nlohmann::json o{{"url", in.name}, {"state", in.state}, {"polls_ok", in.polls_ok},
+                     {"polls_failed", in.polls_failed}, {"skipped", in.skipped}};
+    if (!in.reason.empty()) o["reason"] = in.reason, o["detail"] = in.detail;
+    j["inputs"].push_back(o);
+  }
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+std::string merge_metrics_text(const MergeClientStatus& status) {
+  size_t used = 0;
+  for (const MergeInputStatus& in : status.inputs) used += in.state == "used";
+  std::string m = fmt::format(
+      "# HELP lightprobe_merge_inputs_used Inputs merged by the last round.\n"
+      "# TYPE lightprobe_merge_inputs_used gauge\nlightprobe_merge_inputs_used {}\n"
+      "# HELP lightprobe_merge_rounds_total Merge rounds attempted.\n"
+      "# TYPE lightprobe_merge_rounds_total counter\nlightprobe_merge_rounds_total {}\n"
+      "# HELP lightprobe_merge_stale_rounds_total Rounds that merged nothing (no usable input, or the merge failed).\n"
+      "# TYPE lightprobe_merge_stale_rounds_total counter\nlightprobe_merge_stale_rounds_total {}\n",
+      used, status.rounds, status.stale_rounds);
+  m += "# HELP lightprobe_merge_input_polls_total Polls of each input, by outcome.\n"
+       "# TYPE lightprobe_merge_input_polls_total counter\n";
+  for (const MergeInputStatus& in : status.inputs) {
+    const std::string url = label_value(in.name);
+    m += fmt::format("lightprobe_merge_input_polls_total{{input=\"{}\",outcome=\"ok\"}} {}\n", url, in.polls_ok);
+    m += fmt::format("lightprobe_merge_input_polls_total{{input=\"{}\",outcome=\"failed\"}} {}\n", url,
+                     in.polls_failed);
+  }
+  m += "# HELP lightprobe_merge_input_skipped_total Merge rounds that left an input's list out, by reason.\n"
+       "# TYPE lightprobe_merge_input_skipped_total counter\n";
+  for (const MergeInputStatus& in : status.inputs)
+    for (const auto& [reason, count] : in.skipped)
+      m += fmt::format("lightprobe_merge_input_skipped_total{{input=\"{}\",reason=\"{}\"}} {}\n", label_value(in.name),
+                       label_value(reason), count);
+  return m;
 }
 
 }  // namespace lp

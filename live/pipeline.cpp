@@ -20,8 +20,16 @@ namespace lp {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
+
+// The stages a bracket can pass through, in the order /metrics lists them.
+constexpr const char* kStages[] = {"fuse", "unwrap", "fuse_unwrap", "sample", "publish"};
+
+struct LivePipeline::Timings {
+  double stage[5] = {NAN, NAN, NAN, NAN, NAN};  // as kStages; NaN: not run for this bracket
+  double latency = NAN;
+};
 
 struct LivePipeline::Bracket {
   std::vector<CameraFrame> frames;
@@ -38,6 +46,7 @@ struct LivePipeline::RemapCache {
 LivePipeline::LivePipeline(OpenSource open, LivePipelineOptions options, Publish publish)
     : open_(std::move(open)), options_(std::move(options)), publish_(std::move(publish)) {
   if (options_.queue_brackets < 1) throw InputError("the bracket queue needs room for at least one bracket");
+  for (const char* stage : kStages) stages_.emplace_back(stage, Histogram(latency_buckets_seconds()));
   sampler_ = std::make_unique<FramePipeline>(options_.sampling);
 }
 
@@ -76,26 +85,24 @@ LiveStats LivePipeline::stats() const {
 }
 
 std::string LivePipeline::metrics() const {
-  const LiveStats s = stats();
-  std::string m;
-  auto counter = [&](const char* name, const char* help, double v) {
-    m += fmt::format("# HELP lightprobe_{0} {1}\n# TYPE lightprobe_{0} counter\nlightprobe_{0} {2}\n", name, help, v);
-  };
-  auto gauge = [&](const char* name, const char* help, double v) {
-    m += fmt::format("# HELP lightprobe_{0} {1}\n# TYPE lightprobe_{0} gauge\nlightprobe_{0} {2}\n", name, help, v);
-  };
-  counter("frames_in_total", "Frames received from the camera", double(s.frames_in));
-  counter("frames_dropped_partial_total", "Frames dropped because their bracket was incomplete",
-          double(s.frames_dropped_partial));
-  counter("brackets_dropped_total", "Whole brackets dropped because the back end was busy", double(s.brackets_dropped));
-  counter("brackets_processed_total", "Brackets turned into light lists", double(s.brackets_processed));
-  counter("camera_reconnects_total", "Times the camera was reopened", double(s.reconnects));
-  gauge("fps", "Light lists published per second", s.fps_out);
-  gauge("latency_ms", "Capture to publish latency of the last list, ms", s.capture_to_publish_ms);
-  gauge("stage_fuse_ms", "HDR fusion time of the last bracket, ms", s.fuse_ms);
-  gauge("stage_unwrap_ms", "Unwrapping time of the last frame, ms", s.unwrap_ms);
-  gauge("stage_sample_ms", "Sampling and temporal processing time of the last frame, ms", s.sample_ms);
-  return m;
+  std::lock_guard<std::mutex> lock(mutex_);
+  const LiveStats& s = stats_;
+  MetricsText m;
+  m.counter("lightprobe_frames_in_total", "Frames received from the camera.", double(s.frames_in));
+  m.counter("lightprobe_frames_dropped_partial_total", "Frames dropped because their bracket was incomplete.",
+            double(s.frames_dropped_partial));
+  m.counter("lightprobe_brackets_dropped_total", "Whole brackets dropped because the back end was busy.",
+            double(s.brackets_dropped));
+  m.counter("lightprobe_brackets_processed_total", "Brackets turned into published light lists.",
+            double(s.brackets_processed));
+  m.counter("lightprobe_camera_reconnects_total", "Times the camera was reopened.", double(s.reconnects));
+  m.family("lightprobe_stage_duration_seconds", "histogram",
+           "Time of each processing stage per published list (fuse_unwrap: bracket fusion and unwrap in one pass).");
+  for (const auto& [stage, h] : stages_)
+    m.histogram("lightprobe_stage_duration_seconds", h, "stage=\"" + prometheus_label_value(stage) + "\"");
+  m.family("lightprobe_latency_seconds", "histogram", "Last frame of a bracket captured to its light list published.");
+  m.histogram("lightprobe_latency_seconds", latency_);
+  return m.text();
 }
 
 void LivePipeline::capture_loop() {
@@ -193,13 +200,19 @@ void LivePipeline::process_loop() {
       queue_.pop_front();
     }
     try {
-      process(*b);
+      const Timings t = process(*b);
       const double dt = std::chrono::duration<double>(Clock::now() - last).count();
       last = Clock::now();
       fps = fps == 0 ? 1 / std::max(dt, 1e-6) : 0.8 * fps + 0.2 / std::max(dt, 1e-6);
       std::lock_guard<std::mutex> lock(mutex_);
       stats_.fps_out = fps;
       ++stats_.brackets_processed;
+      stats_.fuse_ms = 1e3 * (std::isnan(t.stage[2]) ? t.stage[0] : t.stage[2]);
+      stats_.unwrap_ms = std::isnan(t.stage[1]) ? 0 : 1e3 * t.stage[1];
+      stats_.sample_ms = 1e3 * t.stage[3];
+      stats_.capture_to_publish_ms = 1e3 * t.latency;
+      for (size_t k = 0; k < stages_.size(); ++k) stages_[k].second.observe(t.stage[k]);
+      latency_.observe(t.latency);
     } catch (const std::exception& e) {
       std::lock_guard<std::mutex> lock(mutex_);
       stats_.last_error = e.what();
@@ -223,9 +236,11 @@ void LivePipeline::ensure_remap(int width, int height) {
   remap_->plan = plan_bracket_unwrap(remap_->compiled);
 }
 
-void LivePipeline::process(Bracket& b) {
+LivePipeline::Timings LivePipeline::process(Bracket& b) {
   auto t0 = Clock::now();
-  double fuse_ms = 0, unwrap_ms = 0;
+  Timings timings;
+  double& fuse_s = timings.stage[0];
+  double& unwrap_s = timings.stage[1];
   auto map = std::make_shared<EnvMap>();
   *map = make_envmap(options_.layout, options_.width, options_.height);
   if (options_.frames_are_maps) {
@@ -237,7 +252,7 @@ void LivePipeline::process(Bracket& b) {
     map->rgb = std::move(radiance.rgb);
     map->valid = std::move(radiance.valid);
     map->units = radiance.units;
-    fuse_ms = ms_since(t0);
+    fuse_s = seconds_since(t0);
   } else if (b.frames.size() > 1) {
     // Fuse only the sensor pixels the unwrap reads (live/bracket_unwrap.h): the same map
     // as merging every pixel and unwrapping, for a tenth of the work at 1280x960.
@@ -260,33 +275,32 @@ void LivePipeline::process(Bracket& b) {
     map->rgb = std::move(radiance.rgb);
     map->valid = std::move(radiance.valid);
     map->units = radiance.units;
-    fuse_ms = ms_since(t0);
+    timings.stage[2] = seconds_since(t0);  // fusion and unwrap in one pass
   } else {
     RgbImage radiance = std::move(b.frames[0].image);
     if (b.frames[0].exposure_s > 0)
       for (float& v : radiance.rgb) v = float(v / b.frames[0].exposure_s);
     if (options_.photometric) apply_photometric(radiance, *options_.photometric);
-    fuse_ms = ms_since(t0);
+    fuse_s = seconds_since(t0);
     t0 = Clock::now();
     ensure_remap(radiance.width, radiance.height);
     apply_remap(radiance, remap_->compiled, &remap_->out);
     map->rgb = remap_->out.rgb;
     map->valid = remap_->out.valid;
     map->units = radiance.units;
-    unwrap_ms = ms_since(t0);
+    unwrap_s = seconds_since(t0);
   }
 
   // 3. Lights, with the temporal processing of the stream.
   t0 = Clock::now();
   const double timestamp = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   const LightList lights = sampler_->process(*map, published_++, timestamp);
-  const double sample_ms = ms_since(t0);
+  timings.stage[3] = seconds_since(t0);
+  t0 = Clock::now();
   publish_(lights, map);
-  std::lock_guard<std::mutex> lock(mutex_);
-  stats_.fuse_ms = fuse_ms;
-  stats_.unwrap_ms = unwrap_ms;
-  stats_.sample_ms = sample_ms;
-  stats_.capture_to_publish_ms = ms_since(b.captured);
+  timings.stage[4] = seconds_since(t0);
+  timings.latency = seconds_since(b.captured);
+  return timings;
 }
 
 }  // namespace lp

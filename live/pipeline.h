@@ -23,6 +23,7 @@
 #include "core/envmap.h"
 #include "core/light_list.h"
 #include "hdr/response.h"
+#include "live/metrics.h"
 #include "probe/camera_source.h"
 #include "sampling/frame_pipeline.h"
 
@@ -68,14 +69,18 @@ class LivePipeline {
   // Blocks until the source is finished (replay without loop) and everything is processed.
   void wait();
   LiveStats stats() const;
-  // Prometheus text exposition of stats().
+  // Prometheus text: the counters of stats(), and histograms of every published list's
+  // stage times (lightprobe_stage_duration_seconds{stage=fuse|unwrap|fuse_unwrap|sample|
+  // publish}) and capture-to-publish latency (lightprobe_latency_seconds), in seconds.
+  // The frame rate gauge comes from the light server (lightprobe_frame_rate_hertz).
   std::string metrics() const;
 
  private:
   struct Bracket;
+  struct Timings;  // of one processed bracket, seconds
   void capture_loop();
   void process_loop();
-  void process(Bracket& bracket);
+  Timings process(Bracket& bracket);
   void ensure_remap(int width, int height);  // compiles the unwrap table for this frame size
 
   OpenSource open_;
@@ -89,6 +94,9 @@ class LivePipeline {
   std::condition_variable cv_;
   std::deque<std::unique_ptr<Bracket>> queue_;
   LiveStats stats_;
+  // Under mutex_, updated with brackets_processed: their counts equal it.
+  Histogram latency_{latency_buckets_seconds()};
+  std::vector<std::pair<std::string, Histogram>> stages_;
   std::unique_ptr<FramePipeline> sampler_;
   // Unwrapping cache: rebuilt when the image size changes.
   struct RemapCache;

@@ -1,8 +1,11 @@
 // The light server's page (GET /): self-contained (inline CSS and JS, no external
 // resources). Shows /probe.png refreshed live with the lights marked on it (from
-// /lights/stream through EventSource), a table of the brightest lights, and the numbers
-// from /status (fps, light count, latency, clients, drops). With a token, open the page as
-// /?access_token=T: it passes the token on to every request it makes.
+// /lights/stream), a table of the brightest lights, and the numbers from /status (fps,
+// light count, latency, clients, drops). With a token, open the page as /#token=T: the
+// fragment never leaves the browser, and the page sends "Authorization: Bearer T" itself
+// on every request, so everything goes through fetch(): JSON, the stream (Server-Sent
+// Events read from a fetch body, since EventSource cannot send headers) and the picture
+// (a blob URL, since <img src> cannot either).
 #pragma once
 
 #include <string_view>
@@ -66,10 +69,10 @@ inline constexpr std::string_view kWebPage = R"LPHTML(<!DOCTYPE html>
 <footer>Azimuth from +X towards +Y, elevation above the horizon (+Z up). Rings: the latest list; picture: refreshed a few times a second.</footer>
 <script>
 "use strict";
-const token = new URLSearchParams(location.search).get("access_token");
+const token = new URLSearchParams(location.hash.slice(1)).get("token");
+const headers = token ? { "Authorization": "Bearer " + token } : {};
 function url(path, params) {
   const u = new URL(path, location.href);
-  if (token) u.searchParams.set("access_token", token);
   for (const k in (params || {})) u.searchParams.set(k, params[k]);
   return u.pathname + u.search;
 }
@@ -77,6 +80,7 @@ const $ = (id) => document.getElementById(id);
 const SVGNS = "http://www.w3.org/2000/svg";
 const lum = (c) => 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
 const fmt = (v, d) => (v === null || v === undefined || !isFinite(v)) ? "-" : Number(v).toFixed(d);
+function needToken() { $("dot").className = ""; $("conn").textContent = "needs a token: open /#token=..."; }
 
 function colour(rgb) {
   const m = Math.max(rgb[0], rgb[1], rgb[2], 1e-30);
@@ -123,29 +127,57 @@ function showList(list) {
   refreshImage();
 }
 
-// The picture: loaded off-screen and swapped in, at most every 300 ms, one at a time.
-let loading = false, lastLoad = 0, pending = false;
-function refreshImage() {
+// The picture: fetched (with the token), shown through a blob URL, at most every 300 ms,
+// one at a time.
+let loading = false, lastLoad = 0, pending = false, shownUrl = null;
+async function refreshImage() {
   const now = Date.now();
   if (loading || now - lastLoad < 300) { pending = true; return; }
   loading = true; pending = false; lastLoad = now;
-  const next = new Image();
-  next.onload = () => { $("probe").src = next.src; $("empty").style.display = "none"; done(); };
-  next.onerror = done;
-  next.src = url("/probe.png", { t: now });
-  function done() { loading = false; if (pending) setTimeout(refreshImage, 300); }
+  try {
+    // "no-cache": the browser revalidates with the ETag; an unchanged picture costs a 304.
+    const r = await fetch(url("/probe.png"), { headers: headers, cache: "no-cache" });
+    if (r.status === 401) needToken();
+    if (r.ok) {
+      const next = URL.createObjectURL(await r.blob());
+      $("probe").src = next; $("empty").style.display = "none";
+      if (shownUrl) URL.revokeObjectURL(shownUrl);
+      shownUrl = next;
+    }
+  } catch (err) { /* the server is away; the next list tries again */ }
+  loading = false;
+  if (pending) setTimeout(refreshImage, 300);
 }
 
-function connect() {
-  const es = new EventSource(url("/lights/stream"));
-  es.onopen = () => { $("dot").className = "live"; $("conn").textContent = "live"; };
-  es.onmessage = (e) => { try { showList(JSON.parse(e.data)); } catch (err) { console.error(err); } };
-  es.onerror = () => { $("dot").className = ""; $("conn").textContent = "reconnecting..."; };
+// Server-Sent Events read from a fetch() body: events end with a blank line, their data
+// lines start with "data: ".
+async function connect() {
+  try {
+    const r = await fetch(url("/lights/stream"), { headers: headers, cache: "no-store" });
+    if (r.status === 401) { needToken(); setTimeout(connect, 5000); return; }
+    if (!r.ok || !r.body) throw new Error("stream answered " + r.status);
+    $("dot").className = "live"; $("conn").textContent = "live";
+    const reader = r.body.getReader(), decoder = new TextDecoder();
+    let buffer = "";
+    for (;;) {
+      const { value, done } = await reader.read();
+      if (done) break;
+      buffer += decoder.decode(value, { stream: true });
+      let end;
+      while ((end = buffer.indexOf("\n\n")) >= 0) {
+        const event = buffer.slice(0, end); buffer = buffer.slice(end + 2);
+        const data = event.split("\n").filter((l) => l.startsWith("data: ")).map((l) => l.slice(6)).join("\n");
+        if (data) { try { showList(JSON.parse(data)); } catch (err) { console.error(err); } }
+      }
+    }
+  } catch (err) { /* reconnect below */ }
+  $("dot").className = ""; $("conn").textContent = "reconnecting...";
+  setTimeout(connect, 1000);
 }
 
 async function pollStatus() {
   try {
-    const r = await fetch(url("/status"), { cache: "no-store" });
+    const r = await fetch(url("/status"), { headers: headers, cache: "no-cache" });
     if (r.ok) {
       const s = await r.json();
       $("fps").textContent = fmt(s.fps, 1);
@@ -154,7 +186,7 @@ async function pollStatus() {
       $("dropped").textContent = s.stream_lists_dropped;
       if (s.frame !== null && $("frame").textContent === "-") { $("frame").textContent = s.frame; refreshImage(); }
     } else if (r.status === 401) {
-      $("conn").textContent = "needs a token: open /?access_token=...";
+      needToken();
     }
   } catch (err) { /* the server is away; try again */ }
   setTimeout(pollStatus, 1000);

@@ -40,8 +40,8 @@ std::vector<double> normalised_weights(size_t count, const std::vector<double>& 
   return w;
 }
 
-// Same units and method everywhere; frame and timestamp of the newest input.
-LightList output_header(const std::vector<LightList>& cameras, const char* who) {
+// Same units (and method, unless any_method) everywhere; frame and timestamp of the newest input.
+LightList output_header(const std::vector<LightList>& cameras, const char* who, bool any_method = false) {
   LightList out;
   out.method = cameras.front().method;
   out.units = cameras.front().units;
@@ -49,7 +49,7 @@ LightList output_header(const std::vector<LightList>& cameras, const char* who) 
   out.timestamp = cameras.front().timestamp;
   for (size_t i = 1; i < cameras.size(); ++i) {
     const LightList& c = cameras[i];
-    if (c.method != out.method)
+    if (c.method != out.method && !any_method)
       throw InputError(fmt::format("{}: camera {} has method '{}', camera 0 '{}': lists of different methods "
                                    "cannot be merged", who, i, c.method, out.method));
     if (c.units != out.units)
@@ -95,6 +95,32 @@ struct Value {
   std::array<double, 3> rgb{0, 0, 0};
   Vec3 c;  // luminance-weighted direction sum
 };
+
+// Whether the list's ids are NUNIQ nodes whose cells partition the sphere.
+bool is_q2_partition(const LightList& list) {
+  std::vector<Node> nodes;
+  nodes.reserve(list.lights.size());
+  int finest = 0;
+  for (const Light& l : list.lights) {
+    const auto node = decode_nuniq(l.id);
+    if (!node) return false;
+    nodes.push_back(*node);
+    finest = std::max(finest, node->level);
+  }
+  std::vector<std::pair<uint64_t, uint64_t>> ranges;
+  ranges.reserve(nodes.size());
+  for (const Node& n : nodes) {
+    const int shift = 2 * (finest - n.level);
+    ranges.emplace_back(n.ipix << shift, (n.ipix + 1) << shift);
+  }
+  std::sort(ranges.begin(), ranges.end());
+  uint64_t at = 0;
+  for (const auto& [b, e] : ranges) {
+    if (b != at) return false;
+    at = e;
+  }
+  return at == (uint64_t(12) << (2 * finest));
+}
 
 // One camera's tree as its leaves, sorted by their range at the common finest level.
 class CameraTree {
@@ -348,17 +374,173 @@ LightList merge_q2trees(const std::vector<LightList>& cameras, const std::vector
   return out;
 }
 
+// ---- by direction ---------------------------------------------------------------------
+
+namespace {
+
+constexpr int kPointLevel = 12;  // HEALPix nside 4096: pixels of 0.014 deg
+
+// The union of the cameras' weighted lights, summed per level-12 pixel.
+struct Point {
+  uint64_t pixel = 0;
+  std::array<double, 3> rgb{0, 0, 0};
+  Vec3 c;  // sum of luminance * direction
+};
+
+// Leaves of the tree over points[begin, end) inside cell (level, ipix): a cell splits
+// while it holds more than one pixel's points.
+void point_leaves(const std::vector<Point>& points, size_t begin, size_t end, int level, uint64_t ipix,
+                  std::vector<Light>& out) {
+  if (end - begin > 1 && level < kPointLevel) {
+    const int shift = 2 * (kPointLevel - level - 1);
+    size_t at = begin;
+    for (uint64_t k = 0; k < 4; ++k) {
+      const uint64_t child = 4 * ipix + k, child_end = (child + 1) << shift;
+      const size_t stop = size_t(std::lower_bound(points.begin() + long(at), points.begin() + long(end), child_end,
+                                                  [](const Point& p, uint64_t v) { return p.pixel < v; }) -
+                                 points.begin());
+      point_leaves(points, at, stop, level + 1, child, out);
+      at = stop;
+    }
+    return;
+  }
+  Light l;
+  l.id = nuniq(level, ipix);
+  l.solid_angle = M_PI / (3.0 * std::ldexp(1.0, 2 * level));
+  Vec3 c;
+  for (size_t k = begin; k < end; ++k) {
+    for (int ch = 0; ch < 3; ++ch) l.rgb[ch] += points[k].rgb[ch];
+    c = c + points[k].c;
+  }
+  const double len = length(c);
+  l.direction = len > 0 ? (1.0 / len) * c : quad_centre(level, ipix);
+  out.push_back(l);
+}
+
+}  // namespace
+
+LightList merge_by_direction(const std::vector<LightList>& cameras, const std::vector<double>& weights, int n,
+                             const Q2MergeOptions& options) {
+  const auto w = normalised_weights(cameras.size(), weights, "merge_by_direction");
+  LightList tree = output_header(cameras, "merge_by_direction", true);
+  tree.method = "q2tree";
+  std::vector<Point> points;
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    if (w[i] == 0) continue;
+    for (const Light& l : cameras[i].lights) {
+      if (!finite(l)) throw InputError(fmt::format("merge_by_direction: camera {}: light {} is not finite", i, l.id));
+      const double len = length(l.direction);
+      if (!(len > 0)) throw InputError(fmt::format("merge_by_direction: camera {}: light {} has no direction", i, l.id));
+      const Vec3 d = (1.0 / len) * l.direction;
+      Point p;
+      const double v[3] = {d.x, d.y, d.z};
+      int64_t pixel = 0;
+      vec2pix_nest64(int64_t(1) << kPointLevel, v, &pixel);
+      p.pixel = uint64_t(pixel);
+      for (int c = 0; c < 3; ++c) p.rgb[c] = w[i] * l.rgb[c];
+      p.c = luminance(p.rgb.data()) * d;
+      points.push_back(p);
+    }
+  }
+  std::sort(points.begin(), points.end(), [](const Point& a, const Point& b) { return a.pixel < b.pixel; });
+  // Points in one pixel are one point (their sum at their centroid).
+  std::vector<Point> merged;
+  for (const Point& p : points) {
+    if (merged.empty() || merged.back().pixel != p.pixel) {
+      merged.push_back(p);
+      continue;
+    }
+    for (int c = 0; c < 3; ++c) merged.back().rgb[c] += p.rgb[c];
+    merged.back().c = merged.back().c + p.c;
+  }
+  size_t at = 0;
+  for (uint64_t b = 0; b < 12; ++b) {
+    const uint64_t end_pixel = (b + 1) << (2 * kPointLevel);
+    const size_t stop = size_t(std::lower_bound(merged.begin() + long(at), merged.end(), end_pixel,
+                                                [](const Point& p, uint64_t v) { return p.pixel < v; }) -
+                               merged.begin());
+    point_leaves(merged, at, stop, 0, b, tree.lights);
+    at = stop;
+  }
+  return merge_q2trees({tree}, {1.0}, n, options);
+}
+
+const char* to_string(MergeMode mode) {
+  switch (mode) {
+    case MergeMode::Index: return "index";
+    case MergeMode::Q2Tree: return "q2tree";
+    case MergeMode::Direction: return "direction";
+  }
+  return "direction";
+}
+
+MergeMode merge_mode(const std::vector<LightList>& cameras) {
+  if (cameras.empty()) return MergeMode::Direction;
+  const std::string& method = cameras.front().method;
+  for (const LightList& c : cameras)
+    if (c.method != method) return MergeMode::Direction;
+  if (method == "pharr" || method == "hemigon") {
+    for (const LightList& c : cameras) {
+      std::unordered_set<uint64_t> seen;
+      for (const Light& l : c.lights)
+        if (!seen.insert(l.id).second) return MergeMode::Direction;
+    }
+    return MergeMode::Index;
+  }
+  if (method == "q2tree") {
+    for (const LightList& c : cameras)
+      if (!is_q2_partition(c)) return MergeMode::Direction;
+    return MergeMode::Q2Tree;
+  }
+  return MergeMode::Direction;
+}
+
+std::optional<MergeProblem> merge_problem(const LightList& list) {
+  constexpr size_t kMaxLights = 1000000;
+  constexpr double kMaxTotal = 1e300;
+  if (list.lights.empty()) return MergeProblem{"empty", "the list has no lights"};
+  if (list.lights.size() > kMaxLights)
+    return MergeProblem{"too_many", fmt::format("{} lights (at most {})", list.lights.size(), kMaxLights)};
+  std::array<double, 3> total{0, 0, 0};
+  for (size_t k = 0; k < list.lights.size(); ++k) {
+    const Light& l = list.lights[k];
+    if (!finite(l)) return MergeProblem{"not_finite", fmt::format("light {} (id {}) is not finite", k, l.id)};
+    if (l.rgb[0] < 0 || l.rgb[1] < 0 || l.rgb[2] < 0 || l.solid_angle < 0)
+      return MergeProblem{"negative", fmt::format("light {} (id {}) has a negative rgb or solid angle", k, l.id)};
+    const double len = length(l.direction);
+    if (!(std::fabs(len - 1) <= 1e-6))
+      return MergeProblem{"not_unit", fmt::format("light {} (id {}) has a direction of length {}", k, l.id, len)};
+    for (int c = 0; c < 3; ++c) total[c] += l.rgb[c];
+  }
+  for (int c = 0; c < 3; ++c)
+    if (!(total[c] <= kMaxTotal))
+      return MergeProblem{"too_bright", fmt::format("total power {} in channel {} (at most {:g})", total[c], c, kMaxTotal)};
+  return std::nullopt;
+}
+
 LightList merge_light_lists(const std::vector<LightList>& cameras, const std::vector<double>& weights, int n,
                             const Q2MergeOptions& options) {
   if (cameras.empty()) throw InputError("merge: no cameras to merge");
-  output_header(cameras, "merge");  // one method and units everywhere
-  const std::string& method = cameras.front().method;
-  if (method == "pharr" || method == "hemigon") return merge_by_index(cameras, weights);
-  if (method == "q2tree") return merge_q2trees(cameras, weights, n, options);
-  throw InputError(fmt::format("merge: cannot merge '{}' lists (pharr, hemigon or q2tree)", method));
+  output_header(cameras, "merge", true);  // one unit everywhere
+  switch (merge_mode(cameras)) {
+    case MergeMode::Index: return merge_by_index(cameras, weights);
+    case MergeMode::Q2Tree: return merge_q2trees(cameras, weights, n, options);
+    case MergeMode::Direction: break;
+  }
+  return merge_by_direction(cameras, weights, n, options);
 }
 
 // ---- robustness ------------------------------------------------------------------------
+
+namespace {
+
+bool usable_output(const LightList& list) {
+  for (const Light& l : list.lights)
+    if (!finite(l) || !(std::fabs(length(l.direction) - 1) <= 1e-6)) return false;
+  return true;
+}
+
+}  // namespace
 
 LightList merge_available(const std::vector<MergeInput>& inputs, double now_s, double timeout_s, MergeState& state,
                           const MergeAvailableOptions& options) {
@@ -369,6 +551,8 @@ LightList merge_available(const std::vector<MergeInput>& inputs, double now_s, d
   std::vector<LightList> alive;
   std::vector<double> weights;
   std::vector<std::string> used, dropped;
+  state.skipped.clear();
+  std::optional<Units> units;
   for (size_t i = 0; i < inputs.size(); ++i) {
     const MergeInput& in = inputs[i];
     const bool live = in.latest.has_value() && std::isfinite(in.last_seen_s) && now_s - in.last_seen_s <= timeout_s;
@@ -376,24 +560,43 @@ LightList merge_available(const std::vector<MergeInput>& inputs, double now_s, d
       dropped.push_back(in.name);
       continue;
     }
+    if (auto problem = merge_problem(*in.latest)) {
+      state.skipped.push_back({in.name, problem->code, problem->detail});
+      continue;
+    }
+    if (units && *units != in.latest->units) {
+      state.skipped.push_back({in.name, "units", fmt::format("in {} units, the inputs before it in {}",
+                                                             to_string(in.latest->units), to_string(*units))});
+      continue;
+    }
+    units = in.latest->units;
     alive.push_back(*in.latest);
     weights.push_back(options.weights.empty() ? 1.0 : options.weights[i]);
     used.push_back(in.name);
   }
   double weight_sum = 0;
   for (double x : weights) weight_sum += x;
-  if (alive.empty() || !(weight_sum > 0)) {
-    // Nothing to merge (no live input, or only inputs of weight 0): repeat the last output.
+  // Nothing to merge, or a merge that failed: the last output again, flagged.
+  const auto repeat_last = [&](std::string error) {
     state.stale = true;
+    state.error = std::move(error);
     state.used.clear();
     state.dropped = std::move(dropped);
-    if (!alive.empty())
-      for (const std::string& name : used) state.dropped.push_back(name);
+    for (const std::string& name : used) state.dropped.push_back(name);
     return state.last_output ? *state.last_output : LightList{};
+  };
+  if (alive.empty() || !(weight_sum > 0)) return repeat_last("");
+  LightList out;
+  try {
+    out = merge_light_lists(alive, weights, options.n, options.q2);
+  } catch (const InputError& e) {
+    return repeat_last(e.what());
   }
-  LightList out = merge_light_lists(alive, weights, options.n, options.q2);
+  if (!usable_output(out)) return repeat_last("the merged list is not finite");
+  state.mode = merge_mode(alive);
   state.last_output = out;
   state.stale = false;
+  state.error.clear();
   state.used = std::move(used);
   state.dropped = std::move(dropped);
   return out;

@@ -70,8 +70,20 @@
 //      at n = 30 / 60 / 120 / 240, against 0.0180 / 0.0068 / 0.0024 / 0.00046 for the
 //      Q2-tree of the average map (the difference: directions only).
 //
-// 3. merge_available: the robust front for a merge client, over named inputs that may
-//    stall: see below.
+// 3. merge_by_direction (any lists, also of different methods, with ids that do not
+//    correspond: a pharr camera beside a q2tree one, a list with a light cut out, ids
+//    repeated). Ids are ignored: every light of camera i is a point of power w_i rgb at its
+//    direction. E(n) = sum_i w_i E_i(n) holds exactly for the union of these points, so the
+//    union is sorted into a HEALPix tree (a cell splits while it holds points in more than
+//    one level-12 pixel, 0.014 deg), each leaf holding the sum of its points at their
+//    luminance centroid, and the tree is reduced to n leaves as merge_q2trees reduces one
+//    (importance L^a dw^b). The output is a q2tree list (ids NUNIQ, leaves partition the
+//    sphere, empty leaves with zero power), so it can be merged again. Total power is the
+//    weighted average of the inputs' (exactly, up to rounding); a light moves by at most
+//    the size of the leaf it ends in.
+//
+// 4. merge_available: the robust front for a merge client, over named inputs that may
+//    stall or send lists that cannot be merged: see below.
 #pragma once
 
 #include <optional>
@@ -99,10 +111,31 @@ struct Q2MergeOptions {
 LightList merge_q2trees(const std::vector<LightList>& cameras, const std::vector<double>& weights, int n,
                         const Q2MergeOptions& options = {});
 
-// Dispatch on the lists' method: pharr/hemigon -> merge_by_index, q2tree ->
-// merge_q2trees(n); anything else, or a mix, throws InputError.
+LightList merge_by_direction(const std::vector<LightList>& cameras, const std::vector<double>& weights, int n,
+                             const Q2MergeOptions& options = {});
+
+// How lists are merged: by index when all are pharr, or all hemigon, each with unique
+// ids; as Q2-trees when all are q2tree lists whose leaves partition the sphere; by
+// direction otherwise (mixed or other methods, repeated ids, a broken tree).
+enum class MergeMode { Index, Q2Tree, Direction };
+const char* to_string(MergeMode mode);
+MergeMode merge_mode(const std::vector<LightList>& cameras);
+
+// Dispatch on merge_mode. Lists in different units throw InputError (nothing converts
+// relative to radiance), as do the checks of the merge chosen (weights, n).
 LightList merge_light_lists(const std::vector<LightList>& cameras, const std::vector<double>& weights, int n,
                             const Q2MergeOptions& options = {});
+
+// Why a list cannot be merged at all, as a short code (for metrics labels) and a
+// sentence: "empty" (no lights), "not_finite", "negative" (rgb or solid angle < 0),
+// "not_unit" (a direction whose length is off 1 by more than 1e-6), "too_many" (over a
+// million lights), "too_bright" (a channel's total over 1e300: sums of it would
+// overflow). nullopt: it can be merged.
+struct MergeProblem {
+  std::string code;
+  std::string detail;
+};
+std::optional<MergeProblem> merge_problem(const LightList& list);
 
 // One camera as the merge client sees it: its latest light list (nullopt until the first
 // arrives) and when that arrived (seconds, on the client's clock).
@@ -118,21 +151,33 @@ struct MergeAvailableOptions {
   Q2MergeOptions q2;
 };
 
+// A live input whose list was left out, and why (code as MergeProblem's, or "units").
+struct MergeSkip {
+  std::string name, code, detail;
+};
+
 // What merge_available keeps between calls and reports about the last one.
 struct MergeState {
   std::optional<LightList> last_output;  // last merged list
-  bool stale = false;                    // the last call had no live input and repeated last_output
+  bool stale = false;                    // the last call merged nothing and repeated last_output
   std::vector<std::string> used;         // inputs merged by the last call
   std::vector<std::string> dropped;      // inputs left out by the last call (silent or never seen)
+  std::vector<MergeSkip> skipped;        // live inputs left out by the last call: their lists cannot be merged
+  MergeMode mode = MergeMode::Index;     // how the last output was merged
+  std::string error;                     // why the last call's merge failed ("" when it did not)
 };
 
 // Merges the inputs that are alive: with a list and now_s - last_seen_s <= timeout_s.
 // An input silent for longer is dropped (the others' weights renormalised), and taken
 // back as soon as it delivers again (its last_seen_s moves): liveness is decided afresh
-// on every call, so the output never stops while one input is alive. With no live
-// input the last output is returned unchanged and state.stale set (an empty list, also
-// flagged, before any output existed). Mixed methods or units among the live inputs,
-// a bad timeout or weights of the wrong count throw InputError.
+// on every call, so the output never stops while one input is alive. A live input whose
+// list cannot be merged (merge_problem, or units other than the first usable input's)
+// is skipped and reported in state.skipped. Lists of different methods or with ids that
+// do not correspond are merged by direction (merge_mode). With nothing to merge, or a
+// merge that fails, the last output is returned unchanged and state.stale set (an empty
+// list, also flagged, before any output existed; state.error says why a merge failed).
+// Never throws for what the inputs hold: only a bad timeout or weights of the wrong
+// count (the caller's options) throw InputError.
 LightList merge_available(const std::vector<MergeInput>& inputs, double now_s, double timeout_s, MergeState& state,
                           const MergeAvailableOptions& options = {});
 

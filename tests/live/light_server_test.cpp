@@ -25,7 +25,9 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/light_list.h"
+#include "tests/live/http_attack.h"
 
 namespace {
 
@@ -370,14 +372,101 @@ TEST(LightServer, ProbePngIsAPngOfTheLatestMap) {
   s.server->stop();
 }
 
-TEST(LightServer, PageIsSelfContainedAndUsesEventSource) {
+// Issue 18: pollers that have the current answer get 304 and no body.
+TEST(LightServer, ETagsTurnRepeatedPollsInto304s) {
+  auto s = start_server();
+  s.server->publish(make_list(1, 4), make_map());
+  const auto get = [&](const std::string& path, const std::string& inm = "", const char* method = "GET") {
+    const std::string h = inm.empty() ? "" : "If-None-Match: " + inm + "\r\n";
+    return lp::test::raw_request(s.port, std::string(method) + " " + path + " HTTP/1.1\r\nHost: x\r\n" + h + "\r\n", 10);
+  };
+  for (const char* path : {"/lights", "/probe.png", "/probe.exr", "/status"}) {
+    const auto first = get(path);
+    ASSERT_EQ(first.status, 200) << path;
+    const std::string etag = lp::test::header_of(first.answer, "ETag");
+    ASSERT_FALSE(etag.empty()) << path;
+    EXPECT_EQ(lp::test::header_of(first.answer, "Cache-Control"), "no-cache") << path;
+    // The same tag, alone, weak, in a list, or "*": 304 with the tag and no body.
+    const std::string weak = etag.rfind("W/", 0) == 0 ? etag : "W/" + etag;
+    for (const std::string& inm : {etag, weak, "\"nope\", " + etag, std::string("*")}) {
+      const auto again = get(path, inm);
+      EXPECT_EQ(again.status, 304) << path << " If-None-Match: " << inm;
+      EXPECT_EQ(lp::test::header_of(again.answer, "ETag"), etag) << path;
+      EXPECT_EQ(lp::test::body_of(again.answer), "") << path;
+      EXPECT_EQ(lp::test::header_of(again.answer, "Content-Length"), "") << path;
+    }
+    EXPECT_EQ(get(path, etag, "HEAD").status, 304) << path;
+    EXPECT_EQ(get(path, "\"nope\"").status, 200) << path;
+  }
+  // /status is a weak tag: it leaves out what changes with every request (uptime...).
+  EXPECT_EQ(lp::test::header_of(get("/status").answer, "ETag").rfind("W/\"", 0), 0u);
+  // Something new: new tags, full answers. (The PNG waits out its rate limit first.)
+  std::vector<std::string> old_tags;
+  for (const char* path : {"/lights", "/probe.png", "/probe.exr", "/status"})
+    old_tags.push_back(lp::test::header_of(get(path).answer, "ETag"));
+  std::this_thread::sleep_for(300ms);
+  s.server->publish(make_list(2, 4), make_map());
+  int k = 0;
+  for (const char* path : {"/lights", "/probe.png", "/probe.exr", "/status"}) {
+    const auto after = get(path, old_tags[size_t(k)]);
+    EXPECT_EQ(after.status, 200) << path;
+    EXPECT_NE(lp::test::header_of(after.answer, "ETag"), old_tags[size_t(k++)]) << path;
+  }
+  // Another server's tags never match this one's (a random prefix per server).
+  auto other = start_server();
+  other.server->publish(make_list(2, 4), nullptr);
+  const auto theirs = lp::test::raw_request(other.port, "GET /lights HTTP/1.1\r\nHost: x\r\n\r\n", 10);
+  EXPECT_NE(lp::test::header_of(theirs.answer, "ETag"), lp::test::header_of(get("/lights").answer, "ETag"));
+  other.server->stop();
+  s.server->stop();
+}
+
+// Issue 18: the live float map as an EXR, as core/image_io writes one.
+TEST(LightServer, ProbeExrIsTheLatestFloatMapWithItsLayoutAndUnits) {
+  auto s = start_server();
+  auto res = lp::test::raw_request(s.port, "GET /probe.exr HTTP/1.1\r\nHost: x\r\n\r\n", 10);
+  EXPECT_EQ(res.status, 503);
+  s.server->publish(make_list(1, 4), nullptr);
+  EXPECT_EQ(lp::test::raw_request(s.port, "GET /probe.exr HTTP/1.1\r\nHost: x\r\n\r\n", 10).status, 503);
+  auto map = std::make_shared<lp::EnvMap>(*make_map());
+  map->units = lp::Units::Radiance;
+  map->rgb[7] = 12345.678f;  // float, not half
+  s.server->publish(make_list(2, 4), map);
+  res = lp::test::raw_request(s.port, "GET /probe.exr HTTP/1.1\r\nHost: x\r\n\r\n", 10);
+  ASSERT_EQ(res.status, 200);
+  EXPECT_EQ(lp::test::header_of(res.answer, "Content-Type"), "image/x-exr");
+  const std::string body = lp::test::body_of(res.answer);
+  EXPECT_EQ(body, lp::encode_envmap_exr(*map));  // the bytes write_envmap writes
+  const std::string path = ::testing::TempDir() + "/probe_from_server.exr";
+  lp::write_file_atomically(path, body);
+  const lp::EnvMap back = lp::read_envmap(path);
+  EXPECT_EQ(back.layout, lp::Layout::LatLong);
+  EXPECT_EQ(back.units, lp::Units::Radiance);
+  ASSERT_EQ(back.width, map->width);
+  ASSERT_EQ(back.height, map->height);
+  EXPECT_EQ(back.rgb, map->rgb);
+  // A frame without a map keeps the last map.
+  s.server->publish(make_list(3, 4), nullptr);
+  res = lp::test::raw_request(s.port, "GET /probe.exr HTTP/1.1\r\nHost: x\r\n\r\n", 10);
+  EXPECT_EQ(lp::test::body_of(res.answer), body);
+  std::remove(path.c_str());
+  s.server->stop();
+}
+
+TEST(LightServer, PageIsSelfContainedAndSendsTheTokenAsAHeader) {
   auto s = start_server();
   auto c = client(s.port);
   auto res = c->Get("/");
   ASSERT_TRUE(res);
   ASSERT_EQ(res->status, 200);
   EXPECT_NE(res->get_header_value("Content-Type").find("text/html"), std::string::npos);
-  EXPECT_NE(res->body.find("EventSource"), std::string::npos);
+  // Everything through fetch() with the Authorization header: the stream read from a
+  // fetch body (EventSource cannot send headers), the picture as a blob URL.
+  EXPECT_NE(res->body.find("getReader()"), std::string::npos);
+  EXPECT_NE(res->body.find("\"Authorization\": \"Bearer \" + token"), std::string::npos);
+  EXPECT_NE(res->body.find("location.hash"), std::string::npos);
+  EXPECT_NE(res->body.find("createObjectURL"), std::string::npos);
+  EXPECT_EQ(res->body.find("access_token"), std::string::npos);
   EXPECT_NE(res->body.find("/lights/stream"), std::string::npos);
   EXPECT_NE(res->body.find("/probe.png"), std::string::npos);
   EXPECT_EQ(res->body.find("src=\"http"), std::string::npos);
@@ -470,32 +559,41 @@ TEST(LightServer, BadRequestsGet4xxAndTheServerCarriesOn) {
   s.server->stop();
 }
 
-TEST(LightServer, TokenGuardsEveryRoute) {
+TEST(LightServer, TokenGuardsEveryRouteButThePageWithTheExactBearerScheme) {
   lp::LightServerOptions options;
   options.token = "s3cret";
   auto s = start_server(options);
   s.server->publish(make_list(1, 2), make_map());
   auto c = client(s.port);
-  for (const char* path : {"/", "/lights", "/probe.png", "/metrics", "/status", "/nope"}) {
+  for (const char* path : {"/lights", "/lights/stream", "/probe.png", "/metrics", "/status", "/nope"}) {
     auto res = c->Get(path);
     ASSERT_TRUE(res) << path;
     EXPECT_EQ(res->status, 401) << path;
+    EXPECT_EQ(res->get_header_value("WWW-Authenticate"), "Bearer realm=\"lightprobe\"") << path;
     res = c->Get(path, httplib::Headers{{"Authorization", "Bearer wrong"}});
     ASSERT_TRUE(res) << path;
     EXPECT_EQ(res->status, 401) << path;
   }
-  for (const char* path : {"/", "/lights", "/probe.png", "/metrics", "/status"}) {
+  for (const char* path : {"/lights", "/probe.png", "/metrics", "/status"}) {
     auto res = c->Get(path, httplib::Headers{{"Authorization", "Bearer s3cret"}});
     ASSERT_TRUE(res) << path;
     EXPECT_EQ(res->status, 200) << path;
   }
-  // Browsers' EventSource and <img> cannot send headers: the page passes access_token.
-  auto res = c->Get("/lights?access_token=s3cret");
+  // The page is static and holds no data: it loads without the token (a browser cannot
+  // send a header when it opens a URL) and reads the token from the URL fragment.
+  auto res = c->Get("/");
   ASSERT_TRUE(res);
   EXPECT_EQ(res->status, 200);
-  res = c->Get("/lights?access_token=s3cre");
+  // Issue 22: only the capitalised scheme, one space, the token exactly; no query token.
+  for (const char* auth : {"bearer s3cret", "BEARER s3cret", "Bearer  s3cret", "Bearer s3cre",
+                           "Bearer s3crett", "Basic czNjcmV0", "s3cret", "Bearer"}) {
+    res = c->Get("/lights", httplib::Headers{{"Authorization", auth}});
+    ASSERT_TRUE(res) << auth;
+    EXPECT_EQ(res->status, 401) << "'" << auth << "' was accepted";
+  }
+  res = c->Get("/lights?access_token=s3cret");
   ASSERT_TRUE(res);
-  EXPECT_EQ(res->status, 401);
+  EXPECT_EQ(res->status, 401) << "the query token is accepted";
   s.server->stop();
 }
 
@@ -518,7 +616,7 @@ TEST(LightServer, RefusesToListenBeyondLoopbackWithoutAToken) {
   EXPECT_NO_THROW(lp::LightServer{options});
   // Bad numbers.
   lp::LightServerOptions bad;
-  bad.threads = 0;
+  bad.limits.max_connections = 0;
   EXPECT_THROW(lp::LightServer{bad}, lp::InputError);
   bad = {};
   bad.stream_queue = 0;

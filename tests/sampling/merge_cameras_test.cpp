@@ -268,19 +268,134 @@ TEST(MergeCameras, Q2TreeRejectsListsThatAreNotTrees) {
   EXPECT_EQ(merge_q2trees({la, la}, {}, 300).lights.size(), la.lights.size());
 }
 
-TEST(MergeCameras, MixedMethodsAreRefused) {
+TEST(MergeCameras, TheStrictMergesRefuseMixedMethodsAndUnits) {
   const EnvMap a = render_scene(describe_scene(), Layout::Healpix, 16, 1);
   const LightList q = sample(a, 30, Method::Q2Tree), p = sample(a, 30, Method::Pharr);
-  EXPECT_THROW(merge_light_lists({q, p}, {}, 30), InputError);
   EXPECT_THROW(merge_q2trees({q, p}, {}, 30), InputError);
   EXPECT_THROW(merge_by_index({p, q}, {}), InputError);
   EXPECT_THROW(merge_by_index({q, q}, {}), InputError);
-  MergeState state;
-  std::vector<MergeInput> inputs{{"cam0", q, 10.0}, {"cam1", p, 10.0}};
-  EXPECT_THROW(merge_available(inputs, 10.5, 1.0, state, {}), InputError);
   LightList other_units = p;
   other_units.units = Units::Radiance;
   EXPECT_THROW(merge_by_index({p, other_units}, {}), InputError);
+  EXPECT_THROW(merge_light_lists({p, other_units}, {}, 30), InputError);
+  EXPECT_EQ(merge_mode({p, p}), MergeMode::Index);
+  EXPECT_EQ(merge_mode({q, q}), MergeMode::Q2Tree);
+  EXPECT_EQ(merge_mode({q, p}), MergeMode::Direction);
+}
+
+// Diffuse error of `lights` against the map (CONVENTIONS.md).
+double diffuse_error(const EnvMap& map, const LightList& list) {
+  return light_error(make_accuracy_reference(map), list.lights).diffuse;
+}
+
+// Issue 22: a q2tree camera beside a pharr one merges (by direction) instead of aborting.
+TEST(MergeCameras, DifferentMethodsMergeByDirectionKeepingPowerAndIrradiance) {
+  const EnvMap a = render_scene(describe_scene(sun_at(40, 30)), Layout::LatLong, 256, 128);
+  const EnvMap b = render_scene(describe_scene(sun_at(60, 200)), Layout::LatLong, 256, 128);
+  const EnvMap avg = average_map(a, b);
+  const LightList q = sample(a, 128, Method::Q2Tree), p = sample(b, 128, Method::Pharr);
+  ASSERT_EQ(merge_mode({q, p}), MergeMode::Direction);
+  // The union of both cameras' lights at half power: what merging by direction reduces.
+  LightList both;
+  for (const LightList* l : {&q, &p})
+    for (Light x : l->lights) {
+      for (double& c : x.rgb) c *= 0.5;
+      both.lights.push_back(x);
+    }
+  const double union_error = diffuse_error(avg, both);
+  for (int n : {32, 64, 128, 256}) {
+    const LightList m = merge_light_lists({q, p}, {}, n);
+    EXPECT_EQ(m.method, "q2tree");
+    EXPECT_LE(m.lights.size(), size_t(n));
+    EXPECT_GE(m.lights.size(), size_t(n - 2));
+    for (const Light& l : m.lights) {
+      ASSERT_NEAR(length(l.direction), 1.0, 1e-12);
+      ASSERT_TRUE(std::isfinite(l.rgb[0]) && l.rgb[0] >= 0);
+    }
+    EXPECT_NEAR(lum_total(m), 0.5 * (lum_total(q) + lum_total(p)), 1e-12 * lum_total(m));
+    const double e = diffuse_error(avg, m);
+    std::printf("direction merge q2tree 128 + pharr 128 -> %d lights: diffuse error %.4f against the average map "
+                "(union of both inputs %.4f, inputs against their own maps %.4f / %.4f)\n",
+                n, e, union_error, diffuse_error(a, q), diffuse_error(b, p));
+    EXPECT_LT(e, union_error + (n < 64 ? 0.02 : 0.005)) << n;
+  }
+  // Weights: all on one camera gives that camera's power.
+  const LightList only_q = merge_light_lists({q, p}, {1, 0}, 128);
+  EXPECT_NEAR(lum_total(only_q), lum_total(q), 1e-12 * lum_total(q));
+  // A q2tree list merged by direction with itself keeps its irradiance.
+  const LightList self = merge_by_direction({q, q}, {}, 128);
+  EXPECT_LT(std::fabs(diffuse_error(a, self) - diffuse_error(a, q)), 0.01);
+}
+
+LightList with_rgb(LightList list, size_t k, std::array<double, 3> rgb) {
+  list.lights.at(k).rgb = rgb;
+  return list;
+}
+
+// Issue 22: lists that used to abort `merge` are merged (by direction) or skipped with a
+// reason; merge_available never throws for what the inputs hold.
+TEST(MergeCameras, UnmergeableListsAreSkippedWithAReasonAndNeverThrow) {
+  const EnvMap a = render_scene(describe_scene(sun_at(40, 30)), Layout::LatLong, 128, 64);
+  const LightList q = sample(a, 64, Method::Q2Tree), p = sample(a, 64, Method::Pharr);
+  LightList empty = q;
+  empty.lights.clear();
+  LightList same_ids = p;
+  for (Light& l : same_ids.lights) l.id = 7;
+  LightList cut = q;
+  cut.lights.erase(cut.lights.begin() + 5);
+  LightList radiance = p;
+  radiance.units = Units::Radiance;
+  LightList skew = p;
+  skew.lights[3].direction = {1, 1, 0};
+  const std::vector<std::pair<LightList, std::string>> bad{
+      {empty, "empty"},
+      {with_rgb(p, 0, {1e308, 1e308, 1e308}), "too_bright"},
+      {with_rgb(p, 1, {-1, 0.5, 0.5}), "negative"},
+      {with_rgb(p, 2, {NAN, 1, 1}), "not_finite"},
+      {skew, "not_unit"},
+      {radiance, "units"}};
+  for (const auto& [list, code] : bad) {
+    MergeState state;
+    std::vector<MergeInput> in{{"good", p, 10.0}, {"bad", list, 10.0}};
+    LightList out;
+    ASSERT_NO_THROW(out = merge_available(in, 10.1, 1.0, state)) << code;
+    ASSERT_EQ(state.skipped.size(), 1u) << code;
+    EXPECT_EQ(state.skipped[0].name, "bad");
+    EXPECT_EQ(state.skipped[0].code, code);
+    EXPECT_FALSE(state.skipped[0].detail.empty());
+    EXPECT_EQ(state.used, std::vector<std::string>{"good"});
+    EXPECT_FALSE(state.stale);
+    EXPECT_NEAR(lum_total(out), lum_total(p), 1e-12 * lum_total(p)) << code;  // the good one alone
+    // Alone, the bad list gives nothing to merge: stale, no output yet, no throw.
+    if (code == "units") continue;  // alone, its units are the merge's
+    MergeState alone;
+    ASSERT_NO_THROW(out = merge_available({{"bad", list, 10.0}}, 10.1, 1.0, alone)) << code;
+    EXPECT_TRUE(alone.stale);
+    EXPECT_TRUE(out.lights.empty());
+  }
+  // Ids that do not correspond: merged by direction, power the average of the inputs'.
+  for (const LightList& odd : {same_ids, cut}) {
+    MergeState state;
+    std::vector<MergeInput> in{{"a", q, 10.0}, {"b", odd, 10.0}};
+    LightList out;
+    ASSERT_NO_THROW(out = merge_available(in, 10.1, 1.0, state));
+    EXPECT_EQ(state.mode, MergeMode::Direction);
+    EXPECT_TRUE(state.skipped.empty());
+    EXPECT_EQ(state.used.size(), 2u);
+    EXPECT_NEAR(lum_total(out), 0.5 * (lum_total(q) + lum_total(odd)), 1e-12 * lum_total(out));
+    for (const Light& l : out.lights) ASSERT_NEAR(length(l.direction), 1.0, 1e-12);
+  }
+  // A merge that fails (n below 12 for a q2tree merge) keeps the last output, flagged.
+  MergeState state;
+  MergeAvailableOptions tiny;
+  tiny.n = 64;
+  const LightList first = merge_available({{"a", q, 10.0}, {"b", q, 10.0}}, 10.1, 1.0, state, tiny);
+  tiny.n = 5;
+  LightList again;
+  ASSERT_NO_THROW(again = merge_available({{"a", q, 11.0}, {"b", q, 11.0}}, 11.1, 1.0, state, tiny));
+  EXPECT_TRUE(state.stale);
+  EXPECT_NE(state.error.find("n >= 12"), std::string::npos) << state.error;
+  EXPECT_EQ(again.lights.size(), first.lights.size());
 }
 
 TEST(MergeCameras, SilentInputIsDroppedAfterTheTimeoutAndTakenBack) {

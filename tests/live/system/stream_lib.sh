@@ -23,10 +23,12 @@ start_stream() {
 }
 
 # http_get PATH: prints the body of a GET on the stream's port; returns 1 unless 200.
+# With TOKEN set, sends it as "Authorization: Bearer $TOKEN".
 http_get() {
-  local reply
+  local reply auth=""
+  [ -n "${TOKEN:-}" ] && auth="Authorization: Bearer $TOKEN"$'\r\n'
   exec 3<>"/dev/tcp/127.0.0.1/$PORT" || return 1
-  printf 'GET %s HTTP/1.0\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n' "$1" >&3
+  printf 'GET %s HTTP/1.0\r\nHost: 127.0.0.1\r\n%sConnection: close\r\n\r\n' "$1" "$auth" >&3
   reply=$(timeout 5 cat <&3)
   exec 3<&- 3>&-
   case "${reply%%$'\r'*}" in *" 200 "*) ;; *) return 1 ;; esac

@@ -1,0 +1,189 @@
+#include "live/map_views.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/image_io.h"
+#include "sampling/overlay.h"
+
+namespace lp {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr const char* kCacheControl = "no-cache";  // keep it, but ask (If-None-Match) every time
+
+std::string encode_png(const std::vector<float>& rgb, int width, int height) {
+  cv::Mat img(height, width, CV_8UC3);
+  auto encode = [](float v) {
+    if (!(v > 0.0f)) return uint8_t(0);  // also NaN
+    if (v >= 1.0f) return uint8_t(255);
+    const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(double(v), 1.0 / 2.4) - 0.055;
+    return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
+  };
+  for (int y = 0; y < height; ++y) {
+    uint8_t* row = img.ptr<uint8_t>(y);
+    for (int x = 0; x < width; ++x) {
+      const float* p = &rgb[3 * (size_t(y) * size_t(width) + size_t(x))];
+      row[3 * x] = encode(p[2]);  // OpenCV is BGR
+      row[3 * x + 1] = encode(p[1]);
+      row[3 * x + 2] = encode(p[0]);
+    }
+  }
+  std::vector<uint8_t> buf;
+  if (!cv::imencode(".png", img, buf)) throw std::runtime_error("light server: PNG encoder failed");
+  return std::string(buf.begin(), buf.end());
+}
+
+// One view's cache and the requests waiting for it (under Impl::mutex).
+struct Cached {
+  Cached(const char* type, char t, double rate) : content_type(type), tag(t), max_rate(rate) {}
+  const char* content_type;
+  char tag;
+  double max_rate;  // renders per second at most; 0: every new map
+  uint64_t generation = 0;
+  Clock::time_point time{};
+  std::shared_ptr<const std::string> body;
+  std::string etag;
+  struct Waiter {
+    std::shared_ptr<HttpDeferred> answer;
+    std::optional<std::string> if_none_match;
+  };
+  std::vector<Waiter> waiting;
+  MapFrame frame;  // the newest frame asked for
+
+  bool fresh(uint64_t g, Clock::time_point now) const {
+    if (!body) return false;
+    if (generation == g || max_rate <= 0) return generation == g;
+    return now - time < std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / max_rate));
+  }
+  HttpResponse response(const std::string* if_none_match) const {
+    if (http_etag_matches(if_none_match, etag)) return http_not_modified(etag, kCacheControl);
+    HttpResponse r;
+    r.body = body;
+    r.content_type = content_type;
+    r.headers = {{"ETag", etag}, {"Cache-Control", kCacheControl}};
+    return r;
+  }
+};
+
+}  // namespace
+
+struct MapViews::Impl {
+  MapViewOptions options;
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::thread thread;
+  bool quit = false, running = false;
+  Cached png{"image/png", 'p', 4}, exr{"image/x-exr", 'e', 0};
+
+  std::shared_ptr<const std::string> render(Cached& c, const MapFrame& f) {
+    if (&c == &exr) return std::make_shared<const std::string>(encode_envmap_exr(*f.map));
+    const EnvMap& map = *f.map;
+    int width = options.png_width;
+    if (width <= 0) width = map.layout == Layout::LatLong ? std::min(map.width, 1024) : 1024;
+    width = std::max(2, width - width % 2);
+    static const std::vector<Light> none;
+    const std::vector<float> rgb = render_overlay(map, f.lights ? f.lights->lights : none, width);
+    return std::make_shared<const std::string>(encode_png(rgb, width, width / 2));
+  }
+
+  // Renders what is waiting, answers the waiters; the lock is released while rendering.
+  void serve(Cached& c, std::unique_lock<std::mutex>& lock) {
+    auto waiting = std::move(c.waiting);
+    c.waiting.clear();
+    const MapFrame f = c.frame;
+    if (!c.fresh(f.generation, Clock::now()) && f.map) {
+      lock.unlock();
+      std::shared_ptr<const std::string> body;
+      try {
+        body = render(c, f);
+      } catch (const std::exception&) {
+        // The waiters get 500 (their promises die unkept).
+      }
+      lock.lock();
+      if (!body) return;
+      c.body = body;
+      c.generation = f.generation;
+      c.time = Clock::now();
+      c.etag = fmt::format("\"{}-{}{}\"", options.etag_prefix, c.tag, f.generation);
+    }
+    for (auto& w : waiting) w.answer->send(c.response(w.if_none_match ? &*w.if_none_match : nullptr));
+  }
+
+  void loop() {
+    std::unique_lock lock(mutex);
+    while (true) {
+      cv.wait(lock, [&] { return quit || !png.waiting.empty() || !exr.waiting.empty(); });
+      if (quit) break;
+      if (!png.waiting.empty()) serve(png, lock);
+      if (!exr.waiting.empty()) serve(exr, lock);
+    }
+    for (Cached* c : {&png, &exr}) {
+      for (auto& w : c->waiting) {
+        HttpResponse r;
+        r.status = 503;
+        r.set_body(http_error_json("server is stopping"), "application/json");
+        w.answer->send(r);
+      }
+      c->waiting.clear();
+    }
+  }
+};
+
+MapViews::MapViews(MapViewOptions options) : impl_(std::make_unique<Impl>()) {
+  impl_->options = std::move(options);
+  impl_->png.max_rate = impl_->options.max_png_rate > 0 ? impl_->options.max_png_rate : 4;
+}
+
+MapViews::~MapViews() { stop(); }
+
+void MapViews::start() {
+  std::lock_guard lock(impl_->mutex);
+  if (impl_->running) return;
+  impl_->running = true;
+  impl_->quit = false;
+  impl_->thread = std::thread([this] { impl_->loop(); });
+}
+
+void MapViews::stop() {
+  if (!impl_) return;
+  {
+    std::lock_guard lock(impl_->mutex);
+    if (!impl_->running) return;
+    impl_->quit = true;
+    impl_->running = false;
+  }
+  impl_->cv.notify_all();
+  if (impl_->thread.joinable()) impl_->thread.join();
+}
+
+void MapViews::answer(MapView view, const MapFrame& frame, const HttpRequest& req, HttpExchange& ex) {
+  Impl& s = *impl_;
+  Cached& c = view == MapView::Png ? s.png : s.exr;
+  std::lock_guard lock(s.mutex);
+  if (c.fresh(frame.generation, Clock::now()) || !frame.map) {
+    if (!c.body) {
+      HttpResponse r;
+      r.status = 503;
+      r.set_body(http_error_json("no map published yet"), "application/json");
+      r.headers.emplace_back("Retry-After", "1");
+      return ex.respond(std::move(r));
+    }
+    return ex.respond(c.response(req.header("if-none-match")));
+  }
+  if (frame.generation >= c.frame.generation) c.frame = frame;
+  const std::string* inm = req.header("if-none-match");
+  c.waiting.push_back({ex.defer(), inm ? std::optional<std::string>(*inm) : std::nullopt});
+  s.cv.notify_one();
+}
+
+}  // namespace lp

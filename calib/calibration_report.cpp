@@ -4,11 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/picture_io.h"
 
 namespace lp {
 
@@ -19,10 +19,15 @@ double scale_for(const CameraModel& m, const CalibrationPlotOptions& o) {
   return std::min(1.0, double(o.max_width_px) / m.width);
 }
 
+// The plots are drawn with OpenCV (BGR) and written by core's one encoder.
 void write_png(const std::string& path, const cv::Mat& bgr) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", bgr, bytes)) throw InputError(fmt::format("{}: cannot encode PNG", path));
-  write_file_atomically(path, std::string(bytes.begin(), bytes.end()));
+  std::vector<uint16_t> rgb(3 * size_t(bgr.cols) * size_t(bgr.rows));
+  for (int y = 0; y < bgr.rows; ++y) {
+    const uint8_t* row = bgr.ptr<uint8_t>(y);
+    uint16_t* out = &rgb[3 * size_t(y) * size_t(bgr.cols)];
+    for (int i = 0; i < 3 * bgr.cols; i += 3) out[i] = row[i + 2], out[i + 1] = row[i + 1], out[i + 2] = row[i];
+  }
+  write_file_atomically(path, encode_rgb_codes(path, bgr.cols, bgr.rows, 8, rgb));
 }
 
 }  // namespace

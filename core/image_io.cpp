@@ -32,6 +32,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/file_io.h"
 
 namespace lp {
 
@@ -57,15 +58,6 @@ std::string one_line(std::string_view text, size_t max_len = 200) {
   }
   while (!out.empty() && out.back() == ' ') out.pop_back();
   return out;
-}
-
-std::string lower_extension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
-  std::string ext = path.substr(dot);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
 }
 
 // A JPEG that stops before its End Of Image marker: libjpeg decodes what is there, fills the
@@ -820,9 +812,8 @@ std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options)
 }
 
 RgbImage read_rgb_image(const std::string& path) {
-  const std::string ext = lower_extension(path);
   RgbImage img;
-  if (ext == ".exr" || ext == ".hdr" || ext == ".pic" || ext == ".rgbe" || ext == ".pfm") {
+  if (is_radiance_file(path)) {
     ReadMapOptions ro;
     ro.layout = Layout::Hemisphere;  // any W x H; the layout is not used
     EnvMap m = read_envmap(path, ro);
@@ -889,38 +880,6 @@ CameraImage read_camera_image(const std::string& path) {
     }
     return out;
   });
-}
-
-void write_display_image(const std::string& path, int width, int height, const std::vector<float>& rgb) {
-  if (width <= 0 || height <= 0 || rgb.size() != 3 * size_t(width) * size_t(height))
-    throw std::invalid_argument("write_display_image: rgb does not hold width x height pixels");
-  const std::string ext = lower_extension(path);
-  if (ext != ".png" && ext != ".jpg" && ext != ".jpeg")
-    fail(path, fmt::format("unsupported display image format '{}' (expected .png or .jpg)", ext.empty() ? "(none)" : ext));
-  const std::string bytes = guarded(path, "write", [&] {
-    cv::Mat img(height, width, CV_8UC3);
-    auto encode = [](float v) {
-      if (!(v > 0.0f)) return uint8_t(0);  // also NaN
-      if (v >= 1.0f) return uint8_t(255);
-      const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(double(v), 1.0 / 2.4) - 0.055;
-      return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
-    };
-    for (int y = 0; y < height; ++y) {
-      uint8_t* row = img.ptr<uint8_t>(y);
-      for (int x = 0; x < width; ++x) {
-        const float* p = &rgb[3 * (size_t(y) * size_t(width) + size_t(x))];
-        row[3 * x] = encode(p[2]);
-        row[3 * x + 1] = encode(p[1]);
-        row[3 * x + 2] = encode(p[0]);
-      }
-    }
-    std::vector<uint8_t> buf;
-    std::vector<int> params;
-    if (ext != ".png") params = {cv::IMWRITE_JPEG_QUALITY, 95};
-    if (!cv::imencode(ext == ".png" ? ".png" : ".jpg", img, buf, params)) fail(path, "cannot write: encoder failed");
-    return std::string(buf.begin(), buf.end());
-  });
-  write_file_atomically(path, bytes);
 }
 
 void make_output_directory(const std::string& dir) {

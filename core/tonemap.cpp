@@ -32,6 +32,13 @@ double exposure_for(const std::vector<float>& rgb, const std::vector<uint8_t>& v
 
 }  // namespace
 
+uint8_t srgb_code(float v) {
+  if (!(v > 0.0f)) return 0;  // also NaN
+  if (v >= 1.0f) return 255;
+  const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(double(v), 1.0 / 2.4) - 0.055;
+  return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
+}
+
 std::vector<float> tone_map(const std::vector<float>& rgb, const std::vector<uint8_t>& valid, int width, int height,
                             const ToneMapOptions& options) {
   const size_t n = size_t(width) * size_t(height);

@@ -17,6 +17,10 @@ struct ToneMapOptions {
   int checker_px = 8;        // checkerboard square for invalid pixels
 };
 
+// The sRGB transfer of one linear display value in [0, 1] to an 8-bit code (NaN and values
+// <= 0 give 0, values >= 1 give 255): the one used by every picture (write_display_image).
+uint8_t srgb_code(float linear);
+
 // `valid` empty: every pixel valid. Row-major, 3 floats per pixel.
 std::vector<float> tone_map(const std::vector<float>& rgb, const std::vector<uint8_t>& valid, int width, int height,
                             const ToneMapOptions& options = {});

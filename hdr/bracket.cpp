@@ -6,12 +6,11 @@
 #include <sstream>
 
 #include <exiv2/exiv2.hpp>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <fmt/format.h>
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/picture_io.h"
 #include "hdr/raw_input.h"
 
 namespace lp {
@@ -193,25 +192,11 @@ std::vector<double> read_exposure_list(const std::string& path) {
 }
 
 void write_code_image(const std::string& path, const RgbImage& image, int bit_depth) {
-  if (bit_depth != 8 && bit_depth != 16) throw InputError(fmt::format("{}: bit depth must be 8 or 16", path));
-  if (image.width <= 0 || image.height <= 0 || image.rgb.size() != 3 * size_t(image.width) * size_t(image.height))
-    throw InputError(fmt::format("{}: image buffer does not match its size", path));
   const double max = bit_depth == 8 ? 255.0 : 65535.0;
-  cv::Mat m(image.height, image.width, bit_depth == 8 ? CV_8UC3 : CV_16UC3);
-  for (int y = 0; y < image.height; ++y)
-    for (int x = 0; x < image.width; ++x) {
-      const float* p = &image.rgb[3 * (size_t(y) * size_t(image.width) + size_t(x))];
-      for (int c = 0; c < 3; ++c) {
-        const double v = std::lround(std::clamp(double(p[2 - c]), 0.0, 1.0) * max);  // RGB -> BGR
-        if (bit_depth == 8) m.at<cv::Vec3b>(y, x)[c] = uint8_t(v);
-        else m.at<cv::Vec3w>(y, x)[c] = uint16_t(v);
-      }
-    }
-  const auto dot = path.rfind('.');
-  const std::string ext = dot == std::string::npos ? ".png" : path.substr(dot);
-  std::vector<uchar> bytes;
-  if (!cv::imencode(ext, m, bytes)) throw InputError(fmt::format("{}: cannot encode as {}", path, ext));
-  write_file_atomically(path, std::string(bytes.begin(), bytes.end()));
+  std::vector<uint16_t> codes(image.rgb.size());
+  std::transform(image.rgb.begin(), image.rgb.end(), codes.begin(),
+                 [&](float v) { return uint16_t(std::lround(std::clamp(double(v), 0.0, 1.0) * max)); });
+  write_file_atomically(path, encode_rgb_codes(path, image.width, image.height, bit_depth, codes));
 }
 
 }  // namespace lp

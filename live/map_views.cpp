@@ -10,9 +10,9 @@
 #include <vector>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/image_io.h"
+#include "core/picture_io.h"
 #include "sampling/overlay.h"
 
 namespace lp {
@@ -20,28 +20,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr const char* kCacheControl = "no-cache";  // keep it, but ask (If-None-Match) every time
-
-std::string encode_png(const std::vector<float>& rgb, int width, int height) {
-  cv::Mat img(height, width, CV_8UC3);
-  auto encode = [](float v) {
-    if (!(v > 0.0f)) return uint8_t(0);  // also NaN
-    if (v >= 1.0f) return uint8_t(255);
-    const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(double(v), 1.0 / 2.4) - 0.055;
-    return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
-  };
-  for (int y = 0; y < height; ++y) {
-    uint8_t* row = img.ptr<uint8_t>(y);
-    for (int x = 0; x < width; ++x) {
-      const float* p = &rgb[3 * (size_t(y) * size_t(width) + size_t(x))];
-      row[3 * x] = encode(p[2]);  // OpenCV is BGR
-      row[3 * x + 1] = encode(p[1]);
-      row[3 * x + 2] = encode(p[0]);
-    }
-  }
-  std::vector<uint8_t> buf;
-  if (!cv::imencode(".png", img, buf)) throw std::runtime_error("light server: PNG encoder failed");
-  return std::string(buf.begin(), buf.end());
-}
 
 // One view's cache and the requests waiting for it (under Impl::mutex).
 struct Cached {
@@ -93,7 +71,7 @@ struct MapViews::Impl {
     width = std::max(2, width - width % 2);
     static const std::vector<Light> none;
     const std::vector<float> rgb = render_overlay(map, f.lights ? f.lights->lights : none, width);
-    return std::make_shared<const std::string>(encode_png(rgb, width, width / 2));
+    return std::make_shared<const std::string>(encode_display_png(width, width / 2, rgb));
   }
 
   // Renders what is waiting, answers the waiters; the lock is released while rendering.

@@ -1,0 +1,27 @@
+// Plain files: reading text (CSV, JSON, lists) and the rules that tell files apart by
+// their extension. With core/image_io.h (images, maps, atomic writes) the only place the
+// library opens files. Failures throw InputError naming the file and the problem.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace lp {
+
+// The whole file as bytes. InputError "<path>: cannot open <what>: <reason>" when it cannot
+// be read, or "<path>: larger than <max_bytes> bytes" (a text input that large is a mistake).
+constexpr size_t kMaxTextFileBytes = size_t(256) << 20;
+std::string read_text_file(const std::string& path, const std::string& what = "",
+                           size_t max_bytes = kMaxTextFileBytes);
+
+// The extension of the file name in `path`, lower case, with its dot (".exr"); "" when the
+// name has none (a dot in a folder name does not count).
+std::string lower_extension(const std::string& path);
+
+// Image files by extension, case-insensitive. Radiance files hold floats read as stored
+// (.exr, .hdr, .pic, .rgbe, .pfm); camera images hold code values (.png, .jpg, .jpeg,
+// .tif, .tiff).
+bool is_radiance_file(const std::string& path);
+bool is_camera_image_file(const std::string& path);
+
+}  // namespace lp

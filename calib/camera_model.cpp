@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <cctype>
 #include <cstring>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -16,6 +15,7 @@
 
 #include "calib/lens_model.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 
 // mrcal.h is a C header without extern "C".
@@ -224,13 +224,7 @@ std::string g17(double v) {
   return buf;
 }
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+std::string read_text(const std::string& path) { return read_text_file(path); }
 
 bool ends_with(const std::string& s, const std::string& suffix) {
   if (s.size() < suffix.size()) return false;
@@ -496,7 +490,7 @@ void write_opencv_yaml(const std::string& path, const CameraModel& model) {
 CameraModel read_opencv_yaml(const std::string& path) {
   CameraModel m;
   try {
-    cv::FileStorage fs(path, cv::FileStorage::READ);
+    cv::FileStorage fs(read_text_file(path), cv::FileStorage::READ | cv::FileStorage::MEMORY);
     if (!fs.isOpened()) throw InputError(path + ": cannot open as OpenCV FileStorage");
     auto need = [&](const char* key) {
       cv::FileNode node = fs[key];

@@ -5,10 +5,10 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 
 namespace lp {
@@ -44,8 +44,7 @@ ColourMatch fit_colour_match(const std::vector<ColourPatchPair>& pairs) {
 }
 
 std::vector<ColourPatchPair> read_colour_patches_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open");
+  std::istringstream in(read_text_file(path));
   std::vector<ColourPatchPair> pairs;
   std::string line;
   int line_no = 0;
@@ -85,10 +84,9 @@ void save_colour_match(const std::string& path, const ColourMatch& match) {
 }
 
 ColourMatch load_colour_match(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open");
+  const std::string text = read_text_file(path);
   try {
-    const auto j = nlohmann::json::parse(in);
+    const auto j = nlohmann::json::parse(text);
     if (j.at("format") != "lightprobe.colour_match/1") throw InputError(path + ": not a lightprobe colour match");
     ColourMatch m;
     const auto a = j.at("matrix").get<std::vector<double>>();

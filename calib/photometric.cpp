@@ -7,13 +7,13 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/error.h"
+#include "core/file_io.h"
 
 namespace lp {
 namespace {
@@ -272,8 +272,7 @@ void validate(const std::vector<PhotometricReading>& readings, const Photometric
 }  // namespace
 
 std::vector<PhotometricReading> read_readings_csv(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open the readings file");
+  std::istringstream in(read_text_file(path, "the readings file"));
   std::vector<PhotometricReading> readings;
   std::map<std::string, int> first_line;
   bool header = false;
@@ -459,11 +458,10 @@ void save_photometric(const std::string& path, const PhotometricCalibration& c) 
 }
 
 PhotometricCalibration load_photometric(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open the photometric calibration");
+  const std::string text = read_text_file(path, "the photometric calibration");
   PhotometricCalibration c;
   try {
-    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json j = nlohmann::json::parse(text);
     if (j.value("format", "") != "lightprobe.photometric/1")
       throw InputError(path + ": not a photometric calibration (format is not lightprobe.photometric/1)");
     c.scale_luminance = j.at("scale_luminance").get<double>();

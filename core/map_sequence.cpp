@@ -3,13 +3,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/error.h"
+#include "core/file_io.h"
 
 namespace lp {
 
@@ -17,17 +17,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool is_map_file(const fs::path& p) {
-  const std::string e = p.extension().string();
-  return e == ".exr" || e == ".hdr" || e == ".pfm";
-}
+bool is_map_file(const fs::path& p) { return is_radiance_file(p.string()); }
 
-bool is_image_file(const fs::path& p) {
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return e == ".exr" || e == ".hdr" || e == ".pfm" || e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".tif" ||
-         e == ".tiff";
-}
+bool is_image_file(const fs::path& p) { return is_radiance_file(p.string()) || is_camera_image_file(p.string()); }
 
 // The files named, a directory standing for the files inside it that `keep` accepts.
 std::vector<std::string> expand(const std::vector<std::string>& inputs, bool (*keep)(const fs::path&), const char* what) {
@@ -49,7 +41,7 @@ std::vector<std::string> expand(const std::vector<std::string>& inputs, bool (*k
 }
 
 std::vector<double> read_timestamps(const fs::path& path, size_t frames) {
-  std::ifstream in(path);
+  std::istringstream in(read_text_file(path.string(), "the timestamps"));
   std::vector<double> times;
   std::string line;
   while (std::getline(in, line)) {

@@ -4,10 +4,10 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 
 namespace lp {
@@ -332,11 +332,7 @@ LightQuadtree LightQuadtree::from_json(const std::string& text, const std::strin
 void save_model(const std::string& path, const LightQuadtree& tree) { write_file_atomically(path, tree.to_json()); }
 
 LightQuadtree load_model(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw InputError(fmt::format("{}: cannot open", path));
-  std::stringstream s;
-  s << f.rdbuf();
-  return LightQuadtree::from_json(s.str(), path);
+  return LightQuadtree::from_json(read_text_file(path, "the model"), path);
 }
 
 }  // namespace lp

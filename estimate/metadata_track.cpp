@@ -3,9 +3,10 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <fstream>
+#include <sstream>
 
 #include "core/error.h"
+#include "core/file_io.h"
 
 namespace lp {
 
@@ -54,8 +55,7 @@ void read_camera(const json& c, MeteringOptions& o, const std::string& source) {
 }  // namespace
 
 Track read_track(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw InputError(fmt::format("{}: cannot open the track", path));
+  std::istringstream f(read_text_file(path, "the track"));
   Track track;
   std::string line;
   int line_no = 0;

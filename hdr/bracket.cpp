@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
 #include <exiv2/exiv2.hpp>
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 #include "core/picture_io.h"
 #include "hdr/raw_input.h"
@@ -157,8 +157,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
 }
 
 std::vector<double> read_exposure_list(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open exposure list");
+  std::istringstream in(read_text_file(path, "the exposure list"));
   std::vector<double> times;
   std::string line;
   int line_no = 0;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <numeric>
 #include <sstream>
 
@@ -17,6 +16,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
+#include "core/file_io.h"
 
 namespace lp {
 namespace {
@@ -324,13 +324,10 @@ void save_response(const std::string& path, const CameraResponse& r) {
 }
 
 CameraResponse load_response(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open response file");
-  std::stringstream ss;
-  ss << in.rdbuf();
+  const std::string text = read_text_file(path, "the response file");
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(ss.str());
+    j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(fmt::format("{}: not JSON (byte {})", path,
                                  e.id == 101 ? std::to_string(static_cast<const nlohmann::json::parse_error&>(e).byte)

@@ -11,6 +11,7 @@
 
 #include "calib/lens_model.h"
 #include "core/error.h"
+#include "core/file_io.h"
 
 namespace lp {
 namespace {
@@ -77,12 +78,12 @@ FisheyeModel equidistant_fisheye(int width, int height, double fov_deg) {
 }
 
 FisheyeModel read_fisheye_yaml(const std::string& path) {
-  if (std::filesystem::path(path).extension() == ".cameramodel")
+  if (lower_extension(path) == ".cameramodel")
     throw InputError(path + ": mrcal models are not read yet; export OpenCV YAML");
-  if (!std::filesystem::exists(path)) throw InputError(path + ": no such file");
+  const std::string text = read_text_file(path);
   cv::FileStorage fs;
   try {
-    fs.open(path, cv::FileStorage::READ);
+    fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
   } catch (const cv::Exception&) {
     throw InputError(path + ": not an OpenCV FileStorage file");
   }
@@ -122,13 +123,14 @@ FisheyeModel read_fisheye_yaml(const std::string& path) {
 }
 
 void write_fisheye_yaml(const std::string& path, const FisheyeModel& model) {
-  cv::FileStorage fs(path, cv::FileStorage::WRITE);
-  if (!fs.isOpened()) throw InputError(path + ": cannot write");
+  const int format = lower_extension(path) == ".xml" ? cv::FileStorage::FORMAT_XML : cv::FileStorage::FORMAT_YAML;
+  cv::FileStorage fs(path, cv::FileStorage::WRITE | cv::FileStorage::MEMORY | format);
   fs << "image_width" << model.width << "image_height" << model.height;
   cv::Mat K = (cv::Mat_<double>(3, 3) << model.fx, 0, model.cx, 0, model.fy, model.cy, 0, 0, 1);
   cv::Mat D = (cv::Mat_<double>(4, 1) << model.k[0], model.k[1], model.k[2], model.k[3]);
   fs << "camera_matrix" << K << "distortion_coefficients" << D << "distortion_model"
      << lens_type_info(LensType::KannalaBrandt).opencv_distortion_model;
+  write_file_atomically(path, fs.releaseAndGetString());
 }
 
 Vec3 fisheye_unproject(const FisheyeModel& model, double x, double y) {

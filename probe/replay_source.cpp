@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -11,6 +10,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "core/file_io.h"
 #include "probe/camera_source.h"
 
 namespace lp {
@@ -26,11 +26,6 @@ std::unique_ptr<CameraSource> open_v4l2(int index, const std::string& spec, cons
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
 
 std::optional<double> parse_number(const std::string& s) {
   try {
@@ -61,8 +56,7 @@ struct Sidecar {
 
 Sidecar read_sidecar(const fs::path& path, bool positive) {
   Sidecar sidecar;
-  std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": cannot read");
+  std::istringstream in(read_text_file(path.string()));
   std::string line;
   int line_number = 0;
   bool seen_data = false;
@@ -135,11 +129,10 @@ class ReplaySource final : public CameraSource {
       : spec_(std::move(spec)), options_(options), start_(Clock::now()) {
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) throw InputError(spec_ + ": " + dir + " is not a directory");
-    static const std::vector<std::string> extensions = {".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr", ".hdr", ".pfm"};
     for (const auto& entry : fs::directory_iterator(dir, ec)) {
       if (!entry.is_regular_file()) continue;
-      const std::string ext = lower(entry.path().extension().string());
-      if (std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) files_.push_back(entry.path());
+      const std::string name = entry.path().string();
+      if (is_camera_image_file(name) || is_radiance_file(name)) files_.push_back(entry.path());
     }
     if (ec) throw InputError(spec_ + ": cannot list " + dir + ": " + ec.message());
     if (files_.empty()) throw InputError(spec_ + ": no images (.png .jpg .tif .exr .hdr .pfm) in " + dir);
@@ -172,8 +165,7 @@ class ReplaySource final : public CameraSource {
     const int64_t pass = delivered_ / int64_t(files_.size());
     const fs::path& file = files_[index];
     CameraFrame frame;
-    const std::string ext = lower(file.extension().string());
-    if (ext == ".exr" || ext == ".hdr" || ext == ".pfm") {
+    if (is_radiance_file(file.string())) {
       frame.image = read_rgb_image(file.string());
       frame.pixel_format = "RGBFloat";
     } else {

@@ -24,6 +24,7 @@
 #include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "eval/synthetic_scene.h"
@@ -336,7 +337,7 @@ int run_tables(const TablesArgs& args, const Output& out) {
   auto cones = std::make_shared<const AngularRegions>(options.glossy.cone_regions);
   const ShadingScene s = prepare_shading(sampler->place(args.tables.n * options.glossy.low_per_high), args.tables.n,
                                          regions, cones, options);
-  const bool json = fs::path(args.output).extension() == ".json";
+  const bool json = lower_extension(args.output) == ".json";
   LightList meta;
   meta.method = std::string(to_string(method));
   meta.units = map.units;

@@ -27,6 +27,20 @@ BracketUnwrapPlan plan_bracket_unwrap(const CompiledRemap& remap) {
 
 namespace {
 
+// The 2 x 2 footprint of every tap of `remap` (k values per source pixel, rows `width`
+// pixels long) into dst[4 k j, 4 k (j + 1)): p[i], p[i + 1], p[i + W], p[i + W + 1].
+// Invalid taps leave their footprint as it is.
+template <class T>
+void gather_footprints(const T* src, size_t width, size_t k, const CompiledRemap& remap, T* dst) {
+  for (size_t j = 0; j < remap.taps.size(); ++j) {
+    const int32_t index = remap.taps[j].index;
+    if (index < 0) continue;
+    const size_t i = size_t(index);
+    std::memcpy(dst + 4 * k * j, src + k * i, 2 * k * sizeof(T));
+    std::memcpy(dst + 4 * k * j + 2 * k, src + k * (i + width), 2 * k * sizeof(T));
+  }
+}
+
 // Frame -> its footprints, 2 pixels per row, 2 rows per output pixel.
 RgbImage gather(const RgbImage& frame, const CompiledRemap& remap) {
   const size_t n = remap.taps.size();
@@ -35,21 +49,11 @@ RgbImage gather(const RgbImage& frame, const CompiledRemap& remap) {
   g.height = int(2 * n);
   g.units = frame.units;
   g.rgb.assign(12 * n, 0.0f);
-  const bool masked = !frame.valid.empty();
-  if (masked) g.valid.assign(4 * n, 0);
   const size_t W = size_t(frame.width);
-  const float* s = frame.rgb.data();
-  for (size_t j = 0; j < n; ++j) {
-    const int32_t index = remap.taps[j].index;
-    if (index < 0) continue;
-    const size_t i = size_t(index);
-    float* d = g.rgb.data() + 12 * j;
-    std::memcpy(d, s + 3 * i, 6 * sizeof(float));            // p[i], p[i + 1]
-    std::memcpy(d + 6, s + 3 * (i + W), 6 * sizeof(float));  // p[i + W], p[i + W + 1]
-    if (masked) {
-      uint8_t* m = g.valid.data() + 4 * j;
-      m[0] = frame.valid[i], m[1] = frame.valid[i + 1], m[2] = frame.valid[i + W], m[3] = frame.valid[i + W + 1];
-    }
+  gather_footprints(frame.rgb.data(), W, 3, remap, g.rgb.data());
+  if (!frame.valid.empty()) {
+    g.valid.assign(4 * n, 0);
+    gather_footprints(frame.valid.data(), W, 1, remap, g.valid.data());
   }
   return g;
 }
@@ -76,13 +80,7 @@ RgbImage fuse_and_unwrap(const Bracket& bracket, const CameraResponse& response,
   // Masks are per pixel of the frames: gather them like the pixels.
   for (auto& mask : options.frame_masks) {
     std::vector<uint8_t> g(4 * full.taps.size(), 0);
-    const size_t W = size_t(full.src_width);
-    for (size_t j = 0; j < full.taps.size(); ++j) {
-      const int32_t index = full.taps[j].index;
-      if (index < 0) continue;
-      const size_t i = size_t(index);
-      g[4 * j] = mask[i], g[4 * j + 1] = mask[i + 1], g[4 * j + 2] = mask[i + W], g[4 * j + 3] = mask[i + W + 1];
-    }
+    gather_footprints(mask.data(), size_t(full.src_width), 1, full, g.data());
     mask = std::move(g);
   }
   const RgbImage merged = merge_bracket(compact, response, options);

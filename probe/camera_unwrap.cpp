@@ -28,29 +28,14 @@ CameraModel camera_model_from_fisheye(const FisheyeModel& f) {
 RemapTable camera_remap(const CameraModel& model, const Mat3& world_from_camera, Layout layout, int width,
                         int height, double max_field_deg) {
   const double min_cos = max_field_deg > 0 ? std::cos(max_field_deg * M_PI / 180) : -2;
-  const EnvMap shape = make_envmap(layout, width, height);
   const Mat3 camera_from_world = transpose(world_from_camera);
-  RemapTable t;
-  t.out_width = shape.width;
-  t.out_height = shape.height;
-  const size_t n = shape.pixel_count();
-  t.src_x.resize(n);
-  t.src_y.resize(n);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const Vec3 d = camera_from_world * pixel_direction(shape, i);
-      const auto p = d.z >= min_cos ? project(model, d) : std::nullopt;
-      const double x = p ? p->x + 0.5 : -1, y = p ? p->y + 0.5 : -1;
-      if (p && x >= 0 && x <= model.width && y >= 0 && y <= model.height) {
-        t.src_x[i] = float(x);
-        t.src_y[i] = float(y);
-      } else {
-        t.src_x[i] = t.src_y[i] = nan;
-      }
-    }
-  });
-  return t;
+  return remap_table(layout, width, height, model.width, model.height,
+                     [&](Vec3 world) -> std::optional<std::array<double, 2>> {
+                       const Vec3 d = camera_from_world * world;
+                       const auto p = d.z >= min_cos ? project(model, d) : std::nullopt;
+                       if (!p) return std::nullopt;
+                       return std::array<double, 2>{p->x + 0.5, p->y + 0.5};  // remap convention
+                     });
 }
 
 EnvMap unwrap_with_camera(const RgbImage& image, const CameraModel& model, const Mat3& world_from_camera,

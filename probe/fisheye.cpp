@@ -172,28 +172,12 @@ std::optional<ImagePoint> fisheye_project(const FisheyeModel& model, Vec3 direct
 }
 
 RemapTable fisheye_remap(const FisheyeModel& model, Layout layout, int width, int height) {
-  const EnvMap shape = make_envmap(layout, width, height);
-  RemapTable t;
-  t.out_width = shape.width;
-  t.out_height = shape.height;
-  const size_t n = shape.pixel_count();
-  t.src_x.resize(n);
-  t.src_y.resize(n);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const auto p = fisheye_project(model, pixel_direction(shape, i));
-      // Remap convention: pixel centres at +0.5.
-      const double x = p ? p->x + 0.5 : -1, y = p ? p->y + 0.5 : -1;
-      if (p && x >= 0 && x <= model.width && y >= 0 && y <= model.height) {
-        t.src_x[i] = float(x);
-        t.src_y[i] = float(y);
-      } else {
-        t.src_x[i] = t.src_y[i] = nan;
-      }
-    }
-  });
-  return t;
+  return remap_table(layout, width, height, model.width, model.height,
+                     [&](Vec3 d) -> std::optional<std::array<double, 2>> {
+                       const auto p = fisheye_project(model, d);
+                       if (!p) return std::nullopt;
+                       return std::array<double, 2>{p->x + 0.5, p->y + 0.5};  // remap convention
+                     });
 }
 
 EnvMap unwrap_fisheye(const RgbImage& image, const FisheyeModel& model, Layout layout, int width, int height,

@@ -645,29 +645,15 @@ RemapTable mirror_ball_remap(const BallInImage& ball, const MirrorBallCamera& ca
   if (!(options.blind_spot_deg >= 0 && options.blind_spot_deg < 180))
     throw InputError("mirror ball: blind_spot_deg must be in [0, 180)");
   const MirrorBallProjection proj(ball, camera, image_width);
-  const EnvMap map = make_envmap(layout, width, height);
-  RemapTable table;
-  table.out_width = map.width;
-  table.out_height = map.height;
-  const size_t n = map.pixel_count();
-  table.src_x.assign(n, float(kNaN));
-  table.src_y.assign(n, float(kNaN));
   const double max_psi = std::min(M_PI - options.blind_spot_deg * M_PI / 180, proj.max_reflection_angle());
   const double max_r = ball.radius_px - options.rim_margin_px;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      const Vec3 d = pixel_direction(map, i);
-      if (proj.reflection_angle(d) > max_psi) continue;
-      const auto pt = proj.image_point(d);
-      if (!pt) continue;
-      const double x = (*pt)[0], y = (*pt)[1];
-      if (std::hypot(x - ball.cx, y - ball.cy) > max_r) continue;
-      if (!(x >= 0 && y >= 0 && x <= image_width && y <= image_height)) continue;
-      table.src_x[i] = float(x);
-      table.src_y[i] = float(y);
-    }
-  });
-  return table;
+  return remap_table(layout, width, height, image_width, image_height,
+                     [&](Vec3 d) -> std::optional<std::array<double, 2>> {
+                       if (proj.reflection_angle(d) > max_psi) return std::nullopt;
+                       const auto pt = proj.image_point(d);
+                       if (!pt || std::hypot((*pt)[0] - ball.cx, (*pt)[1] - ball.cy) > max_r) return std::nullopt;
+                       return pt;
+                     });
 }
 
 namespace {

@@ -5,6 +5,7 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "core/error.h"
@@ -89,6 +90,31 @@ CompiledRemap compile_remap(const RemapTable& table, int src_width, int src_heig
   }
   c.any_invalid = any_invalid;
   return c;
+}
+
+RemapTable remap_table(Layout layout, int width, int height, int src_width, int src_height,
+                       const RemapProjection& project) {
+  const EnvMap shape = make_envmap(layout, width, height);
+  RemapTable t;
+  t.out_width = shape.width;
+  t.out_height = shape.height;
+  const size_t n = shape.pixel_count();
+  t.src_x.resize(n);
+  t.src_y.resize(n);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const auto p = project(pixel_direction(shape, i));
+      const double x = p ? (*p)[0] : -1, y = p ? (*p)[1] : -1;
+      if (p && x >= 0 && x <= src_width && y >= 0 && y <= src_height) {
+        t.src_x[i] = float(x);
+        t.src_y[i] = float(y);
+      } else {
+        t.src_x[i] = t.src_y[i] = nan;
+      }
+    }
+  });
+  return t;
 }
 
 void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out, const RemapOptions& options) {

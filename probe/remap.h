@@ -24,9 +24,13 @@
 // branches but the validity test. Runs over rows in parallel with TBB.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <functional>
+#include <optional>
 #include <vector>
 
+#include "core/envmap.h"
 #include "core/image_io.h"
 
 namespace lp {
@@ -69,5 +73,15 @@ CompiledRemap compile_remap(const RemapTable& table, int src_width, int src_heig
 // size). Throws InputError when the source size differs from the compiled one.
 void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out,
                  const RemapOptions& options = {});
+
+// A projection of a unit world direction to source pixel coordinates in the convention
+// above (pixel centres at +0.5: add 0.5 to OpenCV / mrcal pixels); nullopt where the lens
+// sees nothing.
+using RemapProjection = std::function<std::optional<std::array<double, 2>>(Vec3)>;
+// The table that unwraps a src_width x src_height image into an environment map of
+// `layout` (width, height as make_envmap): every map pixel's direction projected by
+// `project`; directions that project off the image are invalid. Parallel over pixels.
+RemapTable remap_table(Layout layout, int width, int height, int src_width, int src_height,
+                       const RemapProjection& project);
 
 }  // namespace lp

@@ -9,6 +9,7 @@
 #include <unordered_set>
 
 #include "core/error.h"
+#include "core/file_io.h"
 
 namespace lp {
 
@@ -235,7 +236,7 @@ ExportFormat export_format_for(const std::string& name, const std::string& path,
     if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, csv)", name));
     return *f;
   }
-  const std::string e = std::filesystem::path(path).extension().string();
+  const std::string e = lower_extension(path);
   if (e == ".jsonl") return ExportFormat::Ndjson;
   for (const FormatInfo& f : kFormats)
     if (f.extension == e && f.format != ExportFormat::Json) return f.format;

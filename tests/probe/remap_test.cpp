@@ -112,5 +112,31 @@ TEST(Remap, CompiledTableForOneSizeRefusesAnother) {
   EXPECT_THROW(apply_remap(random_image(5, 4, 6), c, &out), InputError);
 }
 
+TEST(Remap, TablesFromAProjectionShiftNothingAndInvalidateWhatFallsOffTheImage) {
+  // A latlong 8 x 4 map through a projection that puts the azimuth on x (0..8) and every
+  // upper direction at y = 1.5, into a 6 x 3 image: the table holds the projected
+  // coordinates as they are, NaN below the horizon and where x > 6.
+  const RemapTable t = remap_table(Layout::LatLong, 8, 4, 6, 3, [](Vec3 d) -> std::optional<std::array<double, 2>> {
+    if (d.z <= 0) return std::nullopt;
+    const double phi = std::atan2(d.y, d.x);
+    const double u = (phi < 0 ? phi + 2 * M_PI : phi) / (2 * M_PI) * 8;  // 0..8
+    return std::array<double, 2>{u, 1.5};
+  });
+  ASSERT_EQ(t.out_width, 8);
+  ASSERT_EQ(t.out_height, 4);
+  const EnvMap shape = make_latlong(8, 4);
+  for (size_t i = 0; i < 32; ++i) {
+    const Vec3 d = pixel_direction(shape, i);
+    const double phi = std::atan2(d.y, d.x);
+    const double u = (phi < 0 ? phi + 2 * M_PI : phi) / (2 * M_PI) * 8;
+    if (d.z > 0 && u <= 6) {
+      EXPECT_FLOAT_EQ(t.src_x[i], float(u)) << i;
+      EXPECT_FLOAT_EQ(t.src_y[i], 1.5f) << i;
+    } else {
+      EXPECT_TRUE(std::isnan(t.src_x[i]) && std::isnan(t.src_y[i])) << i;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace lp

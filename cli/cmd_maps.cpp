@@ -178,7 +178,7 @@ int run_preview(const PreviewArgs& args, const Output& out) {
   ToneMapOptions o;
   if (!(args.percentile > 0 && args.percentile <= 1)) throw InputError("--percentile must be in (0, 1]");
   o.percentile = args.percentile;
-  write_display_image(args.output, img.width, img.height, tone_map(img.rgb, img.valid, img.width, img.height, o));
+  write_display_image(args.output, img.width, img.height, tone_map(image_view(img), o));
   say(out, "{} -> {} ({}x{})\n", args.input, args.output, img.width, img.height);
   emit_json(out, {{"input", args.input}, {"output", args.output}, {"width", img.width}, {"height", img.height}});
   return 0;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/envmap.h"
 
@@ -13,12 +14,15 @@ constexpr float kCheckerLight = 0.55f, kCheckerDark = 0.45f;
 
 // Exposure k with Reinhard k Y / (1 + k Y) = display at the chosen percentile of the
 // valid luminances; falls back to the maximum when that percentile is black.
-double exposure_for(const std::vector<float>& rgb, const std::vector<uint8_t>& valid, size_t n,
-                    const ToneMapOptions& options) {
+double exposure_for(ImageView image, const ToneMapOptions& options) {
   std::vector<float> lum;
-  lum.reserve(n);
-  for (size_t i = 0; i < n; ++i)
-    if (valid.empty() || valid[i]) lum.push_back(luminance(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]));
+  lum.reserve(image.pixel_count());
+  for (int v = 0; v < image.height; ++v)
+    for (int u = 0; u < image.width; ++u)
+      if (image.is_valid(u, v)) {
+        const float* p = image.pixel(u, v);
+        lum.push_back(luminance(p[0], p[1], p[2]));
+      }
   if (lum.empty()) return 1;
   const double p = std::clamp(options.percentile, 0.0, 1.0);
   const size_t rank = std::min(lum.size() - 1, size_t(std::max(0.0, std::ceil(p * double(lum.size())) - 1)));
@@ -39,22 +43,21 @@ uint8_t srgb_code(float v) {
   return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
 }
 
-std::vector<float> tone_map(const std::vector<float>& rgb, const std::vector<uint8_t>& valid, int width, int height,
-                            const ToneMapOptions& options) {
-  const size_t n = size_t(width) * size_t(height);
-  const double k = exposure_for(rgb, valid, n, options);
+std::vector<float> tone_map(ImageView image, const ToneMapOptions& options) {
+  if (image.channels != 3) throw std::invalid_argument("tone_map: the image is not RGB");
+  const int width = image.width, height = image.height;
+  const double k = exposure_for(image, options);
   const int checker = std::max(1, options.checker_px);
-  std::vector<float> out(3 * n);
+  std::vector<float> out(3 * image.pixel_count());
   for (int v = 0; v < height; ++v)
     for (int u = 0; u < width; ++u) {
-      const size_t i = size_t(v) * size_t(width) + size_t(u);
-      float* o = &out[3 * i];
-      if (!valid.empty() && !valid[i]) {
+      float* o = &out[3 * (size_t(v) * size_t(width) + size_t(u))];
+      if (!image.is_valid(u, v)) {
         const float g = ((u / checker + v / checker) % 2) ? kCheckerDark : kCheckerLight;
         o[0] = o[1] = o[2] = g;
         continue;
       }
-      const float* p = &rgb[3 * i];
+      const float* p = image.pixel(u, v);
       double s = k / (1 + k * luminance(p[0], p[1], p[2]));
       s /= std::max(1.0, s * std::max({double(p[0]), double(p[1]), double(p[2])}));
       for (int c = 0; c < 3; ++c) o[c] = float(std::clamp(s * p[c], 0.0, 1.0));

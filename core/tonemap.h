@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/image_view.h"
+
 namespace lp {
 
 struct ToneMapOptions {
@@ -21,8 +23,7 @@ struct ToneMapOptions {
 // <= 0 give 0, values >= 1 give 255): the one used by every picture (write_display_image).
 uint8_t srgb_code(float linear);
 
-// `valid` empty: every pixel valid. Row-major, 3 floats per pixel.
-std::vector<float> tone_map(const std::vector<float>& rgb, const std::vector<uint8_t>& valid, int width, int height,
-                            const ToneMapOptions& options = {});
+// An RGB view (its mask, if any, marks the invalid pixels) -> packed display RGB, row-major.
+std::vector<float> tone_map(ImageView image, const ToneMapOptions& options = {});
 
 }  // namespace lp

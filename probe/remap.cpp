@@ -92,46 +92,18 @@ CompiledRemap compile_remap(const RemapTable& table, int src_width, int src_heig
   return c;
 }
 
-RemapTable remap_table(Layout layout, int width, int height, int src_width, int src_height,
-                       const RemapProjection& project) {
-  const EnvMap shape = make_envmap(layout, width, height);
-  RemapTable t;
-  t.out_width = shape.width;
-  t.out_height = shape.height;
-  const size_t n = shape.pixel_count();
-  t.src_x.resize(n);
-  t.src_y.resize(n);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const auto p = project(pixel_direction(shape, i));
-      const double x = p ? (*p)[0] : -1, y = p ? (*p)[1] : -1;
-      if (p && x >= 0 && x <= src_width && y >= 0 && y <= src_height) {
-        t.src_x[i] = float(x);
-        t.src_y[i] = float(y);
-      } else {
-        t.src_x[i] = t.src_y[i] = nan;
-      }
-    }
-  });
-  return t;
-}
-
-void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out, const RemapOptions& options) {
+void apply_remap(ImageView src, const CompiledRemap& remap, RgbImage* out, const RemapOptions& options) {
   if (src.width != remap.src_width || src.height != remap.src_height)
     throw InputError("remap compiled for a " + std::to_string(remap.src_width) + "x" +
                      std::to_string(remap.src_height) + " source, image is " + std::to_string(src.width) + "x" +
                      std::to_string(src.height));
-  if (src.rgb.size() != size_t(src.width) * size_t(src.height) * 3)
-    throw InputError("remap source holds " + std::to_string(src.rgb.size()) + " floats for " +
-                     std::to_string(src.width) + "x" + std::to_string(src.height) + " RGB pixels");
-  const bool src_mask = !src.valid.empty();
-  if (src_mask && src.valid.size() != size_t(src.width) * size_t(src.height))
-    throw InputError("remap source mask has the wrong size");
+  if (!src.data || src.channels != 3 || !src.packed())
+    throw InputError("remap source is not packed RGB (" + std::to_string(src.channels) + " channels, rows " +
+                     std::to_string(src.stride) + " floats apart)");
+  const bool src_mask = src.valid != nullptr;
   const size_t n = size_t(remap.out_width) * size_t(remap.out_height);
   out->width = remap.out_width;
   out->height = remap.out_height;
-  out->units = src.units;
   out->rgb.resize(3 * n);
   const bool want_mask = remap.any_invalid || src_mask;
   if (want_mask)
@@ -139,8 +111,8 @@ void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out,
   else
     out->valid.clear();
 
-  const float* s = src.rgb.data();
-  const uint8_t* sm = src_mask ? src.valid.data() : nullptr;
+  const float* s = src.data;
+  const uint8_t* sm = src.valid;
   const ptrdiff_t W = src.width;
   const ptrdiff_t row3 = 3 * W;
   const CompiledRemap::Tap* taps = remap.taps.data();
@@ -190,6 +162,43 @@ void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out,
       }
     if (all) out->valid.clear();
   }
+}
+
+RemapTable remap_table(Layout layout, int width, int height, int src_width, int src_height,
+                       const RemapProjection& project) {
+  const EnvMap shape = make_envmap(layout, width, height);
+  RemapTable t;
+  t.out_width = shape.width;
+  t.out_height = shape.height;
+  const size_t n = shape.pixel_count();
+  t.src_x.resize(n);
+  t.src_y.resize(n);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const auto p = project(pixel_direction(shape, i));
+      const double x = p ? (*p)[0] : -1, y = p ? (*p)[1] : -1;
+      if (p && x >= 0 && x <= src_width && y >= 0 && y <= src_height) {
+        t.src_x[i] = float(x);
+        t.src_y[i] = float(y);
+      } else {
+        t.src_x[i] = t.src_y[i] = nan;
+      }
+    }
+  });
+  return t;
+}
+
+void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out, const RemapOptions& options) {
+  if (src.width == remap.src_width && src.height == remap.src_height) {  // else the view's size error
+    if (src.rgb.size() != size_t(src.width) * size_t(src.height) * 3)
+      throw InputError("remap source holds " + std::to_string(src.rgb.size()) + " floats for " +
+                       std::to_string(src.width) + "x" + std::to_string(src.height) + " RGB pixels");
+    if (!src.valid.empty() && src.valid.size() != size_t(src.width) * size_t(src.height))
+      throw InputError("remap source mask has the wrong size");
+  }
+  apply_remap(image_view(src), remap, out, options);
+  out->units = src.units;
 }
 
 RgbImage apply_remap(const RgbImage& src, const RemapTable& table, const RemapOptions& options) {

@@ -32,6 +32,7 @@
 
 #include "core/envmap.h"
 #include "core/image_io.h"
+#include "core/image_view.h"
 
 namespace lp {
 
@@ -70,9 +71,13 @@ struct CompiledRemap {
 CompiledRemap compile_remap(const RemapTable& table, int src_width, int src_height);
 
 // Apply a compiled table. `out` is resized (its storage reused when already the right
-// size). Throws InputError when the source size differs from the compiled one.
+// size); its units are the source's. Throws InputError when the source size differs from
+// the compiled one.
 void apply_remap(const RgbImage& src, const CompiledRemap& remap, RgbImage* out,
                  const RemapOptions& options = {});
+// The same from a view (packed RGB rows, InputError otherwise); `out`'s units are left as
+// they are.
+void apply_remap(ImageView src, const CompiledRemap& remap, RgbImage* out, const RemapOptions& options = {});
 
 // A projection of a unit world direction to source pixel coordinates in the convention
 // above (pixel centres at +0.5: add 0.5 to OpenCV / mrcal pixels); nullopt where the lens

@@ -42,7 +42,7 @@ std::vector<float> render_overlay(const EnvMap& map, const std::vector<Light>& l
   tm.percentile = options.percentile;
   tm.display = options.percentile_display;
   tm.checker_px = options.checker_px;
-  std::vector<float> out = tone_map(view->rgb, view->valid, width, height, tm);
+  std::vector<float> out = tone_map(image_view(*view), tm);
 
   // Lights, dimmest first so the brightest stay on top.
   std::vector<size_t> order(lights.size());

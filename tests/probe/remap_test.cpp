@@ -112,6 +112,34 @@ TEST(Remap, CompiledTableForOneSizeRefusesAnother) {
   EXPECT_THROW(apply_remap(random_image(5, 4, 6), c, &out), InputError);
 }
 
+TEST(Remap, AViewOfTheSourceGivesTheSameOutputAndAStridedOneIsRefused) {
+  RgbImage im = random_image(9, 7, 7);
+  im.valid.assign(63, 1);
+  im.valid[20] = 0;
+  im.units = Units::Absolute;
+  RemapTable t;
+  t.out_width = 4;
+  t.out_height = 3;
+  for (int i = 0; i < 12; ++i) {
+    t.src_x.push_back(0.3f + 0.71f * float(i));
+    t.src_y.push_back(0.6f + 0.53f * float(i));
+  }
+  const CompiledRemap c = compile_remap(t, 9, 7);
+  RgbImage from_image, from_view;
+  apply_remap(im, c, &from_image);
+  apply_remap(image_view(im), c, &from_view);
+  EXPECT_EQ(from_image.units, Units::Absolute);
+  EXPECT_EQ(from_view.units, Units::Relative);  // a view carries pixels, not units
+  EXPECT_EQ(from_view.rgb, from_image.rgb);
+  EXPECT_EQ(from_view.valid, from_image.valid);
+  EXPECT_FALSE(from_view.valid.empty());
+  ImageView strided = image_view(im);
+  strided.stride += 3;
+  strided.height -= 1;
+  const CompiledRemap c6 = compile_remap(t, 9, 6);
+  EXPECT_THROW(apply_remap(strided, c6, &from_view), InputError);
+}
+
 TEST(Remap, TablesFromAProjectionShiftNothingAndInvalidateWhatFallsOffTheImage) {
   // A latlong 8 x 4 map through a projection that puts the azimuth on x (0..8) and every
   // upper direction at y = 1.5, into a 6 x 3 image: the table holds the projected

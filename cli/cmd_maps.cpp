@@ -44,6 +44,23 @@ struct PreviewArgs {
 
 namespace {
 
+// Share of the power in the brightest 0.1 % of the `valid` valid pixels: how peaky the map is.
+double top_power_share(const EnvMap& map, size_t valid, double power_luminance) {
+  if (valid == 0 || !(power_luminance > 0)) return 0;
+  std::vector<std::pair<double, size_t>> by;
+  by.reserve(valid);
+  for (size_t i = 0; i < map.pixel_count(); ++i)
+    if (map.is_valid(i)) {
+      const float* p = map.pixel(i);
+      by.emplace_back(luminance(p[0], p[1], p[2]) * pixel_solid_angle(map, i), i);
+    }
+  const size_t k = std::max<size_t>(1, valid / 1000);
+  std::nth_element(by.begin(), by.begin() + long(k - 1), by.end(), std::greater<>());
+  double top = 0;
+  for (size_t i = 0; i < k; ++i) top += by[i].first;
+  return top / power_luminance;
+}
+
 }  // namespace
 
 int run_info(const InfoArgs& args, const Output& out) {
@@ -82,21 +99,7 @@ int run_info(const InfoArgs& args, const Output& out) {
     mean = lum.empty() ? 0 : mean / double(lum.size());
     const double range_stops = (ymin_pos > 0 && ymax > 0) ? std::log2(double(ymax) / ymin_pos) : 0;
     const Vec3 bdir = n ? pixel_direction(map, brightest) : Vec3{};
-    // Share of the power in the brightest 0.1 % of the valid pixels: how peaky the map is.
-    double top_share = 0;
-    if (valid > 0 && ypower > 0) {
-      std::vector<std::pair<double, size_t>> by;
-      by.reserve(valid);
-      for (size_t i = 0; i < n; ++i)
-        if (map.is_valid(i)) {
-          const float* p = map.pixel(i);
-          by.emplace_back(luminance(p[0], p[1], p[2]) * pixel_solid_angle(map, i), i);
-        }
-      const size_t k = std::max<size_t>(1, valid / 1000);
-      std::nth_element(by.begin(), by.begin() + long(k - 1), by.end(), std::greater<>());
-      for (size_t i = 0; i < k; ++i) top_share += by[i].first;
-      top_share /= ypower;
-    }
+    const double top_share = top_power_share(map, valid, ypower);
     nlohmann::json j = {
         {"file", path},
         {"layout", std::string(to_string(map.layout))},

@@ -288,6 +288,49 @@ int run_synth_walkthrough(const SynthWalkthroughArgs& args, const Output& out) {
   return 0;
 }
 
+namespace {
+
+// The two commands with the most options, out of the table to keep it short.
+Command synth_bracket_command() {
+  return {"synth bracket", "A bracket with known response, noise and truth from a radiance map",
+          "lightprobe synth bracket scene --response gamma -o bracket/\nlightprobe hdr fuse bracket/frame_0*.png --exposure-times bracket/exposures.csv -o fused.exr",
+          [](Flags& f) -> Handler {
+            auto a = std::make_shared<SynthBracketArgs>();
+            f.arg("INPUT", a->input, "Radiance map or image, or 'scene'");
+            f.opt("--exposure-times", a->exposure_times, "Seconds, default 1/64,1/8,1");
+            f.opt("--response", a->response, "linear|gamma|scurve");
+            f.flag("--no-noise", a->no_noise, "No shot or read noise");
+            f.opt("--bit-depth", a->bit_depth, "8 or 16");
+            f.opt("--shake", a->shake_px, "Camera shake, max px per frame");
+            f.flag("--moving-object", a->moving_object, "A bright square moving between frames");
+            f.opt("--seed", a->seed, "Noise seed");
+            f.output(a->output_dir, "Directory for frames, exposures.csv, truth");
+            return [a](const Output& out) { return run_synth_bracket(*a, out); };
+          }};
+}
+
+Command synth_probe_command() {
+  return {"synth probe", "Ray-trace a mirror ball or fisheye view of a map (ground truth)",
+          "lightprobe synth probe scene --type mirrorball --size 512x512 -o ball.exr\nlightprobe synth probe probe.exr --type fisheye --fov 190 --size 1024x1024 -o sky.exr",
+          [](Flags& f) -> Handler {
+            auto a = std::make_shared<SynthProbeArgs>();
+            f.arg("MAP", a->input, "A latlong map, or 'scene'");
+            f.opt("--type", a->type, "mirrorball|fisheye");
+            f.opt("--size", a->size, "Image WxH");
+            f.opt("--radius", a->radius, "Ball radius, px");
+            f.opt("--distance", a->distance, "Camera distance in ball radii (default orthographic)");
+            f.opt("--fov", a->fov, "Fisheye field of view, deg");
+            f.opt("--noise", a->noise, "Relative Gaussian noise");
+            f.opt("--frames", a->frames, "Frames (a jittered sequence)");
+            f.opt("--jitter", a->jitter, "Ball centre jitter per frame, px");
+            f.opt("--seed", a->seed, "Noise seed");
+            f.output(a->output, "Image (or directory for a sequence)");
+            return [a](const Output& out) { return run_synth_probe(*a, out); };
+          }};
+}
+
+}  // namespace
+
 std::vector<Command> synth_commands() {
   return {
       {"synth scene", "The procedural sky + sun + area lights scene",
@@ -329,38 +372,8 @@ std::vector<Command> synth_commands() {
          f.output(a->output_dir, "Directory for board_NN.png, truth.json, true_camera.yaml");
          return [a](const Output& out) { return run_synth_boards(*a, out); };
        }},
-      {"synth bracket", "A bracket with known response, noise and truth from a radiance map",
-       "lightprobe synth bracket scene --response gamma -o bracket/\nlightprobe hdr fuse bracket/frame_0*.png --exposure-times bracket/exposures.csv -o fused.exr",
-       [](Flags& f) -> Handler {
-         auto a = std::make_shared<SynthBracketArgs>();
-         f.arg("INPUT", a->input, "Radiance map or image, or 'scene'");
-         f.opt("--exposure-times", a->exposure_times, "Seconds, default 1/64,1/8,1");
-         f.opt("--response", a->response, "linear|gamma|scurve");
-         f.flag("--no-noise", a->no_noise, "No shot or read noise");
-         f.opt("--bit-depth", a->bit_depth, "8 or 16");
-         f.opt("--shake", a->shake_px, "Camera shake, max px per frame");
-         f.flag("--moving-object", a->moving_object, "A bright square moving between frames");
-         f.opt("--seed", a->seed, "Noise seed");
-         f.output(a->output_dir, "Directory for frames, exposures.csv, truth");
-         return [a](const Output& out) { return run_synth_bracket(*a, out); };
-       }},
-      {"synth probe", "Ray-trace a mirror ball or fisheye view of a map (ground truth)",
-       "lightprobe synth probe scene --type mirrorball --size 512x512 -o ball.exr\nlightprobe synth probe probe.exr --type fisheye --fov 190 --size 1024x1024 -o sky.exr",
-       [](Flags& f) -> Handler {
-         auto a = std::make_shared<SynthProbeArgs>();
-         f.arg("MAP", a->input, "A latlong map, or 'scene'");
-         f.opt("--type", a->type, "mirrorball|fisheye");
-         f.opt("--size", a->size, "Image WxH");
-         f.opt("--radius", a->radius, "Ball radius, px");
-         f.opt("--distance", a->distance, "Camera distance in ball radii (default orthographic)");
-         f.opt("--fov", a->fov, "Fisheye field of view, deg");
-         f.opt("--noise", a->noise, "Relative Gaussian noise");
-         f.opt("--frames", a->frames, "Frames (a jittered sequence)");
-         f.opt("--jitter", a->jitter, "Ball centre jitter per frame, px");
-         f.opt("--seed", a->seed, "Noise seed");
-         f.output(a->output, "Image (or directory for a sequence)");
-         return [a](const Output& out) { return run_synth_probe(*a, out); };
-       }},
+      synth_bracket_command(),
+      synth_probe_command(),
       {"synth walkthrough", "A room walked by a metadata camera, with true probes at query points",
        "lightprobe synth walkthrough -o walk/\nlightprobe eval metadata walk/ -o eval/metadata",
        [](Flags& f) -> Handler {

@@ -328,10 +328,10 @@ EnvMap resample_exact(const EnvMap& src, EnvMap dst, const SeparableRotation& ro
 
 }  // namespace
 
-EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const ResampleOptions& options) {
-  EnvMap dst = make_envmap(layout, width, height);
-  dst.units = src.units;
-  const size_t nsrc = src.pixel_count(), ndst = dst.pixel_count();
+namespace {
+
+void check_resample(const EnvMap& src, Layout layout, const ResampleOptions& options) {
+  const size_t nsrc = src.pixel_count();
   if (nsrc == 0 || src.rgb.size() != 3 * nsrc)
     throw InputError(fmt::format("cannot resample an empty or malformed {} map", to_string(src.layout)));
   if (!src.valid.empty() && src.valid.size() != nsrc)
@@ -345,32 +345,32 @@ EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const R
     throw InputError(fmt::format("min valid fraction must be in [0, 1], got {}", options.min_valid_fraction));
   if (!is_rotation(options.world_from_source))
     throw InputError("resample rotation (world_from_source) is not a proper rotation matrix");
+}
 
-  if (src.layout != Layout::Healpix && layout != Layout::Healpix) {
-    if (const auto rot = separable_rotation(options.world_from_source))
-      return resample_exact(src, std::move(dst), *rot, options.min_valid_fraction);
-  }
+// The sparse matrix from source to destination pixels: per destination pixel p (a row,
+// entries [row_start[p], row_start[p + 1])) the source pixels its samples landed in.
+struct Entry {
+  uint32_t src;
+  float count;  // samples of the destination pixel in this source pixel
+};
+struct Footprints {
+  std::vector<Entry> entries;
+  std::vector<size_t> row_start;
+  std::vector<uint8_t> dst_valid;  // enough valid samples
+};
 
-  const Mat3& world_from_source = options.world_from_source;
-  const Mat3 source_from_world = transpose(world_from_source);
-  const bool identity = is_identity(world_from_source);
-  const int k = options.samples_per_edge > 0 ? options.samples_per_edge : choose_samples_per_edge(src, dst);
-  const SubSampler sampler(dst, k);
+// Pass 1 (parallel, race-free): the samples of every destination pixel, located in the
+// source. A sample outside the source domain or on an invalid source pixel is invalid.
+Footprints locate_samples(const EnvMap& src, const EnvMap& dst, const Mat3& source_from_world, bool identity,
+                          const SubSampler& sampler, double needed) {
+  const size_t ndst = dst.pixel_count();
   const int spp = sampler.samples_per_pixel();
-  const double needed = options.min_valid_fraction * spp - 1e-9;
   const Blocks blocks = make_blocks(dst);
-
-  // Pass 1 (parallel, race-free): the samples of every destination pixel, located in
-  // the source and stored per destination pixel as (source pixel, sample count).
-  // A sample outside the source domain or on an invalid source pixel is invalid.
-  struct Entry {
-    uint32_t src;
-    float count;  // samples of the destination pixel in this source pixel
-  };
-  if (nsrc > UINT32_MAX) throw InputError("source map too large to resample");
+  if (src.pixel_count() > UINT32_MAX) throw InputError("source map too large to resample");
+  Footprints f;
   std::vector<std::vector<Entry>> block_entries(blocks.count);
   std::vector<uint32_t> row_length(ndst, 0);
-  std::vector<uint8_t> dst_valid(ndst, 0);
+  f.dst_valid.assign(ndst, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks.count), [&](const tbb::blocked_range<size_t>& r) {
     std::vector<Vec3> dirs(spp);
     std::vector<uint32_t> hits(spp);
@@ -384,7 +384,7 @@ EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const R
           if (s && src.is_valid(*s)) hits[valid++] = uint32_t(*s);
         }
         if (valid < needed) continue;
-        dst_valid[p] = 1;
+        f.dst_valid[p] = 1;
         std::sort(hits.begin(), hits.begin() + valid);
         const size_t before = out.size();
         for (int i = 0; i < valid; ++i) {
@@ -397,14 +397,125 @@ EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const R
       }
     }
   });
-  std::vector<size_t> row_start(ndst + 1, 0);
-  for (size_t p = 0; p < ndst; ++p) row_start[p + 1] = row_start[p] + row_length[p];
-  std::vector<Entry> entries;
-  entries.reserve(row_start[ndst]);
+  f.row_start.assign(ndst + 1, 0);
+  for (size_t p = 0; p < ndst; ++p) f.row_start[p + 1] = f.row_start[p] + row_length[p];
+  f.entries.reserve(f.row_start[ndst]);
   for (auto& e : block_entries) {
-    entries.insert(entries.end(), e.begin(), e.end());
+    f.entries.insert(f.entries.end(), e.begin(), e.end());
     std::vector<Entry>().swap(e);
   }
+  return f;
+}
+
+// Missed source pixels (no sample of a valid destination pixel landed in them) go whole
+// to the destination pixel holding their centre: they join that pixel's row as one more
+// entry weighing their own solid angle (the row's target, the area its samples cover,
+// already includes them), so balancing makes room for them.
+void add_missed_sources(const EnvMap& src, const EnvMap& dst, const Mat3& world_from_source, bool identity,
+                        const std::vector<double>& owed, const std::vector<double>& row_weight, Footprints* f) {
+  const size_t nsrc = src.pixel_count(), ndst = dst.pixel_count();
+  std::vector<uint8_t> hit(nsrc, 0);
+  for (const Entry& e : f->entries) hit[e.src] = 1;
+  std::vector<std::pair<size_t, uint32_t>> extra;  // (destination, source), in source order
+  for (size_t s = 0; s < nsrc; ++s) {
+    if (hit[s] || owed[s] <= 0) continue;
+    const Vec3 d = identity ? pixel_direction(src, s) : world_from_source * pixel_direction(src, s);
+    const std::optional<size_t> p = pixel_at(dst, d);
+    if (p && f->dst_valid[*p]) extra.push_back({*p, uint32_t(s)});
+  }
+  if (extra.empty()) return;
+  std::stable_sort(extra.begin(), extra.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<Entry> merged;
+  merged.reserve(f->entries.size() + extra.size());
+  std::vector<size_t> merged_start(ndst + 1, 0);
+  size_t next = 0;
+  for (size_t p = 0; p < ndst; ++p) {
+    merged_start[p] = merged.size();
+    merged.insert(merged.end(), f->entries.begin() + f->row_start[p], f->entries.begin() + f->row_start[p + 1]);
+    for (; next < extra.size() && extra[next].first == p; ++next)
+      merged.push_back({extra[next].second, float(owed[extra[next].second] / row_weight[p])});
+  }
+  merged_start[ndst] = merged.size();
+  f->entries.swap(merged);
+  f->row_start.swap(merged_start);
+}
+
+// A few rounds of balancing (iterative proportional fitting) of the row weights towards
+// `row_target`; returns the final column scale T_s / W_s, which keeps every source
+// pixel's power exact.
+std::vector<double> balance(const Footprints& f, const std::vector<double>& owed, const std::vector<double>& row_target,
+                            std::vector<double>* row_weight) {
+  const size_t nsrc = owed.size(), ndst = row_target.size();
+  const auto& entries = f.entries;
+  const auto& row_start = f.row_start;
+  std::vector<double>& weight = *row_weight;
+  std::vector<double> scale(nsrc);  // T_s / W_s
+  auto column_step = [&] {
+    std::fill(scale.begin(), scale.end(), 0.0);  // W_s, serial scatter in a fixed order
+    for (size_t p = 0; p < ndst; ++p)
+      for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) scale[entries[e].src] += weight[p] * entries[e].count;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nsrc, 4096), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t s = r.begin(); s != r.end(); ++s) scale[s] = scale[s] > 0 ? owed[s] / scale[s] : 0.0;
+    });
+  };
+  for (int round = 0; round < kBalanceRounds; ++round) {
+    column_step();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ndst, 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t p = r.begin(); p != r.end(); ++p) {
+        double got = 0;
+        for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) got += weight[p] * entries[e].count * scale[entries[e].src];
+        if (got > 0) weight[p] *= row_target[p] / got;
+      }
+    });
+  }
+  column_step();
+  return scale;
+}
+
+// Pass 2: destination power and radiance, race-free per destination pixel.
+void gather_power(const EnvMap& src, const Footprints& f, const std::vector<double>& row_weight,
+                  const std::vector<double>& scale, EnvMap* dst) {
+  const size_t ndst = dst->pixel_count();
+  std::vector<double> power(3 * ndst, 0.0);
+  dst->valid.assign(ndst, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, ndst, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t p = r.begin(); p != r.end(); ++p) {
+      if (!f.dst_valid[p]) continue;
+      double* acc = &power[3 * p];
+      for (size_t e = f.row_start[p]; e < f.row_start[p + 1]; ++e) {
+        const size_t s = f.entries[e].src;
+        const double share = row_weight[p] * f.entries[e].count * scale[s];
+        const float* l = src.pixel(s);
+        for (int c = 0; c < 3; ++c) acc[c] += double(l[c]) * share;
+      }
+      const double area = pixel_solid_angle(*dst, p);
+      float* out = dst->pixel(p);
+      for (int c = 0; c < 3; ++c) out[c] = float(acc[c] / area);
+      dst->valid[p] = 1;
+    }
+  });
+  if (std::all_of(dst->valid.begin(), dst->valid.end(), [](uint8_t v) { return v != 0; })) dst->valid.clear();
+}
+
+}  // namespace
+
+EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const ResampleOptions& options) {
+  EnvMap dst = make_envmap(layout, width, height);
+  dst.units = src.units;
+  check_resample(src, layout, options);
+  if (src.layout != Layout::Healpix && layout != Layout::Healpix) {
+    if (const auto rot = separable_rotation(options.world_from_source))
+      return resample_exact(src, std::move(dst), *rot, options.min_valid_fraction);
+  }
+
+  const size_t nsrc = src.pixel_count(), ndst = dst.pixel_count();
+  const Mat3& world_from_source = options.world_from_source;
+  const bool identity = is_identity(world_from_source);
+  const int k = options.samples_per_edge > 0 ? options.samples_per_edge : choose_samples_per_edge(src, dst);
+  const SubSampler sampler(dst, k);
+  const int spp = sampler.samples_per_pixel();
+  Footprints f = locate_samples(src, dst, transpose(world_from_source), identity, sampler,
+                                options.min_valid_fraction * spp - 1e-9);
 
   // Power each source pixel owes the destination: all of it, or the part inside the
   // destination's domain when that is the upper hemisphere.
@@ -417,91 +528,17 @@ EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const R
   });
 
   // Sample solid angle per destination pixel, times a row balance factor. The factors
-  // start at 1 (plain W_s normalisation); a few rounds of balancing (iterative
-  // proportional fitting) make each destination pixel receive, for a constant map, the
-  // solid angle its valid samples cover, while the final column step below keeps every
-  // source pixel's power exact.
+  // start at 1 (plain W_s normalisation); balancing makes each destination pixel
+  // receive, for a constant map, the solid angle its valid samples cover.
   std::vector<double> row_weight(ndst, 0.0), row_target(ndst, 0.0);
   for (size_t p = 0; p < ndst; ++p) {
-    if (!dst_valid[p]) continue;
+    if (!f.dst_valid[p]) continue;
     row_weight[p] = pixel_solid_angle(dst, p) / spp;
-    for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) row_target[p] += row_weight[p] * entries[e].count;
+    for (size_t e = f.row_start[p]; e < f.row_start[p + 1]; ++e) row_target[p] += row_weight[p] * f.entries[e].count;
   }
-
-  // Missed source pixels (no sample of a valid destination pixel landed in them) go
-  // whole to the destination pixel holding their centre: they join that pixel's row as
-  // one more entry weighing their own solid angle (the row's target, the area its
-  // samples cover, already includes them), so balancing makes room for them.
-  {
-    std::vector<uint8_t> hit(nsrc, 0);
-    for (const Entry& e : entries) hit[e.src] = 1;
-    std::vector<std::pair<size_t, uint32_t>> extra;  // (destination, source), in source order
-    for (size_t s = 0; s < nsrc; ++s) {
-      if (hit[s] || owed[s] <= 0) continue;
-      const Vec3 d = identity ? pixel_direction(src, s) : world_from_source * pixel_direction(src, s);
-      const std::optional<size_t> p = pixel_at(dst, d);
-      if (p && dst_valid[*p]) extra.push_back({*p, uint32_t(s)});
-    }
-    if (!extra.empty()) {
-      std::stable_sort(extra.begin(), extra.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-      std::vector<Entry> merged;
-      merged.reserve(entries.size() + extra.size());
-      std::vector<size_t> merged_start(ndst + 1, 0);
-      size_t next = 0;
-      for (size_t p = 0; p < ndst; ++p) {
-        merged_start[p] = merged.size();
-        merged.insert(merged.end(), entries.begin() + row_start[p], entries.begin() + row_start[p + 1]);
-        for (; next < extra.size() && extra[next].first == p; ++next)
-          merged.push_back({extra[next].second, float(owed[extra[next].second] / row_weight[p])});
-      }
-      merged_start[ndst] = merged.size();
-      entries.swap(merged);
-      row_start.swap(merged_start);
-    }
-  }
-
-  std::vector<double> scale(nsrc);  // T_s / W_s
-  auto column_step = [&] {
-    std::fill(scale.begin(), scale.end(), 0.0);  // W_s, serial scatter in a fixed order
-    for (size_t p = 0; p < ndst; ++p)
-      for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) scale[entries[e].src] += row_weight[p] * entries[e].count;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, nsrc, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t s = r.begin(); s != r.end(); ++s) scale[s] = scale[s] > 0 ? owed[s] / scale[s] : 0.0;
-    });
-  };
-  for (int round = 0; round < kBalanceRounds; ++round) {
-    column_step();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, ndst, 1024), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t p = r.begin(); p != r.end(); ++p) {
-        double got = 0;
-        for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) got += row_weight[p] * entries[e].count * scale[entries[e].src];
-        if (got > 0) row_weight[p] *= row_target[p] / got;
-      }
-    });
-  }
-  column_step();
-
-  std::vector<double> power(3 * ndst, 0.0);
-
-  // Pass 2: destination power and radiance, race-free per destination pixel.
-  dst.valid.assign(ndst, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, ndst, 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t p = r.begin(); p != r.end(); ++p) {
-      if (!dst_valid[p]) continue;
-      double* acc = &power[3 * p];
-      for (size_t e = row_start[p]; e < row_start[p + 1]; ++e) {
-        const size_t s = entries[e].src;
-        const double share = row_weight[p] * entries[e].count * scale[s];
-        const float* l = src.pixel(s);
-        for (int c = 0; c < 3; ++c) acc[c] += double(l[c]) * share;
-      }
-      const double area = pixel_solid_angle(dst, p);
-      float* out = dst.pixel(p);
-      for (int c = 0; c < 3; ++c) out[c] = float(acc[c] / area);
-      dst.valid[p] = 1;
-    }
-  });
-  if (std::all_of(dst.valid.begin(), dst.valid.end(), [](uint8_t v) { return v != 0; })) dst.valid.clear();
+  add_missed_sources(src, dst, world_from_source, identity, owed, row_weight, &f);
+  const std::vector<double> scale = balance(f, owed, row_target, &row_weight);
+  gather_power(src, f, row_weight, scale, &dst);
   return dst;
 }
 

@@ -116,7 +116,7 @@ TEST(Remap, AViewOfTheSourceGivesTheSameOutputAndAStridedOneIsRefused) {
   RgbImage im = random_image(9, 7, 7);
   im.valid.assign(63, 1);
   im.valid[20] = 0;
-  im.units = Units::Absolute;
+  im.units = Units::Radiance;
   RemapTable t;
   t.out_width = 4;
   t.out_height = 3;
@@ -128,7 +128,7 @@ TEST(Remap, AViewOfTheSourceGivesTheSameOutputAndAStridedOneIsRefused) {
   RgbImage from_image, from_view;
   apply_remap(im, c, &from_image);
   apply_remap(image_view(im), c, &from_view);
-  EXPECT_EQ(from_image.units, Units::Absolute);
+  EXPECT_EQ(from_image.units, Units::Radiance);
   EXPECT_EQ(from_view.units, Units::Relative);  // a view carries pixels, not units
   EXPECT_EQ(from_view.rgb, from_image.rgb);
   EXPECT_EQ(from_view.valid, from_image.valid);

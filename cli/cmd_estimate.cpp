@@ -1,6 +1,7 @@
-// estimate metadata / estimate query / synth walkthrough / eval metadata: lighting without a
-// probe, from the metadata a camera already has (exposure, gain, aperture, white balance),
-// stored over the floor in the quadtree of seed 003 (docs/metadata.md).
+// estimate metadata / estimate query / eval metadata (its harness: eval/metadata_eval.h):
+// lighting without a probe, from the metadata a camera already has (exposure, gain,
+// aperture, white balance), stored over the floor in the quadtree of seed 003
+// (docs/metadata.md).
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -9,25 +10,18 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "calib/photometric.h"
 #include "cli/commands.h"
 #include "cli/eval_handlers.h"
 #include "cli/report.h"
-#include "eval/svg_chart.h"
-#include "core/accuracy.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "core/progress.h"
 #include "estimate/light_quadtree.h"
 #include "estimate/metadata_track.h"
 #include "estimate/walkthrough.h"
-#include "estimate/white_balance_cct.h"
+#include "eval/metadata_eval.h"
 #include "sampling/exporters.h"
-#include "sampling/sampler.h"
 
 namespace lp::cli {
 
@@ -57,7 +51,6 @@ struct EstimateQueryArgs {
 
 namespace {
 
-namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -84,28 +77,6 @@ MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
   }
   validate_metering(m);
   return m;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw InputError(fmt::format("{}: cannot open", path));
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-// Mean |CCT error| (K) of six sector lights against the true map's sector colours.
-double sector_cct_error(const std::vector<Light>& lights, const EnvMap& probe) {
-  const std::vector<Light> truth = bipyramid_lights_of_map(probe);
-  double sum = 0;
-  int n = 0;
-  for (const Light& l : lights)
-    for (const Light& t : truth)
-      if (t.id == l.id && l.luminance() > 0 && t.luminance() > 0) {
-        sum += std::fabs(cct_robertson(chromaticity_of_rgb(l.rgb)).kelvin - cct_robertson(chromaticity_of_rgb(t.rgb)).kelvin);
-        ++n;
-      }
-  return n ? sum / n : NAN;
 }
 
 double percentile(std::vector<double> v, double p) {
@@ -213,208 +184,15 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
 }
 
 int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
-  const fs::path dir(args.input_dir);
-  const std::string truth_path = (dir / "truth.json").string();
-  nlohmann::json truth;
-  try {
-    truth = nlohmann::json::parse(slurp(truth_path));
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: not JSON ({})", truth_path, e.what()));
-  }
-  if (truth.value("format", "") != "lightprobe.walkthrough/1")
-    throw InputError(fmt::format("{}: not a lightprobe.walkthrough/1 truth file (make one with synth walkthrough)", truth_path));
-  const Track track = read_track((dir / "track.jsonl").string());
-  validate_track(track);
-  std::vector<double> fractions = parse_numbers(args.fractions, "--fractions");
-  for (double f : fractions)
-    if (!(f > 0 && f <= 1)) throw InputError(fmt::format("--fractions: each must be in (0, 1], got {}", f));
-  double root_size = args.root_size;
-  if (root_size <= 0) {
-    const auto& room = truth.at("room");
-    root_size = 2 * std::max(room.at("width").get<double>(), room.at("depth").get<double>());
-  }
-  struct Query {
-    std::string name;
-    Vec3 position;
-    EnvMap probe;
-    AccuracyReference reference;
-    std::string standing_track;  // optional: the walk's head motion, standing at the point
-  };
-  std::vector<Query> queries;
-  AccuracyOptions ao;
-  ao.shadowed = false;
-  ao.glossy_exponents.clear();
-  for (const auto& jq : truth.at("queries")) {
-    Query q;
-    q.name = jq.at("name").get<std::string>();
-    q.position = {jq.at("position").at(0).get<double>(), jq.at("position").at(1).get<double>(), jq.at("position").at(2).get<double>()};
-    q.probe = read_envmap((dir / jq.at("probe").get<std::string>()).string());
-    q.reference = make_accuracy_reference(q.probe, ao);
-    if (jq.contains("standing_track")) q.standing_track = (dir / jq["standing_track"].get<std::string>()).string();
-    queries.push_back(std::move(q));
-  }
-  if (queries.empty()) throw InputError(fmt::format("{}: no query points", truth_path));
-
-  struct Row {
-    std::string method;
-    double fraction = 1;  // of the path used (1 for probes)
-    size_t frames = 0;
-    double mean_error = 0, max_error = 0;
-    double mean_distance = 0;  // query point to the nearest visited position
-    double seconds_per_query = 0;
-    double cct_error = NAN;  // K, mean over sectors and query points (metadata rows)
-  };
-  std::vector<Row> rows;
-  // Real probes at each query point: the same maps sampled by the existing samplers.
-  const std::vector<std::pair<Method, int>> probe_methods{{Method::Pharr, 6}, {Method::MedianCut, 6}, {Method::Pharr, 64}, {Method::Q2Tree, 64}};
-  for (const auto& [method, n] : probe_methods) {
-    Row r;
-    r.method = fmt::format("probe {} {}", to_string(method), n);
-    double t = 0;
-    for (const Query& q : queries) {
-      const auto t0 = Clock::now();
-      const LightList l = sample(q.probe, n, method);
-      t += seconds_since(t0);
-      const double e = light_error(q.reference, l.lights).diffuse;
-      r.mean_error += e / double(queries.size());
-      r.max_error = std::max(r.max_error, e);
-    }
-    r.frames = 0;
-    r.seconds_per_query = t / double(queries.size());
-    rows.push_back(r);
-  }
-  {
-    Row r;
-    r.method = "best six sectors";  // the bipyramid filled with the true map's sector means
-    for (const Query& q : queries) {
-      const double e = light_error(q.reference, bipyramid_lights_of_map(q.probe)).diffuse;
-      r.mean_error += e / double(queries.size());
-      r.max_error = std::max(r.max_error, e);
-    }
-    rows.push_back(r);
-  }
-  // The same head motion standing at each query point: metering from views alone.
-  if (std::all_of(queries.begin(), queries.end(), [](const Query& q) { return !q.standing_track.empty(); })) {
-    Row r;
-    r.method = "metadata, standing at the point";
-    BuildModelOptions sb;
-    sb.quadtree.root_size = root_size;
-    sb.quadtree.min_size = root_size;  // one cell: every frame is at the point
-    for (const Query& q : queries) {
-      const Track standing = read_track(q.standing_track);
-      const LightQuadtree model = build_model(standing, standing.camera, sb);
-      const LightList l = model.lights_at(q.position.x, q.position.y);
-      const double e = light_error(q.reference, l.lights).diffuse;
-      r.mean_error += e / double(queries.size());
-      r.max_error = std::max(r.max_error, e);
-      r.cct_error = (std::isnan(r.cct_error) ? 0 : r.cct_error) + sector_cct_error(l.lights, q.probe) / double(queries.size());
-      r.frames = standing.frames.size();
-    }
-    rows.push_back(r);
-  }
-  // The metadata model on a growing part of the path.
-  struct Variant {
-    std::string name;
-    int max_depth;
-    double min_frames, shrink;
-  };
-  const std::vector<Variant> variants{{"metadata (paper: nearest informed)", -1, 1, 0},
-                                      {"metadata, >= 10 frames per sector", -1, 10, 0},
-                                      {"metadata, shrinkage k = 20", -1, 1, 20},
-                                      {"metadata, root only", 0, 1, 0}};
-  BuildModelOptions b;
-  b.quadtree.root_size = root_size;
-  b.quadtree.min_size = args.min_size;
-  Progress progress("fractions", fractions.size(), out.progress);
-  for (double f : fractions) {
-    const size_t count = std::max<size_t>(1, size_t(std::llround(f * double(track.frames.size()))));
-    const auto t0 = Clock::now();
-    const LightQuadtree model = build_model(track, track.camera, b, count);
-    const double build_s = seconds_since(t0);
-    double distance = 0;
-    for (const Query& q : queries) {
-      double best = INFINITY;
-      for (size_t i = 0; i < count; ++i) {
-        const Vec3 p = track.frames[i].position;
-        best = std::min(best, std::hypot(p.x - q.position.x, p.y - q.position.y));
-      }
-      distance += best / double(queries.size());
-    }
-    for (const Variant& v : variants) {
-      Row r;
-      r.method = v.name;
-      r.fraction = f;
-      r.frames = count;
-      r.mean_distance = distance;
-      double t = 0;
-      for (const Query& q : queries) {
-        const auto tq = Clock::now();
-        const LightList l = v.shrink > 0 ? model.lights_shrunk(q.position.x, q.position.y, v.shrink)
-                                         : model.lights_at(q.position.x, q.position.y, v.max_depth, v.min_frames);
-        t += seconds_since(tq);
-        const double e = light_error(q.reference, l.lights).diffuse;
-        r.mean_error += e / double(queries.size());
-        r.max_error = std::max(r.max_error, e);
-        r.cct_error = (std::isnan(r.cct_error) ? 0 : r.cct_error) + sector_cct_error(l.lights, q.probe) / double(queries.size());
-      }
-      r.seconds_per_query = t / double(queries.size()) + build_s / double(count);  // + the update cost of a frame
-      rows.push_back(r);
-    }
-    progress.advance();
-  }
-  progress.finish();
-
-  fs::create_directories(args.output_dir);
-  std::string csv = "method,path_fraction,frames,mean_distance_m,diffuse_mean,diffuse_max,cct_error_k,seconds_per_query\n";
-  for (const Row& r : rows)
-    csv += fmt::format("\"{}\",{},{},{:.4f},{:.6f},{:.6f},{},{:.3e}\n", r.method, r.fraction, r.frames, r.mean_distance,
-                       r.mean_error, r.max_error, std::isnan(r.cct_error) ? std::string() : fmt::format("{:.1f}", r.cct_error),
-                       r.seconds_per_query);
-  const std::string csv_path = (fs::path(args.output_dir) / "metadata.csv").string();
-  write_file_atomically(csv_path, csv);
-
-  ChartPanel panel;
-  panel.title = "Diffuse error at the query points as the walk covers the room";
-  panel.x_label = "part of the path walked";
-  panel.y_label = "diffuse rel. RMS error (mean over query points)";
-  panel.log_x = false;
-  panel.log_y = true;
-  // Seven series (the chart's palette): the rest are in the table and the CSV.
-  const std::vector<std::string> charted{"metadata (paper: nearest informed)", "metadata, shrinkage k = 20",
-                                         "metadata, standing at the point", "best six sectors", "probe pharr 6",
-                                         "probe mediancut 6", "probe q2tree 64"};
-  for (const Row& r : rows) {
-    if (std::find(charted.begin(), charted.end(), r.method) == charted.end()) continue;
-    auto it = std::find_if(panel.series.begin(), panel.series.end(), [&](const ChartSeries& s) { return s.name == r.method; });
-    if (it == panel.series.end()) {
-      panel.series.push_back({r.method, {}, {}, {}, true});
-      it = panel.series.end() - 1;
-    }
-    if (r.frames == 0 || r.method == "metadata, standing at the point") {  // flat across the walk
-      it->x = {fractions.front(), fractions.back()};
-      it->y = {r.mean_error, r.mean_error};
-    } else {
-      it->x.push_back(r.fraction);
-      it->y.push_back(r.mean_error);
-    }
-  }
-  const std::string svg_path = (fs::path(args.output_dir) / "metadata.svg").string();
-  write_file_atomically(svg_path, svg_chart("Light without a probe: camera metadata against real probes", {panel}, 1));
-
-  say(out, "{:<38} {:>6} {:>6} {:>8} {:>9} {:>9} {:>7} {:>11}\n", "method", "path", "frames", "dist m", "diffuse", "max",
-      "dCCT K", "s/query");
-  nlohmann::json jrows = nlohmann::json::array();
-  for (const Row& r : rows) {
-    say(out, "{:<38} {:>6.2f} {:>6} {:>8.2f} {:>9.3f} {:>9.3f} {:>7} {:>11.2e}\n", r.method, r.fraction, r.frames,
-        r.mean_distance, r.mean_error, r.max_error, std::isnan(r.cct_error) ? std::string("-") : fmt::format("{:.0f}", r.cct_error),
-        r.seconds_per_query);
-    nlohmann::json jr{{"method", r.method}, {"path_fraction", r.fraction}, {"frames", r.frames}, {"mean_distance_m", r.mean_distance},
-                      {"diffuse_mean", r.mean_error}, {"diffuse_max", r.max_error}, {"seconds_per_query", r.seconds_per_query}};
-    jr["cct_error_k"] = std::isnan(r.cct_error) ? nlohmann::json() : nlohmann::json(r.cct_error);
-    jrows.push_back(jr);
-  }
-  say(out, "{} rows -> {}, {}\n", rows.size(), csv_path, svg_path);
-  emit_json(out, {{"csv", csv_path}, {"chart", svg_path}, {"queries", queries.size()}, {"frames", track.frames.size()}, {"rows", jrows}});
+  EvalMetadataOptions o;
+  o.input_dir = args.input_dir;
+  o.output_dir = args.output_dir;
+  o.fractions = parse_numbers(args.fractions, "--fractions");
+  o.root_size = args.root_size;
+  o.min_size = args.min_size;
+  const EvalMetadataReport report = evaluate_metadata(o, out.progress);
+  say(out, "{}", report.summary());
+  emit_json(out, report.to_json());
   return 0;
 }
 

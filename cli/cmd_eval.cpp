@@ -1,208 +1,239 @@
-// eval sampling: time and error of every method at every light count, on every map.
-// Times are medians of repeated runs with the map already in memory, split into
-// pre-processing (prepare) and placement (place).
+// The eval commands: thin handlers over the harnesses in eval/ (sampling, temporal, hdr,
+// unwrap, shading; the others beside their stages, cli/eval_handlers.h), and their table.
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <memory>
 
-#include <algorithm>
-#include <chrono>
-#include <filesystem>
-#include <map>
-
 #include "cli/commands.h"
 #include "cli/eval_handlers.h"
+#include "cli/progress_bar.h"
 #include "cli/report.h"
-#include "eval/svg_chart.h"
-#include "core/accuracy.h"
 #include "core/error.h"
-#include "core/image_io.h"
-#include "core/progress.h"
-#include "eval/synthetic_scene.h"
-#include "sampling/sampler.h"
+#include "eval/hdr_eval.h"
+#include "eval/sampling_eval.h"
+#include "eval/shading_eval.h"
+#include "eval/temporal_eval.h"
+#include "eval/unwrap_eval.h"
 
 namespace lp::cli {
 
 namespace {
 
-namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-struct Point {
-  std::string map, method;
-  int n = 0, lights = 0;
-  double prepare_ms = 0, place_ms = 0;
-  double diffuse = 0, glossy10 = 0, glossy100 = 0, shadowed = 0;
+struct EvalSamplingArgs {
+  std::vector<std::string> maps;    // "scene" renders the procedural scene
+  std::string methods = "all";
+  std::string counts = "16,32,64,128,256,512,1024,2048,4096";
+  std::string output_dir;
+  int repeats = 0;                  // 0: adaptive (at least 5, ~0.2 s per point)
+  bool no_shadowed = false;
 };
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
+int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
+  EvalSamplingOptions o;
+  o.maps = args.maps;
+  o.methods = parse_method_list(args.methods);
+  o.counts = parse_int_list(args.counts, "--n");
+  o.output_dir = args.output_dir;
+  o.repeats = args.repeats;
+  o.shadowed = !args.no_shadowed;
+  ProgressBar bar("eval sampling", out);
+  const EvalSamplingReport report = evaluate_sampling(o, bar.callback());
+  bar.finish();
+  say(out, "{}", report.summary());
+  emit_json(out, report.to_json());
+  return 0;
 }
 
-// Runs f at least 5 times and until ~budget seconds are spent (or `fixed` times); median in ms.
-template <typename F>
-double median_ms(F&& f, int fixed, double budget_s) {
-  std::vector<double> t;
-  const auto start = Clock::now();
-  for (int i = 0;; ++i) {
-    const auto t0 = Clock::now();
-    f();
-    t.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-    if (fixed > 0 ? i + 1 >= fixed
-                  : (i + 1 >= 5 && std::chrono::duration<double>(Clock::now() - start).count() > budget_s) || i >= 400)
-      break;
-  }
-  return median(t);
+Command eval_sampling_command() {
+  return {"eval sampling", "Time and error of every sampler and light count",
+          "lightprobe eval sampling probe1.exr probe2.hdr scene --methods all --n 16,64,256,1024 -o eval/",
+          [](Flags& f) -> Handler {
+            auto a = std::make_shared<EvalSamplingArgs>();
+            f.arg("MAP", a->maps, "Maps to evaluate ('scene' for the procedural scene)").required();
+            f.opt("--methods", a->methods, "Comma-separated methods or 'all'");
+            f.opt("--n", a->counts, "Comma-separated light counts");
+            f.output(a->output_dir, "Directory for sampling.csv and the charts");
+            f.opt("--repeats", a->repeats, "Timing repeats per point (0: adaptive)");
+            f.flag("--no-shadowed", a->no_shadowed, "Skip the shadowed error (its reference is the slow part)");
+            return [a](const Output& out) { return run_eval_sampling(*a, out); };
+          }};
 }
 
-std::string map_name(const std::string& path) { return path == "scene" ? "scene" : fs::path(path).stem().string(); }
+struct EvalTemporalArgs {
+  std::vector<std::string> maps;    // base maps; "scene" for the procedural scene
+  std::string methods = "all";
+  std::string scenarios = "all";
+  int frames = 48;
+  int n = 256;
+  double fps = 21;
+  std::string filter = "auto";
+  std::string output_dir;
+};
 
-std::vector<ChartPanel> panels_for(const std::vector<Point>& points, const std::vector<Method>& methods) {
-  struct Metric {
-    const char* title;
-    double Point::*field;
-  };
-  const Metric metrics[] = {{"diffuse error", &Point::diffuse},
-                            {"glossy error (s = 10)", &Point::glossy10},
-                            {"glossy error (s = 100)", &Point::glossy100},
-                            {"shadowed error (60 deg caps)", &Point::shadowed}};
-  std::vector<ChartPanel> panels;
-  for (const Metric& m : metrics) {
-    ChartPanel panel{m.title, "time per frame, ms (prepare + place, median)", "relative RMS error", {}};
-    for (Method method : methods) {
-      ChartSeries s{std::string(to_string(method)), {}, {}, {}};
-      for (const Point& p : points)
-        if (p.method == s.name) {
-          s.x.push_back(p.prepare_ms + p.place_ms);
-          s.y.push_back(p.*(m.field));
-          s.labels.push_back(fmt::format("n={}", p.n));
-        }
-      panel.series.push_back(std::move(s));
+std::vector<Scenario> parse_scenarios(const std::string& text) {
+  if (text == "all") return all_scenarios();
+  std::vector<Scenario> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string name = text.substr(start, comma - start);
+    auto s = scenario_from_string(name);
+    if (!s) {
+      std::string known;
+      for (Scenario k : all_scenarios()) known += (known.empty() ? "" : ", ") + std::string(to_string(k));
+      throw InputError(fmt::format("--scenarios: unknown scenario '{}' ({})", name, known));
     }
-    panels.push_back(std::move(panel));
+    out.push_back(*s);
+    start = comma + 1;
   }
-  return panels;
+  return out;
+}
+
+int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
+  EvalTemporalOptions o;
+  o.maps = args.maps;
+  o.methods = parse_method_list(args.methods);
+  o.scenarios = parse_scenarios(args.scenarios);
+  if (args.n <= 0) throw InputError(fmt::format("--n must be positive, got {}", args.n));
+  o.frames = args.frames;
+  o.count = args.n;
+  o.frame_rate_hz = args.fps;
+  o.filter = args.filter == "on" ? FilterMode::On : args.filter == "off" ? FilterMode::Off : FilterMode::Auto;
+  o.output_dir = args.output_dir;
+  ProgressBar bar("eval temporal", out);
+  const EvalTemporalReport report = evaluate_temporal(o, bar.callback());
+  bar.finish();
+  say(out, "{}", report.summary());
+  emit_json(out, report.to_json());
+  return 0;
+}
+
+Command eval_temporal_command() {
+  return {"eval temporal", "Flicker, jitter and lag of every method on dynamic scenarios",
+          "lightprobe eval temporal probe.exr scene --methods all --scenarios all -o temporal/",
+          [](Flags& f) -> Handler {
+            auto a = std::make_shared<EvalTemporalArgs>();
+            f.arg("MAP", a->maps, "Base maps ('scene' for the procedural scene)").required();
+            f.opt("--methods", a->methods, "Comma-separated methods or 'all'");
+            f.opt("--scenarios", a->scenarios, "Comma-separated scenarios or 'all'");
+            f.opt("--frames", a->frames, "Frames per scenario");
+            f.opt("--n", a->n, "Lights per frame");
+            f.opt("--fps", a->fps, "Frame rate");
+            f.opt("--filter", a->filter, "FIR filtering: auto (hemigon only), on, off");
+            f.output(a->output_dir, "Directory for temporal.csv and temporal.svg");
+            return [a](const Output& out) { return run_eval_temporal(*a, out); };
+          }};
+}
+
+struct EvalShadingArgs {
+  std::vector<std::string> maps;    // "scene" renders the procedural scene
+  std::string counts = "64,256,1024,4096";
+  ShadingTableArgs tables;          // n is taken from counts
+  int points = 0;                   // shading points per timing run (0: ~8M light evaluations)
+  bool coherent = false;            // shade points in the order of their normal's region
+  std::string output_dir;
+};
+
+int run_eval_shading(const EvalShadingArgs& args, const Output& out) {
+  EvalShadingOptions o;
+  o.maps = args.maps;
+  o.counts = parse_int_list(args.counts, "--n");
+  if (args.points < 0) throw InputError(fmt::format("--points must be positive (or 0: automatic), got {}", args.points));
+  o.points = args.points;
+  o.shading = shading_options(args.tables);
+  o.method = progressive_method(args.tables.method);
+  o.coherent = args.coherent;
+  o.output_dir = args.output_dir;
+  ProgressBar bar("eval shading", out);
+  const EvalShadingReport report = evaluate_shading(o, bar.callback());
+  bar.finish();
+  say(out, "{}", report.summary());
+  emit_json(out, report.to_json());
+  return 0;
+}
+
+Command eval_shading_command() {
+  return {"eval shading", "Speed-up and error of culled, glossy two-strata and clustered many-light shading",
+          "lightprobe eval shading probe.exr scene --n 256,1024,4096 -o eval/shading",
+          [](Flags& f) -> Handler {
+            auto a = std::make_shared<EvalShadingArgs>();
+            f.arg("MAP", a->maps, "Maps to evaluate ('scene' for the procedural scene)").required();
+            f.opt("--n", a->counts, "Comma-separated light counts |H|");
+            f.opt("--points", a->points, "Shading points per timing run (0: automatic)");
+            f.flag("--region-copies", a->tables.region_copies, "Shade from per-region copies of the lights instead of index lists into one array");
+            f.flag("--coherent", a->coherent, "Shade points in the order of their normal's region, as neighbouring pixels come (default: random)");
+            declare_table_options(f, a->tables);
+            f.output(a->output_dir, "Directory for shading.csv and shading.svg");
+            return [a](const Output& out) { return run_eval_shading(*a, out); };
+          }};
+}
+
+struct EvalHdrArgs {
+  std::vector<std::string> maps;    // radiance maps/images, or "scene"
+  std::string response = "gamma";
+  std::string output_dir;
+};
+
+int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
+  EvalHdrOptions o;
+  o.maps = args.maps;
+  o.response = curve_from(args.response);
+  o.output_dir = args.output_dir;
+  ProgressBar bar("eval hdr", out);
+  const EvalHdrReport report = evaluate_hdr(o, bar.callback());
+  bar.finish();
+  say(out, "{}", report.summary());
+  emit_json(out, report.to_json());
+  return 0;
+}
+
+Command eval_hdr_command() {
+  return {"eval hdr", "Error and time of HDR fusion against OpenCV on synthetic brackets",
+          "lightprobe eval hdr scene probe.exr --response scurve -o eval/hdr",
+          [](Flags& f) -> Handler {
+            auto a = std::make_shared<EvalHdrArgs>();
+            f.arg("MAP", a->maps, "Radiance maps ('scene' for the procedural scene)").required();
+            f.opt("--response", a->response, "Camera response of the synthetic brackets: linear|gamma|scurve");
+            f.output(a->output_dir, "Directory for hdr.csv and hdr.svg");
+            return [a](const Output& out) { return run_eval_hdr(*a, out); };
+          }};
+}
+
+struct EvalUnwrapArgs {
+  std::vector<std::string> maps;
+  std::string output_dir;
+};
+
+int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out) {
+  EvalUnwrapOptions o;
+  o.maps = args.maps;
+  o.output_dir = args.output_dir;
+  ProgressBar bar("eval unwrap", out);
+  const EvalUnwrapReport report = evaluate_unwrap(o, bar.callback());
+  bar.finish();
+  say(out, "{}", report.summary());
+  emit_json(out, report.to_json());
+  return 0;
+}
+
+Command eval_unwrap_command() {
+  return {"eval unwrap", "Unwrapping error and centre error on synthetic probes",
+          "lightprobe eval unwrap scene probe.exr -o eval/unwrap",
+          [](Flags& f) -> Handler {
+            auto a = std::make_shared<EvalUnwrapArgs>();
+            f.arg("MAP", a->maps, "Latlong maps ('scene' for the procedural scene)").required();
+            f.output(a->output_dir, "Directory for unwrap.csv");
+            return [a](const Output& out) { return run_eval_unwrap(*a, out); };
+          }};
 }
 
 }  // namespace
 
-int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
-  const std::vector<Method> methods = parse_method_list(args.methods);
-  const std::vector<int> counts = parse_int_list(args.counts, "--n");
-  make_output_directory(args.output_dir);
-
-  AccuracyOptions ao;
-  ao.shadowed = !args.no_shadowed;
-  std::vector<Point> points;
-  Progress progress("eval sampling", args.maps.size() * methods.size() * counts.size(), out.progress);
-  for (const std::string& path : args.maps) {
-    const EnvMap map = path == "scene" ? render_scene(describe_scene(), Layout::LatLong, 1024, 512) : read_envmap(path);
-    const AccuracyReference reference = make_accuracy_reference(map, ao);
-    for (Method method : methods) {
-      auto sampler = make_sampler(method);
-      try {
-        sampler->prepare(map);
-      } catch (const InputError& e) {
-        throw InputError(fmt::format("{}: {}", path, e.what()));
-      }
-      const double prepare_ms = median_ms([&] { sampler->prepare(map); }, args.repeats, 0.3);
-      for (int n : counts) {
-        progress.advance();
-        if (method == Method::Q2Tree && n < 12) continue;  // a Q2-tree has at least its 12 base quads
-        std::vector<Light> lights;
-        const double place_ms = median_ms([&] { lights = sampler->place(n); }, args.repeats, 0.1);
-        const LightError e = light_error(reference, lights);
-        points.push_back({map_name(path), std::string(to_string(method)), n, int(lights.size()), prepare_ms, place_ms,
-                          e.diffuse, e.glossy.at(0), e.glossy.at(1), e.shadowed});
-      }
-    }
-  }
-  progress.finish();
-
-  // CSV of every point.
-  std::string csv = "map,method,n,lights,prepare_ms,place_ms,total_ms,diffuse,glossy10,glossy100,shadowed\n";
-  for (const Point& p : points)
-    csv += fmt::format("{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", p.map, p.method, p.n, p.lights,
-                       p.prepare_ms, p.place_ms, p.prepare_ms + p.place_ms, p.diffuse, p.glossy10, p.glossy100,
-                       p.shadowed);
-  const std::string csv_path = (fs::path(args.output_dir) / "sampling.csv").string();
-  write_file_atomically(csv_path, csv);
-
-  // Medians over maps per (method, n): the summary chart and table.
-  std::vector<Point> summary;
-  for (Method method : methods)
-    for (int n : counts) {
-      std::vector<double> pre, place, d, g10, g100, sh, lights;
-      for (const Point& p : points)
-        if (p.method == to_string(method) && p.n == n) {
-          pre.push_back(p.prepare_ms), place.push_back(p.place_ms), d.push_back(p.diffuse);
-          g10.push_back(p.glossy10), g100.push_back(p.glossy100), sh.push_back(p.shadowed);
-          lights.push_back(p.lights);
-        }
-      if (d.empty()) continue;
-      summary.push_back({"median", std::string(to_string(method)), n, int(median(lights)), median(pre), median(place),
-                         median(d), median(g10), median(g100), median(sh)});
-    }
-  const std::string title = args.maps.size() == 1
-                                ? fmt::format("Speed against accuracy: {}", map_name(args.maps[0]))
-                                : fmt::format("Speed against accuracy: median over {} maps", args.maps.size());
-  const std::string svg_path = (fs::path(args.output_dir) / "sampling.svg").string();
-  write_file_atomically(svg_path, svg_chart(title, panels_for(summary, methods)));
-  if (args.maps.size() > 1)
-    for (const std::string& path : args.maps) {
-      std::vector<Point> mine;
-      for (const Point& p : points)
-        if (p.map == map_name(path)) mine.push_back(p);
-      write_file_atomically((fs::path(args.output_dir) / fmt::format("sampling_{}.svg", map_name(path))).string(),
-                            svg_chart(fmt::format("Speed against accuracy: {}", map_name(path)), panels_for(mine, methods)));
-    }
-
-  say(out, "{:<10} {:>6} {:>7} {:>11} {:>10} {:>9} {:>9} {:>10} {:>9}\n", "method", "n", "lights", "prepare ms",
-      "place ms", "diffuse", "glossy10", "glossy100", "shadowed");
-  for (const Point& p : summary)
-    say(out, "{:<10} {:>6} {:>7} {:>11.3f} {:>10.4f} {:>8.2f}% {:>8.2f}% {:>9.2f}% {:>8.2f}%\n", p.method, p.n, p.lights,
-        p.prepare_ms, p.place_ms, 100 * p.diffuse, 100 * p.glossy10, 100 * p.glossy100, 100 * p.shadowed);
-  say(out, "{} points on {} maps -> {}, {}\n", points.size(), args.maps.size(), csv_path, svg_path);
-
-  nlohmann::json rows = nlohmann::json::array();
-  for (const Point& p : points)
-    rows.push_back({{"map", p.map}, {"method", p.method}, {"n", p.n}, {"lights", p.lights},
-                    {"prepare_ms", p.prepare_ms}, {"place_ms", p.place_ms}, {"diffuse", p.diffuse},
-                    {"glossy10", p.glossy10}, {"glossy100", p.glossy100}, {"shadowed", p.shadowed}});
-  emit_json(out, {{"csv", csv_path}, {"chart", svg_path}, {"points", rows}});
-  return 0;
-}
-
 std::vector<Command> eval_commands() {
   return {
-      {"eval sampling", "Time and error of every sampler and light count",
-       "lightprobe eval sampling probe1.exr probe2.hdr scene --methods all --n 16,64,256,1024 -o eval/",
-       [](Flags& f) -> Handler {
-         auto a = std::make_shared<EvalSamplingArgs>();
-         f.arg("MAP", a->maps, "Maps to evaluate ('scene' for the procedural scene)").required();
-         f.opt("--methods", a->methods, "Comma-separated methods or 'all'");
-         f.opt("--n", a->counts, "Comma-separated light counts");
-         f.output(a->output_dir, "Directory for sampling.csv and the charts");
-         f.opt("--repeats", a->repeats, "Timing repeats per point (0: adaptive)");
-         f.flag("--no-shadowed", a->no_shadowed, "Skip the shadowed error (its reference is the slow part)");
-         return [a](const Output& out) { return run_eval_sampling(*a, out); };
-       }},
-      {"eval temporal", "Flicker, jitter and lag of every method on dynamic scenarios",
-       "lightprobe eval temporal probe.exr scene --methods all --scenarios all -o temporal/",
-       [](Flags& f) -> Handler {
-         auto a = std::make_shared<EvalTemporalArgs>();
-         f.arg("MAP", a->maps, "Base maps ('scene' for the procedural scene)").required();
-         f.opt("--methods", a->methods, "Comma-separated methods or 'all'");
-         f.opt("--scenarios", a->scenarios, "Comma-separated scenarios or 'all'");
-         f.opt("--frames", a->frames, "Frames per scenario");
-         f.opt("--n", a->n, "Lights per frame");
-         f.opt("--fps", a->fps, "Frame rate");
-         f.opt("--filter", a->filter, "FIR filtering: auto (hemigon only), on, off");
-         f.output(a->output_dir, "Directory for temporal.csv and temporal.svg");
-         return [a](const Output& out) { return run_eval_temporal(*a, out); };
-       }},
+      eval_sampling_command(),
+      eval_temporal_command(),
       {"eval estimators", "MIS, BIS and SMC reflected-radiance estimators: error, temporal noise, time",
        "lightprobe eval estimators probe.exr scene --repeats 8 -o eval/estimators\nlightprobe eval estimators seq/ --estimators mis,bis,smc --budgets 4,16,64 -o eval/estimators",
        [](Flags& f) -> Handler {
@@ -222,28 +253,8 @@ std::vector<Command> eval_commands() {
          f.output(a->output_dir, "Directory for estimators.csv/.svg and smc_sweep.csv/.svg");
          return [a](const Output& out) { return run_eval_estimators(*a, out); };
        }},
-      {"eval shading", "Speed-up and error of culled, glossy two-strata and clustered many-light shading",
-       "lightprobe eval shading probe.exr scene --n 256,1024,4096 -o eval/shading",
-       [](Flags& f) -> Handler {
-         auto a = std::make_shared<EvalShadingArgs>();
-         f.arg("MAP", a->maps, "Maps to evaluate ('scene' for the procedural scene)").required();
-         f.opt("--n", a->counts, "Comma-separated light counts |H|");
-         f.opt("--points", a->points, "Shading points per timing run (0: automatic)");
-         f.flag("--region-copies", a->tables.region_copies, "Shade from per-region copies of the lights instead of index lists into one array");
-         f.flag("--coherent", a->coherent, "Shade points in the order of their normal's region, as neighbouring pixels come (default: random)");
-         declare_table_options(f, a->tables);
-         f.output(a->output_dir, "Directory for shading.csv and shading.svg");
-         return [a](const Output& out) { return run_eval_shading(*a, out); };
-       }},
-      {"eval hdr", "Error and time of HDR fusion against OpenCV on synthetic brackets",
-       "lightprobe eval hdr scene probe.exr --response scurve -o eval/hdr",
-       [](Flags& f) -> Handler {
-         auto a = std::make_shared<EvalHdrArgs>();
-         f.arg("MAP", a->maps, "Radiance maps ('scene' for the procedural scene)").required();
-         f.opt("--response", a->response, "Camera response of the synthetic brackets: linear|gamma|scurve");
-         f.output(a->output_dir, "Directory for hdr.csv and hdr.svg");
-         return [a](const Output& out) { return run_eval_hdr(*a, out); };
-       }},
+      eval_shading_command(),
+      eval_hdr_command(),
       {"eval calib", "Our geometric calibration against OpenCV run alone; synthetic sweep",
        "lightprobe eval calib views/*.jpg --board 9x6 --square 25 -o eval/calib\nlightprobe eval calib --sweep -o eval/calib",
        [](Flags& f) -> Handler {
@@ -255,14 +266,7 @@ std::vector<Command> eval_commands() {
          f.output(a->output_dir, "Directory for calib_compare.csv, calib_sweep.csv/.svg");
          return [a](const Output& out) { return run_eval_calib(*a, out); };
        }},
-      {"eval unwrap", "Unwrapping error and centre error on synthetic probes",
-       "lightprobe eval unwrap scene probe.exr -o eval/unwrap",
-       [](Flags& f) -> Handler {
-         auto a = std::make_shared<EvalUnwrapArgs>();
-         f.arg("MAP", a->maps, "Latlong maps ('scene' for the procedural scene)").required();
-         f.output(a->output_dir, "Directory for unwrap.csv");
-         return [a](const Output& out) { return run_eval_unwrap(*a, out); };
-       }},
+      eval_unwrap_command(),
       {"eval metadata", "Diffuse error of the metadata model against real probes along a walk",
        "lightprobe synth walkthrough -o walk/ && lightprobe eval metadata walk/ -o eval/metadata",
        [](Flags& f) -> Handler {

@@ -1,5 +1,5 @@
-// hdr response, hdr fuse, calib photometric, synth bracket, eval hdr: what a camera
-// records -> radiance a probe can trust (absolute after photometric calibration).
+// hdr response, hdr fuse: what a camera records -> radiance a probe can trust (absolute
+// after photometric calibration).
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -8,27 +8,19 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <map>
 #include <sstream>
 
 #include "calib/photometric.h"
 #include "cli/commands.h"
-#include "cli/eval_handlers.h"
 #include "cli/report.h"
-#include "eval/svg_chart.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "core/progress.h"
-#include "eval/synthetic_scene.h"
 #include "hdr/align.h"
 #include "hdr/bracket.h"
 #include "hdr/deghost.h"
-#include "hdr/hdr_accuracy.h"
 #include "hdr/log_sensor.h"
 #include "hdr/merge.h"
-#include "hdr/opencv_peer.h"
 #include "hdr/response.h"
-#include "hdr/synthetic_bracket.h"
 
 namespace lp::cli {
 
@@ -181,127 +173,6 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
 namespace {
 
 }  // namespace
-
-int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
-  make_output_directory(args.output_dir);
-  struct Row {
-    std::string map, method;
-    HdrError error;
-    double recover_ms = 0, merge_ms = 0, floor_ms = 0;
-  };
-  std::vector<Row> rows;
-  Progress progress("eval hdr", args.maps.size(), out.progress);
-  for (const std::string& path : args.maps) {
-    SyntheticBracketOptions o;
-    o.response = curve_from(args.response);
-    o.exposure_seconds = {1 / 64., 1 / 8., 1.};
-    const SyntheticBracket sb = make_synthetic_bracket(radiance_from(path), o);
-    Bracket bracket;
-    bracket.frames = sb.frames;
-    bracket.exposure_seconds = sb.exposure_seconds;
-    CameraResponse truth;
-    truth.levels = int(sb.true_log_exposure[0].size());
-    truth.log_exposure = sb.true_log_exposure;
-    // The memory floor: one pass over the bracket.
-    double floor_ms = 1e30;
-    for (int r = 0; r < 5; ++r) {
-      const auto t0 = std::chrono::steady_clock::now();
-      float s = 0;
-      for (const auto& f : bracket.frames)
-        for (float v : f.rgb) s += v;
-      volatile float sink = s;
-      (void)sink;
-      floor_ms = std::min(floor_ms, ms_since(t0));
-    }
-    auto timed = [&](auto&& f) {
-      double best = 1e30;
-      for (int r = 0; r < 3; ++r) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        best = std::min(best, ms_since(t0));
-      }
-      return best;
-    };
-    const std::string name = path == "scene" ? "scene" : fs::path(path).stem().string();
-    auto add = [&](const std::string& method, const RgbImage& est, double rec_ms, double merge_ms) {
-      HdrError e;
-      try {
-        e = hdr_log_error(est, sb.true_radiance);
-      } catch (const InputError&) {  // nothing usable in the estimate: a failure, recorded as such
-        e.median_log10 = e.p95_log10 = std::nan("");
-        e.pixels_invalid = size_t(est.width) * size_t(est.height);
-      }
-      rows.push_back({name, method, e, rec_ms, merge_ms, floor_ms});
-    };
-    RgbImage est;
-    double merge_ms = timed([&] { est = merge_bracket(bracket, truth); });
-    add("ours (true response)", est, 0, merge_ms);
-    CameraResponse deb;
-    double rec_ms = timed([&] { deb = recover_debevec(bracket); });
-    merge_ms = timed([&] { est = merge_bracket(bracket, deb); });
-    add("ours (Debevec)", est, rec_ms, merge_ms);
-    CameraResponse rob;
-    rec_ms = timed([&] { rob = recover_robertson(bracket); });
-    merge_ms = timed([&] { est = merge_bracket(bracket, rob); });
-    add("ours (Robertson)", est, rec_ms, merge_ms);
-    double ms = 0;
-    CameraResponse cvdeb, cvrob;
-    rec_ms = timed([&] { cvdeb = opencv_recover_response(bracket, OpenCvHdrMethod::Debevec); });
-    merge_ms = timed([&] { est = opencv_merge(bracket, OpenCvHdrMethod::Debevec, &cvdeb, &ms); });
-    add("OpenCV Debevec", est, rec_ms, merge_ms);
-    rec_ms = timed([&] { cvrob = opencv_recover_response(bracket, OpenCvHdrMethod::Robertson); });
-    merge_ms = timed([&] { est = opencv_merge(bracket, OpenCvHdrMethod::Robertson, &cvrob, &ms); });
-    add("OpenCV Robertson", est, rec_ms, merge_ms);
-    merge_ms = timed([&] { est = opencv_merge(bracket, OpenCvHdrMethod::Robertson, &truth, &ms); });
-    add("OpenCV MergeRobertson (true response)", est, 0, merge_ms);
-    progress.advance();
-  }
-  progress.finish();
-
-  std::string csv = "map,method,median_log10,p95_log10,invalid_pixels,recover_ms,merge_ms,merge_x_floor\n";
-  for (const Row& r : rows)
-    csv += fmt::format("{},{},{:.6g},{:.6g},{},{:.4g},{:.4g},{:.4g}\n", r.map, r.method, r.error.median_log10,
-                       r.error.p95_log10, r.error.pixels_invalid, r.recover_ms, r.merge_ms, r.merge_ms / r.floor_ms);
-  const std::string csv_path = (fs::path(args.output_dir) / "hdr.csv").string();
-  write_file_atomically(csv_path, csv);
-  std::map<std::string, ChartSeries> by_method;
-  for (const Row& r : rows) {
-    auto& s = by_method[r.method];
-    s.name = r.method;
-    s.x.push_back(r.recover_ms + r.merge_ms);
-    s.y.push_back(r.error.p95_log10);
-    s.labels.push_back(r.map);
-  }
-  ChartPanel panel{"95th-percentile log10 luminance error against time", "recover + merge, ms",
-                   "p95 |log10 L - log10 L_true|", {}};
-  for (auto& [k, s] : by_method) {
-    // Points of one method across maps: sort by time so the polyline reads left to right.
-    std::vector<size_t> idx(s.x.size());
-    for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
-    std::sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return s.x[a] < s.x[b]; });
-    ChartSeries sorted{s.name, {}, {}, {}, false};  // one point per map: a scatter
-    for (size_t i : idx) sorted.x.push_back(s.x[i]), sorted.y.push_back(s.y[i]), sorted.labels.push_back(s.labels[i]);
-    panel.series.push_back(sorted);
-  }
-  const std::string svg_path = (fs::path(args.output_dir) / "hdr.svg").string();
-  write_file_atomically(svg_path, svg_chart(fmt::format("HDR fusion: error against time ({} response, 3 exposures 3 stops apart)",
-                                                        args.response),
-                                            {panel}, 1));
-  say(out, "{:<12} {:<38} {:>9} {:>9} {:>8} {:>10} {:>9} {:>8}\n", "map", "method", "median", "p95", "invalid",
-      "recover ms", "merge ms", "x floor");
-  for (const Row& r : rows)
-    say(out, "{:<12} {:<38} {:>9.4f} {:>9.4f} {:>8} {:>10.1f} {:>9.2f} {:>8.1f}\n", r.map, r.method,
-        r.error.median_log10, r.error.p95_log10, r.error.pixels_invalid, r.recover_ms, r.merge_ms,
-        r.merge_ms / r.floor_ms);
-  say(out, "-> {}, {}\n", csv_path, svg_path);
-  nlohmann::json jr = nlohmann::json::array();
-  for (const Row& r : rows)
-    jr.push_back({{"map", r.map}, {"method", r.method}, {"median_log10", r.error.median_log10},
-                  {"p95_log10", r.error.p95_log10}, {"invalid_pixels", r.error.pixels_invalid},
-                  {"recover_ms", r.recover_ms}, {"merge_ms", r.merge_ms}});
-  emit_json(out, {{"csv", csv_path}, {"chart", svg_path}, {"rows", jr}});
-  return 0;
-}
 
 std::vector<Command> hdr_commands() {
   return {

@@ -1,4 +1,4 @@
-// probe unwrap, synth probe, eval unwrap: mirror-ball and fisheye probes -> maps.
+// probe unwrap, probe register: mirror-ball and fisheye probes -> maps.
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -10,14 +10,11 @@
 #include <filesystem>
 
 #include "cli/commands.h"
-#include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/map_sequence.h"
 #include "core/progress.h"
-#include "core/resample.h"
-#include "eval/synthetic_scene.h"
 #include "calib/colour_match.h"
 #include "hdr/bracket.h"
 #include "probe/ball_register.h"
@@ -27,8 +24,6 @@
 #include "probe/mirror_ball.h"
 #include "probe/stabilise.h"
 #include "probe/unwrap_sequence.h"
-#include "probe/synthetic_probe.h"
-#include "probe/unwrap_accuracy.h"
 
 namespace lp::cli {
 
@@ -192,69 +187,6 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
       registered.size(), args.size, args.size, ball.cx, ball.cy, ball.radius_px);
   emit_json(out, {{"output", args.output_dir}, {"frames", found},
                   {"registered_ball", {ball.cx, ball.cy, ball.radius_px}}});
-  return 0;
-}
-
-int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out) {
-  struct Row {
-    std::string map, probe;
-    UnwrapError error;
-    double centre_error_px = 0, radius_error_px = 0, ms = 0;
-  };
-  std::vector<Row> rows;
-  make_output_directory(args.output_dir);
-  Progress progress("eval unwrap", args.maps.size(), out.progress);
-  for (const std::string& path : args.maps) {
-    const EnvMap world = path == "scene" ? render_scene(describe_scene(), Layout::LatLong, 1024, 512) : read_envmap(path);
-    const std::string name = path == "scene" ? "scene" : fs::path(path).stem().string();
-    const EnvMap truth = resample(world, Layout::LatLong, 256, 128);
-    const BallInImage ball{256.3, 251.7, 200.0};
-    for (const auto& [label, distance, noise] :
-         std::vector<std::tuple<std::string, double, double>>{{"ball, orthographic", 0, 0},
-                                                              {"ball, orthographic, 2 % noise", 0, 0.02},
-                                                              {"ball, perspective 10 radii", 10, 0},
-                                                              {"ball, perspective 10 radii, 2 % noise", 10, 0.02}}) {
-      MirrorBallCamera cam;
-      if (distance > 0) cam.distance_in_radii = distance;
-      RenderBallOptions ro;
-      ro.noise_relative = noise;
-      const RgbImage img = render_mirror_ball(world, ball, cam, 512, 512, ro);
-      const auto t0 = std::chrono::steady_clock::now();
-      const BallInImage found = find_ball(img);
-      const EnvMap map = unwrap_mirror_ball(img, found, cam, Layout::LatLong, 256, 128);
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      rows.push_back({name, label, unwrap_error(map, truth), std::hypot(found.cx - ball.cx, found.cy - ball.cy),
-                      std::fabs(found.radius_px - ball.radius_px), ms});
-    }
-    {
-      const FisheyeModel m = equidistant_fisheye(600, 600, 190);
-      const RgbImage img = render_fisheye(world, m, 4);
-      const auto t0 = std::chrono::steady_clock::now();
-      const EnvMap map = unwrap_fisheye(img, m, Layout::LatLong, 256, 128, {});
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      const ImageCircle c = find_image_circle(img);
-      rows.push_back({name, "fisheye 190 deg equidistant", unwrap_error(map, truth),
-                      std::hypot(c.cx - 300.0, c.cy - 300.0), std::fabs(c.r - 300.0 * 190.0 / 190.0), ms});
-    }
-    progress.advance();
-  }
-  progress.finish();
-  std::string csv = "map,probe,mean_abs_log10,pixels,valid_solid_angle_sr,centre_error_px,radius_error_px,ms\n";
-  for (const Row& r : rows)
-    csv += fmt::format("{},{},{:.6g},{},{:.4f},{:.4f},{:.4f},{:.2f}\n", r.map, r.probe, r.error.mean_abs_log10,
-                       r.error.pixels_compared, r.error.valid_solid_angle, r.centre_error_px, r.radius_error_px, r.ms);
-  const std::string csv_path = (fs::path(args.output_dir) / "unwrap.csv").string();
-  write_file_atomically(csv_path, csv);
-  say(out, "{:<10} {:<40} {:>10} {:>9} {:>10} {:>8}\n", "map", "probe", "log10 err", "valid sr", "centre px", "ms");
-  for (const Row& r : rows)
-    say(out, "{:<10} {:<40} {:>10.4f} {:>9.3f} {:>10.3f} {:>8.1f}\n", r.map, r.probe, r.error.mean_abs_log10,
-        r.error.valid_solid_angle, r.centre_error_px, r.ms);
-  say(out, "-> {}\n", csv_path);
-  nlohmann::json jr = nlohmann::json::array();
-  for (const Row& r : rows)
-    jr.push_back({{"map", r.map}, {"probe", r.probe}, {"mean_abs_log10", r.error.mean_abs_log10},
-                  {"centre_error_px", r.centre_error_px}, {"ms", r.ms}});
-  emit_json(out, {{"csv", csv_path}, {"rows", jr}});
   return 0;
 }
 

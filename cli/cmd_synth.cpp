@@ -23,6 +23,7 @@
 #include "estimate/exposure_metering.h"
 #include "estimate/metadata_track.h"
 #include "estimate/walkthrough.h"
+#include "eval/harness.h"
 #include "eval/synthetic_scene.h"
 #include "eval/synthetic_sequence.h"
 #include "hdr/bracket.h"
@@ -210,7 +211,7 @@ int run_synth_bracket(const SynthBracketArgs& args, const Output& out) {
   o.moving_object = args.moving_object;
   o.seed = args.seed;
   if (o.bit_depth != 8 && o.bit_depth != 16) throw InputError("--bit-depth must be 8 or 16");
-  const SyntheticBracket b = make_synthetic_bracket(radiance_from(args.input), o);
+  const SyntheticBracket b = make_synthetic_bracket(radiance_or_scene(args.input), o);
   write_synthetic_bracket(args.output_dir, b, o.bit_depth);
   say(out, "{}: {} frames ({}-bit, {} response{}{}), exposures.csv, truth.exr, true_response.json\n", args.output_dir,
       b.frames.size(), o.bit_depth, args.response, o.shake_px ? fmt::format(", shake {} px", o.shake_px) : "",

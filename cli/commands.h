@@ -1,5 +1,4 @@
-// What the command handlers share: parsing of option values, the "scene" stand-in for a
-// map, and the table options of `tables` and `eval shading`. Every function throws
+// What the command handlers share: parsing of option values and the table options of `tables` and `eval shading`. Every function throws
 // lp::InputError naming the option (or the file) it refuses.
 #pragma once
 
@@ -14,7 +13,7 @@
 
 namespace lp {
 struct BoardSpec;
-struct RgbImage;
+struct ShadingOptions;
 enum class ResponseCurve;
 }  // namespace lp
 
@@ -37,12 +36,6 @@ void target_geometry(Layout layout, const std::string& size, int nside, const En
 BoardSpec board_from(const std::string& text, double square_mm);
 // --response linear|gamma|scurve of the synthetic brackets.
 ResponseCurve curve_from(const std::string& name);
-// A map file, or "scene": the procedural scene rendered at latlong width x width/2.
-EnvMap map_or_scene(const std::string& name, int scene_width);
-// "scene", or the file name without folder and extension (labels of tables and charts).
-std::string map_label(const std::string& name);
-// A radiance image file as stored, or "scene" (latlong 512x256).
-RgbImage radiance_from(const std::string& path);
 
 // The table options shared by `tables` and `eval shading` (Havran 2005 section 4).
 struct ShadingTableArgs {
@@ -58,5 +51,9 @@ struct ShadingTableArgs {
   bool region_copies = false;       // shader reads per-region copies instead of index lists
 };
 void declare_table_options(Flags& f, ShadingTableArgs& t);
+// The validated table options (the messages name the option).
+ShadingOptions shading_options(const ShadingTableArgs& t);
+// --method of the tables: a progressive sampler (pharr or hemigon).
+Method progressive_method(const std::string& name);
 
 }  // namespace lp::cli

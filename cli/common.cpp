@@ -6,14 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <sstream>
 
 #include "calib/board_detect.h"
 #include "core/error.h"
-#include "core/image_io.h"
-#include "eval/synthetic_scene.h"
 #include "hdr/synthetic_bracket.h"
+#include "render/reference_shader.h"
 
 namespace lp::cli {
 
@@ -146,11 +144,6 @@ ResponseCurve curve_from(const std::string& name) {
   throw InputError(fmt::format("--response must be linear, gamma or scurve, got '{}'", name));
 }
 
-RgbImage radiance_from(const std::string& path) {
-  if (path == "scene") return image_from_envmap(render_scene(describe_scene(), Layout::LatLong, 512, 256));
-  return read_rgb_image(path);
-}
-
 std::vector<Method> parse_method_list(const std::string& text) {
   if (text == "all") return all_methods();
   std::vector<Method> methods;
@@ -174,15 +167,6 @@ BoardSpec board_from(const std::string& text, double square_mm) {
   return BoardSpec{cols, rows, square_mm};
 }
 
-EnvMap map_or_scene(const std::string& name, int scene_width) {
-  if (name == "scene") return render_scene(describe_scene(), Layout::LatLong, scene_width, scene_width / 2);
-  return read_envmap(name);
-}
-
-std::string map_label(const std::string& name) {
-  return name == "scene" ? "scene" : std::filesystem::path(name).stem().string();
-}
-
 void declare_table_options(Flags& f, ShadingTableArgs& t) {
   f.opt("--method", t.method, "Progressive sampler for the lights: pharr|hemigon");
   f.opt("--low-per-high", t.low_per_high, "|L| / |H|: dense lights per glossy-cone light");
@@ -192,6 +176,33 @@ void declare_table_options(Flags& f, ShadingTableArgs& t) {
   f.opt("--cone", t.cone_deg, "Cone half-angle around the reflected direction, degrees");
   f.opt("--k", t.k, "At most this many L lights per cone (power rescaled)");
   f.opt("--q", t.q, "Cluster to at most Q lights (0: |H| / 4)");
+}
+
+ShadingOptions shading_options(const ShadingTableArgs& a) {
+  if (a.regions < 1) throw InputError(fmt::format("--regions must be at least 1, got {}", a.regions));
+  if (a.cone_regions < 1) throw InputError(fmt::format("--cone-regions must be at least 1, got {}", a.cone_regions));
+  if (a.lut < 1) throw InputError(fmt::format("--lut must be at least 1, got {}", a.lut));
+  if (a.low_per_high < 1) throw InputError(fmt::format("--low-per-high must be at least 1, got {}", a.low_per_high));
+  if (a.k < 1) throw InputError(fmt::format("--k must be at least 1, got {}", a.k));
+  if (a.q < 0) throw InputError(fmt::format("--q must be at least 1 (or 0 for |H| / 4), got {}", a.q));
+  if (!(a.cone_deg > 0 && a.cone_deg <= 90))
+    throw InputError(fmt::format("--cone must be in (0, 90] degrees, got {}", a.cone_deg));
+  ShadingOptions o;
+  o.regions = {a.regions, a.lut};
+  o.glossy.low_per_high = a.low_per_high;
+  o.glossy.cone_half_angle_deg = a.cone_deg;
+  o.glossy.max_cone_lights = a.k;
+  o.glossy.cone_regions = {a.cone_regions, a.lut};
+  o.cluster_max_lights = a.q;
+  o.region_copies = a.region_copies;
+  return o;
+}
+
+Method progressive_method(const std::string& name) {
+  auto m = method_from_string(name);
+  if (!m || (*m != Method::Pharr && *m != Method::Hemigon))
+    throw InputError(fmt::format("--method: '{}' is not a progressive sampler (pharr or hemigon)", name));
+  return *m;
 }
 
 }  // namespace lp::cli

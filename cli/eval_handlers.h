@@ -9,28 +9,6 @@
 
 namespace lp::cli {
 
-struct EvalSamplingArgs {
-  std::vector<std::string> maps;    // "scene" renders the procedural scene
-  std::string methods = "all";
-  std::string counts = "16,32,64,128,256,512,1024,2048,4096";
-  std::string output_dir;
-  int repeats = 0;                  // 0: adaptive (at least 5, ~0.2 s per point)
-  bool no_shadowed = false;
-};
-int run_eval_sampling(const EvalSamplingArgs& args, const Output& out);
-
-struct EvalTemporalArgs {
-  std::vector<std::string> maps;    // base maps; "scene" for the procedural scene
-  std::string methods = "all";
-  std::string scenarios = "all";
-  int frames = 48;
-  int n = 256;
-  double fps = 21;
-  std::string filter = "auto";
-  std::string output_dir;
-};
-int run_eval_temporal(const EvalTemporalArgs& args, const Output& out);
-
 struct EvalEstimatorsArgs {
   std::vector<std::string> inputs;  // base maps ("scene": the procedural scene) or sequence directories
   // bis-mix / smc-mix: BIS, and SMC's BIS initialisation, with half the proposals from the map
@@ -49,23 +27,6 @@ struct EvalEstimatorsArgs {
 };
 int run_eval_estimators(const EvalEstimatorsArgs& args, const Output& out);
 
-struct EvalShadingArgs {
-  std::vector<std::string> maps;    // "scene" renders the procedural scene
-  std::string counts = "64,256,1024,4096";
-  ShadingTableArgs tables;          // n is taken from counts
-  int points = 0;                   // shading points per timing run (0: ~8M light evaluations)
-  bool coherent = false;            // shade points in the order of their normal's region
-  std::string output_dir;
-};
-int run_eval_shading(const EvalShadingArgs& args, const Output& out);
-
-struct EvalHdrArgs {
-  std::vector<std::string> maps;    // radiance maps/images, or "scene"
-  std::string response = "gamma";
-  std::string output_dir;
-};
-int run_eval_hdr(const EvalHdrArgs& args, const Output& out);
-
 // eval calib: our calibration next to OpenCV run alone on the same detected corners
 // (images given), and/or a sweep on synthetic corners (views x noise -> error vs truth).
 struct EvalCalibArgs {
@@ -76,12 +37,6 @@ struct EvalCalibArgs {
   std::string output_dir;
 };
 int run_eval_calib(const EvalCalibArgs& args, const Output& out);
-
-struct EvalUnwrapArgs {
-  std::vector<std::string> maps;
-  std::string output_dir;
-};
-int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out);
 
 struct EvalMetadataArgs {
   std::string input_dir;            // from synth walkthrough

@@ -14,11 +14,11 @@ namespace {
 
 TEST(HttpParseHead, DecodesThePathAndKeepsTheQueryRaw) {
   const HttpHeadParse p =
-      http_parse_head("\r\nGET /lights%2Fstream?format=nd%6Ajson HTTP/1.0\r\nHost: x\r\nX-Two:  a b \t\r\n\r\n");
+      http_parse_head("\r\nGET /lights%2Fstream?format=nd%6Ason HTTP/1.0\r\nHost: x\r\nX-Two:  a b \t\r\n\r\n");
   ASSERT_TRUE(p.request) << p.status << " " << p.message;
   EXPECT_EQ(p.request->method, "GET");
   EXPECT_EQ(p.request->path, "/lights/stream");
-  EXPECT_EQ(p.request->query, "format=nd%6Ajson");
+  EXPECT_EQ(p.request->query, "format=nd%6Ason");
   EXPECT_EQ(p.request->query_param("format"), "ndjson");
   EXPECT_EQ(p.request->minor_version, 0);
   ASSERT_EQ(p.request->headers.size(), 2u);

@@ -13,6 +13,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/error.h"
+
 namespace lp::fuzz {
 
 // A directory of this process's own under $TMPDIR (made once, removed at a normal exit):
@@ -36,6 +38,18 @@ inline std::string write_input(const std::string& name, const uint8_t* data, siz
   out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
   if (!out) throw std::runtime_error("fuzz: cannot write " + path);
   return path;
+}
+
+// The whole of a target whose reader takes a path: the input written to
+// scratch_dir()/name, handed to `read`, InputError the one failure allowed.
+template <class Read>
+int read_as_file(const char* name, const uint8_t* data, size_t size, Read&& read) {
+  const std::string path = write_input(name, data, size);
+  try {
+    read(path);
+  } catch (const lp::InputError&) {
+  }
+  return 0;
 }
 
 inline std::string as_text(const uint8_t* data, size_t size) { return std::string(reinterpret_cast<const char*>(data), size); }

@@ -89,9 +89,9 @@ std::string example_footer(const std::string& example) {
   return s.str();
 }
 
-}  // namespace
-
-int run_command_line(int argc, char** argv) {
+// Parses the command line (and a --config file) against the table; runs the chosen
+// handler only when `run`.
+int parse_command_line(int argc, char** argv, bool run) {
   CLI::App app{kDescription, "lightprobe"};
   app.set_version_flag("--version", std::string("lightprobe ") + LIGHTPROBE_VERSION);
   app.require_subcommand(1);
@@ -133,6 +133,7 @@ int run_command_line(int argc, char** argv) {
     app.exit(e);
     return 2;
   }
+  if (!run) return 0;
 
   try {
     for (const auto& [sub, handler] : handlers) {
@@ -147,5 +148,11 @@ int run_command_line(int argc, char** argv) {
   }
   return 1;
 }
+
+}  // namespace
+
+int run_command_line(int argc, char** argv) { return parse_command_line(argc, argv, true); }
+
+int check_command_line(int argc, char** argv) { return parse_command_line(argc, argv, false); }
 
 }  // namespace lp::cli

@@ -72,5 +72,8 @@ std::vector<Command> eval_commands();      // eval sampling|temporal|...
 // Parses the command line against the table, runs the chosen handler and maps its
 // exceptions to exit codes.
 int run_command_line(int argc, char** argv);
+// Only parses (the --config file included): 0 when the line parses, 2 on a parse error,
+// never running a handler. For the config-file fuzzer.
+int check_command_line(int argc, char** argv);
 
 }  // namespace lp::cli

@@ -78,6 +78,9 @@ LightList light_list_from_json(const std::string& text, const std::string& sourc
     doc = json::parse(text);
   } catch (const json::parse_error& e) {
     fail(source, fmt::format("not valid JSON (byte {})", e.byte));
+  } catch (const json::exception& e) {  // out_of_range.406 for a number beyond a double ("1e400")
+    fail(source, e.id == 406 ? std::string("not valid JSON (a number beyond the range of a double)")
+                             : fmt::format("not valid JSON (nlohmann error {})", e.id));
   }
   if (!doc.is_object()) fail(source, "light list is not a JSON object");
 

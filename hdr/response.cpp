@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 #include <sstream>
 
@@ -337,7 +338,11 @@ CameraResponse load_response(const std::string& path) {
     throw InputError(path + ": not a lightprobe response (expected \"format\": \"lightprobe.response/1\")");
   CameraResponse r;
   try {
-    r.levels = j.at("levels").get<int>();
+    // An integer first: get<int>() of a float beyond int (1e30) is undefined behaviour.
+    const auto& levels = j.at("levels");
+    if (!levels.is_number_integer() || levels.get<int64_t>() < 0 || levels.get<int64_t>() > INT32_MAX)
+      throw InputError(fmt::format("{}: \"levels\" is {}, not a count of code values", path, levels.dump().substr(0, 40)));
+    r.levels = levels.get<int>();
     r.linear = j.value("linear", false);
     const auto& le = j.at("log_exposure");
     const char* names[3] = {"r", "g", "b"};

@@ -337,6 +337,111 @@ std::optional<std::string> HttpRequest::query_param(std::string_view name) const
   return std::nullopt;
 }
 
+namespace {
+
+// Splits the complete lines of a request head from `scan` on ([begin, end), no EOL) into
+// `lines`, skipping empty lines before a request line; true once the empty line that ends
+// the head is read (`scan` is then just past it).
+bool split_head_lines(std::string_view in, size_t& scan, size_t& head_start,
+                      std::vector<std::pair<size_t, size_t>>& lines) {
+  size_t pos;
+  while ((pos = in.find('\n', scan)) != std::string_view::npos) {
+    size_t end = pos;
+    if (end > scan && in[end - 1] == '\r') --end;
+    const size_t begin = scan;
+    scan = pos + 1;
+    if (end != begin) {
+      lines.emplace_back(begin, end);
+    } else if (lines.empty()) {
+      head_start = scan;  // empty lines before a request: ignored
+    } else {
+      return true;
+    }
+  }
+  return false;
+}
+
+// 431 for a head (so far, up to `head_end`) over the byte or line cap.
+std::optional<Refusal> head_too_big(std::string_view in, size_t head_end, size_t head_start,
+                                    const std::vector<std::pair<size_t, size_t>>& lines, const HttpLimits& limits) {
+  if (head_end - head_start <= limits.max_head_bytes && lines.size() <= kMaxHeaders + 1) return std::nullopt;
+  return Refusal{431, fmt::format("request head over {} bytes or {} lines", limits.max_head_bytes, kMaxHeaders)};
+}
+
+// The request line and headers, then the policy: no bodies, no expectations, GET/HEAD.
+std::optional<Refusal> parse_head_lines(std::string_view in, const std::vector<std::pair<size_t, size_t>>& lines,
+                                        HttpRequest& req) {
+  const auto line = [&](size_t k) { return in.substr(lines[k].first, lines[k].second - lines[k].first); };
+  const std::string_view request_line = line(0);
+  const size_t sp1 = request_line.find(' '), sp2 = request_line.rfind(' ');
+  if (sp1 == std::string_view::npos || sp2 == sp1) return Refusal{400, "malformed request line"};
+  const std::string_view method = request_line.substr(0, sp1), version = request_line.substr(sp2 + 1);
+  const std::string_view target = request_line.substr(sp1 + 1, sp2 - sp1 - 1);
+  if (method.empty() || !std::all_of(method.begin(), method.end(), is_tchar)) return Refusal{400, "malformed method"};
+  if (version.size() != 8 || version.substr(0, 5) != "HTTP/" || version[6] != '.')
+    return Refusal{400, "malformed HTTP version"};
+  if (version[5] != '1' || (version[7] != '0' && version[7] != '1'))
+    return Refusal{505, fmt::format("HTTP version {} not supported (1.0 or 1.1)", version)};
+  req.minor_version = version[7] - '0';
+  if (target.size() > kMaxTarget) return Refusal{414, fmt::format("request target over {} bytes", kMaxTarget)};
+  if (target.empty() || target.find(' ') != std::string_view::npos) return Refusal{400, "malformed request target"};
+  req.method = std::string(method);
+  req.target = std::string(target);
+  for (size_t k = 1; k < lines.size(); ++k) {
+    const std::string_view h = line(k);
+    const size_t colon = h.find(':');
+    if (h.front() == ' ' || h.front() == '\t') return Refusal{400, "obsolete header line folding"};
+    if (colon == std::string_view::npos || colon == 0) return Refusal{400, "malformed header line"};
+    const std::string_view name = h.substr(0, colon);
+    if (!std::all_of(name.begin(), name.end(), is_tchar)) return Refusal{400, "malformed header name"};
+    const std::string_view value = trim(h.substr(colon + 1));
+    for (char ch : value)
+      if ((static_cast<unsigned char>(ch) < 0x20 && ch != '\t') || ch == 0x7f)
+        return Refusal{400, "control character in a header value"};
+    req.headers.emplace_back(lower(name), std::string(value));
+  }
+  // Bodies: lengths must agree and be digits; any body is refused (we take none).
+  std::optional<uint64_t> length;
+  for (const auto& [k, v] : req.headers) {
+    if (k != "content-length") continue;
+    std::string_view rest = v;
+    while (!rest.empty()) {
+      const size_t comma = rest.find(',');
+      const std::string_view item = trim(rest.substr(0, comma));
+      rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+      uint64_t n = 0;
+      bool overflow = false;
+      if (item.empty() || !std::all_of(item.begin(), item.end(), [](char ch) { return ch >= '0' && ch <= '9'; }))
+        return Refusal{400, fmt::format("bad Content-Length '{}'", std::string(v).substr(0, 40))};
+      for (char ch : item) {
+        if (n > (UINT64_MAX - 9) / 10) overflow = true;
+        n = n * 10 + uint64_t(ch - '0');
+      }
+      if (overflow) n = UINT64_MAX;
+      if (length && *length != n) return Refusal{400, "conflicting Content-Length values"};
+      length = n;
+    }
+  }
+  const bool has_body = req.header("transfer-encoding") || (length && *length > 0);
+  if (const std::string* expect = req.header("expect")) {
+    if (lower(*expect) != "100-continue") return Refusal{417, fmt::format("unsupported Expect '{}'", expect->substr(0, 40))};
+    if (has_body) return Refusal{417, "no request body is accepted (Expect: 100-continue refused)"};
+  }
+  if (req.method != "GET" && req.method != "HEAD")
+    return Refusal{405, fmt::format("method {} not allowed (GET or HEAD only)", req.method.substr(0, 20)),
+                   {{"Allow", "GET, HEAD"}}};
+  if (has_body) return Refusal{413, "no request body is accepted"};
+  // The target: origin form only.
+  const size_t q = req.target.find('?');
+  if (req.target[0] != '/') return Refusal{400, "request target must be a path"};
+  if (!percent_decode(std::string_view(req.target).substr(0, q), req.path, false))
+    return Refusal{400, "broken percent escape in the path"};
+  if (q != std::string::npos) req.query = req.target.substr(q + 1);
+  return std::nullopt;
+}
+
+}  // namespace
+
 struct HttpServer::Impl {
   HttpServerOptions options;
   HttpHandler handler;
@@ -702,34 +807,15 @@ void HttpServer::Impl::read_from(Conn& c) {
 }
 
 void HttpServer::Impl::process_head(Conn& c) {
-  // Complete lines so far; an empty line after the request line ends the head.
-  bool complete = false;
-  size_t pos;
-  while (!complete && (pos = c.in.find('\n', c.scan)) != std::string::npos) {
-    size_t end = pos;
-    if (end > c.scan && c.in[end - 1] == '\r') --end;
-    const size_t begin = c.scan;
-    c.scan = pos + 1;
-    c.last_line = Clock::now();
-    if (end == begin) {
-      if (c.lines.empty()) c.head_start = c.scan;  // empty lines before a request: ignored
-      else complete = true;
-    } else {
-      c.lines.emplace_back(begin, end);
-    }
-  }
-  if (!complete) {
-    if (c.in.size() - c.head_start > options.limits.max_head_bytes || c.lines.size() > kMaxHeaders + 1) {
-      bad_requests.fetch_add(1);
-      refuse(c, {431, fmt::format("request head over {} bytes or {} lines", options.limits.max_head_bytes, kMaxHeaders)});
-    }
-    return;
-  }
-  if (c.scan - c.head_start > options.limits.max_head_bytes || c.lines.size() > kMaxHeaders + 1) {
+  const size_t scanned = c.scan;
+  const bool complete = split_head_lines(c.in, c.scan, c.head_start, c.lines);
+  if (c.scan != scanned) c.last_line = Clock::now();
+  if (auto too_big = head_too_big(c.in, complete ? c.scan : c.in.size(), c.head_start, c.lines, options.limits)) {
     bad_requests.fetch_add(1);
-    refuse(c, {431, fmt::format("request head over {} bytes or {} lines", options.limits.max_head_bytes, kMaxHeaders)});
+    refuse(c, *too_big);
     return;
   }
+  if (!complete) return;
   HttpRequest req;
   std::optional<Refusal> refusal = parse_request(c, req);
   c.in.erase(0, c.scan);
@@ -744,77 +830,11 @@ void HttpServer::Impl::process_head(Conn& c) {
   dispatch(c, req);
 }
 
-// The request line and headers, then the policy: no bodies, no expectations, GET/HEAD.
 std::optional<Refusal> HttpServer::Impl::parse_request(Conn& c, HttpRequest& req) {
-  const std::string_view in = c.in;
-  const auto line = [&](size_t k) { return in.substr(c.lines[k].first, c.lines[k].second - c.lines[k].first); };
-  const std::string_view request_line = line(0);
-  const size_t sp1 = request_line.find(' '), sp2 = request_line.rfind(' ');
-  if (sp1 == std::string_view::npos || sp2 == sp1) return Refusal{400, "malformed request line"};
-  const std::string_view method = request_line.substr(0, sp1), version = request_line.substr(sp2 + 1);
-  const std::string_view target = request_line.substr(sp1 + 1, sp2 - sp1 - 1);
-  if (method.empty() || !std::all_of(method.begin(), method.end(), is_tchar)) return Refusal{400, "malformed method"};
-  if (version.size() != 8 || version.substr(0, 5) != "HTTP/" || version[6] != '.')
-    return Refusal{400, "malformed HTTP version"};
-  if (version[5] != '1' || (version[7] != '0' && version[7] != '1'))
-    return Refusal{505, fmt::format("HTTP version {} not supported (1.0 or 1.1)", version)};
-  req.minor_version = c.minor_version = version[7] - '0';
-  if (target.size() > kMaxTarget) return Refusal{414, fmt::format("request target over {} bytes", kMaxTarget)};
-  if (target.empty() || target.find(' ') != std::string_view::npos) return Refusal{400, "malformed request target"};
-  req.method = std::string(method);
-  req.target = std::string(target);
-  for (size_t k = 1; k < c.lines.size(); ++k) {
-    const std::string_view h = line(k);
-    const size_t colon = h.find(':');
-    if (h.front() == ' ' || h.front() == '\t') return Refusal{400, "obsolete header line folding"};
-    if (colon == std::string_view::npos || colon == 0) return Refusal{400, "malformed header line"};
-    const std::string_view name = h.substr(0, colon);
-    if (!std::all_of(name.begin(), name.end(), is_tchar)) return Refusal{400, "malformed header name"};
-    const std::string_view value = trim(h.substr(colon + 1));
-    for (char ch : value)
-      if ((static_cast<unsigned char>(ch) < 0x20 && ch != '\t') || ch == 0x7f)
-        return Refusal{400, "control character in a header value"};
-    req.headers.emplace_back(lower(name), std::string(value));
-  }
-  // Bodies: lengths must agree and be digits; any body is refused (we take none).
-  std::optional<uint64_t> length;
-  for (const auto& [k, v] : req.headers) {
-    if (k != "content-length") continue;
-    std::string_view rest = v;
-    while (!rest.empty()) {
-      const size_t comma = rest.find(',');
-      const std::string_view item = trim(rest.substr(0, comma));
-      rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
-      uint64_t n = 0;
-      bool overflow = false;
-      if (item.empty() || !std::all_of(item.begin(), item.end(), [](char ch) { return ch >= '0' && ch <= '9'; }))
-        return Refusal{400, fmt::format("bad Content-Length '{}'", std::string(v).substr(0, 40))};
-      for (char ch : item) {
-        if (n > (UINT64_MAX - 9) / 10) overflow = true;
-        n = n * 10 + uint64_t(ch - '0');
-      }
-      if (overflow) n = UINT64_MAX;
-      if (length && *length != n) return Refusal{400, "conflicting Content-Length values"};
-      length = n;
-    }
-  }
-  const bool has_body = req.header("transfer-encoding") || (length && *length > 0);
-  if (const std::string* expect = req.header("expect")) {
-    if (lower(*expect) != "100-continue") return Refusal{417, fmt::format("unsupported Expect '{}'", expect->substr(0, 40))};
-    if (has_body) return Refusal{417, "no request body is accepted (Expect: 100-continue refused)"};
-  }
-  if (req.method != "GET" && req.method != "HEAD")
-    return Refusal{405, fmt::format("method {} not allowed (GET or HEAD only)", req.method.substr(0, 20)),
-                   {{"Allow", "GET, HEAD"}}};
-  if (has_body) return Refusal{413, "no request body is accepted"};
-  // The target: origin form only.
-  const size_t q = req.target.find('?');
-  if (req.target[0] != '/') return Refusal{400, "request target must be a path"};
-  if (!percent_decode(std::string_view(req.target).substr(0, q), req.path, false))
-    return Refusal{400, "broken percent escape in the path"};
-  if (q != std::string::npos) req.query = req.target.substr(q + 1);
+  std::optional<Refusal> refusal = parse_head_lines(c.in, c.lines, req);
+  c.minor_version = req.minor_version;
   req.peer = c.address;
-  return std::nullopt;
+  return refusal;
 }
 
 void HttpServer::Impl::dispatch(Conn& c, HttpRequest& req) {
@@ -1152,6 +1172,24 @@ HttpServerStats HttpServer::stats() const {
   st.connections_open = s.open.load();
   st.streams_open = s.streams.load();
   return st;
+}
+
+HttpHeadParse http_parse_head(std::string_view head, const HttpLimits& limits) {
+  HttpHeadParse out;
+  size_t scan = 0, head_start = 0;
+  std::vector<std::pair<size_t, size_t>> lines;
+  const bool complete = split_head_lines(head, scan, head_start, lines);
+  std::optional<Refusal> refusal = head_too_big(head, complete ? scan : head.size(), head_start, lines, limits);
+  if (!refusal && !complete) return out;
+  HttpRequest req;
+  if (!refusal) refusal = parse_head_lines(head, lines, req);
+  if (refusal) {
+    out.status = refusal->status;
+    out.message = refusal->message;
+  } else {
+    out.request = std::move(req);
+  }
+  return out;
 }
 
 }  // namespace lp

@@ -173,6 +173,17 @@ bool http_etag_matches(const std::string* if_none_match, const std::string& etag
 // 304 Not Modified for `etag`, no body, with the given Cache-Control.
 HttpResponse http_not_modified(const std::string& etag, const std::string& cache_control);
 
+// One request head parsed as the server parses it, with its request policy, without a
+// socket (tests, the fuzzer). `head` holds the bytes the client sent up to and including
+// the empty line that ends the head. Either the request (peer empty), or the status and
+// message the server would refuse it with; status 0 and no request while incomplete.
+struct HttpHeadParse {
+  std::optional<HttpRequest> request;
+  int status = 0;
+  std::string message;
+};
+HttpHeadParse http_parse_head(std::string_view head, const HttpLimits& limits = {});
+
 // {"error": message} and a newline; bytes that are not UTF-8 are replaced.
 std::string http_error_json(const std::string& message);
 // Standard reason phrase ("Not Found"); "Unknown" for codes it does not know.

@@ -439,4 +439,6 @@ LightServerStats LightServer::stats() const {
   return st;
 }
 
+void LightServer::answer(const HttpRequest& request, HttpExchange& exchange) { impl_->handle(request, exchange); }
+
 }  // namespace lp

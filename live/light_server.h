@@ -81,6 +81,11 @@ class LightServer {
 
   LightServerStats stats() const;
 
+  // Answers one request as a served connection would (token, routes, ETags), without a
+  // socket: tests and the fuzzer. Needs no start(); /lights/stream asks `exchange` for
+  // its stream as usual.
+  void answer(const HttpRequest& request, HttpExchange& exchange);
+
   struct Impl;
 
  private:

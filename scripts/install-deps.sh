@@ -13,6 +13,9 @@ packages=(
   # whole-system tests: private network namespaces, a load generator, a headless browser,
   # an HTTP client for abusive requests, Prometheus' linter (promtool) for /metrics
   iproute2 util-linux wrk chromium curl prometheus
+  # fuzzing and the sanitizer build (scripts/fuzz.sh, scripts/sanitize.sh): clang with
+  # libFuzzer and the ASan/UBSan runtimes, llvm-symbolizer for readable reports
+  clang-14 libclang-rt-14-dev llvm-14
 )
 
 missing=()

@@ -1,7 +1,24 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs the whole test suite (ctest).
+# Installs what is missing, builds, and runs the whole test suite (ctest); then the fuzz
+# targets for a bounded time each (scripts/fuzz.sh) and the suite once more under ASan and
+# UBSan (scripts/sanitize.sh). Every stage runs even when an earlier one failed; the exit
+# status is non-zero when any did. Each stage ends with a "<stage>: N passed, M failed"
+# line, and the times of all stages close the run.
+# LIGHTPROBE_SKIP_FUZZ=1 / LIGHTPROBE_SKIP_SANITIZE=1 leave those stages out.
 # Real data is read from ../shared/data beside the repository.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/build.sh
-ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 900
+status=0
+times=""
+stage() {  # name command...: runs it, notes its time and whether it failed
+  local name=$1 start=$SECONDS
+  shift
+  "$@" || { status=1; echo "test: stage $name failed" >&2; }
+  times="$times $name $((SECONDS - start)) s,"
+}
+stage build bash scripts/build.sh
+stage ctest ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 900
+[ "${LIGHTPROBE_SKIP_FUZZ:-0}" = 1 ] || stage fuzz bash scripts/fuzz.sh
+[ "${LIGHTPROBE_SKIP_SANITIZE:-0}" = 1 ] || stage sanitize bash scripts/sanitize.sh
+echo "test: times:${times%,}"
+exit $status

@@ -119,6 +119,19 @@ TEST(LightList, RejectsMalformedDocuments) {
   expect_rejected(edited([](nlohmann::json& d) { d["lights"][0]["id"] = -3; }), "negative id");
 }
 
+// Found by fuzz/fuzz_light_list: nlohmann throws out_of_range (not parse_error) for a
+// number beyond a double, which escaped as an internal error.
+TEST(LightList, ANumberBeyondADoubleIsBadInputNotAnInternalError) {
+  EXPECT_THROW(light_list_from_json("{\"format\": 1e400}", "fuzz"), InputError);
+  try {
+    light_list_from_json("{\"frame\": 3, \"timestamp\": -2e308}", "upstream");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "upstream: not valid JSON (a number beyond the range of a double)");
+  }
+  expect_rejected("{\"format\": \"lightprobe.lights/1\", \"frame\": 1e999999}", "huge frame");
+}
+
 TEST(LightList, WrittenNanDirectionIsRejectedOnRead) {
   LightList list = sample_list();
   list.lights[0].direction.x = std::nan("");

@@ -141,5 +141,26 @@ TEST(ResponseFile, RoundTripsExactlyAndRefusesBrokenFiles) {
   std::filesystem::remove_all(dir);
 }
 
+// Found by UBSan under fuzz/fuzz_response: "levels": 1e30 went through nlohmann's get<int>(),
+// a float-to-int conversion out of range (undefined behaviour).
+TEST(ResponseFile, LevelsThatAreNotAnIntegerCountAreRefusedByName) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lightprobe_hdr_levels_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (const char* levels : {"1e30", "-1e30", "2.5", "-4", "4294967296", "\"256\""}) {
+    const std::string path = (dir / "levels.json").string();
+    std::ofstream(path) << R"({"format": "lightprobe.response/1", "levels": )" << levels
+                        << R"(, "log_exposure": {"r": [], "g": [], "b": []}})";
+    try {
+      load_response(path);
+      ADD_FAILURE() << "accepted levels " << levels;
+    } catch (const InputError& e) {
+      const std::string msg = e.what();  // the number as nlohmann prints it: 1e+30
+      EXPECT_EQ(msg.rfind(path + ": \"levels\" is ", 0), 0u) << msg;
+      EXPECT_NE(msg.find(", not a count of code values"), std::string::npos) << msg;
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace lp

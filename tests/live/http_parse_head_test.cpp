@@ -1,0 +1,85 @@
+// http_parse_head and LightServer::answer: the server's request parser and routes without
+// a socket (the HTTP fuzz target's entry points), checked against what the served
+// connection answers in server_policy_test.cpp and light_server_test.cpp.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/light_list.h"
+#include "live/http_server.h"
+#include "live/light_server.h"
+
+namespace lp {
+namespace {
+
+TEST(HttpParseHead, DecodesThePathAndKeepsTheQueryRaw) {
+  const HttpHeadParse p =
+      http_parse_head("\r\nGET /lights%2Fstream?format=nd%6Ason HTTP/1.0\r\nHost: x\r\nX-Two:  a b \t\r\n\r\n");
+  ASSERT_TRUE(p.request) << p.status << " " << p.message;
+  EXPECT_EQ(p.request->method, "GET");
+  EXPECT_EQ(p.request->path, "/lights/stream");
+  EXPECT_EQ(p.request->query, "format=nd%6Ason");
+  EXPECT_EQ(p.request->query_param("format"), "ndjson");
+  EXPECT_EQ(p.request->minor_version, 0);
+  ASSERT_EQ(p.request->headers.size(), 2u);
+  EXPECT_EQ(p.request->headers[1].first, "x-two");
+  EXPECT_EQ(p.request->headers[1].second, "a b");
+}
+
+TEST(HttpParseHead, AnIncompleteHeadIsNeitherARequestNorARefusal) {
+  const HttpHeadParse p = http_parse_head("GET / HTTP/1.1\r\nHost: x\r\n");
+  EXPECT_FALSE(p.request);
+  EXPECT_EQ(p.status, 0);
+}
+
+TEST(HttpParseHead, RefusesAsTheServerDoes) {
+  const auto status = [](const std::string& head) { return http_parse_head(head).status; };
+  EXPECT_EQ(status("GET / HTTP/2.0\r\n\r\n"), 505);
+  EXPECT_EQ(status("GET / HTTX/1.1\r\n\r\n"), 400);
+  EXPECT_EQ(status("GET /%zz HTTP/1.1\r\n\r\n"), 400);
+  EXPECT_EQ(status("GET / HTTP/1.1\r\nContent-Length: -1\r\n\r\n"), 400);
+  EXPECT_EQ(status("GET / HTTP/1.1\r\nContent-Length: 5\r\n\r\n"), 413);
+  EXPECT_EQ(status("GET / HTTP/1.1\r\nExpect: 100-continue\r\nContent-Length: 1000000000\r\n\r\n"), 417);
+  EXPECT_EQ(status("POST / HTTP/1.1\r\n\r\n"), 405);
+  EXPECT_EQ(status("GET / HTTP/1.1\r\n folded\r\n\r\n"), 400);
+  EXPECT_EQ(status("GET " + std::string(9000, 'a') + " HTTP/1.1\r\n\r\n"), 414);
+  HttpLimits small;
+  small.max_head_bytes = 64;
+  EXPECT_EQ(http_parse_head("GET / HTTP/1.1\r\nX: " + std::string(100, 'a'), small).status, 431);  // before its end
+}
+
+// Collects the one answer a handler gives.
+class Answer final : public HttpExchange {
+ public:
+  void respond(HttpResponse r) override { response = std::move(r); }
+  std::shared_ptr<HttpDeferred> defer() override { throw std::logic_error("not expected"); }
+  std::shared_ptr<HttpStream> stream(HttpResponse, HttpStreamOptions) override { throw std::logic_error("not expected"); }
+  HttpResponse response{0};
+};
+
+int route(LightServer& server, const std::string& head) {
+  const HttpHeadParse p = http_parse_head(head);
+  EXPECT_TRUE(p.request) << head;
+  Answer a;
+  if (p.request) server.answer(*p.request, a);
+  return a.response.status;
+}
+
+TEST(LightServerAnswer, RoutesWithTheTokenWithoutASocket) {
+  LightServerOptions o;
+  o.port = 0;
+  o.token = "t0ken";
+  LightServer server(o);
+  EXPECT_EQ(route(server, "GET /lights HTTP/1.1\r\nAuthorization: Bearer t0ken\r\n\r\n"), 503);  // nothing yet
+  LightList list;
+  list.frame = 3;
+  list.lights.push_back({5, {0, 0, 1}, {1, 1, 1}, 0.1});
+  server.publish(list, nullptr);
+  EXPECT_EQ(route(server, "GET /lights HTTP/1.1\r\nAuthorization: Bearer t0ken\r\n\r\n"), 200);
+  EXPECT_EQ(route(server, "GET /lights HTTP/1.1\r\nAuthorization: bearer t0ken\r\n\r\n"), 401);
+  EXPECT_EQ(route(server, "GET /%ff HTTP/1.1\r\nAuthorization: Bearer t0ken\r\n\r\n"), 404);
+  EXPECT_EQ(route(server, "GET / HTTP/1.1\r\n\r\n"), 200);  // the page is public
+}
+
+}  // namespace
+}  // namespace lp

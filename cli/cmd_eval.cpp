@@ -20,6 +20,17 @@ namespace lp::cli {
 
 namespace {
 
+// Runs a harness under a progress bar, then prints its table and (--json) its report.
+template <typename Evaluate>
+int evaluate_and_report(const char* label, const Output& out, Evaluate&& evaluate) {
+  ProgressBar bar(label, out);
+  const auto report = evaluate(bar.callback());
+  bar.finish();
+  say(out, "{}", report.summary());
+  emit_json(out, report.to_json());
+  return 0;
+}
+
 struct EvalSamplingArgs {
   std::vector<std::string> maps;    // "scene" renders the procedural scene
   std::string methods = "all";
@@ -37,12 +48,7 @@ int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
   o.output_dir = args.output_dir;
   o.repeats = args.repeats;
   o.shadowed = !args.no_shadowed;
-  ProgressBar bar("eval sampling", out);
-  const EvalSamplingReport report = evaluate_sampling(o, bar.callback());
-  bar.finish();
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
+  return evaluate_and_report("eval sampling", out, [&](const EvalProgress& p) { return evaluate_sampling(o, p); });
 }
 
 Command eval_sampling_command() {
@@ -101,12 +107,7 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
   o.frame_rate_hz = args.fps;
   o.filter = args.filter == "on" ? FilterMode::On : args.filter == "off" ? FilterMode::Off : FilterMode::Auto;
   o.output_dir = args.output_dir;
-  ProgressBar bar("eval temporal", out);
-  const EvalTemporalReport report = evaluate_temporal(o, bar.callback());
-  bar.finish();
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
+  return evaluate_and_report("eval temporal", out, [&](const EvalProgress& p) { return evaluate_temporal(o, p); });
 }
 
 Command eval_temporal_command() {
@@ -145,12 +146,7 @@ int run_eval_shading(const EvalShadingArgs& args, const Output& out) {
   o.method = progressive_method(args.tables.method);
   o.coherent = args.coherent;
   o.output_dir = args.output_dir;
-  ProgressBar bar("eval shading", out);
-  const EvalShadingReport report = evaluate_shading(o, bar.callback());
-  bar.finish();
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
+  return evaluate_and_report("eval shading", out, [&](const EvalProgress& p) { return evaluate_shading(o, p); });
 }
 
 Command eval_shading_command() {
@@ -180,12 +176,7 @@ int run_eval_hdr(const EvalHdrArgs& args, const Output& out) {
   o.maps = args.maps;
   o.response = curve_from(args.response);
   o.output_dir = args.output_dir;
-  ProgressBar bar("eval hdr", out);
-  const EvalHdrReport report = evaluate_hdr(o, bar.callback());
-  bar.finish();
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
+  return evaluate_and_report("eval hdr", out, [&](const EvalProgress& p) { return evaluate_hdr(o, p); });
 }
 
 Command eval_hdr_command() {
@@ -209,12 +200,7 @@ int run_eval_unwrap(const EvalUnwrapArgs& args, const Output& out) {
   EvalUnwrapOptions o;
   o.maps = args.maps;
   o.output_dir = args.output_dir;
-  ProgressBar bar("eval unwrap", out);
-  const EvalUnwrapReport report = evaluate_unwrap(o, bar.callback());
-  bar.finish();
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
+  return evaluate_and_report("eval unwrap", out, [&](const EvalProgress& p) { return evaluate_unwrap(o, p); });
 }
 
 Command eval_unwrap_command() {

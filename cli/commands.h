@@ -1,5 +1,6 @@
-// What the command handlers share: parsing of option values and the table options of `tables` and `eval shading`. Every function throws
-// lp::InputError naming the option (or the file) it refuses.
+// What the command handlers share: parsing of option values and the table options of
+// `tables` and `eval shading`. Every function throws lp::InputError naming the option (or
+// the file) it refuses.
 #pragma once
 
 #include <optional>

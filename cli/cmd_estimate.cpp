@@ -14,6 +14,7 @@
 #include "calib/photometric.h"
 #include "cli/commands.h"
 #include "cli/eval_handlers.h"
+#include "cli/progress_bar.h"
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -190,10 +191,7 @@ int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
   o.fractions = parse_numbers(args.fractions, "--fractions");
   o.root_size = args.root_size;
   o.min_size = args.min_size;
-  const EvalMetadataReport report = evaluate_metadata(o, out.progress);
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
+  return evaluate_and_report("eval metadata", out, [&](const EvalProgress& p) { return evaluate_metadata(o, p); });
 }
 
 std::vector<Command> estimate_commands() {

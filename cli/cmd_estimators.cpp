@@ -7,6 +7,7 @@
 
 #include "cli/commands.h"
 #include "cli/eval_handlers.h"
+#include "cli/progress_bar.h"
 #include "cli/report.h"
 #include "core/error.h"
 #include "eval/estimators_eval.h"
@@ -61,10 +62,7 @@ int run_eval_estimators(const EvalEstimatorsArgs& args, const Output& out) {
   o.estimators = split_commas(args.estimators);
   parse_size(args.size, "--size", &o.width, &o.height);
   o.scenarios = parse_scenarios(args.scenarios);
-  const EvalEstimatorsReport report = evaluate_estimators(o, out.progress);
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
+  return evaluate_and_report("eval estimators", out, [&](const EvalProgress& p) { return evaluate_estimators(o, p); });
 }
 
 }  // namespace lp::cli

@@ -20,17 +20,6 @@ namespace lp::cli {
 
 namespace {
 
-// Runs a harness under a progress bar, then prints its table and (--json) its report.
-template <typename Evaluate>
-int evaluate_and_report(const char* label, const Output& out, Evaluate&& evaluate) {
-  ProgressBar bar(label, out);
-  const auto report = evaluate(bar.callback());
-  bar.finish();
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
-}
-
 struct EvalSamplingArgs {
   std::vector<std::string> maps;    // "scene" renders the procedural scene
   std::string methods = "all";

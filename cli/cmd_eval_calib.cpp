@@ -3,6 +3,7 @@
 #include "calib/board_detect.h"
 #include "cli/commands.h"
 #include "cli/eval_handlers.h"
+#include "cli/progress_bar.h"
 #include "cli/report.h"
 #include "core/error.h"
 #include "eval/calib_eval.h"
@@ -16,10 +17,7 @@ int run_eval_calib(const EvalCalibArgs& args, const Output& out) {
   o.board.square_mm = args.square_mm;
   o.sweep = args.sweep;
   o.output_dir = args.output_dir;
-  const EvalCalibReport report = evaluate_calib(o, out.progress);
-  say(out, "{}", report.summary());
-  emit_json(out, report.to_json());
-  return 0;
+  return evaluate_and_report("eval calib", out, [&](const EvalProgress& p) { return evaluate_calib(o, p); });
 }
 
 }  // namespace lp::cli

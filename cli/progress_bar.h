@@ -9,6 +9,7 @@
 #include <string>
 
 #include "cli/command_table.h"
+#include "cli/report.h"
 #include "core/progress.h"
 
 namespace lp::cli {
@@ -35,5 +36,16 @@ class ProgressBar {
   std::unique_ptr<Progress> bar_;
   size_t reported_ = 0;
 };
+
+// Runs a harness under a progress bar, then prints its table and (--json) its report.
+template <typename Evaluate>
+int evaluate_and_report(const char* label, const Output& out, Evaluate&& evaluate) {
+  ProgressBar bar(label, out);
+  const auto report = evaluate(bar.callback());
+  bar.finish();
+  say(out, "{}", report.summary());
+  emit_json(out, report.to_json());
+  return 0;
+}
 
 }  // namespace lp::cli

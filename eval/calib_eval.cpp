@@ -1,5 +1,6 @@
 #include "eval/calib_eval.h"
 
+#include <cassert>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -13,7 +14,6 @@
 #include "calib/synthetic_boards.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "core/progress.h"
 #include "eval/svg_chart.h"
 
 namespace lp {
@@ -37,10 +37,9 @@ struct Detected {
   int width = 0, height = 0, found = 0;
 };
 
-Detected detect(const std::vector<std::string>& images, const BoardSpec& board, bool show_progress) {
+Detected detect(const std::vector<std::string>& images, const BoardSpec& board, ProgressSteps& progress) {
   Detected d;
   d.corners.resize(images.size());
-  Progress progress("detect boards", images.size(), show_progress);
   for (size_t i = 0; i < images.size(); ++i) {
     const CameraImage img = read_camera_image(images[i]);
     if (i == 0) {
@@ -57,7 +56,6 @@ Detected detect(const std::vector<std::string>& images, const BoardSpec& board, 
     }
     progress.advance();
   }
-  progress.finish();
   if (d.found < 4)
     throw InputError(fmt::format("a {}x{} board was found in only {} of {} images; at least 4 views are needed",
                                  board.cols, board.rows, d.found, images.size()));
@@ -116,8 +114,8 @@ std::vector<CalibComparison::Speed> measure_speed(const Detected& d, const Board
   return speed;
 }
 
-CalibComparison compare_on_images(const EvalCalibOptions& o, bool show_progress) {
-  const Detected d = detect(o.images, o.board, show_progress);
+CalibComparison compare_on_images(const EvalCalibOptions& o, ProgressSteps& progress) {
+  const Detected d = detect(o.images, o.board, progress);
   CalibComparison c;
   c.views = d.found;
   const auto t0 = std::chrono::steady_clock::now();
@@ -202,7 +200,7 @@ std::vector<uint8_t> field_mask(const CameraModel& truth, double deg) {
 
 // One configuration (views, noise_px, max_corner_deg set in `r`) over `draws` noise draws.
 void sweep_row(const CameraModel& truth, const std::vector<uint8_t>& mask, int draws, CalibSweepRow* r,
-               Progress* progress) {
+               ProgressSteps* progress) {
   const BoardSpec board{10, 7, 40};
   int ok[4] = {0, 0, 0, 0};
   for (int d = 0; d < draws; ++d) {
@@ -255,22 +253,24 @@ void sweep_row(const CameraModel& truth, const std::vector<uint8_t>& mask, int d
   r->cv_fisheye_seconds /= std::max(1, ok[2]);
 }
 
+// The sweep's rows (below) and noise draws per row: its progress steps are their product.
+constexpr size_t kSweepRows = 10, kSweepDraws = 3;
+
 // Synthetic sweep: boards up to 70 deg off the axis with every corner inside 88 deg (so
 // that cv::fisheye, which cannot image rays beyond 90 deg, competes on equal terms), and
 // one case with boards out to 93 deg. Error = RMS projection difference to the true model
 // (rotation fitted out) over the pixels whose true ray is within the corners' field (the
 // rim beyond is extrapolation for every solver alike), mean square over three noise draws.
-std::vector<CalibSweepRow> run_sweep(bool show_progress) {
+std::vector<CalibSweepRow> run_sweep(ProgressSteps& progress) {
   const CameraModel truth = sweep_truth();
   std::vector<CalibSweepRow> rows;
   for (int v : {4, 6, 8, 12, 16, 20}) rows.push_back({v, 0.2});
   for (double n : {0.05, 0.1, 0.5}) rows.push_back({12, n});  // 0.2 is in the first list
   rows.push_back({12, 0.2, 93});
+  assert(rows.size() == kSweepRows);
   const std::vector<uint8_t> mask88 = field_mask(truth, 88), mask93 = field_mask(truth, 93);
-  const int draws = 3;
-  Progress progress("calibration sweep", rows.size() * draws, show_progress);
+  const int draws = kSweepDraws;
   for (CalibSweepRow& r : rows) sweep_row(truth, r.max_corner_deg > 90 ? mask93 : mask88, draws, &r, &progress);
-  progress.finish();
   return rows;
 }
 
@@ -342,19 +342,20 @@ void validate(const EvalCalibOptions& o) {
   if (o.images.empty() && !o.sweep) throw InputError("eval calib: give chessboard images, --sweep, or both");
 }
 
-EvalCalibReport evaluate_calib(const EvalCalibOptions& options, bool show_progress) {
+EvalCalibReport evaluate_calib(const EvalCalibOptions& options, const EvalProgress& on_progress) {
   validate(options);
+  ProgressSteps progress(on_progress, (options.images.size()) + (options.sweep ? kSweepRows * kSweepDraws : 0));
   make_output_directory(options.output_dir);
   EvalCalibReport report;
   report.output_dir = options.output_dir;
   const fs::path dir(options.output_dir);
   if (!options.images.empty()) {
-    report.comparison = compare_on_images(options, show_progress);
+    report.comparison = compare_on_images(options, progress);
     write_file_atomically((dir / "calib_compare.csv").string(), compare_csv(*report.comparison));
     write_file_atomically((dir / "calib_speed.csv").string(), speed_csv(*report.comparison));
   }
   if (options.sweep) {
-    report.sweep = run_sweep(show_progress);
+    report.sweep = run_sweep(progress);
     write_file_atomically((dir / "calib_sweep.csv").string(), sweep_csv(report.sweep));
     write_file_atomically((dir / "calib_sweep.svg").string(), sweep_chart(report.sweep));
   }

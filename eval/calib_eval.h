@@ -15,6 +15,7 @@
 
 #include "calib/board_detect.h"
 #include "calib/geometric.h"
+#include "eval/harness.h"
 
 namespace lp {
 
@@ -67,7 +68,7 @@ struct EvalCalibReport {
 // Throws lp::InputError naming the option (by its command-line flag) it refuses.
 void validate(const EvalCalibOptions& options);
 // Detects the boards (InputError when fewer than 4 views have one), calibrates, compares,
-// sweeps and writes the files. show_progress: progress bars on a terminal.
-EvalCalibReport evaluate_calib(const EvalCalibOptions& options, bool show_progress = true);
+// sweeps and writes the files. progress: one step per image, then per sweep draw.
+EvalCalibReport evaluate_calib(const EvalCalibOptions& options, const EvalProgress& progress = {});
 
 }  // namespace lp

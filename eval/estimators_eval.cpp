@@ -13,7 +13,6 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
-#include "core/progress.h"
 #include "core/resample.h"
 #include "eval/svg_chart.h"
 #include "eval/synthetic_scene.h"
@@ -293,7 +292,7 @@ struct Accumulated {
 };
 
 Accumulated run_all(const EvalEstimatorsOptions& o, const std::vector<Sequence>& sequences,
-                    const std::vector<Config>& configs, Scene& scene, bool show_progress) {
+                    const std::vector<Config>& configs, Scene& scene, const EvalProgress& on_progress) {
   const size_t np = scene.points.size();
   const int reps = o.repeats;
   Accumulated acc{std::vector<std::vector<EstimatorErrors>>(configs.size(), std::vector<EstimatorErrors>(scene.lobes.size())),
@@ -301,7 +300,7 @@ Accumulated run_all(const EvalEstimatorsOptions& o, const std::vector<Sequence>&
                   0};
   size_t total_frames = 0;
   for (const Sequence& s : sequences) total_frames += s.frames.size();
-  Progress progress("eval estimators", total_frames * configs.size(), show_progress);
+  ProgressSteps progress(on_progress, total_frames * configs.size());
   for (size_t si = 0; si < sequences.size(); ++si) {
     const Sequence& seq = sequences[si];
     const size_t nf = seq.frames.size();
@@ -469,14 +468,14 @@ void validate(const EvalEstimatorsOptions& o) {
     throw InputError(fmt::format("--size must be a latlong size 2H x H, got {}x{}", o.width, o.height));
 }
 
-EvalEstimatorsReport evaluate_estimators(const EvalEstimatorsOptions& options, bool show_progress) {
+EvalEstimatorsReport evaluate_estimators(const EvalEstimatorsOptions& options, const EvalProgress& progress) {
   validate(options);
   const std::vector<Sequence> sequences = load_sequences(options);
   size_t main_configs = 0;
   const std::vector<Config> configs = make_configs(options, &main_configs);
   Scene scene;
   const auto t_start = Clock::now();
-  const Accumulated acc = run_all(options, sequences, configs, scene, show_progress);
+  const Accumulated acc = run_all(options, sequences, configs, scene, progress);
 
   EvalEstimatorsReport report;
   report.seconds = std::chrono::duration<double>(Clock::now() - t_start).count();

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "eval/synthetic_sequence.h"
+#include "eval/harness.h"
 
 namespace lp {
 
@@ -96,7 +97,7 @@ struct EvalEstimatorsReport {
 // Throws lp::InputError naming the option (by its command-line flag) it refuses.
 void validate(const EvalEstimatorsOptions& options);
 // Loads the inputs (InputError naming a missing, unreadable or black map), runs every
-// configuration and writes the files. show_progress: a progress bar on a terminal.
-EvalEstimatorsReport evaluate_estimators(const EvalEstimatorsOptions& options, bool show_progress = true);
+// configuration and writes the files. progress: one step per frame and configuration.
+EvalEstimatorsReport evaluate_estimators(const EvalEstimatorsOptions& options, const EvalProgress& progress = {});
 
 }  // namespace lp

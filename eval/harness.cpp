@@ -31,8 +31,8 @@ ProgressSteps::ProgressSteps(const EvalProgress& progress, size_t total) : progr
   if (progress_) progress_(0, total_);
 }
 
-void ProgressSteps::advance() {
-  ++done_;
+void ProgressSteps::advance(size_t steps) {
+  done_ += steps;
   if (progress_) progress_(done_, total_);
 }
 

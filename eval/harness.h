@@ -30,7 +30,7 @@ double median(std::vector<double> values);
 class ProgressSteps {
  public:
   ProgressSteps(const EvalProgress& progress, size_t total);
-  void advance();
+  void advance(size_t steps = 1);
 
  private:
   const EvalProgress& progress_;

@@ -12,7 +12,6 @@
 #include "core/accuracy.h"
 #include "core/error.h"
 #include "core/image_io.h"
-#include "core/progress.h"
 #include "estimate/light_quadtree.h"
 #include "estimate/metadata_track.h"
 #include "estimate/walkthrough.h"
@@ -143,7 +142,7 @@ void reference_rows(const std::vector<Query>& queries, double root_size, std::ve
 }
 
 // The metadata model on a growing part of the path, in four lookup variants.
-void model_rows(const Walkthrough& w, const EvalMetadataOptions& o, double root_size, bool show_progress,
+void model_rows(const Walkthrough& w, const EvalMetadataOptions& o, double root_size, const EvalProgress& on_progress,
                 std::vector<MetadataRow>* rows) {
   struct Variant {
     std::string name;
@@ -158,7 +157,7 @@ void model_rows(const Walkthrough& w, const EvalMetadataOptions& o, double root_
   BuildModelOptions b;
   b.quadtree.root_size = root_size;
   b.quadtree.min_size = o.min_size;
-  Progress progress("fractions", o.fractions.size(), show_progress);
+  ProgressSteps progress(on_progress, o.fractions.size());
   for (double f : o.fractions) {
     const size_t count = std::max<size_t>(1, size_t(std::llround(f * double(w.track.frames.size()))));
     const auto t0 = Clock::now();
@@ -192,7 +191,6 @@ void model_rows(const Walkthrough& w, const EvalMetadataOptions& o, double root_
     }
     progress.advance();
   }
-  progress.finish();
 }
 
 std::string rows_csv(const std::vector<MetadataRow>& rows) {
@@ -241,7 +239,7 @@ void validate(const EvalMetadataOptions& o) {
     if (!(f > 0 && f <= 1)) throw InputError(fmt::format("--fractions: each must be in (0, 1], got {}", f));
 }
 
-EvalMetadataReport evaluate_metadata(const EvalMetadataOptions& options, bool show_progress) {
+EvalMetadataReport evaluate_metadata(const EvalMetadataOptions& options, const EvalProgress& progress) {
   validate(options);
   const Walkthrough w = read_walkthrough(options.input_dir);
   double root_size = options.root_size;
@@ -253,7 +251,7 @@ EvalMetadataReport evaluate_metadata(const EvalMetadataOptions& options, bool sh
   report.queries = w.queries.size();
   report.frames = w.track.frames.size();
   reference_rows(w.queries, root_size, &report.rows);
-  model_rows(w, options, root_size, show_progress, &report.rows);
+  model_rows(w, options, root_size, progress, &report.rows);
 
   fs::create_directories(options.output_dir);
   report.csv_path = (fs::path(options.output_dir) / "metadata.csv").string();

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "eval/harness.h"
+
 namespace lp {
 
 struct EvalMetadataOptions {
@@ -48,7 +50,7 @@ struct EvalMetadataReport {
 // Throws lp::InputError naming the option (by its command-line flag) it refuses.
 void validate(const EvalMetadataOptions& options);
 // Reads the walkthrough (InputError naming a missing or malformed file), evaluates and
-// writes the files. show_progress: a progress bar on a terminal.
-EvalMetadataReport evaluate_metadata(const EvalMetadataOptions& options, bool show_progress = true);
+// writes the files. progress: one step per fraction of the walk.
+EvalMetadataReport evaluate_metadata(const EvalMetadataOptions& options, const EvalProgress& progress = {});
 
 }  // namespace lp

@@ -72,7 +72,8 @@ EvalUnwrapReport evaluate_unwrap(const EvalUnwrapOptions& options, const EvalPro
   }
   std::string csv = "map,probe,mean_abs_log10,pixels,valid_solid_angle_sr,centre_error_px,radius_error_px,ms\n";
   for (const UnwrapRow& r : report.rows)
-    csv += fmt::format("{},{},{:.6g},{},{:.4f},{:.4f},{:.4f},{:.2f}\n", r.map, r.probe, r.error.mean_abs_log10,
+    // Probe names hold commas ("ball, orthographic"): quoted, as RFC 4180 has it.
+    csv += fmt::format("{},\"{}\",{:.6g},{},{:.4f},{:.4f},{:.4f},{:.2f}\n", r.map, r.probe, r.error.mean_abs_log10,
                        r.error.pixels_compared, r.error.valid_solid_angle, r.centre_error_px, r.radius_error_px, r.ms);
   report.csv_path = (fs::path(options.output_dir) / "unwrap.csv").string();
   write_file_atomically(report.csv_path, csv);

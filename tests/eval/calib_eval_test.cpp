@@ -42,7 +42,7 @@ const EvalCalibReport& report() {
       o.images.push_back((dir / "views" / fmt::format("board_{:02d}.png", i)).string());
       write_display_image(o.images.back(), b.images[i].width, b.images[i].height, b.images[i].rgb);
     }
-    return evaluate_calib(o, false);
+    return evaluate_calib(o);
   }();
   return r;
 }

@@ -47,7 +47,7 @@ const EvalEstimatorsReport& short_run() {
     o.sweep = false;
     o.output_dir = (fs::temp_directory_path() / "lightprobe_estimators_eval_test").string();
     fs::remove_all(o.output_dir);
-    return evaluate_estimators(o, false);
+    return evaluate_estimators(o);
   }();
   return report;
 }

@@ -36,7 +36,7 @@ const EvalMetadataReport& report() {
     o.input_dir = walk_dir().string();
     o.output_dir = (fs::temp_directory_path() / "lightprobe_metadata_eval_test_out").string();
     o.fractions = {0.5, 1};
-    return evaluate_metadata(o, false);
+    return evaluate_metadata(o);
   }();
   return r;
 }

@@ -20,6 +20,7 @@
 #include "cli/report.h"
 #include "eval/svg_chart.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "core/resample.h"
@@ -157,6 +158,7 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
   }
   if (args.inputs.empty()) throw InputError("eval estimators: give at least one map, sequence directory or 'scene'");
   if (args.frames < 2) throw InputError(fmt::format("--frames must be at least 2 (temporal noise needs two), got {}", args.frames));
+  check_frame_count("--frames", args.frames);
   if (args.repeats < 2)
     throw InputError(fmt::format("--repeats must be at least 2 (the variance is measured across runs), got {}", args.repeats));
   if (!(args.ray_cost_us >= 0)) throw InputError(fmt::format("--ray-cost-us must be >= 0, got {}", args.ray_cost_us));
@@ -180,7 +182,7 @@ int run_eval_estimators(const EvalEstimatorsArgs& args_in, const Output& out) {
     }
   }
   int width = 0, height = 0;
-  parse_size(args.size, "--size", &width, &height);
+  parse_image_size(args.size, "--size", &width, &height);
   if (width != 2 * height) throw InputError(fmt::format("--size must be a latlong size 2H x H, got {}", args.size));
   const std::vector<Scenario> scenarios = parse_scenarios(args.scenarios);
 

@@ -17,6 +17,7 @@
 #include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "eval/synthetic_scene.h"
@@ -90,7 +91,7 @@ std::vector<ChartPanel> panels_for(const std::vector<Point>& points, const std::
 
 int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
   const std::vector<Method> methods = parse_method_list(args.methods);
-  const std::vector<int> counts = parse_int_list(args.counts, "--n");
+  const std::vector<int> counts = parse_light_counts(args.counts, "--n");
   make_output_directory(args.output_dir);
 
   AccuracyOptions ao;

@@ -13,6 +13,7 @@
 #include "cli/eval_handlers.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image_io.h"
 #include "core/map_sequence.h"
 #include "core/progress.h"
@@ -71,8 +72,9 @@ void target_size(const std::string& layout_name, const std::string& size, int ns
   if (*l == Layout::Healpix) {
     *w = nside > 0 ? nside : 64;
     *h = 1;
+    check_nside("--nside", *w);
   } else if (!size.empty()) {
-    parse_size(size, "--size", w, h);
+    parse_image_size(size, "--size", w, h);
   } else if (*l == Layout::Hemisphere) {
     *w = 360, *h = 90;
   } else {

@@ -24,6 +24,7 @@
 #include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "eval/synthetic_scene.h"
@@ -61,6 +62,13 @@ ShadingOptions shading_options(const ShadingTableArgs& a) {
   if (a.low_per_high < 1) throw InputError(fmt::format("--low-per-high must be at least 1, got {}", a.low_per_high));
   if (a.k < 1) throw InputError(fmt::format("--k must be at least 1, got {}", a.k));
   if (a.q < 0) throw InputError(fmt::format("--q must be at least 1 (or 0 for |H| / 4), got {}", a.q));
+  check_count("--lut", a.lut, limits().max_lut, "texels a face edge", "the LUT is built texel by texel and exported");
+  // A region needs a texel: more regions than the LUT has texels are empty and only cost time.
+  const long long texels = 6LL * a.lut * a.lut;
+  check_count("--regions", a.regions, texels, "regions", "the 6 lut^2 texels of the LUT");
+  check_count("--cone-regions", a.cone_regions, texels, "regions", "the 6 lut^2 texels of the LUT");
+  check_light_count("--n", a.n);
+  check_light_count("--low-per-high", (long long)a.n * a.low_per_high);
   if (!(a.cone_deg > 0 && a.cone_deg <= 90))
     throw InputError(fmt::format("--cone must be in (0, 90] degrees, got {}", a.cone_deg));
   ShadingOptions o;
@@ -196,7 +204,7 @@ std::vector<ChartPanel> panels_for(const std::vector<Row>& rows) {
 }  // namespace
 
 int run_eval_shading(const EvalShadingArgs& args, const Output& out) {
-  const std::vector<int> counts = parse_int_list(args.counts, "--n");
+  const std::vector<int> counts = parse_light_counts(args.counts, "--n");
   for (int n : counts)
     if (n < 1) throw InputError(fmt::format("--n: light counts must be positive, got {}", n));
   if (args.points < 0) throw InputError(fmt::format("--points must be positive (or 0: automatic), got {}", args.points));

@@ -13,6 +13,7 @@
 #include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "core/resample.h"
@@ -59,6 +60,8 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
   const std::vector<Method> methods = parse_method_list(args.methods);
   const std::vector<Scenario> scenarios = parse_scenarios(args.scenarios);
   if (args.n <= 0) throw InputError(fmt::format("--n must be positive, got {}", args.n));
+  check_light_count("--n", args.n);
+  check_frame_count("--frames", args.frames);
   make_output_directory(args.output_dir);
 
   struct Row {

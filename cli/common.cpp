@@ -12,6 +12,7 @@
 #include "calib/board_detect.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/limits.h"
 #include "eval/synthetic_scene.h"
 #include "hdr/synthetic_bracket.h"
 
@@ -25,6 +26,21 @@ void parse_size(const std::string& text, const char* option, int* width, int* he
     throw InputError(fmt::format("{} must be WxH with positive integers, got '{}'", option, text));
   *width = w;
   *height = h;
+}
+
+void parse_image_size(const std::string& text, const char* option, int* width, int* height) {
+  parse_size(text, option, width, height);
+  check_image_size(option, *width, *height, "size");
+}
+
+void check_frame_count(const char* option, long long count) {
+  check_count(option, count, limits().max_frames, "frames", "each is a file or a map held");
+}
+
+std::vector<int> parse_light_counts(const std::string& text, const char* option) {
+  std::vector<int> counts = parse_int_list(text, option);
+  for (int n : counts) check_light_count(option, n);
+  return counts;
 }
 
 std::vector<int> parse_int_list(const std::string& text, const char* option) {
@@ -75,9 +91,16 @@ std::optional<Layout> optional_layout(const std::string& name, const char* optio
   return l;
 }
 
+void check_target_flags(const std::string& size, int nside) {
+  int w = 0, h = 0;
+  if (!size.empty()) parse_image_size(size, "--size", &w, &h);
+  if (nside > 0) check_nside("--nside", nside);
+}
+
 // Target (layout, width, height) of convert/synth from --layout/--size/--nside.
 void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h) {
   if (layout == Layout::Healpix) {
+    if (nside > 0) check_nside("--nside", nside);
     *w = nside > 0 ? nside : (like && like->layout == Layout::Healpix ? like->nside : 0);
     if (*w == 0) {
       // About as many pixels as the source.
@@ -89,7 +112,7 @@ void target_geometry(Layout layout, const std::string& size, int nside, const En
     return;
   }
   if (!size.empty()) {
-    parse_size(size, "--size", w, h);
+    parse_image_size(size, "--size", w, h);
     return;
   }
   if (like && like->layout == layout) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "tests/core/test_files.h"
 
 extern "C" {
 #include <chealpix.h>
@@ -27,27 +28,9 @@ namespace {
 
 const std::string kData = LIGHTPROBE_SHARED_DATA;
 
-// A fresh directory under the test temp dir, one per test.
-std::string temp_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(::testing::TempDir()) / "lightprobe_image_io" / info->name();
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string() + "/";
-}
-
-void write_bytes(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
-  ASSERT_TRUE(out.good()) << path;
-}
-
-std::string read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test_files::read_bytes;
+using test_files::write_bytes;
+std::string temp_dir() { return test_files::temp_dir("lightprobe_image_io"); }
 
 void truncate_to_half(const std::string& from, const std::string& to) {
   const std::string bytes = read_bytes(from);

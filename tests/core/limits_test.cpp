@@ -20,6 +20,7 @@
 #include "core/error.h"
 #include "core/image_header.h"
 #include "core/image_io.h"
+#include "tests/core/test_files.h"
 
 namespace fs = std::filesystem;
 
@@ -30,25 +31,9 @@ const std::string kData = LIGHTPROBE_SHARED_DATA;
 const std::string kJpeg = kData + "/calib-opencv-stereo-9x6/left01.jpg";       // 640x480 grey, 27.9 KB
 const std::string kPng = kData + "/hdr-memorial-debevec/memorial0064.png";      // 512x768 RGB
 
-std::string temp_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(::testing::TempDir()) / "lightprobe_limits" / info->name();
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string() + "/";
-}
-
-void write_bytes(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
-}
-
-std::string read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test_files::read_bytes;
+using test_files::write_bytes;
+std::string temp_dir() { return test_files::temp_dir("lightprobe_limits"); }
 
 void put_be16(std::string& b, size_t at, uint32_t v) {
   b[at] = char(v >> 8);

@@ -10,6 +10,7 @@
 #include "cli/progress_bar.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "eval/estimators_eval.h"
 
 namespace lp::cli {
@@ -44,6 +45,7 @@ std::vector<Scenario> parse_scenarios(const std::string& text) {
 int run_eval_estimators(const EvalEstimatorsArgs& args, const Output& out) {
   EvalEstimatorsOptions o;
   o.inputs = args.inputs;
+  check_frame_count("--frames", args.frames);
   o.frames = args.frames;
   o.repeats = args.repeats;
   o.bis_m = args.bis_m;
@@ -60,7 +62,7 @@ int run_eval_estimators(const EvalEstimatorsArgs& args, const Output& out) {
   }
   o.budgets = parse_int_list(budgets, "--budgets");
   o.estimators = split_commas(args.estimators);
-  parse_size(args.size, "--size", &o.width, &o.height);
+  parse_image_size(args.size, "--size", &o.width, &o.height);
   o.scenarios = parse_scenarios(args.scenarios);
   return evaluate_and_report("eval estimators", out, [&](const EvalProgress& p) { return evaluate_estimators(o, p); });
 }

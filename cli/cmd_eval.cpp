@@ -10,6 +10,7 @@
 #include "cli/progress_bar.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "eval/hdr_eval.h"
 #include "eval/sampling_eval.h"
 #include "eval/shading_eval.h"
@@ -33,7 +34,7 @@ int run_eval_sampling(const EvalSamplingArgs& args, const Output& out) {
   EvalSamplingOptions o;
   o.maps = args.maps;
   o.methods = parse_method_list(args.methods);
-  o.counts = parse_int_list(args.counts, "--n");
+  o.counts = parse_light_counts(args.counts, "--n");
   o.output_dir = args.output_dir;
   o.repeats = args.repeats;
   o.shadowed = !args.no_shadowed;
@@ -91,6 +92,8 @@ int run_eval_temporal(const EvalTemporalArgs& args, const Output& out) {
   o.methods = parse_method_list(args.methods);
   o.scenarios = parse_scenarios(args.scenarios);
   if (args.n <= 0) throw InputError(fmt::format("--n must be positive, got {}", args.n));
+  check_light_count("--n", args.n);
+  check_frame_count("--frames", args.frames);
   o.frames = args.frames;
   o.count = args.n;
   o.frame_rate_hz = args.fps;
@@ -128,7 +131,7 @@ struct EvalShadingArgs {
 int run_eval_shading(const EvalShadingArgs& args, const Output& out) {
   EvalShadingOptions o;
   o.maps = args.maps;
-  o.counts = parse_int_list(args.counts, "--n");
+  o.counts = parse_light_counts(args.counts, "--n");
   if (args.points < 0) throw InputError(fmt::format("--points must be positive (or 0: automatic), got {}", args.points));
   o.points = args.points;
   o.shading = shading_options(args.tables);

@@ -15,6 +15,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "hdr/response.h"
 #include "live/light_server.h"
 #include "live/merge_client.h"
@@ -75,9 +76,12 @@ int run_stream(const StreamArgs& args, const Output& out) {
   const auto layout = layout_from_string(args.layout);
   if (!layout) throw InputError(fmt::format("--layout: unknown layout '{}'", args.layout));
   lo.layout = *layout;
-  if (!args.size.empty()) parse_size(args.size, "--size", &lo.width, &lo.height);
+  if (!args.size.empty()) parse_image_size(args.size, "--size", &lo.width, &lo.height);
   else if (*layout == Layout::LatLong) lo.width = 512, lo.height = 256;
   if (*layout == Layout::Healpix) lo.width = args.nside > 0 ? args.nside : 32, lo.height = 1;
+  if (*layout == Layout::Healpix) check_nside("--nside", lo.width);
+  check_light_count("--n", args.n);
+  check_light_count("--cluster", args.cluster);
   const auto method = method_from_string(args.method);
   if (!method) throw InputError(fmt::format("--method: unknown method '{}'", args.method));
   lo.sampling.method = *method;
@@ -125,6 +129,7 @@ int run_merge(const MergeArgs& args, const Output& out) {
   mo.timeout_s = args.timeout;
   mo.token = args.upstream_token;
   mo.merge.n = args.n;
+  check_light_count("--n", args.n);
   if (!args.weights.empty()) mo.merge.weights = parse_numbers(args.weights, "--weights", args.urls.size());
   LightServerOptions so;
   parse_listen(args.listen, &so.host, &so.port);

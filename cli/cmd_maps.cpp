@@ -132,6 +132,7 @@ int run_info(const InfoArgs& args, const Output& out) {
 }
 
 int run_convert(const ConvertArgs& args, const Output& out) {
+  check_target_flags(args.size, args.nside);  // before reading what may be a large input
   ReadMapOptions ro;
   ro.layout = optional_layout(args.in_layout, "--in-layout");
   const auto t0 = std::chrono::steady_clock::now();

@@ -12,6 +12,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image_io.h"
 #include "core/map_sequence.h"
 #include "core/progress.h"
@@ -66,8 +67,9 @@ void target_size(const std::string& layout_name, const std::string& size, int ns
   if (*l == Layout::Healpix) {
     *w = nside > 0 ? nside : 64;
     *h = 1;
+    check_nside("--nside", *w);
   } else if (!size.empty()) {
-    parse_size(size, "--size", w, h);
+    parse_image_size(size, "--size", w, h);
   } else if (*l == Layout::Hemisphere) {
     *w = 360, *h = 90;
   } else {

@@ -8,6 +8,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image_io.h"
 #include "core/map_sequence.h"
 #include "core/progress.h"
@@ -58,6 +59,7 @@ int light_count(const std::string& text) {
     throw InputError(fmt::format("--n must be a positive integer or 'auto', got '{}'", text));
   }
   if (n <= 0) throw InputError(fmt::format("--n must be positive, got {}", n));
+  check_light_count("--n", n);
   return n;
 }
 
@@ -78,10 +80,12 @@ int run_sample(const SampleArgs& args, const Output& out) {
   po.sampler.q2_solid_angle_exponent = args.q2_b;
   po.sampler.q2_jitter = args.q2_jitter;
   po.sampler.q2_nside = args.q2_nside;
+  check_nside("--q2-nside", args.q2_nside);
   po.filter = filter_mode(args.filter);
   if (!(args.fps > 0)) throw InputError(fmt::format("--fps must be positive, got {}", args.fps));
   po.frame_rate_hz = args.fps;
   po.cluster_max_lights = args.cluster;
+  check_light_count("--cluster", args.cluster);
   o.read.layout = optional_layout(args.layout, "--layout");
 
   const MapSequence maps = find_map_sequence(args.inputs);

@@ -17,6 +17,7 @@
 #include "core/accuracy.h"
 #include "core/envmap.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "core/resample.h"
@@ -144,6 +145,7 @@ int run_synth_sequence(const SynthSequenceArgs& args, const Output& out) {
   so.frames = args.frames;
   so.frame_rate_hz = args.fps;
   so.seed = args.seed;
+  check_frame_count("--frames", args.frames);
   try {
     validate(so);
   } catch (const InputError& e) {
@@ -152,7 +154,7 @@ int run_synth_sequence(const SynthSequenceArgs& args, const Output& out) {
   EnvMap base = map_or_scene(args.base, 512);
   if (!args.size.empty()) {
     int w = 0, h = 0;
-    parse_size(args.size, "--size", &w, &h);
+    parse_image_size(args.size, "--size", &w, &h);
     base = resample(base, base.layout == Layout::Healpix ? Layout::LatLong : base.layout, w, h);
   }
   Progress progress("synth sequence", size_t(so.frames), out.progress);
@@ -174,6 +176,7 @@ int run_synth_boards(const SynthBoardsArgs& args, const Output& out) {
   o.field_deg = args.fov;
   if (!args.camera.empty()) o.camera = read_camera_model(args.camera);
   if (o.views < 1) throw InputError("--views must be at least 1");
+  check_count("--views", o.views, limits().max_frames, "views", "each is an image file");
   const SyntheticBoards b = synthesize_boards(o);
   make_output_directory(args.output_dir);
   nlohmann::json truth = {{"board", {o.board.cols, o.board.rows}}, {"square_mm", o.board.square_mm},
@@ -221,10 +224,11 @@ int run_synth_bracket(const SynthBracketArgs& args, const Output& out) {
 }
 
 int run_synth_probe(const SynthProbeArgs& args, const Output& out) {
+  int w = 0, h = 0;
+  parse_image_size(args.size, "--size", &w, &h);
+  check_frame_count("--frames", args.frames);
   const EnvMap world = args.input == "scene" ? render_scene(describe_scene(), Layout::LatLong, 1024, 512)
                                              : read_envmap(args.input);
-  int w = 0, h = 0;
-  parse_size(args.size, "--size", &w, &h);
   const bool sequence = args.frames > 1;
   if (args.frames < 1) throw InputError("--frames must be at least 1");
   if (sequence) {
@@ -269,6 +273,9 @@ int run_synth_probe(const SynthProbeArgs& args, const Output& out) {
 int run_synth_walkthrough(const SynthWalkthroughArgs& args, const Output& out) {
   if (args.probe_size < 8 || args.probe_size % 2) throw InputError(fmt::format("--probe-size must be even and >= 8, got {}", args.probe_size));
   if (args.rays < 2) throw InputError(fmt::format("--rays must be >= 2, got {}", args.rays));
+  check_image_size("--probe-size", args.probe_size, args.probe_size / 2, "probe");
+  check_image_size("--rays", args.rays, args.rays, "ray grid");
+  check_count("--samples", args.samples, 64, "rays a pixel edge", "every probe pixel traces samples^2 rays");
   const Room room = default_room();
   WalkthroughOptions o;
   o.fps = args.fps;

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace lp::cli {
 
@@ -26,7 +27,8 @@ constexpr const char* kDescription =
 
 constexpr const char* kSharedOptions =
     "Every command also takes --json (its report as one JSON object on stdout),\n"
-    "--no-progress (no progress bars) and --config FILE (TOML, one [section] per command).";
+    "--no-progress (no progress bars), --config FILE (TOML, one [section] per command),\n"
+    "--max-pixels N and --max-lights N (raise the limits of docs/limits.md).";
 
 // The groups of two-word commands, by stage.
 const std::map<std::string, std::string>& group_help() {
@@ -103,6 +105,10 @@ int parse_command_line(int argc, char** argv, bool run) {
   Output out;
   app.add_flag("--json", out.json, "Print the report as one JSON object on stdout")->configurable(false);
   app.add_flag("!--no-progress", out.progress, "Never draw progress bars");
+  // The limits of core/limits.h, for the rare run that needs more (docs/limits.md).
+  Limits limits;
+  app.add_option("--max-pixels", limits.max_pixels, "Largest image or map read, made or written, in pixels");
+  app.add_option("--max-lights", limits.max_lights, "Largest number of lights asked for");
 
   std::map<std::string, CLI::App*> groups;
   std::vector<std::pair<CLI::App*, Handler>> handlers;
@@ -136,6 +142,7 @@ int parse_command_line(int argc, char** argv, bool run) {
   if (!run) return 0;
 
   try {
+    set_limits(limits);
     for (const auto& [sub, handler] : handlers) {
       if (sub->parsed()) return handler(out);
     }

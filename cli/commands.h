@@ -23,7 +23,13 @@ namespace lp::cli {
 // --methods: comma-separated method names or "all".
 std::vector<Method> parse_method_list(const std::string& text);
 void parse_size(const std::string& text, const char* option, int* width, int* height);
+// parse_size for an image or map size, within core/limits.h.
+void parse_image_size(const std::string& text, const char* option, int* width, int* height);
 std::vector<int> parse_int_list(const std::string& text, const char* option);
+// parse_int_list of light counts, each within core/limits.h.
+std::vector<int> parse_light_counts(const std::string& text, const char* option);
+// --frames, --views and the like within core/limits.h (positivity is the caller's rule).
+void check_frame_count(const char* option, long long count);
 // --rotation: "yaw,pitch,roll" in degrees or 9 numbers (row-major world_from_probe).
 Mat3 parse_rotation(const std::string& text);
 // Comma-separated numbers ('1/40' allowed), exactly `count` of them (0: any).
@@ -31,8 +37,10 @@ std::vector<double> parse_numbers(const std::string& text, const char* option, s
 // --layout and friends: empty means "not given".
 std::optional<Layout> optional_layout(const std::string& name, const char* option);
 // Target (width, height) of convert/synth from --size/--nside for `layout`, like `like`
-// when given (about as many pixels), else the layout's default.
+// when given (about as many pixels), else the layout's default; within core/limits.h.
+// check_target_flags checks --size and --nside alone, before any input is read.
 void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h);
+void check_target_flags(const std::string& size, int nside);
 // --board COLSxROWS inner corners and --square in mm.
 BoardSpec board_from(const std::string& text, double square_mm);
 // --response linear|gamma|scurve of the synthetic brackets.

@@ -10,6 +10,7 @@
 
 #include "calib/board_detect.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "hdr/synthetic_bracket.h"
 #include "render/reference_shader.h"
 
@@ -23,6 +24,21 @@ void parse_size(const std::string& text, const char* option, int* width, int* he
     throw InputError(fmt::format("{} must be WxH with positive integers, got '{}'", option, text));
   *width = w;
   *height = h;
+}
+
+void parse_image_size(const std::string& text, const char* option, int* width, int* height) {
+  parse_size(text, option, width, height);
+  check_image_size(option, *width, *height, "size");
+}
+
+void check_frame_count(const char* option, long long count) {
+  check_count(option, count, limits().max_frames, "frames", "each is a file or a map held");
+}
+
+std::vector<int> parse_light_counts(const std::string& text, const char* option) {
+  std::vector<int> counts = parse_int_list(text, option);
+  for (int n : counts) check_light_count(option, n);
+  return counts;
 }
 
 std::vector<int> parse_int_list(const std::string& text, const char* option) {
@@ -73,9 +89,16 @@ std::optional<Layout> optional_layout(const std::string& name, const char* optio
   return l;
 }
 
+void check_target_flags(const std::string& size, int nside) {
+  int w = 0, h = 0;
+  if (!size.empty()) parse_image_size(size, "--size", &w, &h);
+  if (nside > 0) check_nside("--nside", nside);
+}
+
 // Target (layout, width, height) of convert/synth from --layout/--size/--nside.
 void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h) {
   if (layout == Layout::Healpix) {
+    if (nside > 0) check_nside("--nside", nside);
     *w = nside > 0 ? nside : (like && like->layout == Layout::Healpix ? like->nside : 0);
     if (*w == 0) {
       // About as many pixels as the source.
@@ -87,7 +110,7 @@ void target_geometry(Layout layout, const std::string& size, int nside, const En
     return;
   }
   if (!size.empty()) {
-    parse_size(size, "--size", w, h);
+    parse_image_size(size, "--size", w, h);
     return;
   }
   if (like && like->layout == layout) {
@@ -185,6 +208,13 @@ ShadingOptions shading_options(const ShadingTableArgs& a) {
   if (a.low_per_high < 1) throw InputError(fmt::format("--low-per-high must be at least 1, got {}", a.low_per_high));
   if (a.k < 1) throw InputError(fmt::format("--k must be at least 1, got {}", a.k));
   if (a.q < 0) throw InputError(fmt::format("--q must be at least 1 (or 0 for |H| / 4), got {}", a.q));
+  check_count("--lut", a.lut, limits().max_lut, "texels a face edge", "the LUT is built texel by texel and exported");
+  // A region needs a texel: more regions than the LUT has texels are empty and only cost time.
+  const long long texels = 6LL * a.lut * a.lut;
+  check_count("--regions", a.regions, texels, "regions", "the 6 lut^2 texels of the LUT");
+  check_count("--cone-regions", a.cone_regions, texels, "regions", "the 6 lut^2 texels of the LUT");
+  check_light_count("--n", a.n);
+  check_light_count("--low-per-high", (long long)a.n * a.low_per_high);
   if (!(a.cone_deg > 0 && a.cone_deg <= 90))
     throw InputError(fmt::format("--cone must be in (0, 90] degrees, got {}", a.cone_deg));
   ShadingOptions o;

@@ -33,13 +33,13 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/exr_header.h"
+#include "core/image_header.h"
+#include "core/limits.h"
 
 namespace lp {
 
 namespace {
-
-// Largest image any reader accepts (pixels): guards against absurd sizes in damaged headers.
-constexpr size_t kMaxPixels = size_t(1) << 28;
 
 [[noreturn]] void fail(const std::string& path, const std::string& problem) {
   throw InputError(path + ": " + problem);
@@ -95,9 +95,13 @@ bool jpeg_is_truncated(const std::string& b) {
   return true;
 }
 
+// Every image reader reads the whole file first: its size is checked before it is read.
 std::string read_whole_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, fmt::format("cannot open: {}", std::strerror(errno ? errno : ENOENT)));
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);  // fails on pipes: they are read as they come
+  if (!ec) check_file_size(path, size, max_image_file_bytes(), "an image (32 bytes per pixel of --max-pixels)");
   std::ostringstream ss;
   ss << in.rdbuf();
   if (in.bad()) fail(path, "cannot read: I/O error");
@@ -118,11 +122,6 @@ struct RawImage {
   std::string layout_key = "layout";  // how the file names the field, for messages
 };
 
-void check_size(const std::string& path, long long w, long long h) {
-  if (w <= 0 || h <= 0) fail(path, fmt::format("bad image size {}x{}", w, h));
-  if (size_t(w) * size_t(h) > kMaxPixels) fail(path, fmt::format("image too large ({}x{})", w, h));
-}
-
 Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMapOptions& options) {
   const int w = raw.width, h = raw.height;
   Layout layout;
@@ -138,8 +137,13 @@ Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMa
     layout = Layout::LatLong;
   } else if (h == 12 * w && is_power_of_two(w)) {
     layout = Layout::Healpix;
-  } else {
+  } else if (w == 4 * h) {  // the shape of the default hemisphere map, 360x90
     layout = Layout::Hemisphere;
+  } else {
+    // A photo or a fused bracket is not a map: sampling it as a hemisphere would be silently wrong.
+    fail(path, fmt::format("no layout recorded and {}x{} is not the shape of one (latlong 2:1, hemisphere 4:1, "
+                           "healpix 1:12); give the layout with --layout",
+                           w, h));
   }
   switch (layout) {
     case Layout::LatLong:
@@ -266,6 +270,7 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
 RawImage read_exr(const std::string& path) {
   const std::string bytes = read_whole_file(path);
   if (bytes.size() < 4 || !Imf::isImfMagic(bytes.data())) fail(path, "not an OpenEXR file (bad magic number)");
+  check_exr_header(path, bytes);  // OpenEXR allocates what attribute sizes and data windows claim
   MemoryIStream stream(bytes, path);
   try {
     return decode_exr(path, bytes, stream);
@@ -283,7 +288,7 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   const Imath::Box2i dw = header.dataWindow();
   RawImage raw;
   const long long w = (long long)dw.max.x - dw.min.x + 1, h = (long long)dw.max.y - dw.min.y + 1;
-  check_size(path, w, h);
+  check_image_size(path, w, h);
   raw.width = int(w);
   raw.height = int(h);
   raw.layout_key = "lightprobe.layout";
@@ -427,8 +432,14 @@ double parse_positive(const std::string& path, const std::string& what, const st
   return v;
 }
 
-RawImage read_hdr(const std::string& path) {
-  const std::string bytes = read_whole_file(path);
+// A Radiance file's header: the metadata, the size, and where the scanlines start.
+struct HdrHeader {
+  RawImage raw;  // width, height, layout, units, nside; no pixels yet
+  double scale[3] = {1.0, 1.0, 1.0};  // 1 / (EXPOSURE x COLORCORR) per channel
+  size_t data_start = 0;
+};
+
+HdrHeader read_hdr_header(const std::string& path, const std::string& bytes) {
   size_t pos = 0;
   constexpr size_t kMaxHeader = 1 << 16;
   // Returns the next line without its '\n'; nullopt at end of file.
@@ -453,7 +464,8 @@ RawImage read_hdr(const std::string& path) {
                            one_line(*magic, 60), crlf ? "; lines end in CR LF, as after a text-mode conversion" : ""));
   check_crlf(*magic);
 
-  RawImage raw;
+  HdrHeader header;
+  RawImage& raw = header.raw;
   raw.layout_key = "LIGHTPROBE_LAYOUT";
   double exposure = 1.0;
   double colorcorr[3] = {1.0, 1.0, 1.0};
@@ -492,88 +504,105 @@ RawImage read_hdr(const std::string& path) {
       raw.nside = int(v);
     }
   }
+  for (int k = 0; k < 3; ++k) header.scale[k] = 1.0 / (exposure * colorcorr[k]);
 
   const auto res = next_line();
   if (!res) fail(path, "truncated file (no resolution line)");
   check_crlf(*res);
-  {
-    std::istringstream in{std::string(*res)};
-    std::string a, b, extra;
-    long long h = 0, w = 0;
-    const bool four = bool(in >> a >> h >> b >> w) && !(in >> extra);
-    if (!four) fail(path, fmt::format("bad resolution line '{}'", one_line(*res, 60)));
-    if (a != "-Y" || b != "+X") {
-      const bool radiance_orientation = (a.size() == 2 && b.size() == 2 && (a[0] == '+' || a[0] == '-') &&
-                                         (b[0] == '+' || b[0] == '-'));
-      if (radiance_orientation)
-        fail(path, fmt::format("unsupported orientation '{}' (only -Y H +X W, top to bottom and left to right)",
-                               one_line(*res, 60)));
-      fail(path, fmt::format("bad resolution line '{}'", one_line(*res, 60)));
-    }
-    check_size(path, w, h);
-    raw.width = int(w);
-    raw.height = int(h);
+  std::istringstream in{std::string(*res)};
+  std::string a, b, extra;
+  long long h = 0, w = 0;
+  const bool four = bool(in >> a >> h >> b >> w) && !(in >> extra);
+  if (!four) fail(path, fmt::format("bad resolution line '{}'", one_line(*res, 60)));
+  if (a != "-Y" || b != "+X") {
+    const bool radiance_orientation =
+        (a.size() == 2 && b.size() == 2 && (a[0] == '+' || a[0] == '-') && (b[0] == '+' || b[0] == '-'));
+    if (radiance_orientation)
+      fail(path, fmt::format("unsupported orientation '{}' (only -Y H +X W, top to bottom and left to right)",
+                             one_line(*res, 60)));
+    fail(path, fmt::format("bad resolution line '{}'", one_line(*res, 60)));
   }
+  check_image_size(path, w, h);
+  raw.width = int(w);
+  raw.height = int(h);
+  header.data_start = pos;
+  return header;
+}
 
-  const int W = raw.width, H = raw.height;
+// Decodes scanline `row` starting at bytes[pos] into `line` (RGBE per pixel, W pixels):
+// new-style run-length, or flat pixels with old-style runs. Advances `pos`.
+void decode_hdr_scanline(const std::string& path, const std::string& bytes, size_t& pos, int W, int H, int row,
+                         std::vector<uint8_t>& line) {
   const size_t end = bytes.size();
   auto byte = [&](size_t i) { return static_cast<uint8_t>(bytes[i]); };
-  auto truncated = [&](int row) {
-    fail(path, fmt::format("truncated file (expected {} scanlines, read {})", H, row));
-  };
-  std::vector<uint8_t> line(4 * size_t(W));  // RGBE per pixel
-  raw.rgb.resize(3 * size_t(W) * size_t(H));
-  const double scale[3] = {1.0 / (exposure * colorcorr[0]), 1.0 / (exposure * colorcorr[1]),
-                           1.0 / (exposure * colorcorr[2])};
-  for (int row = 0; row < H; ++row) {
-    const bool new_rle = W >= 8 && W <= 0x7fff && pos + 4 <= end && byte(pos) == 2 && byte(pos + 1) == 2 &&
-                         (byte(pos + 2) & 0x80) == 0;
-    if (new_rle) {
-      const int len = (byte(pos + 2) << 8) | byte(pos + 3);
-      if (len != W) fail(path, fmt::format("corrupt scanline {} (length {}, expected {})", row, len, W));
-      pos += 4;
-      for (int c = 0; c < 4; ++c) {
-        int x = 0;
-        while (x < W) {
-          if (pos >= end) truncated(row);
-          int count = byte(pos++);
-          if (count > 128) {
-            count -= 128;
-            if (x + count > W) fail(path, fmt::format("corrupt run-length data in scanline {}", row));
-            if (pos >= end) truncated(row);
-            const uint8_t v = byte(pos++);
-            for (int k = 0; k < count; ++k) line[4 * size_t(x++) + c] = v;
-          } else {
-            if (count == 0 || x + count > W) fail(path, fmt::format("corrupt run-length data in scanline {}", row));
-            if (pos + size_t(count) > end) truncated(row);
-            for (int k = 0; k < count; ++k) line[4 * size_t(x++) + c] = byte(pos++);
-          }
-        }
-      }
-    } else {
-      // Flat pixels, possibly with old-style runs: (1, 1, 1, n) repeats the previous pixel
-      // n << shift times, the shift growing by 8 for consecutive run codes.
-      int x = 0, shift = 0;
+  auto truncated = [&] { fail(path, fmt::format("truncated file (expected {} scanlines, read {})", H, row)); };
+  auto corrupt = [&] { fail(path, fmt::format("corrupt run-length data in scanline {}", row)); };
+  const bool new_rle =
+      W >= 8 && W <= 0x7fff && pos + 4 <= end && byte(pos) == 2 && byte(pos + 1) == 2 && (byte(pos + 2) & 0x80) == 0;
+  if (new_rle) {
+    const int len = (byte(pos + 2) << 8) | byte(pos + 3);
+    if (len != W) fail(path, fmt::format("corrupt scanline {} (length {}, expected {})", row, len, W));
+    pos += 4;
+    for (int c = 0; c < 4; ++c) {
+      int x = 0;
       while (x < W) {
-        if (pos + 4 > end) truncated(row);
-        const uint8_t r = byte(pos), g = byte(pos + 1), b = byte(pos + 2), e = byte(pos + 3);
-        pos += 4;
-        if (r == 1 && g == 1 && b == 1) {
-          if (x == 0 || shift > 16) fail(path, fmt::format("corrupt run-length data in scanline {}", row));
-          const long long count = (long long)e << shift;
-          if (x + count > W) fail(path, fmt::format("corrupt run-length data in scanline {}", row));
-          for (long long k = 0; k < count; ++k, ++x) std::copy_n(&line[4 * size_t(x - 1)], 4, &line[4 * size_t(x)]);
-          shift += 8;
+        if (pos >= end) truncated();
+        int count = byte(pos++);
+        if (count > 128) {
+          count -= 128;
+          if (x + count > W) corrupt();
+          if (pos >= end) truncated();
+          const uint8_t v = byte(pos++);
+          for (int k = 0; k < count; ++k) line[4 * size_t(x++) + c] = v;
         } else {
-          line[4 * size_t(x)] = r;
-          line[4 * size_t(x) + 1] = g;
-          line[4 * size_t(x) + 2] = b;
-          line[4 * size_t(x) + 3] = e;
-          ++x;
-          shift = 0;
+          if (count == 0 || x + count > W) corrupt();
+          if (pos + size_t(count) > end) truncated();
+          for (int k = 0; k < count; ++k) line[4 * size_t(x++) + c] = byte(pos++);
         }
       }
     }
+    return;
+  }
+  // Flat pixels, possibly with old-style runs: (1, 1, 1, n) repeats the previous pixel
+  // n << shift times, the shift growing by 8 for consecutive run codes.
+  int x = 0, shift = 0;
+  while (x < W) {
+    if (pos + 4 > end) truncated();
+    const uint8_t r = byte(pos), g = byte(pos + 1), b = byte(pos + 2), e = byte(pos + 3);
+    pos += 4;
+    if (r == 1 && g == 1 && b == 1) {
+      if (x == 0 || shift > 16) corrupt();
+      const long long count = (long long)e << shift;
+      if (x + count > W) corrupt();
+      for (long long k = 0; k < count; ++k, ++x) std::copy_n(&line[4 * size_t(x - 1)], 4, &line[4 * size_t(x)]);
+      shift += 8;
+    } else {
+      line[4 * size_t(x)] = r;
+      line[4 * size_t(x) + 1] = g;
+      line[4 * size_t(x) + 2] = b;
+      line[4 * size_t(x) + 3] = e;
+      ++x;
+      shift = 0;
+    }
+  }
+}
+
+RawImage read_hdr(const std::string& path) {
+  const std::string bytes = read_whole_file(path);
+  HdrHeader header = read_hdr_header(path, bytes);
+  RawImage raw = std::move(header.raw);
+  const int W = raw.width, H = raw.height;
+  // Every encoding spends at least 4 bytes a scanline (an RLE header or a literal pixel):
+  // refuse a header whose size the data cannot hold before allocating for it.
+  const size_t available = bytes.size() - header.data_start;
+  if (available / 4 < size_t(H))
+    fail(path, fmt::format("truncated file ({} bytes of pixel data cannot hold {} scanlines of at least 4 bytes)",
+                           available, H));
+  std::vector<uint8_t> line(4 * size_t(W));  // RGBE per pixel
+  raw.rgb.resize(3 * size_t(W) * size_t(H));
+  size_t pos = header.data_start;
+  for (int row = 0; row < H; ++row) {
+    decode_hdr_scanline(path, bytes, pos, W, H, row, line);
     float* out = &raw.rgb[3 * size_t(row) * size_t(W)];
     for (int x = 0; x < W; ++x) {
       const uint8_t* p = &line[4 * size_t(x)];
@@ -583,7 +612,7 @@ RawImage read_hdr(const std::string& path) {
       }
       // Same decoding as Greg Ward's / Bruce Walter's rgbe.c (and OpenCV, stb_image, three.js).
       const double f = std::ldexp(1.0, int(p[3]) - (128 + 8));
-      for (int c = 0; c < 3; ++c) out[3 * x + c] = float(p[c] * f * scale[c]);
+      for (int c = 0; c < 3; ++c) out[3 * x + c] = float(p[c] * f * header.scale[c]);
     }
   }
   return raw;
@@ -709,7 +738,7 @@ RawImage read_pfm(const std::string& path) {
   if (pos >= bytes.size() || !std::isspace(static_cast<unsigned char>(bytes[pos])))
     fail(path, "truncated file (no pixel data)");
   ++pos;  // the single whitespace after the scale
-  check_size(path, w, h);
+  check_image_size(path, w, h);
   const bool little = scale < 0;
   const size_t row_bytes = size_t(w) * size_t(channels) * 4;
   const size_t avail = bytes.size() - pos;
@@ -848,10 +877,19 @@ CameraImage read_camera_image(const std::string& path) {
   return guarded(path, "read", [&] {
     const std::string bytes = read_whole_file(path);
     if (bytes.empty()) fail(path, "cannot read: empty file");
+    // The decoder allocates what the header claims: check the claim first.
+    const auto header = read_image_header(path, bytes);
+    if (!header) fail(path, "unsupported camera image format (expected PNG, JPEG, TIFF, PNM or BMP)");
+    check_image_size(path, header->width, header->height);
     if (jpeg_is_truncated(bytes)) fail(path, "truncated JPEG (no end-of-image marker)");
+    if (bytes.size() < header->min_file_bytes)
+      fail(path, fmt::format("{} bytes cannot hold a {}x{} {} (at least {}): damaged file or a forged header",
+                             bytes.size(), header->width, header->height, to_string(header->format),
+                             header->min_file_bytes));
+    if (bytes.size() > size_t(std::numeric_limits<int>::max())) fail(path, "file over 2 GiB: not a camera image");
     const cv::Mat buf(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
     const cv::Mat img = cv::imdecode(buf, cv::IMREAD_UNCHANGED);
-    if (img.empty()) fail(path, "cannot decode image (unsupported format or damaged file)");
+    if (img.empty()) fail(path, "cannot decode image (damaged file)");
     const int depth = img.depth();
     if (depth != CV_8U && depth != CV_16U)
       fail(path, "unsupported sample type (camera images must be 8- or 16-bit)");

@@ -23,8 +23,8 @@
 // A healpix map is stored as an image nside wide and 12 nside tall: face f occupies rows
 // [f nside, (f+1) nside), and the pixel at (column ix, row iy) of a face is NESTED index
 // f nside^2 + interleave(ix, iy) (ix on the even bits).
-// When a file carries no layout, it is inferred from the size: W = 2H latlong,
-// 12 W = H (W a power of two) healpix, otherwise hemisphere.
+// With no layout in the file: W = 2H latlong, 12 W = H (W a power of two) healpix, W = 4H
+// hemisphere, other shapes refused. Headers are checked against core/limits.h first.
 //
 // All failures throw InputError naming the path and the problem.
 #pragma once

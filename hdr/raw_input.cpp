@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace lp {
 namespace {
@@ -90,6 +91,8 @@ RgbImage read_camera_raw(const std::string& path, double* exposure_seconds_out) 
   };
   int rc = raw->open_file(path.c_str());
   if (rc != LIBRAW_SUCCESS) fail("open", rc);
+  // open_file reads only the metadata: check the sensor size before unpack allocates it.
+  check_image_size(path, raw->imgdata.sizes.raw_width, raw->imgdata.sizes.raw_height, "sensor");
   auto& params = raw->imgdata.params;
   params.output_bps = 16;
   params.gamm[0] = params.gamm[1] = 1.0;

@@ -12,6 +12,7 @@
 #include <unordered_set>
 
 #include "core/error.h"
+#include "core/limits.h"
 
 extern "C" {
 #include <chealpix.h>
@@ -496,11 +497,11 @@ MergeMode merge_mode(const std::vector<LightList>& cameras) {
 }
 
 std::optional<MergeProblem> merge_problem(const LightList& list) {
-  constexpr size_t kMaxLights = 1000000;
+  const size_t max_lights = size_t(limits().max_lights);
   constexpr double kMaxTotal = 1e300;
   if (list.lights.empty()) return MergeProblem{"empty", "the list has no lights"};
-  if (list.lights.size() > kMaxLights)
-    return MergeProblem{"too_many", fmt::format("{} lights (at most {})", list.lights.size(), kMaxLights)};
+  if (list.lights.size() > max_lights)
+    return MergeProblem{"too_many", fmt::format("{} lights (at most {})", list.lights.size(), max_lights)};
   std::array<double, 3> total{0, 0, 0};
   for (size_t k = 0; k < list.lights.size(); ++k) {
     const Light& l = list.lights[k];

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "tests/core/test_files.h"
 
 extern "C" {
 #include <chealpix.h>
@@ -27,27 +28,9 @@ namespace {
 
 const std::string kData = LIGHTPROBE_SHARED_DATA;
 
-// A fresh directory under the test temp dir, one per test.
-std::string temp_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(::testing::TempDir()) / "lightprobe_image_io" / info->name();
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir.string() + "/";
-}
-
-void write_bytes(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), std::streamsize(bytes.size()));
-  ASSERT_TRUE(out.good()) << path;
-}
-
-std::string read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test_files::read_bytes;
+using test_files::write_bytes;
+std::string temp_dir() { return test_files::temp_dir("lightprobe_image_io"); }
 
 void truncate_to_half(const std::string& from, const std::string& to) {
   const std::string bytes = read_bytes(from);
@@ -348,7 +331,9 @@ TEST(ImageIo, HdrFlatAndOldStyleRunLengthScanlinesDecodeToKnownValues) {
     f += char(x < 150 ? 0x82 : 0);  // exponent 0: black
   }
   write_bytes(dir + "old.hdr", f);
-  const EnvMap map = read_envmap(dir + "old.hdr");
+  ReadMapOptions hemisphere;  // 300x2 is no map's shape: say which
+  hemisphere.layout = Layout::Hemisphere;
+  const EnvMap map = read_envmap(dir + "old.hdr", hemisphere);
   EXPECT_EQ(map.layout, Layout::Hemisphere);
   ASSERT_EQ(map.width, 300);
   for (int x = 0; x < 300; ++x) {
@@ -430,7 +415,9 @@ TEST(ImageIo, PfmRowsAreStoredBottomToTopInEitherByteOrder) {
   std::string f = "PF\n2 2\n1.0\n";
   for (int i = 0; i < 12; ++i) f += be(float(i + 1));
   write_bytes(dir + "be.pfm", f);
-  const EnvMap map = read_envmap(dir + "be.pfm");
+  ReadMapOptions hemisphere;  // 2x2 is no map's shape: say which
+  hemisphere.layout = Layout::Hemisphere;
+  const EnvMap map = read_envmap(dir + "be.pfm", hemisphere);
   EXPECT_EQ(map.layout, Layout::Hemisphere);
   // Top-left is the first pixel of the second stored row: values 7, 8, 9.
   EXPECT_EQ(map.pixel(0)[0], 7.0f);
@@ -581,20 +568,21 @@ TEST(ImageIo, ProbulatorProbesReadAsSmallLatlongMaps) {
   EXPECT_GT(grace_max, 1000.0f);  // Grace Cathedral's small strong lights
 }
 
-TEST(ImageIo, PisaCubeFacesReadAsSquareHemisphereImages) {
+TEST(ImageIo, PisaCubeFacesReadAsSquareImagesButAreNoMapWithoutALayout) {
   for (const char* face : {"px", "nx", "py", "ny", "pz", "nz"}) {
     SCOPED_TRACE(face);
-    const EnvMap map = read_envmap(kData + "/probes-threejs-spot-and-cube/pisa_cube/" + face + ".hdr");
-    EXPECT_EQ(map.layout, Layout::Hemisphere);
-    EXPECT_EQ(map.width, 256);
-    EXPECT_EQ(map.height, 256);
-    EXPECT_GT(*std::max_element(map.rgb.begin(), map.rgb.end()), 0.1f);
+    const std::string path = kData + "/probes-threejs-spot-and-cube/pisa_cube/" + face + ".hdr";
+    const RgbImage image = read_rgb_image(path);
+    EXPECT_EQ(image.width, 256);
+    EXPECT_EQ(image.height, 256);
+    EXPECT_GT(*std::max_element(image.rgb.begin(), image.rgb.end()), 0.1f);
+    expect_input_error([&] { read_envmap(path); }, {path, "no layout recorded", "256x256", "--layout"});
   }
 }
 
 TEST(ImageIo, MemorialReferenceReadsWithAMaximumOfAbout274) {
-  const EnvMap map = read_envmap(kData + "/hdr-memorial-debevec/reference/memorial_radiance_hdrshop.hdr");
-  EXPECT_EQ(map.layout, Layout::Hemisphere);
+  // A fused photograph, not a map: read as an image.
+  const RgbImage map = read_rgb_image(kData + "/hdr-memorial-debevec/reference/memorial_radiance_hdrshop.hdr");
   EXPECT_EQ(map.width, 512);
   EXPECT_EQ(map.height, 768);
   EXPECT_NEAR(*std::max_element(map.rgb.begin(), map.rgb.end()), 274.0, 274.0 * 0.01);
@@ -739,7 +727,7 @@ TEST(ImageIo, MissingOrUndecodableCameraImagesAreRefused) {
   const std::string dir = temp_dir();
   expect_input_error([&] { read_camera_image(dir + "none.png"); }, {dir + "none.png", "cannot open"});
   write_bytes(dir + "junk.png", "this is not a png");
-  expect_input_error([&] { read_camera_image(dir + "junk.png"); }, {dir + "junk.png", "cannot decode"});
+  expect_input_error([&] { read_camera_image(dir + "junk.png"); }, {dir + "junk.png", "unsupported camera image format"});
 }
 
 TEST(ImageIo, DisplayImagesAreSrgbEncodedAndClamped) {

@@ -11,10 +11,12 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "core/limits.h"
 
 namespace lp {
 
 std::string read_text_file(const std::string& path, const std::string& what, size_t max_bytes) {
+  if (max_bytes == 0) max_bytes = size_t(limits().max_text_file_bytes);
   auto cannot = [&](int err) {
     return InputError(fmt::format("{}: cannot open{}{}: {}", path, what.empty() ? "" : " ", what, std::strerror(err)));
   };

@@ -10,9 +10,8 @@ namespace lp {
 
 // The whole file as bytes. InputError "<path>: cannot open <what>: <reason>" when it cannot
 // be read, or "<path>: larger than <max_bytes> bytes" (a text input that large is a mistake).
-constexpr size_t kMaxTextFileBytes = size_t(256) << 20;
-std::string read_text_file(const std::string& path, const std::string& what = "",
-                           size_t max_bytes = kMaxTextFileBytes);
+// max_bytes 0: the text-file limit of core/limits.h.
+std::string read_text_file(const std::string& path, const std::string& what = "", size_t max_bytes = 0);
 
 // The extension of the file name in `path`, lower case, with its dot (".exr"); "" when the
 // name has none (a dot in a folder name does not count).

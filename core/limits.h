@@ -35,7 +35,8 @@ struct Limits {
   // flag): 10,000 is seven minutes of video at 25 fps, and each is a file or a map held.
   int max_frames = 10000;
   // Bytes of a text input (light lists, response and camera files, CSV; no flag): 1 GiB
-  // holds a million-light list three times. Not yet checked by the text readers.
+  // holds a million-light list three times. Checked by core/file_io.h's read_text_file,
+  // through which every text reader goes.
   uint64_t max_text_file_bytes = uint64_t(1) << 30;
 };
 

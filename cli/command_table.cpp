@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "core/interrupt.h"
 
 namespace lp::cli {
 
@@ -134,9 +135,13 @@ int run_command_line(int argc, char** argv) {
     return 2;
   }
 
+  install_interrupt_handlers();  // SIGINT/SIGTERM: temp files removed, exit 130/143
   try {
     for (const auto& [sub, handler] : handlers) {
-      if (sub->parsed()) return handler(out);
+      if (!sub->parsed()) continue;
+      const int code = handler(out);
+      // A command that stopped itself on a deferred signal (stream, merge) ends with its code.
+      return interrupt_exit_code() ? interrupt_exit_code() : code;
     }
   } catch (const lp::InputError& e) {
     std::fprintf(stderr, "lightprobe: %s\n", e.what());

@@ -32,6 +32,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/interrupt.h"
 
 namespace lp {
 
@@ -943,6 +944,7 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
     if (fd < 0 && errno != EEXIST) throw error(errno);
   }
   if (fd < 0) throw error(EEXIST);
+  const TempFileRegistration registered(tmp);  // SIGINT/SIGTERM mid-write removes it (core/interrupt.h)
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);

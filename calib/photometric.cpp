@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/json_file.h"
 
 namespace lp {
 namespace {
@@ -459,13 +460,10 @@ void save_photometric(const std::string& path, const PhotometricCalibration& c) 
 }
 
 PhotometricCalibration load_photometric(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open the photometric calibration");
+  const nlohmann::json j = read_json_file(path);
+  check_json_format(j, path, "lightprobe.photometric/1");
   PhotometricCalibration c;
   try {
-    const nlohmann::json j = nlohmann::json::parse(in);
-    if (j.value("format", "") != "lightprobe.photometric/1")
-      throw InputError(path + ": not a photometric calibration (format is not lightprobe.photometric/1)");
     c.scale_luminance = j.at("scale_luminance").get<double>();
     c.scale_rgb = j.at("scale_rgb").get<std::array<double, 3>>();
     c.scale_relative_error = j.value("scale_relative_error", 0.0);
@@ -485,7 +483,7 @@ PhotometricCalibration load_photometric(const std::string& path) {
         c.residuals.push_back({r.value("label", ""), r.value("predicted", 0.0), r.value("measured", 0.0),
                                r.value("relative", 0.0), r.value("held_out_relative", 0.0)});
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": not a valid photometric calibration: " + e.what());
+    throw InputError(json_field_problem(path, e));
   }
   for (double s : c.scale_rgb)
     if (!(s > 0) || !std::isfinite(s)) throw InputError(path + ": scale_rgb must hold three positive numbers");

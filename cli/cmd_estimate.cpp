@@ -20,6 +20,7 @@
 #include "eval/svg_chart.h"
 #include "core/accuracy.h"
 #include "core/error.h"
+#include "core/json_file.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "estimate/light_quadtree.h"
@@ -84,14 +85,6 @@ MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
   }
   validate_metering(m);
   return m;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw InputError(fmt::format("{}: cannot open", path));
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
 }
 
 // Mean |CCT error| (K) of six sector lights against the true map's sector colours.
@@ -215,14 +208,8 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
 int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
   const fs::path dir(args.input_dir);
   const std::string truth_path = (dir / "truth.json").string();
-  nlohmann::json truth;
-  try {
-    truth = nlohmann::json::parse(slurp(truth_path));
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: not JSON ({})", truth_path, e.what()));
-  }
-  if (truth.value("format", "") != "lightprobe.walkthrough/1")
-    throw InputError(fmt::format("{}: not a lightprobe.walkthrough/1 truth file (make one with synth walkthrough)", truth_path));
+  const nlohmann::json truth = read_json_file(truth_path);
+  check_json_format(truth, truth_path, "lightprobe.walkthrough/1");  // make one with synth walkthrough
   const Track track = read_track((dir / "track.jsonl").string());
   validate_track(track);
   std::vector<double> fractions = parse_numbers(args.fractions, "--fractions");

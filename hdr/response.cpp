@@ -17,6 +17,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
+#include "core/json_file.h"
 
 namespace lp {
 namespace {
@@ -324,20 +325,8 @@ void save_response(const std::string& path, const CameraResponse& r) {
 }
 
 CameraResponse load_response(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open response file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(ss.str());
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: not JSON (byte {})", path,
-                                 e.id == 101 ? std::to_string(static_cast<const nlohmann::json::parse_error&>(e).byte)
-                                             : std::string("?")));
-  }
-  if (!j.is_object() || j.value("format", std::string()) != "lightprobe.response/1")
-    throw InputError(path + ": not a lightprobe response (expected \"format\": \"lightprobe.response/1\")");
+  const nlohmann::json j = read_json_file(path);
+  check_json_format(j, path, "lightprobe.response/1");
   CameraResponse r;
   try {
     r.levels = j.at("levels").get<int>();
@@ -346,7 +335,7 @@ CameraResponse load_response(const std::string& path) {
     const char* names[3] = {"r", "g", "b"};
     for (int c = 0; c < 3; ++c) r.log_exposure[size_t(c)] = le.at(names[c]).get<std::vector<float>>();
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: missing or mistyped field ({})", path, e.what()));
+    throw InputError(json_field_problem(path, e));
   }
   check_response(r, path);
   return r;

@@ -93,6 +93,7 @@ std::string example_footer(const std::string& example) {
 }  // namespace
 
 int run_command_line(int argc, char** argv) {
+  install_interrupt_handlers();  // SIGINT/SIGTERM: temp files removed, exit 130/143
   CLI::App app{kDescription, "lightprobe"};
   app.set_version_flag("--version", std::string("lightprobe ") + LIGHTPROBE_VERSION);
   app.require_subcommand(1);
@@ -135,7 +136,6 @@ int run_command_line(int argc, char** argv) {
     return 2;
   }
 
-  install_interrupt_handlers();  // SIGINT/SIGTERM: temp files removed, exit 130/143
   try {
     for (const auto& [sub, handler] : handlers) {
       if (!sub->parsed()) continue;

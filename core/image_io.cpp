@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <bit>
 #include <filesystem>
+#include <optional>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -935,6 +936,8 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
   std::random_device rd;
   std::string tmp;
   int fd = -1;
+  // Created and registered with SIGINT/SIGTERM held, so a signal never finds it unregistered.
+  std::optional<InterruptsHeld> held(std::in_place);
   for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
     static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyz0123456789";
     tmp = path + ".tmp-";
@@ -945,6 +948,7 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
   }
   if (fd < 0) throw error(EEXIST);
   const TempFileRegistration registered(tmp);  // SIGINT/SIGTERM mid-write removes it (core/interrupt.h)
+  held.reset();
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);

@@ -4,6 +4,7 @@
 #include <csignal>
 #include <cstring>
 
+#include <pthread.h>
 #include <unistd.h>
 
 namespace lp {
@@ -52,6 +53,16 @@ int interrupt_exit_code() {
   const int sig = g_signal.load();
   return sig ? 128 + sig : 0;
 }
+
+InterruptsHeld::InterruptsHeld() {
+  sigset_t held;
+  sigemptyset(&held);
+  sigaddset(&held, SIGINT);
+  sigaddset(&held, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &held, &previous_);
+}
+
+InterruptsHeld::~InterruptsHeld() { pthread_sigmask(SIG_SETMASK, &previous_, nullptr); }
 
 TempFileRegistration::TempFileRegistration(const std::string& path) {
   if (path.size() >= kPathMax) return;

@@ -12,6 +12,7 @@
 // Everything the handler does is async-signal-safe (unlink, _exit, atomics).
 #pragma once
 
+#include <csignal>
 #include <string>
 
 namespace lp {
@@ -22,6 +23,19 @@ void defer_interrupts();
 int interrupt_signal();
 // 128 + the signal received, the exit code for it; 0 when none has been.
 int interrupt_exit_code();
+
+// SIGINT and SIGTERM held back (blocked) while it lives, so that a temp file is never
+// created without being registered; a signal that came meanwhile is handled on release.
+class InterruptsHeld {
+ public:
+  InterruptsHeld();
+  ~InterruptsHeld();
+  InterruptsHeld(const InterruptsHeld&) = delete;
+  InterruptsHeld& operator=(const InterruptsHeld&) = delete;
+
+ private:
+  sigset_t previous_;
+};
 
 // Registers a temp file for removal by the handler while it exists (a fixed number of
 // slots; past them a file is not registered, which only loses the cleanup). Unregisters

@@ -291,9 +291,15 @@ class Cascade {
                     1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       tried_ += ms;
       if (ok) return true;
+      // After the cheap stages, one look for a board of another size: when the image shows
+      // one larger than --board, the slow stages would search it for minutes (67 s per view
+      // of a 9x6 board with --board 7x5) and find nothing.
+      if (suffix.empty() && st.kind == Kind::sb && st.downscaled && other_board_size(img)) return false;
     }
     return false;
   }
+  // The size of a board seen that --board cannot be part of; cols 0 when none.
+  const std::array<int, 2>& other_size() const { return other_; }
   const std::vector<cv::Point2f>& points() const { return pts_; }
   const std::string& tried() const { return tried_; }
 
@@ -381,6 +387,31 @@ class Cascade {
     return true;
   }
 
+  // SB on the downscaled copy with CALIB_CB_LARGER from the smallest pattern: it grows the
+  // grid to the whole board it sees, whose size comes back in the meta matrix. Only a board
+  // larger than --board in some direction (in either orientation) counts: a smaller one may
+  // be part of the right board, cut by the image edge.
+  bool other_board_size(const cv::Mat& img) {
+    const auto t0 = std::chrono::steady_clock::now();
+    cv::Mat small = img;
+    if (scale_ < 1) cv::resize(img, small, cv::Size(), scale_, scale_, cv::INTER_AREA);
+    std::vector<cv::Point2f> pts;
+    cv::Mat meta;
+    const bool found = cv::findChessboardCornersSB(small, cv::Size(3, 3), pts,
+                                                           cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_LARGER, meta);
+    char ms[48];
+    std::snprintf(ms, sizeof ms, ", size check %.0f ms",
+                  1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    tried_ += ms;
+    if (!found || meta.empty()) return false;
+    const int cols = meta.cols, rows = meta.rows;
+    const bool fits = (cols <= board_.cols && rows <= board_.rows) || (cols <= board_.rows && rows <= board_.cols);
+    if (fits) return false;
+    // Said the way --board is written: the longer side first when --board's is.
+    other_ = (cols >= rows) == (board_.cols >= board_.rows) ? std::array<int, 2>{cols, rows} : std::array<int, 2>{rows, cols};
+    return true;
+  }
+
   const cv::Mat& gray_;
   const BoardSpec& board_;
   const DetectOptions& options_;
@@ -391,6 +422,7 @@ class Cascade {
   std::vector<Stage> stages_;
   std::vector<cv::Point2f> pts_;
   std::string tried_;
+  std::array<int, 2> other_{0, 0};
 };
 
 }  // namespace
@@ -408,7 +440,8 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board, co
   const cv::Mat gray = to_gray8(image);
   Cascade cascade(gray, board, options, result);
   bool found = cascade.run(gray, "");
-  if (!found && options.clahe && (options.classic || options.sb)) {  // mrgingham equalised already
+  const bool other_board = cascade.other_size()[0] > 0;
+  if (!found && !other_board && options.clahe && (options.classic || options.sb)) {  // mrgingham equalised already
     cv::Mat equalised;
     cv::createCLAHE(2.0, cv::Size(8, 8))->apply(gray, equalised);
     found = cascade.run(equalised, "+clahe");
@@ -419,6 +452,12 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board, co
     result.corners.reserve(cascade.points().size());
     for (const auto& p : cascade.points()) result.corners.push_back({double(p.x), double(p.y)});
     canonicalize_corner_order(result.corners, board.cols, board.rows);
+  } else if (other_board) {
+    result.other_cols = cascade.other_size()[0];
+    result.other_rows = cascade.other_size()[1];
+    result.reason = "found " + std::to_string(result.other_cols) + "x" + std::to_string(result.other_rows) +
+                    " inner corners, --board says " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+                    " (tried " + tried + ")";
   } else {
     result.method.clear();
     result.reason = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +

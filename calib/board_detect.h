@@ -23,6 +23,9 @@
 //   7. SB with CALIB_CB_ACCURACY at full resolution (OpenCV's most thorough call, 150-400
 //      ms): the recall floor, reached only by views every other stage missed;
 //   8. (optional) 1-6 again on a CLAHE-equalised image (dim or uneven lighting).
+// When 1 and 2 fail, one more downscaled SB call looks for a board of any size; one larger
+// than `board` (a wrong --board) ends the cascade at once with "found 9x6 inner corners,
+// --board says 7x5" (the later stages would search for minutes and find nothing).
 // BoardDetection::attempts lists the stages tried with their times.
 // Square boards (cols == rows) add mrgingham (the mrcal authors' finder) between stages 5
 // and 6: on a CLAHE-equalised copy as its CLI does, image pyramid levels tried
@@ -78,6 +81,9 @@ struct BoardDetection {
   std::vector<std::array<double, 2>> corners;  // row-major over the board, cols per row
   std::string method;   // "classic", "sb", "mrgingham", "sb-rectified", each maybe "+clahe"; "" when not found
   std::string reason;   // why nothing was found; empty when found
+  // A board of another size that --board cannot be part of (larger in some direction),
+  // seen after the cheap stages; the cascade stops there. 0 when none.
+  int other_cols = 0, other_rows = 0;
   std::string attempts; // the stages tried, in order, each with its time ("sb@0.62 31 ms, ...")
   double seconds = 0;   // wall time of detect_board
   int refine_reverted = 0;       // SB corners whose cornerSubPix move exceeded the limit

@@ -233,9 +233,14 @@ bool ends_with(const std::string& s, const std::string& suffix) {
   return tail == suffix;
 }
 
-void check_finite(const std::string& path, const CameraModel& m) {
+// What every model file holds, read or written: finite intrinsics, positive focal lengths
+// (fx fy lead every lens model's intrinsics) and a positive image size.
+void check_model_file(const std::string& path, const CameraModel& m) {
   for (double v : m.intrinsics)
     if (!std::isfinite(v)) throw InputError(path + ": " + m.lensmodel + " has a non-finite intrinsic");
+  for (size_t k = 0; k < 2 && k < m.intrinsics.size(); ++k)
+    if (!(m.intrinsics[k] > 0))
+      throw InputError(path + ": focal length " + (k ? "fy" : "fx") + " = " + g17(m.intrinsics[k]) + " is not positive");
   if (m.width <= 0 || m.height <= 0)
     throw InputError(path + ": image size " + std::to_string(m.width) + "x" + std::to_string(m.height) +
                      " is not positive");
@@ -405,7 +410,7 @@ void write_cameramodel(const std::string& path, const CameraModel& model) {
   if (int(model.intrinsics.size()) != n)
     throw InputError(path + ": " + model.lensmodel + " takes " + std::to_string(n) + " intrinsics, got " +
                      std::to_string(model.intrinsics.size()));
-  check_finite(path, model);
+  check_model_file(path, model);
   // mrcal's C writer prints %f and its Python writer ~10 digits: write the text ourselves
   // with %.17g so doubles survive a round trip bit-exactly.
   std::string t;
@@ -449,6 +454,7 @@ CameraModel read_cameramodel(const std::string& path) {
   m.height = int(cm->imagersize[1]);
   m.rms_reprojection_px = comment_value(text, "rms_reprojection_px");
   m.cross_validation_px = comment_value(text, "cross_validation_px");
+  check_model_file(path, m);
   return m;
 }
 
@@ -466,7 +472,7 @@ void write_opencv_yaml(const std::string& path, const CameraModel& model) {
   if (int(p.size()) != n)
     throw InputError(path + ": " + lm + " takes " + std::to_string(n) + " intrinsics, got " +
                      std::to_string(p.size()));
-  check_finite(path, model);
+  check_model_file(path, model);
   // After the core (and Mei's xi) come the distortion coefficients; a zero-padded form
   // (pinhole as plumb_bob) writes zeros.
   std::vector<double> dist;
@@ -576,7 +582,7 @@ CameraModel read_opencv_yaml(const std::string& path) {
   } catch (const cv::Exception& e) {
     throw InputError(path + ": not readable as OpenCV FileStorage (" + e.err + ")");
   }
-  check_finite(path, m);
+  check_model_file(path, m);
   return m;
 }
 

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
+#include "core/json_file.h"
 
 namespace lp {
 
@@ -84,10 +85,9 @@ void save_colour_match(const std::string& path, const ColourMatch& match) {
 }
 
 ColourMatch load_colour_match(const std::string& path) {
-  const std::string text = read_text_file(path);
+  const nlohmann::json j = read_json_file(path);
+  check_json_format(j, path, "lightprobe.colour_match/1");
   try {
-    const auto j = nlohmann::json::parse(text);
-    if (j.at("format") != "lightprobe.colour_match/1") throw InputError(path + ": not a lightprobe colour match");
     ColourMatch m;
     const auto a = j.at("matrix").get<std::vector<double>>();
     if (a.size() != 9) throw InputError(path + ": matrix must have 9 numbers");
@@ -96,7 +96,7 @@ ColourMatch load_colour_match(const std::string& path) {
     m.patches = j.value("patches", 0);
     return m;
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: malformed colour match: {}", path, e.what()));
+    throw InputError(json_field_problem(path, e));
   }
 }
 

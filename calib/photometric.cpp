@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/json_file.h"
 
 namespace lp {
 namespace {
@@ -236,6 +237,58 @@ Fit solve(const std::vector<PhotometricReading>& readings, const std::vector<siz
   return fit;
 }
 
+// Leave-one-out estimates of ln k for the linear model with no loss or a Huber loss, all n
+// in O(n log n) (a Ceres fit per reading made `calib photometric` quadratic: 20,000 rows took
+// minutes). With c_i = ln camera_i - ln measured_i the residual is theta + c_i, and the fit is
+// the root of the nondecreasing, piecewise linear F(theta) = sum_i psi(theta + c_i), psi the
+// identity clipped to +-scale (Huber; unclipped for no loss), convex cost so one root.
+// Over the c_i sorted once, with prefix sums, F without reading i costs two binary searches;
+// the root is found on its linear piece: from the full fit's piece, re-solved until the
+// piece holds it (one or two steps, as one reading moves the fit by O(1/n)).
+// Empty when the loss is not one of those (Cauchy is not convex: Ceres per reading).
+std::vector<double> held_out_linear_fast(const std::vector<PhotometricReading>& readings,
+                                         const PhotometricOptions& options, double theta_all) {
+  if (options.model != PhotometricOptions::Model::Linear ||
+      (options.loss != RobustLoss::None && options.loss != RobustLoss::Huber))
+    return {};
+  const size_t n = readings.size();
+  const double clip = options.loss == RobustLoss::Huber ? options.loss_scale : std::numeric_limits<double>::infinity();
+  std::vector<double> c(n), sorted(n), prefix(n + 1, 0.0);
+  for (size_t i = 0; i < n; ++i) c[i] = std::log(readings[i].camera_value) - std::log(readings[i].measured);
+  sorted = c;
+  std::sort(sorted.begin(), sorted.end());
+  for (size_t i = 0; i < n; ++i) prefix[i + 1] = prefix[i] + sorted[i];
+  // The linear piece at theta without reading `skip`: theta + c clipped below for c < -clip -
+  // theta, above for c > clip - theta; returns the root of that piece's line (or NaN).
+  auto piece_root = [&](double theta, size_t skip) {
+    const size_t lo = size_t(std::lower_bound(sorted.begin(), sorted.end(), -clip - theta) - sorted.begin());
+    const size_t hi_start = size_t(std::upper_bound(sorted.begin(), sorted.end(), clip - theta) - sorted.begin());
+    double below = double(lo), above = double(n - hi_start), inside = double(hi_start - lo);
+    double sum_inside = prefix[hi_start] - prefix[lo];
+    const double ck = c[skip];
+    if (ck < -clip - theta) below -= 1;
+    else if (ck > clip - theta) above -= 1;
+    else inside -= 1, sum_inside -= ck;
+    if (inside <= 0) return std::numeric_limits<double>::quiet_NaN();
+    const double clipped = below == above ? 0.0 : clip * (below - above);  // no loss: nothing clipped (inf * 0)
+    return (clipped - sum_inside) / inside;  // clip * (above - below) + inside * theta + sum_inside = 0
+  };
+  std::vector<double> out(n);
+  for (size_t i = 0; i < n; ++i) {
+    double theta = theta_all;
+    bool settled = false;
+    for (int step = 0; step < 50 && !settled; ++step) {
+      const double next = piece_root(theta, i);
+      if (!std::isfinite(next)) break;
+      settled = next == theta || piece_root(next, i) == next;
+      theta = next;
+    }
+    if (!settled) return {};  // a flat or cycling case: leave it to Ceres
+    out[i] = theta;
+  }
+  return out;
+}
+
 // Prediction of reading r in its own unit.
 double predict(const Fit& fit, const PhotometricReading& r, bool log_model) {
   if (!log_model) return std::exp(fit.params[0]) * r.camera_value;
@@ -408,6 +461,7 @@ PhotometricCalibration fit_photometric(const std::vector<PhotometricReading>& re
   }
   for (double& s : cal.scale_rgb) s = cal.scale_luminance / kLuminousEfficacy;
 
+  const std::vector<double> held_fast = held_out_linear_fast(readings, options, fit.params[0]);
   double sum2 = 0, held2 = 0;
   for (size_t i = 0; i < n; ++i) {
     PhotometricResidual res;
@@ -415,11 +469,15 @@ PhotometricCalibration fit_photometric(const std::vector<PhotometricReading>& re
     res.measured = readings[i].measured;
     res.predicted = predict(fit, readings[i], log_model);
     res.relative = res.predicted / res.measured - 1;
-    std::vector<size_t> rest;
-    for (size_t j = 0; j < n; ++j)
-      if (j != i) rest.push_back(j);
-    const Fit held = solve(readings, rest, options, false);
-    res.held_out_relative = predict(held, readings[i], log_model) / res.measured - 1;
+    if (!held_fast.empty()) {
+      res.held_out_relative = predict(Fit{{held_fast[i]}, {}}, readings[i], log_model) / res.measured - 1;
+    } else {
+      std::vector<size_t> rest;
+      for (size_t j = 0; j < n; ++j)
+        if (j != i) rest.push_back(j);
+      const Fit held = solve(readings, rest, options, false);
+      res.held_out_relative = predict(held, readings[i], log_model) / res.measured - 1;
+    }
     sum2 += res.relative * res.relative;
     held2 += res.held_out_relative * res.held_out_relative;
     cal.max_abs_relative = std::max(cal.max_abs_relative, std::abs(res.relative));
@@ -458,12 +516,10 @@ void save_photometric(const std::string& path, const PhotometricCalibration& c) 
 }
 
 PhotometricCalibration load_photometric(const std::string& path) {
-  const std::string text = read_text_file(path, "the photometric calibration");
+  const nlohmann::json j = read_json_file(path);
+  check_json_format(j, path, "lightprobe.photometric/1");
   PhotometricCalibration c;
   try {
-    const nlohmann::json j = nlohmann::json::parse(text);
-    if (j.value("format", "") != "lightprobe.photometric/1")
-      throw InputError(path + ": not a photometric calibration (format is not lightprobe.photometric/1)");
     c.scale_luminance = j.at("scale_luminance").get<double>();
     c.scale_rgb = j.at("scale_rgb").get<std::array<double, 3>>();
     c.scale_relative_error = j.value("scale_relative_error", 0.0);
@@ -483,7 +539,7 @@ PhotometricCalibration load_photometric(const std::string& path) {
         c.residuals.push_back({r.value("label", ""), r.value("predicted", 0.0), r.value("measured", 0.0),
                                r.value("relative", 0.0), r.value("held_out_relative", 0.0)});
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": not a valid photometric calibration: " + e.what());
+    throw InputError(json_field_problem(path, e));
   }
   for (double s : c.scale_rgb)
     if (!(s > 0) || !std::isfinite(s)) throw InputError(path + ": scale_rgb must hold three positive numbers");

@@ -125,6 +125,9 @@ int run_calib_compare(const CalibCompareArgs& args, const Output& out) {
     throw InputError(fmt::format("{} is for {}x{}, {} for {}x{}", args.a, a.width, a.height, args.b, b.width, b.height));
   std::vector<uint8_t> mask(size_t(a.width) * size_t(a.height), 1);
   const ProjectionDiff d = projection_difference(a, b, mask, std::max(1, args.step_px), !args.no_rotation);
+  if (d.samples == 0)  // an RMS over nothing is no agreement
+    throw InputError(fmt::format("{} vs {}: no pixel of the {}x{} image (every {} px) images a ray both models can project",
+                                 args.a, args.b, a.width, a.height, std::max(1, args.step_px)));
   say(out, "{} vs {}: RMS {:.3f} px, median {:.3f} px, max {:.3f} px over {} samples{}\n", args.a, args.b, d.rms_px,
       d.median_px, d.max_px, d.samples, args.no_rotation ? "" : " (rotation fitted out)");
   emit_json(out, {{"rms_px", d.rms_px}, {"median_px", d.median_px}, {"max_px", d.max_px}, {"samples", d.samples}});

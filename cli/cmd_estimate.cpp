@@ -17,6 +17,7 @@
 #include "cli/progress_bar.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/json_file.h"
 #include "core/image_io.h"
 #include "estimate/light_quadtree.h"
 #include "estimate/metadata_track.h"

@@ -6,7 +6,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <thread>
 
 #include "calib/camera_model.h"
@@ -15,6 +14,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/limits.h"
 #include "hdr/response.h"
 #include "live/light_server.h"
@@ -37,9 +37,6 @@ struct MergeArgs {
 };
 
 namespace {
-
-std::atomic<bool> g_stop{false};
-void on_signal(int) { g_stop = true; }
 
 void parse_listen(const std::string& text, std::string* host, int* port) {
   const auto colon = text.rfind(':');
@@ -101,12 +98,11 @@ int run_stream(const StreamArgs& args, const Output& out) {
   say(out, "lightprobe stream: {} -> http://{}:{}/ (lights at /lights, live at /lights/stream, metrics at /metrics)\n",
       args.source, server_options.host, port);
   std::fflush(stdout);
-  g_stop = false;
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  defer_interrupts();  // a signal stops the loop below: servers stopped, the summary printed
   const auto start = std::chrono::steady_clock::now();
-  while (!g_stop) {
+  while (!interrupt_signal()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    if (!pipeline.stats().input_error.empty()) break;
     server.publish_metrics(pipeline.metrics());
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (args.duration > 0 && elapsed >= args.duration) break;
@@ -121,6 +117,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
   emit_json(out, {{"port", port}, {"frames_in", s.frames_in}, {"brackets_processed", s.brackets_processed},
                   {"brackets_dropped", s.brackets_dropped}, {"frames_dropped_partial", s.frames_dropped_partial},
                   {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error}});
+  if (!s.input_error.empty()) throw InputError(s.input_error);  // a bad frame is refused, after the summary
   return 0;
 }
 
@@ -138,14 +135,12 @@ int run_merge(const MergeArgs& args, const Output& out) {
   const int port = server.start();
   say(out, "lightprobe merge: {} cameras -> http://{}:{}/lights\n", args.urls.size(), so.host, port);
   std::fflush(stdout);
-  g_stop = false;
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  std::atomic<bool> stop{false};
+  defer_interrupts();  // a signal stops the watchdog below: the summary is printed
+  std::atomic<bool> stop{false}, failed{false};
   uint64_t published = 0;
   std::thread watchdog([&] {
     const auto start = std::chrono::steady_clock::now();
-    while (!g_stop && !(args.duration > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >= args.duration))
+    while (!interrupt_signal() && !failed && !(args.duration > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >= args.duration))
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     stop = true;
   });
@@ -161,7 +156,7 @@ int run_merge(const MergeArgs& args, const Output& out) {
                      },
                      stop);
   } catch (...) {
-    g_stop = true;  // a joinable watchdog must not outlive the error (std::terminate)
+    failed = true;  // a joinable watchdog must not outlive the error (std::terminate)
     watchdog.join();
     throw;
   }

@@ -9,7 +9,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <thread>
 
 #include "calib/photometric.h"
@@ -17,6 +16,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "estimate/light_quadtree.h"
 #include "live/light_server.h"
 #include "probe/camera_source.h"
@@ -24,9 +24,6 @@
 namespace lp::cli {
 
 namespace {
-
-std::atomic<bool> g_stop_metadata{false};
-void on_signal(int) { g_stop_metadata = true; }
 
 // The metadata of one live frame; nullopt (and a reason) for frames that cannot be metered.
 std::optional<FrameMetadata> frame_metadata(const CameraFrame& f, std::string* why) {
@@ -96,14 +93,12 @@ int run_stream_metadata(const StreamArgs& args, const Output& out) {
   say(out, "lightprobe stream (metadata): {} -> http://{}:{}/lights, model {}\n", source->describe(), server_options.host, port,
       args.metadata_model);
   std::fflush(stdout);
-  g_stop_metadata = false;
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  defer_interrupts();  // a signal stops the loop below: the model is saved, the summary printed
   const auto start = std::chrono::steady_clock::now();
   uint64_t used = 0, skipped = 0;
   std::string last_skip;
   LightReading last{};
-  while (!g_stop_metadata) {
+  while (!interrupt_signal()) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (args.duration > 0 && elapsed >= args.duration) break;
     auto frame = source->next(0.5);

@@ -111,8 +111,8 @@ nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions
     if (f.ball) {
       fj["ball"] = {f.ball->cx, f.ball->cy, f.ball->radius_px};
       fj["ball_raw"] = {f.ball_detected->cx, f.ball_detected->cy, f.ball_detected->radius_px};
-      fj["valid_fraction"] = f.valid_fraction;
     }
+    fj["valid_fraction"] = f.valid_fraction;
     if (f.circle) fj["circle"] = {f.circle->cx, f.circle->cy, f.circle->r};
     per_frame.push_back(fj);
   }
@@ -130,6 +130,9 @@ nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions
 
 }  // namespace
 
+// Below this share of valid solid angle an unwrapped map earns a warning.
+constexpr double kFewValidWarning = 0.05;
+
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   const std::vector<std::string> files = find_images(args.inputs);
   const UnwrapSequenceOptions o = unwrap_options(args);
@@ -143,6 +146,10 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
       },
       [&] { progress.advance(); });
   progress.finish();
+  for (const auto& f : r.frames)  // a sliver of a probe: a map, but mostly holes
+    if (f.valid_fraction < kFewValidWarning)
+      std::fprintf(stderr, "lightprobe: warning: %s: only %.1f %% of the map is valid (is the probe cut by the image edge?)\n",
+                   f.file.c_str(), 100 * f.valid_fraction);
   const UnwrapSequenceReport::Frame& first = r.frames[0];
   if (first.ball && !sequence)
     say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px -> {} {}x{}{}\n", args.output, first.ball->cx, first.ball->cy,

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/limits.h"
 
 namespace lp::cli {
@@ -144,7 +145,10 @@ int parse_command_line(int argc, char** argv, bool run) {
   try {
     set_limits(limits);
     for (const auto& [sub, handler] : handlers) {
-      if (sub->parsed()) return handler(out);
+      if (!sub->parsed()) continue;
+      const int code = handler(out);
+      // A command that stopped itself on a deferred signal (stream, merge) ends with its code.
+      return interrupt_exit_code() ? interrupt_exit_code() : code;
     }
   } catch (const lp::InputError& e) {
     std::fprintf(stderr, "lightprobe: %s\n", e.what());
@@ -158,7 +162,10 @@ int parse_command_line(int argc, char** argv, bool run) {
 
 }  // namespace
 
-int run_command_line(int argc, char** argv) { return parse_command_line(argc, argv, true); }
+int run_command_line(int argc, char** argv) {
+  install_interrupt_handlers();  // SIGINT/SIGTERM: temp files removed, exit 130/143
+  return parse_command_line(argc, argv, true);
+}
 
 int check_command_line(int argc, char** argv) { return parse_command_line(argc, argv, false); }
 

@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <bit>
 #include <filesystem>
+#include <optional>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -36,6 +37,7 @@
 #include "core/exr_header.h"
 #include "core/image_header.h"
 #include "core/limits.h"
+#include "core/interrupt.h"
 
 namespace lp {
 
@@ -931,6 +933,8 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
   std::random_device rd;
   std::string tmp;
   int fd = -1;
+  // Created and registered with SIGINT/SIGTERM held, so a signal never finds it unregistered.
+  std::optional<InterruptsHeld> held(std::in_place);
   for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
     static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyz0123456789";
     tmp = path + ".tmp-";
@@ -940,6 +944,8 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
     if (fd < 0 && errno != EEXIST) throw error(errno);
   }
   if (fd < 0) throw error(EEXIST);
+  const TempFileRegistration registered(tmp);  // SIGINT/SIGTERM mid-write removes it (core/interrupt.h)
+  held.reset();
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);

@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/timestamps.h"
 
 namespace lp {
 
@@ -40,21 +41,8 @@ std::vector<std::string> expand(const std::vector<std::string>& inputs, bool (*k
   return files;
 }
 
-std::vector<double> read_timestamps(const fs::path& path, size_t frames) {
-  std::istringstream in(read_text_file(path.string(), "the timestamps"));
-  std::vector<double> times;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    try {
-      size_t used = 0;
-      const double t = std::stod(line, &used);
-      if (!std::isfinite(t)) throw std::invalid_argument("x");
-      times.push_back(t);
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("{}: line {} is not a time in seconds: '{}'", path.string(), times.size() + 1, line));
-    }
-  }
+std::vector<double> read_sequence_timestamps(const fs::path& path, size_t frames) {
+  std::vector<double> times = read_timestamps(path.string());
   if (times.size() != frames)
     throw InputError(fmt::format("{}: {} times for {} maps", path.string(), times.size(), frames));
   return times;
@@ -68,7 +56,7 @@ MapSequence find_map_sequence(const std::vector<std::string>& inputs) {
   std::error_code ec;
   if (inputs.size() == 1 && fs::is_directory(inputs[0], ec)) {
     const fs::path path = fs::path(inputs[0]) / "timestamps.txt";
-    if (fs::exists(path, ec)) seq.timestamps_s = read_timestamps(path, seq.files.size());
+    if (fs::exists(path, ec)) seq.timestamps_s = read_sequence_timestamps(path, seq.files.size());
   }
   return seq;
 }

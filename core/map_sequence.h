@@ -1,7 +1,8 @@
 // A recorded sequence of environment maps on disk: files named on the command line, or
 // a directory standing for the maps inside it (.exr, .hdr, .pfm, in name order), with
 // the capture times of its `timestamps.txt` when present (one time in seconds per map,
-// in the maps' order; blank lines and lines starting with '#' are skipped).
+// in the maps' order; blank lines and lines starting with '#' are skipped; core/timestamps.h:
+// plain decimals, strictly increasing).
 #pragma once
 
 #include <optional>
@@ -17,7 +18,8 @@ struct MapSequence {
 };
 
 // Throws InputError naming the directory with no maps, or the timestamps file and line
-// that is not a finite time, or whose count differs from the maps'.
+// that is not one decimal time or not after the one before, or whose count differs from
+// the maps'.
 MapSequence find_map_sequence(const std::vector<std::string>& inputs);
 
 // Probe images named, or inside the directories named (.exr .hdr .pfm .png .jpg .jpeg

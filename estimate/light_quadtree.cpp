@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
+#include "core/json_file.h"
 
 namespace lp {
 
@@ -277,10 +278,9 @@ std::string LightQuadtree::to_json() const {
 }
 
 LightQuadtree LightQuadtree::from_json(const std::string& text, const std::string& source) {
+  const nlohmann::json j = parse_json_text(text, source);
+  check_json_format(j, source, "lightprobe.metadata-model/1");
   try {
-    const auto j = nlohmann::json::parse(text);
-    if (j.value("format", "") != "lightprobe.metadata-model/1")
-      throw InputError(fmt::format("{}: not a lightprobe.metadata-model/1 file", source));
     QuadtreeOptions o;
     o.origin_x = j.at("origin").at(0).get<double>();
     o.origin_y = j.at("origin").at(1).get<double>();
@@ -325,7 +325,7 @@ LightQuadtree LightQuadtree::from_json(const std::string& text, const std::strin
     }
     return t;
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: malformed model ({})", source, e.what()));
+    throw InputError(json_field_problem(source, e));
   }
 }
 

@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "core/accuracy.h"
 #include "core/error.h"
+#include "core/json_file.h"
 #include "core/image_io.h"
 #include "estimate/light_quadtree.h"
 #include "estimate/metadata_track.h"
@@ -27,14 +27,6 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw InputError(fmt::format("{}: cannot open", path));
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
 
 // Mean |CCT error| (K) of six sector lights against the true map's sector colours.
 double sector_cct_error(const std::vector<Light>& lights, const EnvMap& probe) {
@@ -69,13 +61,8 @@ Walkthrough read_walkthrough(const std::string& input_dir) {
   const fs::path dir(input_dir);
   const std::string truth_path = (dir / "truth.json").string();
   Walkthrough w;
-  try {
-    w.truth = nlohmann::json::parse(slurp(truth_path));
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: not JSON ({})", truth_path, e.what()));
-  }
-  if (w.truth.value("format", "") != "lightprobe.walkthrough/1")
-    throw InputError(fmt::format("{}: not a lightprobe.walkthrough/1 truth file (make one with synth walkthrough)", truth_path));
+  w.truth = read_json_file(truth_path);
+  check_json_format(w.truth, truth_path, "lightprobe.walkthrough/1");  // made by synth walkthrough
   w.track = read_track((dir / "track.jsonl").string());
   validate_track(w.track);
   AccuracyOptions ao;

@@ -61,17 +61,33 @@ void check_bracket(const Bracket& b) {
     throw InputError(fmt::format("{}: {} paths for {} images", who, b.paths.size(), b.frames.size()));
   if (b.bit_depth < 1 || b.bit_depth > 16)
     throw InputError(fmt::format("{}: unsupported bit depth {}", who, b.bit_depth));
-  const RgbImage& first = b.frames.front();
+  // The size most frames have (the first's on a tie): the frame that differs is the bad one,
+  // even when it is the first.
+  size_t common = 0, common_count = 0;
+  for (size_t k = 0; k < b.frames.size(); ++k) {
+    size_t count = 0;
+    for (const RgbImage& g : b.frames) count += g.width == b.frames[k].width && g.height == b.frames[k].height;
+    if (count > common_count) common = k, common_count = count;
+  }
+  const RgbImage& usual = b.frames[common];
   for (size_t k = 0; k < b.frames.size(); ++k) {
     const RgbImage& f = b.frames[k];
-    if (f.width != first.width || f.height != first.height)
-      throw InputError(fmt::format("{}: size {}x{} differs from the first image's {}x{}", frame_name(b, k),
-                                   f.width, f.height, first.width, first.height));
+    if (f.width != usual.width || f.height != usual.height)
+      throw InputError(common_count > 1
+                           ? fmt::format("{}: size {}x{} differs from the {}x{} of {} of the {} images", frame_name(b, k),
+                                         f.width, f.height, usual.width, usual.height, common_count, b.frames.size())
+                           : fmt::format("{}: size {}x{} differs from the first image's {}x{}", frame_name(b, k),
+                                         f.width, f.height, usual.width, usual.height));
     if (f.width <= 0 || f.height <= 0 || f.rgb.size() != 3 * size_t(f.width) * size_t(f.height))
       throw InputError(fmt::format("{}: empty or malformed image", frame_name(b, k)));
     const double t = b.exposure_seconds[k];
     if (!std::isfinite(t) || !(t > 0.0))
       throw InputError(fmt::format("{}: exposure time {} s is not positive and finite", frame_name(b, k), t));
+    // Two frames at one time add no range and make a response fit flat.
+    for (size_t j = 0; j < k; ++j)
+      if (b.exposure_seconds[j] == t)
+        throw InputError(fmt::format("{} and {}: the same exposure time {} s; each frame of a bracket needs its own",
+                                     frame_name(b, j), frame_name(b, k), t));
   }
 }
 

@@ -27,8 +27,9 @@ struct Bracket {
 };
 
 // Throws InputError naming the first offending file (or "bracket" when it has no paths):
-// fewer than 2 frames, sizes that differ from the first frame's, a time count that does
-// not match the frame count, a time that is not positive and finite.
+// fewer than 2 frames, a size that differs from the one most frames have (so the odd frame
+// is named, even when it is the first), a time count that does not match the frame count,
+// a time that is not positive and finite, two frames with the same time (both named).
 void check_bracket(const Bracket& bracket);
 
 // Reads every image (read_camera_image) and its exposure time: from `exposure_seconds`

@@ -39,7 +39,7 @@ inline int level_of(float v, float scale, int levels) {
 template <bool kIgnore, bool kMask>
 void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, int y0, int y1, RgbImage& out,
                 uint8_t* flags, std::atomic<size_t>& n_sat, std::atomic<size_t>& n_black,
-                std::atomic<size_t>& n_ignored, std::atomic<size_t>& n_no_frame) {
+                std::atomic<size_t>& n_ignored, std::atomic<size_t>& n_no_frame, std::atomic<size_t>& n_well) {
   constexpr bool kTrack = kIgnore || kMask;
   const int W = b.width();
   const size_t nf = b.frames.size();
@@ -68,7 +68,7 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
     }
     return false;
   };
-  size_t sat = 0, black = 0, ignored = 0, no_frame = 0;
+  size_t sat = 0, black = 0, ignored = 0, no_frame = 0, well = 0;
   for (int y = y0; y < y1; ++y) {
     std::fill(sw.begin(), sw.end(), 0.0f);
     std::fill(swx.begin(), swx.end(), 0.0f);
@@ -160,6 +160,7 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
       }
       if (flag & kSaturatedEverywhere) ++sat;
       if (flag & kBlackEverywhere) ++black;
+      if (!flag) ++well;
       if (flags) flags[row + size_t(x)] = flag;
     }
   }
@@ -167,6 +168,7 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
   n_black += black;
   n_ignored += ignored;
   n_no_frame += no_frame;
+  n_well += well;
 }
 
 }  // namespace
@@ -291,19 +293,19 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
   std::vector<uint8_t> flags;
   const bool want_flags = report && o.flag_image;
   if (want_flags) flags.assign(size_t(out.width) * size_t(out.height), 0);
-  std::atomic<size_t> n_sat{0}, n_black{0}, n_ignored{0}, n_no_frame{0};
+  std::atomic<size_t> n_sat{0}, n_black{0}, n_ignored{0}, n_no_frame{0}, n_well{0};
   auto run = [&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, out.height, 8), [&](const tbb::blocked_range<int>& r) {
       uint8_t* f = want_flags ? flags.data() : nullptr;
       const int y0 = r.begin(), y1 = r.end();
       if (o.ignore_colour && masked)
-        merge_rows<true, true>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame);
+        merge_rows<true, true>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
       else if (o.ignore_colour)
-        merge_rows<true, false>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame);
+        merge_rows<true, false>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
       else if (masked)
-        merge_rows<false, true>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame);
+        merge_rows<false, true>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
       else
-        merge_rows<false, false>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame);
+        merge_rows<false, false>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
     });
   };
   if (o.threads > 0) {
@@ -312,12 +314,17 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
   } else {
     run();
   }
+  if (n_well == 0)  // all black or all saturated: a uniform bound, not a measurement
+    throw InputError(fmt::format("{}: no pixel is well exposed in any of the {} frames (every one is black or saturated "
+                                 "in all of them)",
+                                 b.paths.empty() ? std::string("bracket") : b.paths.front() + " .. " + b.paths.back(), nf));
   if (n_ignored == 0 && n_no_frame == 0) out.valid.clear();
   if (report) {
     report->saturated_everywhere = n_sat;
     report->black_everywhere = n_black;
     report->ignored = n_ignored;
     report->no_frame = n_no_frame;
+    report->well_exposed = n_well;
     report->flags = std::move(flags);
     report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }

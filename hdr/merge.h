@@ -100,14 +100,16 @@ struct MergeReport {
   size_t black_everywhere = 0;
   size_t ignored = 0;  // pixels of ignore_colour in every kept frame (invalid in the output)
   size_t no_frame = 0;  // pixels that no frame_masks / frame valid mask kept (invalid in the output)
+  size_t well_exposed = 0;  // pixels whose every channel had a usable frame (none: InputError)
   double seconds = 0.0;
   std::vector<uint8_t> flags;  // width*height MergeFlag bits, when MergeOptions::flag_image
 };
 
 // Relative radiance (units Relative): code z of frame k maps to level
 // lround(z · (levels − 1)) of `response`. Per-channel lookup tables and TBB over rows.
-// Throws InputError on a bad bracket, a response with an unusable shape, or frame_masks /
-// frame valid masks of the wrong count or size.
+// Throws InputError on a bad bracket, a response with an unusable shape, frame_masks /
+// frame valid masks of the wrong count or size, or a bracket in which no pixel is well
+// exposed in any frame (all black or all saturated: nothing was measured).
 RgbImage merge_bracket(const Bracket& bracket, const CameraResponse& response, const MergeOptions& options = {},
                        MergeReport* report = nullptr);
 

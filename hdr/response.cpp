@@ -18,6 +18,7 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/json_file.h"
 
 namespace lp {
 namespace {
@@ -325,17 +326,8 @@ void save_response(const std::string& path, const CameraResponse& r) {
 }
 
 CameraResponse load_response(const std::string& path) {
-  const std::string text = read_text_file(path, "the response file");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: not JSON (byte {})", path,
-                                 e.id == 101 ? std::to_string(static_cast<const nlohmann::json::parse_error&>(e).byte)
-                                             : std::string("?")));
-  }
-  if (!j.is_object() || j.value("format", std::string()) != "lightprobe.response/1")
-    throw InputError(path + ": not a lightprobe response (expected \"format\": \"lightprobe.response/1\")");
+  const nlohmann::json j = read_json_file(path);
+  check_json_format(j, path, "lightprobe.response/1");
   CameraResponse r;
   try {
     // An integer first: get<int>() of a float beyond int (1e30) is undefined behaviour.
@@ -348,7 +340,7 @@ CameraResponse load_response(const std::string& path) {
     const char* names[3] = {"r", "g", "b"};
     for (int c = 0; c < 3; ++c) r.log_exposure[size_t(c)] = le.at(names[c]).get<std::vector<float>>();
   } catch (const nlohmann::json::exception& e) {
-    throw InputError(fmt::format("{}: missing or mistyped field ({})", path, e.what()));
+    throw InputError(json_field_problem(path, e));
   }
   check_response(r, path);
   return r;

@@ -112,6 +112,12 @@ void LivePipeline::capture_loop() {
     std::optional<CameraFrame> frame;
     try {
       frame = source_->next(0.2);
+    } catch (const InputError& e) {
+      // A frame that is bad input (a replay file that cannot be read): no reconnect
+      // would fix it, so capture ends and the command refuses it.
+      std::lock_guard<std::mutex> lock(mutex_);
+      stats_.input_error = stats_.last_error = e.what();
+      break;
     } catch (const std::exception& e) {
       // The camera went away: keep the stream alive and reopen it.
       {

@@ -56,6 +56,7 @@ struct LiveStats {
   double capture_to_publish_ms = 0;        // last frame of the bracket in -> its list published
   double fuse_ms = 0, unwrap_ms = 0, sample_ms = 0;  // last frame's stages (brackets: fuse_ms includes the unwrap)
   std::string last_error;
+  std::string input_error;  // a frame was bad input (capture stopped there); empty: none
 };
 
 class LivePipeline {

@@ -7,6 +7,9 @@
 //                                      or "name,seconds" lines (a non-numeric header is skipped)
 //                      timestamps.txt  one timestamp in seconds per line, or "name seconds"
 //                    Without timestamps: index / frame_rate when paced, else seconds since open.
+//                    Pacing: at frame_rate when > 0, else at the recorded times when present
+//                    (plain decimal seconds, strictly increasing: core/timestamps.h), else free.
+//                    A frame file that cannot be read throws InputError (not CameraLost).
 //   video:FILE       cv::VideoCapture on a file (8-bit, code values in [0, 1]); exposures from
 //                    FILE's "<stem>.exposures.csv" or "exposures.csv" beside it (optional).
 //   aravis           the first GenICam camera Aravis finds (GigE Vision, USB3 Vision).
@@ -100,8 +103,9 @@ RgbImage render_fake_scene(const FakeScene& scene, int width, int height);
 struct SourceOptions {
   // replay / video
   bool loop = false;          // start over at the end
-  double frame_rate = 0;      // replay/video: pace playback at this rate (0: as fast as
-                              // possible); cameras: acquisition frame rate if settable (0: keep)
+  double frame_rate = 0;      // replay/video: pace playback at this rate (0: a replay's recorded
+                              // timestamps when it has them, else as fast as possible);
+                              // cameras: acquisition frame rate if settable (0: keep)
   // cameras
   std::string pixel_format;   // "" keeps the camera's; Mono8, Mono12, Mono16, BayerRG8,
                               // BayerRG16, RGB8Packed, ... (Bayer is demosaiced)

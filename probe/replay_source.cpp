@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/timestamps.h"
 #include "probe/camera_source.h"
 
 namespace lp {
@@ -27,18 +28,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::optional<double> parse_number(const std::string& s) {
-  try {
-    size_t used = 0;
-    const double v = std::stod(s, &used);
-    if (used == s.size() && std::isfinite(v)) return v;
-  } catch (const std::exception&) {
-  }
-  return std::nullopt;
-}
-
 // A sidecar: one number per line in file order, or "name<sep>number" lines
 // (sep: comma, semicolon, tab or spaces). A first line that is not numeric is a header.
+// Numbers are plain decimals (core/timestamps.h parse_seconds: no hex, no suffix).
 struct Sidecar {
   std::vector<double> in_order;
   std::map<std::string, double> by_name;  // file name and stem
@@ -54,12 +46,14 @@ struct Sidecar {
   }
 };
 
+// Exposures (`positive`) must be > 0; timestamps must increase strictly in file order.
 Sidecar read_sidecar(const fs::path& path, bool positive) {
   Sidecar sidecar;
   std::istringstream in(read_text_file(path.string()));
   std::string line;
   int line_number = 0;
   bool seen_data = false;
+  std::vector<TimedLine> times;  // in file order, for the timestamps' order check
   while (std::getline(in, line)) {
     ++line_number;
     if (auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
@@ -73,10 +67,10 @@ Sidecar read_sidecar(const fs::path& path, bool positive) {
     std::optional<double> value;
     std::string name;
     if (tokens.size() == 1) {
-      value = parse_number(tokens[0]);
+      value = parse_seconds(tokens[0]);
     } else if (tokens.size() == 2) {
       name = tokens[0];
-      value = parse_number(tokens[1]);
+      value = parse_seconds(tokens[1]);
     } else {
       throw InputError(where + ": expected 'seconds' or 'name,seconds'");
     }
@@ -86,6 +80,7 @@ Sidecar read_sidecar(const fs::path& path, bool positive) {
     }
     if (positive && !(*value > 0)) throw InputError(where + ": exposure " + tokens.back() + " is not positive");
     seen_data = true;
+    times.push_back({*value, line_number});
     if (name.empty()) {
       sidecar.in_order.push_back(*value);
     } else {
@@ -95,6 +90,7 @@ Sidecar read_sidecar(const fs::path& path, bool positive) {
   }
   if (!sidecar.in_order.empty() && !sidecar.by_name.empty())
     throw InputError(path.string() + ": mixes 'seconds' and 'name,seconds' lines");
+  if (!positive && sidecar.by_name.empty()) check_increasing(path.string(), times);  // named: in frame order, later
   return sidecar;
 }
 
@@ -146,6 +142,7 @@ class ReplaySource final : public CameraSource {
     if (!timestamps_.in_order.empty() && timestamps_.in_order.size() < files_.size())
       throw InputError(timestamps.string() + ": " + std::to_string(timestamps_.in_order.size()) + " timestamps for " +
                        std::to_string(files_.size()) + " images");
+    if (!timestamps_.by_name.empty()) check_named_times(timestamps.string());
     cycle_ = options_.exposure_cycle;
     check_cycle(spec_, cycle_);
   }
@@ -157,13 +154,23 @@ class ReplaySource final : public CameraSource {
 
   std::optional<CameraFrame> next(double timeout_s) override {
     if (finished()) return std::nullopt;
-    if (options_.frame_rate > 0) {
-      const auto due = start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(double(delivered_) / options_.frame_rate));
-      if (!wait_until(due, timeout_s)) return std::nullopt;
-    }
     const size_t index = size_t(delivered_ % int64_t(files_.size()));
     const int64_t pass = delivered_ / int64_t(files_.size());
     const fs::path& file = files_[index];
+    // Paced at --fps when given, else at the recorded times (timestamps.txt), else free.
+    const auto recorded = timestamps_.lookup(file, index);
+    if (pass > 0 && recorded && span_s_ < 0) span_s_ = loop_span();
+    double due_s = -1;
+    if (options_.frame_rate > 0) {
+      due_s = double(delivered_) / options_.frame_rate;
+    } else if (recorded) {
+      if (!first_time_s_) first_time_s_ = *recorded;
+      due_s = *recorded + double(pass) * std::max(0.0, span_s_) - *first_time_s_;
+    }
+    if (due_s >= 0) {
+      const auto due = start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(due_s));
+      if (!wait_until(due, timeout_s)) return std::nullopt;
+    }
     CameraFrame frame;
     if (is_radiance_file(file.string())) {
       frame.image = read_rgb_image(file.string());
@@ -176,10 +183,9 @@ class ReplaySource final : public CameraSource {
     }
     frame.exposure_s = exposures_.lookup(file, index).value_or(0.0);
     frame.sequence = delivered_;
-    if (auto t = timestamps_.lookup(file, index)) {
+    if (recorded) {
       // Later passes of a loop continue the clock: shifted by the recording's span plus one period.
-      if (pass > 0 && span_s_ < 0) span_s_ = loop_span();
-      frame.timestamp_s = *t + double(pass) * std::max(0.0, span_s_);
+      frame.timestamp_s = *recorded + double(pass) * std::max(0.0, span_s_);
     } else if (options_.frame_rate > 0) {
       frame.timestamp_s = double(delivered_) / options_.frame_rate;
     } else {
@@ -198,6 +204,17 @@ class ReplaySource final : public CameraSource {
   bool finished() const override { return !options_.loop && delivered_ >= int64_t(files_.size()); }
 
  private:
+  // "name seconds" timestamps: one for every image, increasing in the images' (name) order.
+  void check_named_times(const std::string& path) const {
+    for (size_t i = 0; i < files_.size(); ++i) {
+      const auto t = timestamps_.lookup(files_[i], i);
+      if (!t) throw InputError(path + ": no time for " + files_[i].filename().string());
+      if (i > 0 && !(*t > *timestamps_.lookup(files_[i - 1], i - 1)))
+        throw InputError(path + ": the time of " + files_[i].filename().string() + " is not after that of " +
+                         files_[i - 1].filename().string() + "; times must increase strictly");
+    }
+  }
+
   double loop_span() const {
     std::vector<double> t;
     for (size_t i = 0; i < files_.size(); ++i)
@@ -215,6 +232,7 @@ class ReplaySource final : public CameraSource {
   Clock::time_point start_;
   int64_t delivered_ = 0;
   double span_s_ = -1;
+  std::optional<double> first_time_s_;  // the first recorded time: the pacing's origin
 };
 
 // ---- video:FILE and v4l2:N ----------------------------------------------------------

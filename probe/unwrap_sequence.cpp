@@ -57,6 +57,17 @@ CircleTrack track_to_use(const CircleTrack& raw, const UnwrapSequenceOptions& o)
   return track;
 }
 
+// The share of the map's solid angle that holds valid pixels.
+double valid_solid_angle_fraction(const EnvMap& map) {
+  double valid = 0, all = 0;
+  for (size_t p = 0; p < map.pixel_count(); ++p) {
+    const double w = pixel_solid_angle(map, p);
+    all += w;
+    if (map.is_valid(p)) valid += w;
+  }
+  return all > 0 ? valid / all : 0.0;
+}
+
 // Power-weighted mean direction of the valid map (nullopt for a black map).
 std::optional<Vec3> centroid(const EnvMap& map) {
   Vec3 c{0, 0, 0};
@@ -85,39 +96,51 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
     EnvMap map;
     UnwrapSequenceReport::Frame fr;
     fr.file = files[i];
-    if (o.type == ProbeType::MirrorBall) {
-      const BallInImage ball{track.cx[i], track.cy[i], track.r[i]};
-      UnwrapOptions uo;
-      uo.blind_spot_deg = o.blind_spot_deg;
-      uo.fill = o.fill;
-      UnwrapReport ur;
-      MirrorBallCamera cam = o.ball_camera;
-      cam.world_from_probe = o.world_from_probe;
-      map = unwrap_mirror_ball(frames[i], ball, cam, o.layout, o.width, o.height, uo, &ur);
-      report.fill_power_share = ur.fill_power_share;
-      fr.ball = ball;
-      fr.ball_detected = BallInImage{report.detected.cx[i], report.detected.cy[i], report.detected.r[i]};
-      fr.valid_fraction = ur.valid_solid_angle_fraction;
-    } else {
-      if (!base_model)
-        base_model = o.camera ? *o.camera
-                              : camera_model_from_fisheye(equidistant_fisheye(
-                                    frames[0].width, frames[0].height, o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg : 180));
-      CameraModel m = *base_model;
-      if (!track.cx.empty()) {
-        // Move the optical centre with the image circle, relative to the track's first frame.
-        m.intrinsics[2] += track.cx[i] - track.cx[0];
-        m.intrinsics[3] += track.cy[i] - track.cy[0];
-        fr.circle = ImageCircle{track.cx[i], track.cy[i], track.r[i]};
+    // The unwrappers' messages ("camera model is for 1032x778, image is 1280x960", "remap
+    // source is 1x1") name no file: this frame's is put in front.
+    try {
+      if (o.type == ProbeType::MirrorBall) {
+        const BallInImage ball{track.cx[i], track.cy[i], track.r[i]};
+        UnwrapOptions uo;
+        uo.blind_spot_deg = o.blind_spot_deg;
+        uo.fill = o.fill;
+        UnwrapReport ur;
+        MirrorBallCamera cam = o.ball_camera;
+        cam.world_from_probe = o.world_from_probe;
+        map = unwrap_mirror_ball(frames[i], ball, cam, o.layout, o.width, o.height, uo, &ur);
+        report.fill_power_share = ur.fill_power_share;
+        fr.ball = ball;
+        fr.ball_detected = BallInImage{report.detected.cx[i], report.detected.cy[i], report.detected.r[i]};
+        fr.valid_fraction = ur.valid_solid_angle_fraction;  // before any fill
+      } else {
+        if (!base_model)
+          base_model = o.camera ? *o.camera
+                                : camera_model_from_fisheye(equidistant_fisheye(
+                                      frames[0].width, frames[0].height, o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg : 180));
+        CameraModel m = *base_model;
+        if (!track.cx.empty()) {
+          // Move the optical centre with the image circle, relative to the track's first frame.
+          m.intrinsics[2] += track.cx[i] - track.cx[0];
+          m.intrinsics[3] += track.cy[i] - track.cy[0];
+          fr.circle = ImageCircle{track.cx[i], track.cy[i], track.r[i]};
+        }
+        CameraUnwrapOptions co;
+        co.max_field_deg = o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg / 2 : (o.camera ? 0 : 90);
+        if (o.fill) co.fill.method = FillMethod::PushPull;
+        FillReport fill;
+        map = unwrap_with_camera(frames[i], m, o.world_from_probe * upward_camera_world_from_camera(), o.layout, o.width,
+                                 o.height, co, &fill);
+        report.fill_power_share = fill.filled_power_share;
       }
-      CameraUnwrapOptions co;
-      co.max_field_deg = o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg / 2 : (o.camera ? 0 : 90);
-      if (o.fill) co.fill.method = FillMethod::PushPull;
-      FillReport fill;
-      map = unwrap_with_camera(frames[i], m, o.world_from_probe * upward_camera_world_from_camera(), o.layout, o.width,
-                               o.height, co, &fill);
-      report.fill_power_share = fill.filled_power_share;
+    } catch (const InputError& e) {
+      if (std::string(e.what()).rfind(files[i], 0) == 0) throw;
+      throw InputError(files[i] + ": " + e.what());
     }
+    // A probe outside the image unwraps to nothing: refused before anything is written.
+    if (o.type != ProbeType::MirrorBall) fr.valid_fraction = valid_solid_angle_fraction(map);
+    if (!(fr.valid_fraction > 0))
+      throw InputError(files[i] + ": the unwrapped map holds no valid pixel (is the " +
+                       (o.type == ProbeType::MirrorBall ? "ball" : "image circle") + " inside the image?)");
     map.units = frames[i].units;
     if (o.colour) apply_colour_match(map, *o.colour);
     if (auto c = centroid(map)) centroids.push_back(*c);

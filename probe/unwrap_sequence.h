@@ -55,7 +55,7 @@ struct UnwrapSequenceReport {
     std::string file;
     std::optional<BallInImage> ball, ball_detected;  // mirror ball: used, and as found
     std::optional<ImageCircle> circle;               // fisheye sequence
-    double valid_fraction = 0;                       // mirror ball
+    double valid_fraction = 0;                       // share of the map's solid angle that is valid
   };
   std::vector<Frame> frames;
   CircleTrack detected, used;         // empty for a single fisheye image
@@ -66,7 +66,9 @@ struct UnwrapSequenceReport {
 
 // Unwraps every file in order and hands each map to `emit` (frame index, map); `step`
 // is called after each frame of each pass (2 * files.size() calls). Throws InputError
-// naming the file that cannot be read, has another size than frame 0, or holds no ball.
+// naming the file that cannot be read, has another size than frame 0, holds no ball, or
+// unwraps to a map with no valid pixel (a ball or circle outside the image), before that
+// frame is emitted.
 UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files, const UnwrapSequenceOptions& options,
                                            const std::function<void(size_t frame, EnvMap& map)>& emit,
                                            const std::function<void()>& step = {});

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/synthetic_boards.h"
 #include "core/error.h"
 
 namespace fs = std::filesystem;
@@ -265,6 +266,37 @@ TEST(BoardDetect, WrongSizeFindsNothingWithReason) {
   EXPECT_NE(d.attempts.find(" ms"), std::string::npos) << d.attempts;
   EXPECT_THROW(detect_board(image, {2, 7, 25}), InputError);
   EXPECT_THROW(detect_board(CameraImage{}, {9, 6, 25}), InputError);
+}
+
+// A wrong --board smaller than the board in view (9x6 boards, --board 7x5) used to run every
+// stage, minutes per view; the size check after the cheap stages names what it saw instead.
+// Rendered boards (synthetic_boards.h).
+TEST(BoardDetect, ABoardLargerThanTheOneAskedForIsNamedInsteadOfSearched) {
+  SyntheticBoardsOptions o;
+  o.views = 3;
+  o.board = {9, 6, 30};
+  o.seed = 5;
+  o.max_tilt_deg = 30;
+  o.min_cover = 0.3;
+  const SyntheticBoards boards = synthesize_boards(o);
+  int named = 0;
+  for (const CameraImage& image : boards.images) {
+    const BoardDetection wrong = detect_board(image, {7, 5, 30});
+    EXPECT_FALSE(wrong.found);
+    if (wrong.other_cols == 0) continue;
+    ++named;
+    // Said the way --board is written, the longer side first.
+    EXPECT_EQ(wrong.other_cols, 9);
+    EXPECT_EQ(wrong.other_rows, 6);
+    EXPECT_EQ(wrong.reason.rfind("found 9x6 inner corners, --board says 7x5 (tried ", 0), 0u) << wrong.reason;
+    // The slow stages were not run.
+    EXPECT_EQ(wrong.attempts.find("accuracy"), std::string::npos) << wrong.attempts;
+    EXPECT_EQ(wrong.attempts.find("+clahe"), std::string::npos) << wrong.attempts;
+  }
+  EXPECT_GE(named, 2);
+  // A --board larger than the board seen is not "another size" (the view could be part of
+  // it) and the right size is found: both as before, on the view the check saw best.
+  EXPECT_TRUE(detect_board(boards.images[0], {9, 6, 30}).found);
 }
 
 // Ladybug: 5x8, non-square. Both spellings find the board, the corner orders are transposes

@@ -95,6 +95,32 @@ TEST(CalibrationRun, DetectsEveryImageAndRefusesMixedSizes) {
   EXPECT_THROW(detect_boards({"/nonexistent.png", paths[0]}, o.board), InputError);
 }
 
+TEST(CalibrationRun, RefusesOneViewGivenTwiceNamingBothFiles) {
+  const CameraModel truth = kb190();
+  auto corners = project_board_views(truth, kBoard, 6, 70, 600, 0.1, 3, 93);
+  ASSERT_GE(corners.size(), 5u);
+  corners[4] = corners[1];  // the same view again: a held-out view equal to a fitted one
+  try {
+    calibrate_detections(detections_of(corners, truth), kBoard);
+    ADD_FAILURE() << "a duplicated view was calibrated";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "view_4.png: the same view as view_1.png (identical board corners); give each view once");
+  }
+}
+
+TEST(CalibrationRun, NoBoardButOneOfAnotherSizeSaysWhichSize) {
+  const CameraModel truth = kb190();
+  BoardDetections d = detections_of(std::vector<std::vector<std::array<double, 2>>>(5), truth);
+  d.per_image[2].other_cols = 9;
+  d.per_image[2].other_rows = 6;
+  try {
+    calibrate_detections(d, BoardSpec{7, 5, 30});
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "no 7x5 board found in any of the 5 images: found 9x6 inner corners, --board says 7x5");
+  }
+}
+
 TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   const CameraModel truth = kb190();
   const auto corners = project_board_views(truth, kBoard, 8, 70, 600, 0.1, 3, 93);

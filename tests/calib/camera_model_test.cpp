@@ -366,6 +366,34 @@ TEST(CameraModel, UnreadableFilesAreRefusedWithAMessageNamingThePath) {
   std::printf("  %s\n", error_of([&] { read_camera_model(missing); }, missing).c_str());
 }
 
+TEST(CameraModel, FocalLengthsThatAreZeroNegativeOrNaNAreRefusedWhenReadNamingTheFile) {
+  const std::string cm = temp_path("focal.cameramodel"), yaml = temp_path("focal.yaml");
+  auto cameramodel = [&](const std::string& fx) {
+    std::ofstream(cm) << "{ 'lensmodel': 'LENSMODEL_PINHOLE', 'intrinsics': [" << fx
+                      << ", 800, 320, 240], 'extrinsics': [0, 0, 0, 0, 0, 0], 'imagersize': [640, 480] }\n";
+  };
+  cameramodel("0");
+  EXPECT_EQ(error_of([&] { read_camera_model(cm); }, cm), cm + ": focal length fx = 0 is not positive");
+  cameramodel("-800");
+  EXPECT_EQ(error_of([&] { read_camera_model(cm); }, cm), cm + ": focal length fx = -800 is not positive");
+  cameramodel("800");  // the same model with a positive focal length is read
+  EXPECT_DOUBLE_EQ(read_camera_model(cm).intrinsics[0], 800);
+  // fy and NaN through OpenCV YAML (camera_matrix: fx at (0,0), fy at (1,1)).
+  auto opencv = [&](const std::string& fx, const std::string& fy) {
+    std::ofstream(yaml) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+                           "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+                           "   data: [ " << fx << ", 0., 320., 0., " << fy << ", 240., 0., 0., 1. ]\n"
+                           "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
+                           "   data: [ 0., 0., 0., 0., 0. ]\ndistortion_model: plumb_bob\n";
+  };
+  opencv("800.", "-1.");
+  EXPECT_EQ(error_of([&] { read_camera_model(yaml); }, yaml), yaml + ": focal length fy = -1 is not positive");
+  opencv(".Nan", "800.");
+  EXPECT_NE(error_of([&] { read_camera_model(yaml); }, yaml).find("non-finite"), std::string::npos);
+  opencv("800.", "800.");
+  EXPECT_DOUBLE_EQ(read_camera_model(yaml).intrinsics[1], 800);
+}
+
 }  // namespace
 }  // namespace lp
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -101,6 +102,49 @@ TEST(Photometric, NoisyReadingsGiveTheScaleWithinTheReportedUncertainty) {
   EXPECT_GE(within_one, 25);
   EXPECT_LE(within_one, 45);
   EXPECT_GE(within_three, 49);
+}
+
+// The held-out check refits without each reading; it is solved in O(n log n) for the linear
+// model with no loss or Huber's. Reference: the root of the fit's estimating equation
+// sum psi(theta + c_j) over j != i, by bisection (psi clipped at the Huber scale), where
+// c = ln camera - ln measured; and, looser, Ceres refits (converged to ~1e-9 only).
+TEST(Photometric, HeldOutErrorsEqualExactRefitsWithoutEachReading) {
+  const double k = 640.0;
+  std::mt19937_64 rng(77);
+  std::normal_distribution<double> noise(0.0, 0.04);
+  std::vector<PhotometricReading> readings;
+  for (int i = 0; i < 30; ++i) {
+    const double L = 3.0 * std::pow(1.3, i);
+    const double outlier = i % 9 == 4 ? 1.6 : 1.0;  // three readings 60 % off: clipped by Huber
+    readings.push_back(reading(L / k, L * outlier * std::exp(noise(rng)), Unit::CandelaPerSquareMetre, "p" + std::to_string(i)));
+  }
+  for (RobustLoss loss : {RobustLoss::Huber, RobustLoss::None}) {
+    PhotometricOptions options;
+    options.loss = loss;
+    const double clip = loss == RobustLoss::Huber ? options.loss_scale : 1e300;
+    const auto cal = fit_photometric(readings, options);
+    double max_exact = 0, max_ceres = 0;
+    for (size_t i = 0; i < readings.size(); ++i) {
+      auto psi_sum = [&](double theta) {
+        double s = 0;
+        for (size_t j = 0; j < readings.size(); ++j)
+          if (j != i)
+            s += std::clamp(theta + std::log(readings[j].camera_value) - std::log(readings[j].measured), -clip, clip);
+        return s;
+      };
+      double lo = -20, hi = 20;
+      for (int it = 0; it < 200; ++it) (psi_sum(0.5 * (lo + hi)) > 0 ? hi : lo) = 0.5 * (lo + hi);
+      const double exact = std::exp(0.5 * (lo + hi)) * readings[i].camera_value / readings[i].measured - 1;
+      max_exact = std::max(max_exact, std::abs(cal.residuals[i].held_out_relative - exact));
+      std::vector<PhotometricReading> rest = readings;
+      rest.erase(rest.begin() + long(i));
+      const double ceres = fit_photometric(rest, options).scale_luminance * readings[i].camera_value / readings[i].measured - 1;
+      max_ceres = std::max(max_ceres, std::abs(cal.residuals[i].held_out_relative - ceres));
+    }
+    EXPECT_LT(max_exact, 1e-13) << cal.loss;
+    EXPECT_LT(max_ceres, 1e-8) << cal.loss;
+    EXPECT_GT(cal.held_out_rms_relative, cal.rms_relative) << cal.loss;
+  }
 }
 
 TEST(Photometric, ALuxReadingAndALuminanceReadingOfTheSameSceneGiveTheSameScale) {

@@ -79,6 +79,12 @@ TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   // Different sizes: the odd file is named.
   const std::string size_msg = message_of([&] { read_bracket({a, odd}, std::vector<double>{1.0, 2.0}); });
   EXPECT_NE(size_msg.find("odd.png"), std::string::npos) << size_msg;
+  // The odd size is named when it is the first frame, too.
+  const std::string first_msg = message_of([&] { read_bracket({odd, a, b}, std::vector<double>{1.0, 2.0, 4.0}); });
+  EXPECT_EQ(first_msg, odd + ": size 6x8 differs from the 8x6 of 2 of the 3 images");
+  // Two frames at one exposure time: both named.
+  const std::string same_msg = message_of([&] { read_bracket({a, b}, std::vector<double>{0.5, 0.5}); });
+  EXPECT_EQ(same_msg, a + " and " + b + ": the same exposure time 0.5 s; each frame of a bracket needs its own");
   // No EXIF in a PNG and no times given.
   const std::string exif_msg = message_of([&] { read_bracket({a, b}); });
   EXPECT_EQ(exif_msg, a + ": no exposure time in EXIF; give --exposure-times");

@@ -119,12 +119,42 @@ TEST(MergeBracket, IgnoresTheBorderColourAndMarksPixelsThatAreBorderInEveryFrame
   ASSERT_EQ(out.valid.size(), size_t(32 * 32));
   EXPECT_EQ(out.valid[10], 0);
   EXPECT_EQ(out.valid[20], 1);
-  // Pixel 20 comes from the third frame alone: the same as merging that frame by itself.
+  // Pixel 20 comes from the third frame alone: the same as merging that frame with one that
+  // is border everywhere (two frames at one exposure time are refused).
   Bracket last;
-  last.frames = {b.frames[2], b.frames[2]};
-  last.exposure_seconds = {4.0, 4.0};
-  const RgbImage alone = merge_bracket(last, r);
+  RgbImage border = b.frames[2];
+  for (size_t p = 0; p < border.rgb.size() / 3; ++p) border.rgb[3 * p] = border.rgb[3 * p + 1] = 0.0f, border.rgb[3 * p + 2] = 1.0f;
+  last.frames = {b.frames[2], border};
+  last.exposure_seconds = {4.0, 1.0};
+  const RgbImage alone = merge_bracket(last, r, options);
   for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(out.rgb[3 * 20 + size_t(c)], alone.rgb[3 * 20 + size_t(c)]);
+}
+
+TEST(MergeBracket, RefusesABracketWithNoPixelWellExposedInAnyFrame) {
+  const CameraResponse r = test::true_response(test::gamma_curve());
+  for (float level : {0.0f, 1.0f}) {  // all black, all saturated
+    Bracket b;
+    for (int k = 0; k < 3; ++k) {
+      RgbImage f;
+      f.width = 6, f.height = 4;
+      f.rgb.assign(3 * 6 * 4, level);
+      b.frames.push_back(f);
+      b.paths.push_back("frame" + std::to_string(k) + ".png");
+    }
+    b.exposure_seconds = {0.01, 0.1, 1.0};
+    try {
+      merge_bracket(b, r);
+      ADD_FAILURE() << "a bracket at level " << level << " was fused";
+    } catch (const InputError& e) {
+      EXPECT_STREQ(e.what(), "frame0.png .. frame2.png: no pixel is well exposed in any of the 3 frames (every one "
+                             "is black or saturated in all of them)");
+    }
+    // One mid-grey pixel in one frame is a measurement: fused, and counted.
+    b.frames[1].rgb[3 * 5] = b.frames[1].rgb[3 * 5 + 1] = b.frames[1].rgb[3 * 5 + 2] = 0.5f;
+    MergeReport report;
+    merge_bracket(b, r, {}, &report);
+    EXPECT_EQ(report.well_exposed, 1u);
+  }
 }
 
 TEST(MergeBracket, RefusesAResponseOfTheWrongShapeAndBadThresholds) {

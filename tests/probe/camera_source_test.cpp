@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -97,6 +98,36 @@ TEST(CameraSourceReplay, LoopsPacedWithOrderedExposures) {
     EXPECT_EQ(frame->bracket_index, -1);
   }
   EXPECT_FALSE(source->finished());
+}
+
+TEST(CameraSourceReplay, PacesByTheRecordedTimestampsAndRefusesBadOnes) {
+  TempDir dir;
+  for (int k = 0; k < 3; ++k) cv::imwrite((dir.path / ("f" + std::to_string(k) + ".png")).string(), cv::Mat(4, 4, CV_8UC3, cv::Scalar::all(50)));
+  std::ofstream(dir.path / "timestamps.txt") << "100.0\n100.3\n100.6\n";
+  auto source = lp::open_source("replay:" + dir.path.string());
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0; k < 3; ++k) ASSERT_TRUE(source->next(2.0)) << k;
+  // Frame 2 is due 0.6 s after frame 0 (not a timed assertion on speed: a lower bound).
+  EXPECT_GE(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.59);
+  // Backwards, hex and two numbers per line are refused with the line; named times must
+  // cover every image and rise in the images' order.
+  const std::pair<const char*, const char*> bad[] = {{"1\n3\n2\n", "timestamps.txt:3"},
+                                                     {"1\n0x10\n20\n", "timestamps.txt:2"},
+                                                     {"0.1 0.2\n0.3 0.4\n0.5 0.6\n", "no time for f0.png"},
+                                                     {"f0.png 2\nf1.png 1\nf2.png 3\n", "f1.png is not after"}};
+  for (const auto& [text, where] : bad) {
+    std::ofstream(dir.path / "timestamps.txt") << text;
+    EXPECT_NE(message_of([&] { lp::open_source("replay:" + dir.path.string()); }).find(where), std::string::npos) << text;
+  }
+}
+
+TEST(CameraSourceReplay, AFrameThatCannotBeReadIsAnInputErrorNotALostCamera) {
+  TempDir dir;
+  cv::imwrite((dir.path / "a.png").string(), cv::Mat(4, 4, CV_8UC3, cv::Scalar::all(9)));
+  std::ofstream(dir.path / "b.png") << "garbage";
+  auto source = lp::open_source("replay:" + dir.path.string());
+  ASSERT_TRUE(source->next(1.0));
+  EXPECT_NE(message_of([&] { source->next(1.0); }).find("b.png"), std::string::npos);
 }
 
 TEST(CameraSourceReplay, BadDirectoriesAndSidecars) {

@@ -342,7 +342,6 @@ Accumulated run_all(const EvalEstimatorsOptions& o, const std::vector<Sequence>&
       progress.advance(nf);
     }
   }
-  progress.finish();
   return acc;
 }
 

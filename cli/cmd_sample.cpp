@@ -11,7 +11,9 @@
 #include "core/image_io.h"
 #include "core/map_sequence.h"
 #include "core/progress.h"
+#include "core/spherical_harmonics.h"
 #include "sampling/exporters.h"
+#include "sampling/light_units.h"
 #include "sampling/sample_maps.h"
 #include "sampling/overlay.h"
 #include "sampling/sampler.h"
@@ -23,7 +25,7 @@ struct SampleArgs {
   std::string method = "pharr";
   std::string n = "256";            // a count or "auto"
   double target_error = 0.01;
-  std::string format;               // json|ndjson|pbrt|mitsuba|gltf|csv (default from -o)
+  std::string format;               // json|ndjson|pbrt|mitsuba|gltf|glb|csv (default from -o)
   std::string output;
   std::string overlay;              // PNG of the lights on the map
   std::string layout;               // input layout override
@@ -35,6 +37,8 @@ struct SampleArgs {
   std::string filter = "auto";      // FIR filtering of power and directions: auto|on|off
   double fps = 21;                  // frame rate the filter is designed for
   int cluster = 0;                  // cluster to at most this many lights (0: off)
+  bool sh9 = false;                 // also carry the whole map's SH9 ("content": "map")
+  std::string exposure, scale, normalize_illuminance;  // units of a relative map (one of)
 };
 
 namespace {
@@ -59,6 +63,31 @@ int light_count(const std::string& text) {
   }
   if (n <= 0) throw InputError(fmt::format("--n must be positive, got {}", n));
   return n;
+}
+
+LightUnitsOptions units_options(const SampleArgs& args) {
+  LightUnitsOptions u;
+  if (!args.exposure.empty()) u.exposure_ev = parse_numbers(args.exposure, "--exposure", 1)[0];
+  if (!args.scale.empty()) u.scale = parse_numbers(args.scale, "--scale", 1)[0];
+  if (!args.normalize_illuminance.empty())
+    u.normalize_illuminance_lux = parse_numbers(args.normalize_illuminance, "--normalize-illuminance", 1)[0];
+  return u;
+}
+
+bool has_physical_units(ExportFormat f) {
+  return f == ExportFormat::Gltf || f == ExportFormat::Glb || f == ExportFormat::Pbrt || f == ExportFormat::Mitsuba;
+}
+
+// The lists in the units of the output format; the warning of a relative list, once.
+void apply_units(std::vector<LightList>& lists, const SampleArgs& args, ExportFormat format) {
+  const LightUnitsOptions u = units_options(args);
+  std::string warning;
+  for (LightList& l : lists) {
+    LightUnitsResult r = apply_light_units(std::move(l), u, args.output);
+    l = std::move(r.list);
+    warning = r.warning;
+  }
+  if (!warning.empty() && has_physical_units(format)) std::fprintf(stderr, "warning: %s\n", warning.c_str());
 }
 
 }  // namespace
@@ -89,6 +118,7 @@ int run_sample(const SampleArgs& args, const Output& out) {
   const ExportFormat format = export_format_for(args.format, args.output, sequence);
   if (sequence && format != ExportFormat::Ndjson && format != ExportFormat::Csv)
     throw InputError(fmt::format("{} maps form a sequence: use --format ndjson (or csv)", maps.files.size()));
+  if (sequence && args.sh9) throw InputError("--sh9 takes one map, not a sequence");
 
   Progress progress("sample", maps.files.size(), out.progress && sequence);
   SampleMapsResult result = sample_maps(maps, o, [&] { progress.advance(); });
@@ -107,6 +137,11 @@ int run_sample(const SampleArgs& args, const Output& out) {
     frames.push_back(f.to_json());
     lists.push_back(std::move(f.list));
   }
+  if (args.sh9) {
+    lists[0].sh9 = project_sh9(result.last_map, maps.files[0]);
+    lists[0].sh9_content = Sh9Content::Map;
+  }
+  apply_units(lists, args, format);
   write_file_atomically(args.output, export_light_sequence(lists, format));
   if (!args.overlay.empty()) write_overlay_png(args.overlay, result.last_map, lists.back().lights);
   if (sequence && !out.json)
@@ -134,7 +169,7 @@ std::vector<Command> sample_commands() {
          f.opt("--method", a->method, "pharr|hemigon|q2tree|mediancut");
          f.opt("--n", a->n, "Number of lights, or 'auto' with --target-error");
          f.opt("--target-error", a->target_error, "With --n auto: largest diffuse error (0.01 = 1 %)");
-         f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|csv (default: from -o's extension)");
+         f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|glb|csv (default: from -o's extension)");
          f.output(a->output, "Output file");
          f.opt("--overlay", a->overlay, "Also draw the lights on the tone-mapped map (PNG)");
          f.opt("--layout", a->layout, "Read the input as this layout");
@@ -147,6 +182,10 @@ std::vector<Command> sample_commands() {
          f.opt("--filter", a->filter, "Temporal FIR filter on power and directions: auto (hemigon only), on, off");
          f.opt("--fps", a->fps, "Frame rate of a sequence (the FIR filter is designed for it)");
          f.opt("--cluster", a->cluster, "Cluster the lights to at most this many (Havran 2005 4.3)");
+         f.flag("--sh9", a->sh9, "Also carry the whole map's SH9 (\"sh9\", content \"map\"; glTF: asset.extras)");
+         f.opt("--exposure", a->exposure, "Scale a relative map's lights by 2^EV (then written as absolute units)");
+         f.opt("--scale", a->scale, "Scale by K: relative units -> W sr^-1 m^-2");
+         f.opt("--normalize-illuminance", a->normalize_illuminance, "Scale so an upward-facing surface gets LUX");
          return [a](const Output& out) { return run_sample(*a, out); };
        }},
   };

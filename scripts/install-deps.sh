@@ -13,18 +13,22 @@ packages=(
   # whole-system tests: private network namespaces, a load generator, a headless browser,
   # an HTTP client for abusive requests, Prometheus' linter (promtool) for /metrics
   iproute2 util-linux wrk chromium curl prometheus
+  # export checks: Khronos' glTF validator and three.js run on node (scripts/install-js-tools.sh)
+  nodejs npm
 )
 
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-if [ ${#missing[@]} -eq 0 ]; then
-  exit 0
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install-deps: installing ${missing[*]}" >&2
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-echo "install-deps: installing ${missing[*]}" >&2
-sudo=""
-[ "$(id -u)" -eq 0 ] || sudo="sudo"
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+
+# JavaScript consumers for the export tests (glTF validator, three.js): project-local.
+"$(dirname "$0")/install-js-tools.sh"

@@ -224,7 +224,7 @@ std::vector<Command> estimate_commands() {
          f.arg("MODEL", a->model, "Model JSON (estimate metadata)").required();
          f.opt("--at", a->at, "Position X,Y[,Z] in metres").required();
          f.output(a->output, "Light list (.json, .pbrt, .xml, .gltf, .csv)");
-         f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|csv (default from -o)");
+         f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|glb|csv (default from -o)");
          f.opt("--min-frames", a->min_frames, "Frames that make a sector informed (1: the paper's rule)");
          f.opt("--shrink", a->shrink, "Hierarchical shrinkage with this prior weight in frames (0: off)");
          f.opt("--max-depth", a->max_depth, "Descend at most this deep (0: the root's global estimate)");

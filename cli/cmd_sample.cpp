@@ -12,7 +12,10 @@
 #include "core/image_io.h"
 #include "core/map_sequence.h"
 #include "core/progress.h"
+#include "core/spherical_harmonics.h"
 #include "sampling/exporters.h"
+#include "sampling/light_units.h"
+#include "sampling/lights_and_ambient.h"
 #include "sampling/sample_maps.h"
 #include "sampling/overlay.h"
 #include "sampling/sampler.h"
@@ -24,7 +27,7 @@ struct SampleArgs {
   std::string method = "pharr";
   std::string n = "256";            // a count or "auto"
   double target_error = 0.01;
-  std::string format;               // json|ndjson|pbrt|mitsuba|gltf|csv (default from -o)
+  std::string format;               // json|ndjson|pbrt|mitsuba|gltf|glb|csv (default from -o)
   std::string output;
   std::string overlay;              // PNG of the lights on the map
   std::string layout;               // input layout override
@@ -36,6 +39,10 @@ struct SampleArgs {
   std::string filter = "auto";      // FIR filtering of power and directions: auto|on|off
   double fps = 21;                  // frame rate the filter is designed for
   int cluster = 0;                  // cluster to at most this many lights (0: off)
+  std::string residual;             // "sh9": n lights + SH9 of what they leave out
+  bool sh9 = false;                 // also carry the whole map's SH9 ("content": "map")
+  double light_cap_deg = LightsAndAmbientOptions{}.light_cap_deg;
+  std::string exposure, scale, normalize_illuminance;  // units of a relative map (one of)
 };
 
 namespace {
@@ -63,11 +70,83 @@ int light_count(const std::string& text) {
   return n;
 }
 
+LightUnitsOptions units_options(const SampleArgs& args) {
+  LightUnitsOptions u;
+  if (!args.exposure.empty()) u.exposure_ev = parse_numbers(args.exposure, "--exposure", 1)[0];
+  if (!args.scale.empty()) u.scale = parse_numbers(args.scale, "--scale", 1)[0];
+  if (!args.normalize_illuminance.empty())
+    u.normalize_illuminance_lux = parse_numbers(args.normalize_illuminance, "--normalize-illuminance", 1)[0];
+  return u;
+}
+
+bool has_physical_units(ExportFormat f) {
+  return f == ExportFormat::Gltf || f == ExportFormat::Glb || f == ExportFormat::Pbrt || f == ExportFormat::Mitsuba;
+}
+
+// The lists in the units of the output format; the warning of a relative list, once.
+void apply_units(std::vector<LightList>& lists, const SampleArgs& args, ExportFormat format) {
+  const LightUnitsOptions u = units_options(args);
+  std::string warning;
+  for (LightList& l : lists) {
+    LightUnitsResult r = apply_light_units(std::move(l), u, args.output);
+    l = std::move(r.list);
+    warning = r.warning;
+  }
+  if (!warning.empty() && has_physical_units(format)) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+}
+
+// --residual sh9: one map, n lights for its peaks + SH9 of the rest, scored three ways.
+int run_sample_residual(const SampleArgs& args, const Output& out, Method method) {
+  if (args.residual != "sh9") throw InputError(fmt::format("--residual must be sh9, got '{}'", args.residual));
+  if (args.inputs.size() != 1) throw InputError("--residual sh9 takes one map, not a sequence");
+  if (args.sh9) throw InputError("--residual sh9 and --sh9: give one (the list carries one SH9)");
+  const int n = light_count(args.n);
+  if (n == 0) throw InputError("--residual sh9 needs a light count, not --n auto");
+  ReadMapOptions read;
+  read.layout = optional_layout(args.layout, "--layout");
+  const EnvMap map = read_envmap(args.inputs[0], read);
+  const ExportFormat format = export_format_for(args.format, args.output, false);
+  SamplerOptions so;
+  so.upper_only = args.upper_only;
+  so.q2_luminance_exponent = args.q2_a;
+  so.q2_solid_angle_exponent = args.q2_b;
+  so.q2_nside = args.q2_nside;
+  LightsAndAmbientOptions ao;
+  ao.light_cap_deg = args.light_cap_deg;
+  if (!(ao.light_cap_deg > 0 && ao.light_cap_deg <= 180))
+    throw InputError(fmt::format("--light-cap must be in (0, 180] degrees, got {}", ao.light_cap_deg));
+  const AccuracyReference ref = make_accuracy_reference(map);
+  const AmbientComparison c = compare_lights_and_sh9(map, ref, n, method, so, ao);
+  std::vector<LightList> lists{c.list};
+  apply_units(lists, args, format);
+  write_file_atomically(args.output, export_lights(lists[0], format));
+  auto row = [](const LightError& e) {
+    return nlohmann::json{{"diffuse", e.diffuse}, {"glossy", e.glossy}, {"shadowed", e.shadowed}};
+  };
+  if (!out.json)
+    say(out, "{}: {} lights ({:.1f} % of the power) + SH9 ambient -> {}; diffuse error {:.2f} % (lights alone "
+             "{:.2f} %, SH9 alone {:.2f} %), shadowed {:.2f} % ({:.2f} %, {:.2f} %)\n",
+        args.inputs[0], lists[0].lights.size(), 100 * c.light_power_share, args.output, 100 * c.lights_and_sh9.diffuse,
+        100 * c.lights_only.diffuse, 100 * c.sh9_only.diffuse, 100 * c.lights_and_sh9.shadowed,
+        100 * c.lights_only.shadowed, 100 * c.sh9_only.shadowed);
+  emit_json(out, {{"method", args.method},
+                  {"n", n},
+                  {"lights", lists[0].lights.size()},
+                  {"output", args.output},
+                  {"format", std::string(to_string(format))},
+                  {"light_power_share", c.light_power_share},
+                  {"error", row(c.lights_and_sh9)},
+                  {"error_lights_only", row(c.lights_only)},
+                  {"error_sh9_only", row(c.sh9_only)}});
+  return 0;
+}
+
 }  // namespace
 
 int run_sample(const SampleArgs& args, const Output& out) {
   const auto method = method_from_string(args.method);
   if (!method) throw InputError(fmt::format("--method: unknown method '{}' (pharr, hemigon, q2tree, mediancut)", args.method));
+  if (!args.residual.empty()) return run_sample_residual(args, out, *method);
   SampleMapsOptions o;
   FramePipelineOptions& po = o.pipeline;
   po.method = *method;
@@ -93,6 +172,7 @@ int run_sample(const SampleArgs& args, const Output& out) {
   const ExportFormat format = export_format_for(args.format, args.output, sequence);
   if (sequence && format != ExportFormat::Ndjson && format != ExportFormat::Csv)
     throw InputError(fmt::format("{} maps form a sequence: use --format ndjson (or csv)", maps.files.size()));
+  if (sequence && args.sh9) throw InputError("--sh9 takes one map, not a sequence");
 
   Progress progress("sample", maps.files.size(), out.progress && sequence);
   SampleMapsResult result = sample_maps(maps, o, [&] { progress.advance(); });
@@ -111,6 +191,11 @@ int run_sample(const SampleArgs& args, const Output& out) {
     frames.push_back(f.to_json());
     lists.push_back(std::move(f.list));
   }
+  if (args.sh9) {
+    lists[0].sh9 = project_sh9(result.last_map, maps.files[0]);
+    lists[0].sh9_content = Sh9Content::Map;
+  }
+  apply_units(lists, args, format);
   write_file_atomically(args.output, export_light_sequence(lists, format));
   if (!args.overlay.empty()) write_overlay_png(args.overlay, result.last_map, lists.back().lights);
   if (sequence && !out.json)
@@ -131,14 +216,14 @@ int run_sample(const SampleArgs& args, const Output& out) {
 std::vector<Command> sample_commands() {
   return {
       {"sample", "Environment map -> directional lights",
-       "lightprobe sample probe.exr --method q2tree --n 256 -o lights.json --overlay lights.png\nlightprobe sample probe.exr --method pharr --n auto --target-error 0.01 -o lights.pbrt\nlightprobe sample frames/ --method hemigon --n 300 -o lights.ndjson",
+       "lightprobe sample probe.exr --method q2tree --n 256 -o lights.json --overlay lights.png\nlightprobe sample probe.exr --method pharr --n auto --target-error 0.01 -o lights.pbrt\nlightprobe sample frames/ --method hemigon --n 300 -o lights.ndjson\nlightprobe sample probe.exr --method q2tree --n 16 --residual sh9 --normalize-illuminance 10000 -o lights.glb",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<SampleArgs>();
          f.arg("MAP", a->inputs, "A map, several maps (a sequence: NDJSON, one frame each) or a directory").required();
          f.opt("--method", a->method, "pharr|hemigon|q2tree|mediancut");
          f.opt("--n", a->n, "Number of lights, or 'auto' with --target-error");
          f.opt("--target-error", a->target_error, "With --n auto: largest diffuse error (0.01 = 1 %)");
-         f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|csv (default: from -o's extension)");
+         f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|glb|csv (default: from -o's extension)");
          f.output(a->output, "Output file");
          f.opt("--overlay", a->overlay, "Also draw the lights on the tone-mapped map (PNG)");
          f.opt("--layout", a->layout, "Read the input as this layout");
@@ -151,6 +236,12 @@ std::vector<Command> sample_commands() {
          f.opt("--filter", a->filter, "Temporal FIR filter on power and directions: auto (hemigon only), on, off");
          f.opt("--fps", a->fps, "Frame rate of a sequence (the FIR filter is designed for it)");
          f.opt("--cluster", a->cluster, "Cluster the lights to at most this many (Havran 2005 4.3)");
+         f.opt("--residual", a->residual, "sh9: n lights for the map's peaks + SH9 ambient of the rest (one map)");
+         f.opt("--light-cap", a->light_cap_deg, "With --residual: half-angle (deg) of the cap one light stands for");
+         f.flag("--sh9", a->sh9, "Also carry the whole map's SH9 (\"sh9\", content \"map\"; glTF: asset.extras)");
+         f.opt("--exposure", a->exposure, "Scale a relative map's lights by 2^EV (then written as absolute units)");
+         f.opt("--scale", a->scale, "Scale by K: relative units -> W sr^-1 m^-2");
+         f.opt("--normalize-illuminance", a->normalize_illuminance, "Scale so an upward-facing surface gets LUX");
          return [a](const Output& out) { return run_sample(*a, out); };
        }},
   };

@@ -76,7 +76,7 @@ class CliFlags final : public Flags {
 
 std::vector<Command> all_commands() {
   std::vector<Command> all;
-  for (auto stage : {map_commands, calib_commands, hdr_commands, probe_commands, sample_commands, render_commands,
+  for (auto stage : {map_commands, calib_commands, hdr_commands, probe_commands, sample_commands, sh_commands, render_commands,
                      estimate_commands, live_commands, synth_commands, eval_commands}) {
     for (Command& c : stage()) all.push_back(std::move(c));
   }

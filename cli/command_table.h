@@ -63,6 +63,7 @@ std::vector<Command> calib_commands();     // calib geometric|compare|photometri
 std::vector<Command> hdr_commands();       // hdr response|fuse
 std::vector<Command> probe_commands();     // probe unwrap|register
 std::vector<Command> sample_commands();    // sample
+std::vector<Command> sh_commands();        // sh
 std::vector<Command> render_commands();    // tables
 std::vector<Command> estimate_commands();  // estimate metadata|query
 std::vector<Command> live_commands();      // stream, merge

@@ -394,6 +394,10 @@ AccuracyReference make_accuracy_reference(const EnvMap& map, const AccuracyOptio
 }
 
 LightError light_error(const AccuracyReference& reference, std::span<const Light> lights) {
+  return light_error(reference, lights, Sh9{});
+}
+
+LightError light_error(const AccuracyReference& reference, std::span<const Light> lights, const Sh9& ambient) {
   const AccuracyOptions& opt = reference.options;
   const auto& dirs = reference.directions;
   const size_t nd = dirs.size();
@@ -405,7 +409,7 @@ LightError light_error(const AccuracyReference& reference, std::span<const Light
   for (size_t k = 0; k < nd; ++k) {
     double e = 0;
     for (size_t i = 0; i < lights.size(); ++i) e += lum[i] * std::max(0.0, dot(dirs[k], lights[i].direction));
-    est[k] = e;
+    est[k] = e + luminance(sh9_irradiance(ambient, dirs[k]).data());
   }
   err.diffuse = rel_rms(reference.diffuse, est);
 
@@ -415,13 +419,13 @@ LightError light_error(const AccuracyReference& reference, std::span<const Light
     for (size_t k = 0; k < nd; ++k) {
       double e = 0;
       for (size_t i = 0; i < lights.size(); ++i) e += lum[i] * phong_lobe(dot(dirs[k], lights[i].direction), s);
-      est[k] = e;
+      est[k] = e + luminance(sh9_phong(ambient, dirs[k], s).data());
     }
     err.glossy.push_back(rel_rms(reference.glossy[g], est));
   }
 
   if (opt.shadowed && !reference.shadowed.empty()) {
-    // Shadowed = all lights minus those inside the cap (the same rule as the reference).
+    // Shadowed = all lights (and the ambient) minus the lights inside the cap.
     const double cos_half = std::cos(opt.cap_half_angle_deg * M_PI / 180.0);
     double sum = 0;
     std::vector<size_t> inside;

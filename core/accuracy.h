@@ -20,6 +20,7 @@
 
 #include "core/envmap.h"
 #include "core/light_list.h"
+#include "core/spherical_harmonics.h"
 #include "core/vec3.h"
 
 namespace lp {
@@ -59,6 +60,11 @@ struct LightError {
   double shadowed = 0;         // 0 when options.shadowed is false
 };
 LightError light_error(const AccuracyReference& reference, std::span<const Light> lights);
+// Lights plus an ambient SH9 (sample --residual sh9; or SH9 alone with no lights), scored
+// as a renderer lights with them: the ambient's irradiance (and its radiance through the
+// Phong lobe) adds to the lights' everywhere, and no cap occludes it (ambient is not
+// shadowed), while the lights inside a cap are.
+LightError light_error(const AccuracyReference& reference, std::span<const Light> lights, const Sh9& ambient);
 
 // Single evaluations, for tests and tools: irradiance (luminance) at normal n from the
 // map, and from lights; glossy radiance for reflection direction r.

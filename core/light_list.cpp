@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/sh9_json.h"
 
 namespace lp {
 
@@ -48,6 +49,8 @@ std::array<double, 3> triple(const json& value, const std::string& source, const
 
 }  // namespace
 
+std::string_view to_string(Sh9Content content) { return content == Sh9Content::Map ? "map" : "residual"; }
+
 std::string to_json(const LightList& list, bool pretty) {
   // ordered_json keeps the keys in the order CONVENTIONS.md shows them.
   using ojson = nlohmann::ordered_json;
@@ -68,6 +71,10 @@ std::string to_json(const LightList& list, bool pretty) {
   doc["units"] = std::string(to_string(list.units));
   doc["frame_convention"] = kFrameConvention;
   doc["lights"] = std::move(lights);
+  if (list.sh9)
+    doc["sh9"] = {{"order", kSh9Order},
+                  {"content", std::string(to_string(list.sh9_content))},
+                  {"coefficients", sh9_rows_json(*list.sh9)}};
   // nlohmann prints doubles with the shortest representation that round-trips.
   return pretty ? doc.dump(2) : doc.dump();
 }
@@ -125,6 +132,17 @@ LightList light_list_from_json(const std::string& text, const std::string& sourc
     l.solid_angle = number(field(o, "solid_angle", source, where), source, where + "solid_angle");
     if (l.solid_angle < 0) fail(source, where + "solid_angle is negative");
     list.lights.push_back(l);
+  }
+  if (auto sh = doc.find("sh9"); sh != doc.end()) {
+    if (!sh->is_object()) fail(source, "sh9 is not an object");
+    const json& content = field(*sh, "content", source, "sh9: ");
+    if (content == "map")
+      list.sh9_content = Sh9Content::Map;
+    else if (content == "residual")
+      list.sh9_content = Sh9Content::Residual;
+    else
+      fail(source, fmt::format("sh9: content is {}, expected \"residual\" or \"map\"", content.dump()));
+    list.sh9 = sh9_from_json_object(*sh, source, "sh9: ");
   }
   return list;
 }

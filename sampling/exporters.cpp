@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/spherical_harmonics.h"
 
 namespace lp {
 
@@ -23,7 +24,8 @@ struct FormatInfo {
 constexpr FormatInfo kFormats[] = {
     {ExportFormat::Json, "json", ".json"},       {ExportFormat::Ndjson, "ndjson", ".ndjson"},
     {ExportFormat::Pbrt, "pbrt", ".pbrt"},       {ExportFormat::Mitsuba, "mitsuba", ".xml"},
-    {ExportFormat::Gltf, "gltf", ".gltf"},       {ExportFormat::Csv, "csv", ".csv"},
+    {ExportFormat::Gltf, "gltf", ".gltf"},       {ExportFormat::Glb, "glb", ".glb"},
+    {ExportFormat::Csv, "csv", ".csv"},
 };
 
 const FormatInfo& info(ExportFormat format) {
@@ -127,7 +129,25 @@ std::array<double, 4> quaternion_from_minus_z(Vec3 b) {
   return {axis.x * k, axis.y * k, 0, std::cos(angle / 2)};
 }
 
-std::string export_gltf(const LightList& list) {
+// glTF's lux: a "radiance" list's rgb is photopically weighted W m^-2 (calib/photometric.h),
+// and 683 lm/W makes the luminance of color x intensity its illuminance in lux (Blender's
+// importer divides by the same 683 to get a sun's W m^-2). Relative lists stay as they are.
+double gltf_intensity_factor(const LightList& list) { return list.units == Units::Radiance ? kLumensPerWatt : 1.0; }
+
+nlohmann::ordered_json gltf_sh9_extras(const LightList& list) {
+  using ojson = nlohmann::ordered_json;
+  const Sh9 yup = scaled(sh9_yup_from_zup(*list.sh9), gltf_intensity_factor(list));
+  ojson rows = ojson::array();
+  for (const auto& row : yup.coefficients) rows.push_back({row[0], row[1], row[2]});
+  return {{"format", kShFormat},
+          {"order", kSh9Order},
+          {"content", std::string(to_string(list.sh9_content))},
+          {"frame_convention", "y-up (glTF, three.js): basis of lightprobe.sh/1 evaluated at (x, z, -y)"},
+          {"units", "as the lights' color x intensity"},
+          {"coefficients", std::move(rows)}};
+}
+
+nlohmann::ordered_json gltf_document(const LightList& list) {
   using ojson = nlohmann::ordered_json;
   ojson doc;
   doc["asset"] = {{"version", "2.0"},
@@ -139,12 +159,14 @@ std::string export_gltf(const LightList& list) {
                     {"method", list.method},
                     {"units", std::string(to_string(list.units))},
                     {"frame_convention", "y-up: (x, y, z) of lightprobe's z-up world is (x, z, -y) here"}}}};
+  if (list.sh9) doc["asset"]["extras"]["sh9"] = gltf_sh9_extras(list);
   if (list.lights.empty()) {
     // glTF requires non-empty `lights` and `nodes` arrays when present: an empty scene.
     doc["scenes"] = ojson::array({ojson::object({{"name", "lightprobe lights"}})});
     doc["scene"] = 0;
-    return doc.dump(2) + "\n";
+    return doc;
   }
+  const double lux_factor = gltf_intensity_factor(list);
   doc["extensionsUsed"] = {"KHR_lights_punctual"};
   ojson lights = ojson::array();
   ojson nodes = ojson::array();
@@ -157,7 +179,7 @@ std::string export_gltf(const LightList& list) {
     light["name"] = name;
     light["type"] = "directional";
     light["color"] = {c[0], c[1], c[2]};
-    light["intensity"] = max_component(l.rgb);
+    light["intensity"] = max_component(l.rgb) * lux_factor;
     light["extras"] = {{"id", l.id}, {"solid_angle", l.solid_angle}};
     lights.push_back(std::move(light));
 
@@ -173,7 +195,27 @@ std::string export_gltf(const LightList& list) {
   doc["nodes"] = std::move(nodes);
   doc["scenes"] = ojson::array({ojson{{"name", "lightprobe lights"}, {"nodes", std::move(scene_nodes)}}});
   doc["scene"] = 0;
-  return doc.dump(2) + "\n";
+  return doc;
+}
+
+std::string export_gltf(const LightList& list) { return gltf_document(list).dump(2) + "\n"; }
+
+// Binary glTF 2.0: 12-byte header (magic "glTF", version 2, total length), then one JSON
+// chunk (length, type "JSON", the text padded with spaces to 4 bytes); no BIN chunk,
+// since lights need no buffers. All integers little-endian.
+std::string export_glb(const LightList& list) {
+  std::string json = gltf_document(list).dump();
+  while (json.size() % 4) json += ' ';
+  std::string out;
+  auto u32 = [&](uint32_t v) {
+    for (int b = 0; b < 4; ++b) out += char((v >> (8 * b)) & 0xFF);
+  };
+  u32(0x46546C67);  // "glTF"
+  u32(2);
+  u32(uint32_t(12 + 8 + json.size()));
+  u32(uint32_t(json.size()));
+  u32(0x4E4F534A);  // "JSON"
+  return out + json;
 }
 
 std::string export_csv(const LightList& list) {
@@ -215,6 +257,8 @@ std::string export_lights(const LightList& list, ExportFormat format) {
       return export_mitsuba(list);
     case ExportFormat::Gltf:
       return export_gltf(list);
+    case ExportFormat::Glb:
+      return export_glb(list);
     case ExportFormat::Csv:
       return export_csv(list);
   }
@@ -233,14 +277,17 @@ std::string export_light_sequence(const std::vector<LightList>& lists, ExportFor
 ExportFormat export_format_for(const std::string& name, const std::string& path, bool sequence) {
   if (!name.empty()) {
     auto f = export_format_from_string(name);
-    if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, csv)", name));
+    if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, glb, csv)", name));
     return *f;
   }
   const std::string e = lower_extension(path);
   if (e == ".jsonl") return ExportFormat::Ndjson;
+  if (e == ".json") return sequence ? ExportFormat::Ndjson : ExportFormat::Json;
   for (const FormatInfo& f : kFormats)
-    if (f.extension == e && f.format != ExportFormat::Json) return f.format;
-  return sequence ? ExportFormat::Ndjson : ExportFormat::Json;
+    if (f.extension == e) return f.format;
+  std::string known;
+  for (const FormatInfo& f : kFormats) known += fmt::format("{}{} ({})", known.empty() ? "" : ", ", f.extension, f.name);
+  throw InputError(fmt::format("{}: unknown extension '{}': name one of {}, .jsonl, or give --format", path, e, known));
 }
 
 }  // namespace lp

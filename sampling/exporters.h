@@ -49,11 +49,18 @@
 //            [x, y, z, w] that turns the node's local -Z (where a KHR directional light
 //            shines) into the light's travel direction. Frame: glTF is +Y up,
 //            right-handed, so the same (x, y, z)_ours -> (x, z, -y)_gltf rotation; the
-//            travel direction is -(x, z, -y). Units: glTF specifies lux; we write the
-//            list's own units unconverted (relative for uncalibrated maps; for "radiance"
-//            lists the luminance of color x intensity is in lux, since a light's rgb is
-//            radiance integrated over solid angle). The list's frame, timestamp, method
-//            and units go in asset.extras, each light's id and solid angle in its extras.
+//            travel direction is -(x, z, -y). Units: glTF specifies lux. A "radiance"
+//            list's rgb is photopically weighted W m^-2 (calib/photometric.h), so
+//            intensity = 683 m and the luminance of color x intensity is the light's
+//            illuminance in lux (Blender's importer divides by 683 again: sun strength
+//            in W m^-2 = m). A relative list is written unconverted (scale it first:
+//            sampling/light_units.h). The list's frame, timestamp, method and units go in
+//            asset.extras, with the list's SH9 when it has one (asset.extras.sh9: rotated
+//            to glTF's Y-up frame, lightprobe.sh/1's basis and order, so that three.js'
+//            SphericalHarmonics3.fromArray takes its rows flattened; scaled like the
+//            intensities); each light's id and solid angle in its extras.
+//   glb      the same glTF document as binary glTF 2.0: a 12-byte header and one JSON chunk
+//            padded with spaces to 4 bytes (no BIN chunk: lights need no buffers).
 //   csv      header `id,x,y,z,r,g,b,solid_angle`, one row per light in our frame, every
 //            number with the shortest text that reads back to the same double.
 //
@@ -71,14 +78,18 @@
 
 namespace lp {
 
-enum class ExportFormat { Json, Ndjson, Pbrt, Mitsuba, Gltf, Csv };
+// Maximum luminous efficacy (lm/W) that relates calibrated maps' photopically weighted
+// watts to lux and cd m^-2 (calib/photometric.h), and glTF's lux to Blender's W m^-2.
+inline constexpr double kLumensPerWatt = 683.0;
 
-// "json", "ndjson", "pbrt", "mitsuba", "gltf", "csv" (the --format names).
+enum class ExportFormat { Json, Ndjson, Pbrt, Mitsuba, Gltf, Glb, Csv };
+
+// "json", "ndjson", "pbrt", "mitsuba", "gltf", "glb", "csv" (the --format names).
 std::string_view to_string(ExportFormat format);
 std::optional<ExportFormat> export_format_from_string(std::string_view name);
 std::vector<ExportFormat> all_export_formats();
 // Conventional file extension, with the dot: ".json", ".ndjson", ".pbrt", ".xml",
-// ".gltf", ".csv".
+// ".gltf", ".glb", ".csv".
 std::string_view file_extension(ExportFormat format);
 
 // The whole file text for one light list.
@@ -88,8 +99,9 @@ std::string export_lights(const LightList& list, ExportFormat format);
 std::string export_light_sequence(const std::vector<LightList>& lists, ExportFormat format);
 
 // The format of an output: `name` (--format) when given, else from the extension of
-// `path` (.json, .ndjson or .jsonl, .pbrt, .xml, .gltf, .csv); any other extension is
-// JSON, or NDJSON for a sequence. Throws InputError on an unknown `name`.
+// `path` (.json, .ndjson or .jsonl, .pbrt, .xml, .gltf, .glb, .csv; .json is NDJSON for
+// a sequence). Throws InputError on an unknown `name`, and on any other extension
+// (naming the ones that exist) when no `name` is given.
 ExportFormat export_format_for(const std::string& name, const std::string& path, bool sequence);
 
 }  // namespace lp

@@ -116,7 +116,7 @@ TEST(ExportFormats, NamesRoundTripAndUnknownNamesAreRejected) {
     EXPECT_EQ(*back, f);
     EXPECT_EQ(file_extension(f).front(), '.');
   }
-  EXPECT_EQ(all_export_formats().size(), 6u);
+  EXPECT_EQ(all_export_formats().size(), 7u);
   EXPECT_EQ(export_format_from_string("mitsuba"), ExportFormat::Mitsuba);
   EXPECT_FALSE(export_format_from_string("obj").has_value());
   EXPECT_FALSE(export_format_from_string("JSON").has_value());

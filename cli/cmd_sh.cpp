@@ -1,0 +1,74 @@
+// sh: environment map -> its SH9 coefficients (sh.json), the ambient term of engines.
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <memory>
+
+#include "cli/commands.h"
+#include "cli/report.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/spherical_harmonics.h"
+
+namespace lp::cli {
+
+struct ShArgs {
+  std::string input;
+  std::string output;
+  int order = kSh9Order;
+  std::string layout;  // input layout override
+};
+
+int run_sh(const ShArgs& args, const Output& out) {
+  if (args.order != kSh9Order)
+    throw InputError(fmt::format("--order: only order {} (9 coefficients) is supported, got {}", kSh9Order, args.order));
+  ReadMapOptions read;
+  read.layout = optional_layout(args.layout, "--layout");
+  const EnvMap map = args.input == "scene" ? map_or_scene(args.input, 1024) : read_envmap(args.input, read);
+
+  const auto start = std::chrono::steady_clock::now();
+  const Sh9 sh = project_sh9(map, args.input);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  write_file_atomically(args.output, sh9_to_json(sh, map.units));
+
+  const auto up = sh9_irradiance(sh, {0, 0, 1});
+  const auto down = sh9_irradiance(sh, {0, 0, -1});
+  if (!out.json)
+    say(out, "{}: SH9 of {} in {:.2f} ms -> {}; irradiance (luminance) facing up {:.4g}, down {:.4g} ({})\n",
+        args.input, describe_size(map), ms, args.output, luminance(up.data()), luminance(down.data()),
+        to_string(map.units));
+  nlohmann::json coefficients = nlohmann::json::array();
+  for (const auto& row : sh.coefficients) coefficients.push_back(row);
+  // Irradiance per channel facing each axis: numbers a consumer's own SH code can check.
+  nlohmann::json axes;
+  const std::pair<const char*, Vec3> kAxes[] = {{"+x", {1, 0, 0}}, {"-x", {-1, 0, 0}}, {"+y", {0, 1, 0}},
+                                               {"-y", {0, -1, 0}}, {"+z", {0, 0, 1}}, {"-z", {0, 0, -1}}};
+  for (const auto& [name, axis] : kAxes) axes[name] = sh9_irradiance(sh, axis);
+  emit_json(out, {{"input", args.input},
+                  {"output", args.output},
+                  {"units", std::string(to_string(map.units))},
+                  {"project_ms", ms},
+                  {"irradiance_up", luminance(up.data())},
+                  {"irradiance_down", luminance(down.data())},
+                  {"irradiance_axes", axes},
+                  {"coefficients", coefficients}});
+  return 0;
+}
+
+std::vector<Command> sh_commands() {
+  return {
+      {"sh", "Environment map -> spherical harmonics (SH9) of its radiance",
+       "lightprobe sh probe.exr -o sh.json\nlightprobe sh scene -o sh.json --json",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<ShArgs>();
+         f.arg("MAP", a->input, "A map file, or 'scene' (the procedural scene)").required();
+         f.output(a->output, "sh.json: {\"format\": \"lightprobe.sh/1\", \"order\": 2, ..., \"coefficients\": [[r, g, b] x 9]}");
+         f.opt("--order", a->order, "SH order (only 2: 9 coefficients, bands 0-2)");
+         f.opt("--layout", a->layout, "Read the input as this layout");
+         return [a](const Output& out) { return run_sh(*a, out); };
+       }},
+  };
+}
+
+}  // namespace lp::cli

@@ -1,0 +1,66 @@
+#include "sampling/light_units.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "core/error.h"
+#include "sampling/exporters.h"
+
+namespace lp {
+
+double upward_illuminance(const LightList& list) {
+  std::array<double, 3> e{0, 0, 0};
+  for (const Light& l : list.lights)
+    for (int c = 0; c < 3; ++c) e[c] += l.rgb[c] * std::max(0.0, l.direction.z);
+  if (list.sh9 && list.sh9_content == Sh9Content::Residual) {
+    const auto a = sh9_irradiance(*list.sh9, {0, 0, 1});
+    for (int c = 0; c < 3; ++c) e[c] += a[c];
+  }
+  return luminance(e.data()) * (list.units == Units::Radiance ? kLumensPerWatt : 1.0);
+}
+
+LightUnitsResult apply_light_units(LightList list, const LightUnitsOptions& options, const std::string& output) {
+  const int given = int(options.exposure_ev.has_value()) + int(options.scale.has_value()) +
+                    int(options.normalize_illuminance_lux.has_value());
+  if (given > 1) throw InputError("--exposure, --scale and --normalize-illuminance: give at most one");
+  LightUnitsResult r;
+  if (given == 0) {
+    if (list.units == Units::Relative)
+      r.warning = fmt::format(
+          "{}: relative units written as they are (not lux or W m^-2): calibrate the map, or give --exposure, "
+          "--scale or --normalize-illuminance",
+          output);
+    r.list = std::move(list);
+    return r;
+  }
+  if (options.exposure_ev) {
+    if (!std::isfinite(*options.exposure_ev))
+      throw InputError(fmt::format("--exposure must be a finite number of stops, got {}", *options.exposure_ev));
+    r.factor = std::exp2(*options.exposure_ev);
+  } else if (options.scale) {
+    if (!(*options.scale > 0) || !std::isfinite(*options.scale))
+      throw InputError(fmt::format("--scale must be positive, got {}", *options.scale));
+    r.factor = *options.scale;
+  } else {
+    const double lux = *options.normalize_illuminance_lux;
+    if (!(lux > 0) || !std::isfinite(lux))
+      throw InputError(fmt::format("--normalize-illuminance must be a positive illuminance in lux, got {}", lux));
+    // The target is reached in "radiance" units, where 683 Y is lux.
+    LightList probe = list;
+    probe.units = Units::Radiance;
+    const double now = upward_illuminance(probe);
+    if (!(now > 0))
+      throw InputError("--normalize-illuminance: the lights give no illuminance on an upward-facing surface");
+    r.factor = lux / now;
+  }
+  for (Light& l : list.lights)
+    for (double& c : l.rgb) c *= r.factor;
+  if (list.sh9) list.sh9 = scaled(*list.sh9, r.factor);
+  // A scaled relative list is what a calibration would have given: absolute radiance.
+  list.units = Units::Radiance;
+  r.list = std::move(list);
+  return r;
+}
+
+}  // namespace lp

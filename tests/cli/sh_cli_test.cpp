@@ -1,0 +1,109 @@
+// `lightprobe sh` and the SH, units and GLB options of `lightprobe sample` as a user runs
+// them: files that read back, warnings where units are relative, and bad input refused
+// with one line and exit 2, leaving nothing written.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_run.h"
+#include "core/envmap.h"
+#include "core/image_io.h"
+
+namespace lp::cli_test {
+namespace {
+
+const std::string kGrace = "probes-probulator-latlong256/grace.hdr";
+
+TEST(ShCli, WritesNineCoefficientsThatReadBack) {
+  const fs::path out = scratch() / "sh.json";
+  const CliRun r = lightprobe("sh --json " + shared(kGrace) + " -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto doc = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(doc["format"], "lightprobe.sh/1");
+  EXPECT_EQ(doc["order"], 2);
+  EXPECT_EQ(doc["frame_convention"], "z-up");
+  ASSERT_EQ(doc["coefficients"].size(), 9u);
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["coefficients"], doc["coefficients"]);
+  EXPECT_GT(report["irradiance_up"].get<double>(), 0);
+}
+
+TEST(ShCli, BadInputIsOneLineAndWritesNothing) {
+  const fs::path out = scratch() / "never.json";
+  fs::remove(out);
+  expect_one_line_error(lightprobe("sh " + shared(kGrace) + " --order 3 -o " + out.string()), "--order");
+  EXPECT_FALSE(fs::exists(out));
+  // NaN radiance (PFM: no checks on write), and a map whose every pixel is masked out.
+  EnvMap map = make_latlong(8, 4);
+  const fs::path nan = scratch() / "nan.pfm";
+  {
+    std::string pfm = "PF\n8 4\n-1.0\n";
+    std::vector<float> px(8 * 4 * 3, 1.0f);
+    px[5] = NAN;
+    pfm.append(reinterpret_cast<const char*>(px.data()), px.size() * sizeof(float));
+    std::ofstream(nan, std::ios::binary) << pfm;
+  }
+  expect_one_line_error(lightprobe("sh " + nan.string() + " -o " + out.string()), "nan.pfm");
+  map.valid.assign(map.pixel_count(), 0);
+  const fs::path masked = scratch() / "masked.exr";
+  write_envmap(masked.string(), map);
+  expect_one_line_error(lightprobe("sh " + masked.string() + " -o " + out.string()), "masked.exr");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(SampleCli, GlbIsBinaryGltfAndUnknownExtensionsAreRefused) {
+  const fs::path glb = scratch() / "lights.glb";
+  ASSERT_EQ(lightprobe("sample " + shared(kGrace) + " --method q2tree --n 16 -o " + glb.string()).code, 0);
+  EXPECT_EQ(slurp(glb).substr(0, 4), "glTF");
+  const fs::path txt = scratch() / "lights.txt";
+  const CliRun r = lightprobe("sample " + shared(kGrace) + " --n 16 -o " + txt.string());
+  expect_one_line_error(r, "lights.txt");
+  EXPECT_NE(r.err.find(".glb"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(txt));
+}
+
+TEST(SampleCli, RelativeUnitsWarnOrScaleToTheIlluminanceAsked) {
+  const fs::path gltf = scratch() / "lights.gltf";
+  CliRun r = lightprobe("sample " + shared(kGrace) + " --n 16 -o " + gltf.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("relative units"), std::string::npos) << r.err;
+  r = lightprobe("sample " + shared(kGrace) + " --n 16 --normalize-illuminance 5000 -o " + gltf.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("relative units"), std::string::npos) << r.err;
+  // Upward illuminance of the exported lights: sum over lights above the horizon of
+  // Y(color) intensity cos(zenith); in glTF's Y-up frame the light shines along the node's
+  // -Z, so that is where the rotation sends -Z, and "up" is +Y.
+  const auto doc = nlohmann::json::parse(slurp(gltf));
+  EXPECT_EQ(doc["asset"]["extras"]["units"], "radiance");
+  double lux = 0;
+  const auto& lights = doc["extensions"]["KHR_lights_punctual"]["lights"];
+  for (size_t i = 0; i < lights.size(); ++i) {
+    const auto& q = doc["nodes"][i]["rotation"];
+    const double x = q[0], y = q[1], z = q[2], w = q[3];
+    // Y component of (0, 0, -1) rotated by q: v + 2w (u x v) + 2 u x (u x v) gives 2 (w x - y z).
+    const double travel_y = 2 * (w * x - y * z);
+    const auto& c = lights[i]["color"];
+    const double lum = 0.2126 * c[0].get<double>() + 0.7152 * c[1].get<double>() + 0.0722 * c[2].get<double>();
+    lux += lum * lights[i]["intensity"].get<double>() * std::max(0.0, -travel_y);
+  }
+  EXPECT_NEAR(lux, 5000, 5000 * 1e-9);
+  const fs::path out = scratch() / "zero.gltf";
+  expect_one_line_error(lightprobe("sample " + shared(kGrace) + " --n 16 --normalize-illuminance 0 -o " + out.string()),
+                        "--normalize-illuminance");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(SampleCli, ResidualSh9CarriesLightsAndAmbientAndScoresThem) {
+  const fs::path out = scratch() / "residual.json";
+  const CliRun r = lightprobe("sample --json " + shared(kGrace) + " --method pharr --n 4 --residual sh9 -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto doc = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(doc["lights"].size(), 4u);
+  EXPECT_EQ(doc["sh9"]["content"], "residual");
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_LT(report["error"]["diffuse"].get<double>(), report["error_lights_only"]["diffuse"].get<double>());
+  expect_one_line_error(lightprobe("sample " + shared(kGrace) + " --n 4 --residual sh12 -o " + out.string()), "--residual");
+}
+
+}  // namespace
+}  // namespace lp::cli_test

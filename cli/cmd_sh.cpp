@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/spherical_harmonics.h"
+#include "eval/harness.h"
 
 namespace lp::cli {
 

@@ -124,7 +124,8 @@ ChartPanel error_against_time(const std::vector<HdrRow>& rows) {
   }
   ChartPanel panel{"95th-percentile log10 luminance error against time", "recover + merge, ms",
                    "p95 |log10 L - log10 L_true|", {}};
-  for (auto& [k, s] : by_method) {
+  for (auto& entry : by_method) {
+    const ChartSeries& s = entry.second;  // not a structured binding: clang 14 cannot capture those
     // Points of one method across maps: sort by time so the polyline reads left to right.
     std::vector<size_t> idx(s.x.size());
     for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;

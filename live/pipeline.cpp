@@ -220,8 +220,11 @@ void LivePipeline::process_loop() {
       for (size_t k = 0; k < stages_.size(); ++k) stages_[k].second.observe(t.stage[k]);
       latency_.observe(t.latency);
     } catch (const std::exception& e) {
+      // A bracket the back end could not process is dropped whole, and counted so: every
+      // frame in is processed, dropped or partial (the books balance, docs/live.md).
       std::lock_guard<std::mutex> lock(mutex_);
       stats_.last_error = e.what();
+      ++stats_.brackets_dropped;
     }
   }
 }

@@ -109,7 +109,7 @@ TEST(GarbageCli, JsonFilesOfTheWrongFormatNameTheFileAndWhatIsWrong) {
   std::ofstream(bad) << "{\"format\": \"lightprobe.response/1\", \"levels\": \"many\"}";
   const CliRun typed = lightprobe("hdr fuse " + map + " " + map + " --exposure-times 0.1,0.2 --response " +
                                   bad.string() + " -o " + (dir / "out.exr").string());
-  expect_one_line_error(typed, bad.string() + ": a field has the wrong type");
+  expect_one_line_error(typed, bad.string() + ": \"levels\" is \"many\", not a count of code values");
   EXPECT_EQ(typed.err.find("json.exception"), std::string::npos) << typed.err;
 }
 

@@ -36,7 +36,7 @@ std::string message_of(F f) {
 TEST(JsonFile, SyntaxErrorsAndMissingFilesNameTheFile) {
   const std::string broken = write("broken.json", "{\"format\": ");
   EXPECT_EQ(message_of([&] { read_json_file(broken); }), broken + ": not JSON (syntax error at byte 12)");
-  EXPECT_EQ(message_of([&] { read_json_file("/nonexistent/x.json"); }), "/nonexistent/x.json: cannot open");
+  EXPECT_EQ(message_of([&] { read_json_file("/nonexistent/x.json"); }), "/nonexistent/x.json: cannot open: No such file or directory");
   EXPECT_EQ(read_json_file(write("ok.json", "{\"a\": 1}"))["a"], 1);
 }
 

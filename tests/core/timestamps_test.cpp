@@ -61,7 +61,7 @@ TEST(Timestamps, RefusesEveryKindOfGarbageWithTheFileAndLine) {
   EXPECT_EQ(message_of(nul), nul + ":2: '0.1?' is not one decimal number of seconds");
   const std::string hex = write("hex.txt", "0\n0x10\n");
   EXPECT_EQ(message_of(hex), hex + ":2: '0x10' is not one decimal number of seconds");
-  EXPECT_EQ(message_of("/nonexistent/timestamps.txt"), "/nonexistent/timestamps.txt: cannot read");
+  EXPECT_EQ(message_of("/nonexistent/timestamps.txt"), "/nonexistent/timestamps.txt: cannot open the timestamps: No such file or directory");
 }
 
 }  // namespace

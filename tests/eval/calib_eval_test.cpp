@@ -1,5 +1,7 @@
 // eval calib as a library call, on chessboard views rendered through a known fisheye
 // (calib/synthetic_boards.h): our calibration and OpenCV's alone on the same corners.
+#include <unistd.h>  // getpid: ctest runs each test in its own process, at once
+
 #include "eval/calib_eval.h"
 
 #include <gtest/gtest.h>
@@ -30,7 +32,7 @@ SyntheticBoardsOptions boards_options() {
 
 const EvalCalibReport& report() {
   static const EvalCalibReport r = [] {
-    const fs::path dir = fs::temp_directory_path() / "lightprobe_calib_eval_test";
+    const fs::path dir = fs::temp_directory_path() / ("lightprobe_calib_eval_test_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir / "views");
     const SyntheticBoardsOptions bo = boards_options();

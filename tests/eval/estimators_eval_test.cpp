@@ -2,6 +2,8 @@
 // what the estimators must do (unbiased MIS/BIS: mean error far below the RMSE, the RMSE
 // the spread across runs; error falling with the budget; at most one visibility test per
 // sample) and against the files and report it writes.
+#include <unistd.h>  // getpid: ctest runs each test in its own process, at once
+
 #include "eval/estimators_eval.h"
 
 #include <gtest/gtest.h>
@@ -45,7 +47,7 @@ const EvalEstimatorsReport& short_run() {
     o.width = 64;
     o.height = 32;
     o.sweep = false;
-    o.output_dir = (fs::temp_directory_path() / "lightprobe_estimators_eval_test").string();
+    o.output_dir = (fs::temp_directory_path() / ("lightprobe_estimators_eval_test_" + std::to_string(::getpid()))).string();
     fs::remove_all(o.output_dir);
     return evaluate_estimators(o);
   }();

@@ -1,6 +1,8 @@
 // eval metadata as a library call, on a small synthetic walk (estimate/walkthrough.h):
 // the rows it must hold, real probes far better than probe-less lighting, and distances
 // that can only shrink as more of the path is walked.
+#include <unistd.h>  // getpid: ctest runs each test in its own process, at once
+
 #include "eval/metadata_eval.h"
 
 #include <gtest/gtest.h>
@@ -20,7 +22,7 @@ namespace fs = std::filesystem;
 
 const fs::path& walk_dir() {
   static const fs::path dir = [] {
-    const fs::path d = fs::temp_directory_path() / "lightprobe_metadata_eval_test_walk";
+    const fs::path d = fs::temp_directory_path() / ("lightprobe_metadata_eval_test_walk_" + std::to_string(::getpid()));
     fs::remove_all(d);
     WalkthroughOptions o;
     o.rays_x = 4;
@@ -34,7 +36,7 @@ const EvalMetadataReport& report() {
   static const EvalMetadataReport r = [] {
     EvalMetadataOptions o;
     o.input_dir = walk_dir().string();
-    o.output_dir = (fs::temp_directory_path() / "lightprobe_metadata_eval_test_out").string();
+    o.output_dir = (fs::temp_directory_path() / ("lightprobe_metadata_eval_test_out_" + std::to_string(::getpid()))).string();
     o.fractions = {0.5, 1};
     return evaluate_metadata(o);
   }();

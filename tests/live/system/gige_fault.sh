@@ -64,7 +64,7 @@ kill -9 "$SIM_PID"
 wait "$SIM_PID" 2>/dev/null
 SIM_PID=""
 sleep 3
-http_get /lights >/dev/null || fail "/lights stopped answering while the camera was away"
+code=$(curl -s -o /dev/null -w "%{http_code}" --max-time 5 "http://127.0.0.1:$PORT/lights"); [ "$code" = 200 ] || fail "/lights stopped answering while the camera was away (HTTP $code): $(tail -3 "$STREAM_ERR" | tr "\n" " ")"
 stalled=$(metric lightprobe_frames_in_total)
 [ "$stalled" -ge "$before" ] || fail "frame counter went backwards ($before -> $stalled)"
 

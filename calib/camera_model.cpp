@@ -441,7 +441,10 @@ CameraModel read_cameramodel(const std::string& path) {
   struct Free {
     void operator()(mrcal_cameramodel_t* m) const { mrcal_free_cameramodel(&m); }
   };
-  std::unique_ptr<mrcal_cameramodel_t, Free> cm(mrcal_read_cameramodel_string(text.c_str(), int(text.size())));
+  // mrcal's parser reads a trailing comment up to a newline past the buffer's end (found by
+  // fuzz_cameramodel): it gets the text with a newline closing it.
+  const std::string closed = text + "\n";
+  std::unique_ptr<mrcal_cameramodel_t, Free> cm(mrcal_read_cameramodel_string(closed.c_str(), int(closed.size())));
   if (!cm) throw InputError(path + ": not a valid mrcal .cameramodel");
   char name[1024];
   if (!mrcal_lensmodel_name(name, sizeof name, &cm->lensmodel))

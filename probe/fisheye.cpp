@@ -94,17 +94,26 @@ FisheyeModel read_fisheye_yaml(const std::string& path) {
     return n;
   };
   std::string dist_model;
-  need("distortion_model") >> dist_model;
+  try {
+    need("distortion_model") >> dist_model;
+  } catch (const cv::Exception&) {
+    throw InputError(path + ": distortion_model is not a string");
+  }
   const std::string kb_form = lens_type_info(LensType::KannalaBrandt).opencv_distortion_model;
   if (dist_model != kb_form)
     throw InputError(path + ": distortion_model is '" + dist_model + "', only '" + kb_form +
                      "' (Kannala-Brandt, cv::fisheye) is read here");
   FisheyeModel m;
-  need("image_width") >> m.width;
-  need("image_height") >> m.height;
   cv::Mat K, D;
-  need("camera_matrix") >> K;
-  need("distortion_coefficients") >> D;
+  try {  // OpenCV throws on a node of the wrong kind (found by fuzz_opencv_yaml)
+    need("image_width") >> m.width;
+    need("image_height") >> m.height;
+    need("camera_matrix") >> K;
+    need("distortion_coefficients") >> D;
+  } catch (const cv::Exception&) {
+    throw InputError(path + ": image_width, image_height must be numbers and camera_matrix, "
+                            "distortion_coefficients OpenCV matrices");
+  }
   if (K.rows != 3 || K.cols != 3) throw InputError(path + ": camera_matrix is not 3x3");
   if (D.total() != 4) throw InputError(path + ": fisheye distortion_coefficients must hold 4 values, has " +
                                        std::to_string(D.total()));

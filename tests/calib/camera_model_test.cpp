@@ -412,3 +412,23 @@ TEST(CameraModelFiles, OpenCvSampleFilesWithoutADistortionModelReadAsCalibrateCa
 
 }  // namespace
 }  // namespace lp
+
+namespace lp {
+// Found by fuzz_cameramodel: mrcal's parser read past the buffer when the file ended in a
+// comment without a newline (a SEGV under ASan); such a file reads like any other.
+TEST(CameraModelFile, AFileEndingInACommentWithoutANewlineIsRead) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lp_cameramodel_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "cam.cameramodel").string();
+  std::ofstream(path) << "{\n    'lensmodel':  'LENSMODEL_OPENCV8',\n"
+                         "    'intrinsics': [ 1000, 1000, 639.5, 479.5, -0.1, 0.01, 0, 0, 0, 0, 0, 0 ],\n"
+                         "    'extrinsics': [ 0, 0, 0, 0, 0, 0 ],\n"
+                         "    'imagersize': [ 1280, 960 ],\n}\n# rms_reprojection_px = 0.25";
+  const CameraModel m = read_cameramodel(path);
+  EXPECT_EQ(m.lensmodel, "LENSMODEL_OPENCV8");
+  EXPECT_EQ(m.width, 1280);
+  EXPECT_DOUBLE_EQ(m.intrinsics[2], 639.5);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace lp

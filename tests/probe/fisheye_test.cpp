@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <random>
 
 #include <opencv2/calib3d.hpp>
@@ -214,6 +215,24 @@ TEST(Fisheye, OpenCvYamlIsReadWithTheConventionKeysAndOtherModelsAreRefused) {
   EXPECT_THROW(read_fisheye_yaml((dir / "pinhole.yaml").string()), InputError);
   EXPECT_THROW(read_fisheye_yaml((dir / "cam.cameramodel").string()), InputError);
   EXPECT_THROW(read_fisheye_yaml((dir / "missing.yaml").string()), InputError);
+  std::filesystem::remove_all(dir);
+}
+
+// Found by fuzz_opencv_yaml: a camera_matrix that is not a matrix made OpenCV throw its own
+// exception (an internal error, exit 1); it is bad input naming the file.
+TEST(Fisheye, ACameraMatrixThatIsNotAMatrixIsBadInputNamingTheFile) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lp_fisheye_bad_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "cam.yaml").string();
+  std::ofstream(path) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ndistortion_model: fisheye\n"
+                         "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 1, 2 ]\n"
+                         "distortion_coefficients: [ 0, 0, 0, 0 ]\n";
+  try {
+    read_fisheye_yaml(path);
+    ADD_FAILURE() << "a 3x3 matrix with two values was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(path + ": ", 0), 0u) << e.what();
+  }
   std::filesystem::remove_all(dir);
 }
 

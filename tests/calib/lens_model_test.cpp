@@ -206,7 +206,7 @@ TEST(LensModel, UnknownNamesAreRefusedInOneLine) {
   // A configured model with a configuration mrcal refuses, or none.
   EXPECT_NE(error_of([] { LensModel::parse("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8"); }).find("configuration"),
             std::string::npos);
-  EXPECT_THROW(LensModel(LensType::SplinedStereographic), InputError);
+  EXPECT_THROW(LensModel{LensType::SplinedStereographic}, InputError);  // braces: clang parses (..) as a declaration
   EXPECT_THROW(candidate_lens_type("LENSMODEL_OPENCV5"), InputError);  // a model, but not a candidate name
   EXPECT_THROW(candidate_lens_type("rational"), InputError);
 }

@@ -185,7 +185,9 @@ TEST(MergeWeights, DISABLED_WeightingTable) {
   for (const char* n : {"grace", "pisa", "uffizi"})
     scenes.emplace_back(n, read_rgb_image(kData + "/probes-probulator-latlong256/" + n + ".hdr"));
   scenes.emplace_back("scene", image_from_envmap(render_scene(describe_scene(), Layout::LatLong, 512, 256)));
-  for (const auto& [name, truth] : scenes) {
+  for (const auto& scene : scenes) {
+    const auto& name = scene.first;
+    const auto& truth = scene.second;  // a plain reference: clang 14 cannot capture a structured binding
     for (const auto& [curve, cname] :
          {std::pair{ResponseCurve::Gamma22, "gamma"}, std::pair{ResponseCurve::SCurve, "s-curve"}}) {
       SyntheticBracketOptions so;

@@ -496,6 +496,23 @@ void write_opencv_yaml(const std::string& path, const CameraModel& model) {
   write_file_atomically(path, fs.releaseAndGetString());
 }
 
+void read_yaml_matrix(const cv::FileNode& node, const std::string& path, const char* key, int max_values, cv::Mat* out) {
+  if (node.isMap()) {
+    const long long rows = int(node["rows"]), cols = int(node["cols"]);
+    if (rows <= 0 || cols <= 0 || rows * cols > max_values)
+      throw InputError(path + ": " + key + " claims " + std::to_string(rows) + "x" + std::to_string(cols) +
+                       " values, at most " + std::to_string(max_values) + " expected");
+  } else if (node.isSeq() && int(node.size()) > max_values) {
+    throw InputError(path + ": " + key + " has " + std::to_string(node.size()) + " values, at most " +
+                     std::to_string(max_values) + " expected");
+  }
+  try {
+    node >> *out;
+  } catch (const cv::Exception&) {
+    throw InputError(path + ": " + key + " is not an OpenCV matrix");
+  }
+}
+
 CameraModel read_opencv_yaml(const std::string& path) {
   CameraModel m;
   try {
@@ -509,8 +526,8 @@ CameraModel read_opencv_yaml(const std::string& path) {
     m.width = int(need("image_width"));
     m.height = int(need("image_height"));
     cv::Mat K, D;
-    need("camera_matrix") >> K;
-    need("distortion_coefficients") >> D;
+    read_yaml_matrix(need("camera_matrix"), path, "camera_matrix", 9, &K);
+    read_yaml_matrix(need("distortion_coefficients"), path, "distortion_coefficients", 14, &D);
     // Files written by OpenCV's own samples carry no distortion_model: a coefficient count
     // that only one model's form has (5: plumb_bob, 8: rational) names it; 4 stays
     // ambiguous (plumb_bob, fisheye, omnidir) and is refused.
@@ -560,7 +577,7 @@ CameraModel read_opencv_yaml(const std::string& path) {
         xi = double(xi_node);
       } else {
         cv::Mat xm;
-        xi_node >> xm;
+        read_yaml_matrix(xi_node, path, "xi", 1, &xm);
         if (xm.total() != 1) throw InputError(path + ": xi is not a single number");
         xm.convertTo(xm, CV_64F);
         xi = xm.at<double>(0);

@@ -20,6 +20,11 @@
 
 #include "core/vec3.h"
 
+namespace cv {
+class FileNode;
+class Mat;
+}  // namespace cv
+
 namespace lp {
 
 struct CameraModel {
@@ -55,6 +60,10 @@ void write_cameramodel(const std::string& path, const CameraModel& model);
 CameraModel read_cameramodel(const std::string& path);
 void write_opencv_yaml(const std::string& path, const CameraModel& model);
 CameraModel read_opencv_yaml(const std::string& path);
+// An OpenCV FileStorage matrix of at most max_values values into *out; InputError naming
+// `path` and `key` otherwise. The size is checked before OpenCV allocates rows x cols from
+// the header (a 48 GB allocation from a 300-byte file, found by fuzz_opencv_yaml).
+void read_yaml_matrix(const cv::FileNode& node, const std::string& path, const char* key, int max_values, cv::Mat* out);
 // By extension: .cameramodel or .yaml/.yml/.xml.
 CameraModel read_camera_model(const std::string& path);
 

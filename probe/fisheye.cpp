@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "calib/lens_model.h"
+#include "calib/camera_model.h"
 #include "core/error.h"
 #include "core/file_io.h"
 
@@ -108,8 +109,8 @@ FisheyeModel read_fisheye_yaml(const std::string& path) {
   try {  // OpenCV throws on a node of the wrong kind (found by fuzz_opencv_yaml)
     need("image_width") >> m.width;
     need("image_height") >> m.height;
-    need("camera_matrix") >> K;
-    need("distortion_coefficients") >> D;
+    read_yaml_matrix(need("camera_matrix"), path, "camera_matrix", 9, &K);
+    read_yaml_matrix(need("distortion_coefficients"), path, "distortion_coefficients", 4, &D);
   } catch (const cv::Exception&) {
     throw InputError(path + ": image_width, image_height must be numbers and camera_matrix, "
                             "distortion_coefficients OpenCV matrices");

@@ -233,6 +233,16 @@ TEST(Fisheye, ACameraMatrixThatIsNotAMatrixIsBadInputNamingTheFile) {
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()).rfind(path + ": ", 0), 0u) << e.what();
   }
+  // A header that claims 10^10 values (OpenCV would allocate 80 GB before reading data).
+  std::ofstream(path) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ndistortion_model: fisheye\n"
+                         "camera_matrix: !!opencv-matrix\n   rows: 100000\n   cols: 100000\n   dt: d\n   data: [ 1 ]\n"
+                         "distortion_coefficients: [ 0, 0, 0, 0 ]\n";
+  try {
+    read_fisheye_yaml(path);
+    ADD_FAILURE() << "a 100000x100000 camera matrix was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("camera_matrix claims 100000x100000"), std::string::npos) << e.what();
+  }
   std::filesystem::remove_all(dir);
 }
 

@@ -164,7 +164,9 @@ int parse_command_line(int argc, char** argv, bool run) {
 
 int run_command_line(int argc, char** argv) {
   install_interrupt_handlers();  // SIGINT/SIGTERM: temp files removed, exit 130/143
-  return parse_command_line(argc, argv, true);
+  const int code = parse_command_line(argc, argv, true);
+  end_if_interrupted();  // a signal that landed as the command finished still ends it with 128 + signal
+  return code;
 }
 
 int check_command_line(int argc, char** argv) { return parse_command_line(argc, argv, false); }

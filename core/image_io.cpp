@@ -929,23 +929,27 @@ void make_output_directory(const std::string& dir) {
 }
 
 void write_file_atomically(const std::string& path, const std::string& bytes) {
-  auto error = [&](int err) { return InputError(fmt::format("{}: cannot write: {}", path, std::strerror(err))); };
+  auto error = [&](int err) {
+    end_if_interrupted();  // the temp file went because a signal is ending the process: no error for that
+    return InputError(fmt::format("{}: cannot write: {}", path, std::strerror(err)));
+  };
   std::random_device rd;
   std::string tmp;
-  int fd = -1;
-  // Created and registered with SIGINT/SIGTERM held, so a signal never finds it unregistered.
-  std::optional<InterruptsHeld> held(std::in_place);
-  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
-    static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyz0123456789";
-    tmp = path + ".tmp-";
-    uint32_t r = rd();
-    for (int k = 0; k < 6; ++k, r /= 36) tmp += kChars[r % 36];
-    fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd < 0 && errno != EEXIST) throw error(errno);
-  }
-  if (fd < 0) throw error(EEXIST);
-  const TempFileRegistration registered(tmp);  // SIGINT/SIGTERM mid-write removes it (core/interrupt.h)
-  held.reset();
+  // Created and registered in one step, so a signal never finds it unregistered (core/interrupt.h).
+  const int fd = create_registered_temp_file(
+      [&] {
+        static constexpr char kChars[] = "abcdefghijklmnopqrstuvwxyz0123456789";
+        std::string name = path + ".tmp-";
+        uint32_t r = rd();
+        for (int k = 0; k < 6; ++k, r /= 36) name += kChars[r % 36];
+        return name;
+      },
+      tmp);
+  if (fd < 0) throw error(errno);
+  struct Unregister {
+    const std::string& path;
+    ~Unregister() { unregister_temp_file(path); }
+  } unregister{tmp};
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);

@@ -9,10 +9,11 @@
 // calls defer_interrupts(): from then a first signal only sets the flag it polls
 // (interrupt_signal()), and a second one ends the process as above. main returns
 // 128 + interrupt_signal() when the command comes back after a deferred signal.
-// Everything the handler does is async-signal-safe (unlink, _exit, atomics).
+// The handler itself only sets a flag and writes to a pipe; a watcher thread started here
+// removes the temp files and exits, under the lock temp files are created with.
 #pragma once
 
-#include <csignal>
+#include <functional>
 #include <string>
 
 namespace lp {
@@ -24,22 +25,20 @@ int interrupt_signal();
 // 128 + the signal received, the exit code for it; 0 when none has been.
 int interrupt_exit_code();
 
-// SIGINT and SIGTERM held back (blocked) while it lives, so that a temp file is never
-// created without being registered; a signal that came meanwhile is handled on release.
-class InterruptsHeld {
- public:
-  InterruptsHeld();
-  ~InterruptsHeld();
-  InterruptsHeld(const InterruptsHeld&) = delete;
-  InterruptsHeld& operator=(const InterruptsHeld&) = delete;
+// A signal that ends the process (any while not deferred, the second when deferred) ends it
+// here at once, in the calling thread, rather than moments later from the watcher (temp files removed,
+// 128 + signal); main calls it before returning, so a command finishing as the signal lands
+// does not exit 0.
+void end_if_interrupted();
 
- private:
-  sigset_t previous_;
-};
+// Creates a new file at the first name next_name() gives that does not exist yet (O_EXCL;
+// up to 100 tries), registered for removal by a signal in the same step, so no signal can
+// find it created but unregistered. Returns the open descriptor (path set to its name), or
+// -1 with errno set. Unregister it (unregister_temp_file) once renamed or removed.
+int create_registered_temp_file(const std::function<std::string()>& next_name, std::string& path);
+void unregister_temp_file(const std::string& path);
 
-// Registers a temp file for removal by the handler while it exists (a fixed number of
-// slots; past them a file is not registered, which only loses the cleanup). Unregisters
-// on destruction: call it once the file is renamed or removed.
+// Registers an existing temp file for removal by a signal while this lives.
 class TempFileRegistration {
  public:
   explicit TempFileRegistration(const std::string& path);
@@ -48,7 +47,7 @@ class TempFileRegistration {
   TempFileRegistration& operator=(const TempFileRegistration&) = delete;
 
  private:
-  int slot_ = -1;
+  std::string path_;
 };
 
 }  // namespace lp

@@ -16,6 +16,9 @@ packages=(
   # fuzzing and the sanitizer build (scripts/fuzz.sh, scripts/sanitize.sh): clang with
   # libFuzzer and the ASan/UBSan runtimes, llvm-symbolizer for readable reports
   clang-14 libclang-rt-14-dev llvm-14
+  # MQTT: the client library `stream --publish` / `merge --subscribe` use, and the broker
+  # and command-line clients their tests run on loopback
+  libmosquitto-dev mosquitto mosquitto-clients
 )
 
 missing=()

@@ -234,7 +234,9 @@ void LivePipeline::ensure_remap(int width, int height) {
   const CameraModel model =
       options_.camera ? *options_.camera : camera_model_from_fisheye(equidistant_fisheye(width, height, options_.fov_deg));
   if (model.width != width || model.height != height)
-    throw InputError(fmt::format("camera model is for {}x{}, frames are {}x{}", model.width, model.height, width, height));
+    throw InputError(fmt::format("{}camera model is for {}x{}, frames are {}x{}",
+                                 options_.camera_file.empty() ? "" : options_.camera_file + ": ", model.width, model.height,
+                                 width, height));
   remap_ = std::make_unique<RemapCache>();
   remap_->width = width;
   remap_->height = height;

@@ -38,6 +38,7 @@ struct LivePipelineOptions {
   // Probe geometry: a fisheye through `camera` (default: equidistant 180 deg over the
   // image's short side) looking up, turned by `world_from_probe`.
   std::optional<CameraModel> camera;
+  std::string camera_file;  // where `camera` was read from, named in errors about it
   double fov_deg = 180;
   Mat3 world_from_probe{};
   // Input frames that are already environment maps (replayed .exr maps) skip unwrapping.

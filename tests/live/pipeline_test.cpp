@@ -9,6 +9,8 @@
 
 #include "eval/synthetic_scene.h"
 #include "live/pipeline.h"
+#include "probe/camera_unwrap.h"
+#include "probe/fisheye.h"
 
 namespace lp {
 namespace {
@@ -82,6 +84,22 @@ TEST(LivePipeline, EveryFrameIsProcessedInAWholeBracketOrCountedAsDropped) {
   EXPECT_EQ(s.frames_in, 3 * (s.brackets_processed + s.brackets_dropped) + s.frames_dropped_partial);
   EXPECT_GT(s.frames_dropped_partial, 0u);
   EXPECT_GT(s.brackets_processed, 40u);
+}
+
+TEST(LivePipeline, ACameraModelOfAnotherSizeDropsEveryBracketNamingItsFile) {
+  std::atomic<int> opened{0};
+  std::atomic<int> published{0};
+  auto o = options();
+  o.camera = camera_model_from_fisheye(equidistant_fisheye(80, 60, 180));  // the frames are 64x64
+  o.camera_file = "rig.yaml";
+  LivePipeline p([&] { return std::make_unique<ScriptedSource>(30, 0, -1, &opened); }, o,
+                 [&](const LightList&, std::shared_ptr<const EnvMap>) { ++published; });
+  p.start();
+  p.wait();
+  const LiveStats s = p.stats();
+  EXPECT_EQ(published.load(), 0);
+  EXPECT_EQ(s.brackets_dropped, 10u);
+  EXPECT_EQ(s.last_error, "rig.yaml: camera model is for 80x60, frames are 64x64");
 }
 
 TEST(LivePipeline, ALostCameraIsReopenedAndTheStreamGoesOn) {

@@ -23,6 +23,7 @@
 namespace cv {
 class FileNode;
 class Mat;
+class FileStorage;
 }  // namespace cv
 
 namespace lp {
@@ -60,6 +61,11 @@ void write_cameramodel(const std::string& path, const CameraModel& model);
 CameraModel read_cameramodel(const std::string& path);
 void write_opencv_yaml(const std::string& path, const CameraModel& model);
 CameraModel read_opencv_yaml(const std::string& path);
+// The OpenCV FileStorage file at `path` (YAML or XML), read through read_text_file and opened;
+// InputError naming the file if it is not one. YAML is checked first for the lines on which
+// OpenCV 4.6's parser reads before its buffer and ends the process in std::terminate (a key
+// that is empty: a line whose text starts with ':'), found by fuzz_opencv_yaml.
+cv::FileStorage open_opencv_storage(const std::string& path);
 // An OpenCV FileStorage matrix of at most max_values values into *out; InputError naming
 // `path` and `key` otherwise. The size is checked before OpenCV allocates rows x cols from
 // the header (a 48 GB allocation from a 300-byte file, found by fuzz_opencv_yaml).

@@ -81,14 +81,7 @@ FisheyeModel equidistant_fisheye(int width, int height, double fov_deg) {
 FisheyeModel read_fisheye_yaml(const std::string& path) {
   if (lower_extension(path) == ".cameramodel")
     throw InputError(path + ": mrcal models are not read yet; export OpenCV YAML");
-  const std::string text = read_text_file(path);
-  cv::FileStorage fs;
-  try {
-    fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
-  } catch (const cv::Exception&) {
-    throw InputError(path + ": not an OpenCV FileStorage file");
-  }
-  if (!fs.isOpened()) throw InputError(path + ": not an OpenCV FileStorage file");
+  cv::FileStorage fs = open_opencv_storage(path);
   auto need = [&](const char* key) {
     cv::FileNode n = fs[key];
     if (n.empty()) throw InputError(path + ": missing key " + key);

@@ -18,12 +18,7 @@ build=$root/build-fuzz
 seconds=${FUZZ_SECONDS:-20}
 jobs=${FUZZ_JOBS:-$(nproc)}
 all_targets="rgbe pfm exr camera_image cameramodel opencv_yaml light_list response readings_csv timestamps config http_request"
-# opencv_yaml is left out of the default run: OpenCV 4.6's FileStorage parser calls
-# std::terminate on some malformed YAML (an exception rethrown where it cannot propagate,
-# inside cv::FileStorage::FileStorage), which no caller can catch; docs/fuzzing.md. Run it
-# by name (FUZZ_TARGETS=opencv_yaml) to look for other findings.
-default_targets=${all_targets/opencv_yaml /}
-targets=${FUZZ_TARGETS:-$default_targets}
+targets=${FUZZ_TARGETS:-$all_targets}
 
 bash scripts/install-deps.sh
 # The libraries compile exactly as in scripts/sanitize.sh's build-asan/: with the build

@@ -366,6 +366,23 @@ TEST(CameraModel, UnreadableFilesAreRefusedWithAMessageNamingThePath) {
   std::printf("  %s\n", error_of([&] { read_camera_model(missing); }, missing).c_str());
 }
 
+// OpenCV 4.6 ends the process (std::terminate) on a key line whose key is empty; found by
+// fuzz_opencv_yaml. Refused by name before OpenCV sees the text; the same line inside a
+// flow sequence or a comment is no key and still reads. (read_fisheye_yaml opens
+// files the same way: tests/probe/fisheye_test.cpp.)
+TEST(CameraModel, YamlWithAnEmptyKeyIsRefusedBeforeOpenCVCanAbortOnIt) {
+  const std::string yaml = temp_path("empty_key.yaml");
+  const std::string head = "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n   rows: 3\n";
+  const std::string tail =
+      "   dt: d\n   data: [ 300., 0., 320., 0., 300., 240.,\n     0., 0., 1. ]  # :not a key\n"
+      "distortion_model: plumb_bob\ndistortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
+      "   data: [ 0., 0., 0., 0., 0. ]\n";
+  std::ofstream(yaml) << head << "   :ols: 3\n" << tail;
+  EXPECT_EQ(error_of([&] { read_opencv_yaml(yaml); }, yaml), yaml + ": line 7: an empty key (OpenCV cannot read it)");
+  std::ofstream(yaml) << head << "   cols: 3\n" << tail;
+  EXPECT_DOUBLE_EQ(read_opencv_yaml(yaml).intrinsics[0], 300);
+}
+
 TEST(CameraModel, FocalLengthsThatAreZeroNegativeOrNaNAreRefusedWhenReadNamingTheFile) {
   const std::string cm = temp_path("focal.cameramodel"), yaml = temp_path("focal.yaml");
   auto cameramodel = [&](const std::string& fx) {

@@ -218,6 +218,22 @@ TEST(Fisheye, OpenCvYamlIsReadWithTheConventionKeysAndOtherModelsAreRefused) {
   std::filesystem::remove_all(dir);
 }
 
+// Found by fuzz_opencv_yaml: OpenCV 4.6 ends the process on a key line with an empty key.
+TEST(Fisheye, YamlWithAnEmptyKeyIsRefusedBeforeOpenCVCanAbortOnIt) {
+  const auto dir = std::filesystem::temp_directory_path() / ("lp_fisheye_key_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "cam.yaml").string();
+  std::ofstream(path) << "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ndistortion_model: fisheye\n"
+                         "camera_matrix: !!opencv-matrix\n   rows: 3\n   :ols: 3\n   dt: d\n   data: [ 1, 2 ]\n";
+  try {
+    read_fisheye_yaml(path);
+    ADD_FAILURE() << "read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ": line 8: an empty key (OpenCV cannot read it)");
+  }
+  std::filesystem::remove_all(dir);
+}
+
 // Found by fuzz_opencv_yaml: a camera_matrix that is not a matrix made OpenCV throw its own
 // exception (an internal error, exit 1); it is bad input naming the file.
 TEST(Fisheye, ACameraMatrixThatIsNotAMatrixIsBadInputNamingTheFile) {

@@ -6,11 +6,14 @@
 # Left out, and why:
 #   live_system.*   shell-driven whole-system runs (network namespaces, wrk, Chromium, a
 #                   one-minute soak): they time the servers; under ASan they measure ASan.
+#   Load.*          the in-process load and soak tests: they assert the pipeline keeps its
+#                   frame rate and that resident memory stays flat, which ASan's slowdown
+#                   and its quarantine of freed memory break by design.
 #   LIGHTPROBE_SANITIZE_EXCLUDE   a ctest regex of further tests to leave out (optional).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=$PWD/build-asan
-exclude='^live_system\.'
+exclude='^live_system\.|^Load\.'
 [ -n "${LIGHTPROBE_SANITIZE_EXCLUDE:-}" ] && exclude="$exclude|$LIGHTPROBE_SANITIZE_EXCLUDE"
 
 bash scripts/install-deps.sh

@@ -238,7 +238,8 @@ TEST(Cli, ASynthesisedSequenceIsSampledFrameByFrameWithStableIdsAndTheFilterDela
   // Clustering bounds the count.
   CliRun c = lightprobe("sample --json " + dir.string() + " --method pharr --n 64 --cluster 10 -o " + out.string());
   ASSERT_EQ(c.code, 0) << c.err;
-  for (const auto& fr : nlohmann::json::parse(c.out)["frames"]) EXPECT_LE(fr["lights"].get<int>(), 10);
+  const auto clustered = nlohmann::json::parse(c.out);  // kept alive: a range-for over a temporary's member dangles
+  for (const auto& fr : clustered["frames"]) EXPECT_LE(fr["lights"].get<int>(), 10);
 }
 
 TEST(Cli, EvalTemporalWritesTheAtlasAndRejectsUnknownScenarios) {

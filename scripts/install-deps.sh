@@ -19,6 +19,9 @@ packages=(
   # MQTT: the client library `stream --publish` / `merge --subscribe` use, and the broker
   # and command-line clients their tests run on loopback
   libmosquitto-dev mosquitto mosquitto-clients
+  # OpenEXR's and OpenImageIO's tools: exrenvmap checks the prefiltered cube's frame,
+  # exrheader / iinfo read what the project writes
+  openexr openimageio-tools
 )
 
 missing=()

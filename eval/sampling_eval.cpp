@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "eval/svg_chart.h"
+#include "sampling/lights_and_ambient.h"
 
 namespace lp {
 
@@ -61,9 +62,28 @@ std::vector<ChartPanel> panels_for(const std::vector<SamplingPoint>& points, con
   return panels;
 }
 
+// n lights + SH9, n lights alone, SH9 alone on one map (reference shared with the samplers).
+void measure_ambient(const std::string& path, const EnvMap& map, const AccuracyReference& reference,
+                     const EvalSamplingOptions& options, std::vector<AmbientPoint>& points) {
+  for (int n : options.ambient_counts) {
+    AmbientComparison c;
+    try {
+      c = compare_lights_and_sh9(map, reference, n, options.ambient_method);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: {}", path, e.what()));
+    }
+    auto point = [&](const char* variant, const LightError& e, double share) {
+      points.push_back({map_label(path), variant, n, e.diffuse, e.glossy.at(0), e.glossy.at(1), e.shadowed, share});
+    };
+    point("lights+sh9", c.lights_and_sh9, c.light_power_share);
+    point("lights", c.lights_only, 1);
+    point("sh9", c.sh9_only, 0);
+  }
+}
+
 // Every method at every count on one map.
 void measure_map(const std::string& path, const EvalSamplingOptions& options, ProgressSteps& steps,
-                 std::vector<SamplingPoint>& points) {
+                 std::vector<SamplingPoint>& points, std::vector<AmbientPoint>& ambient) {
   AccuracyOptions ao;
   ao.shadowed = options.shadowed;
   const EnvMap map = map_or_scene(path, 1024);
@@ -86,6 +106,57 @@ void measure_map(const std::string& path, const EvalSamplingOptions& options, Pr
                         e.diffuse, e.glossy.at(0), e.glossy.at(1), e.shadowed});
     }
   }
+  measure_ambient(path, map, reference, options, ambient);
+}
+
+std::vector<AmbientPoint> ambient_medians(const std::vector<AmbientPoint>& points, const EvalSamplingOptions& options) {
+  std::vector<AmbientPoint> out;
+  for (int n : options.ambient_counts)
+    for (const char* variant : {"lights+sh9", "lights", "sh9"}) {
+      std::vector<double> d, g10, g100, sh, share;
+      for (const AmbientPoint& p : points)
+        if (p.n == n && p.variant == variant) {
+          d.push_back(p.diffuse), g10.push_back(p.glossy10), g100.push_back(p.glossy100);
+          sh.push_back(p.shadowed), share.push_back(p.light_power_share);
+        }
+      if (!d.empty())
+        out.push_back({"median", variant, n, median(d), median(g10), median(g100), median(sh), median(share)});
+    }
+  return out;
+}
+
+// sampling_ambient.csv (every point) and sampling_ambient.svg (medians: error against n).
+void write_ambient_files(EvalSamplingReport& report, const EvalSamplingOptions& options) {
+  std::string csv = "map,variant,n,diffuse,glossy10,glossy100,shadowed,light_power_share\n";
+  for (const AmbientPoint& p : report.ambient)
+    csv += fmt::format("{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g}\n", p.map, p.variant, p.n, p.diffuse, p.glossy10,
+                       p.glossy100, p.shadowed, p.light_power_share);
+  report.ambient_csv_path = (fs::path(options.output_dir) / "sampling_ambient.csv").string();
+  write_file_atomically(report.ambient_csv_path, csv);
+  std::vector<ChartPanel> panels;
+  const struct {
+    const char* title;
+    double AmbientPoint::*field;
+  } measures[] = {{"diffuse", &AmbientPoint::diffuse},
+                  {"glossy s = 10", &AmbientPoint::glossy10},
+                  {"glossy s = 100", &AmbientPoint::glossy100},
+                  {"shadowed (60 deg caps)", &AmbientPoint::shadowed}};
+  for (const auto& m : measures) {
+    if (m.field == &AmbientPoint::shadowed && !options.shadowed) continue;
+    ChartPanel panel{m.title, "lights n", "relative RMS error", {}};
+    for (const char* variant : {"lights+sh9", "lights", "sh9"}) {
+      ChartSeries s{variant, {}, {}, {}};
+      for (const AmbientPoint& p : report.ambient_medians)
+        if (p.variant == variant) s.x.push_back(p.n), s.y.push_back(p.*m.field);
+      panel.series.push_back(s);
+    }
+    panels.push_back(panel);
+  }
+  report.ambient_svg_path = (fs::path(options.output_dir) / "sampling_ambient.svg").string();
+  write_file_atomically(report.ambient_svg_path,
+                        svg_chart(fmt::format("n lights + SH9 ambient, n lights alone, SH9 alone ({}, median over {} maps)",
+                                              to_string(options.ambient_method), options.maps.size()),
+                                  panels));
 }
 
 // Medians over maps per (method, n): the summary chart and table.
@@ -141,10 +212,14 @@ EvalSamplingReport evaluate_sampling(const EvalSamplingOptions& options, const E
   report.maps = options.maps.size();
   {
     ProgressSteps steps(progress, options.maps.size() * options.methods.size() * options.counts.size());
-    for (const std::string& path : options.maps) measure_map(path, options, steps, report.points);
+    for (const std::string& path : options.maps) measure_map(path, options, steps, report.points, report.ambient);
   }
   report.medians = medians_over_maps(report.points, options);
   write_sampling_files(report, options);
+  if (!options.ambient_counts.empty()) {
+    report.ambient_medians = ambient_medians(report.ambient, options);
+    write_ambient_files(report, options);
+  }
   return report;
 }
 
@@ -156,6 +231,13 @@ std::string EvalSamplingReport::summary() const {
                      p.lights, p.prepare_ms, p.place_ms, 100 * p.diffuse, 100 * p.glossy10, 100 * p.glossy100,
                      100 * p.shadowed);
   s += fmt::format("{} points on {} maps -> {}, {}\n", points.size(), maps, csv_path, svg_path);
+  if (ambient_medians.empty()) return s;
+  s += fmt::format("\n{:<11} {:>4} {:>9} {:>9} {:>10} {:>9} {:>12}\n", "lighting", "n", "diffuse", "glossy10",
+                   "glossy100", "shadowed", "light share");
+  for (const AmbientPoint& p : ambient_medians)
+    s += fmt::format("{:<11} {:>4} {:>8.2f}% {:>8.2f}% {:>9.2f}% {:>8.2f}% {:>11.1f}%\n", p.variant, p.n,
+                     100 * p.diffuse, 100 * p.glossy10, 100 * p.glossy100, 100 * p.shadowed, 100 * p.light_power_share);
+  s += fmt::format("-> {}, {}\n", ambient_csv_path, ambient_svg_path);
   return s;
 }
 
@@ -165,7 +247,15 @@ nlohmann::json EvalSamplingReport::to_json() const {
     rows.push_back({{"map", p.map}, {"method", p.method}, {"n", p.n}, {"lights", p.lights},
                     {"prepare_ms", p.prepare_ms}, {"place_ms", p.place_ms}, {"diffuse", p.diffuse},
                     {"glossy10", p.glossy10}, {"glossy100", p.glossy100}, {"shadowed", p.shadowed}});
-  return {{"csv", csv_path}, {"chart", svg_path}, {"points", rows}};
+  nlohmann::json ambient_rows = nlohmann::json::array();
+  for (const AmbientPoint& p : ambient)
+    ambient_rows.push_back({{"map", p.map}, {"variant", p.variant}, {"n", p.n}, {"diffuse", p.diffuse},
+                            {"glossy10", p.glossy10}, {"glossy100", p.glossy100}, {"shadowed", p.shadowed},
+                            {"light_power_share", p.light_power_share}});
+  return {{"csv", csv_path},
+          {"chart", svg_path},
+          {"points", rows},
+          {"ambient", {{"csv", ambient_csv_path}, {"chart", ambient_svg_path}, {"points", ambient_rows}}}};
 }
 
 }  // namespace lp

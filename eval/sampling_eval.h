@@ -25,6 +25,19 @@ struct EvalSamplingOptions {
   int repeats = 0;
   // The shadowed error; its reference is the slow part of a run.
   bool shadowed = true;
+  // Lights + ambient (`sample --residual sh9`): n lights of the map's peaks + SH9 of the
+  // rest, scored against n lights of the whole map alone and SH9 alone, at these n with
+  // this method (empty: not measured). Written to sampling_ambient.csv / .svg.
+  std::vector<int> ambient_counts = {1, 2, 4, 8, 16, 64};
+  Method ambient_method = Method::MedianCut;  // pharr is noisy at small n (docs/sampling.md)
+};
+
+// One way to light at one n: "lights+sh9", "lights" or "sh9" (the last does not depend on n).
+struct AmbientPoint {
+  std::string map, variant;
+  int n = 0;
+  double diffuse = 0, glossy10 = 0, glossy100 = 0, shadowed = 0;
+  double light_power_share = 0;  // lights+sh9: the lights' share of the map's luminance power
 };
 
 struct SamplingPoint {
@@ -37,11 +50,13 @@ struct SamplingPoint {
 struct EvalSamplingReport {
   std::vector<SamplingPoint> points;   // map x method x count, in that order
   std::vector<SamplingPoint> medians;  // method x count: medians over the maps
+  std::vector<AmbientPoint> ambient;          // map x n x variant
+  std::vector<AmbientPoint> ambient_medians;  // n x variant, medians over the maps
   size_t maps = 0;
-  std::string csv_path, svg_path;
+  std::string csv_path, svg_path, ambient_csv_path, ambient_svg_path;
   // The table of medians and where the files went.
   std::string summary() const;
-  // {"csv", "chart", "points": [every point]}.
+  // {"csv", "chart", "points": [every point], "ambient": {"csv", "chart", "points"}}.
   nlohmann::json to_json() const;
 };
 

@@ -11,6 +11,7 @@
 
 #include "core/accuracy.h"
 #include "eval/synthetic_scene.h"
+#include "sampling/lights_and_ambient.h"
 
 namespace lp {
 namespace {
@@ -31,6 +32,7 @@ const EvalSamplingReport& scene_report() {
     o.counts = {64, 256};
     o.repeats = 1;
     o.shadowed = false;
+    o.ambient_counts = {1, 8};
     o.output_dir = (fs::path(::testing::TempDir()) / ("lp_sampling_eval_" + std::to_string(::getpid()))).string();
     return evaluate_sampling(o);
   }();
@@ -75,6 +77,34 @@ TEST(SamplingEval, Q2TreeDiffuseErrorAt256LightsMatchesAnIndependentRunAndItsBou
   EXPECT_LT(p.diffuse, scene_report().points[0].diffuse);  // more lights, less error
   EXPECT_EQ(p.shadowed, 0);                                 // not measured
   EXPECT_GT(p.prepare_ms + p.place_ms, 0);
+}
+
+// Lights + SH9 against lights alone and SH9 alone: the numbers are compare_lights_and_sh9's
+// (called directly here), written to the CSV and JSON, and behave as the split promises.
+TEST(SamplingEval, LightsPlusAmbientIsScoredAgainstLightsAloneAndSh9Alone) {
+  const EvalSamplingReport& r = scene_report();
+  ASSERT_EQ(r.ambient.size(), 6u);  // n = 1, 8 x three variants
+  EXPECT_EQ(r.ambient[0].variant, "lights+sh9");
+  EXPECT_EQ(r.ambient[3].n, 8);
+  const EnvMap map = render_scene(describe_scene(), Layout::LatLong, 1024, 512);
+  AccuracyOptions ao;
+  ao.shadowed = false;
+  const AmbientComparison c = compare_lights_and_sh9(map, make_accuracy_reference(map, ao), 8, Method::MedianCut);
+  EXPECT_DOUBLE_EQ(r.ambient[3].diffuse, c.lights_and_sh9.diffuse);
+  EXPECT_DOUBLE_EQ(r.ambient[4].diffuse, c.lights_only.diffuse);
+  EXPECT_DOUBLE_EQ(r.ambient[5].glossy10, c.sh9_only.glossy.at(0));
+  // Eight lights for the sun and SH9 for the sky light a diffuse surface better than eight
+  // lights for everything; SH9 alone cannot hold the sun for a glossy lobe.
+  EXPECT_LT(r.ambient[3].diffuse, r.ambient[4].diffuse);
+  EXPECT_LT(r.ambient[3].glossy10, r.ambient[5].glossy10);
+  EXPECT_GT(r.ambient[3].light_power_share, 0);
+  EXPECT_LT(r.ambient[3].light_power_share, 1);
+  const std::string csv = slurp(r.ambient_csv_path);
+  EXPECT_EQ(csv.rfind("map,variant,n,diffuse,", 0), 0u);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
+  EXPECT_NE(slurp(r.ambient_svg_path).find("lights+sh9"), std::string::npos);
+  EXPECT_EQ(r.to_json()["ambient"]["points"].size(), 6u);
+  std::printf("%s", r.summary().c_str());
 }
 
 }  // namespace

@@ -22,6 +22,8 @@ packages=(
   # OpenEXR's and OpenImageIO's tools: exrenvmap checks the prefiltered cube's frame,
   # exrheader / iinfo read what the project writes
   openexr openimageio-tools
+  # Blender, headless, imports the glTF/GLB exports in a consumer test (ctest consumers.blender)
+  blender
 )
 
 missing=()

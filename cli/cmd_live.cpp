@@ -19,6 +19,7 @@
 #include "hdr/response.h"
 #include "live/light_server.h"
 #include "live/merge_client.h"
+#include "live/mqtt_merge.h"
 #include "live/mqtt_publisher.h"
 #include "live/pipeline.h"
 #include "probe/camera_source.h"
@@ -35,6 +36,9 @@ struct MergeArgs {
   int n = 256;                      // q2tree light count of the merge
   double timeout = 2.0;             // drop a camera silent this long
   double duration = 0;
+  std::string subscribe;            // mqtt://HOST:PORT/PREFIX/+/lights instead of URLs
+  int mqtt_qos = 1;
+  std::string mqtt_cafile;
 };
 
 namespace {
@@ -145,6 +149,9 @@ int run_stream(const StreamArgs& args, const Output& out) {
 }
 
 int run_merge(const MergeArgs& args, const Output& out) {
+  if (!args.subscribe.empty() && !(args.urls.empty() && args.weights.empty()))
+    throw InputError("--subscribe: merges whichever cameras publish; no server URLs or --weights with it");
+  if (args.urls.empty() && args.subscribe.empty()) throw InputError("merge needs server URLs or --subscribe");
   MergeClientOptions mo;
   mo.timeout_s = args.timeout;
   mo.token = args.upstream_token;
@@ -156,7 +163,8 @@ int run_merge(const MergeArgs& args, const Output& out) {
   if (!args.token.empty()) so.token = args.token;
   LightServer server(so);
   const int port = server.start();
-  say(out, "lightprobe merge: {} cameras -> http://{}:{}/lights\n", args.urls.size(), so.host, port);
+  say(out, "lightprobe merge: {} -> http://{}:{}/lights\n",
+      args.subscribe.empty() ? fmt::format("{} cameras", args.urls.size()) : "cameras on MQTT", so.host, port);
   std::fflush(stdout);
   defer_interrupts();  // a signal stops the watchdog below: the summary is printed
   std::atomic<bool> stop{false}, failed{false};
@@ -168,16 +176,16 @@ int run_merge(const MergeArgs& args, const Output& out) {
     stop = true;
   });
   MergeClientStatus last;
+  const auto serve = [&](const LightList& l, const MergeClientStatus& st) {
+    server.publish(l, nullptr);
+    server.publish_metrics(merge_metrics_text(st));
+    server.publish_status("merge", merge_status_json(st));
+    ++published;
+    last = st;
+  };
   try {
-    run_merge_client(args.urls, mo,
-                     [&](const LightList& l, const MergeClientStatus& st) {
-                       server.publish(l, nullptr);
-                       server.publish_metrics(merge_metrics_text(st));
-                       server.publish_status("merge", merge_status_json(st));
-                       ++published;
-                       last = st;
-                     },
-                     stop);
+    if (args.subscribe.empty()) run_merge_client(args.urls, mo, serve, stop);
+    else run_mqtt_merge(args.subscribe, "--subscribe", {.merge = mo, .client = {.cafile = args.mqtt_cafile}, .qos = args.mqtt_qos}, serve, stop);
   } catch (...) {
     failed = true;  // a joinable watchdog must not outlive the error (std::terminate)
     watchdog.join();
@@ -188,7 +196,7 @@ int run_merge(const MergeArgs& args, const Output& out) {
   size_t skipped = 0;
   for (const MergeInputStatus& in : last.inputs) skipped += in.state == "skipped";
   say(out, "merge stopped: {} lists published; last used {} of {} inputs ({} skipped){}\n", published,
-      last.state.used.size(), args.urls.size(), skipped, last.error.empty() ? "" : "; last error: " + last.error);
+      last.state.used.size(), std::max(args.urls.size(), last.inputs.size()), skipped, last.error.empty() ? "" : "; last error: " + last.error);
   emit_json(out, {{"port", port}, {"published", published}, {"used", last.state.used}, {"dropped", last.state.dropped},
                   {"skipped", skipped}, {"mode", last.mode}});
   return 0;
@@ -231,10 +239,13 @@ std::vector<Command> live_commands() {
          return [a](const Output& out) { return run_stream(*a, out); };
        }},
       {"merge", "Merge the lights of several cameras' servers and serve the result",
-       "lightprobe merge http://cam1:8080 http://cam2:8080 --listen 127.0.0.1:8090",
+       "lightprobe merge http://cam1:8080 http://cam2:8080 --listen 127.0.0.1:8090\nlightprobe merge --subscribe mqtt://broker:1883/studio/+/lights",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<MergeArgs>();
-         f.arg("URL", a->urls, "Light servers, http://HOST:PORT").required();
+         f.arg("URL", a->urls, "Light servers, http://HOST:PORT");
+         f.opt("--subscribe", a->subscribe, "Instead of URLs: the cameras on an MQTT broker, mqtt[s]://[USER[:PASSWORD]@]HOST[:PORT]/PREFIX/+/lights (publishes PREFIX/merged/lights)");
+         f.opt("--mqtt-qos", a->mqtt_qos, "QoS of the subscription and the merged lists, 0 or 1").one_of({"0", "1"});
+         f.opt("--mqtt-cafile", a->mqtt_cafile, "mqtts: CA certificates (PEM); default the system's");
          f.opt("--listen", a->listen, "HOST:PORT to serve the merged lights on");
          f.opt("--token", a->token, "Bearer token for our server");
          f.opt("--upstream-token", a->upstream_token, "Bearer token for the cameras' servers");

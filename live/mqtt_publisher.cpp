@@ -125,7 +125,7 @@ MqttPublisherStats MqttPublisher::stats() const {
   return s;
 }
 
-std::string MqttPublisher::metrics() const {
+std::string MqttPublisher::metrics(const std::vector<std::pair<std::string, MqttLinkStats>>& other_links) const {
   const MqttPublisherStats s = stats();
   return fmt::format(
              "# HELP lightprobe_mqtt_lists_published_total Light lists handed to the MQTT broker.\n"
@@ -137,7 +137,11 @@ std::string MqttPublisher::metrics() const {
              "out.\n"
              "# TYPE lightprobe_mqtt_lists_dropped_total counter\nlightprobe_mqtt_lists_dropped_total {}\n",
              s.lists_published, s.lists_delivered, s.lists_dropped) +
-         mqtt_link_metrics({{"publish", s.link}});
+         [&] {
+           auto links = other_links;
+           links.emplace_back("publish", s.link);
+           return mqtt_link_metrics(links);
+         }();
 }
 
 }  // namespace lp

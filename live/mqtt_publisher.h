@@ -17,6 +17,8 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/light_list.h"
 #include "live/mqtt_client.h"
@@ -59,8 +61,9 @@ class MqttPublisher {
   void set_status(const std::string& json_object);
 
   MqttPublisherStats stats() const;
-  // Prometheus text: lightprobe_mqtt_lists_{published,delivered,dropped}_total and the link.
-  std::string metrics() const;
+  // Prometheus text: lightprobe_mqtt_lists_{published,delivered,dropped}_total and the
+  // link (mqtt_link_metrics), labelled "publish", beside `other_links`.
+  std::string metrics(const std::vector<std::pair<std::string, MqttLinkStats>>& other_links = {}) const;
   // Non-empty once the broker refused our credentials (the stream ends with it).
   std::string refused() const { return connection_->stats().refused; }
   const std::string& lights_topic() const { return lights_topic_; }

@@ -132,12 +132,16 @@ MqttConnection::~MqttConnection() {
 
 void MqttConnection::start() {
   if (started_) throw std::logic_error("MqttConnection started twice");
-  started_ = true;
-  // A broker that is not there yet is no error: the network thread retries with backoff.
-  const int rc = mosquitto_connect_async(mosq_, url_.host.c_str(), url_.port, options_.keepalive_s);
-  if (rc == MOSQ_ERR_INVAL) throw InputError(fmt::format("{}: cannot connect to {}", flag_, address_));
+  // The thread first: then the connection is non-blocking and a broker that is not there
+  // yet is retried with backoff. Connecting first (libmosquitto 2.0.11), a refused first
+  // attempt left the thread idle for good.
   if (mosquitto_loop_start(mosq_) != MOSQ_ERR_SUCCESS)
     throw std::runtime_error("libmosquitto was built without thread support");
+  started_ = true;
+  if (mosquitto_connect_async(mosq_, url_.host.c_str(), url_.port, options_.keepalive_s) == MOSQ_ERR_INVAL) {
+    stop();
+    throw InputError(fmt::format("{}: cannot connect to {}", flag_, address_));
+  }
 }
 
 void MqttConnection::stop(const std::optional<std::pair<std::string, std::string>>& farewell) {

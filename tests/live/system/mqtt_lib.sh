@@ -13,23 +13,37 @@ need_mqtt() {
   [ -x "$PY" ] || skip "no $PY for the JSON checks"
 }
 
-# start_broker [CONFIG LINE...]: starts mosquitto -c $WORK/mosquitto.conf with
-# `listener PORT 127.0.0.1`, no persistence and the given lines; waits until it listens.
-# Picks a free port unless BROKER_PORT is set, and keeps it for restart_broker.
+# mqtt_test_setup: skips without the tools; PIDS, killed on exit with WORK removed.
+mqtt_test_setup() {
+  need_mqtt
+  PIDS=()
+  trap 'for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$WORK"' EXIT
+}
+
+# launch_broker: mosquitto -c $WORK/mosquitto.conf in the background (BROKER_PID); true
+# once it listens on BROKER_PORT, false when it exits or 5 s pass (then it is stopped).
+launch_broker() {
+  "$MOSQUITTO" -c "$WORK/mosquitto.conf" >>"$WORK/mosquitto.log" 2>&1 &
+  BROKER_PID=$!; PIDS+=("$BROKER_PID")
+  for _ in $(seq 50); do
+    kill -0 "$BROKER_PID" 2>/dev/null || return 1
+    (exec 3<>"/dev/tcp/127.0.0.1/$BROKER_PORT") 2>/dev/null && return 0
+    sleep 0.1
+  done
+  kill "$BROKER_PID" 2>/dev/null; wait "$BROKER_PID" 2>/dev/null
+  return 1
+}
+
+# start_broker [CONFIG LINE...]: a broker with `listener PORT 127.0.0.1`, no persistence
+# and the given lines, in its own config file. Picks a free port unless BROKER_PORT is
+# set (another one if that is taken), and keeps it for restart_broker.
 start_broker() {
   printf '%s\n' "$@" >"$WORK/mosquitto.extra"
   local attempt
   for attempt in 1 2 3 4 5 6 7 8; do
     [ -n "${BROKER_PORT:-}" ] || BROKER_PORT=$((20000 + RANDOM % 40000))
     { printf 'listener %s 127.0.0.1\npersistence false\n' "$BROKER_PORT"; cat "$WORK/mosquitto.extra"; } >"$WORK/mosquitto.conf"
-    "$MOSQUITTO" -c "$WORK/mosquitto.conf" >>"$WORK/mosquitto.log" 2>&1 &
-    BROKER_PID=$!; PIDS+=("$BROKER_PID")
-    for _ in $(seq 50); do
-      kill -0 "$BROKER_PID" 2>/dev/null || break
-      (exec 3<>"/dev/tcp/127.0.0.1/$BROKER_PORT") 2>/dev/null && return 0
-      sleep 0.1
-    done
-    kill "$BROKER_PID" 2>/dev/null; wait "$BROKER_PID" 2>/dev/null
+    launch_broker && return 0
     BROKER_PORT=""  # taken by someone else: another one
   done
   fail "mosquitto did not start: $(tail -2 "$WORK/mosquitto.log")"
@@ -41,14 +55,8 @@ kill_broker() { kill -"${1:-KILL}" "$BROKER_PID" 2>/dev/null; wait "$BROKER_PID"
 # restart_broker: the same port and config again (retained messages are gone with it).
 restart_broker() {
   local tries
-  for tries in $(seq 30); do  # the port may linger for a moment
-    "$MOSQUITTO" -c "$WORK/mosquitto.conf" >>"$WORK/mosquitto.log" 2>&1 &
-    BROKER_PID=$!; PIDS+=("$BROKER_PID")
-    for _ in $(seq 20); do
-      kill -0 "$BROKER_PID" 2>/dev/null || break
-      (exec 3<>"/dev/tcp/127.0.0.1/$BROKER_PORT") 2>/dev/null && return 0
-      sleep 0.1
-    done
+  for tries in $(seq 15); do  # the port may linger for a moment
+    launch_broker && return 0
     sleep 0.5
   done
   fail "mosquitto did not restart on port $BROKER_PORT: $(tail -2 "$WORK/mosquitto.log")"

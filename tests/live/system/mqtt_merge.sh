@@ -15,9 +15,7 @@ LP=$1
 WORK=$(mktemp -d)
 . "$(dirname "$0")/stream_lib.sh"
 . "$(dirname "$0")/mqtt_lib.sh"
-need_mqtt
-PIDS=()
-trap 'for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$WORK"' EXIT
+mqtt_test_setup
 
 start_broker "allow_anonymous true"
 URL=mqtt://127.0.0.1:$BROKER_PORT/studio

@@ -11,9 +11,7 @@ LP=$1
 WORK=$(mktemp -d)
 . "$(dirname "$0")/stream_lib.sh"
 . "$(dirname "$0")/mqtt_lib.sh"
-need_mqtt
-PIDS=()
-trap 'for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$WORK"' EXIT
+mqtt_test_setup
 
 # The stream comes up before its broker: it streams, and connects when the broker does.
 BROKER_PORT=$((20000 + RANDOM % 40000))

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <mosquitto.h>
 
+#include <chrono>
 #include <filesystem>
 #include <stdexcept>
 
@@ -103,6 +104,7 @@ MqttConnection::MqttConnection(const MqttUrl& url, const std::string& flag, cons
   mosquitto_disconnect_callback_set(mosq_, &MqttConnection::disconnected_cb);
   mosquitto_message_callback_set(mosq_, &MqttConnection::message_cb);
   mosquitto_publish_callback_set(mosq_, &MqttConnection::published_cb);
+  mosquitto_log_callback_set(mosq_, &MqttConnection::log_cb);
   mosquitto_reconnect_delay_set(mosq_, unsigned(std::max(1, options.reconnect_delay_s)),
                                 unsigned(std::max({1, options.reconnect_delay_s, options.reconnect_delay_max_s})), true);
   if (!url.user.empty())
@@ -142,11 +144,30 @@ void MqttConnection::start() {
     stop();
     throw InputError(fmt::format("{}: cannot connect to {}", flag_, address_));
   }
+  if (url_.tls) tls_revive_ = std::thread([this] { revive_tls_loop(); });
+}
+
+void MqttConnection::revive_tls_loop() {
+  const int first_s = std::max(1, options_.reconnect_delay_s);
+  int delay_s = first_s;
+  while (!stopped_) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (connected_) delay_s = first_s;  // a connection worked: the backoff starts over
+    if (!tls_lost_) continue;
+    for (int waited = 0; waited < 10 * delay_s && !stopped_; ++waited)
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (stopped_) break;
+    delay_s = std::min(2 * delay_s, std::max(delay_s, options_.reconnect_delay_max_s));
+    tls_lost_ = false;
+    mosquitto_loop_stop(mosq_, false);  // joins the thread that gave up
+    mosquitto_loop_start(mosq_);        // the thread first, as in start()
+    mosquitto_reconnect_async(mosq_);   // a broker still away is retried by that thread (not a TLS error)
+  }
 }
 
 void MqttConnection::stop(const std::optional<std::pair<std::string, std::string>>& farewell) {
-  if (!started_ || stopped_) return;
-  stopped_ = true;
+  if (!started_ || stopped_.exchange(true)) return;
+  if (tls_revive_.joinable()) tls_revive_.join();
   // Queued in order: the farewell is written before the DISCONNECT.
   if (farewell && connected_)
     mosquitto_publish(mosq_, nullptr, farewell->first.c_str(), int(farewell->second.size()), farewell->second.data(), 1,
@@ -207,6 +228,22 @@ void MqttConnection::message_cb(mosquitto*, void* self, const mosquitto_message*
 void MqttConnection::published_cb(mosquitto*, void* self, int mid) {
   auto& c = *static_cast<MqttConnection*>(self);
   if (c.on_delivered_) c.on_delivered_(mid);
+}
+
+void MqttConnection::log_cb(mosquitto*, void* self, int level, const char* text) {
+  // A TLS failure (an unknown CA, a name mismatch) ends libmosquitto's thread without a
+  // callback; its log line is the only word of it.
+  // Before any connection worked it is the setup's fault (an unknown CA, a name mismatch):
+  // fatal. Afterwards it is a lost connection, which revive_tls_loop() restores.
+  auto& c = *static_cast<MqttConnection*>(self);
+  if (level != MOSQ_LOG_ERR || std::string_view(text).rfind("OpenSSL Error", 0) != 0) return;
+  std::lock_guard lock(c.mutex_);
+  if (c.stats_.connects == 0) {
+    if (c.stats_.refused.empty()) c.stats_.refused = fmt::format("{}: TLS with {} failed: {}", c.flag_, c.address_, text);
+    return;
+  }
+  if (c.connected_.exchange(false)) ++c.stats_.disconnects;
+  c.tls_lost_ = true;
 }
 
 std::string mqtt_link_metrics(const std::vector<std::pair<std::string, MqttLinkStats>>& links) {

@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -49,7 +50,7 @@ struct MqttLinkStats {
   bool connected = false;
   uint64_t connects = 0;     // connections the broker accepted (the first and every reconnect)
   uint64_t disconnects = 0;  // connections lost (or refused)
-  std::string refused;       // the broker refused our credentials: fatal, no more retries
+  std::string refused;       // the broker refused our credentials, or TLS failed: fatal, no more retries
 };
 
 class MqttConnection {
@@ -88,6 +89,7 @@ class MqttConnection {
   static void disconnected_cb(mosquitto*, void* self, int rc);
   static void message_cb(mosquitto*, void* self, const mosquitto_message* message);
   static void published_cb(mosquitto*, void* self, int mid);
+  static void log_cb(mosquitto*, void* self, int level, const char* text);
 
   MqttUrl url_;
   std::string flag_, address_;
@@ -99,7 +101,13 @@ class MqttConnection {
   mutable std::mutex mutex_;  // stats_
   MqttLinkStats stats_;
   std::atomic<bool> connected_{false};
-  bool started_ = false, stopped_ = false;
+  bool started_ = false;
+  std::atomic<bool> stopped_{false};
+  // TLS: libmosquitto 2.0.11 ends its thread on any TLS error, a broker's restart included;
+  // this thread starts it again (with the backoff) once a connection had worked.
+  std::atomic<bool> tls_lost_{false};
+  std::thread tls_revive_;
+  void revive_tls_loop();
 };
 
 // Prometheus text of named links ("publish", "subscribe"): lightprobe_mqtt_connected and

@@ -64,7 +64,7 @@ class MqttPublisher {
   // Prometheus text: lightprobe_mqtt_lists_{published,delivered,dropped}_total and the
   // link (mqtt_link_metrics), labelled "publish", beside `other_links`.
   std::string metrics(const std::vector<std::pair<std::string, MqttLinkStats>>& other_links = {}) const;
-  // Non-empty once the broker refused our credentials (the stream ends with it).
+  // Non-empty once the broker refused our credentials or TLS failed (the stream ends with it).
   std::string refused() const { return connection_->stats().refused; }
   const std::string& lights_topic() const { return lights_topic_; }
   const std::string& status_topic() const { return status_topic_; }

@@ -1,6 +1,12 @@
 # Shared by the MQTT tests (issue 19): a mosquitto broker of the test's own on a free
 # loopback port with its own config file, killed and restarted at will, and small
-# helpers around mosquitto_sub. Sourced after stream_lib.sh; expects LP, WORK and PIDS.
+# helpers around mosquitto_sub. Sourced as `. mqtt_lib.sh LIGHTPROBE`: sets LP, WORK and
+# PIDS (killed on exit, WORK removed), sources stream_lib.sh, and skips (77) without the
+# tools.
+set -uo pipefail
+LP=$1
+WORK=$(mktemp -d)
+. "$(dirname "${BASH_SOURCE[0]}")/stream_lib.sh"
 
 MOSQUITTO=$(command -v mosquitto || echo /usr/sbin/mosquitto)
 PY=/usr/bin/python3  # Debian's python3 (DEPENDENCIES.md): JSON checks
@@ -101,3 +107,5 @@ labelled_metric() {
 
 # serving PORT: /lights answers 200.
 serving() { [ "$(code "http://127.0.0.1:$1/lights")" = 200 ]; }
+
+mqtt_test_setup

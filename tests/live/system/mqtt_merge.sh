@@ -10,12 +10,7 @@
 # - malformed payloads on the merge's topics (not JSON, another format, NaN, 1e999, 17 MB,
 #   a negative light) are counted against their camera and skipped; the merge lives on.
 # Usage: mqtt_merge.sh LIGHTPROBE   (exit 77 = skipped: no mosquitto, clients or curl)
-set -uo pipefail
-LP=$1
-WORK=$(mktemp -d)
-. "$(dirname "$0")/stream_lib.sh"
-. "$(dirname "$0")/mqtt_lib.sh"
-mqtt_test_setup
+. "$(dirname "$0")/mqtt_lib.sh" "$1"  # LP, WORK, the broker; skips without mosquitto
 
 start_broker "allow_anonymous true"
 URL=mqtt://127.0.0.1:$BROKER_PORT/studio

@@ -6,12 +6,7 @@
 # password is refused in one line naming --publish (the password not in it), for stream
 # and merge alike, and the right one, given in the stream's config file, publishes.
 # Usage: mqtt_publish.sh LIGHTPROBE   (exit 77 = skipped: no mosquitto, clients or curl)
-set -uo pipefail
-LP=$1
-WORK=$(mktemp -d)
-. "$(dirname "$0")/stream_lib.sh"
-. "$(dirname "$0")/mqtt_lib.sh"
-mqtt_test_setup
+. "$(dirname "$0")/mqtt_lib.sh" "$1"  # LP, WORK, the broker; skips without mosquitto
 
 # The stream comes up before its broker: it streams, and connects when the broker does.
 BROKER_PORT=$((20000 + RANDOM % 40000))

@@ -6,12 +6,7 @@
 # error: live/mqtt_client.cpp starts it again); without the CA the certificate is refused
 # in one line naming --publish.
 # Usage: mqtt_tls.sh LIGHTPROBE   (exit 77 = skipped: no mosquitto, clients, curl or openssl)
-set -uo pipefail
-LP=$1
-WORK=$(mktemp -d)
-. "$(dirname "$0")/stream_lib.sh"
-. "$(dirname "$0")/mqtt_lib.sh"
-mqtt_test_setup
+. "$(dirname "$0")/mqtt_lib.sh" "$1"  # LP, WORK, the broker; skips without mosquitto
 command -v openssl >/dev/null || skip "openssl not installed"
 
 chmod a+x "$WORK"  # mosquitto started as root reads its files as user mosquitto

@@ -19,6 +19,8 @@
 #include "hdr/response.h"
 #include "live/light_server.h"
 #include "live/merge_client.h"
+#include "live/mqtt_merge.h"
+#include "live/mqtt_publisher.h"
 #include "live/pipeline.h"
 #include "probe/camera_source.h"
 
@@ -34,6 +36,9 @@ struct MergeArgs {
   int n = 256;                      // q2tree light count of the merge
   double timeout = 2.0;             // drop a camera silent this long
   double duration = 0;
+  std::string subscribe;            // mqtt://HOST:PORT/PREFIX/+/lights instead of URLs
+  int mqtt_qos = 1;
+  std::string mqtt_cafile;
 };
 
 namespace {
@@ -54,6 +59,7 @@ void parse_listen(const std::string& text, std::string* host, int* port) {
 }  // namespace
 
 int run_stream(const StreamArgs& args, const Output& out) {
+  if (!args.metadata_model.empty() && !args.publish.empty()) throw InputError("--publish: not with --metadata-model");
   if (!args.metadata_model.empty()) return run_stream_metadata(args, out);  // the probe-less mode
   // Options in, validated before anything starts.
   SourceOptions so;
@@ -94,9 +100,21 @@ int run_stream(const StreamArgs& args, const Output& out) {
   if (!args.token.empty()) server_options.token = args.token;
 
   LightServer server(server_options);
+  std::unique_ptr<MqttPublisher> mqtt;  // --publish: the lists on a broker too
+  MqttPublisherOptions mqo;
+  mqo.camera = mqtt_camera_name(args.name, args.source, "--name");
+  mqo.qos = args.mqtt_qos;
+  mqo.client.cafile = args.mqtt_cafile;
+  if (!args.publish.empty()) mqtt = std::make_unique<MqttPublisher>(args.publish, "--publish", mqo);
   LivePipeline pipeline([&] { return open_source(args.source, so); }, lo,
-                        [&](const LightList& lights, std::shared_ptr<const EnvMap> map) { server.publish(lights, map); });
+                        [&](const LightList& lights, std::shared_ptr<const EnvMap> map) {
+                          server.publish(lights, map);
+                          if (mqtt) mqtt->publish(lights);
+                        });
   const int port = server.start();
+  if (mqtt) mqtt->set_status(nlohmann::json{{"source", args.source}, {"method", args.method},
+                                            {"http", fmt::format("http://{}:{}/", server_options.host, port)}}.dump());
+  if (mqtt) mqtt->start();
   pipeline.start();
   say(out, "lightprobe stream: {} -> http://{}:{}/ (lights at /lights, live at /lights/stream, metrics at /metrics)\n",
       args.source, server_options.host, port);
@@ -105,26 +123,38 @@ int run_stream(const StreamArgs& args, const Output& out) {
   const auto start = std::chrono::steady_clock::now();
   while (!interrupt_signal()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    if (!pipeline.stats().input_error.empty()) break;
-    server.publish_metrics(pipeline.metrics());
+    if (!pipeline.stats().input_error.empty() || (mqtt && !mqtt->refused().empty())) break;
+    server.publish_metrics(pipeline.metrics() + (mqtt ? mqtt->metrics() : ""));
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (args.duration > 0 && elapsed >= args.duration) break;
   }
   pipeline.stop();
   const LiveStats s = pipeline.stats();
   server.stop();
+  const std::string refused = mqtt ? mqtt->refused() : "";
+  if (mqtt) mqtt->stop();
+  const MqttPublisherStats m = mqtt ? mqtt->stats() : MqttPublisherStats{};
   say(out, "stream stopped: {} frames in, {} brackets processed, {} dropped whole, {} frames in partial brackets, {} "
-           "reconnects{}\n",
+           "reconnects{}{}\n",
       s.frames_in, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects,
+      mqtt ? fmt::format("; mqtt: {} lists published, {} dropped, {} connects", m.lists_published, m.lists_dropped,
+                         m.link.connects)
+           : "",
       s.last_error.empty() ? "" : "; last error: " + s.last_error);
   emit_json(out, {{"port", port}, {"frames_in", s.frames_in}, {"brackets_processed", s.brackets_processed},
                   {"brackets_dropped", s.brackets_dropped}, {"frames_dropped_partial", s.frames_dropped_partial},
-                  {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error}});
+                  {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error},
+                  {"mqtt_published", m.lists_published}, {"mqtt_dropped", m.lists_dropped},
+                  {"mqtt_connects", m.link.connects}});
   if (!s.input_error.empty()) throw InputError(s.input_error);  // a bad frame is refused, after the summary
+  if (!refused.empty()) throw InputError(refused);
   return 0;
 }
 
 int run_merge(const MergeArgs& args, const Output& out) {
+  if (!args.subscribe.empty() && !(args.urls.empty() && args.weights.empty()))
+    throw InputError("--subscribe: merges whichever cameras publish; no server URLs or --weights with it");
+  if (args.urls.empty() && args.subscribe.empty()) throw InputError("merge needs server URLs or --subscribe");
   MergeClientOptions mo;
   mo.timeout_s = args.timeout;
   mo.token = args.upstream_token;
@@ -136,7 +166,8 @@ int run_merge(const MergeArgs& args, const Output& out) {
   if (!args.token.empty()) so.token = args.token;
   LightServer server(so);
   const int port = server.start();
-  say(out, "lightprobe merge: {} cameras -> http://{}:{}/lights\n", args.urls.size(), so.host, port);
+  say(out, "lightprobe merge: {} -> http://{}:{}/lights\n",
+      args.subscribe.empty() ? fmt::format("{} cameras", args.urls.size()) : "cameras on MQTT", so.host, port);
   std::fflush(stdout);
   defer_interrupts();  // a signal stops the watchdog below: the summary is printed
   std::atomic<bool> stop{false}, failed{false};
@@ -148,16 +179,16 @@ int run_merge(const MergeArgs& args, const Output& out) {
     stop = true;
   });
   MergeClientStatus last;
+  const auto serve = [&](const LightList& l, const MergeClientStatus& st) {
+    server.publish(l, nullptr);
+    server.publish_metrics(merge_metrics_text(st));
+    server.publish_status("merge", merge_status_json(st));
+    ++published;
+    last = st;
+  };
   try {
-    run_merge_client(args.urls, mo,
-                     [&](const LightList& l, const MergeClientStatus& st) {
-                       server.publish(l, nullptr);
-                       server.publish_metrics(merge_metrics_text(st));
-                       server.publish_status("merge", merge_status_json(st));
-                       ++published;
-                       last = st;
-                     },
-                     stop);
+    if (args.subscribe.empty()) run_merge_client(args.urls, mo, serve, stop);
+    else run_mqtt_merge(args.subscribe, "--subscribe", {.merge = mo, .client = {.cafile = args.mqtt_cafile}, .qos = args.mqtt_qos}, serve, stop);
   } catch (...) {
     failed = true;  // a joinable watchdog must not outlive the error (std::terminate)
     watchdog.join();
@@ -168,7 +199,7 @@ int run_merge(const MergeArgs& args, const Output& out) {
   size_t skipped = 0;
   for (const MergeInputStatus& in : last.inputs) skipped += in.state == "skipped";
   say(out, "merge stopped: {} lists published; last used {} of {} inputs ({} skipped){}\n", published,
-      last.state.used.size(), args.urls.size(), skipped, last.error.empty() ? "" : "; last error: " + last.error);
+      last.state.used.size(), std::max(args.urls.size(), last.inputs.size()), skipped, last.error.empty() ? "" : "; last error: " + last.error);
   emit_json(out, {{"port", port}, {"published", published}, {"used", last.state.used}, {"dropped", last.state.dropped},
                   {"skipped", skipped}, {"mode", last.mode}});
   return 0;
@@ -200,6 +231,10 @@ std::vector<Command> live_commands() {
          f.opt("--fps", a->fps, "Replay pacing and the temporal filter's frame rate");
          f.flag("--loop", a->loop, "Replay: start over at the end");
          f.opt("--duration", a->duration, "Stop after this many seconds");
+         f.opt("--publish", a->publish, "Also publish to an MQTT broker: mqtt[s]://[USER[:PASSWORD]@]HOST[:PORT]/PREFIX (topics PREFIX/NAME/lights, PREFIX/NAME/status)");
+         f.opt("--name", a->name, "The camera's NAME in MQTT topics (default: from --source, aravis:Fake_1 -> aravis-Fake_1)");
+         f.opt("--mqtt-qos", a->mqtt_qos, "QoS of the published lists, 0 or 1").one_of({"0", "1"});
+         f.opt("--mqtt-cafile", a->mqtt_cafile, "mqtts: CA certificates (PEM); default the system's");
          f.opt("--metadata-model", a->metadata_model, "Probe-less mode: meter each frame's exposure/gain into this model and serve its lights");
          f.opt("--position", a->position, "Metadata mode: where the rig stands, X,Y m");
          f.opt("--view-dir", a->view_dir, "Metadata mode: where the camera looks, x,y,z");
@@ -207,10 +242,13 @@ std::vector<Command> live_commands() {
          return [a](const Output& out) { return run_stream(*a, out); };
        }},
       {"merge", "Merge the lights of several cameras' servers and serve the result",
-       "lightprobe merge http://cam1:8080 http://cam2:8080 --listen 127.0.0.1:8090",
+       "lightprobe merge http://cam1:8080 http://cam2:8080 --listen 127.0.0.1:8090\nlightprobe merge --subscribe mqtt://broker:1883/studio/+/lights",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<MergeArgs>();
-         f.arg("URL", a->urls, "Light servers, http://HOST:PORT").required();
+         f.arg("URL", a->urls, "Light servers, http://HOST:PORT");
+         f.opt("--subscribe", a->subscribe, "Instead of URLs: the cameras on an MQTT broker, mqtt[s]://[USER[:PASSWORD]@]HOST[:PORT]/PREFIX/+/lights (publishes PREFIX/merged/lights)");
+         f.opt("--mqtt-qos", a->mqtt_qos, "QoS of the subscription and the merged lists, 0 or 1").one_of({"0", "1"});
+         f.opt("--mqtt-cafile", a->mqtt_cafile, "mqtts: CA certificates (PEM); default the system's");
          f.opt("--listen", a->listen, "HOST:PORT to serve the merged lights on");
          f.opt("--token", a->token, "Bearer token for our server");
          f.opt("--upstream-token", a->upstream_token, "Bearer token for the cameras' servers");

@@ -26,6 +26,10 @@ struct StreamArgs {
   double fps = 0;                   // replay pacing; also the temporal filter's rate
   bool loop = false;
   double duration = 0;              // seconds; 0 = until interrupted (or the replay ends)
+  std::string publish;              // mqtt://[user[:pw]@]HOST[:PORT]/PREFIX (live/mqtt_publisher.h)
+  std::string name;                 // the camera's name in MQTT topics; default from --source
+  int mqtt_qos = 1;
+  std::string mqtt_cafile;          // mqtts: CA certificates
   // Probe-less mode (docs/metadata.md): each frame's exposure, gain and image mean update
   // a metadata model (saved to this path) and the server serves its lights at --position.
   std::string metadata_model;

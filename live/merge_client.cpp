@@ -53,15 +53,16 @@ double now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-// One upstream: its connection, its latest list and what it last sent.
+// One upstream: its connection.
 struct Upstream {
   Endpoint endpoint;
   std::unique_ptr<httplib::Client> client;
-  std::optional<std::string> malformed;  // why its last answer was not a light list
 };
 
-// Fetches one upstream's list into `input` (and `status`); never throws.
-void poll(Upstream& up, MergeInput& input, MergeInputStatus& status, const MergeClientOptions& options, double t) {
+// Fetches one upstream's list into `input` (and `status`, and `malformed`: why its answer
+// was not a light list); never throws.
+void poll(Upstream& up, MergeInput& input, MergeInputStatus& status, std::string& malformed,
+          const MergeClientOptions& options, double t) {
   // No If-None-Match: cpp-httplib 0.11 reads a 304 (which has no body and no length) until
   // the connection closes, so every conditional poll would time out.
   // The whole request within request_timeout_s, however the upstream trickles its bytes.
@@ -76,17 +77,17 @@ void poll(Upstream& up, MergeInput& input, MergeInputStatus& status, const Merge
   try {
     input.latest = light_list_from_json(r->body, up.endpoint.url);
     input.last_seen_s = t;
-    up.malformed.reset();
+    malformed.clear();
   } catch (const std::exception& e) {
     // Alive but unusable: its older list must not stand in for it.
     input.latest.reset();
-    up.malformed = e.what();
+    malformed = e.what();
   }
 }
 
 // Fills the per-input states from the round's merge report.
-void update_status(MergeClientStatus& status, const std::vector<Upstream>& ups, const MergeState& st) {
-  for (size_t i = 0; i < ups.size(); ++i) {
+void update_status(MergeClientStatus& status, const std::vector<std::string>& malformed, const MergeState& st) {
+  for (size_t i = 0; i < status.inputs.size(); ++i) {
     MergeInputStatus& in = status.inputs[i];
     in.reason.clear();
     in.detail.clear();
@@ -94,7 +95,7 @@ void update_status(MergeClientStatus& status, const std::vector<Upstream>& ups, 
     if (std::find(st.used.begin(), st.used.end(), in.name) != st.used.end()) in.state = "used";
     for (const MergeSkip& s : st.skipped)
       if (s.name == in.name) in.state = "skipped", in.reason = s.code, in.detail = s.detail;
-    if (ups[i].malformed) in.state = "skipped", in.reason = "malformed", in.detail = *ups[i].malformed;
+    if (i < malformed.size() && !malformed[i].empty()) in.state = "skipped", in.reason = "malformed", in.detail = malformed[i];
     if (in.state == "skipped") ++in.skipped[in.reason];
   }
 }
@@ -113,6 +114,22 @@ std::string label_value(const std::string& s) {
 }
 
 }  // namespace
+
+std::optional<LightList> merge_round(const std::vector<MergeInput>& inputs, const std::vector<std::string>& malformed,
+                                     const MergeClientOptions& options, MergeClientStatus& status) {
+  for (size_t i = status.inputs.size(); i < inputs.size(); ++i) status.inputs.emplace_back().name = inputs[i].name;
+  LightList merged = merge_available(inputs, now_s(), options.timeout_s, status.state, options.merge);
+  ++status.rounds;
+  update_status(status, malformed, status.state);
+  status.error = status.state.error;
+  if (status.state.stale) {
+    ++status.stale_rounds;
+    return std::nullopt;
+  }
+  status.mode = to_string(status.state.mode);
+  merged.frame = int64_t(status.lists_out++);
+  return merged;
+}
 
 void run_merge_client(const std::vector<std::string>& urls, const MergeClientOptions& options,
                       const std::function<void(const LightList&, const MergeClientStatus&)>& publish,
@@ -133,27 +150,15 @@ void run_merge_client(const std::vector<std::string>& urls, const MergeClientOpt
     up.client->set_keep_alive(true);
     if (!options.token.empty()) up.client->set_bearer_token_auth(options.token.c_str());
     inputs.push_back({u, std::nullopt, 0});
-    MergeInputStatus s;
-    s.name = u;
-    status.inputs.push_back(s);
+    status.inputs.emplace_back().name = u;
     ups.push_back(std::move(up));
   }
-  int64_t last_frame_out = -1;
+  std::vector<std::string> malformed(ups.size());
   while (!stop) {
     try {
       const double t = now_s();
-      for (size_t i = 0; i < ups.size(); ++i) poll(ups[i], inputs[i], status.inputs[i], options, t);
-      LightList merged = merge_available(inputs, now_s(), options.timeout_s, status.state, options.merge);
-      ++status.rounds;
-      update_status(status, ups, status.state);
-      status.error = status.state.error;
-      if (status.state.stale) {
-        ++status.stale_rounds;
-      } else {
-        status.mode = to_string(status.state.mode);
-        merged.frame = ++last_frame_out;
-        publish(merged, status);
-      }
+      for (size_t i = 0; i < ups.size(); ++i) poll(ups[i], inputs[i], status.inputs[i], malformed[i], options, t);
+      if (std::optional<LightList> merged = merge_round(inputs, malformed, options, status)) publish(*merged, status);
     } catch (const std::exception& e) {
       // A bad option is found before the loop; anything else ends this round only.
       status.error = e.what();
@@ -204,7 +209,7 @@ std::string merge_metrics_text(const MergeClientStatus& status) {
     for (const auto& [reason, count] : in.skipped)
       m += fmt::format("lightprobe_merge_input_skipped_total{{input=\"{}\",reason=\"{}\"}} {}\n", label_value(in.name),
                        label_value(reason), count);
-  return m;
+  return m + status.link_metrics;
 }
 
 }  // namespace lp

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,7 +46,17 @@ struct MergeClientStatus {
   std::string error;          // why the last round's merge failed, if it did
   std::vector<MergeInputStatus> inputs;
   MergeState state;           // the merge's own report of the last round
+  uint64_t lists_out = 0;     // merged lists numbered so far (the next one's frame)
+  std::string link_metrics;   // Prometheus text of the link the inputs come through (MQTT), if any
 };
+
+// One round over the inputs as they stand, shared by the HTTP poller below and the MQTT
+// subscriber (live/mqtt_merge.h): merges the live ones (merge_available), updates
+// `status` (its inputs follow `inputs`, which may only grow) and returns the merged list,
+// numbered, or nullopt when the round merged nothing. `malformed[i]`: why input i's last
+// answer was not a light list (its older list must not stand in for it; empty: it was).
+std::optional<LightList> merge_round(const std::vector<MergeInput>& inputs, const std::vector<std::string>& malformed,
+                                     const MergeClientOptions& options, MergeClientStatus& status);
 
 // Polls until `stop` becomes true, calling `publish` with every new merged list (rounds
 // that merge nothing publish nothing) and the status. Throws InputError for a malformed

@@ -14,23 +14,6 @@ command -v curl >/dev/null || skip "curl not installed (Debian package curl)"
 PIDS=()
 trap 'for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$WORK"' EXIT
 
-# start_bg NAME ARGS...: runs lightprobe ARGS in the background; sets NAME_PID, NAME_PORT.
-start_bg() {
-  local name=$1 port="" pid; shift
-  "$LP" "$@" --json >"$WORK/$name.json" 2>"$WORK/$name.err" &
-  pid=$!; PIDS+=("$pid")
-  for _ in $(seq 100); do
-    port=$(sed -n 's|.*-> http://127.0.0.1:\([0-9]*\)/.*|\1|p' "$WORK/$name.err" | head -1)
-    [ -n "$port" ] && break
-    kill -0 "$pid" 2>/dev/null || fail "$name exited at start: $(tail -1 "$WORK/$name.err")"
-    sleep 0.1
-  done
-  [ -n "$port" ] || fail "$name did not start listening within 10 s"
-  printf -v "${name}_PID" '%s' "$pid"; printf -v "${name}_PORT" '%s' "$port"
-}
-code() { curl -s -o "$WORK/body" -w '%{http_code}' --max-time 5 "$@"; }
-alive() { kill -0 "$1" 2>/dev/null || fail "$2 died (exit $(wait "$1"; echo $?)): $(tail -2 "$WORK/$2.err")"; }
-
 start_bg A stream --source aravis:Fake_1 --exposures 0.0002,0.002,0.02 --method q2tree --n 64 --duration 40 --listen 127.0.0.1:0
 start_bg B stream --source aravis:Fake_1 --exposures 0.0002,0.002,0.02 --method pharr --n 64 --duration 40 --listen 127.0.0.1:0
 for p in "$A_PORT" "$B_PORT"; do

@@ -67,3 +67,24 @@ check_accounting() {
   [ "$fin" -eq $((cycle * (proc + drop) + part)) ] ||
     fail "frames unaccounted for: in=$fin, processed=$proc, dropped=$drop brackets, partial=$part"
 }
+
+# start_bg NAME ARGS...: runs lightprobe ARGS --json in the background (its report in
+# $WORK/NAME.json, its stderr in $WORK/NAME.err); sets NAME_PID, NAME_PORT; adds the pid to
+# PIDS (the caller's EXIT trap kills them).
+start_bg() {
+  local name=$1 port="" pid; shift
+  "$LP" "$@" --json >"$WORK/$name.json" 2>"$WORK/$name.err" &
+  pid=$!; PIDS+=("$pid")
+  for _ in $(seq 100); do
+    port=$(sed -n 's|.*-> http://127.0.0.1:\([0-9]*\)/.*|\1|p' "$WORK/$name.err" | head -1)
+    [ -n "$port" ] && break
+    kill -0 "$pid" 2>/dev/null || fail "$name exited at start: $(tail -1 "$WORK/$name.err")"
+    sleep 0.1
+  done
+  [ -n "$port" ] || fail "$name did not start listening within 10 s"
+  printf -v "${name}_PID" '%s' "$pid"; printf -v "${name}_PORT" '%s' "$port"
+}
+# code URL...: curl's HTTP status; the body in $WORK/body.
+code() { curl -s -o "$WORK/body" -w '%{http_code}' --max-time 5 "$@"; }
+# alive PID NAME: fails with NAME's last words if it died.
+alive() { kill -0 "$1" 2>/dev/null || fail "$2 died (exit $(wait "$1"; echo $?)): $(tail -2 "$WORK/$2.err")"; }

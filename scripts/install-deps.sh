@@ -17,8 +17,8 @@ packages=(
   # libFuzzer and the ASan/UBSan runtimes, llvm-symbolizer for readable reports
   clang-14 libclang-rt-14-dev llvm-14
   # MQTT: the client library `stream --publish` / `merge --subscribe` use, and the broker
-  # and command-line clients their tests run on loopback
-  libmosquitto-dev mosquitto mosquitto-clients
+  # and command-line clients their tests run on loopback (openssl makes the TLS test certificates)
+  libmosquitto-dev mosquitto mosquitto-clients openssl
   # OpenEXR's and OpenImageIO's tools: exrenvmap checks the prefiltered cube's frame,
   # exrheader / iinfo read what the project writes
   openexr openimageio-tools

@@ -5,12 +5,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "eval/ball_eval.h"
 #include "probe/mirror_ball.h"
+#include "probe/unwrap_sequence.h"
 
 namespace lp {
 namespace {
@@ -129,6 +131,34 @@ TEST(BallPrecision, TheReportedSigmaMatchesTheScatterFromNoise) {
   EXPECT_GT(sigma, 2 * sigma_clean);
   EXPECT_LT(std::sqrt(ss), 3 * sigma);
   EXPECT_GT(std::sqrt(ss), sigma / 3);
+}
+
+}  // namespace
+}  // namespace lp
+
+namespace lp {
+namespace {
+
+// The unwrap report carries how each ball was found, with the fit's standard errors.
+TEST(BallPrecision, TheUnwrapReportCarriesTheFitsUncertainty) {
+  EnvMap flat = make_envmap(Layout::LatLong, 64, 32);
+  std::fill(flat.rgb.begin(), flat.rgb.end(), 1.0f);
+  const BallCase c = render_ball_case(flat, BallBackground::Black, 60, {}, 5);
+  const std::string path = (std::filesystem::temp_directory_path() / "lp_ball_fit_report.exr").string();
+  write_rgb_image(path, c.image);
+  UnwrapSequenceOptions o;
+  o.width = 64, o.height = 32;
+  const auto found = unwrap_probe_sequence({path}, o, [](size_t, EnvMap&) {});
+  ASSERT_EQ(found.frames.size(), 1u);
+  ASSERT_TRUE(found.frames[0].ball_fit.has_value());
+  EXPECT_TRUE(found.frames[0].ball_fit->subpixel);
+  EXPECT_GT(found.frames[0].ball_fit->sigma_centre_px, 0.0);
+  EXPECT_LT(found.frames[0].ball_fit->sigma_centre_px, 0.05);
+  EXPECT_GT(found.frames[0].ball_fit->sigma_radius_px, 0.0);
+  o.ball = c.truth;
+  const auto given = unwrap_probe_sequence({path}, o, [](size_t, EnvMap&) {});
+  EXPECT_FALSE(given.frames[0].ball_fit.has_value());
+  std::filesystem::remove(path);
 }
 
 }  // namespace

@@ -34,6 +34,13 @@ std::vector<std::string> every_shared_map() {
 
 const std::string kPhoto = kData + "/hdr-memorial-debevec/reference/memorial_radiance_hdrshop.hdr";
 
+// A map of radiance 1 everywhere: a ball with no rim structure.
+EnvMap uniform_map() {
+  EnvMap flat = make_envmap(Layout::LatLong, 64, 32);
+  std::fill(flat.rgb.begin(), flat.rgb.end(), 1.0f);
+  return flat;
+}
+
 // The whole grid (17 maps x 3 radii x 5 backgrounds); minutes of CPU, so only on demand:
 // LIGHTPROBE_BALL_EVAL=DIR writes DIR/ball.csv and prints the table.
 TEST(BallPrecision, EveryMapSizeAndBackgroundOnDemand) {
@@ -57,17 +64,12 @@ TEST(BallPrecision, EveryMapSizeAndBackgroundOnDemand) {
   std::printf("%s", rep.summary().c_str());
 }
 
-}  // namespace
-}  // namespace lp
-namespace lp {
-namespace {
 
 // The harness's truth: a uniform ball (no rim structure to confuse an edge) on black is
 // found to a few hundredths of a pixel, so the coverage compositing and the sub-pixel
 // convention agree with find_ball's.
 TEST(BallPrecision, AUniformBallOnBlackIsFoundToHundredthsOfAPixel) {
-  EnvMap flat = make_envmap(Layout::LatLong, 64, 32);
-  std::fill(flat.rgb.begin(), flat.rgb.end(), 1.0f);
+  const EnvMap flat = uniform_map();
   for (const double r : {60.0, 150.0}) {
     const BallCase c = render_ball_case(flat, BallBackground::Black, r, {}, 11);
     FindBallReport rep;
@@ -108,8 +110,7 @@ TEST(BallPrecision, AStudioBallIsFoundToAFewTenthsOfAPixelOnFourBackgrounds) {
 // edges) the spread of the centre errors over 8 renders is within a factor 3 of the mean
 // reported sigma, and the sigma grows with the noise.
 TEST(BallPrecision, TheReportedSigmaMatchesTheScatterFromNoise) {
-  EnvMap flat = make_envmap(Layout::LatLong, 64, 32);
-  std::fill(flat.rgb.begin(), flat.rgb.end(), 1.0f);
+  const EnvMap flat = uniform_map();
   double ss = 0, sigma = 0, sigma_clean = 0;
   const int n = 8;
   for (int i = 0; i < n; ++i) {
@@ -133,16 +134,10 @@ TEST(BallPrecision, TheReportedSigmaMatchesTheScatterFromNoise) {
   EXPECT_GT(std::sqrt(ss), sigma / 3);
 }
 
-}  // namespace
-}  // namespace lp
-
-namespace lp {
-namespace {
 
 // The unwrap report carries how each ball was found, with the fit's standard errors.
 TEST(BallPrecision, TheUnwrapReportCarriesTheFitsUncertainty) {
-  EnvMap flat = make_envmap(Layout::LatLong, 64, 32);
-  std::fill(flat.rgb.begin(), flat.rgb.end(), 1.0f);
+  const EnvMap flat = uniform_map();
   const BallCase c = render_ball_case(flat, BallBackground::Black, 60, {}, 5);
   const std::string path = (std::filesystem::temp_directory_path() / "lp_ball_fit_report.exr").string();
   write_rgb_image(path, c.image);

@@ -66,16 +66,23 @@ double residual(const RimEdge& p, const BallInImage& c) { return std::hypot(p.x 
 // Per ray, the edges within +-window of circle c, strongest first; empty where the band
 // leaves the image or touches an invalid pixel.
 using RayEdges = std::vector<std::vector<RimEdge>>;
+
+// Whether ray k's band of +-window around c lies inside the image on valid pixels.
+bool ray_in_view(const cv::Mat& img, const cv::Mat& valid8, const BallInImage& c, double window, int k, int rays) {
+  const double t = ray_angle(k, rays), ct = std::cos(t), st = std::sin(t);
+  for (double rr = c.radius_px - window - 2; rr <= c.radius_px + window + 2; rr += 1) {
+    const double x = c.cx + rr * ct, y = c.cy + rr * st;
+    if (x < 0.5 || y < 0.5 || x > img.cols - 0.5 || y > img.rows - 0.5) return false;
+    if (!valid8.empty() && !valid8.at<uint8_t>(int(y), int(x))) return false;
+  }
+  return true;
+}
+
 RayEdges ray_edges(const cv::Mat& img, const cv::Mat& valid8, const BallInImage& c, double window, int rays) {
   RayEdges out(rays);
   tbb::parallel_for(0, rays, [&](int k) {
-    const double t = ray_angle(k, rays), ct = std::cos(t), st = std::sin(t);
-    if (!valid8.empty())
-      for (double rr = c.radius_px - window - 2; rr <= c.radius_px + window + 2; rr += 1) {
-        const int x = int(c.cx + rr * ct), y = int(c.cy + rr * st);
-        if (x < 0 || y < 0 || x >= valid8.cols || y >= valid8.rows || !valid8.at<uint8_t>(y, x)) return;
-      }
-    out[k] = radial_edges(img, c.cx, c.cy, t, c.radius_px - window, c.radius_px + window, 6);
+    if (!ray_in_view(img, valid8, c, window, k, rays)) return;
+    out[k] = radial_edges(img, c.cx, c.cy, ray_angle(k, rays), c.radius_px - window, c.radius_px + window, 6);
   });
   return out;
 }
@@ -205,12 +212,13 @@ std::optional<BallInImage> narrow(const cv::Mat& smooth, const cv::Mat& valid8, 
   return c;
 }
 
-// Share of all rays whose outermost edge within 1 px of c lies within 0.5 px of it.
+// Share of the rays in view whose outermost edge within 1 px of c lies within 0.5 px of it.
 double agreement(const cv::Mat& smooth, const cv::Mat& valid8, const BallInImage& c, int rays) {
-  int agree = 0;
+  int agree = 0, in_view = 0;
+  for (int k = 0; k < rays; ++k) in_view += ray_in_view(smooth, valid8, c, 1.0, k, rays);
   for (const Weighted& p : pick_edges(ray_edges(smooth, valid8, c, 1.0, rays), c, false))
     agree += std::abs(residual(p.e, c)) < 0.5;
-  return double(agree) / rays;
+  return in_view ? double(agree) / in_view : 0;
 }
 
 // The wide pass: the strongest edges within 4 px + 2 % of R of the start, a circle fitted

@@ -43,7 +43,8 @@ struct RimFit {
   double sigma_centre_px = 0, sigma_radius_px = 0;  // as find_ball reports them
   double rms_px = 0;    // weighted RMS residual of the inliers
   int inliers = 0;      // rays whose edge has a non-zero final weight
-  // Share of all rays whose outermost edge within 1 px of the circle lies within 0.5 px of it.
+  // Share of the rays in view (inside the image, on valid pixels) whose outermost edge
+  // within 1 px of the circle lies within 0.5 px of it.
   double agreement = 0;
   bool ok = false;      // false: too few edges, or the fit ran away (> 2 windows)
 };

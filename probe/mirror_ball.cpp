@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "probe/ball_rim_fit.h"
 
 namespace lp {
 namespace {
@@ -149,135 +150,6 @@ struct Circle {
   double cx = 0, cy = 0, r = 0;
 };
 
-struct EdgePoint {
-  double x, y, strength;
-};
-
-// Bilinear sample of a 3-channel float image at (x, y) in pixel-centre-at-+0.5
-// coordinates; the caller keeps (x, y) within [0.5, W - 0.5] x [0.5, H - 0.5].
-cv::Vec3f bilinear(const cv::Mat& img, double x, double y) {
-  const double fx = x - 0.5, fy = y - 0.5;
-  int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
-  x0 = std::clamp(x0, 0, img.cols - 2);
-  y0 = std::clamp(y0, 0, img.rows - 2);
-  const float ax = float(fx - x0), ay = float(fy - y0);
-  const cv::Vec3f* r0 = img.ptr<cv::Vec3f>(y0);
-  const cv::Vec3f* r1 = img.ptr<cv::Vec3f>(y0 + 1);
-  return (1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1]);
-}
-
-// Local maxima of the radial derivative's magnitude (summed over the colour channels, so
-// an edge between equally bright but differently coloured regions counts) along one ray within [r_lo, r_hi],
-// strongest first (at most `keep`), each placed to sub-pixel precision by a parabola;
-// empty when the band leaves the image.
-std::vector<EdgePoint> radial_edges(const cv::Mat& img, double cx, double cy, double theta, double r_lo,
-                                    double r_hi, int keep, double step = 0.25) {
-  const double dx = std::cos(theta), dy = std::sin(theta);
-  const double w = img.cols, h = img.rows;
-  // Derivatives over a 1 px baseline (bilinear samples have piecewise-constant slopes
-  // within a pixel, so a shorter baseline would quantise the peak to pixel cells); peak
-  // refined by a parabola through the derivative at -1, 0, +1 px.
-  const int half = int(std::lround(0.5 / step)), reach = 2 * half;
-  const double lo = std::max(0.0, r_lo - (reach + 1) * step), hi = r_hi + (reach + 1) * step;
-  for (double rr : {lo, hi}) {
-    const double x = cx + rr * dx, y = cy + rr * dy;
-    if (x < 0.5 || y < 0.5 || x > w - 0.5 || y > h - 0.5) return {};
-  }
-  const int n = int(std::ceil((hi - lo) / step)) + 1;
-  if (n < 2 * reach + 5) return {};
-  std::vector<cv::Vec3f> p(n);
-  std::vector<double> d(n, 0.0);
-  for (int i = 0; i < n; ++i) p[i] = bilinear(img, cx + (lo + i * step) * dx, cy + (lo + i * step) * dy);
-  for (int i = half; i + half < n; ++i) {
-    const cv::Vec3f g = p[i + half] - p[i - half];
-    d[i] = (std::abs(g[0]) + std::abs(g[1]) + std::abs(g[2])) / (2 * half * step);
-  }
-  std::vector<EdgePoint> out;
-  for (int i = reach + half; i + reach + half < n; ++i) {
-    if (!(d[i] > d[i - 1] && d[i] >= d[i + 1])) continue;
-    const double dm = d[i - reach], dp = d[i + reach];
-    const double denom = dm - 2 * d[i] + dp;
-    const double off = denom < 0 ? std::clamp(0.5 * (dm - dp) / denom, -0.5, 0.5) * reach : 0.0;
-    const double rr = lo + (i + off) * step;
-    if (rr < r_lo || rr > r_hi) continue;
-    out.push_back({cx + rr * dx, cy + rr * dy, d[i]});
-  }
-  std::sort(out.begin(), out.end(), [](const EdgePoint& a, const EdgePoint& b) { return a.strength > b.strength; });
-  if (int(out.size()) > keep) out.resize(keep);
-  return out;
-}
-
-// Geometric fit, Gauss-Newton with Tukey biweights (iteratively reweighted).
-Circle geometric_fit(const std::vector<EdgePoint>& pts, Circle c) {
-  std::vector<double> res(pts.size());
-  for (int outer = 0; outer < 8; ++outer) {
-    for (size_t i = 0; i < pts.size(); ++i) res[i] = std::hypot(pts[i].x - c.cx, pts[i].y - c.cy) - c.r;
-    std::vector<double> absr(res.size());
-    for (size_t i = 0; i < res.size(); ++i) absr[i] = std::abs(res[i]);
-    std::nth_element(absr.begin(), absr.begin() + absr.size() / 2, absr.end());
-    const double sigma = std::max(0.1, 1.4826 * absr[absr.size() / 2]);
-    const double k = 4.685 * sigma;
-    for (int it = 0; it < 5; ++it) {
-      double jtj[3][3] = {}, jtr[3] = {};
-      for (size_t i = 0; i < pts.size(); ++i) {
-        const double dx = pts[i].x - c.cx, dy = pts[i].y - c.cy;
-        const double dist = std::hypot(dx, dy);
-        if (dist < 1e-9) continue;
-        const double ri = dist - c.r;
-        if (std::abs(ri) >= k) continue;
-        const double u = ri / k;
-        const double wgt = (1 - u * u) * (1 - u * u);
-        const double j[3] = {-dx / dist, -dy / dist, -1};
-        for (int p = 0; p < 3; ++p) {
-          jtr[p] += wgt * j[p] * ri;
-          for (int q = 0; q < 3; ++q) jtj[p][q] += wgt * j[p] * j[q];
-        }
-      }
-      cv::Matx33d m(jtj[0][0], jtj[0][1], jtj[0][2], jtj[1][0], jtj[1][1], jtj[1][2], jtj[2][0], jtj[2][1],
-                    jtj[2][2]);
-      cv::Vec3d rhs(-jtr[0], -jtr[1], -jtr[2]);
-      cv::Vec3d delta;
-      if (!cv::solve(m, rhs, delta, cv::DECOMP_SVD)) break;
-      c.cx += delta[0];
-      c.cy += delta[1];
-      c.r += delta[2];
-      if (std::abs(delta[0]) + std::abs(delta[1]) + std::abs(delta[2]) < 1e-6) break;
-    }
-  }
-  return c;
-}
-
-double ray_angle(int k, int rays) { return 2 * M_PI * (k + 0.5) / rays; }
-
-// Per ray: edge candidates in the band [r - half_band, r + half_band] around circle c.
-std::vector<std::vector<EdgePoint>> ray_candidates(const cv::Mat& img, const Circle& c, double half_band, int rays,
-                                                   int keep) {
-  std::vector<std::vector<EdgePoint>> out(rays);
-  for (int k = 0; k < rays; ++k)
-    out[k] = radial_edges(img, c.cx, c.cy, ray_angle(k, rays), c.r - half_band, c.r + half_band, keep);
-  return out;
-}
-
-double radial_residual(const EdgePoint& p, const Circle& c) { return std::hypot(p.x - c.cx, p.y - c.cy) - c.r; }
-
-// Per ray, the outermost candidate among those at least `rel` times as strong as the
-// ray's strongest: the silhouette is the ball's outer boundary, while the rim's
-// reflection (the whole scene behind the ball squeezed into a few pixels) draws rings
-// concentric with it just inside, which would pull a "strongest edge" fit inwards.
-std::vector<EdgePoint> outermost_edges(const std::vector<std::vector<EdgePoint>>& cands, const Circle& c,
-                                       double rel) {
-  std::vector<EdgePoint> pts;
-  for (const auto& ray : cands) {
-    if (ray.empty()) continue;
-    const EdgePoint* best = nullptr;
-    for (const auto& e : ray)
-      if (e.strength >= rel * ray[0].strength && (!best || radial_residual(e, c) > radial_residual(*best, c)))
-        best = &e;
-    pts.push_back(*best);
-  }
-  return pts;
-}
-
 double cut_fraction(const Circle& c, int w, int h) {
   int out = 0;
   const int n = 720;
@@ -288,14 +160,6 @@ double cut_fraction(const Circle& c, int w, int h) {
   }
   return double(out) / n;
 }
-
-struct Candidate {
-  Circle circle;
-  double confidence = 0;
-  double rms = 0;
-  int inliers = 0;
-  bool ok = false;
-};
 
 // ---- Region contrast (coarse-to-fine search and confidence) ----
 
@@ -382,6 +246,9 @@ bool sample4(const FeatureLevel& L, double x, double y, cv::Vec4f* out) {
 constexpr double kSupport = 3.0;
 struct RegionScore {
   double score = 0, support = 0, visible = 0;
+  // The score with circles less than 97 % seen fading out: seeds for a ball wholly in
+  // view, which large circles half outside a textured image outscore otherwise.
+  double score_whole = 0;
 };
 
 RegionScore region_score(const FeatureLevel& L, const Circle& c_full, int angles, double max_cut) {
@@ -409,9 +276,11 @@ RegionScore region_score(const FeatureLevel& L, const Circle& c_full, int angles
   out.visible = double(vis) / angles;
   // Unseen angles count as the seen ones' mean, so that a ball overflowing the crop is
   // not pushed inside it; circles less than half visible fade out (the cut check
-  // after the fit decides whether a ball is too cut; max_cut is unused here).
+  // after the fit decides whether a ball is too cut).
   const double fade = std::min(1.0, out.visible / 0.5);
   out.score = vis ? c_full.r * sum / vis * fade * fade : 0;
+  const double fade_whole = std::min(1.0, out.visible / 0.97);
+  out.score_whole = vis ? c_full.r * sum / vis * fade_whole * fade_whole : 0;
   out.support = vis ? double(sup) / vis : 0;
   return out;
 }
@@ -422,7 +291,8 @@ int angles_for(const FeatureLevel& L, const Circle& c) {
 
 // Local search around c (full-res coordinates) on one level: +-2 level px in centre and
 // radius, step 0.5 level px.
-Circle local_search(const FeatureLevel& L, const Circle& c, double r_min, double r_max, double max_cut) {
+Circle local_search(const FeatureLevel& L, const Circle& c, double r_min, double r_max, double max_cut,
+                    bool whole = false) {
   const double sx = L.sx, sy = L.sy, s = L.s();
   const int n = 9;
   std::vector<double> scores(size_t(n) * n * n, -1);
@@ -432,7 +302,8 @@ Circle local_search(const FeatureLevel& L, const Circle& c, double r_min, double
     for (int k = 0; k < n; ++k) {
       const Circle q{c.cx + (i - 4) * 0.5 * sx, c.cy + (j - 4) * 0.5 * sy, c.r + (k - 4) * 0.5 * s};
       if (q.r < r_min || q.r > r_max) continue;
-      scores[size_t(ij) * n + k] = region_score(L, q, angles, max_cut).score;
+      const RegionScore rs = region_score(L, q, angles, max_cut);
+      scores[size_t(ij) * n + k] = whole ? rs.score_whole : rs.score;
     }
   });
   const size_t best = size_t(std::max_element(scores.begin(), scores.end()) - scores.begin());
@@ -452,7 +323,8 @@ Circle local_search(const FeatureLevel& L, const Circle& c, double r_min, double
 
 // Exhaustive search on the coarsest level: every centre and radius on the level's pixel
 // grid; the best few local maxima (apart by > 3 level px) as seeds, in full-res coordinates.
-std::vector<Circle> coarse_seeds(const FeatureLevel& L, double r_min, double r_max, int keep, double max_cut) {
+std::vector<Circle> coarse_seeds(const FeatureLevel& L, double r_min, double r_max, int keep, double max_cut,
+                                 bool whole) {
   const int lw = L.feat.cols, lh = L.feat.rows;
   const int r0 = std::max(4, int(std::ceil(r_min / L.s()))), r1 = int(std::floor(r_max / L.s()));
   if (r1 < r0) return {};
@@ -460,9 +332,10 @@ std::vector<Circle> coarse_seeds(const FeatureLevel& L, double r_min, double r_m
   std::vector<float> sc(size_t(lw + 1) * (lh + 1) * nr, 0.f);
   tbb::parallel_for(0, lh + 1, [&](int y) {
     for (int x = 0; x <= lw; ++x)
-      for (int r = r0; r <= r1; ++r)
-        sc[(size_t(y) * (lw + 1) + x) * nr + (r - r0)] =
-            float(region_score(L, {x * L.sx, y * L.sy, r * L.s()}, 48, max_cut).score);
+      for (int r = r0; r <= r1; ++r) {
+        const RegionScore rs = region_score(L, {x * L.sx, y * L.sy, r * L.s()}, 48, max_cut);
+        sc[(size_t(y) * (lw + 1) + x) * nr + (r - r0)] = float(whole ? rs.score_whole : rs.score);
+      }
   });
   std::vector<size_t> order(sc.size());
   std::iota(order.begin(), order.end(), size_t(0));
@@ -484,58 +357,11 @@ std::vector<Circle> coarse_seeds(const FeatureLevel& L, double r_min, double r_m
   return out;
 }
 
-// Sub-pixel polish on edges: the narrow passes of `refine` (outermost edge per ray in
-// bands of +-6, 4, 3 px on the linear image), skipping rays whose band touches invalid
-// pixels. The edge agreement (share of rays whose strongest edge within +-10 % of R
-// lies on the circle) tells whether the boundary is a clean edge.
-Candidate edge_polish(const cv::Mat& coarse, const cv::Mat& fine, const cv::Mat& valid8, Circle c, int rays,
-                      double r_min, double r_max) {
-  Candidate out;
-  auto usable = [&](std::vector<std::vector<EdgePoint>> cands, const Circle& cc, double band) {
-    if (valid8.empty()) return cands;
-    for (int k = 0; k < int(cands.size()); ++k) {
-      const double t = ray_angle(k, rays);
-      for (int j = -4; j <= 4 && !cands[k].empty(); ++j) {
-        const double rr = cc.r + j * (band + 2) / 4;
-        const int x = int(cc.cx + rr * std::cos(t)), y = int(cc.cy + rr * std::sin(t));
-        if (x < 0 || y < 0 || x >= valid8.cols || y >= valid8.rows || !valid8.at<uint8_t>(y, x)) cands[k].clear();
-      }
-    }
-    return cands;
-  };
-  for (const double band : {6.0, 4.0, 3.0}) {
-    const auto pts = outermost_edges(usable(ray_candidates(fine, c, band, rays, 4), c, band), c, 0.3);
-    if (pts.size() < 12) return out;
-    Circle next = geometric_fit(pts, c);
-    if (!(next.r > 0) || !std::isfinite(next.cx) || !std::isfinite(next.cy)) return out;
-    if (std::hypot(next.cx - c.cx, next.cy - c.cy) > 2 * band || std::abs(next.r - c.r) > 2 * band) return out;
-    c = next;
-  }
-  if (c.r < r_min || c.r > r_max) return out;
-  const auto pts = outermost_edges(usable(ray_candidates(fine, c, 3, rays, 4), c, 3), c, 0.3);
-  double ss = 0;
-  int n_in = 0;
-  const double tol = 1.5 + 0.005 * c.r;
-  for (auto& p : pts) {
-    const double ri = radial_residual(p, c);
-    if (std::abs(ri) < tol) ss += ri * ri, ++n_in;
-  }
-  const auto wide = usable(ray_candidates(coarse, c, 0.1 * c.r, rays, 1), c, 0.1 * c.r);
-  int agree = 0, n_wide = 0;
-  for (auto& ray : wide) {
-    if (ray.empty()) continue;
-    ++n_wide;
-    if (std::abs(radial_residual(ray[0], c)) < tol) ++agree;
-  }
-  out.circle = c;
-  out.inliers = n_in;
-  out.rms = n_in ? std::sqrt(ss / n_in) : 0;
-  out.confidence = n_wide >= 12 ? double(agree) / n_wide : 0;
-  out.ok = true;
-  return out;
-}
-
 }  // namespace
+
+// A rim fit counts when at least this share of its rays has an edge on it (clean renders
+// 0.7-1; the kartik photos' blurred rims 0.2-0.35, like random circles in texture).
+constexpr double kMinRimAgreement = 0.5;
 
 BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, FindBallReport* report) {
   const int w = image.width, h = image.height;
@@ -574,8 +400,7 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
       valid01.at<float>(y, x) = ok ? 1.f : 0.f;
       valid8.at<uint8_t>(y, x) = ok ? 1 : 0;
     }
-  cv::Mat coarse, fine, lum_blur, energy;
-  cv::GaussianBlur(col, coarse, cv::Size(0, 0), 2.0);
+  cv::Mat fine, lum_blur, energy;
   // Sub-pixel passes run on linear values: the rim's pixels blend ball and background
   // linearly in radiance, and any compression would move the edge towards the dark side.
   cv::GaussianBlur(lin, fine, cv::Size(0, 0), 1.0);
@@ -597,34 +422,55 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   int analysis = 0;
   while (analysis + 1 < int(levels.size()) && std::max(w, h) / factors[analysis] > 128) ++analysis;
 
-  std::vector<Circle> seeds;
+  std::vector<std::pair<Circle, bool>> seeds;  // circle, whole (seeded by score_whole)
   if (options.initial_guess)
-    seeds.push_back({options.initial_guess->cx, options.initial_guess->cy, options.initial_guess->radius_px});
+    seeds.push_back({{options.initial_guess->cx, options.initial_guess->cy, options.initial_guess->radius_px}, false});
   else
-    seeds = coarse_seeds(levels.back(), r_min, r_max, 8, options.max_cut_fraction);
+    for (bool whole : {false, true})
+      for (const Circle& c : coarse_seeds(levels.back(), r_min, r_max, whole ? 4 : 8, options.max_cut_fraction, whole))
+        seeds.push_back({c, whole});
 
-  Circle best_c;
-  RegionScore best_s;
-  bool found = false;
-  for (Circle c : seeds) {
-    for (int li = int(levels.size()) - 1; li >= 0; --li) c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction);
-    const RegionScore s = region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction);
-    if (!found || s.score > best_s.score) best_c = c, best_s = s, found = true;
+  // Each seed refined on the region contrast, then its silhouette fitted; the circle whose
+  // fitted rim agrees with the edges along the longest arc wins (a large circle half
+  // outside the image or through a textured background agrees along little of it). Where
+  // no fit agrees along kMinRimAgreement of the rim (a blurred photo whose rim fades into
+  // a similar background: 0.2-0.35 on the kartik frames) the region score decides and
+  // its answer stands.
+  struct Pick {
+    Circle c;
+    RegionScore s;
+    RimFit rim;
+  };
+  std::optional<Pick> best;
+  auto arc = [](const Pick& p) {
+    return p.rim.ok && p.rim.agreement >= kMinRimAgreement ? p.rim.agreement * p.rim.ball.radius_px : -1.0;
+  };
+  // Seeds refined down to level 1 (half resolution) only: the rim fit's first window
+  // covers the difference, and the winner's region answer is refined on level 0 below.
+  const int last_level = levels.size() > 1 ? 1 : 0;
+  for (auto [c, whole] : seeds) {
+    for (int li = int(levels.size()) - 1; li >= last_level; --li)
+      c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction, whole);
+    Pick p{c, region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction), {}};
+    p.rim = fit_rim(fine, lin, valid8, {c.cx, c.cy, c.r}, options.rays);
+    const bool near = std::hypot(p.rim.ball.cx - c.cx, p.rim.ball.cy - c.cy) <= 8 + 0.02 * c.r &&
+                      std::abs(p.rim.ball.radius_px - c.r) <= 8 + 0.02 * c.r;
+    if (!near) p.rim.ok = false;
+    if (!best || arc(p) > arc(*best) || (arc(p) == arc(*best) && p.s.score > best->s.score)) best = p;
   }
-  const double confidence = found && best_s.visible >= 0.25 ? best_s.support : 0.0;
-  if (!found || confidence < options.min_confidence)
+  const double confidence = best && best->s.visible >= 0.25 ? best->s.support : 0.0;
+  if (!best || confidence < options.min_confidence)
     throw InputError("find_ball: no ball found (boundary confidence " + std::to_string(confidence).substr(0, 4) +
                      " < " + std::to_string(options.min_confidence).substr(0, 4) + ")");
-
-  // Sub-pixel polish on the edges when the boundary is a clean edge near the region answer.
-  Circle result = best_c;
+  Circle result = last_level ? local_search(levels[0], best->c, r_min, r_max, options.max_cut_fraction) : best->c;
   FindBallReport rep;
-  const Candidate pol = edge_polish(coarse, fine, valid8, best_c, options.rays, r_min, r_max);
-  if (pol.ok && pol.confidence >= 0.5 &&
-      std::hypot(pol.circle.cx - best_c.cx, pol.circle.cy - best_c.cy) <= 8 + 0.02 * best_c.r &&
-      std::abs(pol.circle.r - best_c.r) <= 8 + 0.02 * best_c.r)
-    result = pol.circle;
-  if (pol.ok) rep.rms_residual_px = pol.rms, rep.edge_points = pol.inliers;
+  if (arc(*best) > 0) {
+    const RimFit& rim = best->rim;
+    rep.subpixel = true;
+    result = {rim.ball.cx, rim.ball.cy, rim.ball.radius_px};
+    rep.rms_residual_px = rim.rms_px, rep.edge_points = rim.inliers;
+    rep.sigma_centre_px = rim.sigma_centre_px, rep.sigma_radius_px = rim.sigma_radius_px;
+  }
   rep.confidence = confidence;
   rep.cut_fraction = cut_fraction(result, w, h);
   if (report) *report = rep;

@@ -110,21 +110,22 @@ class MirrorBallProjection {
 // ---------------------------------------------------------------------------------------
 // Detection.
 //
-// Method (region contrast, multi-scale): feature images per pyramid level (factors 1, 2,
-// 4, ... down to <= 64 px): compressed colour c / (c + mean luminance), 3 x 3 median-
-// filtered against speckle, and the log of local texture energy (the residual of a 3 x 3
-// median, blurred), each channel divided by its own fluctuation scale (median |difference|
-// of pixels 2 apart). A circle's contrast per angle is the largest channel difference
-// between thin annuli 1-3 level px inside and outside; its score is R times the mean over
-// seen angles of a soft support (unseen angles, outside the image or on invalid pixels,
-// count as the mean; circles less than half seen fade out). Exhaustive search over
-// centre and radius on the coarsest level, the best 8 local maxima refined level by level
-// (+-2 level px, parabolic sub-step), the best at the <= 128 px level kept. Then the
-// outer-edge sub-pixel fit on the linear image (rays to the outermost edge with >= 0.3
-// of the strongest, bands +-6, 4, 3 px, Tukey-weighted Gauss-Newton; rim rings pull it
-// in by up to ~0.6 px on grace) replaces the region answer when its edge agreement is
-// >= 0.5 and it stays within 8 px + 2 % of R (clean edges: synthetic renders); on
-// textured backgrounds the region answer stands (no sub-pixel claim there).
+// Method (region contrast, multi-scale, then the silhouette): feature images per pyramid
+// level (factors 1, 2, 4, ... down to <= 64 px): compressed colour c / (c + mean
+// luminance), 3 x 3 median-filtered against speckle, and the log of local texture energy
+// (the residual of a 3 x 3 median, blurred), each channel divided by its own fluctuation
+// scale (median |difference| of pixels 2 apart). A circle's contrast per angle is the
+// largest channel difference between thin annuli 1-3 level px inside and outside; its
+// score is R times the mean over seen angles of a soft support (unseen angles, outside
+// the image or on invalid pixels, count as the mean; circles less than half seen fade
+// out). Exhaustive search over centre and radius on the coarsest level, the
+// best 8 local maxima refined level by level (+-2 level px, parabolic sub-step). Each is
+// then fitted to its silhouette on the linear image (probe/ball_rim_fit.h: edges along
+// rays, half-rim hypotheses against a rim that is dark on a dark background, a Tukey-
+// weighted circle fit, then each ray's edge placed by area); the one whose rim agrees with
+// the edges along the longest arc wins (texture and round features of a background agree
+// along little of it); the region answer stands when no fit agrees along half the rim
+// (report.subpixel false). Precision: docs/probes.md "Finding the ball".
 // Confidence: the share of seen angles whose contrast is >= 3 (at the <= 128 px level):
 // ~0.1-0.2 on uniform noise, 0.84-0.87 on the kartik photos, 1 on clean renders.
 // Below `min_confidence` -> InputError "no ball found". Invalid pixels (RgbImage::valid)
@@ -151,6 +152,12 @@ struct FindBallReport {
   double cut_fraction = 0;  // share of circumference outside the image
   double rms_residual_px = 0;  // of the final fit's inliers
   int edge_points = 0;         // inliers of the final fit
+  // Whether the silhouette fit was kept (else the region answer stands, good to a few
+  // pixels, and the three numbers above and below are 0).
+  bool subpixel = false;
+  // The fit's own standard errors (px): of the centre (the larger axis of its 1-sigma
+  // ellipse) and of the radius (probe/ball_rim_fit.h).
+  double sigma_centre_px = 0, sigma_radius_px = 0;
 };
 
 BallInImage find_ball(const RgbImage& image, const FindBallOptions& options = {},

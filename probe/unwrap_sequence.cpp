@@ -16,7 +16,8 @@ namespace {
 
 // Pass 1: the frames and their raw geometry.
 std::vector<RgbImage> read_frames(const std::vector<std::string>& files, const UnwrapSequenceOptions& o,
-                                  CircleTrack& raw, const std::function<void()>& step) {
+                                  CircleTrack& raw, std::vector<std::optional<FindBallReport>>& fits,
+                                  const std::function<void()>& step) {
   std::vector<RgbImage> frames;
   for (const std::string& f : files) {
     RgbImage img = read_rgb_image(f);
@@ -25,11 +26,14 @@ std::vector<RgbImage> read_frames(const std::vector<std::string>& files, const U
                                    frames[0].width, frames[0].height));
     if (o.type == ProbeType::MirrorBall) {
       BallInImage ball;
+      fits.emplace_back();
       if (o.ball) {
         ball = *o.ball;
       } else {
         try {
-          ball = find_ball(img);
+          FindBallReport fit;
+          ball = find_ball(img, {}, &fit);
+          fits.back() = fit;
         } catch (const InputError& e) {
           throw InputError(fmt::format("{}: {}", f, e.what()));
         }
@@ -86,7 +90,8 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
                                            const std::function<void(size_t frame, EnvMap& map)>& emit,
                                            const std::function<void()>& step) {
   UnwrapSequenceReport report;
-  const std::vector<RgbImage> frames = read_frames(files, o, report.detected, step);
+  std::vector<std::optional<FindBallReport>> fits;
+  const std::vector<RgbImage> frames = read_frames(files, o, report.detected, fits, step);
   report.used = track_to_use(report.detected, o);
   const CircleTrack& track = report.used;
   const auto t0 = std::chrono::steady_clock::now();
@@ -111,6 +116,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
         report.fill_power_share = ur.fill_power_share;
         fr.ball = ball;
         fr.ball_detected = BallInImage{report.detected.cx[i], report.detected.cy[i], report.detected.r[i]};
+        fr.ball_fit = fits[i];
         fr.valid_fraction = ur.valid_solid_angle_fraction;  // before any fill
       } else {
         if (!base_model)

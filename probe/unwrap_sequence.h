@@ -54,6 +54,9 @@ struct UnwrapSequenceReport {
   struct Frame {
     std::string file;
     std::optional<BallInImage> ball, ball_detected;  // mirror ball: used, and as found
+    // How it was found (confidence, whether sub-pixel, the fit's standard errors); nullopt
+    // when the ball was given.
+    std::optional<FindBallReport> ball_fit;
     std::optional<ImageCircle> circle;               // fisheye sequence
     double valid_fraction = 0;                       // share of the map's solid angle that is valid
   };

@@ -57,10 +57,15 @@ TEST(MirrorBallReal, FindBallIsConfidentAndConsistentOnTheKartikPhotos) {
   EXPECT_LT((r_hi - r_lo) / r_lo, 0.02);
 }
 
-// NOT YET PASSING, hence disabled: on the registered 1/40 s frame find_ball's radius is
-// 1.27 % off the registered one (the other two: < 0.5 px, 0.01 %); the region search on
-// the blurred granite edge has shallow optima that resampling moves by ~3 px.
-TEST(BallRegister, DISABLED_KartikFramesRegisterToTheSameBall) {
+// Detection must not depend on the crop or the resampling: each frame, resampled so that
+// the ball find_ball found in it is centred with radius 480 / 2.04, must give that ball
+// back. The truth is known only this way, by construction from the first detection: the
+// photos' rims are blurred over ~5 px and fade into the granite (no sub-pixel fit is
+// kept on them, FindBallReport::subpixel false), and the three frames' radii, each in its
+// own crop, agree to 1.05 %. Measured: centre <= 0.22 px, radius <= 0.02 % (before the
+// rim fit: 1.27 % on the 1/40 s frame, where an edge polish on granite was taken); the
+// tolerance is about twice that, 0.5 px and 0.1 % (0.24 px).
+TEST(BallRegister, KartikFramesRegisterToTheSameBall) {
   const auto balls = kartik_balls();
   const int size = 480;
   const auto reg = register_balls(kartik(), balls, size);
@@ -73,8 +78,8 @@ TEST(BallRegister, DISABLED_KartikFramesRegisterToTheSameBall) {
     const BallInImage b = find_ball(img, {}, &rep);
     std::printf("registered: centre off (%.2f, %.2f) px, radius off %.2f %%, confidence %.3f\n", b.cx - want.cx,
                 b.cy - want.cy, 100 * (b.radius_px / want.radius_px - 1), rep.confidence);
-    EXPECT_LT(std::hypot(b.cx - want.cx, b.cy - want.cy), 1.0);
-    EXPECT_LT(std::abs(b.radius_px / want.radius_px - 1), 0.01);
+    EXPECT_LT(std::hypot(b.cx - want.cx, b.cy - want.cy), 0.5);
+    EXPECT_LT(std::abs(b.radius_px / want.radius_px - 1), 0.001);
   }
 }
 

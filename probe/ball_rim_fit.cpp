@@ -1,0 +1,283 @@
+#include "probe/ball_rim_fit.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <optional>
+
+namespace lp {
+
+cv::Vec3f bilinear3(const cv::Mat& img, double x, double y) {
+  const double fx = x - 0.5, fy = y - 0.5;
+  int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+  x0 = std::clamp(x0, 0, img.cols - 2);
+  y0 = std::clamp(y0, 0, img.rows - 2);
+  const float ax = float(fx - x0), ay = float(fy - y0);
+  const cv::Vec3f* r0 = img.ptr<cv::Vec3f>(y0);
+  const cv::Vec3f* r1 = img.ptr<cv::Vec3f>(y0 + 1);
+  return (1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1]);
+}
+
+std::vector<RimEdge> radial_edges(const cv::Mat& img, double cx, double cy, double theta, double r_lo, double r_hi,
+                                  int keep, double step) {
+  const double dx = std::cos(theta), dy = std::sin(theta);
+  const double w = img.cols, h = img.rows;
+  // Derivatives over a 1 px baseline (bilinear samples have piecewise-constant slopes
+  // within a pixel, so a shorter baseline would quantise the peak to pixel cells); peak
+  // refined by a parabola through the derivative at -1, 0, +1 px.
+  const int half = int(std::lround(0.5 / step)), reach = 2 * half;
+  const double lo = std::max(0.0, r_lo - (reach + 1) * step), hi = r_hi + (reach + 1) * step;
+  for (double rr : {lo, hi}) {
+    const double x = cx + rr * dx, y = cy + rr * dy;
+    if (x < 0.5 || y < 0.5 || x > w - 0.5 || y > h - 0.5) return {};
+  }
+  const int n = int(std::ceil((hi - lo) / step)) + 1;
+  if (n < 2 * reach + 5) return {};
+  std::vector<cv::Vec3f> p(n);
+  std::vector<double> d(n, 0.0);
+  for (int i = 0; i < n; ++i) p[i] = bilinear3(img, cx + (lo + i * step) * dx, cy + (lo + i * step) * dy);
+  for (int i = half; i + half < n; ++i) {
+    const cv::Vec3f g = p[i + half] - p[i - half];
+    d[i] = (std::abs(g[0]) + std::abs(g[1]) + std::abs(g[2])) / (2 * half * step);
+  }
+  std::vector<RimEdge> out;
+  for (int i = reach + half; i + reach + half < n; ++i) {
+    if (!(d[i] > d[i - 1] && d[i] >= d[i + 1])) continue;
+    const double dm = d[i - reach], dp = d[i + reach];
+    const double denom = dm - 2 * d[i] + dp;
+    const double off = denom < 0 ? std::clamp(0.5 * (dm - dp) / denom, -0.5, 0.5) * reach : 0.0;
+    const double rr = lo + (i + off) * step;
+    if (rr < r_lo || rr > r_hi) continue;
+    out.push_back({cx + rr * dx, cy + rr * dy, d[i]});
+  }
+  std::sort(out.begin(), out.end(), [](const RimEdge& a, const RimEdge& b) { return a.strength > b.strength; });
+  if (int(out.size()) > keep) out.resize(keep);
+  return out;
+}
+
+namespace {
+
+double ray_angle(int k, int rays) { return 2 * M_PI * (k + 0.5) / rays; }
+
+double residual(const RimEdge& p, const BallInImage& c) { return std::hypot(p.x - c.cx, p.y - c.cy) - c.radius_px; }
+
+// Per ray, the edges within +-window of circle c, strongest first; empty where the band
+// leaves the image or touches an invalid pixel.
+using RayEdges = std::vector<std::vector<RimEdge>>;
+
+// Whether ray k's band of +-window around c lies inside the image on valid pixels.
+bool ray_in_view(const cv::Mat& img, const cv::Mat& valid8, const BallInImage& c, double window, int k, int rays) {
+  const double t = ray_angle(k, rays), ct = std::cos(t), st = std::sin(t);
+  for (double rr = c.radius_px - window - 2; rr <= c.radius_px + window + 2; rr += 1) {
+    const double x = c.cx + rr * ct, y = c.cy + rr * st;
+    if (x < 0.5 || y < 0.5 || x > img.cols - 0.5 || y > img.rows - 0.5) return false;
+    if (!valid8.empty() && !valid8.at<uint8_t>(int(y), int(x))) return false;
+  }
+  return true;
+}
+
+RayEdges ray_edges(const cv::Mat& img, const cv::Mat& valid8, const BallInImage& c, double window, int rays) {
+  RayEdges out(rays);
+  tbb::parallel_for(0, rays, [&](int k) {
+    if (!ray_in_view(img, valid8, c, window, k, rays)) return;
+    out[k] = radial_edges(img, c.cx, c.cy, ray_angle(k, rays), c.radius_px - window, c.radius_px + window, 6);
+  });
+  return out;
+}
+
+struct Weighted {
+  RimEdge e;
+  double w;  // relative strength in (0, 1]
+};
+
+double median_of(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Per ray, the outermost edge (or the strongest) at least 10 % as strong as the median
+// ray's strongest.
+std::vector<Weighted> pick_edges(const RayEdges& cands, const BallInImage& c, bool strongest) {
+  std::vector<double> tops;
+  for (const auto& ray : cands)
+    if (!ray.empty()) tops.push_back(ray[0].strength);
+  if (tops.empty()) return {};
+  const double med = median_of(tops), floor = 0.1 * med;
+  std::vector<Weighted> pts;
+  for (const auto& ray : cands) {
+    const RimEdge* best = nullptr;
+    for (const auto& e : ray)
+      if (e.strength >= floor && (!best || (!strongest && residual(e, c) > residual(*best, c)))) best = &e;
+    if (best) pts.push_back({*best, std::min(1.0, best->strength / med)});
+  }
+  return pts;
+}
+
+struct FitResult {
+  BallInImage c;
+  cv::Matx33d cov;
+  double rms = 0;
+  int inliers = 0;
+};
+
+// Gauss-Newton with Tukey biweights times the edges' relative strength.
+FitResult robust_circle(const std::vector<Weighted>& pts, BallInImage c) {
+  std::vector<double> absr(pts.size());
+  FitResult f;
+  for (int outer = 0; outer < 6; ++outer) {
+    for (size_t i = 0; i < pts.size(); ++i) absr[i] = std::abs(residual(pts[i].e, c));
+    std::nth_element(absr.begin(), absr.begin() + absr.size() / 2, absr.end());
+    const double k = 4.685 * std::max(0.03, 1.4826 * absr[absr.size() / 2]);
+    cv::Matx33d jtj;
+    cv::Vec3d jtr;
+    double swr2 = 0, sw = 0;
+    int n = 0;
+    for (const Weighted& p : pts) {
+      const double dx = p.e.x - c.cx, dy = p.e.y - c.cy, dist = std::hypot(dx, dy), ri = dist - c.radius_px;
+      if (dist < 1e-9 || std::abs(ri) >= k) continue;
+      const double u = ri / k, wgt = p.w * (1 - u * u) * (1 - u * u);
+      const cv::Vec3d j(-dx / dist, -dy / dist, -1);
+      jtj += wgt * j * j.t();
+      jtr += wgt * ri * j;
+      swr2 += wgt * ri * ri, sw += wgt, ++n;
+    }
+    cv::Vec3d delta;
+    if (n < 6 || !cv::solve(jtj, -jtr, delta, cv::DECOMP_CHOLESKY)) return f;
+    c.cx += delta[0], c.cy += delta[1], c.radius_px += delta[2];
+    f.c = c, f.inliers = n, f.rms = std::sqrt(swr2 / sw);
+    // Weights normalised to a mean of 1 over the inliers, so that s^2 is a per-edge variance.
+    f.cov = (swr2 / std::max(1.0, sw - 3 * sw / n)) * jtj.inv();
+  }
+  return f;
+}
+
+// Per ray, the silhouette by area: with A = the profile 1.5 px inside the circle and B =
+// 1.5 px outside, the edge sits at r - 1.5 + integral over [r - 1.5, r + 1.5] of
+// (p - B) / (A - B): exact for a step blurred by pixel coverage and bilinear
+// interpolation, and an error of either sign (not always inwards, as a derivative peak
+// merged with the rings just inside is) where the rim's last pixel differs from A.
+// Weight: |A - B| relative to the median ray's, capped at 1.
+std::vector<Weighted> area_edges(const cv::Mat& img, const cv::Mat& valid8, const BallInImage& c, int rays) {
+  constexpr double half = 1.5, step = 0.125;
+  std::vector<Weighted> pts(rays, {{0, 0, 0}, -1});
+  tbb::parallel_for(0, rays, [&](int k) {
+    const double t = ray_angle(k, rays), ct = std::cos(t), st = std::sin(t);
+    const double lo = c.radius_px - half, hi = c.radius_px + half;
+    for (double rr : {lo - 2, hi + 2}) {
+      const double x = c.cx + rr * ct, y = c.cy + rr * st;
+      if (x < 0.5 || y < 0.5 || x > img.cols - 0.5 || y > img.rows - 0.5) return;
+      if (!valid8.empty() && !valid8.at<uint8_t>(int(y), int(x))) return;
+    }
+    auto at = [&](double rr) { return bilinear3(img, c.cx + rr * ct, c.cy + rr * st); };
+    const cv::Vec3f a = at(lo), b = at(hi), ab = a - b;
+    const double den = ab.dot(ab);
+    if (!(den > 0)) return;
+    double area = 0;
+    const int n = int(std::lround((hi - lo) / step));
+    for (int i = 0; i < n; ++i) {
+      const double f = (at(lo + (i + 0.5) * step) - b).dot(ab) / den;
+      area += std::clamp(f, -0.5, 1.5) * step;
+    }
+    const double e = lo + area;
+    pts[k] = {{c.cx + e * ct, c.cy + e * st, std::sqrt(den)}, 1};
+  });
+  std::vector<Weighted> out;
+  std::vector<double> s;
+  for (const auto& p : pts)
+    if (p.w > 0) out.push_back(p), s.push_back(p.e.strength);
+  if (out.empty()) return out;
+  const double med = median_of(s);
+  for (auto& p : out) p.w = std::min(1.0, p.e.strength / med);
+  return out;
+}
+
+}  // namespace
+
+namespace {
+
+// Windows of 3, 2, 1.5, 1 px around c, the outermost edges; nullopt when the fit fails
+// or runs away (more than two windows).
+std::optional<BallInImage> narrow(const cv::Mat& smooth, const cv::Mat& valid8, BallInImage c, int rays) {
+  for (const double window : {3.0, 2.0, 1.5, 1.0}) {
+    const auto pts = pick_edges(ray_edges(smooth, valid8, c, window, rays), c, false);
+    if (pts.size() < 12) return std::nullopt;
+    const FitResult f = robust_circle(pts, c);
+    if (f.inliers == 0 || !(f.c.radius_px > 0)) return std::nullopt;
+    if (std::hypot(f.c.cx - c.cx, f.c.cy - c.cy) > 2 * window || std::abs(f.c.radius_px - c.radius_px) > 2 * window)
+      return std::nullopt;
+    c = f.c;
+  }
+  return c;
+}
+
+// Share of the rays in view whose outermost edge within 1 px of c lies within 0.5 px of it.
+double agreement(const cv::Mat& smooth, const cv::Mat& valid8, const BallInImage& c, int rays) {
+  int agree = 0, in_view = 0;
+  for (int k = 0; k < rays; ++k) in_view += ray_in_view(smooth, valid8, c, 1.0, k, rays);
+  for (const Weighted& p : pick_edges(ray_edges(smooth, valid8, c, 1.0, rays), c, false))
+    agree += std::abs(residual(p.e, c)) < 0.5;
+  return in_view ? double(agree) / in_view : 0;
+}
+
+// The wide pass: the strongest edges within 4 px + 2 % of R of the start, a circle fitted
+// to all of them and to each half of the rim (eight half-circles 45 deg apart), each
+// narrowed; the one agreeing with the most rays wins. Where part of the rim has no
+// silhouette (dark against dark) the edges there are something else, consistently (the
+// inner border of a dark reflection): half the rays, too many for the biweights alone.
+std::optional<BallInImage> coarse_rim(const cv::Mat& smooth, const cv::Mat& valid8, const BallInImage& start,
+                                      int rays, double* best_agreement) {
+  const auto pts = pick_edges(ray_edges(smooth, valid8, start, 4 + 0.02 * start.radius_px, rays), start, true);
+  if (pts.size() < 12) return std::nullopt;
+  std::optional<BallInImage> best;
+  *best_agreement = -1;
+  for (int h = -1; h < 8; ++h) {
+    std::vector<Weighted> sub;
+    for (const Weighted& p : pts) {
+      const double a = std::atan2(p.e.y - start.cy, p.e.x - start.cx) - h * M_PI / 4;
+      if (h < 0 || std::cos(a) > 0) sub.push_back(p);
+    }
+    if (sub.size() < 12) continue;
+    const FitResult f = robust_circle(sub, start);
+    if (f.inliers == 0 || !(f.c.radius_px > 0)) continue;
+    const auto c = narrow(smooth, valid8, f.c, rays);
+    if (!c) continue;
+    const double ag = agreement(smooth, valid8, *c, rays);
+    if (ag > *best_agreement) *best_agreement = ag, best = c;
+  }
+  return best;
+}
+
+}  // namespace
+
+RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& start, int rays) {
+  RimFit out;
+  double ag = 0;
+  const auto coarse = coarse_rim(smooth, valid8, start, rays, &ag);
+  if (!coarse) return out;
+  BallInImage c = *coarse;
+  FitResult f;
+  for (int pass = 0; pass < 3; ++pass) {
+    const auto pts = area_edges(linear, valid8, c, rays);
+    if (pts.size() < 12) break;
+    const FitResult g = robust_circle(pts, c);
+    if (g.inliers == 0 || std::hypot(g.c.cx - c.cx, g.c.cy - c.cy) > 1 || std::abs(g.c.radius_px - c.radius_px) > 1) break;
+    f = g, c = g.c;
+  }
+  if (f.inliers == 0) return out;
+  // Neighbouring rays closer than ~2 px see the same pixels.
+  const double spacing = 2 * M_PI * c.radius_px / rays, inflate = std::max(1.0, 2.0 / spacing);
+  cv::Vec2d ev;
+  cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);
+  out.ball = c;
+  out.sigma_centre_px = std::sqrt(std::max(0.0, ev[0]) * inflate);
+  out.sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)) * inflate);
+  out.rms_px = f.rms;
+  out.inliers = f.inliers;
+  out.agreement = ag;
+  out.ok = true;
+  return out;
+}
+
+}  // namespace lp

@@ -1,0 +1,56 @@
+// The last step of find_ball (probe/mirror_ball.h): the ball's silhouette to a fraction of
+// a pixel, from a centre and radius good to a few pixels.
+//
+// Along rays from the centre, edges are the local maxima of the radial derivative of the
+// linear image (summed over the colour channels), placed by a parabola. Per ray the
+// outermost edge within a window around the current circle is taken, among those at
+// least 10 % as strong as the median ray's strongest: the silhouette is the ball's outer
+// boundary, while its rim reflects the whole scene behind it squeezed into a few pixels,
+// rings just inside that a strongest-edge rule would follow. A circle is fitted to them
+// by Gauss-Newton with Tukey biweights (scale from the residuals' MAD) times the edge's
+// strength relative to the median edge, capped at 1, so that a rim dark against a dark
+// background (no edge, only noise) counts little and a blinding arc no more than any
+// other edge. Windows shrink 3, 2, 1.5, 1 px as the circle settles.
+//
+// Uncertainty: the weighted least-squares covariance s^2 (J^T W J)^-1 with
+// s^2 = sum w r^2 / (sum w - 3), inflated by the rays' correlation (neighbouring rays
+// closer than 2 px share the smoothed pixels they sample: variance times 2 px / spacing).
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+#include "probe/mirror_ball.h"
+
+namespace lp {
+
+struct RimEdge {
+  double x, y, strength;
+};
+
+// Bilinear sample of a 3-channel float image at (x, y), pixel centres at +0.5; the
+// caller keeps (x, y) within [0.5, W - 0.5] x [0.5, H - 0.5].
+cv::Vec3f bilinear3(const cv::Mat& img, double x, double y);
+
+// Edges along the ray at angle theta from (cx, cy) within radii [r_lo, r_hi], strongest
+// first (at most `keep`); empty when the band leaves the image.
+std::vector<RimEdge> radial_edges(const cv::Mat& img, double cx, double cy, double theta, double r_lo, double r_hi,
+                                  int keep, double step = 0.25);
+
+struct RimFit {
+  BallInImage ball;
+  double sigma_centre_px = 0, sigma_radius_px = 0;  // as find_ball reports them
+  double rms_px = 0;    // weighted RMS residual of the inliers
+  int inliers = 0;      // rays whose edge has a non-zero final weight
+  // Share of the rays in view (inside the image, on valid pixels) whose outermost edge
+  // within 1 px of the circle lies within 0.5 px of it.
+  double agreement = 0;
+  bool ok = false;      // false: too few edges, or the fit ran away (> 2 windows)
+};
+
+// `linear`: CV_32FC3, values proportional to radiance; `valid8`: CV_8U (1 valid) of the
+// same size, or empty. Rays whose band touches an invalid pixel are skipped.
+RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& start, int rays);
+
+}  // namespace lp

@@ -1,0 +1,160 @@
+// find_ball's precision on balls rendered from every shared map (eval/ball_eval.h).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "eval/ball_eval.h"
+#include "probe/mirror_ball.h"
+#include "probe/unwrap_sequence.h"
+
+namespace lp {
+namespace {
+
+const std::string kData = LIGHTPROBE_SHARED_DATA;
+
+std::vector<std::string> every_shared_map() {
+  std::vector<std::string> maps;
+  for (const char* m : {"city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset"})
+    maps.push_back(kData + "/probes-blender-studiolights/" + m + ".exr");
+  for (const char* m : {"ennis", "grace", "pisa", "uffizi", "wells"})
+    maps.push_back(kData + "/probes-probulator-latlong256/" + m + ".hdr");
+  maps.push_back(kData + "/probes-threejs-spot-and-cube/spot1Lux.hdr");
+  maps.push_back(kData + "/probes-threejs-spot-and-cube/pisa_cube");
+  maps.push_back(kData + "/hdr-mirrorball-kartik/reference/course_sample_latlon.hdr");
+  maps.push_back(kData + "/hdr-mirrorball-kartik/reference/student_flattened_latlon.hdr");
+  return maps;
+}
+
+const std::string kPhoto = kData + "/hdr-memorial-debevec/reference/memorial_radiance_hdrshop.hdr";
+
+// A map of radiance 1 everywhere: a ball with no rim structure.
+EnvMap uniform_map() {
+  EnvMap flat = make_envmap(Layout::LatLong, 64, 32);
+  std::fill(flat.rgb.begin(), flat.rgb.end(), 1.0f);
+  return flat;
+}
+
+// The whole grid (17 maps x 3 radii x 5 backgrounds); minutes of CPU, so only on demand:
+// LIGHTPROBE_BALL_EVAL=DIR writes DIR/ball.csv and prints the table.
+TEST(BallPrecision, EveryMapSizeAndBackgroundOnDemand) {
+  const char* dir = std::getenv("LIGHTPROBE_BALL_EVAL");
+  if (!dir) GTEST_SKIP() << "set LIGHTPROBE_BALL_EVAL=DIR to run the whole grid";
+  EvalBallOptions o;
+  o.maps = every_shared_map();
+  if (const char* only = std::getenv("LIGHTPROBE_BALL_EVAL_MAPS")) {  // e.g. "grace,city"
+    std::vector<std::string> keep;
+    for (const auto& m : o.maps)
+      for (std::string s = only; !s.empty();) {
+        const std::string name = s.substr(0, s.find(','));
+        if (m.find("/" + name) != std::string::npos) keep.push_back(m);
+        s = s.find(',') == std::string::npos ? "" : s.substr(s.find(',') + 1);
+      }
+    o.maps = keep;
+  }
+  o.photo = kPhoto;
+  o.output_dir = dir;
+  const EvalBallReport rep = evaluate_ball_detection(o, [](size_t d, size_t t) { std::fprintf(stderr, "%zu/%zu\n", d, t); });
+  std::printf("%s", rep.summary().c_str());
+}
+
+
+// The harness's truth: a uniform ball (no rim structure to confuse an edge) on black is
+// found to a few hundredths of a pixel, so the coverage compositing and the sub-pixel
+// convention agree with find_ball's.
+TEST(BallPrecision, AUniformBallOnBlackIsFoundToHundredthsOfAPixel) {
+  const EnvMap flat = uniform_map();
+  for (const double r : {60.0, 150.0}) {
+    const BallCase c = render_ball_case(flat, BallBackground::Black, r, {}, 11);
+    FindBallReport rep;
+    const BallInImage b = find_ball(c.image, {}, &rep);
+    std::printf("uniform R %.1f: centre off %.4f px, radius off %+.4f px, sigma %.4f / %.4f px\n", c.truth.radius_px,
+                std::hypot(b.cx - c.truth.cx, b.cy - c.truth.cy), b.radius_px - c.truth.radius_px, rep.sigma_centre_px,
+                rep.sigma_radius_px);
+    EXPECT_TRUE(rep.subpixel);
+    EXPECT_LT(std::hypot(b.cx - c.truth.cx, b.cy - c.truth.cy), 0.05);
+    EXPECT_LT(std::abs(b.radius_px - c.truth.radius_px), 0.05);
+  }
+}
+
+// A studio map at two sizes on four backgrounds: the photo behind the ball has round
+// features of its own (a dome), the sun is a blinding arc at the rim, the night is 1000 x
+// darker with noise. Measured (docs/probes.md): centre <= 0.26 px, |radius| <= 0.10 px;
+// before this fit only the two black cases were found at all. The fifth background, half
+// the rim dark on dark, is NOT solved (2.3 px at R 60, not found at R 150): printed, not
+// asserted.
+TEST(BallPrecision, AStudioBallIsFoundToAFewTenthsOfAPixelOnFourBackgrounds) {
+  EvalBallOptions o;
+  o.maps = {kData + "/probes-blender-studiolights/studio.exr"};
+  o.photo = kPhoto;
+  o.radii = {60, 150};
+  const EvalBallReport rep = evaluate_ball_detection(o);
+  std::printf("%s", rep.summary().c_str());
+  ASSERT_EQ(rep.rows.size(), 10u);
+  for (const BallRow& r : rep.rows) {
+    if (r.background == std::string("dark")) continue;
+    ASSERT_TRUE(r.found) << r.background << " R " << r.radius_px << ": " << r.error;
+    EXPECT_TRUE(r.report.subpixel) << r.background << " R " << r.radius_px;
+    EXPECT_LE(r.centre_error_px, 0.3) << r.background << " R " << r.radius_px;
+    EXPECT_LE(std::abs(r.radius_error_px), 0.2) << r.background << " R " << r.radius_px;
+  }
+}
+
+// The fit's own uncertainty means something: on noisy uniform balls (only noise moves the
+// edges) the spread of the centre errors over 8 renders is within a factor 3 of the mean
+// reported sigma, and the sigma grows with the noise.
+TEST(BallPrecision, TheReportedSigmaMatchesTheScatterFromNoise) {
+  const EnvMap flat = uniform_map();
+  double ss = 0, sigma = 0, sigma_clean = 0;
+  const int n = 8;
+  for (int i = 0; i < n; ++i) {
+    BallCase c = render_ball_case(flat, BallBackground::Black, 60, {}, 100 + i);
+    FindBallReport clean;
+    find_ball(c.image, {}, &clean);
+    sigma_clean += clean.sigma_centre_px / n;
+    std::mt19937_64 rng(7 + i);
+    std::normal_distribution<double> noise(0.0, 0.15);
+    for (float& v : c.image.rgb) v = float(std::max(0.0, v + noise(rng)));
+    FindBallReport rep;
+    const BallInImage b = find_ball(c.image, {}, &rep);
+    const double dx = b.cx - c.truth.cx, dy = b.cy - c.truth.cy;
+    ss += 0.5 * (dx * dx + dy * dy) / n;  // per axis
+    sigma += rep.sigma_centre_px / n;
+  }
+  std::printf("noisy uniform R 60: centre scatter %.4f px per axis, mean sigma %.4f px (clean %.4f)\n", std::sqrt(ss),
+              sigma, sigma_clean);
+  EXPECT_GT(sigma, 2 * sigma_clean);
+  EXPECT_LT(std::sqrt(ss), 3 * sigma);
+  EXPECT_GT(std::sqrt(ss), sigma / 3);
+}
+
+
+// The unwrap report carries how each ball was found, with the fit's standard errors.
+TEST(BallPrecision, TheUnwrapReportCarriesTheFitsUncertainty) {
+  const EnvMap flat = uniform_map();
+  const BallCase c = render_ball_case(flat, BallBackground::Black, 60, {}, 5);
+  const std::string path = (std::filesystem::temp_directory_path() / "lp_ball_fit_report.exr").string();
+  write_rgb_image(path, c.image);
+  UnwrapSequenceOptions o;
+  o.width = 64, o.height = 32;
+  const auto found = unwrap_probe_sequence({path}, o, [](size_t, EnvMap&) {});
+  ASSERT_EQ(found.frames.size(), 1u);
+  ASSERT_TRUE(found.frames[0].ball_fit.has_value());
+  EXPECT_TRUE(found.frames[0].ball_fit->subpixel);
+  EXPECT_GT(found.frames[0].ball_fit->sigma_centre_px, 0.0);
+  EXPECT_LT(found.frames[0].ball_fit->sigma_centre_px, 0.05);
+  EXPECT_GT(found.frames[0].ball_fit->sigma_radius_px, 0.0);
+  o.ball = c.truth;
+  const auto given = unwrap_probe_sequence({path}, o, [](size_t, EnvMap&) {});
+  EXPECT_FALSE(given.frames[0].ball_fit.has_value());
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace lp

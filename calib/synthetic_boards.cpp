@@ -1,12 +1,17 @@
 #include "calib/synthetic_boards.h"
 
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
 #include <cmath>
+#include <filesystem>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 
 #include "core/error.h"
+#include "core/image_io.h"
 
 namespace lp {
 namespace {
@@ -250,6 +255,29 @@ SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options, const L
     out.poses.push_back({rvec.at<double>(0), rvec.at<double>(1), rvec.at<double>(2), pose.t.x, pose.t.y, pose.t.z});
   }
   return out;
+}
+
+void write_synthetic_boards(const std::string& dir, const SyntheticBoardsOptions& options,
+                            const SyntheticBoards& boards) {
+  namespace fs = std::filesystem;
+  const CameraModel& camera = options.camera;
+  make_output_directory(dir);
+  nlohmann::json truth = {{"board", {options.board.cols, options.board.rows}}, {"square_mm", options.board.square_mm},
+                          {"lensmodel", camera.lensmodel}, {"intrinsics", camera.intrinsics},
+                          {"width", camera.width}, {"height", camera.height}};
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t i = 0; i < boards.images.size(); ++i) {
+    const std::string name = fmt::format("board_{:02d}.png", i);
+    const CameraImage& image = boards.images[i];
+    write_code_image((fs::path(dir) / name).string(), RgbImage{image.width, image.height, image.rgb}, 8);
+    views.push_back({{"file", name}, {"corners", boards.true_corners[i]}, {"pose", boards.poses[i]}});
+  }
+  truth["views"] = views;
+  write_file_atomically((fs::path(dir) / "truth.json").string(), truth.dump(1) + "\n");
+  try {
+    write_opencv_yaml((fs::path(dir) / "true_camera.yaml").string(), camera);
+  } catch (const InputError&) {  // a lens model OpenCV has no name for
+  }
 }
 
 }  // namespace lp

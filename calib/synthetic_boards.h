@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "calib/board_detect.h"
@@ -62,6 +63,13 @@ inline SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options) 
                                         [&camera](Vec3 d) { return project(camera, d); },
                                         [&camera](Pixel p) { return unproject(camera, p); }});
 }
+
+// Writes `boards` made with `options` into `dir` (created): board_NN.png (8-bit codes),
+// truth.json (board, square, camera, and per view its file, true corners and
+// camera_from_board pose) and true_camera.yaml (left out when the lens model has no OpenCV
+// form). The ground truth of `lightprobe synth boards`.
+void write_synthetic_boards(const std::string& dir, const SyntheticBoardsOptions& options,
+                            const SyntheticBoards& boards);
 
 }  // namespace lp
 

@@ -1,29 +1,23 @@
-// calib geometric and synth boards: chessboard calibration with model selection by
-// cross-validation, and boards rendered through a known camera (ground truth).
+// calib geometric|compare|photometric|colour: chessboard calibration with model selection
+// by cross-validation, the projection difference of two models, absolute and colour scales.
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <filesystem>
-#include <limits>
 #include <memory>
 
-#include "calib/board_detect.h"
 #include "calib/calibration_run.h"
 #include "calib/camera_model.h"
 #include "calib/colour_match.h"
 #include "calib/photometric.h"
 #include "calib/geometric.h"
 #include "calib/lens_model.h"
-#include "calib/synthetic_boards.h"
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/progress.h"
-#include "hdr/bracket.h"
 
 namespace lp::cli {
 
@@ -56,40 +50,7 @@ struct CalibColourArgs {
   std::string output;
 };
 
-namespace {
-
 namespace fs = std::filesystem;
-
-// One progress bar per stage of the solve (a 60-view solve takes most of a minute); the
-// library reports a step as it starts, so a new stage closes the last one's bar.
-StageProgress solve_progress_bars(const Output& out) {
-  struct Bars {
-    std::unique_ptr<Progress> bar;
-    std::string stage;
-    int done = 0, total = 0;
-  };
-  auto bars = std::make_shared<Bars>();
-  return [bars, enabled = out.progress](const std::string& stage, int done, int total) {
-    Bars& b = *bars;
-    if (stage != b.stage) {
-      if (b.bar) {
-        if (b.total > b.done) b.bar->advance(uint64_t(b.total - b.done));
-        b.bar->finish();
-      }
-      b.bar.reset();
-      b.stage = stage;
-      b.done = 0;
-      b.total = std::max(1, total);
-      if (stage != "done") b.bar = std::make_unique<Progress>("solve: " + stage, uint64_t(b.total), enabled);
-    }
-    if (b.bar && done > b.done) {
-      b.bar->advance(uint64_t(done - b.done));
-      b.done = done;
-    }
-  };
-}
-
-}  // namespace
 
 int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   const BoardSpec board = board_from(args.board, args.square_mm);
@@ -105,7 +66,7 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   GeometricCalibrationOptions o;
   o.calibrate.model = args.model;
   o.calibrate.use_mrcal = !args.no_mrcal;
-  o.calibrate.progress = solve_progress_bars(out);
+  o.calibrate.progress = stage_progress_bars("solve: ", out.progress);
   o.drop_influential = args.drop_influential;
   Progress detected("detect boards", args.images.size(), out.progress);
   BoardDetections detections = detect_boards(args.images, board, o.detect, [&] { detected.advance(); });
@@ -176,6 +137,7 @@ int run_calib_colour(const CalibColourArgs& args, const Output& out) {
                   {"matrix", m.matrix.m}});
   return 0;
 }
+
 std::vector<Command> calib_commands() {
   return {
       {"calib geometric", "Chessboard calibration with model selection by cross-validation",

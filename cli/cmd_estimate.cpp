@@ -1,34 +1,24 @@
-// estimate metadata / estimate query / eval metadata (its harness: eval/metadata_eval.h):
-// lighting without a probe, from the metadata a camera already has (exposure, gain,
-// aperture, white balance), stored over the floor in the quadtree of seed 003
-// (docs/metadata.md).
+// estimate metadata / estimate query: lighting without a probe, from the metadata a camera
+// already has (exposure, gain, aperture, white balance), stored over the floor in the
+// quadtree of seed 003 (docs/metadata.md).
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <memory>
-
 #include <algorithm>
-#include <chrono>
-#include <cmath>
+#include <memory>
 
 #include "calib/photometric.h"
 #include "cli/commands.h"
-#include "cli/eval_handlers.h"
-#include "cli/progress_bar.h"
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/json_file.h"
 #include "core/image_io.h"
 #include "estimate/light_quadtree.h"
 #include "estimate/metadata_track.h"
-#include "estimate/walkthrough.h"
-#include "eval/metadata_eval.h"
 #include "sampling/exporters.h"
 
 namespace lp::cli {
 
-// estimate metadata / query, synth walkthrough, eval metadata: lighting without a probe,
-// from camera metadata over a floor quadtree (seed 003; docs/metadata.md).
 struct EstimateMetadataArgs {
   std::string track;                // JSONL track (estimate/metadata_track.h)
   std::string output;               // model.json
@@ -37,7 +27,7 @@ struct EstimateMetadataArgs {
   double calibration_f_number = -1; // -1: the track header's (or 0)
   double f_number = -1, ae_target = -1, iso_base = -1, meter_constant = -1;  // -1: the track's
   std::string colour_matrix;        // 9 numbers, camera RGB -> Rec. 709 (default: the track's, else none)
-  double root_size = 32, min_size = 1, max_weight = 0;
+  BuildModelOptions build;          // --root-size, --min-size and --max-weight, bound directly
   std::string origin;               // "X,Y"; default the first frame's position
 };
 
@@ -52,10 +42,6 @@ struct EstimateQueryArgs {
 };
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // The camera: the track's header, then --photometric and the explicit options.
 MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
@@ -81,12 +67,6 @@ MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
   return m;
 }
 
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
-}
-
 }  // namespace
 
 int run_estimate_metadata(const EstimateMetadataArgs& args, const Output& out) {
@@ -98,10 +78,7 @@ int run_estimate_metadata(const EstimateMetadataArgs& args, const Output& out) {
   readings.reserve(track.frames.size());
   for (const TrackFrame& f : track.frames) readings.push_back(meter_frame(f.metadata, camera, f.source));
 
-  BuildModelOptions b;
-  b.quadtree.root_size = args.root_size;
-  b.quadtree.min_size = args.min_size;
-  b.quadtree.max_weight = args.max_weight;
+  BuildModelOptions b = args.build;
   if (!args.origin.empty()) {
     const auto o = parse_numbers(args.origin, "--origin", 2);
     b.quadtree.origin_x = o[0];
@@ -113,22 +90,15 @@ int run_estimate_metadata(const EstimateMetadataArgs& args, const Output& out) {
   const double build_s = seconds_since(t_build);
   save_model(args.output, model);
 
-  std::vector<double> lum, lux, cct;
-  for (const LightReading& r : readings) {
-    lum.push_back(r.luminance);
-    lux.push_back(r.illuminance);
-    if (r.cct_k > 0 && std::isfinite(r.cct_k)) cct.push_back(r.cct_k);
-  }
+  const ReadingsSpread spread = readings_spread(readings);
+  const Spread &lum = spread.luminance, &lux = spread.illuminance, &cct = spread.cct;
   const std::string route = camera.photometric_scale ? "calibration" : "meter equation";
   say(out, "{}: {} frames -> {} nodes (depth {}), {} outside the root; luminance by the {}\n", args.output,
       track.frames.size(), model.nodes().size(), model.max_depth(), model.outside_updates(), route);
-  say(out, "  luminance cd/m2  median {:.1f}  5-95 %: {:.1f} .. {:.1f}\n", percentile(lum, 0.5), percentile(lum, 0.05),
-      percentile(lum, 0.95));
-  say(out, "  lux (pi L)       median {:.0f}  5-95 %: {:.0f} .. {:.0f}\n", percentile(lux, 0.5), percentile(lux, 0.05),
-      percentile(lux, 0.95));
-  if (!cct.empty())
-    say(out, "  CCT K            median {:.0f}  5-95 %: {:.0f} .. {:.0f}\n", percentile(cct, 0.5), percentile(cct, 0.05),
-        percentile(cct, 0.95));
+  say(out, "  luminance cd/m2  median {:.1f}  5-95 %: {:.1f} .. {:.1f}\n", lum.median, lum.p05, lum.p95);
+  say(out, "  lux (pi L)       median {:.0f}  5-95 %: {:.0f} .. {:.0f}\n", lux.median, lux.p05, lux.p95);
+  if (spread.with_cct)
+    say(out, "  CCT K            median {:.0f}  5-95 %: {:.0f} .. {:.0f}\n", cct.median, cct.p05, cct.p95);
   say(out, "  build {:.2f} ms ({:.2f} us per frame)\n", build_s * 1e3, build_s * 1e6 / double(track.frames.size()));
   emit_json(out, {{"output", args.output},
                   {"frames", track.frames.size()},
@@ -136,9 +106,9 @@ int run_estimate_metadata(const EstimateMetadataArgs& args, const Output& out) {
                   {"max_depth", model.max_depth()},
                   {"outside_updates", model.outside_updates()},
                   {"camera", metering_json(camera)},
-                  {"luminance_cd_m2", {{"median", percentile(lum, 0.5)}, {"p05", percentile(lum, 0.05)}, {"p95", percentile(lum, 0.95)}}},
-                  {"illuminance_lux", {{"median", percentile(lux, 0.5)}, {"p05", percentile(lux, 0.05)}, {"p95", percentile(lux, 0.95)}}},
-                  {"cct_k", {{"median", percentile(cct, 0.5)}, {"p05", percentile(cct, 0.05)}, {"p95", percentile(cct, 0.95)}}},
+                  {"luminance_cd_m2", lum.to_json()},
+                  {"illuminance_lux", lux.to_json()},
+                  {"cct_k", cct.to_json()},
                   {"build_seconds", build_s},
                   {"seconds", seconds_since(t0)}});
   return 0;
@@ -185,16 +155,6 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
   return 0;
 }
 
-int run_eval_metadata(const EvalMetadataArgs& args, const Output& out) {
-  EvalMetadataOptions o;
-  o.input_dir = args.input_dir;
-  o.output_dir = args.output_dir;
-  o.fractions = parse_numbers(args.fractions, "--fractions");
-  o.root_size = args.root_size;
-  o.min_size = args.min_size;
-  return evaluate_and_report("eval metadata", out, [&](const EvalProgress& p) { return evaluate_metadata(o, p); });
-}
-
 std::vector<Command> estimate_commands() {
   return {
       {"estimate metadata", "A recorded track (position, view, exposure, gain, WB per frame) -> quadtree model",
@@ -211,9 +171,10 @@ std::vector<Command> estimate_commands() {
          f.opt("--iso-base", a->iso_base, "ISO at gain 1 (meter equation)");
          f.opt("--meter-constant", a->meter_constant, "Reflected-light meter constant K, cd s m^-2");
          f.opt("--colour-matrix", a->colour_matrix, "Camera RGB -> Rec. 709: 9 numbers, row-major");
-         f.opt("--root-size", a->root_size, "Side of the root cell, m (must cover the scene)");
-         f.opt("--min-size", a->min_size, "Smallest cell side, m");
-         f.opt("--max-weight", a->max_weight, "Cap on a sector's frame count: old frames fade (0: no cap)");
+         f.opt("--root-size", a->build.quadtree.root_size, "Side of the root cell, m (must cover the scene)");
+         f.opt("--min-size", a->build.quadtree.min_size, "Smallest cell side, m");
+         f.opt("--max-weight", a->build.quadtree.max_weight,
+               "Cap on a sector's frame count: old frames fade (0: no cap)");
          f.opt("--origin", a->origin, "Root centre X,Y in metres (default: the first frame's position)");
          return [a](const Output& out) { return run_estimate_metadata(*a, out); };
        }},

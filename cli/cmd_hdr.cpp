@@ -3,12 +3,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <memory>
-
-#include <algorithm>
-#include <chrono>
 #include <filesystem>
-#include <sstream>
+#include <memory>
 
 #include "calib/photometric.h"
 #include "cli/commands.h"
@@ -69,15 +65,11 @@ std::optional<std::array<uint8_t, 3>> ignore_colour(const std::string& text) {
   return c;
 }
 
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
 }  // namespace
 
 int run_hdr_response(const HdrResponseArgs& args, const Output& out) {
   const Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times));
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   CameraResponse response;
   if (args.method == "debevec") {
     DebevecOptions o;
@@ -91,7 +83,7 @@ int run_hdr_response(const HdrResponseArgs& args, const Output& out) {
   } else {
     throw InputError(fmt::format("--method must be debevec or robertson, got '{}'", args.method));
   }
-  const double ms = ms_since(t0);
+  const double ms = 1e3 * seconds_since(t0);
   save_response(args.output, response);
   say(out, "{}: {} response from {} frames ({} levels) in {:.1f} ms\n", args.output, args.method,
       bracket.frames.size(), response.levels, ms);
@@ -105,7 +97,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
   if (!args.photometric.empty()) photometric = load_photometric(args.photometric);
   nlohmann::json report = {{"output", args.output}};
   RgbImage radiance;
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   if (args.images.size() == 1 && photometric && photometric->log_sensor) {
     // A logarithmic sensor: one frame, decoded with the fitted value = a + b ln L.
     const RgbImage codes = read_rgb_image(args.images[0]);
@@ -144,8 +136,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     if (args.deghost) {
       std::array<std::vector<float>, 3> g = response.log_exposure;
       mo.frame_masks = ghost_masks(bracket.frames, bracket.exposure_seconds, &g, {});
-      const auto dropped = count_dropped(mo.frame_masks);
-      report["ghost_pixels_dropped"] = dropped;
+      report["ghost_pixels_dropped"] = count_dropped(mo.frame_masks);
     }
     MergeReport mr;
     radiance = merge_bracket(bracket, response, mo, &mr);
@@ -162,17 +153,13 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     report["units"] = "radiance";
   }
   write_rgb_image(args.output, radiance);
-  const double ms = ms_since(t0);
+  const double ms = 1e3 * seconds_since(t0);
   report["milliseconds"] = ms;
   say(out, "{}: {}x{} radiance ({}) in {:.0f} ms\n", args.output, radiance.width, radiance.height,
       to_string(radiance.units), ms);
   emit_json(out, report);
   return 0;
 }
-
-namespace {
-
-}  // namespace
 
 std::vector<Command> hdr_commands() {
   return {

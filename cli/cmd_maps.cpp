@@ -1,22 +1,18 @@
-// info, convert, synth scene: the map commands.
+// info, convert, preview: the map commands.
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <memory>
-
-#include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <sstream>
+#include <memory>
 
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/envmap.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/map_statistics.h"
 #include "core/resample.h"
-#include "eval/synthetic_scene.h"
 #include "core/tonemap.h"
 #include "probe/cube_map.h"
 
@@ -42,90 +38,25 @@ struct PreviewArgs {
   double percentile = 0.99;
 };
 
-namespace {
-
-// Share of the power in the brightest 0.1 % of the `valid` valid pixels: how peaky the map is.
-double top_power_share(const EnvMap& map, size_t valid, double power_luminance) {
-  if (valid == 0 || !(power_luminance > 0)) return 0;
-  std::vector<std::pair<double, size_t>> by;
-  by.reserve(valid);
-  for (size_t i = 0; i < map.pixel_count(); ++i)
-    if (map.is_valid(i)) {
-      const float* p = map.pixel(i);
-      by.emplace_back(luminance(p[0], p[1], p[2]) * pixel_solid_angle(map, i), i);
-    }
-  const size_t k = std::max<size_t>(1, valid / 1000);
-  std::nth_element(by.begin(), by.begin() + long(k - 1), by.end(), std::greater<>());
-  double top = 0;
-  for (size_t i = 0; i < k; ++i) top += by[i].first;
-  return top / power_luminance;
-}
-
-}  // namespace
-
 int run_info(const InfoArgs& args, const Output& out) {
   nlohmann::json all = nlohmann::json::array();
   for (const std::string& path : args.files) {
     ReadMapOptions ro;
     ro.layout = optional_layout(args.layout, "--layout");
     const EnvMap map = read_envmap(path, ro);
-    const size_t n = map.pixel_count();
-    std::vector<float> lum;
-    lum.reserve(n);
-    size_t valid = 0, brightest = 0;
-    float ymax = -1;
-    for (size_t i = 0; i < n; ++i) {
-      if (!map.is_valid(i)) continue;
-      ++valid;
-      const float* p = map.pixel(i);
-      const float y = luminance(p[0], p[1], p[2]);
-      lum.push_back(y);
-      if (y > ymax) ymax = y, brightest = i;
-    }
-    float ymin_pos = 0;
-    for (float y : lum)
-      if (y > 0 && (ymin_pos == 0 || y < ymin_pos)) ymin_pos = y;
-    auto quantile = [&](double q) {
-      if (lum.empty()) return 0.0f;
-      std::vector<float> v = lum;
-      const size_t k = std::min(v.size() - 1, size_t(q * double(v.size() - 1) + 0.5));
-      std::nth_element(v.begin(), v.begin() + long(k), v.end());
-      return v[k];
-    };
-    const auto power = total_power(map);
-    const double ypower = luminance(power.data());
-    double mean = 0;
-    for (float y : lum) mean += y;
-    mean = lum.empty() ? 0 : mean / double(lum.size());
-    const double range_stops = (ymin_pos > 0 && ymax > 0) ? std::log2(double(ymax) / ymin_pos) : 0;
-    const Vec3 bdir = n ? pixel_direction(map, brightest) : Vec3{};
-    const double top_share = top_power_share(map, valid, ypower);
-    nlohmann::json j = {
-        {"file", path},
-        {"layout", std::string(to_string(map.layout))},
-        {"width", map.width},
-        {"height", map.height},
-        {"units", std::string(to_string(map.units))},
-        {"pixels", n},
-        {"valid_fraction", n ? double(valid) / double(n) : 0.0},
-        {"luminance", {{"min_positive", ymin_pos}, {"max", ymax}, {"mean", mean}, {"median", quantile(0.5)},
-                       {"p99", quantile(0.99)}}},
-        {"dynamic_range_stops", range_stops},
-        {"power_rgb", {power[0], power[1], power[2]}},
-        {"power_luminance", ypower},
-        {"brightest_direction", {bdir.x, bdir.y, bdir.z}},
-        {"power_share_top_0_1_percent", top_share},
-    };
-    if (map.layout == Layout::Healpix) j["nside"] = map.nside;
+    const MapStatistics s = map_statistics(map);
+    nlohmann::json j = s.to_json(map);
+    j["file"] = path;
     all.push_back(j);
+    const Vec3 b = s.brightest_direction;
     say(out,
         "{}\n  layout      {} ({})\n  valid       {:.1f} % of {} pixels\n"
         "  luminance   min>0 {:.4g}  median {:.4g}  mean {:.4g}  p99 {:.4g}  max {:.4g}\n"
         "  range       {:.1f} stops\n  power       rgb ({:.5g}, {:.5g}, {:.5g})  luminance {:.5g}\n"
         "  brightest   theta {:.2f} deg, phi {:.2f} deg; top 0.1 % of pixels hold {:.1f} % of the power\n",
-        path, describe_size(map), to_string(map.units), 100.0 * j["valid_fraction"].get<double>(), n, ymin_pos,
-        quantile(0.5), mean, quantile(0.99), ymax, range_stops, power[0], power[1], power[2], ypower,
-        zenith_of(bdir) * 180 / M_PI, azimuth_of(bdir) * 180 / M_PI, 100 * top_share);
+        path, describe_size(map), to_string(map.units), 100.0 * j["valid_fraction"].get<double>(), s.pixels,
+        s.min_positive, s.median, s.mean, s.p99, s.max, s.range_stops, s.power_rgb[0], s.power_rgb[1], s.power_rgb[2],
+        s.power_luminance, zenith_of(b) * 180 / M_PI, azimuth_of(b) * 180 / M_PI, 100 * s.top_power_share);
   }
   emit_json(out, all.size() == 1 ? all[0] : nlohmann::json{{"maps", all}});
   return 0;
@@ -135,7 +66,7 @@ int run_convert(const ConvertArgs& args, const Output& out) {
   check_target_flags(args.size, args.nside);  // before reading what may be a large input
   ReadMapOptions ro;
   ro.layout = optional_layout(args.in_layout, "--in-layout");
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   // A directory (or a pattern with {face}) holds the six faces of a cube map:
   // assemble them into a latlong map at about the cube's resolution first.
   std::error_code ec;
@@ -160,7 +91,7 @@ int run_convert(const ConvertArgs& args, const Output& out) {
   WriteMapOptions wo;
   wo.exr_pixel_type = args.half ? ExrPixelType::Half : ExrPixelType::Float;
   write_envmap(args.output, dst, wo);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds = seconds_since(t0);
   const double p_in = total_luminance_power(src), p_out = total_luminance_power(dst);
   say(out, "{} ({}) -> {} ({}); power {:.6g} -> {:.6g} ({:+.2e} relative), {:.2f} s\n", args.input,
       describe_size(src), args.output, describe_size(dst), p_in, p_out, p_in > 0 ? (p_out - p_in) / p_in : 0.0,

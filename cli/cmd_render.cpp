@@ -4,9 +4,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <memory>
 
 #include "cli/commands.h"
@@ -14,7 +12,7 @@
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
-#include "eval/synthetic_scene.h"
+#include "eval/harness.h"
 #include "render/reference_shader.h"
 #include "render/shading_tables.h"
 #include "sampling/sampler.h"
@@ -27,28 +25,14 @@ struct TablesArgs {
   ShadingTableArgs tables;
   std::string output;               // .json, or the binary texture (.lpst / anything else)
 };
-namespace {
-
-namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-EnvMap load_map(const std::string& path, const std::string& layout) {
-  if (path == "scene") return render_scene(describe_scene(), Layout::LatLong, 1024, 512);
-  ReadMapOptions ro;
-  if (!layout.empty()) {
-    ro.layout = layout_from_string(layout);
-    if (!ro.layout) throw InputError(fmt::format("--layout: unknown layout '{}'", layout));
-  }
-  return read_envmap(path, ro);
-}
-
-}  // namespace
 
 int run_tables(const TablesArgs& args, const Output& out) {
   const ShadingOptions options = shading_options(args.tables);
   const Method method = progressive_method(args.tables.method);
   if (args.tables.n < 1) throw InputError(fmt::format("--n must be at least 1, got {}", args.tables.n));
-  const EnvMap map = load_map(args.input, args.layout);
+  ReadMapOptions ro;
+  ro.layout = optional_layout(args.layout, "--layout");
+  const EnvMap map = args.input == "scene" ? map_or_scene(args.input, 1024) : read_envmap(args.input, ro);
   const auto t0 = Clock::now();
   auto sampler = make_sampler(method);
   try {
@@ -66,7 +50,7 @@ int run_tables(const TablesArgs& args, const Output& out) {
   meta.units = map.units;
   const std::string bytes = json ? shading_tables_json(s, meta) : shading_tables_binary(s);
   write_file_atomically(args.output, bytes);
-  const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  const double ms = 1e3 * seconds_since(t0);
   const double mean_list = double(s.culled.indices.size()) / regions->count();
   say(out, "{} lights in H, {} in L, {} clustered; {} culling regions (radius <= {:.2f} deg, {:.0f} lights each on average), "
       "{} cone regions -> {} ({} bytes, {}) in {:.1f} ms\n",

@@ -31,17 +31,11 @@ struct SampleArgs {
   std::string output;
   std::string overlay;              // PNG of the lights on the map
   std::string layout;               // input layout override
-  bool upper_only = false;
-  bool lloyd = false;
-  double q2_a = 1.0, q2_b = 0.25;
-  bool q2_jitter = false;
-  int q2_nside = 0;
+  FramePipelineOptions pipeline;    // the hemigon and q2tree flags, --fps and --cluster, bound directly
   std::string filter = "auto";      // FIR filtering of power and directions: auto|on|off
-  double fps = 21;                  // frame rate the filter is designed for
-  int cluster = 0;                  // cluster to at most this many lights (0: off)
   std::string residual;             // "sh9": n lights + SH9 of what they leave out
   bool sh9 = false;                 // also carry the whole map's SH9 ("content": "map")
-  double light_cap_deg = LightsAndAmbientOptions{}.light_cap_deg;
+  LightsAndAmbientOptions ambient;  // --light-cap, bound directly
   std::string exposure, scale, normalize_illuminance;  // units of a relative map (one of)
 };
 
@@ -106,13 +100,9 @@ int run_sample_residual(const SampleArgs& args, const Output& out, Method method
   read.layout = optional_layout(args.layout, "--layout");
   const EnvMap map = read_envmap(args.inputs[0], read);
   const ExportFormat format = export_format_for(args.format, args.output, false);
-  SamplerOptions so;
-  so.upper_only = args.upper_only;
-  so.q2_luminance_exponent = args.q2_a;
-  so.q2_solid_angle_exponent = args.q2_b;
-  so.q2_nside = args.q2_nside;
-  LightsAndAmbientOptions ao;
-  ao.light_cap_deg = args.light_cap_deg;
+  SamplerOptions so = args.pipeline.sampler;
+  so.lloyd_relaxed = so.q2_jitter = false;  // the residual's lights are the plain samplers'
+  const LightsAndAmbientOptions& ao = args.ambient;
   if (!(ao.light_cap_deg > 0 && ao.light_cap_deg <= 180))
     throw InputError(fmt::format("--light-cap must be in (0, 180] degrees, got {}", ao.light_cap_deg));
   const AccuracyReference ref = make_accuracy_reference(map);
@@ -148,23 +138,16 @@ int run_sample(const SampleArgs& args, const Output& out) {
   if (!method) throw InputError(fmt::format("--method: unknown method '{}' (pharr, hemigon, q2tree, mediancut)", args.method));
   if (!args.residual.empty()) return run_sample_residual(args, out, *method);
   SampleMapsOptions o;
+  o.pipeline = args.pipeline;
   FramePipelineOptions& po = o.pipeline;
   po.method = *method;
   po.count = light_count(args.n);
   po.auto_count = po.count == 0;
   po.auto_options.target_diffuse_error = args.target_error;
-  po.sampler.upper_only = args.upper_only;
-  po.sampler.lloyd_relaxed = args.lloyd;
-  po.sampler.q2_luminance_exponent = args.q2_a;
-  po.sampler.q2_solid_angle_exponent = args.q2_b;
-  po.sampler.q2_jitter = args.q2_jitter;
-  po.sampler.q2_nside = args.q2_nside;
-  check_nside("--q2-nside", args.q2_nside);
+  check_nside("--q2-nside", po.sampler.q2_nside);
   po.filter = filter_mode(args.filter);
-  if (!(args.fps > 0)) throw InputError(fmt::format("--fps must be positive, got {}", args.fps));
-  po.frame_rate_hz = args.fps;
-  po.cluster_max_lights = args.cluster;
-  check_light_count("--cluster", args.cluster);
+  if (!(po.frame_rate_hz > 0)) throw InputError(fmt::format("--fps must be positive, got {}", po.frame_rate_hz));
+  check_light_count("--cluster", po.cluster_max_lights);
   o.read.layout = optional_layout(args.layout, "--layout");
 
   const MapSequence maps = find_map_sequence(args.inputs);
@@ -227,17 +210,20 @@ std::vector<Command> sample_commands() {
          f.output(a->output, "Output file");
          f.opt("--overlay", a->overlay, "Also draw the lights on the tone-mapped map (PNG)");
          f.opt("--layout", a->layout, "Read the input as this layout");
-         f.flag("--upper-only", a->upper_only, "hemigon: sample only the upper hemisphere (sky probes)");
-         f.flag("--lloyd", a->lloyd, "hemigon: Lloyd-relaxed Halton points");
-         f.opt("--q2-a", a->q2_a, "q2tree: luminance exponent a of p = L^a dw^b");
-         f.opt("--q2-b", a->q2_b, "q2tree: solid-angle exponent b of p = L^a dw^b");
-         f.flag("--q2-jitter", a->q2_jitter, "q2tree: deterministic jitter instead of leaf centroids");
-         f.opt("--q2-nside", a->q2_nside, "q2tree: HEALPix resolution to bin to (0: from the input)");
+         f.flag("--upper-only", a->pipeline.sampler.upper_only,
+                "hemigon: sample only the upper hemisphere (sky probes)");
+         f.flag("--lloyd", a->pipeline.sampler.lloyd_relaxed, "hemigon: Lloyd-relaxed Halton points");
+         f.opt("--q2-a", a->pipeline.sampler.q2_luminance_exponent, "q2tree: luminance exponent a of p = L^a dw^b");
+         f.opt("--q2-b", a->pipeline.sampler.q2_solid_angle_exponent, "q2tree: solid-angle exponent b of p = L^a dw^b");
+         f.flag("--q2-jitter", a->pipeline.sampler.q2_jitter, "q2tree: deterministic jitter instead of leaf centroids");
+         f.opt("--q2-nside", a->pipeline.sampler.q2_nside, "q2tree: HEALPix resolution to bin to (0: from the input)");
          f.opt("--filter", a->filter, "Temporal FIR filter on power and directions: auto (hemigon only), on, off");
-         f.opt("--fps", a->fps, "Frame rate of a sequence (the FIR filter is designed for it)");
-         f.opt("--cluster", a->cluster, "Cluster the lights to at most this many (Havran 2005 4.3)");
+         f.opt("--fps", a->pipeline.frame_rate_hz, "Frame rate of a sequence (the FIR filter is designed for it)");
+         f.opt("--cluster", a->pipeline.cluster_max_lights,
+               "Cluster the lights to at most this many (Havran 2005 4.3)");
          f.opt("--residual", a->residual, "sh9: n lights for the map's peaks + SH9 ambient of the rest (one map)");
-         f.opt("--light-cap", a->light_cap_deg, "With --residual: half-angle (deg) of the cap one light stands for");
+         f.opt("--light-cap", a->ambient.light_cap_deg,
+               "With --residual: half-angle (deg) of the cap one light stands for");
          f.flag("--sh9", a->sh9, "Also carry the whole map's SH9 (\"sh9\", content \"map\"; glTF: asset.extras)");
          f.opt("--exposure", a->exposure, "Scale a relative map's lights by 2^EV (then written as absolute units)");
          f.opt("--scale", a->scale, "Scale by K: relative units -> W sr^-1 m^-2");

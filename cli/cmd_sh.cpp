@@ -2,7 +2,6 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <memory>
 
 #include "cli/commands.h"
@@ -28,9 +27,9 @@ int run_sh(const ShArgs& args, const Output& out) {
   read.layout = optional_layout(args.layout, "--layout");
   const EnvMap map = args.input == "scene" ? map_or_scene(args.input, 1024) : read_envmap(args.input, read);
 
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   const Sh9 sh = project_sh9(map, args.input);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double ms = 1e3 * seconds_since(start);
   write_file_atomically(args.output, sh9_to_json(sh, map.units));
 
   const auto up = sh9_irradiance(sh, {0, 0, 1});

@@ -3,13 +3,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <filesystem>
 #include <memory>
 
-#include "calib/board_detect.h"
 #include "calib/camera_model.h"
 #include "calib/synthetic_boards.h"
 #include "cli/commands.h"
@@ -17,33 +12,18 @@
 #include "core/accuracy.h"
 #include "core/envmap.h"
 #include "core/error.h"
-#include "core/limits.h"
 #include "core/image_io.h"
+#include "core/limits.h"
 #include "core/progress.h"
 #include "core/resample.h"
-#include "estimate/exposure_metering.h"
-#include "estimate/metadata_track.h"
 #include "estimate/walkthrough.h"
 #include "eval/harness.h"
 #include "eval/synthetic_scene.h"
 #include "eval/synthetic_sequence.h"
-#include "hdr/bracket.h"
-#include "hdr/response.h"
 #include "hdr/synthetic_bracket.h"
-#include "probe/fisheye.h"
-#include "probe/mirror_ball.h"
 #include "probe/synthetic_probe.h"
 
 namespace lp::cli {
-
-namespace {
-
-namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-}  // namespace
 
 struct SynthSceneArgs {
   std::string output;
@@ -55,60 +35,43 @@ struct SynthSceneArgs {
 };
 
 struct SynthSequenceArgs {
+  SequenceOptions o;                // frames, fps and seed bound directly
   std::string scenario = "moving-light";
   std::string base = "scene";       // a map file or "scene"
-  int frames = 48;
-  double fps = 21;
-  uint64_t seed = 7;
   std::string size;                 // resample the base first (WxH)
   std::string output_dir;
 };
 
 struct SynthBoardsArgs {
-  int views = 20;
+  SyntheticBoardsOptions o;         // views, noise, fov and seed bound directly
   std::string board = "9x6";
   double square_mm = 30;
-  double noise = 0.01;
-  double fov = 190;
   std::string camera;               // a model file; default a 190 deg Kannala-Brandt 1280x960
-  uint64_t seed = 1;
   std::string output_dir;
 };
 
 struct SynthBracketArgs {
+  SyntheticBracketOptions o;        // bit depth, shake, moving object and seed bound directly
   std::string input = "scene";      // a radiance image/map or "scene"
   std::string exposure_times;       // default 1/64,1/8,1
   std::string response = "gamma";   // linear|gamma|scurve
   bool no_noise = false;
-  int bit_depth = 8;
-  int shake_px = 0;
-  bool moving_object = false;
-  uint64_t seed = 1;
   std::string output_dir;
 };
 
 struct SynthProbeArgs {
+  SyntheticProbeOptions o;
   std::string input = "scene";
-  std::string type = "mirrorball";
   std::string size = "512x512";
-  double radius = 0;                // ball radius px (0: 40 % of the short side)
-  double distance = 0;              // 0: orthographic
-  double fov = 190;                 // fisheye
-  double noise = 0;
-  int frames = 1;
-  double jitter = 1.0;              // ball centre jitter px per frame (sequences)
-  uint64_t seed = 1;
   std::string output;
 };
 
 struct SynthWalkthroughArgs {
+  WalkthroughOptions o;             // fps, speed, rays and the bright-RGB record bound directly
   std::string output_dir;
-  double fps = 10, speed = 0.7;
-  int rays = 16;                    // camera rays across
   int probe_size = 128;             // latlong width of the query probes
   int samples = 4;                  // per pixel edge
   bool no_mean_code = false;        // the camera does not report its metered mean
-  bool bright_rgb = false;          // record the brightest pixels' colour
 };
 
 int run_synth_scene(const SynthSceneArgs& args, const Output& out) {
@@ -140,12 +103,9 @@ int run_synth_scene(const SynthSceneArgs& args, const Output& out) {
 int run_synth_sequence(const SynthSequenceArgs& args, const Output& out) {
   const auto scenario = scenario_from_string(args.scenario);
   if (!scenario) throw InputError(fmt::format("--scenario: unknown scenario '{}'", args.scenario));
-  SequenceOptions so;
+  SequenceOptions so = args.o;
   so.scenario = *scenario;
-  so.frames = args.frames;
-  so.frame_rate_hz = args.fps;
-  so.seed = args.seed;
-  check_frame_count("--frames", args.frames);
+  check_frame_count("--frames", so.frames);
   try {
     validate(so);
   } catch (const InputError& e) {
@@ -168,36 +128,13 @@ int run_synth_sequence(const SynthSequenceArgs& args, const Output& out) {
 }
 
 int run_synth_boards(const SynthBoardsArgs& args, const Output& out) {
-  SyntheticBoardsOptions o;
-  o.views = args.views;
+  SyntheticBoardsOptions o = args.o;
   o.board = board_from(args.board, args.square_mm);
-  o.noise_sigma = args.noise;
-  o.seed = args.seed;
-  o.field_deg = args.fov;
   if (!args.camera.empty()) o.camera = read_camera_model(args.camera);
   if (o.views < 1) throw InputError("--views must be at least 1");
   check_count("--views", o.views, limits().max_frames, "views", "each is an image file");
   const SyntheticBoards b = synthesize_boards(o);
-  make_output_directory(args.output_dir);
-  nlohmann::json truth = {{"board", {o.board.cols, o.board.rows}}, {"square_mm", o.board.square_mm},
-                          {"lensmodel", o.camera.lensmodel}, {"intrinsics", o.camera.intrinsics},
-                          {"width", o.camera.width}, {"height", o.camera.height}};
-  nlohmann::json views = nlohmann::json::array();
-  for (size_t i = 0; i < b.images.size(); ++i) {
-    const std::string name = fmt::format("board_{:02d}.png", i);
-    RgbImage rgb;
-    rgb.width = b.images[i].width;
-    rgb.height = b.images[i].height;
-    rgb.rgb = b.images[i].rgb;
-    write_code_image((fs::path(args.output_dir) / name).string(), rgb, 8);
-    views.push_back({{"file", name}, {"corners", b.true_corners[i]}, {"pose", b.poses[i]}});
-  }
-  truth["views"] = views;
-  write_file_atomically((fs::path(args.output_dir) / "truth.json").string(), truth.dump(1) + "\n");
-  try {
-    write_opencv_yaml((fs::path(args.output_dir) / "true_camera.yaml").string(), o.camera);
-  } catch (const InputError&) {
-  }
+  write_synthetic_boards(args.output_dir, o, b);
   say(out, "{}: {} views of a {}x{} board through {} ({}x{}), truth.json\n", args.output_dir, b.images.size(),
       o.board.cols, o.board.rows, o.camera.lensmodel, o.camera.width, o.camera.height);
   emit_json(out, {{"output", args.output_dir}, {"views", b.images.size()}});
@@ -205,14 +142,10 @@ int run_synth_boards(const SynthBoardsArgs& args, const Output& out) {
 }
 
 int run_synth_bracket(const SynthBracketArgs& args, const Output& out) {
-  SyntheticBracketOptions o;
+  SyntheticBracketOptions o = args.o;
   if (!args.exposure_times.empty()) o.exposure_seconds = parse_numbers(args.exposure_times, "--exposure-times");
   o.response = curve_from(args.response);
   o.add_noise = !args.no_noise;
-  o.bit_depth = args.bit_depth;
-  o.shake_px = args.shake_px;
-  o.moving_object = args.moving_object;
-  o.seed = args.seed;
   if (o.bit_depth != 8 && o.bit_depth != 16) throw InputError("--bit-depth must be 8 or 16");
   const SyntheticBracket b = make_synthetic_bracket(radiance_or_scene(args.input), o);
   write_synthetic_bracket(args.output_dir, b, o.bit_depth);
@@ -224,65 +157,27 @@ int run_synth_bracket(const SynthBracketArgs& args, const Output& out) {
 }
 
 int run_synth_probe(const SynthProbeArgs& args, const Output& out) {
-  int w = 0, h = 0;
-  parse_image_size(args.size, "--size", &w, &h);
-  check_frame_count("--frames", args.frames);
+  SyntheticProbeOptions o = args.o;
+  parse_image_size(args.size, "--size", &o.width, &o.height);
+  check_frame_count("--frames", o.frames);
   const EnvMap world = args.input == "scene" ? render_scene(describe_scene(), Layout::LatLong, 1024, 512)
                                              : read_envmap(args.input);
-  const bool sequence = args.frames > 1;
-  if (args.frames < 1) throw InputError("--frames must be at least 1");
-  if (sequence) {
-    make_output_directory(args.output);
-  }
-  nlohmann::json truth = {{"type", args.type}, {"input", args.input}, {"frames", args.frames}};
-  nlohmann::json per_frame = nlohmann::json::array();
-  if (args.type == "mirrorball") {
-    const double r = args.radius > 0 ? args.radius : 0.4 * std::min(w, h);
-    const BallInImage ball{w / 2.0, h / 2.0, r};
-    MirrorBallCamera cam;
-    if (args.distance > 0) cam.distance_in_radii = args.distance;
-    const auto track = jittered_track(ball, args.frames, sequence ? args.jitter : 0, args.seed);
-    for (int f = 0; f < args.frames; ++f) {
-      RenderBallOptions ro;
-      ro.noise_relative = args.noise;
-      ro.seed = args.seed + uint64_t(f);
-      const RgbImage img = render_mirror_ball(world, track[size_t(f)], cam, w, h, ro);
-      const std::string path = sequence ? (fs::path(args.output) / fmt::format("frame_{:04d}.exr", f)).string() : args.output;
-      write_rgb_image(path, img);
-      per_frame.push_back({{"frame", f}, {"ball", {track[size_t(f)].cx, track[size_t(f)].cy, track[size_t(f)].radius_px}}});
-    }
-    if (args.distance > 0) truth["distance_in_radii"] = args.distance;
-  } else if (args.type == "fisheye") {
-    const FisheyeModel m = equidistant_fisheye(w, h, args.fov);
-    const RgbImage img = render_fisheye(world, m, 4);
-    write_rgb_image(args.output, img);
-    truth["fov_deg"] = args.fov;
-    if (sequence) throw InputError("--frames applies to mirror balls only");
-  } else {
-    throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", args.type));
-  }
-  truth["per_frame"] = per_frame;
-  if (sequence) write_file_atomically((fs::path(args.output) / "truth.json").string(), truth.dump(2) + "\n");
-  say(out, "{}: synthetic {} probe {}x{}{}\n", args.output, args.type, w, h,
-      sequence ? fmt::format(", {} frames, truth.json", args.frames) : "");
+  const nlohmann::json truth = write_synthetic_probe(world, args.input, o, args.output);
+  say(out, "{}: synthetic {} probe {}x{}{}\n", args.output, o.type, o.width, o.height,
+      o.frames > 1 ? fmt::format(", {} frames, truth.json", o.frames) : "");
   emit_json(out, truth);
   return 0;
 }
 
-
 int run_synth_walkthrough(const SynthWalkthroughArgs& args, const Output& out) {
   if (args.probe_size < 8 || args.probe_size % 2) throw InputError(fmt::format("--probe-size must be even and >= 8, got {}", args.probe_size));
-  if (args.rays < 2) throw InputError(fmt::format("--rays must be >= 2, got {}", args.rays));
+  if (args.o.rays_x < 2) throw InputError(fmt::format("--rays must be >= 2, got {}", args.o.rays_x));
   check_image_size("--probe-size", args.probe_size, args.probe_size / 2, "probe");
-  check_image_size("--rays", args.rays, args.rays, "ray grid");
+  check_image_size("--rays", args.o.rays_x, args.o.rays_x, "ray grid");
   check_count("--samples", args.samples, 64, "rays a pixel edge", "every probe pixel traces samples^2 rays");
   const Room room = default_room();
-  WalkthroughOptions o;
-  o.fps = args.fps;
-  o.speed = args.speed;
-  o.rays_x = args.rays;
+  WalkthroughOptions o = args.o;
   o.record_mean_code = !args.no_mean_code;
-  o.record_bright_rgb = args.bright_rgb;
   const auto t0 = Clock::now();
   Progress progress("probes", walkthrough_query_points(room, o).size(), out.progress);
   const WalkthroughFiles files =
@@ -308,10 +203,10 @@ Command synth_bracket_command() {
             f.opt("--exposure-times", a->exposure_times, "Seconds, default 1/64,1/8,1");
             f.opt("--response", a->response, "linear|gamma|scurve");
             f.flag("--no-noise", a->no_noise, "No shot or read noise");
-            f.opt("--bit-depth", a->bit_depth, "8 or 16");
-            f.opt("--shake", a->shake_px, "Camera shake, max px per frame");
-            f.flag("--moving-object", a->moving_object, "A bright square moving between frames");
-            f.opt("--seed", a->seed, "Noise seed");
+            f.opt("--bit-depth", a->o.bit_depth, "8 or 16");
+            f.opt("--shake", a->o.shake_px, "Camera shake, max px per frame");
+            f.flag("--moving-object", a->o.moving_object, "A bright square moving between frames");
+            f.opt("--seed", a->o.seed, "Noise seed");
             f.output(a->output_dir, "Directory for frames, exposures.csv, truth");
             return [a](const Output& out) { return run_synth_bracket(*a, out); };
           }};
@@ -323,15 +218,15 @@ Command synth_probe_command() {
           [](Flags& f) -> Handler {
             auto a = std::make_shared<SynthProbeArgs>();
             f.arg("MAP", a->input, "A latlong map, or 'scene'");
-            f.opt("--type", a->type, "mirrorball|fisheye");
+            f.opt("--type", a->o.type, "mirrorball|fisheye");
             f.opt("--size", a->size, "Image WxH");
-            f.opt("--radius", a->radius, "Ball radius, px");
-            f.opt("--distance", a->distance, "Camera distance in ball radii (default orthographic)");
-            f.opt("--fov", a->fov, "Fisheye field of view, deg");
-            f.opt("--noise", a->noise, "Relative Gaussian noise");
-            f.opt("--frames", a->frames, "Frames (a jittered sequence)");
-            f.opt("--jitter", a->jitter, "Ball centre jitter per frame, px");
-            f.opt("--seed", a->seed, "Noise seed");
+            f.opt("--radius", a->o.radius_px, "Ball radius, px");
+            f.opt("--distance", a->o.distance_in_radii, "Camera distance in ball radii (default orthographic)");
+            f.opt("--fov", a->o.fov_deg, "Fisheye field of view, deg");
+            f.opt("--noise", a->o.noise_relative, "Relative Gaussian noise");
+            f.opt("--frames", a->o.frames, "Frames (a jittered sequence)");
+            f.opt("--jitter", a->o.jitter_px, "Ball centre jitter per frame, px");
+            f.opt("--seed", a->o.seed, "Noise seed");
             f.output(a->output, "Image (or directory for a sequence)");
             return [a](const Output& out) { return run_synth_probe(*a, out); };
           }};
@@ -359,9 +254,9 @@ std::vector<Command> synth_commands() {
          auto a = std::make_shared<SynthSequenceArgs>();
          f.opt("--scenario", a->scenario, "static-noise|moving-light|swinging-bulb|abrupt-switch|flicker|rising-light|camera-turn");
          f.opt("--base", a->base, "Base map file, or 'scene' (the procedural scene at 512x256)");
-         f.opt("--frames", a->frames, "Number of frames");
-         f.opt("--fps", a->fps, "Frame rate (flicker aliasing depends on it)");
-         f.opt("--seed", a->seed, "Noise seed");
+         f.opt("--frames", a->o.frames, "Number of frames");
+         f.opt("--fps", a->o.frame_rate_hz, "Frame rate (flicker aliasing depends on it)");
+         f.opt("--seed", a->o.seed, "Noise seed");
          f.opt("--size", a->size, "Resample the base to WxH first");
          f.output(a->output_dir, "Output directory (frame_0000.exr ..., truth.json)");
          return [a](const Output& out) { return run_synth_sequence(*a, out); };
@@ -370,13 +265,13 @@ std::vector<Command> synth_commands() {
        "lightprobe synth boards --views 10 -o boards/\nlightprobe calib geometric boards/board_*.png --board 9x6 --square 30 -o camera.yaml",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<SynthBoardsArgs>();
-         f.opt("--views", a->views, "Number of views");
+         f.opt("--views", a->o.views, "Number of views");
          f.opt("--board", a->board, "COLSxROWS inner corners");
          f.opt("--square", a->square_mm, "Square size, mm");
-         f.opt("--noise", a->noise, "Image noise (0..1 units)");
-         f.opt("--fov", a->fov, "Image circle, deg (0: the model's own domain)");
+         f.opt("--noise", a->o.noise_sigma, "Image noise (0..1 units)");
+         f.opt("--fov", a->o.field_deg, "Image circle, deg (0: the model's own domain)");
          f.opt("--camera", a->camera, "Camera model file (default: 190 deg Kannala-Brandt 1280x960)");
-         f.opt("--seed", a->seed, "Seed");
+         f.opt("--seed", a->o.seed, "Seed");
          f.output(a->output_dir, "Directory for board_NN.png, truth.json, true_camera.yaml");
          return [a](const Output& out) { return run_synth_boards(*a, out); };
        }},
@@ -387,13 +282,13 @@ std::vector<Command> synth_commands() {
        [](Flags& f) -> Handler {
          auto a = std::make_shared<SynthWalkthroughArgs>();
          f.output(a->output_dir, "Directory for track.jsonl, probes/, truth.json");
-         f.opt("--fps", a->fps, "Camera frame rate");
-         f.opt("--speed", a->speed, "Walking speed, m/s");
-         f.opt("--rays", a->rays, "Camera rays across the frame");
+         f.opt("--fps", a->o.fps, "Camera frame rate");
+         f.opt("--speed", a->o.speed, "Walking speed, m/s");
+         f.opt("--rays", a->o.rays_x, "Camera rays across the frame");
          f.opt("--probe-size", a->probe_size, "Latlong width of the query probes");
          f.opt("--samples", a->samples, "Probe rays per pixel edge");
          f.flag("--no-mean-code", a->no_mean_code, "The camera does not report its metered mean (AE assumed on target)");
-         f.flag("--bright-rgb", a->bright_rgb, "Record the brightest pixels' colour");
+         f.flag("--bright-rgb", a->o.record_bright_rgb, "Record the brightest pixels' colour");
          return [a](const Output& out) { return run_synth_walkthrough(*a, out); };
        }},
   };

@@ -16,12 +16,17 @@ namespace lp {
 struct BoardSpec;
 struct ShadingOptions;
 enum class ResponseCurve;
+enum class Scenario;
 }  // namespace lp
 
 namespace lp::cli {
 
+// Comma-separated items, empty ones kept (so that "mis," names an empty estimator).
+std::vector<std::string> split_commas(const std::string& text);
 // --methods: comma-separated method names or "all".
 std::vector<Method> parse_method_list(const std::string& text);
+// --scenarios: comma-separated scenario names (eval/synthetic_sequence.h) or "all".
+std::vector<Scenario> parse_scenarios(const std::string& text);
 void parse_size(const std::string& text, const char* option, int* width, int* height);
 // parse_size for an image or map size, within core/limits.h.
 void parse_image_size(const std::string& text, const char* option, int* width, int* height);
@@ -30,7 +35,7 @@ std::vector<int> parse_int_list(const std::string& text, const char* option);
 std::vector<int> parse_light_counts(const std::string& text, const char* option);
 // --frames, --views and the like within core/limits.h (positivity is the caller's rule).
 void check_frame_count(const char* option, long long count);
-// --rotation: "yaw,pitch,roll" in degrees or 9 numbers (row-major world_from_probe).
+// --rotation: "yaw,pitch,roll" in degrees or 9 numbers (row-major world_from_probe), as parse_numbers reads them.
 Mat3 parse_rotation(const std::string& text);
 // Comma-separated numbers ('1/40' allowed), exactly `count` of them (0: any).
 std::vector<double> parse_numbers(const std::string& text, const char* option, size_t count = 0);

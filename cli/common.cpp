@@ -11,6 +11,7 @@
 #include "calib/board_detect.h"
 #include "core/error.h"
 #include "core/limits.h"
+#include "eval/synthetic_sequence.h"
 #include "hdr/synthetic_bracket.h"
 #include "render/reference_shader.h"
 
@@ -60,18 +61,7 @@ std::vector<int> parse_int_list(const std::string& text, const char* option) {
 }
 
 Mat3 parse_rotation(const std::string& text) {
-  std::vector<double> v;
-  std::string item;
-  std::istringstream in(text);
-  while (std::getline(in, item, ',')) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stod(item, &used));
-      if (used != item.size()) throw std::invalid_argument("x");
-    } catch (const std::exception&) {
-      throw InputError(fmt::format("--rotation: '{}' is not a number", item));
-    }
-  }
+  const std::vector<double> v = parse_numbers(text, "--rotation");
   if (v.size() == 3) return rotation_from_yaw_pitch_roll_deg(v[0], v[1], v[2]);
   if (v.size() == 9) {
     Mat3 m;
@@ -167,19 +157,41 @@ ResponseCurve curve_from(const std::string& name) {
   throw InputError(fmt::format("--response must be linear, gamma or scurve, got '{}'", name));
 }
 
-std::vector<Method> parse_method_list(const std::string& text) {
-  if (text == "all") return all_methods();
-  std::vector<Method> methods;
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> items;
   size_t start = 0;
   while (start <= text.size()) {
     const size_t comma = std::min(text.find(',', start), text.size());
-    const std::string name = text.substr(start, comma - start);
+    items.push_back(text.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return items;
+}
+
+std::vector<Method> parse_method_list(const std::string& text) {
+  if (text == "all") return all_methods();
+  std::vector<Method> methods;
+  for (const std::string& name : split_commas(text)) {
     auto m = method_from_string(name);
     if (!m) throw InputError(fmt::format("--methods: unknown method '{}' (pharr, hemigon, q2tree, mediancut, all)", name));
     methods.push_back(*m);
-    start = comma + 1;
   }
   return methods;
+}
+
+std::vector<Scenario> parse_scenarios(const std::string& text) {
+  if (text == "all") return all_scenarios();
+  std::vector<Scenario> scenarios;
+  for (const std::string& name : split_commas(text)) {
+    auto s = scenario_from_string(name);
+    if (!s) {
+      std::string known;
+      for (Scenario k : all_scenarios()) known += (known.empty() ? "" : ", ") + std::string(to_string(k));
+      throw InputError(fmt::format("--scenarios: unknown scenario '{}' ({})", name, known));
+    }
+    scenarios.push_back(*s);
+  }
+  return scenarios;
 }
 
 BoardSpec board_from(const std::string& text, double square_mm) {

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cstdio>
 #include <string>
 
@@ -16,6 +17,11 @@ template <typename... Args>
 void say(const Output& out, fmt::format_string<Args...> f, Args&&... args) {
   std::fputs(fmt::format(f, std::forward<Args>(args)...).c_str(), out.json ? stderr : stdout);
 }
+
+using Clock = std::chrono::steady_clock;
+
+// The times a report carries: seconds since `t0`.
+inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 inline void emit_json(const Output& out, const nlohmann::json& report) {
   if (out.json) std::printf("%s\n", report.dump().c_str());

@@ -78,6 +78,10 @@ RgbImage read_rgb_image(const std::string& path);
 // .exr/.hdr/.pfm without a layout record; atomic like every writer.
 void write_rgb_image(const std::string& path, const RgbImage& image, const WriteMapOptions& options = {});
 
+// Writes code values in [0, 1] as an 8- or 16-bit PNG (or TIFF by extension), exactly as a
+// camera would store them (no colour encoding applied), atomically. For synthetic frames.
+void write_code_image(const std::string& path, const RgbImage& image, int bit_depth);
+
 // 8-bit sRGB PNG/JPEG of already tone-mapped RGB in [0, 1] (overlays, charts).
 void write_display_image(const std::string& path, int width, int height, const std::vector<float>& rgb);
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
@@ -60,6 +61,14 @@ std::string encode_display_image(const std::string& path, int width, int height,
 
 std::string encode_display_png(int width, int height, const std::vector<float>& rgb) {
   return encode_display_image(".png", width, height, rgb);
+}
+
+void write_code_image(const std::string& path, const RgbImage& image, int bit_depth) {
+  const double max = bit_depth == 8 ? 255.0 : 65535.0;
+  std::vector<uint16_t> codes(image.rgb.size());
+  std::transform(image.rgb.begin(), image.rgb.end(), codes.begin(),
+                 [&](float v) { return uint16_t(std::lround(std::clamp(double(v), 0.0, 1.0) * max)); });
+  write_file_atomically(path, encode_rgb_codes(path, image.width, image.height, bit_depth, codes));
 }
 
 void write_display_image(const std::string& path, int width, int height, const std::vector<float>& rgb) {

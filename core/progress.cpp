@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <mutex>
 
 namespace lp {
@@ -75,6 +76,33 @@ void Progress::draw(bool final) {
   line += "\x1b[K";  // clear what a longer previous line left behind
   std::fputs(line.c_str(), stderr);
   std::fflush(stderr);
+}
+
+std::function<void(const std::string&, int, int)> stage_progress_bars(std::string prefix, bool enabled) {
+  struct Bars {
+    std::unique_ptr<Progress> bar;
+    std::string stage;
+    int done = 0, total = 0;
+  };
+  auto bars = std::make_shared<Bars>();
+  return [bars, prefix = std::move(prefix), enabled](const std::string& stage, int done, int total) {
+    Bars& b = *bars;
+    if (stage != b.stage) {
+      if (b.bar) {
+        if (b.total > b.done) b.bar->advance(uint64_t(b.total - b.done));
+        b.bar->finish();
+      }
+      b.bar.reset();
+      b.stage = stage;
+      b.done = 0;
+      b.total = std::max(1, total);
+      if (stage != "done") b.bar = std::make_unique<Progress>(prefix + stage, uint64_t(b.total), enabled);
+    }
+    if (b.bar && done > b.done) {
+      b.bar->advance(uint64_t(done - b.done));
+      b.done = done;
+    }
+  };
 }
 
 }  // namespace lp

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -132,6 +133,29 @@ nlohmann::json metering_json(const MeteringOptions& m) {
                    {"meter_constant", m.meter_constant}};
   if (m.photometric_scale) j["photometric_scale"] = *m.photometric_scale;
   return j;
+}
+
+namespace {
+
+Spread spread_of(std::vector<double> v) {
+  if (v.empty()) return {};
+  std::sort(v.begin(), v.end());
+  auto at = [&](double p) { return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))]; };
+  return {at(0.05), at(0.5), at(0.95)};
+}
+
+}  // namespace
+
+nlohmann::json Spread::to_json() const { return {{"median", median}, {"p05", p05}, {"p95", p95}}; }
+
+ReadingsSpread readings_spread(const std::vector<LightReading>& readings) {
+  std::vector<double> lum, lux, cct;
+  for (const LightReading& r : readings) {
+    lum.push_back(r.luminance);
+    lux.push_back(r.illuminance);
+    if (r.cct_k > 0 && std::isfinite(r.cct_k)) cct.push_back(r.cct_k);
+  }
+  return {spread_of(lum), spread_of(lux), spread_of(cct), cct.size()};
 }
 
 }  // namespace lp

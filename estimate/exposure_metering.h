@@ -37,6 +37,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace lp {
 
@@ -92,5 +93,17 @@ void validate_metering(const MeteringOptions& options);
 // The camera as reports and truth files record it: the metering route, f-number, AE
 // target, ISO base, meter constant and the photometric scale when known.
 nlohmann::json metering_json(const MeteringOptions& m);
+
+// Nearest-rank 5th, 50th and 95th percentiles of a track's readings (zeros where there are
+// none), as `estimate metadata` reports them; CCT over the readings that have one.
+struct Spread {
+  double p05 = 0, median = 0, p95 = 0;
+  nlohmann::json to_json() const;  // {median, p05, p95}
+};
+struct ReadingsSpread {
+  Spread luminance, illuminance, cct;
+  size_t with_cct = 0;  // readings with a finite, positive colour temperature
+};
+ReadingsSpread readings_spread(const std::vector<LightReading>& readings);
 
 }  // namespace lp

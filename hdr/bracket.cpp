@@ -206,12 +206,4 @@ std::vector<double> read_exposure_list(const std::string& path) {
   return times;
 }
 
-void write_code_image(const std::string& path, const RgbImage& image, int bit_depth) {
-  const double max = bit_depth == 8 ? 255.0 : 65535.0;
-  std::vector<uint16_t> codes(image.rgb.size());
-  std::transform(image.rgb.begin(), image.rgb.end(), codes.begin(),
-                 [&](float v) { return uint16_t(std::lround(std::clamp(double(v), 0.0, 1.0) * max)); });
-  write_file_atomically(path, encode_rgb_codes(path, image.width, image.height, bit_depth, codes));
-}
-
 }  // namespace lp

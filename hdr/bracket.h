@@ -53,8 +53,4 @@ std::optional<double> read_exif_exposure_seconds(const std::string& path);
 // time field is not a number is a header. Throws InputError naming the file and line.
 std::vector<double> read_exposure_list(const std::string& csv_or_txt);
 
-// Writes code values in [0, 1] as an 8- or 16-bit PNG (or TIFF by extension), exactly as a
-// camera would store them (no colour encoding applied), atomically. For synthetic brackets.
-void write_code_image(const std::string& path, const RgbImage& image, int bit_depth);
-
 }  // namespace lp

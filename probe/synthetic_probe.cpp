@@ -1,12 +1,15 @@
 #include "probe/synthetic_probe.h"
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include "core/error.h"
+#include "probe/fisheye.h"
 
 namespace lp {
 
@@ -79,6 +82,41 @@ std::vector<BallInImage> jittered_track(BallInImage ball, int frames, double jit
     b.cy = ball.cy + jitter_px * normal(rng);
   }
   return track;
+}
+
+nlohmann::json write_synthetic_probe(const EnvMap& world, const std::string& input_label,
+                                     const SyntheticProbeOptions& o, const std::string& output) {
+  const bool sequence = o.frames > 1;
+  if (o.frames < 1) throw InputError("--frames must be at least 1");
+  if (o.type != "mirrorball" && o.type != "fisheye")
+    throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", o.type));
+  if (o.type == "fisheye" && sequence) throw InputError("--frames applies to mirror balls only");
+  if (sequence) make_output_directory(output);
+  nlohmann::json truth = {{"type", o.type}, {"input", input_label}, {"frames", o.frames}};
+  nlohmann::json per_frame = nlohmann::json::array();
+  if (o.type == "mirrorball") {
+    const double r = o.radius_px > 0 ? o.radius_px : 0.4 * std::min(o.width, o.height);
+    MirrorBallCamera camera;
+    if (o.distance_in_radii > 0) camera.distance_in_radii = o.distance_in_radii;
+    const auto track = jittered_track({o.width / 2.0, o.height / 2.0, r}, o.frames, sequence ? o.jitter_px : 0, o.seed);
+    for (int f = 0; f < o.frames; ++f) {
+      RenderBallOptions ro;
+      ro.noise_relative = o.noise_relative;
+      ro.seed = o.seed + uint64_t(f);
+      const BallInImage& ball = track[size_t(f)];
+      const std::string path =
+          sequence ? (std::filesystem::path(output) / fmt::format("frame_{:04d}.exr", f)).string() : output;
+      write_rgb_image(path, render_mirror_ball(world, ball, camera, o.width, o.height, ro));
+      per_frame.push_back({{"frame", f}, {"ball", {ball.cx, ball.cy, ball.radius_px}}});
+    }
+    if (o.distance_in_radii > 0) truth["distance_in_radii"] = o.distance_in_radii;
+  } else {
+    write_rgb_image(output, render_fisheye(world, equidistant_fisheye(o.width, o.height, o.fov_deg), 4));
+    truth["fov_deg"] = o.fov_deg;
+  }
+  truth["per_frame"] = per_frame;
+  if (sequence) write_file_atomically((std::filesystem::path(output) / "truth.json").string(), truth.dump(2) + "\n");
+  return truth;
 }
 
 }  // namespace lp

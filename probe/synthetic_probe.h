@@ -4,7 +4,10 @@
 #pragma once
 
 #include <array>
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/envmap.h"
@@ -40,5 +43,26 @@ RgbImage render_mirror_ball(const EnvMap& world, const BallInImage& ball, const 
 // `frames` copies of `ball` whose centres move by independent Gaussian offsets of
 // standard deviation jitter_px per axis (seeded, reproducible); the radius is kept.
 std::vector<BallInImage> jittered_track(BallInImage ball, int frames, double jitter_px, uint64_t seed);
+
+// `lightprobe synth probe`: a probe image of `world` with its truth.
+struct SyntheticProbeOptions {
+  std::string type = "mirrorball";  // mirrorball|fisheye (equidistant)
+  int width = 512, height = 512;
+  double radius_px = 0;             // ball radius (0: 40 % of the short side)
+  double distance_in_radii = 0;     // camera distance from the ball centre (0: orthographic)
+  double fov_deg = 190;             // fisheye field of view
+  double noise_relative = 0;        // mirror ball: RenderBallOptions::noise_relative
+  int frames = 1;                   // > 1: a jittered mirror-ball sequence
+  double jitter_px = 1.0;           // ball centre jitter per frame (sequences)
+  uint64_t seed = 1;                // noise seed of frame 0 (frame f: seed + f) and of the jitter
+};
+
+// Renders the probe and writes it to `output`: one image, or for a sequence a directory
+// (created) of frame_NNNN.exr and truth.json. Returns the truth: type, input (the label of
+// `world`), frames, per frame the ball (cx, cy, radius_px; none for a fisheye), and
+// distance_in_radii or fov_deg. InputError for an unknown type, a fisheye sequence or no
+// frames, before anything is written.
+nlohmann::json write_synthetic_probe(const EnvMap& world, const std::string& input_label,
+                                     const SyntheticProbeOptions& options, const std::string& output);
 
 }  // namespace lp

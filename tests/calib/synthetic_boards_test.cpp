@@ -5,10 +5,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 #include <vector>
 
 #include "calib/board_detect.h"
 #include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_file.h"
 
 namespace lp {
 namespace {
@@ -207,6 +212,41 @@ TEST(SyntheticBoards, CameraModelPathMatchesLocalLens) {
   }
   const Score s = detect_all(a, o.board, "KB via camera_model");
   EXPECT_EQ(s.found, 2);
+}
+
+// What `synth boards` leaves on disk reads back as the boards it was made from.
+TEST(SyntheticBoards, WrittenFilesReadBackAsTheTruth) {
+  namespace fs = std::filesystem;
+  SyntheticBoardsOptions o;
+  o.views = 2;
+  const SyntheticBoards boards = synthesize_boards(o);
+  const fs::path dir = fs::temp_directory_path() / ("lp_synthetic_boards_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  write_synthetic_boards((dir / "out").string(), o, boards);
+  const nlohmann::json truth = read_json_file((dir / "out" / "truth.json").string());
+  EXPECT_EQ(truth["board"], nlohmann::json({9, 6}));
+  EXPECT_EQ(truth["square_mm"], 30);
+  EXPECT_EQ(truth["lensmodel"], o.camera.lensmodel);
+  ASSERT_EQ(truth["views"].size(), 2u);
+  for (size_t v = 0; v < 2; ++v) {
+    const nlohmann::json& view = truth["views"][v];
+    EXPECT_EQ(view["file"], v == 0 ? "board_00.png" : "board_01.png");
+    ASSERT_EQ(view["corners"].size(), 54u);
+    EXPECT_DOUBLE_EQ(view["corners"][17][0].get<double>(), boards.true_corners[v][17][0]);
+    EXPECT_DOUBLE_EQ(view["pose"][5].get<double>(), boards.poses[v][5]);
+    // 8-bit codes: each value within half a code of what was rendered.
+    const CameraImage png = read_camera_image((dir / "out" / view["file"].get<std::string>()).string());
+    ASSERT_EQ(png.rgb.size(), boards.images[v].rgb.size());
+    double worst = 0;
+    for (size_t i = 0; i < png.rgb.size(); ++i)
+      worst = std::max(worst, std::abs(double(png.rgb[i]) - std::clamp(double(boards.images[v].rgb[i]), 0.0, 1.0)));
+    EXPECT_LE(worst, 0.5 / 255 + 1e-6);
+  }
+  const CameraModel camera = read_camera_model((dir / "out" / "true_camera.yaml").string());
+  EXPECT_EQ(camera.width, 1280);
+  ASSERT_EQ(camera.intrinsics.size(), o.camera.intrinsics.size());
+  for (size_t i = 0; i < camera.intrinsics.size(); ++i) EXPECT_NEAR(camera.intrinsics[i], o.camera.intrinsics[i], 1e-9);
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -1,8 +1,10 @@
 // Luminance and lux from exposure metadata against the synthetic camera's truth, and the
 // errors bad metadata must give.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <vector>
 
 #include "core/accuracy.h"
 #include "core/error.h"
@@ -192,6 +194,32 @@ TEST(ExposureMetering, BadMetadataNamesTheFrameAndTheField) {
   MeteringOptions bad = cam;
   bad.ae_target = 0;
   EXPECT_THROW(validate_metering(bad), InputError);
+}
+
+// Nearest-rank percentiles of 1..21: rank round(p * 20), so 5 % -> 2, median 11, 95 % -> 20.
+TEST(ReadingsSpread, NearestRankPercentilesAndCctOnlyWhereKnown) {
+  std::vector<LightReading> readings;
+  for (int i = 21; i >= 1; --i) {  // out of order on purpose
+    LightReading r;
+    r.luminance = i;
+    r.illuminance = M_PI * i;
+    r.cct_k = i <= 3 ? 3000.0 * i : 0.0;  // three readings with a colour temperature
+    readings.push_back(r);
+  }
+  readings[0].cct_k = NAN;
+  const ReadingsSpread s = readings_spread(readings);
+  EXPECT_EQ(s.luminance.p05, 2);
+  EXPECT_EQ(s.luminance.median, 11);
+  EXPECT_EQ(s.luminance.p95, 20);
+  EXPECT_DOUBLE_EQ(s.illuminance.median, M_PI * 11);
+  EXPECT_EQ(s.with_cct, 3u);
+  EXPECT_EQ(s.cct.p05, 3000);  // rank round(0.05 * 2) = 0
+  EXPECT_EQ(s.cct.median, 6000);
+  EXPECT_EQ(s.cct.p95, 9000);
+  EXPECT_EQ(s.cct.to_json()["p95"], 9000);
+  const ReadingsSpread none = readings_spread({});
+  EXPECT_EQ(none.luminance.median, 0);
+  EXPECT_EQ(none.with_cct, 0u);
 }
 
 }  // namespace

@@ -269,7 +269,7 @@ void write_synthetic_boards(const std::string& dir, const SyntheticBoardsOptions
   for (size_t i = 0; i < boards.images.size(); ++i) {
     const std::string name = fmt::format("board_{:02d}.png", i);
     const CameraImage& image = boards.images[i];
-    write_code_image((fs::path(dir) / name).string(), RgbImage{image.width, image.height, image.rgb}, 8);
+    write_code_image((fs::path(dir) / name).string(), RgbImage{image.width, image.height, image.rgb, {}, Units::Relative}, 8);
     views.push_back({{"file", name}, {"corners", boards.true_corners[i]}, {"pose", boards.poses[i]}});
   }
   truth["views"] = views;

@@ -19,6 +19,7 @@
 #include "hdr/response.h"
 #include "live/light_server.h"
 #include "live/merge_client.h"
+#include "live/merge_session.h"
 #include "live/mqtt_merge.h"
 #include "live/mqtt_publisher.h"
 #include "live/pipeline.h"
@@ -152,56 +153,26 @@ int run_stream(const StreamArgs& args, const Output& out) {
 }
 
 int run_merge(const MergeArgs& args, const Output& out) {
-  if (!args.subscribe.empty() && !(args.urls.empty() && args.weights.empty()))
-    throw InputError("--subscribe: merges whichever cameras publish; no server URLs or --weights with it");
-  if (args.urls.empty() && args.subscribe.empty()) throw InputError("merge needs server URLs or --subscribe");
-  MergeClientOptions mo;
-  mo.timeout_s = args.timeout;
-  mo.token = args.upstream_token;
-  mo.merge.n = args.n;
+  MergeSessionOptions mo;
+  mo.urls = args.urls;
+  mo.subscribe = args.subscribe;
+  mo.mqtt.merge.timeout_s = args.timeout;
+  mo.mqtt.merge.token = args.upstream_token;
+  mo.mqtt.merge.merge.n = args.n;
   check_light_count("--n", args.n);
-  if (!args.weights.empty()) mo.merge.weights = parse_numbers(args.weights, "--weights", args.urls.size());
-  LightServerOptions so;
-  parse_listen(args.listen, &so.host, &so.port);
-  if (!args.token.empty()) so.token = args.token;
-  LightServer server(so);
-  const int port = server.start();
-  say(out, "lightprobe merge: {} -> http://{}:{}/lights\n",
-      args.subscribe.empty() ? fmt::format("{} cameras", args.urls.size()) : "cameras on MQTT", so.host, port);
-  std::fflush(stdout);
-  defer_interrupts();  // a signal stops the watchdog below: the summary is printed
-  std::atomic<bool> stop{false}, failed{false};
-  uint64_t published = 0;
-  std::thread watchdog([&] {
-    const auto start = std::chrono::steady_clock::now();
-    while (!interrupt_signal() && !failed && !(args.duration > 0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >= args.duration))
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    stop = true;
+  if (!args.weights.empty()) mo.mqtt.merge.merge.weights = parse_numbers(args.weights, "--weights", args.urls.size());
+  mo.mqtt.client.cafile = args.mqtt_cafile;
+  mo.mqtt.qos = args.mqtt_qos;
+  parse_listen(args.listen, &mo.server.host, &mo.server.port);
+  if (!args.token.empty()) mo.server.token = args.token;
+  mo.duration_s = args.duration;
+  const MergeSessionReport r = run_merge_session(mo, [&](int port) {
+    say(out, "lightprobe merge: {} -> http://{}:{}/lights\n",
+        args.subscribe.empty() ? fmt::format("{} cameras", args.urls.size()) : "cameras on MQTT", mo.server.host, port);
+    std::fflush(stdout);
   });
-  MergeClientStatus last;
-  const auto serve = [&](const LightList& l, const MergeClientStatus& st) {
-    server.publish(l, nullptr);
-    server.publish_metrics(merge_metrics_text(st));
-    server.publish_status("merge", merge_status_json(st));
-    ++published;
-    last = st;
-  };
-  try {
-    if (args.subscribe.empty()) run_merge_client(args.urls, mo, serve, stop);
-    else run_mqtt_merge(args.subscribe, "--subscribe", {.merge = mo, .client = {.cafile = args.mqtt_cafile}, .qos = args.mqtt_qos}, serve, stop);
-  } catch (...) {
-    failed = true;  // a joinable watchdog must not outlive the error (std::terminate)
-    watchdog.join();
-    throw;
-  }
-  watchdog.join();
-  server.stop();
-  size_t skipped = 0;
-  for (const MergeInputStatus& in : last.inputs) skipped += in.state == "skipped";
-  say(out, "merge stopped: {} lists published; last used {} of {} inputs ({} skipped){}\n", published,
-      last.state.used.size(), std::max(args.urls.size(), last.inputs.size()), skipped, last.error.empty() ? "" : "; last error: " + last.error);
-  emit_json(out, {{"port", port}, {"published", published}, {"used", last.state.used}, {"dropped", last.state.dropped},
-                  {"skipped", skipped}, {"mode", last.mode}});
+  say(out, "{}", r.summary());
+  emit_json(out, r.to_json());
   return 0;
 }
 

@@ -112,6 +112,8 @@ nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions
       fj["ball"] = {f.ball->cx, f.ball->cy, f.ball->radius_px};
       fj["ball_raw"] = {f.ball_detected->cx, f.ball_detected->cy, f.ball_detected->radius_px};
     }
+    if (const auto& b = f.ball_fit)  // how the ball was found: sub-pixel or not, the fit's standard errors
+      fj["ball_fit"] = {{"subpixel", b->subpixel}, {"sigma_centre_px", b->sigma_centre_px}, {"sigma_radius_px", b->sigma_radius_px}};
     fj["valid_fraction"] = f.valid_fraction;
     if (f.circle) fj["circle"] = {f.circle->cx, f.circle->cy, f.circle->r};
     per_frame.push_back(fj);

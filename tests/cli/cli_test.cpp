@@ -306,6 +306,11 @@ TEST(Cli, ASynthesisedMirrorBallUnwrapsToTheMapItCameFrom) {
   const auto b = j["per_frame"][0]["ball"];
   EXPECT_NEAR(b[0].get<double>(), 200, 0.2);  // the renderer centres the ball, radius 40 % of 400
   EXPECT_NEAR(b[2].get<double>(), 160, 0.3);
+  // How it was found: the sub-pixel rim fit, with standard errors well under its 0.2 px error bound.
+  const auto fit = j["per_frame"][0]["ball_fit"];
+  EXPECT_TRUE(fit["subpixel"].get<bool>());
+  EXPECT_GT(fit["sigma_centre_px"].get<double>(), 0);
+  EXPECT_LT(fit["sigma_centre_px"].get<double>(), 0.2);
   // The sun survives the round trip: most of the power in the brightest direction.
   CliRun info = lightprobe("info --json " + map.string());
   const auto d = nlohmann::json::parse(info.out)["brightest_direction"];

@@ -1,0 +1,65 @@
+#include "live/merge_session.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "core/error.h"
+#include "core/interrupt.h"
+
+namespace lp {
+
+MergeSessionReport run_merge_session(const MergeSessionOptions& options, const std::function<void(int port)>& started) {
+  if (!options.subscribe.empty() && !(options.urls.empty() && options.mqtt.merge.merge.weights.empty()))
+    throw InputError(options.subscribe_flag + ": merges whichever cameras publish; no server URLs or --weights with it");
+  if (options.urls.empty() && options.subscribe.empty()) throw InputError("merge needs server URLs or --subscribe");
+  LightServer server(options.server);
+  MergeSessionReport report;
+  report.port = server.start();
+  if (started) started(report.port);
+  defer_interrupts();  // a signal stops the watchdog below: the summary is returned
+  std::atomic<bool> stop{false}, failed{false};
+  std::thread watchdog([&] {
+    const auto start = std::chrono::steady_clock::now();
+    auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+    while (!interrupt_signal() && !failed && !(options.duration_s > 0 && elapsed() >= options.duration_s))
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    stop = true;
+  });
+  const auto serve = [&](const LightList& l, const MergeClientStatus& st) {
+    server.publish(l, nullptr);
+    server.publish_metrics(merge_metrics_text(st));
+    server.publish_status("merge", merge_status_json(st));
+    ++report.published;
+    report.last = st;
+  };
+  try {
+    if (options.subscribe.empty()) run_merge_client(options.urls, options.mqtt.merge, serve, stop);
+    else run_mqtt_merge(options.subscribe, options.subscribe_flag, options.mqtt, serve, stop);
+  } catch (...) {
+    failed = true;  // a joinable watchdog must not outlive the error (std::terminate)
+    watchdog.join();
+    throw;
+  }
+  watchdog.join();
+  server.stop();
+  for (const MergeInputStatus& in : report.last.inputs) report.skipped += in.state == "skipped";
+  report.inputs = std::max(options.urls.size(), report.last.inputs.size());
+  return report;
+}
+
+std::string MergeSessionReport::summary() const {
+  return fmt::format("merge stopped: {} lists published; last used {} of {} inputs ({} skipped){}\n", published,
+                     last.state.used.size(), inputs, skipped, last.error.empty() ? "" : "; last error: " + last.error);
+}
+
+nlohmann::json MergeSessionReport::to_json() const {
+  return {{"port", port}, {"published", published}, {"used", last.state.used}, {"dropped", last.state.dropped},
+          {"skipped", skipped}, {"mode", last.mode}};
+}
+
+}  // namespace lp

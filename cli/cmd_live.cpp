@@ -20,6 +20,7 @@
 #include "live/light_server.h"
 #include "live/merge_client.h"
 #include "live/merge_session.h"
+#include "live/stream_session.h"
 #include "live/mqtt_merge.h"
 #include "live/mqtt_publisher.h"
 #include "live/pipeline.h"
@@ -63,11 +64,12 @@ int run_stream(const StreamArgs& args, const Output& out) {
   if (!args.metadata_model.empty() && !args.publish.empty()) throw InputError("--publish: not with --metadata-model");
   if (!args.metadata_model.empty()) return run_stream_metadata(args, out);  // the probe-less mode
   // Options in, validated before anything starts.
-  SourceOptions so;
+  StreamSessionOptions st;
+  SourceOptions& so = st.source_options;
   so.loop = args.loop;
   so.frame_rate = args.fps;
   so.bracketing = args.bracketing;
-  LivePipelineOptions lo;
+  LivePipelineOptions& lo = st.pipeline;
   if (!args.exposures.empty()) lo.exposure_cycle = parse_numbers(args.exposures, "--exposures");
   for (double t : lo.exposure_cycle)
     if (!(t > 0)) throw InputError("--exposures must be positive seconds");
@@ -96,59 +98,23 @@ int run_stream(const StreamArgs& args, const Output& out) {
   lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21;
   lo.sampling.cluster_max_lights = args.cluster;
   lo.sampling.sampler.upper_only = *layout == Layout::Hemisphere;
-  LightServerOptions server_options;
-  parse_listen(args.listen, &server_options.host, &server_options.port);
-  if (!args.token.empty()) server_options.token = args.token;
-
-  LightServer server(server_options);
-  std::unique_ptr<MqttPublisher> mqtt;  // --publish: the lists on a broker too
-  MqttPublisherOptions mqo;
-  mqo.camera = mqtt_camera_name(args.name, args.source, "--name");
-  mqo.qos = args.mqtt_qos;
-  mqo.client.cafile = args.mqtt_cafile;
-  if (!args.publish.empty()) mqtt = std::make_unique<MqttPublisher>(args.publish, "--publish", mqo);
-  LivePipeline pipeline([&] { return open_source(args.source, so); }, lo,
-                        [&](const LightList& lights, std::shared_ptr<const EnvMap> map) {
-                          server.publish(lights, map);
-                          if (mqtt) mqtt->publish(lights);
-                        });
-  const int port = server.start();
-  if (mqtt) mqtt->set_status(nlohmann::json{{"source", args.source}, {"method", args.method},
-                                            {"http", fmt::format("http://{}:{}/", server_options.host, port)}}.dump());
-  if (mqtt) mqtt->start();
-  pipeline.start();
-  say(out, "lightprobe stream: {} -> http://{}:{}/ (lights at /lights, live at /lights/stream, metrics at /metrics)\n",
-      args.source, server_options.host, port);
-  std::fflush(stdout);
-  defer_interrupts();  // a signal stops the loop below: servers stopped, the summary printed
-  const auto start = std::chrono::steady_clock::now();
-  while (!interrupt_signal()) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    if (!pipeline.stats().input_error.empty() || (mqtt && !mqtt->refused().empty())) break;
-    server.publish_metrics(pipeline.metrics() + (mqtt ? mqtt->metrics() : ""));
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (args.duration > 0 && elapsed >= args.duration) break;
-  }
-  pipeline.stop();
-  const LiveStats s = pipeline.stats();
-  server.stop();
-  const std::string refused = mqtt ? mqtt->refused() : "";
-  if (mqtt) mqtt->stop();
-  const MqttPublisherStats m = mqtt ? mqtt->stats() : MqttPublisherStats{};
-  say(out, "stream stopped: {} frames in, {} brackets processed, {} dropped whole, {} frames in partial brackets, {} "
-           "reconnects{}{}\n",
-      s.frames_in, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects,
-      mqtt ? fmt::format("; mqtt: {} lists published, {} dropped, {} connects", m.lists_published, m.lists_dropped,
-                         m.link.connects)
-           : "",
-      s.last_error.empty() ? "" : "; last error: " + s.last_error);
-  emit_json(out, {{"port", port}, {"frames_in", s.frames_in}, {"brackets_processed", s.brackets_processed},
-                  {"brackets_dropped", s.brackets_dropped}, {"frames_dropped_partial", s.frames_dropped_partial},
-                  {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error},
-                  {"mqtt_published", m.lists_published}, {"mqtt_dropped", m.lists_dropped},
-                  {"mqtt_connects", m.link.connects}});
-  if (!s.input_error.empty()) throw InputError(s.input_error);  // a bad frame is refused, after the summary
-  if (!refused.empty()) throw InputError(refused);
+  parse_listen(args.listen, &st.server.host, &st.server.port);
+  if (!args.token.empty()) st.server.token = args.token;
+  st.source = args.source;
+  st.publish = args.publish;
+  st.mqtt.camera = mqtt_camera_name(args.name, args.source, "--name");
+  st.mqtt.qos = args.mqtt_qos;
+  st.mqtt.client.cafile = args.mqtt_cafile;
+  st.method_name = args.method;
+  st.duration_s = args.duration;
+  const StreamSessionReport r = run_stream_session(st, [&](int port) {
+    say(out, "lightprobe stream: {} -> http://{}:{}/ (lights at /lights, live at /lights/stream, metrics at /metrics)\n",
+        args.source, st.server.host, port);
+    std::fflush(stdout);
+  });
+  say(out, "{}", r.summary());
+  emit_json(out, r.to_json());
+  if (!r.error.empty()) throw InputError(r.error);  // a bad frame or a refused login, after the summary
   return 0;
 }
 

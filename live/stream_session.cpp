@@ -1,0 +1,78 @@
+#include "live/stream_session.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <memory>
+#include <thread>
+
+#include "core/interrupt.h"
+
+namespace lp {
+
+StreamSessionReport run_stream_session(const StreamSessionOptions& options, const std::function<void(int port)>& started) {
+  LightServer server(options.server);
+  std::unique_ptr<MqttPublisher> mqtt;
+  if (!options.publish.empty()) mqtt = std::make_unique<MqttPublisher>(options.publish, options.publish_flag, options.mqtt);
+  LivePipeline pipeline([&] { return open_source(options.source, options.source_options); }, options.pipeline,
+                        [&](const LightList& lights, std::shared_ptr<const EnvMap> map) {
+                          server.publish(lights, map);
+                          if (mqtt) mqtt->publish(lights);
+                        });
+  StreamSessionReport report;
+  report.port = server.start();
+  if (mqtt) {
+    mqtt->set_status(nlohmann::json{{"source", options.source},
+                                    {"method", options.method_name},
+                                    {"http", fmt::format("http://{}:{}/", options.server.host, report.port)}}
+                         .dump());
+    mqtt->start();
+  }
+  pipeline.start();
+  if (started) started(report.port);
+  defer_interrupts();  // a signal stops the loop below: servers stopped, the summary returned
+  const auto start = std::chrono::steady_clock::now();
+  while (!interrupt_signal()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    if (!pipeline.stats().input_error.empty() || (mqtt && !mqtt->refused().empty())) break;
+    server.publish_metrics(pipeline.metrics() + (mqtt ? mqtt->metrics() : ""));
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (options.duration_s > 0 && elapsed >= options.duration_s) break;
+  }
+  pipeline.stop();
+  report.stats = pipeline.stats();
+  server.stop();
+  if (mqtt) {
+    const std::string refused = mqtt->refused();
+    mqtt->stop();
+    report.published = true;
+    report.mqtt = mqtt->stats();
+    if (!refused.empty()) report.error = refused;
+  }
+  if (!report.stats.input_error.empty()) report.error = report.stats.input_error;  // a bad frame is refused
+  return report;
+}
+
+std::string StreamSessionReport::summary() const {
+  const LiveStats& s = stats;
+  return fmt::format(
+      "stream stopped: {} frames in, {} brackets processed, {} dropped whole, {} frames in partial brackets, {} "
+      "reconnects{}{}\n",
+      s.frames_in, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects,
+      published ? fmt::format("; mqtt: {} lists published, {} dropped, {} connects", mqtt.lists_published,
+                              mqtt.lists_dropped, mqtt.link.connects)
+                : "",
+      s.last_error.empty() ? "" : "; last error: " + s.last_error);
+}
+
+nlohmann::json StreamSessionReport::to_json() const {
+  const LiveStats& s = stats;
+  return {{"port", port}, {"frames_in", s.frames_in}, {"brackets_processed", s.brackets_processed},
+          {"brackets_dropped", s.brackets_dropped}, {"frames_dropped_partial", s.frames_dropped_partial},
+          {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error},
+          {"mqtt_published", mqtt.lists_published}, {"mqtt_dropped", mqtt.lists_dropped},
+          {"mqtt_connects", mqtt.link.connects}};
+}
+
+}  // namespace lp

@@ -1,0 +1,45 @@
+// `lightprobe stream` as one call: the live pipeline from a camera source, its lists served
+// by a light server (and published on an MQTT broker when asked) until a signal, a duration,
+// a bad frame or a refused broker login, with a summary. The command only parses options.
+#pragma once
+
+#include <nlohmann/json_fwd.hpp>
+
+#include <functional>
+#include <string>
+
+#include "live/light_server.h"
+#include "live/mqtt_publisher.h"
+#include "live/pipeline.h"
+#include "probe/camera_source.h"
+
+namespace lp {
+
+struct StreamSessionOptions {
+  std::string source;              // open_source() spec
+  SourceOptions source_options;
+  LivePipelineOptions pipeline;
+  LightServerOptions server;
+  std::string publish;             // mqtt[s]://... : the lists on a broker too; empty: HTTP only
+  std::string publish_flag = "--publish";
+  MqttPublisherOptions mqtt;
+  std::string method_name;         // for the MQTT status message
+  double duration_s = 0;           // stop after this long; 0: at SIGINT / SIGTERM only
+};
+
+struct StreamSessionReport {
+  int port = 0;
+  LiveStats stats;
+  bool published = false;          // an MQTT publisher ran
+  MqttPublisherStats mqtt;
+  std::string error;               // a bad frame or a refused broker login: the command fails with it
+  // "stream stopped: N frames in, ..." (one line).
+  std::string summary() const;
+  nlohmann::json to_json() const;
+};
+
+// InputError before anything starts for a malformed publish URL. `started(port)` is called
+// once the server listens and the pipeline runs. Interrupts are deferred (core/interrupt.h).
+StreamSessionReport run_stream_session(const StreamSessionOptions& options, const std::function<void(int port)>& started);
+
+}  // namespace lp

@@ -102,6 +102,8 @@ TEST(SampleCli, ResidualSh9CarriesLightsAndAmbientAndScoresThem) {
   EXPECT_EQ(doc["sh9"]["content"], "residual");
   const auto report = nlohmann::json::parse(r.out);
   EXPECT_LT(report["error"]["diffuse"].get<double>(), report["error_lights_only"]["diffuse"].get<double>());
+  EXPECT_GT(report["milliseconds"].get<double>(), 0);  // the time of the lights + SH9, reported beside their error
+  EXPECT_LT(report["milliseconds"].get<double>(), 60e3);
   expect_one_line_error(lightprobe("sample " + shared(kGrace) + " --n 4 --residual sh12 -o " + out.string()), "--residual");
 }
 

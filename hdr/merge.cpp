@@ -25,6 +25,7 @@ struct Tables {
   int sat_level = 0, black_level = 0;           // level >= sat_level: saturated; <= black_level: black
   std::array<int, 3> colour_level{-1, -1, -1};  // ignore_colour in levels, or -1
   std::vector<const uint8_t*> keep, valid;      // per frame: frame_masks[k] / frames[k].valid, or null
+  std::vector<size_t> valid_stride;             // per frame: bytes between the valid mask's rows
 };
 
 inline int level_of(float v, float scale, int levels) {
@@ -37,11 +38,11 @@ inline int level_of(float v, float scale, int levels) {
 // kIgnore: ignore_colour is set. kMask: some frame has a keep mask (frame_masks) or a valid
 // mask; both are chosen once per call, so the plain merge carries neither test.
 template <bool kIgnore, bool kMask>
-void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, int y0, int y1, RgbImage& out,
+void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& T, int y0, int y1, RgbImage& out,
                 uint8_t* flags, std::atomic<size_t>& n_sat, std::atomic<size_t>& n_black,
                 std::atomic<size_t>& n_ignored, std::atomic<size_t>& n_no_frame, std::atomic<size_t>& n_well) {
   constexpr bool kTrack = kIgnore || kMask;
-  const int W = b.width();
+  const int W = b.frames[0].width;
   const size_t nf = b.frames.size();
   const int L = T.levels;
   const float scale = T.scale;
@@ -55,13 +56,15 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
   const float* x0 = T.wx[0].data();
   const float* x1 = T.wx[1].data();
   const float* x2 = T.wx[2].data();
-  // Frame k does not take part at pixel index p (row-major).
-  auto dropped = [&](size_t k, size_t p) {
+  // Frame k does not take part at pixel (x, y).
+  auto dropped = [&](size_t k, int x, int y) {
     if constexpr (kMask) {
-      if ((T.keep[k] && !T.keep[k][p]) || (T.valid[k] && !T.valid[k][p])) return true;
+      if ((T.keep[k] && !T.keep[k][size_t(y) * size_t(W) + size_t(x)]) ||
+          (T.valid[k] && !T.valid[k][size_t(y) * T.valid_stride[k] + size_t(x)]))
+        return true;
     }
     if constexpr (kIgnore) {
-      const float* q = &b.frames[k].rgb[3 * p];
+      const float* q = b.frames[k].pixel(x, y);
       if (level_of(q[0], scale, L) == T.colour_level[0] && level_of(q[1], scale, L) == T.colour_level[1] &&
           level_of(q[2], scale, L) == T.colour_level[2])
         return true;
@@ -75,13 +78,13 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
     if constexpr (kTrack) std::fill(used.begin(), used.end(), uint8_t(0));
     const size_t row = size_t(y) * size_t(W);
     for (size_t k = 0; k < nf; ++k) {
-      const float* z = &b.frames[k].rgb[3 * row];
+      const float* z = b.frames[k].row(y);
       const float fw = T.frame_w[k], fx = T.frame_wx[k];
       [[maybe_unused]] const uint8_t* km = nullptr;
       [[maybe_unused]] const uint8_t* vm = nullptr;
       if constexpr (kMask) {
         km = T.keep[k] ? T.keep[k] + row : nullptr;
-        vm = T.valid[k] ? T.valid[k] + row : nullptr;
+        vm = T.valid[k] ? T.valid[k] + size_t(y) * T.valid_stride[k] : nullptr;
       }
       for (int x = 0; x < W; ++x) {
         if constexpr (kMask) {
@@ -134,9 +137,9 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
         int best_d = 1 << 30;
         for (size_t k : T.by_time) {
           if constexpr (kTrack) {
-            if (dropped(k, row + size_t(x))) continue;
+            if (dropped(k, x, y)) continue;
           }
-          const float* p = &b.frames[k].rgb[3 * (row + size_t(x))];
+          const float* p = b.frames[k].pixel(x, y);
           const int l = level_of(p[c], scale, L);
           all_sat = all_sat && l >= T.sat_level;
           all_black = all_black && l <= T.black_level;
@@ -148,14 +151,14 @@ void merge_rows(const Bracket& b, const CameraResponse& resp, const Tables& T, i
           for (size_t j = 0; j < nf; ++j) {
             const size_t k = all_sat ? T.by_time[j] : T.by_time[nf - 1 - j];
             if constexpr (kTrack) {
-              if (dropped(k, row + size_t(x))) continue;
+              if (dropped(k, x, y)) continue;
             }
             pick = k;
             break;
           }
           flag |= all_sat ? kSaturatedEverywhere : kBlackEverywhere;
         }
-        const int l = level_of(b.frames[pick].rgb[3 * (row + size_t(x)) + size_t(c)], scale, L);
+        const int l = level_of(b.frames[pick].pixel(x, y)[c], scale, L);
         o[i] = float(std::exp(double(resp.log_exposure[size_t(c)][size_t(l)])) / b.exposure_seconds[pick]);
       }
       if (flag & kSaturatedEverywhere) ++sat;
@@ -228,9 +231,33 @@ MergeWeights merge_weights(const CameraResponse& resp, int bit_depth, const std:
   return mw;
 }
 
+BracketView bracket_view(const Bracket& b) {
+  BracketView v;
+  for (const RgbImage& f : b.frames) v.frames.push_back(image_view(f));
+  v.exposure_seconds = b.exposure_seconds;
+  v.bit_depth = b.bit_depth;
+  if (!b.paths.empty()) v.label = b.paths.front() + " .. " + b.paths.back();
+  return v;
+}
+
 RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const MergeOptions& o, MergeReport* report) {
-  const auto start = std::chrono::steady_clock::now();
   check_bracket(b);
+  const size_t npix = size_t(b.width()) * size_t(b.height());
+  for (size_t k = 0; k < b.frames.size(); ++k)
+    if (!b.frames[k].valid.empty() && b.frames[k].valid.size() != npix)
+      throw InputError(fmt::format("merge frame {}: valid mask of {} bytes, need width*height = {}", k,
+                                   b.frames[k].valid.size(), npix));
+  return merge_bracket(bracket_view(b), resp, o, report);
+}
+
+RgbImage merge_bracket(const BracketView& b, const CameraResponse& resp, const MergeOptions& o, MergeReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  if (b.frames.size() < 2 || b.exposure_seconds.size() != b.frames.size())
+    throw InputError(fmt::format("{}: {} frames and {} exposure times (need at least 2, one each)", b.label,
+                                 b.frames.size(), b.exposure_seconds.size()));
+  for (const ImageView& f : b.frames)
+    if (f.empty() || f.channels != 3 || f.width != b.frames[0].width || f.height != b.frames[0].height)
+      throw InputError(fmt::format("{}: frames must be RGB views of one size", b.label));
   check_response(resp, "response");
   if (!(o.black_threshold >= 0.0) || !(o.saturation_threshold <= 1.0) ||
       !(o.black_threshold < o.saturation_threshold))
@@ -238,17 +265,13 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
                                  o.saturation_threshold));
   if (o.threads < 0) throw InputError(fmt::format("merge threads {} is negative", o.threads));
   const size_t nf = b.frames.size();
-  const size_t npix = size_t(b.width()) * size_t(b.height());
+  const size_t npix = size_t(b.frames[0].width) * size_t(b.frames[0].height);
   if (!o.frame_masks.empty() && o.frame_masks.size() != nf)
     throw InputError(fmt::format("merge frame_masks: {} masks for {} frames", o.frame_masks.size(), nf));
   for (size_t k = 0; k < o.frame_masks.size(); ++k)
     if (o.frame_masks[k].size() != npix)
       throw InputError(fmt::format("merge frame_masks[{}]: {} bytes, need width*height = {}", k,
                                    o.frame_masks[k].size(), npix));
-  for (size_t k = 0; k < nf; ++k)
-    if (!b.frames[k].valid.empty() && b.frames[k].valid.size() != npix)
-      throw InputError(fmt::format("merge frame {}: valid mask of {} bytes, need width*height = {}", k,
-                                   b.frames[k].valid.size(), npix));
   const int L = resp.levels;
   Tables T;
   T.levels = L;
@@ -278,15 +301,17 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
   bool masked = false;
   T.keep.assign(nf, nullptr);
   T.valid.assign(nf, nullptr);
+  T.valid_stride.assign(nf, 0);
   for (size_t k = 0; k < nf; ++k) {
     if (!o.frame_masks.empty()) T.keep[k] = o.frame_masks[k].data();
-    if (!b.frames[k].valid.empty()) T.valid[k] = b.frames[k].valid.data();
+    T.valid[k] = b.frames[k].valid;
+    T.valid_stride[k] = b.frames[k].stride / 3;
     masked = masked || T.keep[k] || T.valid[k];
   }
 
   RgbImage out;
-  out.width = b.width();
-  out.height = b.height();
+  out.width = b.frames[0].width;
+  out.height = b.frames[0].height;
   out.units = Units::Relative;
   out.rgb.resize(3 * size_t(out.width) * size_t(out.height));
   if (o.ignore_colour || masked) out.valid.assign(npix, 1);
@@ -317,7 +342,7 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
   if (n_well == 0)  // all black or all saturated: a uniform bound, not a measurement
     throw InputError(fmt::format("{}: no pixel is well exposed in any of the {} frames (every one is black or saturated "
                                  "in all of them)",
-                                 b.paths.empty() ? std::string("bracket") : b.paths.front() + " .. " + b.paths.back(), nf));
+                                 b.label, nf));
   if (n_ignored == 0 && n_no_frame == 0) out.valid.clear();
   if (report) {
     report->saturated_everywhere = n_sat;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/image_io.h"
+#include "core/image_view.h"
 #include "hdr/bracket.h"
 #include "hdr/response.h"
 
@@ -111,6 +112,18 @@ struct MergeReport {
 // frame valid masks of the wrong count or size, or a bracket in which no pixel is well
 // exposed in any frame (all black or all saturated: nothing was measured).
 RgbImage merge_bracket(const Bracket& bracket, const CameraResponse& response, const MergeOptions& options = {},
+                       MergeReport* report = nullptr);
+// The same over frames someone else owns (camera buffers, a live ring): non-owning RGB views
+// of one size (any row stride), with their exposure times. bracket_view(b) makes one of a
+// Bracket (valid while it lives); merging it gives the same image bit for bit.
+struct BracketView {
+  std::vector<ImageView> frames;
+  std::vector<double> exposure_seconds;
+  int bit_depth = 8;
+  std::string label = "bracket";  // names the bracket in errors
+};
+BracketView bracket_view(const Bracket& bracket);
+RgbImage merge_bracket(const BracketView& bracket, const CameraResponse& response, const MergeOptions& options = {},
                        MergeReport* report = nullptr);
 
 // The merge's weights, as merge_bracket precomputes them: frame k's weight at code level l

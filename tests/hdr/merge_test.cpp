@@ -100,6 +100,38 @@ TEST(MergeBracket, GivesTheSameImageOnOneThreadAsOnMany) {
   EXPECT_EQ(merge_bracket(b, r, one).rgb, merge_bracket(b, r, {}).rgb);
 }
 
+// Frames someone else owns, inside wider buffers (a row stride of 80 pixels for 64-pixel rows,
+// with garbage in the gap): the same image bit for bit, masks and ignored colour included.
+TEST(MergeBracket, ViewsOfStridedFramesMergeToTheSameImageAsTheBracket) {
+  Bracket b = test::photograph(test::random_radiance(64, 48, 1e-3, 10.0), {0.01, 0.1, 1.0}, test::gamma_curve());
+  b.frames[1].valid.assign(64 * 48, 1);
+  for (size_t i = 0; i < b.frames[1].valid.size(); i += 7) b.frames[1].valid[i] = 0;
+  const CameraResponse r = test::true_response(test::gamma_curve());
+  std::vector<std::vector<float>> buffers;
+  std::vector<std::vector<uint8_t>> masks;
+  BracketView v = bracket_view(b);
+  for (size_t k = 0; k < b.frames.size(); ++k) {
+    buffers.emplace_back(size_t(80) * 48 * 3, -7.0f);  // the gap holds values no merge may read
+    masks.emplace_back(size_t(80) * 48, 0);
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x) {
+        for (int c = 0; c < 3; ++c) buffers[k][(size_t(y) * 80 + size_t(x)) * 3 + size_t(c)] = b.frames[k].rgb[(size_t(y) * 64 + size_t(x)) * 3 + size_t(c)];
+        masks[k][size_t(y) * 80 + size_t(x)] = b.frames[k].valid.empty() ? 1 : b.frames[k].valid[size_t(y) * 64 + size_t(x)];
+      }
+    v.frames[k] = {buffers[k].data(), 64, 48, 3, size_t(80) * 3, b.frames[k].valid.empty() ? nullptr : masks[k].data()};
+  }
+  MergeOptions o;
+  o.ignore_colour = std::array<uint8_t, 3>{0, 0, 0};
+  const RgbImage want = merge_bracket(b, r, o), got = merge_bracket(v, r, o);
+  EXPECT_EQ(got.rgb, want.rgb);
+  EXPECT_EQ(got.valid, want.valid);
+  Bracket unmasked = b;  // the mask took effect: without it the merge differs
+  unmasked.frames[1].valid.clear();
+  EXPECT_NE(merge_bracket(unmasked, r, o).rgb, want.rgb);
+  v.frames.pop_back();
+  EXPECT_THROW(merge_bracket(v, r, o), InputError);
+}
+
 TEST(MergeBracket, IgnoresTheBorderColourAndMarksPixelsThatAreBorderInEveryFrameInvalid) {
   const RgbImage e = test::random_radiance(32, 32, 1e-2, 1.0);
   Bracket b = test::photograph(e, {0.25, 1.0, 4.0}, test::gamma_curve());

@@ -1,4 +1,4 @@
-// sh: environment map -> its SH9 coefficients (sh.json), the ambient term of engines.
+// sh, prefilter: a map -> what engines light with (SH9 ambient; GGX specular cube and DFG).
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -10,6 +10,7 @@
 #include "core/image_io.h"
 #include "core/spherical_harmonics.h"
 #include "eval/harness.h"
+#include "render/prefilter.h"
 
 namespace lp::cli {
 
@@ -56,6 +57,29 @@ int run_sh(const ShArgs& args, const Output& out) {
   return 0;
 }
 
+struct PrefilterArgs {
+  std::string input, output, lut;
+  PrefilterOptions options;
+  int lut_size = 128;
+};
+
+int run_prefilter(const PrefilterArgs& args, const Output& out) {
+  check_prefiltered_cube_path(args.output);
+  const EnvMap map = map_or_scene(args.input, 1024);
+  const auto start = Clock::now();
+  const PrefilteredCube cube = prefilter_ggx(map, args.options, args.input);
+  const double ms = 1e3 * seconds_since(start);
+  write_prefiltered_cube(args.output, cube);
+  if (!args.lut.empty()) write_dfg_table(args.lut, compute_dfg_table(args.lut_size));
+  say(out, "{}: GGX chain of {} levels ({}-texel faces down to {}) in {:.0f} ms -> {}{}\n", args.input, cube.levels.size(),
+      cube.levels.front().face_size, cube.levels.back().face_size, ms, args.output, args.lut.empty() ? "" : ", DFG -> " + args.lut);
+  nlohmann::json roughness = nlohmann::json::array();
+  for (const CubeLevel& l : cube.levels) roughness.push_back(l.roughness);
+  emit_json(out, {{"input", args.input}, {"output", args.output}, {"lut", args.lut}, {"prefilter_ms", ms},
+                  {"roughness", roughness}, {"units", std::string(to_string(cube.units))}});
+  return 0;
+}
+
 std::vector<Command> sh_commands() {
   return {
       {"sh", "Environment map -> spherical harmonics (SH9) of its radiance",
@@ -67,6 +91,18 @@ std::vector<Command> sh_commands() {
          f.opt("--order", a->order, "SH order (only 2: 9 coefficients, bands 0-2)");
          f.opt("--layout", a->layout, "Read the input as this layout");
          return [a](const Output& out) { return run_sh(*a, out); };
+       }},
+      {"prefilter", "Environment map -> GGX prefiltered specular cube (OpenEXR mip chain) and DFG table",
+       "lightprobe prefilter probe.exr -o specular.exr --lut dfg.exr\nlightprobe prefilter scene -o specular.exr --size 64",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<PrefilterArgs>();
+         f.arg("MAP", a->input, "A whole-sphere map file, or 'scene' (the procedural scene)").required();
+         f.output(a->output, "specular.exr: tiled mip chain, envmap = cube, level k at roughness k / (levels - 1)");
+         f.opt("--size", a->options.face_size, "Face size of level 0 (roughness 0), a power of two");
+         f.opt("--min-size", a->options.min_face_size, "Face size of the last level (roughness 1)");
+         f.opt("--lut", a->lut, "Also write the split-sum DFG table (R = A, G = B) to this EXR");
+         f.opt("--lut-size", a->lut_size, "DFG table size (n.v x roughness)");
+         return [a](const Output& out) { return run_prefilter(*a, out); };
        }},
   };
 }

@@ -19,6 +19,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 #include "sampling/halton.h"
 
@@ -243,7 +244,8 @@ CubeLevel prefilter_level(const CubePyramid& source, int face_size, double rough
 Vec3 openexr_from_world(Vec3 d) { return {d.y, d.z, -d.x}; }
 Vec3 world_from_openexr(Vec3 d) { return {-d.z, d.x, d.y}; }
 
-PrefilteredCube prefilter_ggx(const EnvMap& map, const PrefilterOptions& options) {
+PrefilteredCube prefilter_ggx(const EnvMap& map, const PrefilterOptions& options, const std::string& label) {
+  const std::string of = label.empty() ? "" : label + ": ";
   const int n = options.face_size;
   if (n < 4 || n > 2048 || (n & (n - 1)))
     throw InputError(fmt::format("--size: the face size must be a power of two in [4, 2048], got {}", n));
@@ -251,9 +253,9 @@ PrefilteredCube prefilter_ggx(const EnvMap& map, const PrefilterOptions& options
   if (m < 1 || m > n || (m & (m - 1)))
     throw InputError(fmt::format("--min-size: the smallest face must be a power of two in [1, {}], got {}", n, m));
   if (map.layout == Layout::Hemisphere)
-    throw InputError("a hemisphere map covers the upper half only: the prefiltered cube needs the whole sphere");
+    throw InputError(of + "a hemisphere map covers the upper half only: the prefiltered cube needs the whole sphere");
   if (!map.valid.empty() && std::count(map.valid.begin(), map.valid.end(), uint8_t(0)) > 0)
-    throw InputError("the map has invalid pixels (a blind spot?): fill them first, the prefiltered cube needs the whole sphere");
+    throw InputError(of + "the map has invalid pixels (a blind spot?): fill them first, the prefiltered cube needs the whole sphere");
   CubePyramid source;
   source.levels.push_back(cube_from_map(map, n));
   while (source.levels.back().face_size > 1) source.levels.push_back(downsample(source.levels.back()));
@@ -350,7 +352,12 @@ std::array<double, 2> dfg_by_quadrature(double n_dot_v, double roughness) {
   return {a, b};
 }
 
+void check_prefiltered_cube_path(const std::string& path) {
+  if (lower_extension(path) != ".exr") throw InputError(path + ": the prefiltered cube is written as OpenEXR (.exr)");
+}
+
 void write_prefiltered_cube(const std::string& path, const PrefilteredCube& cube) {
+  check_prefiltered_cube_path(path);
   if (cube.levels.empty()) throw InputError(path + ": no cube levels to write");
   const int n = cube.levels[0].face_size;
   Imf::Header header(n, 6 * n);

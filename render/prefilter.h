@@ -52,7 +52,8 @@ struct PrefilteredCube {
 
 // InputError when the map has invalid pixels or covers a hemisphere only (the chain needs
 // the whole sphere: fill it first), or when the options are out of range.
-PrefilteredCube prefilter_ggx(const EnvMap& map, const PrefilterOptions& options = {});
+// `label` (the map's file) starts the messages about the map when given.
+PrefilteredCube prefilter_ggx(const EnvMap& map, const PrefilterOptions& options = {}, const std::string& label = "");
 
 // P(R) at perceptual roughness r > 0 by summing over every pixel of the map with exact
 // solid angles: the reference the chain is measured against.
@@ -83,6 +84,8 @@ std::array<double, 2> dfg_by_quadrature(double n_dot_v, double roughness);
 // its last level (width 1, height below 6: its mean) and are no part of the chain. Records lightprobe.roughness (one
 // float per cube level) and lightprobe.units.
 void write_prefiltered_cube(const std::string& path, const PrefilteredCube& cube);
+// InputError unless `path` ends in .exr (no other format holds the chain): check before working.
+void check_prefiltered_cube_path(const std::string& path);
 // The table as an RGB float EXR (R = A, G = B, B = 0), row 0 = roughness 0.
 void write_dfg_table(const std::string& path, const DfgTable& table);
 

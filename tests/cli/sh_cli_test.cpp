@@ -51,6 +51,24 @@ TEST(ShCli, BadInputIsOneLineAndWritesNothing) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// The prefiltered cube: the file holds the chain (levels, roughness), the DFG table is
+// written when asked, and what the chain cannot hold is refused in one line naming it.
+TEST(PrefilterCli, WritesTheCubeChainAndTheDfgTableAndRefusesWhatItCannotHold) {
+  const fs::path cube = scratch() / "specular.exr", lut = scratch() / "dfg.exr";
+  const CliRun r = lightprobe("prefilter --json " + shared(kGrace) + " --size 32 --lut-size 16 --lut " + lut.string() +
+                              " -o " + cube.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  ASSERT_EQ(report["roughness"].size(), 2u);  // faces 32 and 16: roughness 0 and 1
+  EXPECT_EQ(report["roughness"][1].get<double>(), 1.0);
+  EXPECT_GT(fs::file_size(cube), 1000u);
+  const RgbImage table = read_rgb_image(lut.string());
+  EXPECT_EQ(table.width, 16);
+  EXPECT_GT(table.rgb[3 * (16 * 0 + 15)], 0.9f);  // smooth, head-on: A near 1
+  expect_one_line_error(lightprobe("prefilter " + shared(kGrace) + " -o " + (scratch() / "cube.png").string()), "cube.png");
+  expect_one_line_error(lightprobe("prefilter " + shared(kGrace) + " --size 100 -o " + cube.string()), "--size");
+}
+
 TEST(SampleCli, GlbIsBinaryGltfAndUnknownExtensionsAreRefused) {
   const fs::path glb = scratch() / "lights.glb";
   ASSERT_EQ(lightprobe("sample " + shared(kGrace) + " --method q2tree --n 16 -o " + glb.string()).code, 0);

@@ -64,28 +64,19 @@ std::array<double, 3> face_bilinear(const CubeLevel& c, int face, double x, doub
   return out;
 }
 
-// A cube (OpenEXR layout) and its mips, for filtered importance sampling.
+// Bilinear lookup of a cube level in an OpenEXR-frame direction (within the face it falls on).
+std::array<double, 3> cube_bilinear(const CubeLevel& c, Vec3 exr_direction) {
+  Imf::CubeMapFace face;
+  Imath::V2f pif;
+  Imf::CubeMap::faceAndPixelPosition(Imath::V3f(float(exr_direction.x), float(exr_direction.y), float(exr_direction.z)),
+                                     cube_window(c.face_size), face, pif);
+  return face_bilinear(c, int(face), pif.x, pif.y);
+}
+
+// A cube (OpenEXR layout) and its box-filtered mips: each level is summed over the mip of
+// its own face size.
 struct CubePyramid {
   std::vector<CubeLevel> levels;
-
-  std::array<double, 3> bilinear(int level, Vec3 exr_direction) const {
-    const CubeLevel& c = levels[size_t(level)];
-    Imf::CubeMapFace face;
-    Imath::V2f pif;
-    Imf::CubeMap::faceAndPixelPosition(Imath::V3f(float(exr_direction.x), float(exr_direction.y), float(exr_direction.z)),
-                                       cube_window(c.face_size), face, pif);
-    return face_bilinear(c, int(face), pif.x, pif.y);
-  }
-
-  std::array<double, 3> trilinear(double lod, Vec3 exr_direction) const {
-    lod = std::clamp(lod, 0.0, double(levels.size() - 1));
-    const int l0 = int(lod), l1 = std::min(l0 + 1, int(levels.size()) - 1);
-    const double f = lod - l0;
-    const auto a = bilinear(l0, exr_direction);
-    if (f == 0 || l1 == l0) return a;
-    const auto b = bilinear(l1, exr_direction);
-    return {(1 - f) * a[0] + f * b[0], (1 - f) * a[1] + f * b[1], (1 - f) * a[2] + f * b[2]};
-  }
 };
 
 // Calls body(pixel, face, i, j, direction) for every texel of a cube image with faces of
@@ -286,9 +277,7 @@ std::array<double, 3> prefiltered_radiance_brute_force(const EnvMap& map, Vec3 w
 }
 
 std::array<double, 3> prefiltered_lookup(const PrefilteredCube& cube, int level, Vec3 world_direction) {
-  CubePyramid one;
-  one.levels.push_back(cube.levels.at(size_t(level)));
-  return one.bilinear(0, openexr_from_world(normalize(world_direction)));
+  return cube_bilinear(cube.levels.at(size_t(level)), openexr_from_world(normalize(world_direction)));
 }
 
 namespace {

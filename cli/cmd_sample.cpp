@@ -36,7 +36,7 @@ struct SampleArgs {
   std::string residual;             // "sh9": n lights + SH9 of what they leave out
   bool sh9 = false;                 // also carry the whole map's SH9 ("content": "map")
   LightsAndAmbientOptions ambient;  // --light-cap, bound directly
-  std::string exposure, scale, normalize_illuminance;  // units of a relative map (one of)
+  UnitFlags units;                  // of a relative map (one of three)
 };
 
 namespace {
@@ -64,22 +64,13 @@ int light_count(const std::string& text) {
   return n;
 }
 
-LightUnitsOptions units_options(const SampleArgs& args) {
-  LightUnitsOptions u;
-  if (!args.exposure.empty()) u.exposure_ev = parse_numbers(args.exposure, "--exposure", 1)[0];
-  if (!args.scale.empty()) u.scale = parse_numbers(args.scale, "--scale", 1)[0];
-  if (!args.normalize_illuminance.empty())
-    u.normalize_illuminance_lux = parse_numbers(args.normalize_illuminance, "--normalize-illuminance", 1)[0];
-  return u;
-}
-
 bool has_physical_units(ExportFormat f) {
   return f == ExportFormat::Gltf || f == ExportFormat::Glb || f == ExportFormat::Pbrt || f == ExportFormat::Mitsuba;
 }
 
 // The lists in the units of the output format; the warning of a relative list, once.
 void apply_units(std::vector<LightList>& lists, const SampleArgs& args, ExportFormat format) {
-  const LightUnitsOptions u = units_options(args);
+  const LightUnitsOptions u = args.units.options();
   std::string warning;
   for (LightList& l : lists) {
     LightUnitsResult r = apply_light_units(std::move(l), u, args.output);
@@ -229,9 +220,7 @@ std::vector<Command> sample_commands() {
          f.opt("--light-cap", a->ambient.light_cap_deg,
                "With --residual: half-angle (deg) of the cap one light stands for");
          f.flag("--sh9", a->sh9, "Also carry the whole map's SH9 (\"sh9\", content \"map\"; glTF: asset.extras)");
-         f.opt("--exposure", a->exposure, "Scale a relative map's lights by 2^EV (then written as absolute units)");
-         f.opt("--scale", a->scale, "Scale by K: relative units -> W sr^-1 m^-2");
-         f.opt("--normalize-illuminance", a->normalize_illuminance, "Scale so an upward-facing surface gets LUX");
+         a->units.declare(f);
          return [a](const Output& out) { return run_sample(*a, out); };
        }},
   };

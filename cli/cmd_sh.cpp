@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
 #include <memory>
 
 #include "cli/commands.h"
@@ -11,6 +12,7 @@
 #include "core/spherical_harmonics.h"
 #include "eval/harness.h"
 #include "render/prefilter.h"
+#include "sampling/light_units.h"
 
 namespace lp::cli {
 
@@ -19,6 +21,7 @@ struct ShArgs {
   std::string output;
   int order = kSh9Order;
   std::string layout;  // input layout override
+  UnitFlags units;     // of a relative map
 };
 
 int run_sh(const ShArgs& args, const Output& out) {
@@ -29,16 +32,22 @@ int run_sh(const ShArgs& args, const Output& out) {
   const EnvMap map = args.input == "scene" ? map_or_scene(args.input, 1024) : read_envmap(args.input, read);
 
   const auto start = Clock::now();
-  const Sh9 sh = project_sh9(map, args.input);
+  LightList ambient;  // a list of no lights but its SH9: scaled as `sample` scales a list
+  ambient.sh9 = project_sh9(map, args.input);
+  ambient.sh9_content = Sh9Content::Residual;
+  ambient.units = map.units;
   const double ms = 1e3 * seconds_since(start);
-  write_file_atomically(args.output, sh9_to_json(sh, map.units));
+  const LightUnitsResult scaled = apply_light_units(std::move(ambient), args.units.options(), args.output);
+  if (!scaled.warning.empty()) std::fprintf(stderr, "warning: %s\n", scaled.warning.c_str());
+  const Sh9& sh = *scaled.list.sh9;
+  write_file_atomically(args.output, sh9_to_json(sh, scaled.list.units));
 
   const auto up = sh9_irradiance(sh, {0, 0, 1});
   const auto down = sh9_irradiance(sh, {0, 0, -1});
   if (!out.json)
     say(out, "{}: SH9 of {} in {:.2f} ms -> {}; irradiance (luminance) facing up {:.4g}, down {:.4g} ({})\n",
         args.input, describe_size(map), ms, args.output, luminance(up.data()), luminance(down.data()),
-        to_string(map.units));
+        to_string(scaled.list.units));
   nlohmann::json coefficients = nlohmann::json::array();
   for (const auto& row : sh.coefficients) coefficients.push_back(row);
   // Irradiance per channel facing each axis: numbers a consumer's own SH code can check.
@@ -48,7 +57,8 @@ int run_sh(const ShArgs& args, const Output& out) {
   for (const auto& [name, axis] : kAxes) axes[name] = sh9_irradiance(sh, axis);
   emit_json(out, {{"input", args.input},
                   {"output", args.output},
-                  {"units", std::string(to_string(map.units))},
+                  {"units", std::string(to_string(scaled.list.units))},
+                  {"scale_factor", scaled.factor},
                   {"project_ms", ms},
                   {"irradiance_up", luminance(up.data())},
                   {"irradiance_down", luminance(down.data())},
@@ -90,6 +100,7 @@ std::vector<Command> sh_commands() {
          f.output(a->output, "sh.json: {\"format\": \"lightprobe.sh/1\", \"order\": 2, ..., \"coefficients\": [[r, g, b] x 9]}");
          f.opt("--order", a->order, "SH order (only 2: 9 coefficients, bands 0-2)");
          f.opt("--layout", a->layout, "Read the input as this layout");
+         a->units.declare(f);
          return [a](const Output& out) { return run_sh(*a, out); };
        }},
       {"prefilter", "Environment map -> GGX prefiltered specular cube (OpenEXR mip chain) and DFG table",

@@ -14,6 +14,7 @@
 
 namespace lp {
 struct BoardSpec;
+struct LightUnitsOptions;
 struct ShadingOptions;
 enum class ResponseCurve;
 enum class Scenario;
@@ -50,6 +51,14 @@ void check_target_flags(const std::string& size, int nside);
 BoardSpec board_from(const std::string& text, double square_mm);
 // --response linear|gamma|scurve of the synthetic brackets.
 ResponseCurve curve_from(const std::string& name);
+
+// --exposure, --scale, --normalize-illuminance: the units a relative map's lights or SH9 are
+// exported in (sampling/light_units.h), shared by `sample` and `sh`.
+struct UnitFlags {
+  std::string exposure, scale, normalize_illuminance;  // empty: not given
+  void declare(Flags& f);
+  LightUnitsOptions options() const;
+};
 
 // The table options shared by `tables` and `eval shading` (Havran 2005 section 4).
 struct ShadingTableArgs {

@@ -14,6 +14,7 @@
 #include "eval/synthetic_sequence.h"
 #include "hdr/synthetic_bracket.h"
 #include "render/reference_shader.h"
+#include "sampling/light_units.h"
 
 namespace lp::cli {
 
@@ -245,6 +246,21 @@ Method progressive_method(const std::string& name) {
   if (!m || (*m != Method::Pharr && *m != Method::Hemigon))
     throw InputError(fmt::format("--method: '{}' is not a progressive sampler (pharr or hemigon)", name));
   return *m;
+}
+
+void UnitFlags::declare(Flags& f) {
+  f.opt("--exposure", exposure, "Scale a relative map's products by 2^EV (then written as absolute units)");
+  f.opt("--scale", scale, "Scale by K: relative units -> W sr^-1 m^-2");
+  f.opt("--normalize-illuminance", normalize_illuminance, "Scale so an upward-facing surface gets LUX");
+}
+
+LightUnitsOptions UnitFlags::options() const {
+  LightUnitsOptions u;
+  if (!exposure.empty()) u.exposure_ev = parse_numbers(exposure, "--exposure", 1)[0];
+  if (!scale.empty()) u.scale = parse_numbers(scale, "--scale", 1)[0];
+  if (!normalize_illuminance.empty())
+    u.normalize_illuminance_lux = parse_numbers(normalize_illuminance, "--normalize-illuminance", 1)[0];
+  return u;
 }
 
 }  // namespace lp::cli

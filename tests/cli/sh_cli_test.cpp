@@ -5,6 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+
 #include "cli_run.h"
 #include "core/envmap.h"
 #include "core/image_io.h"
@@ -26,6 +28,37 @@ TEST(ShCli, WritesNineCoefficientsThatReadBack) {
   const auto report = nlohmann::json::parse(r.out);
   EXPECT_EQ(report["coefficients"], doc["coefficients"]);
   EXPECT_GT(report["irradiance_up"].get<double>(), 0);
+}
+
+// A relative map's SH9 is written as it is with a warning, or scaled as `sample` scales
+// lights: --normalize-illuminance LUX makes the SH's own irradiance facing up (luminance,
+// x 683 lm/W, recomputed here from the written coefficients) exactly LUX.
+TEST(ShCli, RelativeUnitsWarnOrAreScaledToTheAskedIlluminance) {
+  const fs::path out = scratch() / "sh_units.json";
+  CliRun r = lightprobe("sh " + shared(kGrace) + " -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("relative units"), std::string::npos) << r.err;
+  const auto plain = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(plain["units"], "relative");
+
+  r = lightprobe("sh --json " + shared(kGrace) + " --normalize-illuminance 5000 -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  const auto doc = nlohmann::json::parse(slurp(out));
+  EXPECT_EQ(doc["units"], "radiance");
+  // E(+z) = sum_i A_i L_i Y_i(+z): A = pi, 2pi/3, pi/4 per band; at +z only Y00, Y10, Y20 are non-zero.
+  const double y00 = 0.282095, y10 = 0.488603, y20 = 0.315392 * 2;  // Y20(+z) = 0.315392 (3 z^2 - 1)
+  double e[3];
+  for (int c = 0; c < 3; ++c)
+    e[c] = M_PI * y00 * doc["coefficients"][0][c].get<double>() + 2 * M_PI / 3 * y10 * doc["coefficients"][2][c].get<double>() +
+           M_PI / 4 * y20 * doc["coefficients"][6][c].get<double>();
+  const double lux = 683 * (0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2]);
+  EXPECT_NEAR(lux, 5000, 5000 * 1e-4);
+  // The factor is the ratio of the two files' coefficients.
+  const double factor = nlohmann::json::parse(r.out)["scale_factor"].get<double>();
+  EXPECT_NEAR(doc["coefficients"][0][1].get<double>(), factor * plain["coefficients"][0][1].get<double>(),
+              1e-9 * std::abs(doc["coefficients"][0][1].get<double>()));
+  expect_one_line_error(lightprobe("sh " + shared(kGrace) + " --scale 2 --exposure 1 -o " + out.string()), "at most one");
 }
 
 TEST(ShCli, BadInputIsOneLineAndWritesNothing) {

@@ -10,11 +10,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 status=0
 times=""
+failed_stages=""
 stage() {  # name command...: runs it, notes its time and whether it failed
   local name=$1 start=$SECONDS
   shift
-  "$@" || { status=1; echo "test: stage $name failed" >&2; }
-  times="$times $name $((SECONDS - start)) s,"
+  local mark=""
+  "$@" || { status=1; mark=" FAILED"; failed_stages="$failed_stages $name "; echo "test: stage $name failed" >&2; }
+  times="$times $name $((SECONDS - start)) s$mark,"
 }
 stage build bash scripts/build.sh
 stage ctest ctest --test-dir build --output-on-failure -j "$(nproc)" --timeout 900
@@ -31,5 +33,9 @@ if [ "${LIGHTPROBE_SKIP_SANITIZE:-0}" != 1 ]; then
     stage sanitize bash scripts/sanitize.sh
   fi
 fi
+# What failed, once more at the very end: CI may show only the tail of a long log.
+case $failed_stages in *" ctest "*) echo "test: ctest failed: $(cut -d: -f2 build/Testing/Temporary/LastTestsFailed.log 2>/dev/null | tr '\n' ' ')" ;; esac
+case $failed_stages in *" fuzz "*) grep -h -A3 ' FAILED ' build-fuzz/logs/summary.txt 2>/dev/null | sed 's/^/test: /' || true ;; esac
+case $failed_stages in *" sanitize "*) echo "test: sanitize failed: $(cut -d: -f2 build-asan/Testing/Temporary/LastTestsFailed.log 2>/dev/null | tr '\n' ' ')" ;; esac
 echo "test: times:${times%,}"
 exit $status

@@ -9,10 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
-
-// mrgingham.hh includes "point.hh" from its own directory, so its directory is on the
-// include path (calib/CMakeLists.txt); only this file sees it.
-#include <mrgingham/mrgingham.hh>
+#include "core/lazy_libs.h"  // mrgingham: in the plugin, as it links OpenCV's codecs
 
 namespace lp {
 namespace {
@@ -113,9 +110,8 @@ bool try_mrgingham(const cv::Mat& gray, const BoardSpec& board, int pyramid_leve
   auto clahe = cv::createCLAHE();
   clahe->setClipLimit(8);
   clahe->apply(gray, equalised);
-  std::vector<mrgingham::PointDouble> found;
-  level_used = mrgingham::find_chessboard_from_image_array(found, nullptr, board.cols, equalised,
-                                                           pyramid_level);
+  std::vector<cv::Point2d> found;
+  level_used = lazy::find_chessboard_mrgingham(found, board.cols, equalised, pyramid_level);
   if (level_used < 0 || found.size() != static_cast<size_t>(board.cols) * board.rows) return false;
   pts.clear();
   for (const auto& p : found) pts.emplace_back(float(p.x), float(p.y));

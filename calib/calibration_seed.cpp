@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/ccalib/omnidir.hpp>
+#include <opencv2/ccalib/omnidir.hpp>  // the CALIB_ numbers; the call is core/lazy_libs.h
+
+#include "core/lazy_libs.h"
 
 namespace lp {
 
@@ -237,7 +239,7 @@ ModelFit opencv_omnidir(const CalibrationProblem& pr, const ViewSubset& views, s
   cv::Mat K, xi, D, idx;
   std::vector<cv::Mat> rv, tv;
   try {
-    cv::omnidir::calibrate(obj, img, cv::Size(pr.width, pr.height), K, xi, D, rv, tv, cv::omnidir::CALIB_FIX_SKEW,
+    lazy::omnidir_calibrate(obj, img, cv::Size(pr.width, pr.height), K, xi, D, rv, tv, cv::omnidir::CALIB_FIX_SKEW,
                            cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 300, 1e-10), idx);
   } catch (const cv::Exception&) {
     f.error = "cv::omnidir::calibrate failed";

@@ -28,7 +28,6 @@
 #include <fstream>
 #include <limits>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <sstream>
 
@@ -38,6 +37,7 @@
 #include "core/image_header.h"
 #include "core/limits.h"
 #include "core/interrupt.h"
+#include "core/lazy_libs.h"
 
 namespace lp {
 
@@ -889,8 +889,7 @@ CameraImage read_camera_image(const std::string& path) {
                              bytes.size(), header->width, header->height, to_string(header->format),
                              header->min_file_bytes));
     if (bytes.size() > size_t(std::numeric_limits<int>::max())) fail(path, "file over 2 GiB: not a camera image");
-    const cv::Mat buf(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
-    const cv::Mat img = cv::imdecode(buf, cv::IMREAD_UNCHANGED);
+    const cv::Mat img = lazy::decode_image(bytes);
     if (img.empty()) fail(path, "cannot decode image (damaged file)");
     const int depth = img.depth();
     if (depth != CV_8U && depth != CV_16U)

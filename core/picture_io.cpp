@@ -5,12 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgcodecs.hpp>  // the IMWRITE_ numbers; the codecs are in core/lazy_libs.h
 #include <stdexcept>
 
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
+#include "core/lazy_libs.h"
 #include "core/tonemap.h"
 
 namespace lp {
@@ -37,13 +38,7 @@ std::string encode_rgb_codes(const std::string& path, int width, int height, int
   std::vector<uint8_t> buf;
   std::vector<int> params;
   if (ext == ".jpg" || ext == ".jpeg") params = {cv::IMWRITE_JPEG_QUALITY, 95};
-  bool ok = false;
-  try {
-    ok = cv::imencode(ext, m, buf, params);
-  } catch (const cv::Exception&) {
-    ok = false;  // no encoder for the extension
-  }
-  if (!ok) throw InputError(fmt::format("{}: cannot encode as {}", path, ext));
+  if (!lazy::encode_image(ext, m, params, buf)) throw InputError(fmt::format("{}: cannot encode as {}", path, ext));
   return std::string(buf.begin(), buf.end());
 }
 

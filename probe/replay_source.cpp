@@ -5,12 +5,13 @@
 #include <filesystem>
 #include <map>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
+#include <opencv2/videoio.hpp>  // the CAP_ numbers; the capture is core/lazy_libs.h
 #include <sstream>
 #include <thread>
 
 #include "core/error.h"
 #include "core/file_io.h"
+#include "core/lazy_libs.h"
 #include "core/timestamps.h"
 #include "probe/camera_source.h"
 
@@ -279,11 +280,11 @@ class CaptureSource final : public CameraSource {
       : spec_(std::move(spec)), options_(options), device_(index), start_(Clock::now()) {
     const std::string node = "/dev/video" + std::to_string(index);
     if (!fs::exists(node)) throw InputError(spec_ + ": no camera " + node + " (no such device)");
-    if (!capture_.open(index, cv::CAP_V4L2) || !capture_.isOpened()) throw InputError(spec_ + ": cannot open " + node);
-    if (options_.frame_rate > 0) capture_.set(cv::CAP_PROP_FPS, options_.frame_rate);
+    if (!capture_->open_device(index, cv::CAP_V4L2) || !capture_->is_opened()) throw InputError(spec_ + ": cannot open " + node);
+    if (options_.frame_rate > 0) capture_->set(cv::CAP_PROP_FPS, options_.frame_rate);
     if (options_.roi && options_.roi->width > 0 && options_.roi->height > 0) {
-      capture_.set(cv::CAP_PROP_FRAME_WIDTH, options_.roi->width);
-      capture_.set(cv::CAP_PROP_FRAME_HEIGHT, options_.roi->height);
+      capture_->set(cv::CAP_PROP_FRAME_WIDTH, options_.roi->width);
+      capture_->set(cv::CAP_PROP_FRAME_HEIGHT, options_.roi->height);
     }
     if (options_.exposure_s) write_exposure(*options_.exposure_s);
     cycle_ = options_.exposure_cycle;
@@ -292,7 +293,7 @@ class CaptureSource final : public CameraSource {
   }
 
   std::string describe() const override {
-    const int w = int(capture_.get(cv::CAP_PROP_FRAME_WIDTH)), h = int(capture_.get(cv::CAP_PROP_FRAME_HEIGHT));
+    const int w = int(capture_->get(cv::CAP_PROP_FRAME_WIDTH)), h = int(capture_->get(cv::CAP_PROP_FRAME_HEIGHT));
     std::string d = spec_ + " (" + std::to_string(w) + "x" + std::to_string(h);
     if (device_ < 0) {
       d += ", " + std::to_string(frame_count_) + " frames";
@@ -309,7 +310,7 @@ class CaptureSource final : public CameraSource {
       if (!wait_until(due, timeout_s)) return std::nullopt;
     }
     cv::Mat image;
-    if (!capture_.read(image) || image.empty()) {
+    if (!capture_->read(image) || image.empty()) {
       if (device_ >= 0) throw CameraLost(spec_ + ": the camera stopped delivering frames");
       if (!options_.loop || frame_index_ == 0) {
         ended_ = true;
@@ -318,7 +319,7 @@ class CaptureSource final : public CameraSource {
       open_file();  // rewind (seeking is unreliable on some containers)
       ++pass_;
       frame_index_ = 0;
-      if (!capture_.read(image) || image.empty()) {
+      if (!capture_->read(image) || image.empty()) {
         ended_ = true;
         return std::nullopt;
       }
@@ -327,7 +328,7 @@ class CaptureSource final : public CameraSource {
     frame.image = to_rgb(image, frame.pixel_format);
     frame.sequence = delivered_;
     if (device_ < 0) {
-      const double fps = capture_.get(cv::CAP_PROP_FPS);
+      const double fps = capture_->get(cv::CAP_PROP_FPS);
       const double period = fps > 0 ? 1.0 / fps : 0.0;
       if (pass_ == 0 && frame_index_ + 1 > frame_count_) frame_count_ = frame_index_ + 1;
       frame.timestamp_s = double(frame_index_) * period + double(pass_) * double(frame_count_) * period;
@@ -354,24 +355,24 @@ class CaptureSource final : public CameraSource {
 
  private:
   void open_file() {
-    capture_.release();
-    if (!capture_.open(file_) || !capture_.isOpened()) throw InputError(spec_ + ": cannot decode video " + file_);
-    const double n = capture_.get(cv::CAP_PROP_FRAME_COUNT);
+    capture_->release();
+    if (!capture_->open_file(file_) || !capture_->is_opened()) throw InputError(spec_ + ": cannot decode video " + file_);
+    const double n = capture_->get(cv::CAP_PROP_FRAME_COUNT);
     if (n > 0) frame_count_ = std::max(frame_count_, int64_t(n));
   }
   // V4L2 exposure: manual mode, CAP_PROP_EXPOSURE in units of 100 us. Only what the
   // driver reports back is recorded.
   void write_exposure(double seconds) {
-    capture_.set(cv::CAP_PROP_AUTO_EXPOSURE, 1);  // V4L2_EXPOSURE_MANUAL
-    capture_.set(cv::CAP_PROP_EXPOSURE, seconds * 1e4);
-    exposure_s_ = capture_.get(cv::CAP_PROP_EXPOSURE) * 1e-4;
+    capture_->set(cv::CAP_PROP_AUTO_EXPOSURE, 1);  // V4L2_EXPOSURE_MANUAL
+    capture_->set(cv::CAP_PROP_EXPOSURE, seconds * 1e4);
+    exposure_s_ = capture_->get(cv::CAP_PROP_EXPOSURE) * 1e-4;
   }
 
   std::string spec_;
   SourceOptions options_;
   std::string file_;
   int device_ = -1;
-  cv::VideoCapture capture_;
+  std::unique_ptr<lazy::VideoCapture> capture_ = lazy::make_video_capture();
   Sidecar exposures_;
   std::string exposures_name_;
   std::vector<double> cycle_;

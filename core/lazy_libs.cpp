@@ -1,0 +1,80 @@
+#include "core/lazy_libs.h"
+
+#include <dlfcn.h>
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
+
+namespace lp::lazy {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> plugin_candidates() {
+  std::vector<std::string> paths;
+  if (const char* dir = std::getenv("LIGHTPROBE_PLUGIN_DIR"); dir && *dir) paths.push_back((fs::path(dir) / kPluginFile).string());
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    paths.push_back((exe.parent_path() / kPluginFile).string());
+    paths.push_back((exe.parent_path() / ".." / "lib" / kPluginFile).lexically_normal().string());
+  }
+#ifdef LIGHTPROBE_LAZY_LIBS_PATH
+  paths.push_back(LIGHTPROBE_LAZY_LIBS_PATH);  // where the build wrote it
+#endif
+  return paths;
+}
+
+const PluginTable* load() {
+  std::string tried, last_error = "not found";
+  for (const std::string& path : plugin_candidates()) {
+    tried += (tried.empty() ? "" : ", ") + path;
+    if (!fs::exists(path)) continue;
+    // Never closed: what it returns (decoders, captures) lives as long as the process.
+    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      last_error = dlerror();
+      continue;
+    }
+    using Entry = const PluginTable* (*)();
+    auto entry = reinterpret_cast<Entry>(dlsym(handle, "lightprobe_lazy_libs"));
+    const PluginTable* table = entry ? entry() : nullptr;
+    if (table && table->version == kPluginVersion) return table;
+    last_error = path + " is not this build's plugin (stale or foreign)";
+  }
+  throw std::runtime_error(fmt::format("cannot load {} (OpenCV's image and video codecs, omnidir, mrgingham): {}; "
+                                       "looked in {} (set LIGHTPROBE_PLUGIN_DIR)",
+                                       kPluginFile, last_error, tried));
+}
+
+const PluginTable& table() {
+  static const PluginTable* t = load();  // thread-safe once; a failure is retried next call
+  return *t;
+}
+
+}  // namespace
+
+void load_plugin() { (void)table(); }
+
+cv::Mat decode_image(const std::string& bytes) { return table().decode_image(bytes); }
+
+bool encode_image(const std::string& ext, const cv::Mat& image, const std::vector<int>& params,
+                  std::vector<uint8_t>& bytes) {
+  return table().encode_image(ext, image, params, bytes);
+}
+
+std::unique_ptr<VideoCapture> make_video_capture() { return std::unique_ptr<VideoCapture>(table().new_video_capture()); }
+
+double omnidir_calibrate(const std::vector<cv::Mat>& object_points, const std::vector<cv::Mat>& image_points,
+                         cv::Size size, cv::Mat& K, cv::Mat& xi, cv::Mat& D, std::vector<cv::Mat>& rvecs,
+                         std::vector<cv::Mat>& tvecs, int flags, cv::TermCriteria criteria, cv::Mat& used) {
+  return table().omnidir_calibrate(object_points, image_points, size, K, xi, D, rvecs, tvecs, flags, criteria, used);
+}
+
+int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, const cv::Mat& image, int pyramid_level) {
+  return table().find_chessboard_mrgingham(corners, gridn, image, pyramid_level);
+}
+
+}  // namespace lp::lazy

@@ -1,0 +1,69 @@
+// The heavy libraries, loaded on first use: OpenCV's image codecs and video I/O,
+// cv::omnidir's calibration (contrib ccalib) and mrgingham's chessboard finder. Linked
+// into the executable they pull about 270 shared libraries (GDAL through imgcodecs, FFmpeg
+// and GStreamer through videoio, Qt through ccalib's highgui, and mrgingham links
+// imgcodecs), and every command, even `--version`, paid 0.2 s and 96 MB to load them. They
+// live in a plugin instead (liblightprobe_lazy_libs.so, core/plugin/), which the first call
+// here loads: a command that reads no camera image, video or chessboard loads none of them.
+//
+// The plugin is looked for in $LIGHTPROBE_PLUGIN_DIR, beside the executable, in ../lib
+// from it, then where the build wrote it. When it cannot be loaded, the first call throws
+// std::runtime_error naming the places it looked and the loader's message.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace lp::lazy {
+
+// cv::imdecode(bytes, IMREAD_UNCHANGED); an empty Mat when it cannot decode.
+cv::Mat decode_image(const std::string& bytes);
+// cv::imencode(ext, image, params); false when no encoder takes `ext` or encoding fails.
+bool encode_image(const std::string& ext, const cv::Mat& image, const std::vector<int>& params,
+                  std::vector<uint8_t>& bytes);
+
+// cv::VideoCapture, behind an interface the plugin implements (CAP_* numbers as in
+// <opencv2/videoio.hpp>).
+class VideoCapture {
+ public:
+  virtual ~VideoCapture() = default;
+  virtual bool open_file(const std::string& path) = 0;
+  virtual bool open_device(int index, int api) = 0;
+  virtual bool is_opened() const = 0;
+  virtual bool read(cv::Mat& frame) = 0;
+  virtual double get(int property) const = 0;
+  virtual bool set(int property, double value) = 0;
+  virtual void release() = 0;
+};
+std::unique_ptr<VideoCapture> make_video_capture();
+
+// cv::omnidir::calibrate, the same arguments; throws cv::Exception as it does.
+double omnidir_calibrate(const std::vector<cv::Mat>& object_points, const std::vector<cv::Mat>& image_points,
+                         cv::Size size, cv::Mat& K, cv::Mat& xi, cv::Mat& D, std::vector<cv::Mat>& rvecs,
+                         std::vector<cv::Mat>& tvecs, int flags, cv::TermCriteria criteria, cv::Mat& used);
+
+// mrgingham::find_chessboard_from_image_array(corners, nullptr, gridn, image, level):
+// the pyramid level used, or < 0 when no board was found.
+int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, const cv::Mat& image, int pyramid_level);
+
+// What the plugin exports (its one symbol, `lightprobe_lazy_libs`, returns it). The
+// version changes whenever the table does, so that a stale plugin is refused.
+struct PluginTable {
+  int version;
+  cv::Mat (*decode_image)(const std::string&);
+  bool (*encode_image)(const std::string&, const cv::Mat&, const std::vector<int>&, std::vector<uint8_t>&);
+  VideoCapture* (*new_video_capture)();
+  double (*omnidir_calibrate)(const std::vector<cv::Mat>&, const std::vector<cv::Mat>&, cv::Size, cv::Mat&, cv::Mat&,
+                              cv::Mat&, std::vector<cv::Mat>&, std::vector<cv::Mat>&, int, cv::TermCriteria, cv::Mat&);
+  int (*find_chessboard_mrgingham)(std::vector<cv::Point2d>&, int, const cv::Mat&, int);
+};
+inline constexpr int kPluginVersion = 1;
+inline constexpr const char* kPluginFile = "liblightprobe_lazy_libs.so";
+
+// Loads the plugin now (idempotent): commands may call it up front to fail before work.
+void load_plugin();
+
+}  // namespace lp::lazy

@@ -1,0 +1,63 @@
+// The plugin of core/lazy_libs.h: the only code linked with OpenCV's imgcodecs, videoio and
+// ccalib and with mrgingham. Each entry is the library call and nothing else.
+#include <mrgingham.hh>
+#include <opencv2/ccalib/omnidir.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "core/lazy_libs.h"
+
+namespace {
+
+using namespace lp::lazy;
+
+cv::Mat decode_image(const std::string& bytes) {
+  const cv::Mat buf(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
+  return cv::imdecode(buf, cv::IMREAD_UNCHANGED);
+}
+
+bool encode_image(const std::string& ext, const cv::Mat& image, const std::vector<int>& params,
+                  std::vector<uint8_t>& bytes) {
+  try {
+    return cv::imencode(ext, image, bytes, params);
+  } catch (const cv::Exception&) {
+    return false;  // no encoder for the extension
+  }
+}
+
+class Capture final : public VideoCapture {
+ public:
+  bool open_file(const std::string& path) override { return capture_.open(path); }
+  bool open_device(int index, int api) override { return capture_.open(index, api); }
+  bool is_opened() const override { return capture_.isOpened(); }
+  bool read(cv::Mat& frame) override { return capture_.read(frame); }
+  double get(int property) const override { return capture_.get(property); }
+  bool set(int property, double value) override { return capture_.set(property, value); }
+  void release() override { capture_.release(); }
+
+ private:
+  cv::VideoCapture capture_;
+};
+
+VideoCapture* new_video_capture() { return new Capture; }
+
+double omnidir_calibrate(const std::vector<cv::Mat>& object_points, const std::vector<cv::Mat>& image_points,
+                         cv::Size size, cv::Mat& K, cv::Mat& xi, cv::Mat& D, std::vector<cv::Mat>& rvecs,
+                         std::vector<cv::Mat>& tvecs, int flags, cv::TermCriteria criteria, cv::Mat& used) {
+  return cv::omnidir::calibrate(object_points, image_points, size, K, xi, D, rvecs, tvecs, flags, criteria, used);
+}
+
+int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, const cv::Mat& image, int pyramid_level) {
+  std::vector<mrgingham::PointDouble> found;
+  const int level = mrgingham::find_chessboard_from_image_array(found, nullptr, gridn, image, pyramid_level);
+  corners.clear();
+  for (const auto& p : found) corners.emplace_back(p.x, p.y);
+  return level;
+}
+
+const PluginTable kTable{kPluginVersion, decode_image, encode_image, new_video_capture, omnidir_calibrate,
+                         find_chessboard_mrgingham};
+
+}  // namespace
+
+extern "C" __attribute__((visibility("default"))) const lp::lazy::PluginTable* lightprobe_lazy_libs() { return &kTable; }

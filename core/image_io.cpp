@@ -11,6 +11,7 @@
 #include <ImfRgbaFile.h>
 #include <ImfStdIO.h>
 #include <ImfStringAttribute.h>
+#include <ImfThreading.h>
 #include <ImfVersion.h>
 #include <half.h>
 #include <fcntl.h>
@@ -28,7 +29,9 @@
 #include <fstream>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <mutex>
 #include <random>
+#include <thread>
 #include <sstream>
 
 #include "core/error.h"
@@ -378,7 +381,13 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
   }
   const Imf::PixelType type = half ? Imf::HALF : Imf::FLOAT;
   Imf::Header header(img.width, img.height);
+  // ZIP at deflate level 1, compressed by OpenEXR's own threads: on float maps it writes
+  // 1.3-1.8x faster than the default level for 0-8 % more bytes, and PIZ, faster on smooth
+  // maps, is slower still on the noisy float of fused brackets (docs/hdr.md has the table).
   header.compression() = Imf::ZIP_COMPRESSION;
+  header.zipCompressionLevel() = 1;
+  static std::once_flag threads_once;
+  std::call_once(threads_once, [] { Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency()))); });
   for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(type));
   const bool mask = !img.valid.empty();
   if (mask) header.channels().insert("A", Imf::Channel(type));

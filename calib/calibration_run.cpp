@@ -213,6 +213,9 @@ std::string GeometricCalibration::summary() const {
   s += table_text(result);
   s += views_text(*this);
   s += uncertainty_text(result);
+  if (optimization_inputs)
+    s += "the .cameramodel carries mrcal's optimization_inputs: mrcal-show-projection-uncertainty and "
+         "mrcal-show-residuals-board-observation read it\n";
   s += fmt::format("wrote {}; pictures {}_residuals.png, {}_coverage.png{}\n", fmt::join(written, ", "), picture_stem,
                    picture_stem, uncertainty_picture ? fmt::format(", {}_uncertainty.png", picture_stem) : "");
   return s;
@@ -229,7 +232,7 @@ std::string GeometricCalibration::to_json() const {
               {"cross_validation_px", before_dropping->cross_validation_px},
               {"heldout_rms_px", before_dropping->heldout_rms_px}};
   const nlohmann::json j = {
-      {"output", written}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
+      {"output", written}, {"optimization_inputs", optimization_inputs}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
       {"uncertainty", uncertainty_json(*this)}, {"intrinsics", r.model.intrinsics},
       {"rms_px", r.model.rms_reprojection_px}, {"cross_validation_px", r.cross_validation_px},
       {"cross_validation_noise_px", num(r.cv_noise_px)},
@@ -242,7 +245,14 @@ std::string GeometricCalibration::to_json() const {
   return j.dump();
 }
 
-void check_calibration_output(const std::string& output) {
+void check_calibration_output(const std::string& output, const std::string& model) {
+  if (!model.empty()) {
+    try {
+      candidate_lens_type(model);
+    } catch (const InputError& e) {
+      throw InputError(std::string("--model: ") + e.what());
+    }
+  }
   const std::string ext = fs::path(output).extension().string();
   if (ext != ".cameramodel" && ext != ".yaml" && ext != ".yml")
     throw InputError(output + ": the output must be .cameramodel or .yaml");
@@ -314,10 +324,14 @@ void write_calibration_files(GeometricCalibration& run, const std::string& outpu
   const std::string yaml = cameramodel ? with_extension(output, ".yaml") : output;
   if (cameramodel) {
     if (is_mrcal_model(model.lensmodel)) {
-      write_cameramodel(output, model);
+      const SolveRecord& solve = run.result.solve;
+      write_cameramodel(output, model,
+                        solve.views.empty() ? "" : mrcal_optimization_inputs(model, run.board, solve, run.detections.images));
+      run.optimization_inputs = !solve.views.empty();
       run.written.push_back(output);
     } else {
-      run.notes.push_back(model.lensmodel + " is not an mrcal model: writing OpenCV YAML only (" + yaml + ")");
+      run.notes.push_back(model.lensmodel + " is not an mrcal model: writing OpenCV YAML only (" + yaml +
+                          "; mrcal's tools cannot read it)");
     }
   }
   if (LensModel::parse(model.lensmodel).has_opencv_form()) {

@@ -4,8 +4,10 @@
 //
 // calibrate_images: detect the board in every image (board_detect.h detect_boards), calibrate
 // (geometric.h), and on request leave out the most influential views and solve again.
-// write_calibration_files: .cameramodel where mrcal has the model, OpenCV YAML wherever OpenCV
-// has it (CONVENTIONS.md "Camera models"), and the pictures (calibration_report.h).
+// write_calibration_files: .cameramodel where mrcal has the model (with mrcal's
+// optimization_inputs, so that mrcal's uncertainty and residual tools run on it), OpenCV YAML
+// wherever OpenCV has it (CONVENTIONS.md "Camera models"), and the pictures
+// (calibration_report.h).
 #pragma once
 
 #include <functional>
@@ -51,6 +53,7 @@ struct GeometricCalibration {
   // Set by write_calibration_files.
   std::vector<std::string> written;  // camera files, in the order written
   std::vector<std::string> notes;    // a format that was skipped, and why (one line each)
+  bool optimization_inputs = false;  // the .cameramodel carries mrcal's (mrcal_optimization_inputs.h)
   std::string picture_stem;          // <stem>_residuals.png, <stem>_coverage.png
   bool uncertainty_picture = false;  // <stem>_uncertainty.png (when there is an uncertainty)
 
@@ -63,8 +66,9 @@ struct GeometricCalibration {
 };
 
 // InputError (one line, naming the file) when `output` is not .cameramodel / .yaml / .yml or
-// its directory does not exist: checked before minutes of work.
-void check_calibration_output(const std::string& output);
+// its directory does not exist, or ("--model: ...") when `model` is neither empty nor a
+// candidate name: checked before minutes of work.
+void check_calibration_output(const std::string& output, const std::string& model = "");
 
 // The calibration of detected boards (options.detect unused). InputError when fewer than 4
 // images show the board or the calibration refuses the corners. Progress of the solve:

@@ -13,6 +13,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 #include "calib/lens_model.h"
 #include "core/error.h"
@@ -320,12 +321,16 @@ std::string precheck_cameramodel(const std::string& text) {
     if (i >= n) return "no value for '" + key + "'";
     std::vector<double> values;
     std::string str;
+    if (text[i] == 'b' && i + 1 < n && (text[i + 1] == '\'' || text[i + 1] == '"')) ++i;  // bytes: optimization_inputs
     if (text[i] == '\'' || text[i] == '"') {
       if (!string_at(&str)) return "unterminated string for '" + key + "'";
     } else if (text[i] == '[') {
       if (!list_at(&values)) return "malformed list for '" + key + "'";
     } else {
-      return "value of '" + key + "' is neither a string nor a list";
+      char* end = nullptr;  // a number: icam_intrinsics
+      values.push_back(std::strtod(text.c_str() + i, &end));
+      if (end == text.c_str() + i) return "value of '" + key + "' is neither a string, a number nor a list";
+      i = size_t(end - text.c_str());
     }
     if (key == "lensmodel") lensmodel = str, have_lensmodel = true;
     if (key == "intrinsics") intrinsics = values, have_intrinsics = true;
@@ -403,7 +408,7 @@ std::optional<Vec3> unproject(const CameraModel& model, Pixel pixel) {
 
 // ---- .cameramodel ---------------------------------------------------------------------
 
-void write_cameramodel(const std::string& path, const CameraModel& model) {
+void write_cameramodel(const std::string& path, const CameraModel& model, const std::string& optimization_inputs) {
   if (!is_mrcal_model(model.lensmodel))
     throw InputError(path + ": mrcal has no lens model '" + model.lensmodel +
                      "'; write it as OpenCV YAML (.yaml) instead");
@@ -431,6 +436,15 @@ void write_cameramodel(const std::string& path, const CameraModel& model) {
   t += "    # extrinsics are rt_fromref\n";
   t += "    'extrinsics': [ 0, 0, 0, 0, 0, 0,],\n\n";
   t += "    'imagersize': [ " + std::to_string(model.width) + ", " + std::to_string(model.height) + ",],\n";
+  if (!optimization_inputs.empty()) {
+    // Base85 has no quote or backslash: the text goes between b'...' as it is.
+    if (optimization_inputs.find_first_of("'\\\n") != std::string::npos)
+      throw std::invalid_argument("write_cameramodel: optimization_inputs is not base85 text");
+    t += "\n    'icam_intrinsics': 0,\n\n";
+    t += "    # mrcal's optimization_inputs (mrcal.optimize's arguments at the optimum), as mrcal's Python\n";
+    t += "    # writes them: a numpy .npz, base85. Changing the intrinsics invalidates them.\n";
+    t += "    'optimization_inputs': b'" + optimization_inputs + "',\n";
+  }
   t += "}\n";
   write_file_atomically(path, t);
 }

@@ -57,7 +57,10 @@ std::optional<Vec3> unproject(const CameraModel& model, Pixel pixel);
 // camera_matrix, distortion_coefficients, distortion_model = rational | plumb_bob |
 // fisheye | omnidir (+ xi)); models OpenCV has no form for (stereographic, splined) are
 // refused with InputError. Both written atomically.
-void write_cameramodel(const std::string& path, const CameraModel& model);
+// optimization_inputs: mrcal's serialised solve (calib/mrcal_optimization_inputs.h), written
+// as mrcal's Python writes it ('icam_intrinsics': 0 and 'optimization_inputs': b'...');
+// empty: none. The reader ignores it.
+void write_cameramodel(const std::string& path, const CameraModel& model, const std::string& optimization_inputs = "");
 CameraModel read_cameramodel(const std::string& path);
 void write_opencv_yaml(const std::string& path, const CameraModel& model);
 CameraModel read_opencv_yaml(const std::string& path);

@@ -132,6 +132,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   take_selection(res, sel, res.table[sel.selected]);
   const LensType pick = candidate_lens_type(res.selected);
   const ModelFit& chosen = fits.full.get(pick);
+  res.solve = record_solve(fits.used, chosen);
 
   // How the chosen model fits each view; what each view weighs.
   take_diagnostics(res, diagnose_views(pr, views, outliers.view_used, chosen, res.views,

@@ -27,6 +27,7 @@
 #include "calib/calibration_uncertainty.h"
 #include "calib/camera_model.h"
 #include "calib/model_selection.h"
+#include "calib/mrcal_optimization_inputs.h"
 #include "calib/outlier_rejection.h"
 #include "calib/projection_difference.h"
 #include "calib/projection_uncertainty.h"
@@ -122,6 +123,9 @@ struct CalibrationResult {
   std::array<int, 4> edge_observations{};
   bool corners_poorly_covered = false;  // some side has < min_edge_observations
   UncertaintyReport uncertainty;        // empty unless options.uncertainty
+  // The chosen model's solve (views, corners with inlier weights, board poses): what mrcal's
+  // optimization_inputs state (calib/mrcal_optimization_inputs.h).
+  SolveRecord solve;
 };
 
 // corners_per_view[i]: board.cols * board.rows pixel corners (row-major) or empty.

@@ -10,13 +10,11 @@
 #include "calib/calibration_run.h"
 #include "calib/camera_model.h"
 #include "calib/colour_match.h"
+#include "calib/corners_vnl.h"
 #include "calib/photometric.h"
-#include "calib/geometric.h"
-#include "calib/lens_model.h"
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
-#include "core/image_io.h"
 #include "core/progress.h"
 
 namespace lp::cli {
@@ -30,6 +28,7 @@ struct CalibGeometricArgs {
   std::string report_dir;           // pictures; default beside the output
   std::string output;               // camera.cameramodel or camera.yaml
   int drop_influential = 0;         // recalibrate without up to N flagged views, worst first
+  std::string corners_in, corners_out, imagersize;  // mrcal's corners.vnl; W,H for corners_in
 };
 
 struct CalibCompareArgs {
@@ -55,23 +54,21 @@ namespace fs = std::filesystem;
 int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   const BoardSpec board = board_from(args.board, args.square_mm);
   if (args.drop_influential < 0) throw InputError("--drop-influential must be 0 or more");
-  if (!args.model.empty()) {
-    try {
-      candidate_lens_type(args.model);
-    } catch (const InputError& e) {
-      throw InputError(std::string("--model: ") + e.what());
-    }
-  }
-  check_calibration_output(args.output);
+  check_calibration_output(args.output, args.model);
   GeometricCalibrationOptions o;
   o.calibrate.model = args.model;
   o.calibrate.use_mrcal = !args.no_mrcal;
   o.calibrate.progress = stage_progress_bars("solve: ", out.progress);
   o.drop_influential = args.drop_influential;
+  if (args.images.empty() == args.corners_in.empty()) throw InputError("give either IMAGE... or --corners-in");
+  const std::vector<double> size = args.imagersize.empty() ? std::vector<double>{0, 0} : parse_numbers(args.imagersize, "--imagersize", 2);
   Progress detected("detect boards", args.images.size(), out.progress);
-  BoardDetections detections = detect_boards(args.images, board, o.detect, [&] { detected.advance(); });
+  CornersFile corners = !args.corners_in.empty() ? read_corners_vnl(args.corners_in, board, size[0], size[1])
+                                                 : CornersFile{detect_boards(args.images, board, o.detect, [&] { detected.advance(); }), {}};
   detected.finish();
-  GeometricCalibration run = calibrate_detections(std::move(detections), board, o);
+  if (!args.corners_out.empty()) write_corners_vnl(args.corners_out, corners.detections);
+  GeometricCalibration run = calibrate_detections(std::move(corners.detections), board, o);
+  run.notes.insert(run.notes.begin(), corners.notes.begin(), corners.notes.end());
   write_calibration_files(run, args.output, args.report_dir);
   say(out, "{}", run.summary());
   if (out.json) std::printf("%s\n", run.to_json().c_str());
@@ -141,10 +138,13 @@ int run_calib_colour(const CalibColourArgs& args, const Output& out) {
 std::vector<Command> calib_commands() {
   return {
       {"calib geometric", "Chessboard calibration with model selection by cross-validation",
-       "lightprobe calib geometric views/*.jpg --board 9x6 --square 25 -o camera.cameramodel\nlightprobe calib geometric views/*.jpg --board 9x6 --square 25 --drop-influential 1 -o camera.cameramodel",
+       "lightprobe calib geometric views/*.jpg --board 9x6 --square 25 -o camera.cameramodel\nlightprobe calib geometric views/*.jpg --board 9x6 --square 25 --drop-influential 1 -o camera.cameramodel\nlightprobe calib geometric views/*.jpg --board 10x10 --square 25 --corners-out corners.vnl -o camera.cameramodel\nlightprobe calib geometric --corners-in corners.vnl --imagersize 1280,960 --board 10x10 --square 25 -o camera.cameramodel",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<CalibGeometricArgs>();
-         f.arg("IMAGE", a->images, "Chessboard views (one camera, one resolution)").required();
+         f.arg("IMAGE", a->images, "Chessboard views (one camera, one resolution)");
+         f.opt("--corners-in", a->corners_in, "Solve from mrcal's corners.vnl instead of images");
+         f.opt("--corners-out", a->corners_out, "Write the detected corners as mrcal's corners.vnl");
+         f.opt("--imagersize", a->imagersize, "W,H of the images of --corners-in (default: read one)");
          f.opt("--board", a->board, "COLSxROWS inner corners, e.g. 9x6").required();
          f.opt("--square", a->square_mm, "Square size, mm").required();
          f.opt("--model", a->model, "Use this model instead of the selection (see the printed table)");

@@ -10,6 +10,9 @@ packages=(
   libchealpix-dev libexiv2-dev libraw-dev libceres-dev
   libaravis-dev libusb-1.0-0-dev aravis-tools aravis-tools-cli libcamera-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev libmrcal-dev python3-mrcal libmrgingham-dev
+  # zlib (the .npz inside a .cameramodel); mrcal's command-line tools, which a consumer test
+  # runs on the models calib geometric writes (ctest consumers.mrcal)
+  zlib1g-dev mrcal
   # whole-system tests: private network namespaces, a load generator, a headless browser,
   # an HTTP client for abusive requests, Prometheus' linter (promtool) for /metrics
   iproute2 util-linux wrk chromium curl prometheus

@@ -11,12 +11,14 @@
 #include "calib/calibration_run.h"
 #include "calib/synthetic_boards.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "tests/calib/test_cameras.h"
 
 namespace lp {
 namespace {
 
 namespace fs = std::filesystem;
+using calib_test::detections_of;
 using calib_test::kb190;
 
 const BoardSpec kBoard{10, 7, 40};
@@ -27,24 +29,6 @@ fs::path temp_dir(const std::string& name) {
                      ("lightprobe_calibration_run_test_" + std::to_string(::getpid()) + "_" + name);
   fs::remove_all(d);
   fs::create_directories(d);
-  return d;
-}
-
-// Detections as detect_boards gives them, from corners projected through a camera.
-BoardDetections detections_of(const std::vector<std::vector<std::array<double, 2>>>& corners, const CameraModel& cam) {
-  BoardDetections d;
-  for (size_t i = 0; i < corners.size(); ++i) {
-    d.images.push_back("view_" + std::to_string(i) + ".png");
-    BoardDetection b;
-    b.found = !corners[i].empty();
-    b.corners = corners[i];
-    b.method = "projected";
-    d.per_image.push_back(b);
-    d.found += b.found;
-  }
-  d.corners = corners;
-  d.width = cam.width;
-  d.height = cam.height;
   return d;
 }
 
@@ -136,7 +120,9 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   EXPECT_TRUE(fs::exists(dir / "cam.yaml"));
   EXPECT_FALSE(fs::exists(out));
   ASSERT_EQ(run.notes.size(), 1u);
-  EXPECT_EQ(run.notes[0], "LENSMODEL_KANNALA_BRANDT is not an mrcal model: writing OpenCV YAML only (" + run.written[0] + ")");
+  EXPECT_EQ(run.notes[0], "LENSMODEL_KANNALA_BRANDT is not an mrcal model: writing OpenCV YAML only (" + run.written[0] +
+                             "; mrcal's tools cannot read it)");
+  EXPECT_FALSE(run.optimization_inputs);
   EXPECT_TRUE(run.uncertainty_picture);
   for (const char* p : {"_residuals.png", "_coverage.png", "_uncertainty.png"})
     EXPECT_TRUE(fs::exists(run.picture_stem + p)) << p;
@@ -212,6 +198,16 @@ TEST(CalibrationRun, WritesBothFormatsForAnMrcalModelWithAnOpenCVForm) {
   EXPECT_FALSE(run.uncertainty_picture);
   EXPECT_EQ(read_camera_model((dir / "cam.yaml").string()).intrinsics, run.result.model.intrinsics);
   EXPECT_EQ(read_camera_model((dir / "cam.cameramodel").string()).intrinsics, run.result.model.intrinsics);
+  // mrcal's optimization_inputs ride along (tests/calib/consumers/mrcal_consumer.sh runs mrcal
+  // on them); lightprobe's reader (mrcal's C parser) reads past them.
+  EXPECT_TRUE(run.optimization_inputs);
+  const std::string text = read_text_file((dir / "cam.cameramodel").string());
+  EXPECT_NE(text.find("\n    'icam_intrinsics': 0,\n"), std::string::npos);
+  EXPECT_NE(text.find("\n    'optimization_inputs': b'"), std::string::npos);
+  ASSERT_EQ(run.result.solve.views.size(), corners.size());
+  EXPECT_EQ(run.result.solve.observations[2][7][0], corners[2][7][0]);
+  EXPECT_NE(run.summary().find("the .cameramodel carries mrcal's optimization_inputs"), std::string::npos);
+  EXPECT_TRUE(nlohmann::json::parse(run.to_json())["optimization_inputs"].get<bool>());
   // Checked before the work: the output's type and directory.
   EXPECT_THROW(check_calibration_output((dir / "cam.txt").string()), InputError);
   EXPECT_THROW(check_calibration_output((dir / "missing" / "cam.yaml").string()), InputError);

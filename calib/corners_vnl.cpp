@@ -1,0 +1,160 @@
+#include "calib/corners_vnl.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/file_io.h"
+#include "core/image_io.h"
+#include "core/limits.h"
+
+namespace lp {
+namespace {
+
+namespace fs = std::filesystem;
+
+// One data row: x, y and level, each NaN for '-'.
+struct Row {
+  std::string file;
+  double x = NAN, y = NAN, level = 0;
+  int line = 0;
+};
+
+double field(const std::string& path, int line, const std::string& text) {
+  if (text == "-") return NAN;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size() || !std::isfinite(v))
+    throw InputError(fmt::format("{}:{}: '{}' is neither a number nor '-' (rows are 'filename x y [level]')", path,
+                                 line, text));
+  return v;
+}
+
+std::vector<Row> read_rows(const std::string& path) {
+  std::istringstream in(read_text_file(path, "corners file"));
+  std::vector<Row> rows;
+  std::string text;
+  for (int line = 1; std::getline(in, text); ++line) {
+    std::istringstream words(text);
+    std::vector<std::string> f;
+    for (std::string w; words >> w;) f.push_back(w);
+    if (f.empty() || f[0][0] == '#') continue;  // blank, the header, vnlog comments
+    if (f.size() != 3 && f.size() != 4)
+      throw InputError(fmt::format("{}:{}: {} fields, rows are 'filename x y [level]'", path, line, f.size()));
+    Row r{f[0], field(path, line, f[1]), field(path, line, f[2]), f.size() == 4 ? field(path, line, f[3]) : 0.0, line};
+    rows.push_back(std::move(r));
+  }
+  if (rows.empty()) throw InputError(path + ": no corner rows (expected 'filename x y [level]')");
+  return rows;
+}
+
+// The image as mrcal finds it: as written when absolute or present from here, else beside
+// the corners file.
+std::string locate(const std::string& vnl, const std::string& image) {
+  std::error_code ec;
+  if (fs::path(image).is_absolute() || fs::exists(image, ec)) return image;
+  return (fs::path(vnl).parent_path() / image).string();
+}
+
+}  // namespace
+
+void write_corners_vnl(const std::string& path, const BoardDetections& d) {
+  std::string t = "# filename x y level\n";
+  for (size_t i = 0; i < d.images.size(); ++i) {
+    const std::string& name = d.images[i];
+    if (name.empty() || name[0] == '#' || name.find_first_of(" \t\r\n\v\f") != std::string::npos)
+      throw InputError(fmt::format("{}: cannot write '{}' to corners.vnl: a file name there has no whitespace and "
+                                   "does not start with '#'",
+                                   path, name));
+    if (d.corners[i].empty()) t += name + " - - -\n";
+    for (const auto& c : d.corners[i]) t += fmt::format("{} {:.17g} {:.17g} 0\n", name, c[0], c[1]);
+  }
+  write_file_atomically(path, t);
+}
+
+CornersFile read_corners_vnl(const std::string& path, const BoardSpec& board, double given_width, double given_height) {
+  const std::vector<Row> rows = read_rows(path);
+  const size_t per_board = size_t(board.cols) * size_t(board.rows);
+  CornersFile out;
+  BoardDetections& d = out.detections;
+  std::set<std::string> seen;
+  int weighed_below_one = 0;
+  for (size_t begin = 0; begin < rows.size();) {
+    size_t end = begin;
+    while (end < rows.size() && rows[end].file == rows[begin].file) ++end;
+    const Row& first = rows[begin];
+    if (!seen.insert(first.file).second)
+      throw InputError(fmt::format("{}:{}: {} again: the rows of one view must be consecutive", path, first.line,
+                                   first.file));
+    const size_t n = end - begin;
+    BoardDetection det;
+    std::vector<std::array<double, 2>> corners;
+    if (n == 1 && (std::isnan(first.x) || std::isnan(first.y))) {
+      det.reason = "no board (corners.vnl)";
+    } else if (n != per_board) {
+      throw InputError(fmt::format("{}:{}: {} has {} corner rows; a {}x{} board has {}", path, first.line, first.file,
+                                   n, board.cols, board.rows, per_board));
+    } else {
+      int missing = 0;
+      for (size_t k = begin; k < end; ++k) {
+        const Row& r = rows[k];
+        if (std::isnan(r.x) || std::isnan(r.y) || std::isnan(r.level) || r.level < 0) ++missing;
+        else if (r.level > 0) ++weighed_below_one;
+        corners.push_back({r.x, r.y});
+      }
+      if (missing > 0) {
+        corners.clear();
+        det.reason = fmt::format("incomplete board in corners.vnl ({} of {} corners not detected)", missing, per_board);
+        out.notes.push_back(fmt::format("{}: {}: {} of {} corners not detected; lightprobe solves whole boards only, "
+                                        "the view is left out",
+                                        path, first.file, missing, per_board));
+      } else {
+        det.found = true;
+        det.method = "corners.vnl";
+        det.corners = corners;
+        ++d.found;
+      }
+    }
+    d.images.push_back(first.file);
+    d.per_image.push_back(std::move(det));
+    d.corners.push_back(std::move(corners));
+    begin = end;
+  }
+  if (weighed_below_one > 0)
+    out.notes.push_back(fmt::format("{}: {} corners have a level above 0 (mrcal weighs them 2^-level); lightprobe "
+                                    "weighs every corner 1",
+                                    path, weighed_below_one));
+  int width = 0, height = 0;
+  if (given_width != 0 || given_height != 0) {
+    for (double v : {given_width, given_height})
+      if (!(v >= 1 && v <= 1e9) || v != std::floor(v))
+        throw InputError(fmt::format("--imagersize {},{}: not two positive whole numbers of pixels", given_width,
+                                     given_height));
+    width = int(given_width);
+    height = int(given_height);
+    check_image_size("--imagersize", width, height, "image size");
+  } else {
+    for (const std::string& image : d.images) {
+      const std::string file = locate(path, image);
+      std::error_code ec;
+      if (!fs::is_regular_file(file, ec)) continue;
+      const CameraImage img = read_camera_image(file);
+      width = img.width;
+      height = img.height;
+      break;
+    }
+    if (width <= 0)
+      throw InputError(path + ": the image size is unknown: none of the images it names is here (" +
+                       locate(path, d.images.front()) + ", ...); give it (--imagersize W,H)");
+  }
+  d.width = width;
+  d.height = height;
+  return out;
+}
+
+}  // namespace lp

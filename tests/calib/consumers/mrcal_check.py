@@ -1,0 +1,78 @@
+#!/usr/bin/env python3
+r'''mrcal's Python on a .cameramodel that `lightprobe calib geometric` wrote.
+
+Usage: mrcal_check.py MODEL REPORT_JSON [--uncertainty-factor F]
+
+- the model loads and carries optimization_inputs whose intrinsics are the model's;
+- mrcal's residuals at the stored state (optimizer_callback, nothing optimised) reproduce
+  lightprobe's RMS reprojection error (REPORT_JSON's rms_px) to 1e-3 relative;
+- mrcal.optimize() from the stored state lowers that RMS by less than 1e-3 relative (the
+  state is the optimum of the stored problem, as mrcal-calibrate-cameras leaves it);
+- with --uncertainty-factor: mrcal.projection_uncertainty (rays at infinity, worst
+  direction) at the image centre and its median over a grid of pixels are finite and
+  within a factor F of lightprobe's linear mean-frames estimate
+  (uncertainty.linear_mean_frames_px), which is mrcal's method re-implemented.
+Prints the numbers; exits 1 on the first check that fails.
+'''
+import copy
+import json
+import sys
+
+import numpy as np
+import mrcal
+
+
+def fail(msg):
+    print(f"FAILED: {msg}")
+    sys.exit(1)
+
+
+model_path, report_path = sys.argv[1], sys.argv[2]
+factor = float(sys.argv[4]) if len(sys.argv) > 4 and sys.argv[3] == '--uncertainty-factor' else None
+report = json.load(open(report_path))
+m = mrcal.cameramodel(model_path)
+oi = m.optimization_inputs()
+if oi is None:
+    fail(f"{model_path} has no optimization_inputs")
+lensmodel, intrinsics = m.intrinsics()
+if oi['lensmodel'] != lensmodel or not np.array_equal(oi['intrinsics'][0], intrinsics):
+    fail("the optimization_inputs' intrinsics are not the model's")
+
+# Residuals at the stored state. Corners lightprobe rejected carry weight -1; mrcal gives
+# them zero residuals, so the RMS is over the inliers, per corner (2-D), as lightprobe's.
+x = mrcal.optimizer_callback(**oi, no_jacobian=True, no_factorization=True)[1]
+nboards = mrcal.num_measurements_boards(**oi)
+inliers = np.count_nonzero(oi['observations_board'][..., 2] > 0)
+rms = np.sqrt(np.sum(x[:nboards] ** 2) / inliers)
+lp_rms = report['rms_px']
+print(f"RMS: mrcal {rms:.6f} px, lightprobe {lp_rms:.6f} px over {inliers} inlier corners")
+if not abs(rms - lp_rms) <= 1e-3 * lp_rms:
+    fail(f"mrcal's RMS {rms} differs from lightprobe's {lp_rms} by more than 1e-3 relative")
+
+again = copy.deepcopy(oi)
+stats = mrcal.optimize(**again)
+rms_again = np.sqrt(np.sum(stats['x'][:nboards] ** 2) / inliers)
+print(f"mrcal.optimize from the stored state: RMS {rms_again:.6f} px")
+if not rms_again >= rms * (1 - 1e-3):
+    fail(f"the stored state is not the optimum: mrcal lowers the RMS from {rms} to {rms_again}")
+
+if factor is not None:
+    lp = report['uncertainty']['linear_mean_frames_px']
+    W, H = m.imagersize()
+
+    def sigma(q):
+        v = mrcal.unproject(np.array(q, dtype=float), lensmodel, intrinsics)
+        return mrcal.projection_uncertainty(v, m, atinfinity=True, what='worstdirection-stdev')
+
+    centre = sigma(((W - 1) / 2., (H - 1) / 2.))
+    grid = [sigma((x, y)) for x in np.linspace(0, W - 1, 12) for y in np.linspace(0, H - 1, 9)]
+    grid = np.array([s for s in grid if np.isfinite(s)])
+    median = np.median(grid)
+    print(f"uncertainty at the centre: mrcal {centre:.4f} px, lightprobe {lp['centre_px']:.4f} px; "
+          f"median: mrcal {median:.4f} px ({len(grid)} pixels), lightprobe {lp['median_px']:.4f} px")
+    if not (np.isfinite(centre) and centre > 0 and len(grid) > 50):
+        fail("mrcal's uncertainty is not finite")
+    for name, a, b in (('centre', centre, lp['centre_px']), ('median', median, lp['median_px'])):
+        if not (b > 0 and 1 / factor <= a / b <= factor):
+            fail(f"{name}: mrcal {a} and lightprobe {b} differ by more than a factor {factor}")
+print("PASSED")

@@ -1,0 +1,70 @@
+// `calib geometric --corners-out / --corners-in`: detection and solving run apart through
+// mrcal's corners.vnl; the model solved from the file is the one solved from the images.
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <string>
+
+#include "tests/cli/cli_run.h"
+
+namespace lp::cli_test {
+namespace {
+
+std::vector<double> intrinsics_of(const CliRun& r) {
+  return nlohmann::json::parse(r.out)["intrinsics"].get<std::vector<double>>();
+}
+
+void expect_same_model(const std::vector<double>& a, const std::vector<double>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) EXPECT_NEAR(a[k], b[k], 1e-9 * std::max(1.0, std::abs(a[k]))) << k;
+}
+
+TEST(CalibCornersCli, CornersOutThenInGivesTheModelOfTheImages) {
+  const fs::path dir = scratch() / "corners_roundtrip";
+  fs::create_directories(dir);
+  ASSERT_EQ(lightprobe("synth boards --views 6 --board 9x6 --square 30 -o " + (dir / "boards").string()).code, 0);
+  std::string images;
+  for (int i = 0; i < 6; ++i) images += " " + (dir / "boards" / ("board_0" + std::to_string(i) + ".png")).string();
+  const std::string common = " --json --board 9x6 --square 30 --model LENSMODEL_KANNALA_BRANDT";
+  const std::string vnl = (dir / "corners.vnl").string();
+  const CliRun detected = lightprobe("calib geometric" + images + common + " --corners-out " + vnl + " -o " +
+                                     (dir / "a.yaml").string());
+  ASSERT_EQ(detected.code, 0) << detected.err;
+  const std::string text = slurp(vnl);
+  EXPECT_EQ(text.rfind("# filename x y level\n", 0), 0u);
+  EXPECT_EQ(line_count(text), 1 + 6 * 54);
+
+  // From the file, the images read only for their size.
+  const CliRun solved = lightprobe("calib geometric --corners-in " + vnl + common + " -o " + (dir / "b.yaml").string());
+  ASSERT_EQ(solved.code, 0) << solved.err;
+  expect_same_model(intrinsics_of(detected), intrinsics_of(solved));
+
+  // Without the images: the size is needed, and given.
+  fs::rename(dir / "boards", dir / "gone");
+  expect_one_line_error(
+      lightprobe("calib geometric --corners-in " + vnl + common + " -o " + (dir / "c.yaml").string()),
+      vnl + ": the image size is unknown");
+  EXPECT_FALSE(fs::exists(dir / "c.yaml"));
+  const CliRun sized = lightprobe("calib geometric --corners-in " + vnl + " --imagersize 1280,960" + common + " -o " +
+                                  (dir / "c.yaml").string());
+  ASSERT_EQ(sized.code, 0) << sized.err;
+  expect_same_model(intrinsics_of(detected), intrinsics_of(sized));
+}
+
+TEST(CalibCornersCli, BadCornerFilesAndMissingInputsAreUsageErrors) {
+  const fs::path dir = scratch() / "corners_bad";
+  fs::create_directories(dir);
+  const std::string vnl = (dir / "bad.vnl").string();
+  std::ofstream(vnl) << "# filename x y level\na.png 1 2 0\na.png 3 two 0\n";
+  const std::string out = " --board 9x6 --square 30 -o " + (dir / "x.cameramodel").string();
+  expect_one_line_error(lightprobe("calib geometric --corners-in " + vnl + " --imagersize 640,480" + out),
+                        vnl + ":3: 'two' is neither a number nor '-'");
+  expect_one_line_error(lightprobe("calib geometric" + out), "give either IMAGE... or --corners-in");
+  expect_one_line_error(lightprobe("calib geometric a.png --corners-in " + vnl + out),
+                        "give either IMAGE... or --corners-in");
+  expect_one_line_error(lightprobe("calib geometric --corners-in " + vnl + " --imagersize 640" + out), "--imagersize");
+  EXPECT_FALSE(fs::exists(dir / "x.cameramodel"));
+}
+
+}  // namespace
+}  // namespace lp::cli_test

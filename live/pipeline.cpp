@@ -48,6 +48,9 @@ LivePipeline::LivePipeline(OpenSource open, LivePipelineOptions options, Publish
   if (options_.queue_brackets < 1) throw InputError("the bracket queue needs room for at least one bracket");
   for (const char* stage : kStages) stages_.emplace_back(stage, Histogram(latency_buckets_seconds()));
   sampler_ = std::make_unique<FramePipeline>(options_.sampling);
+  decode_ = plan_frame_decode({options_.photometric ? &*options_.photometric : nullptr, options_.photometric_file,
+                               options_.exposure_cycle.size(), options_.response.has_value(), options_.frames_are_maps});
+  stats_.decode = to_string(decode_);
 }
 
 LivePipeline::~LivePipeline() { stop(); }
@@ -143,6 +146,11 @@ void LivePipeline::capture_loop() {
     if (!frame) {
       if (source_->finished()) break;
       continue;
+    }
+    if (auto why = undecodable_frame(*frame, decode_)) {  // refused, never decoded as something else
+      std::lock_guard<std::mutex> lock(mutex_);
+      stats_.input_error = stats_.last_error = *why;
+      break;
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -288,10 +296,8 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     map->units = radiance.units;
     timings.stage[2] = seconds_since(t0);  // fusion and unwrap in one pass
   } else {
+    decode_single_frame(b.frames[0], decode_, options_.photometric ? &*options_.photometric : nullptr);
     RgbImage radiance = std::move(b.frames[0].image);
-    if (b.frames[0].exposure_s > 0)
-      for (float& v : radiance.rgb) v = float(v / b.frames[0].exposure_s);
-    if (options_.photometric) apply_photometric(radiance, *options_.photometric);
     fuse_s = seconds_since(t0);
     t0 = Clock::now();
     ensure_remap(radiance.width, radiance.height);

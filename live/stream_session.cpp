@@ -57,9 +57,9 @@ StreamSessionReport run_stream_session(const StreamSessionOptions& options, cons
 std::string StreamSessionReport::summary() const {
   const LiveStats& s = stats;
   return fmt::format(
-      "stream stopped: {} frames in, {} brackets processed, {} dropped whole, {} frames in partial brackets, {} "
-      "reconnects{}{}\n",
-      s.frames_in, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects,
+      "stream stopped: {} frames in ({} decode), {} brackets processed, {} dropped whole, {} frames in partial "
+      "brackets, {} reconnects{}{}\n",
+      s.frames_in, s.decode, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects,
       published ? fmt::format("; mqtt: {} lists published, {} dropped, {} connects", mqtt.lists_published,
                               mqtt.lists_dropped, mqtt.link.connects)
                 : "",
@@ -68,7 +68,7 @@ std::string StreamSessionReport::summary() const {
 
 nlohmann::json StreamSessionReport::to_json() const {
   const LiveStats& s = stats;
-  return {{"port", port}, {"frames_in", s.frames_in}, {"brackets_processed", s.brackets_processed},
+  return {{"port", port}, {"frames_in", s.frames_in}, {"decode", s.decode}, {"brackets_processed", s.brackets_processed},
           {"brackets_dropped", s.brackets_dropped}, {"frames_dropped_partial", s.frames_dropped_partial},
           {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error},
           {"mqtt_published", mqtt.lists_published}, {"mqtt_dropped", mqtt.lists_dropped},

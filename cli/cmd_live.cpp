@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <memory>
 
 #include <atomic>
@@ -34,7 +35,8 @@ struct MergeArgs {
   std::string listen = "127.0.0.1:8090";
   std::string token;                // for our server
   std::string upstream_token;       // for the cameras' servers
-  std::string weights;              // one per URL (e.g. from camera positions)
+  std::string weights;              // one per URL
+  std::string camera_positions, target;  // X,Y,Z per URL (';' between) and the point lit: position weights
   int n = 256;                      // q2tree light count of the merge
   double timeout = 2.0;             // drop a camera silent this long
   double duration = 0;
@@ -127,6 +129,14 @@ int run_merge(const MergeArgs& args, const Output& out) {
   mo.mqtt.merge.merge.n = args.n;
   check_light_count("--n", args.n);
   if (!args.weights.empty()) mo.mqtt.merge.merge.weights = parse_numbers(args.weights, "--weights", args.urls.size());
+  std::string xyz = args.camera_positions;
+  std::replace(xyz.begin(), xyz.end(), ';', ',');
+  const auto p = xyz.empty() ? std::vector<double>{} : parse_numbers(xyz, "--camera-positions", 3 * args.urls.size());
+  for (size_t i = 0; i < p.size(); i += 3) mo.camera_positions.push_back({p[i], p[i + 1], p[i + 2]});
+  if (!args.target.empty()) {
+    const auto t = parse_numbers(args.target, "--target", 3);
+    mo.target = Vec3{t[0], t[1], t[2]};
+  }
   mo.mqtt.client.cafile = args.mqtt_cafile;
   mo.mqtt.qos = args.mqtt_qos;
   parse_listen(args.listen, &mo.server.host, &mo.server.port);
@@ -190,6 +200,8 @@ std::vector<Command> live_commands() {
          f.opt("--token", a->token, "Bearer token for our server");
          f.opt("--upstream-token", a->upstream_token, "Bearer token for the cameras' servers");
          f.opt("--weights", a->weights, "Comma-separated weights, one per URL");
+         f.opt("--camera-positions", a->camera_positions, "Where each URL's camera stands, X,Y,Z;X,Y,Z;... (with --target: weights 1/distance^2)");
+         f.opt("--target", a->target, "X,Y,Z: the point being lit, for --camera-positions");
          f.opt("--n", a->n, "Light count of a Q2-tree merge");
          f.opt("--timeout", a->timeout, "Drop a camera silent for this many seconds");
          f.opt("--duration", a->duration, "Stop after this many seconds");

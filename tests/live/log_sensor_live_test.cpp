@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "tests/core/test_files.h"
 #include "core/image_io.h"
 #include "hdr/response.h"
 #include "live/pipeline.h"
@@ -21,6 +22,8 @@ namespace fs = std::filesystem;
 
 namespace lp {
 namespace {
+
+using test_files::input_error;
 
 constexpr double kScale = 2.78;               // linear camera: cd/m2 per relative unit
 constexpr double kCurveA = 0.25, kCurveB = 0.05;  // log camera: code = a + b ln L
@@ -69,7 +72,7 @@ LivePipelineOptions pipeline_options(const PhotometricCalibration& calibration) 
   LivePipelineOptions o;
   o.photometric = calibration;
   o.photometric_file = "cal.json";
-  o.layout = Layout::Hemisphere;
+  // The default layout: a hemisphere, here 90 x 23.
   o.width = 90;
   o.height = 23;
   o.sampling.method = Method::Pharr;
@@ -117,16 +120,6 @@ TEST(LiveLogSensor, ALogCameraAndALinearCameraOfOneSceneStreamTheSameCandelas) {
     for (double cd : log[f]) ASSERT_NEAR(cd / truth, 1.0, 1e-3) << "log frame " << f;
     for (double cd : linear[f]) ASSERT_NEAR(cd / truth, 1.0, 1e-3) << "linear frame " << f;
   }
-}
-
-template <typename F>
-std::string input_error(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 TEST(LiveLogSensor, WhatTheStreamCannotDecodeIsRefusedAtStartNamingTheCalibration) {

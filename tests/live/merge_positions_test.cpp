@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "tests/core/test_files.h"
 #include "eval/synthetic_scene.h"
 #include "live/light_server.h"
 #include "live/merge_client.h"
@@ -19,15 +20,7 @@
 namespace lp {
 namespace {
 
-template <typename F>
-std::string input_error(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using test_files::input_error;
 
 MergeSessionOptions two_cameras() {
   MergeSessionOptions o;

@@ -91,12 +91,13 @@ int run_stream(const StreamArgs& args, const Output& out) {
   else if (*layout == Layout::LatLong) lo.width = 512, lo.height = 256;
   if (*layout == Layout::Healpix) lo.width = args.nside > 0 ? args.nside : 32, lo.height = 1;
   if (*layout == Layout::Healpix) check_nside("--nside", lo.width);
-  check_light_count("--n", args.n);
   check_light_count("--cluster", args.cluster);
   const auto method = method_from_string(args.method);
   if (!method) throw InputError(fmt::format("--method: unknown method '{}'", args.method));
   lo.sampling.method = *method;
-  lo.sampling.count = args.n;
+  lo.sampling.count = light_count(args.n);
+  lo.sampling.auto_count = lo.sampling.count == 0;
+  lo.sampling.auto_options.target_diffuse_error = args.target_error;
   lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21;
   lo.sampling.cluster_max_lights = args.cluster;
   lo.sampling.sampler.upper_only = *layout == Layout::Hemisphere;
@@ -173,7 +174,8 @@ std::vector<Command> live_commands() {
          f.opt("--size", a->size, "Map size WxH");
          f.opt("--nside", a->nside, "healpix nside");
          f.opt("--method", a->method, "pharr|hemigon|q2tree|mediancut");
-         f.opt("--n", a->n, "Lights per frame");
+         f.opt("--n", a->n, "Lights per frame, or 'auto': the fewest within --target-error, with hysteresis");
+         f.opt("--target-error", a->target_error, "With --n auto: largest diffuse error (0.01 = 1 %)");
          f.opt("--cluster", a->cluster, "Cluster to at most this many lights");
          f.opt("--fps", a->fps, "Replay pacing and the temporal filter's frame rate");
          f.flag("--loop", a->loop, "Replay: start over at the end");

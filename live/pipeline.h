@@ -63,6 +63,13 @@ struct LiveStats {
   std::string last_error;
   std::string input_error;  // a frame was bad input (capture stopped there); empty: none
   std::string decode = "relative";  // how frames become radiance (frame_decode.h to_string)
+  // The light count (--n N, or --n auto: the fewest within count_target, with hysteresis).
+  int lights = 0;                   // of the last list, before clustering
+  bool auto_count = false;
+  double count_target = 0;          // auto: the diffuse error to stay within
+  double count_error = 0;           // auto: the last count's diffuse error
+  bool count_reached = true;        // auto: false when the largest count missed the target
+  uint64_t count_changes = 0;       // auto: times the count changed after the first list
 };
 
 class LivePipeline {

@@ -550,6 +550,10 @@ PhotometricCalibration load_photometric(const std::string& path) {
 
 namespace {
 void scale_pixels(std::vector<float>& rgb, const PhotometricCalibration& c) {
+  // A log sensor's codes are not proportional to radiance: scaling them would be a silent
+  // wrong answer. They are decoded (hdr/log_sensor.h), which applies the scale itself.
+  if (c.log_sensor)
+    throw InputError("apply_photometric: a log-sensor calibration decodes raw codes (decode_log_sensor); it is not a linear scale");
   for (size_t i = 0; i + 2 < rgb.size(); i += 3)
     for (int k = 0; k < 3; ++k) rgb[i + k] = float(rgb[i + k] * c.scale_rgb[k]);
 }

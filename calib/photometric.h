@@ -32,7 +32,9 @@
 // raw code of a patch and v = a + b ln(L / (1 cd m^-2)); the fit gives a and b (and their
 // standard errors) with the same robust loss on r_i = (v_i - a)/b - ln(measured_i), the log
 // ratio of decoded to measured luminance. Decoding L = exp((v - a)/b) already yields cd m^-2,
-// so such a calibration has scale_luminance = 1. Log-sensor fits take cd m^-2 readings only.
+// so such a calibration has scale_luminance = 1, and its scale_rgb = 1/683 turns the decoded
+// cd m^-2 into Radiance units like any calibrated map (hdr/log_sensor.h decode_log_sensor;
+// one unit everywhere: 683 Y = cd m^-2). Log-sensor fits take cd m^-2 readings only.
 //
 // Readings file (CSV, UTF-8; read_readings_csv):
 //   # comment lines and blank lines are ignored
@@ -141,8 +143,9 @@ void save_photometric(const std::string& path, const PhotometricCalibration& cal
 PhotometricCalibration load_photometric(const std::string& path);
 
 // Multiplies channel c by scale_rgb[c] and sets units = Radiance. The input must be linear
-// relative radiance (log-sensor codes decoded first); an image already in Radiance units
-// throws InputError (the scale would apply twice).
+// relative radiance; an image already in Radiance units throws InputError (the scale would
+// apply twice), and so does a log-sensor calibration (its codes are decoded, not scaled:
+// hdr/log_sensor.h decode_log_sensor, which ends in the same scale_rgb).
 void apply_photometric(RgbImage& image, const PhotometricCalibration& calibration);
 void apply_photometric(EnvMap& map, const PhotometricCalibration& calibration);
 

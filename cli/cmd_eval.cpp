@@ -13,6 +13,7 @@
 #include "eval/calib_eval.h"
 #include "eval/estimators_eval.h"
 #include "eval/hdr_eval.h"
+#include "eval/merge_eval.h"
 #include "eval/metadata_eval.h"
 #include "eval/sampling_eval.h"
 #include "eval/shading_eval.h"
@@ -236,6 +237,15 @@ std::vector<Command> eval_commands() {
          return [o](const Output& out) {
            return evaluate_and_report("eval unwrap", out, evaluate_unwrap, *o);
          };
+       }},
+      {"eval merge", "Merging four displaced cameras: position weights against equal ones at a camera placed at the target",
+       "lightprobe eval merge -o eval/merge",
+       [](Flags& f) -> Handler {
+         auto o = std::make_shared<EvalMergeOptions>();
+         f.opt("--grid", o->grid, "Targets per side of the cameras' square");
+         f.opt("--n", o->n, "Lights per camera and of the merge");
+         f.output(o->output_dir, "Directory for merge.csv and merge.svg");
+         return [o](const Output& out) { return evaluate_and_report("eval merge", out, evaluate_merge, *o); };
        }},
       {"eval metadata", "Diffuse error of the metadata model against real probes along a walk",
        "lightprobe synth walkthrough -o walk/ && lightprobe eval metadata walk/ -o eval/metadata",

@@ -98,11 +98,10 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
   nlohmann::json report = {{"output", args.output}};
   RgbImage radiance;
   const auto t0 = Clock::now();
-  if (args.images.size() == 1 && photometric && photometric->log_sensor) {
+  if (photometric && photometric->log_sensor) {
     // A logarithmic sensor: one frame, decoded with the fitted value = a + b ln L.
-    const RgbImage codes = read_rgb_image(args.images[0]);
-    radiance = decode_log_sensor(codes, LogSensorModel{photometric->log_sensor->a, photometric->log_sensor->b});
-    radiance.units = Units::Radiance;
+    if (args.images.size() != 1) throw InputError(args.photometric + ": a log-sensor calibration decodes one frame, not a bracket");
+    radiance = decode_log_sensor(read_rgb_image(args.images[0]), *photometric);
     report["mode"] = "log-sensor";
   } else {
     Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times));

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <memory>
 
 #include <atomic>
@@ -34,7 +35,8 @@ struct MergeArgs {
   std::string listen = "127.0.0.1:8090";
   std::string token;                // for our server
   std::string upstream_token;       // for the cameras' servers
-  std::string weights;              // one per URL (e.g. from camera positions)
+  std::string weights;              // one per URL
+  std::string camera_positions, target;  // X,Y,Z per URL (';' between) and the point lit: position weights
   int n = 256;                      // q2tree light count of the merge
   double timeout = 2.0;             // drop a camera silent this long
   double duration = 0;
@@ -74,7 +76,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
   for (double t : lo.exposure_cycle)
     if (!(t > 0)) throw InputError("--exposures must be positive seconds");
   if (!args.response.empty()) lo.response = load_response(args.response);
-  if (!args.photometric.empty()) lo.photometric = load_photometric(args.photometric);
+  if (!args.photometric.empty()) lo.photometric = load_photometric(args.photometric), lo.photometric_file = args.photometric;
   if (!args.camera.empty()) {
     lo.camera = read_camera_model(args.camera);
     lo.camera_file = args.camera;
@@ -89,12 +91,13 @@ int run_stream(const StreamArgs& args, const Output& out) {
   else if (*layout == Layout::LatLong) lo.width = 512, lo.height = 256;
   if (*layout == Layout::Healpix) lo.width = args.nside > 0 ? args.nside : 32, lo.height = 1;
   if (*layout == Layout::Healpix) check_nside("--nside", lo.width);
-  check_light_count("--n", args.n);
   check_light_count("--cluster", args.cluster);
   const auto method = method_from_string(args.method);
   if (!method) throw InputError(fmt::format("--method: unknown method '{}'", args.method));
   lo.sampling.method = *method;
-  lo.sampling.count = args.n;
+  lo.sampling.count = light_count(args.n);
+  lo.sampling.auto_count = lo.sampling.count == 0;
+  lo.sampling.auto_options.target_diffuse_error = args.target_error;
   lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21;
   lo.sampling.cluster_max_lights = args.cluster;
   lo.sampling.sampler.upper_only = *layout == Layout::Hemisphere;
@@ -127,6 +130,14 @@ int run_merge(const MergeArgs& args, const Output& out) {
   mo.mqtt.merge.merge.n = args.n;
   check_light_count("--n", args.n);
   if (!args.weights.empty()) mo.mqtt.merge.merge.weights = parse_numbers(args.weights, "--weights", args.urls.size());
+  std::string xyz = args.camera_positions;
+  std::replace(xyz.begin(), xyz.end(), ';', ',');
+  const auto p = xyz.empty() ? std::vector<double>{} : parse_numbers(xyz, "--camera-positions", 3 * args.urls.size());
+  for (size_t i = 0; i < p.size(); i += 3) mo.camera_positions.push_back({p[i], p[i + 1], p[i + 2]});
+  if (!args.target.empty()) {
+    const auto t = parse_numbers(args.target, "--target", 3);
+    mo.target = Vec3{t[0], t[1], t[2]};
+  }
   mo.mqtt.client.cafile = args.mqtt_cafile;
   mo.mqtt.qos = args.mqtt_qos;
   parse_listen(args.listen, &mo.server.host, &mo.server.port);
@@ -163,7 +174,8 @@ std::vector<Command> live_commands() {
          f.opt("--size", a->size, "Map size WxH");
          f.opt("--nside", a->nside, "healpix nside");
          f.opt("--method", a->method, "pharr|hemigon|q2tree|mediancut");
-         f.opt("--n", a->n, "Lights per frame");
+         f.opt("--n", a->n, "Lights per frame, or 'auto': the fewest within --target-error, with hysteresis");
+         f.opt("--target-error", a->target_error, "With --n auto: largest diffuse error (0.01 = 1 %)");
          f.opt("--cluster", a->cluster, "Cluster to at most this many lights");
          f.opt("--fps", a->fps, "Replay pacing and the temporal filter's frame rate");
          f.flag("--loop", a->loop, "Replay: start over at the end");
@@ -190,6 +202,8 @@ std::vector<Command> live_commands() {
          f.opt("--token", a->token, "Bearer token for our server");
          f.opt("--upstream-token", a->upstream_token, "Bearer token for the cameras' servers");
          f.opt("--weights", a->weights, "Comma-separated weights, one per URL");
+         f.opt("--camera-positions", a->camera_positions, "Where each URL's camera stands, X,Y,Z;X,Y,Z;... (with --target: weights 1/distance^2)");
+         f.opt("--target", a->target, "X,Y,Z: the point being lit, for --camera-positions");
          f.opt("--n", a->n, "Light count of a Q2-tree merge");
          f.opt("--timeout", a->timeout, "Drop a camera silent for this many seconds");
          f.opt("--duration", a->duration, "Stop after this many seconds");

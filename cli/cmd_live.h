@@ -21,7 +21,8 @@ struct StreamArgs {
   std::string size;
   int nside = 0;
   std::string method = "hemigon";
-  int n = 300;
+  std::string n = "300";            // a count or "auto" (the fewest within target_error)
+  double target_error = 0.01;
   int cluster = 0;
   double fps = 0;                   // replay pacing; also the temporal filter's rate
   bool loop = false;

@@ -48,20 +48,6 @@ FilterMode filter_mode(const std::string& name) {
   throw InputError(fmt::format("--filter must be auto, on or off, got '{}'", name));
 }
 
-// --n: a positive count, or 0 for "auto".
-int light_count(const std::string& text) {
-  if (text == "auto") return 0;
-  int n = 0;
-  try {
-    size_t used = 0;
-    n = std::stoi(text, &used);
-    if (used != text.size()) throw std::invalid_argument("x");
-  } catch (const std::exception&) {
-    throw InputError(fmt::format("--n must be a positive integer or 'auto', got '{}'", text));
-  }
-  if (n <= 0) throw InputError(fmt::format("--n must be positive, got {}", n));
-  check_light_count("--n", n);
-  return n;
 }
 
 bool has_physical_units(ExportFormat f) {

@@ -38,6 +38,8 @@ std::vector<int> parse_light_counts(const std::string& text, const char* option)
 void check_frame_count(const char* option, long long count);
 // --rotation: "yaw,pitch,roll" in degrees or 9 numbers (row-major world_from_probe), as parse_numbers reads them.
 Mat3 parse_rotation(const std::string& text);
+// --n of sample and stream: a positive count within core/limits.h, or 0 for "auto".
+int light_count(const std::string& text);
 // Comma-separated numbers ('1/40' allowed), exactly `count` of them (0: any).
 std::vector<double> parse_numbers(const std::string& text, const char* option, size_t count = 0);
 // --layout and friends: empty means "not given".

@@ -120,6 +120,21 @@ void target_geometry(Layout layout, const std::string& size, int nside, const En
   *w = 2 * *h;
 }
 
+int light_count(const std::string& text) {
+  if (text == "auto") return 0;
+  int n = 0;
+  try {
+    size_t used = 0;
+    n = std::stoi(text, &used);
+    if (used != text.size()) throw std::invalid_argument("x");
+  } catch (const std::exception&) {
+    throw InputError(fmt::format("--n must be a positive integer or 'auto', got '{}'", text));
+  }
+  if (n <= 0) throw InputError(fmt::format("--n must be positive, got {}", n));
+  check_light_count("--n", n);
+  return n;
+}
+
 std::vector<double> parse_numbers(const std::string& text, const char* option, size_t count) {
   std::vector<double> v;
   std::istringstream in(text);

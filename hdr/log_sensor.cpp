@@ -17,6 +17,18 @@ RgbImage decode_log_sensor(const RgbImage& codes, const LogSensorModel& m) {
   return out;
 }
 
+RgbImage decode_log_sensor(const RgbImage& codes, const PhotometricCalibration& calibration) {
+  if (!calibration.log_sensor)
+    throw InputError("the photometric calibration is linear, not a log-sensor curve: nothing to decode");
+  if (codes.units == Units::Radiance)
+    throw InputError("a log-sensor frame must hold raw codes, not radiance (the curve would apply twice)");
+  RgbImage out = decode_log_sensor(codes, LogSensorModel{calibration.log_sensor->a, calibration.log_sensor->b});
+  for (size_t i = 0; i + 2 < out.rgb.size(); i += 3)
+    for (size_t c = 0; c < 3; ++c) out.rgb[i + c] = float(out.rgb[i + c] * calibration.scale_rgb[c]);
+  out.units = Units::Radiance;
+  return out;
+}
+
 LogSensorModel fit_log_sensor_least_squares(const std::vector<double>& values, const std::vector<double>& lum) {
   if (values.size() != lum.size())
     throw InputError(fmt::format("log sensor fit: {} values for {} luminances", values.size(), lum.size()));

@@ -10,6 +10,7 @@
 
 #include <vector>
 
+#include "calib/photometric.h"
 #include "core/image_io.h"
 
 namespace lp {
@@ -23,6 +24,16 @@ struct LogSensorModel {
 // `codes` (callers decoding with a calibrated model set Units::Radiance). Throws
 // InputError when b is zero or a/b are not finite.
 RgbImage decode_log_sensor(const RgbImage& codes, const LogSensorModel& model);
+
+// A log sensor's frame under its photometric calibration (calib/photometric.h with a log
+// curve), in the one unit every calibrated map has: Units::Radiance, per channel
+// "photopically weighted" W sr^-1 m^-2, so that 683 Y = cd m^-2. The curve decodes each
+// channel to cd m^-2; that is then scaled by scale_rgb (1/683), exactly as a linear
+// camera's relative values are scaled by k/683: the curve replaces the division by
+// exposure, the scale to watts is the same. (Decoding alone and calling it radiance made
+// a log-sensor map 683 times brighter than a linear calibrated map of the same scene.)
+// InputError when the calibration has no log curve or `codes` are radiance already.
+RgbImage decode_log_sensor(const RgbImage& codes, const PhotometricCalibration& calibration);
 
 // Ordinary least squares of values on ln(luminances): b = cov(ln L, v) / var(ln L),
 // a = mean(v) − b mean(ln L). Throws InputError when the sizes differ, fewer than 2

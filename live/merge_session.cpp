@@ -1,6 +1,7 @@
 #include "live/merge_session.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -13,12 +14,31 @@
 
 namespace lp {
 
+std::vector<double> merge_session_weights(const MergeSessionOptions& o, std::string* from) {
+  const std::vector<double>& explicit_weights = o.mqtt.merge.merge.weights;
+  if (o.camera_positions.empty() && !o.target) {
+    if (from) *from = explicit_weights.empty() ? "equal" : "--weights";
+    return explicit_weights;
+  }
+  if (o.camera_positions.empty() || !o.target)
+    throw InputError("--camera-positions and --target go together: where the cameras stand and the point being lit");
+  if (!o.subscribe.empty())
+    throw InputError(o.subscribe_flag + ": cameras on a topic come and go by name; --camera-positions needs server URLs");
+  if (!explicit_weights.empty()) throw InputError("--weights or --camera-positions, not both: positions make the weights");
+  if (o.camera_positions.size() != o.urls.size())
+    throw InputError(fmt::format("--camera-positions: {} positions for {} cameras", o.camera_positions.size(), o.urls.size()));
+  if (from) *from = "camera positions";
+  return position_weights(o.camera_positions, *o.target, o.position_power);
+}
+
 MergeSessionReport run_merge_session(const MergeSessionOptions& options, const std::function<void(int port)>& started) {
   if (!options.subscribe.empty() && !(options.urls.empty() && options.mqtt.merge.merge.weights.empty()))
     throw InputError(options.subscribe_flag + ": merges whichever cameras publish; no server URLs or --weights with it");
   if (options.urls.empty() && options.subscribe.empty()) throw InputError("merge needs server URLs or --subscribe");
-  LightServer server(options.server);
   MergeSessionReport report;
+  MqttMergeOptions merge_options = options.mqtt;
+  merge_options.merge.merge.weights = report.weights = merge_session_weights(options, &report.weights_from);
+  LightServer server(options.server);
   report.port = server.start();
   if (started) started(report.port);
   defer_interrupts();  // a signal stops the watchdog below: the summary is returned
@@ -38,8 +58,8 @@ MergeSessionReport run_merge_session(const MergeSessionOptions& options, const s
     report.last = st;
   };
   try {
-    if (options.subscribe.empty()) run_merge_client(options.urls, options.mqtt.merge, serve, stop);
-    else run_mqtt_merge(options.subscribe, options.subscribe_flag, options.mqtt, serve, stop);
+    if (options.subscribe.empty()) run_merge_client(options.urls, merge_options.merge, serve, stop);
+    else run_mqtt_merge(options.subscribe, options.subscribe_flag, merge_options, serve, stop);
   } catch (...) {
     failed = true;  // a joinable watchdog must not outlive the error (std::terminate)
     watchdog.join();
@@ -53,13 +73,15 @@ MergeSessionReport run_merge_session(const MergeSessionOptions& options, const s
 }
 
 std::string MergeSessionReport::summary() const {
-  return fmt::format("merge stopped: {} lists published; last used {} of {} inputs ({} skipped){}\n", published,
-                     last.state.used.size(), inputs, skipped, last.error.empty() ? "" : "; last error: " + last.error);
+  return fmt::format("merge stopped: {} lists published; last used {} of {} inputs ({} skipped); weights {}{}{}\n",
+                     published, last.state.used.size(), inputs, skipped, weights_from,
+                     weights.empty() ? "" : fmt::format(" {:.4g}", fmt::join(weights, ",")),
+                     last.error.empty() ? "" : "; last error: " + last.error);
 }
 
 nlohmann::json MergeSessionReport::to_json() const {
   return {{"port", port}, {"published", published}, {"used", last.state.used}, {"dropped", last.state.dropped},
-          {"skipped", skipped}, {"mode", last.mode}};
+          {"skipped", skipped}, {"mode", last.mode}, {"weights", weights}, {"weights_from", weights_from}};
 }
 
 }  // namespace lp

@@ -48,6 +48,11 @@ LivePipeline::LivePipeline(OpenSource open, LivePipelineOptions options, Publish
   if (options_.queue_brackets < 1) throw InputError("the bracket queue needs room for at least one bracket");
   for (const char* stage : kStages) stages_.emplace_back(stage, Histogram(latency_buckets_seconds()));
   sampler_ = std::make_unique<FramePipeline>(options_.sampling);
+  decode_ = plan_frame_decode({options_.photometric ? &*options_.photometric : nullptr, options_.photometric_file,
+                               options_.exposure_cycle.size(), options_.response.has_value(), options_.frames_are_maps});
+  stats_.decode = to_string(decode_);
+  stats_.auto_count = options_.sampling.auto_count;
+  stats_.count_target = options_.sampling.auto_count ? options_.sampling.auto_options.target_diffuse_error : 0;
 }
 
 LivePipeline::~LivePipeline() { stop(); }
@@ -96,6 +101,8 @@ std::string LivePipeline::metrics() const {
   m.counter("lightprobe_brackets_processed_total", "Brackets turned into published light lists.",
             double(s.brackets_processed));
   m.counter("lightprobe_camera_reconnects_total", "Times the camera was reopened.", double(s.reconnects));
+  m.gauge("lightprobe_light_count", "Lights of the last list, before clustering (--n auto: chosen per frame).", s.lights);
+  m.counter("lightprobe_light_count_changes_total", "Times --n auto changed the light count.", double(s.count_changes));
   m.family("lightprobe_stage_duration_seconds", "histogram",
            "Time of each processing stage per published list (fuse_unwrap: bracket fusion and unwrap in one pass).");
   for (const auto& [stage, h] : stages_)
@@ -143,6 +150,11 @@ void LivePipeline::capture_loop() {
     if (!frame) {
       if (source_->finished()) break;
       continue;
+    }
+    if (auto why = undecodable_frame(*frame, decode_)) {  // refused, never decoded as something else
+      std::lock_guard<std::mutex> lock(mutex_);
+      stats_.input_error = stats_.last_error = *why;
+      break;
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -217,6 +229,11 @@ void LivePipeline::process_loop() {
       stats_.unwrap_ms = std::isnan(t.stage[1]) ? 0 : 1e3 * t.stage[1];
       stats_.sample_ms = 1e3 * t.stage[3];
       stats_.capture_to_publish_ms = 1e3 * t.latency;
+      const FrameCount& c = sampler_->last_count();  // the sampler lives on this thread
+      stats_.count_changes += stats_.brackets_processed > 1 && c.count != stats_.lights;
+      stats_.lights = c.count;
+      stats_.count_error = c.automatic ? c.diffuse_error : 0;
+      stats_.count_reached = c.reached;
       for (size_t k = 0; k < stages_.size(); ++k) stages_[k].second.observe(t.stage[k]);
       latency_.observe(t.latency);
     } catch (const std::exception& e) {
@@ -288,10 +305,8 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     map->units = radiance.units;
     timings.stage[2] = seconds_since(t0);  // fusion and unwrap in one pass
   } else {
+    decode_single_frame(b.frames[0], decode_, options_.photometric ? &*options_.photometric : nullptr);
     RgbImage radiance = std::move(b.frames[0].image);
-    if (b.frames[0].exposure_s > 0)
-      for (float& v : radiance.rgb) v = float(v / b.frames[0].exposure_s);
-    if (options_.photometric) apply_photometric(radiance, *options_.photometric);
     fuse_s = seconds_since(t0);
     t0 = Clock::now();
     ensure_remap(radiance.width, radiance.height);

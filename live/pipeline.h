@@ -23,6 +23,7 @@
 #include "core/envmap.h"
 #include "core/light_list.h"
 #include "hdr/response.h"
+#include "live/frame_decode.h"
 #include "live/metrics.h"
 #include "probe/camera_source.h"
 #include "sampling/frame_pipeline.h"
@@ -34,7 +35,10 @@ struct LivePipelineOptions {
   // log sensor, or a replayed sequence of radiance maps).
   std::vector<double> exposure_cycle;
   std::optional<CameraResponse> response;         // default: linear
+  // Absolute units; a log-sensor curve decodes single frames (live/frame_decode.h: what
+  // it refuses at start). The file is named in those refusals.
   std::optional<PhotometricCalibration> photometric;
+  std::string photometric_file;
   // Probe geometry: a fisheye through `camera` (default: equidistant 180 deg over the
   // image's short side) looking up, turned by `world_from_probe`.
   std::optional<CameraModel> camera;
@@ -58,6 +62,14 @@ struct LiveStats {
   double fuse_ms = 0, unwrap_ms = 0, sample_ms = 0;  // last frame's stages (brackets: fuse_ms includes the unwrap)
   std::string last_error;
   std::string input_error;  // a frame was bad input (capture stopped there); empty: none
+  std::string decode = "relative";  // how frames become radiance (frame_decode.h to_string)
+  // The light count (--n N, or --n auto: the fewest within count_target, with hysteresis).
+  int lights = 0;                   // of the last list, before clustering
+  bool auto_count = false;
+  double count_target = 0;          // auto: the diffuse error to stay within
+  double count_error = 0;           // auto: the last count's diffuse error
+  bool count_reached = true;        // auto: false when the largest count missed the target
+  uint64_t count_changes = 0;       // auto: times the count changed after the first list
 };
 
 class LivePipeline {
@@ -100,6 +112,7 @@ class LivePipeline {
   Histogram latency_{latency_buckets_seconds()};
   std::vector<std::pair<std::string, Histogram>> stages_;
   std::unique_ptr<FramePipeline> sampler_;
+  FrameDecode decode_ = FrameDecode::Relative;  // chosen from the options at construction
   // Unwrapping cache: rebuilt when the image size changes.
   struct RemapCache;
   std::unique_ptr<RemapCache> remap_;

@@ -11,6 +11,14 @@
 
 namespace lp {
 
+nlohmann::json light_count_json(const LiveStats& s) {
+  nlohmann::json j{{"mode", s.auto_count ? "auto" : "fixed"}, {"lights", s.lights}};
+  if (s.auto_count)
+    j.update({{"target_error", s.count_target}, {"diffuse_error", s.count_error}, {"reached", s.count_reached},
+              {"changes", s.count_changes}});
+  return j;
+}
+
 StreamSessionReport run_stream_session(const StreamSessionOptions& options, const std::function<void(int port)>& started) {
   LightServer server(options.server);
   std::unique_ptr<MqttPublisher> mqtt;
@@ -37,6 +45,7 @@ StreamSessionReport run_stream_session(const StreamSessionOptions& options, cons
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     if (!pipeline.stats().input_error.empty() || (mqtt && !mqtt->refused().empty())) break;
     server.publish_metrics(pipeline.metrics() + (mqtt ? mqtt->metrics() : ""));
+    server.publish_status("light_count", light_count_json(pipeline.stats()).dump());
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (options.duration_s > 0 && elapsed >= options.duration_s) break;
   }
@@ -57,9 +66,12 @@ StreamSessionReport run_stream_session(const StreamSessionOptions& options, cons
 std::string StreamSessionReport::summary() const {
   const LiveStats& s = stats;
   return fmt::format(
-      "stream stopped: {} frames in, {} brackets processed, {} dropped whole, {} frames in partial brackets, {} "
-      "reconnects{}{}\n",
-      s.frames_in, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects,
+      "stream stopped: {} frames in ({} decode), {} brackets processed, {} dropped whole, {} frames in partial "
+      "brackets, {} reconnects; {} lights{}{}{}\n",
+      s.frames_in, s.decode, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects, s.lights,
+      s.auto_count ? fmt::format(" (--n auto: diffuse error {:.4f}, target {:g}{}, {} changes)", s.count_error,
+                                 s.count_target, s.count_reached ? "" : " MISSED", s.count_changes)
+                   : "",
       published ? fmt::format("; mqtt: {} lists published, {} dropped, {} connects", mqtt.lists_published,
                               mqtt.lists_dropped, mqtt.link.connects)
                 : "",
@@ -68,11 +80,11 @@ std::string StreamSessionReport::summary() const {
 
 nlohmann::json StreamSessionReport::to_json() const {
   const LiveStats& s = stats;
-  return {{"port", port}, {"frames_in", s.frames_in}, {"brackets_processed", s.brackets_processed},
+  return {{"port", port}, {"frames_in", s.frames_in}, {"decode", s.decode}, {"brackets_processed", s.brackets_processed},
           {"brackets_dropped", s.brackets_dropped}, {"frames_dropped_partial", s.frames_dropped_partial},
           {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error},
           {"mqtt_published", mqtt.lists_published}, {"mqtt_dropped", mqtt.lists_dropped},
-          {"mqtt_connects", mqtt.link.connects}};
+          {"mqtt_connects", mqtt.link.connects}, {"light_count", light_count_json(s)}};
 }
 
 }  // namespace lp

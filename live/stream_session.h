@@ -38,6 +38,11 @@ struct StreamSessionReport {
   nlohmann::json to_json() const;
 };
 
+// The light count as /status shows it (section "light_count") and to_json reports it:
+// {"mode": "fixed"|"auto", "lights", and for auto "target_error", "diffuse_error",
+// "reached", "changes"}.
+nlohmann::json light_count_json(const LiveStats& stats);
+
 // InputError before anything starts for a malformed publish URL. `started(port)` is called
 // once the server listens and the pipeline runs. Interrupts are deferred (core/interrupt.h).
 StreamSessionReport run_stream_session(const StreamSessionOptions& options, const std::function<void(int port)>& started);

@@ -1,6 +1,7 @@
 #include "sampling/frame_pipeline.h"
 
 #include <chrono>
+#include <cmath>
 
 #include "core/error.h"
 #include "sampling/clustering.h"
@@ -47,9 +48,12 @@ LightList FramePipeline::process(const EnvMap& map, int64_t frame, double timest
     ao.shadowed = false;
     ao.glossy_exponents.clear();
     const AccuracyReference reference = make_accuracy_reference(map, ao);
-    list.lights = tracker_->update(*sampler_, reference).lights;
+    AutoCountResult r = tracker_->update(*sampler_, reference);
+    count_ = {int(r.lights.size()), true, r.diffuse_error, r.reached};
+    list.lights = std::move(r.lights);
   } else {
     list.lights = sampler_->place(options_.count);
+    count_ = {int(list.lights.size()), false, NAN, true};
   }
   timing_.place_ms = ms_since(t0);
 

@@ -33,6 +33,14 @@ struct FramePipelineOptions {
   int cluster_max_lights = 0;       // 0: no clustering
 };
 
+// The light count of the last frame: fixed, or what the auto count chose and why.
+struct FrameCount {
+  int count = 0;              // lights placed (before clustering)
+  bool automatic = false;     // --n auto
+  double diffuse_error = 0;   // automatic: the chosen count's diffuse error (NaN for a fixed n)
+  bool reached = true;        // automatic: false when even max_count missed the target
+};
+
 struct FrameTiming {
   double prepare_ms = 0, place_ms = 0, temporal_ms = 0;
 };
@@ -47,6 +55,7 @@ class FramePipeline {
   int delay_frames() const;
   bool filtering() const { return filter_.has_value(); }
   const FrameTiming& last_timing() const { return timing_; }
+  const FrameCount& last_count() const { return count_; }
   void reset();
 
  private:
@@ -55,6 +64,7 @@ class FramePipeline {
   std::optional<LightTemporalFilter> filter_;
   std::optional<AutoCountTracker> tracker_;
   FrameTiming timing_;
+  FrameCount count_;
 };
 
 }  // namespace lp

@@ -11,11 +11,14 @@
 #include <vector>
 
 #include "core/error.h"
+#include "tests/core/test_files.h"
 
 namespace fs = std::filesystem;
 
 namespace lp {
 namespace {
+
+using test_files::input_error;
 
 using Unit = PhotometricReading::Unit;
 
@@ -30,17 +33,6 @@ std::string temp_dir() {
 std::string write_text(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
   return path;
-}
-
-// The error message of `f`, or "" when it does not throw InputError.
-template <typename F>
-std::string input_error(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 PhotometricReading reading(double camera, double measured, Unit unit, std::string label) {

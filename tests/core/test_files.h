@@ -1,4 +1,5 @@
-// Scratch files for the core tests: a fresh directory per test and whole-file bytes.
+// Scratch files for the tests: a fresh directory per test and whole-file bytes; and the
+// message of an InputError, for tests of refusals.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -7,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+
+#include "core/error.h"
 
 namespace lp::test_files {
 
@@ -30,6 +33,17 @@ inline std::string read_bytes(const std::string& path) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+// The message of the InputError `f` throws, or "" when it throws none.
+template <typename F>
+std::string input_error(F f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
 }
 
 }  // namespace lp::test_files

@@ -1,0 +1,50 @@
+// How the stream turns a camera frame into radiance, and what it refuses to decode.
+//
+// One unit everywhere: with a photometric calibration every map the stream publishes is
+// in Units::Radiance (683 Y = cd m^-2), whichever sensor delivered it:
+//   linear sensor   code / exposure (when the frame knows it), times the calibration's
+//                   scale_rgb; brackets are fused first (hdr/merge.h), then scaled;
+//   log sensor      (a calibration with a log curve, calib/photometric.h) one frame per
+//                   map, each channel decoded by the curve to cd m^-2, times scale_rgb
+//                   (hdr/log_sensor.h): no exposure division (the curve already maps the
+//                   code to luminance) and no bracket.
+// Anything else is refused with a one-line InputError, never treated as linear: at start
+// for options that cannot work together, at the first frame for a frame the decode
+// cannot read (see below).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "calib/photometric.h"
+#include "core/image_io.h"
+#include "probe/camera_source.h"
+
+namespace lp {
+
+enum class FrameDecode { Relative, Linear, LogSensor };
+// "relative" (no calibration: codes / exposure, relative units), "linear", "log-sensor".
+const char* to_string(FrameDecode decode);
+
+// What a stream's options ask the decode to do, checked before anything starts.
+struct FrameDecodeSetup {
+  const PhotometricCalibration* photometric = nullptr;  // null: relative units
+  std::string photometric_file;   // named in errors
+  size_t exposures = 0;           // the bracket's exposure count (0 or 1: single frames)
+  bool response = false;          // a response curve was given
+  bool frames_are_maps = false;   // the source delivers environment maps (radiance)
+};
+// The decode for these options. InputError, naming the calibration file, for a log-sensor
+// calibration with a bracket, with a response curve or with frames that are maps already
+// (radiance has no codes to decode).
+FrameDecode plan_frame_decode(const FrameDecodeSetup& setup);
+
+// Why a frame cannot be decoded so, or nullopt: a log-sensor decode needs raw codes, and a
+// float frame (RGBFloat: radiance replayed from .exr/.hdr/.pfm) has none.
+std::optional<std::string> undecodable_frame(const CameraFrame& frame, FrameDecode decode);
+
+// A single frame (no bracket) to radiance, in place, as described above; `photometric` is
+// required for Linear and LogSensor.
+void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric);
+
+}  // namespace lp

@@ -76,6 +76,8 @@ struct Snapshot {
   std::shared_ptr<const std::string> json;  // one line, no trailing newline
   std::shared_ptr<const std::string> body;  // json + "\n", as /lights and NDJSON streams send it
   std::shared_ptr<const std::string> sse;   // "data: " json "\n\n"
+  std::shared_ptr<const std::string> sh;    // /sh: sh.json of the list's map SH9; null without one
+  std::string sh_etag;
   double latency = NAN;                      // publish wall time - list timestamp (s)
 };
 
@@ -146,6 +148,7 @@ struct LightServer::Impl {
   void handle_stream(const HttpRequest& req, HttpExchange& ex);
   void handle_map(MapView view, const HttpRequest& req, HttpExchange& ex);
   HttpResponse lights_response(const HttpRequest& req) const;
+  HttpResponse sh_response(const HttpRequest& req) const;
   HttpResponse status_response(const HttpRequest& req) const;
   HttpResponse metrics_response() const;
   nlohmann::json status_json() const;
@@ -171,9 +174,7 @@ void LightServer::Impl::handle(const HttpRequest& req, HttpExchange& ex) {
   if (req.path == "/probe.exr") return handle_map(MapView::Exr, req, ex);
   if (req.path == "/status") return ex.respond(status_response(req));
   if (req.path == "/metrics") return ex.respond(metrics_response());
-  // GET /sh (spherical harmonics of the latest map) and SH inside the light list come
-  // with the SH task: its route goes here, answered from the Snapshot (computed once per
-  // publish, like Snapshot::body) with an ETag as /lights has.
+  if (req.path == "/sh") return ex.respond(sh_response(req));
   ex.respond(error_response(404, "no such path: " + req.path.substr(0, 200)));
 }
 
@@ -190,6 +191,25 @@ HttpResponse LightServer::Impl::lights_response(const HttpRequest& req) const {
   r.body = snap->body;
   r.content_type = "application/json";
   r.headers = {{"ETag", snap->etag}, {"Cache-Control", kRevalidate}};
+  return r;
+}
+
+// sh.json as `lightprobe sh` writes it, of the map the latest list was sampled from. Only
+// a list whose "sh9" is the map's: a residual is not the map's SH and would be a wrong
+// answer under the same name.
+HttpResponse LightServer::Impl::sh_response(const HttpRequest& req) const {
+  const auto snap = snapshot();
+  if (!snap) {
+    HttpResponse r = error_response(503, "no light list published yet");
+    r.headers.emplace_back("Retry-After", "1");
+    return r;
+  }
+  if (!snap->sh) return error_response(404, "the latest light list carries no SH9 of its map");
+  if (http_etag_matches(req.header("if-none-match"), snap->sh_etag)) return http_not_modified(snap->sh_etag, kRevalidate);
+  HttpResponse r;
+  r.body = snap->sh;
+  r.content_type = "application/json";
+  r.headers = {{"ETag", snap->sh_etag}, {"Cache-Control", kRevalidate}};
   return r;
 }
 
@@ -388,6 +408,8 @@ void LightServer::publish(const LightList& list, std::shared_ptr<const EnvMap> m
   snap->json = std::make_shared<const std::string>(json);
   snap->body = std::make_shared<const std::string>(json + "\n");
   snap->sse = std::make_shared<const std::string>("data: " + json + "\n\n");
+  if (list.sh9 && list.sh9_content == Sh9Content::Map)
+    snap->sh = std::make_shared<const std::string>(sh9_to_json(*list.sh9, list.units));
   const double now_wall = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   if (list.timestamp > 1e9) {  // looks like Unix time: latency is meaningful
     const double latency = now_wall - list.timestamp;
@@ -397,6 +419,7 @@ void LightServer::publish(const LightList& list, std::shared_ptr<const EnvMap> m
     std::lock_guard lock(s.state_mutex);
     snap->generation = s.latest ? s.latest->generation + 1 : 1;
     snap->etag = fmt::format("\"{}-l{}\"", s.etag_prefix, snap->generation);
+    snap->sh_etag = fmt::format("\"{}-h{}\"", s.etag_prefix, snap->generation);
     if (snap->map) s.latest_map = {snap->generation, snap->map, snap->lists};
     s.latest = snap;
     s.publish_times.push_back(Clock::now());

@@ -11,6 +11,9 @@
 //                   or NDJSON with ?format=ndjson (one list per line)
 //   /probe.png      tone-mapped preview of the latest map with its lights (sampling/overlay.h),
 //                   rendered lazily, at most `preview_max_rate` times a second, and cached
+//   /sh             the latest map's SH9 as `lightprobe sh` writes sh.json (from the list's
+//                   "sh9" of content "map", live/pipeline.h); 503 before the first frame,
+//                   404 when the list carries none (a merge's lists)
 //   /status         JSON numbers for the page: frame, lights, fps, latency, clients, drops
 //   /metrics        Prometheus text: the pipeline's (publish_metrics) plus the server's own
 // The connection policy (caps per address and in all, answered with 503; timeouts per

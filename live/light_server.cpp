@@ -90,6 +90,23 @@ uint64_t fnv1a(std::string_view text) {
 
 constexpr const char* kRevalidate = "no-cache";  // clients may keep answers but must ask (ETag) every time
 
+HttpResponse nothing_published() {
+  HttpResponse r = error_response(503, "no light list published yet");
+  r.headers.emplace_back("Retry-After", "1");
+  return r;
+}
+
+// A JSON answer of one published list, with its tag: a poller that has it already gets
+// 304 and no body.
+HttpResponse tagged_json(const HttpRequest& req, std::shared_ptr<const std::string> body, const std::string& etag) {
+  if (http_etag_matches(req.header("if-none-match"), etag)) return http_not_modified(etag, kRevalidate);
+  HttpResponse r;
+  r.body = std::move(body);
+  r.content_type = "application/json";
+  r.headers = {{"ETag", etag}, {"Cache-Control", kRevalidate}};
+  return r;
+}
+
 }  // namespace
 
 struct LightServer::Impl {
@@ -180,18 +197,8 @@ void LightServer::Impl::handle(const HttpRequest& req, HttpExchange& ex) {
 
 HttpResponse LightServer::Impl::lights_response(const HttpRequest& req) const {
   const auto snap = snapshot();
-  if (!snap) {
-    HttpResponse r = error_response(503, "no light list published yet");
-    r.headers.emplace_back("Retry-After", "1");
-    return r;
-  }
-  // A poller that has this list already gets 304 and no body.
-  if (http_etag_matches(req.header("if-none-match"), snap->etag)) return http_not_modified(snap->etag, kRevalidate);
-  HttpResponse r;
-  r.body = snap->body;
-  r.content_type = "application/json";
-  r.headers = {{"ETag", snap->etag}, {"Cache-Control", kRevalidate}};
-  return r;
+  if (!snap) return nothing_published();
+  return tagged_json(req, snap->body, snap->etag);
 }
 
 // sh.json as `lightprobe sh` writes it, of the map the latest list was sampled from. Only
@@ -199,18 +206,9 @@ HttpResponse LightServer::Impl::lights_response(const HttpRequest& req) const {
 // answer under the same name.
 HttpResponse LightServer::Impl::sh_response(const HttpRequest& req) const {
   const auto snap = snapshot();
-  if (!snap) {
-    HttpResponse r = error_response(503, "no light list published yet");
-    r.headers.emplace_back("Retry-After", "1");
-    return r;
-  }
+  if (!snap) return nothing_published();
   if (!snap->sh) return error_response(404, "the latest light list carries no SH9 of its map");
-  if (http_etag_matches(req.header("if-none-match"), snap->sh_etag)) return http_not_modified(snap->sh_etag, kRevalidate);
-  HttpResponse r;
-  r.body = snap->sh;
-  r.content_type = "application/json";
-  r.headers = {{"ETag", snap->sh_etag}, {"Cache-Control", kRevalidate}};
-  return r;
+  return tagged_json(req, snap->sh, snap->sh_etag);
 }
 
 void LightServer::Impl::handle_stream(const HttpRequest& req, HttpExchange& ex) {

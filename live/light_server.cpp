@@ -356,6 +356,7 @@ LightServer::LightServer(LightServerOptions options) {
   MapViewOptions mv;
   mv.png_width = impl_->options.preview_width;
   mv.max_png_rate = impl_->options.preview_max_rate;
+  mv.png_time_constant_s = impl_->options.preview_time_constant_s;
   mv.etag_prefix = impl_->etag_prefix;
   impl_->views = std::make_unique<MapViews>(mv);
   HttpServerOptions ho;

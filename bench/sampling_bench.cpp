@@ -9,6 +9,8 @@
 #include <map>
 #include <vector>
 
+#include "core/spherical_harmonics.h"
+#include "core/temporal_tonemap.h"
 #include "eval/synthetic_scene.h"
 #include "sampling/sampler.h"
 
@@ -102,10 +104,27 @@ void BM_PrepareAndPlace(benchmark::State& state, Method method, Layout layout) {
   }
 }
 
+// The live chain's other per-frame work on the same maps: the SH9 every list carries
+// (live/pipeline.h) and the preview's tone statistics (core/temporal_tonemap.h).
+void BM_ProjectSh9(benchmark::State& state, Layout layout) {
+  const EnvMap& map = scene_map(layout);
+  RatioTimer ratio(state, map);
+  for (auto _ : state) benchmark::DoNotOptimize(project_sh9(map));
+}
+
+void BM_ToneParameters(benchmark::State& state, Layout layout) {
+  const EnvMap& map = scene_map(layout);
+  RatioTimer ratio(state, map);
+  for (auto _ : state) benchmark::DoNotOptimize(frame_tone_parameters(image_view(map)));
+}
+
 int register_all() {
   for (Layout layout : {Layout::Hemisphere, Layout::LatLong}) {
     const std::string size = layout == Layout::Hemisphere ? "hemisphere360x90" : "latlong1024x512";
     benchmark::RegisterBenchmark(("PlainRead/" + size).c_str(), BM_PlainRead, layout)->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("ProjectSh9/" + size).c_str(), BM_ProjectSh9, layout)->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("ToneParameters/" + size).c_str(), BM_ToneParameters, layout)
+        ->Unit(benchmark::kMicrosecond);
     for (Method m : all_methods()) {
       const std::string name = std::string(to_string(m)) + "/" + size;
       benchmark::RegisterBenchmark(("Prepare/" + name).c_str(), BM_Prepare, m, layout)->Unit(benchmark::kMicrosecond);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <vector>
 
 #include "core/error.h"
 #include "core/sh9_json.h"
@@ -54,15 +55,35 @@ Sh9 project_sh9(const EnvMap& map, std::string_view source) {
   const size_t width = size_t(map.width);
   Sh9 sh;
   size_t used = 0;
+  // Latlong and hemisphere maps are separable: the trigonometry of each column and row once
+  // (the same expressions as pixel_direction, so the same bits), not per pixel. A live
+  // 360x90 frame is projected in a fraction of a millisecond (bench ProjectSh9).
+  const bool separable = map.layout != Layout::Healpix;
+  std::vector<double> cos_phi, sin_phi;
+  if (separable)
+    for (size_t u = 0; u < width; ++u) {
+      const double phi = 2 * M_PI * (double(u) + 0.5) / map.width;
+      cos_phi.push_back(std::cos(phi));
+      sin_phi.push_back(std::sin(phi));
+    }
   for (size_t row = 0; row * width < n; ++row) {
     // Every pixel of a row (and of a healpix map) has the same solid angle.
     const double dw = pixel_solid_angle(map, row * width);
+    double sin_theta = 0, cos_theta = 0;
+    if (separable) {
+      const double span = map.layout == Layout::Hemisphere ? M_PI / 2 : M_PI;  // as envmap.cpp
+      const double theta = span * (double(row) + 0.5) / map.height;
+      sin_theta = std::sin(theta);
+      cos_theta = std::cos(theta);
+    }
     for (size_t i = row * width; i < (row + 1) * width; ++i) {
       if (!map.is_valid(i)) continue;
       ++used;
       const float* p = map.pixel(i);
       if (p[0] == 0 && p[1] == 0 && p[2] == 0) continue;
-      const auto y = sh9_basis(pixel_direction(map, i));
+      const size_t u = i - row * width;
+      const auto y = sh9_basis(separable ? Vec3{sin_theta * cos_phi[u], sin_theta * sin_phi[u], cos_theta}
+                                         : pixel_direction(map, i));
       for (int k = 0; k < kSh9Count; ++k)
         for (int c = 0; c < 3; ++c) sh.coefficients[k][c] += double(p[c]) * y[k] * dw;
     }

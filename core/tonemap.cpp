@@ -11,6 +11,22 @@ namespace lp {
 namespace {
 
 constexpr float kCheckerLight = 0.55f, kCheckerDark = 0.45f;
+constexpr float kHatchLine = 0.35f, kHatchGround = 0.07f;
+
+float unseen_value(int u, int v, const ToneMapOptions& options) {
+  const int size = std::max(1, options.checker_px);
+  if (options.unseen == UnseenStyle::Hatch) {
+    const int spacing = std::max(3, size * 3 / 2);
+    return (u + v) % spacing < std::max(1, spacing / 4) ? kHatchLine : kHatchGround;
+  }
+  return ((u / size + v / size) % 2) ? kCheckerDark : kCheckerLight;
+}
+
+bool seen(ImageView image, int u, int v) {
+  if (!image.is_valid(u, v)) return false;
+  const float* p = image.pixel(u, v);
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
 
 // Exposure k with Reinhard k Y / (1 + k Y) = display at the chosen percentile of the
 // valid luminances; falls back to the maximum when that percentile is black.
@@ -19,7 +35,7 @@ double exposure_for(ImageView image, const ToneMapOptions& options) {
   lum.reserve(image.pixel_count());
   for (int v = 0; v < image.height; ++v)
     for (int u = 0; u < image.width; ++u)
-      if (image.is_valid(u, v)) {
+      if (seen(image, u, v)) {
         const float* p = image.pixel(u, v);
         lum.push_back(luminance(p[0], p[1], p[2]));
       }
@@ -46,15 +62,13 @@ uint8_t srgb_code(float v) {
 std::vector<float> tone_map(ImageView image, const ToneMapOptions& options) {
   if (image.channels != 3) throw std::invalid_argument("tone_map: the image is not RGB");
   const int width = image.width, height = image.height;
-  const double k = exposure_for(image, options);
-  const int checker = std::max(1, options.checker_px);
+  const double k = options.exposure > 0 && std::isfinite(options.exposure) ? options.exposure : exposure_for(image, options);
   std::vector<float> out(3 * image.pixel_count());
   for (int v = 0; v < height; ++v)
     for (int u = 0; u < width; ++u) {
       float* o = &out[3 * (size_t(v) * size_t(width) + size_t(u))];
-      if (!image.is_valid(u, v)) {
-        const float g = ((u / checker + v / checker) % 2) ? kCheckerDark : kCheckerLight;
-        o[0] = o[1] = o[2] = g;
+      if (!seen(image, u, v)) {
+        o[0] = o[1] = o[2] = unseen_value(u, v, options);
         continue;
       }
       const float* p = image.pixel(u, v);

@@ -76,6 +76,8 @@ struct Snapshot {
   std::shared_ptr<const std::string> json;  // one line, no trailing newline
   std::shared_ptr<const std::string> body;  // json + "\n", as /lights and NDJSON streams send it
   std::shared_ptr<const std::string> sse;   // "data: " json "\n\n"
+  std::shared_ptr<const std::string> sh;    // /sh: sh.json of the list's map SH9; null without one
+  std::string sh_etag;
   double latency = NAN;                      // publish wall time - list timestamp (s)
 };
 
@@ -87,6 +89,23 @@ uint64_t fnv1a(std::string_view text) {
 }
 
 constexpr const char* kRevalidate = "no-cache";  // clients may keep answers but must ask (ETag) every time
+
+HttpResponse nothing_published() {
+  HttpResponse r = error_response(503, "no light list published yet");
+  r.headers.emplace_back("Retry-After", "1");
+  return r;
+}
+
+// A JSON answer of one published list, with its tag: a poller that has it already gets
+// 304 and no body.
+HttpResponse tagged_json(const HttpRequest& req, std::shared_ptr<const std::string> body, const std::string& etag) {
+  if (http_etag_matches(req.header("if-none-match"), etag)) return http_not_modified(etag, kRevalidate);
+  HttpResponse r;
+  r.body = std::move(body);
+  r.content_type = "application/json";
+  r.headers = {{"ETag", etag}, {"Cache-Control", kRevalidate}};
+  return r;
+}
 
 }  // namespace
 
@@ -146,6 +165,7 @@ struct LightServer::Impl {
   void handle_stream(const HttpRequest& req, HttpExchange& ex);
   void handle_map(MapView view, const HttpRequest& req, HttpExchange& ex);
   HttpResponse lights_response(const HttpRequest& req) const;
+  HttpResponse sh_response(const HttpRequest& req) const;
   HttpResponse status_response(const HttpRequest& req) const;
   HttpResponse metrics_response() const;
   nlohmann::json status_json() const;
@@ -171,26 +191,24 @@ void LightServer::Impl::handle(const HttpRequest& req, HttpExchange& ex) {
   if (req.path == "/probe.exr") return handle_map(MapView::Exr, req, ex);
   if (req.path == "/status") return ex.respond(status_response(req));
   if (req.path == "/metrics") return ex.respond(metrics_response());
-  // GET /sh (spherical harmonics of the latest map) and SH inside the light list come
-  // with the SH task: its route goes here, answered from the Snapshot (computed once per
-  // publish, like Snapshot::body) with an ETag as /lights has.
+  if (req.path == "/sh") return ex.respond(sh_response(req));
   ex.respond(error_response(404, "no such path: " + req.path.substr(0, 200)));
 }
 
 HttpResponse LightServer::Impl::lights_response(const HttpRequest& req) const {
   const auto snap = snapshot();
-  if (!snap) {
-    HttpResponse r = error_response(503, "no light list published yet");
-    r.headers.emplace_back("Retry-After", "1");
-    return r;
-  }
-  // A poller that has this list already gets 304 and no body.
-  if (http_etag_matches(req.header("if-none-match"), snap->etag)) return http_not_modified(snap->etag, kRevalidate);
-  HttpResponse r;
-  r.body = snap->body;
-  r.content_type = "application/json";
-  r.headers = {{"ETag", snap->etag}, {"Cache-Control", kRevalidate}};
-  return r;
+  if (!snap) return nothing_published();
+  return tagged_json(req, snap->body, snap->etag);
+}
+
+// sh.json as `lightprobe sh` writes it, of the map the latest list was sampled from. Only
+// a list whose "sh9" is the map's: a residual is not the map's SH and would be a wrong
+// answer under the same name.
+HttpResponse LightServer::Impl::sh_response(const HttpRequest& req) const {
+  const auto snap = snapshot();
+  if (!snap) return nothing_published();
+  if (!snap->sh) return error_response(404, "the latest light list carries no SH9 of its map");
+  return tagged_json(req, snap->sh, snap->sh_etag);
 }
 
 void LightServer::Impl::handle_stream(const HttpRequest& req, HttpExchange& ex) {
@@ -338,6 +356,7 @@ LightServer::LightServer(LightServerOptions options) {
   MapViewOptions mv;
   mv.png_width = impl_->options.preview_width;
   mv.max_png_rate = impl_->options.preview_max_rate;
+  mv.png_time_constant_s = impl_->options.preview_time_constant_s;
   mv.etag_prefix = impl_->etag_prefix;
   impl_->views = std::make_unique<MapViews>(mv);
   HttpServerOptions ho;
@@ -388,6 +407,8 @@ void LightServer::publish(const LightList& list, std::shared_ptr<const EnvMap> m
   snap->json = std::make_shared<const std::string>(json);
   snap->body = std::make_shared<const std::string>(json + "\n");
   snap->sse = std::make_shared<const std::string>("data: " + json + "\n\n");
+  if (list.sh9 && list.sh9_content == Sh9Content::Map)
+    snap->sh = std::make_shared<const std::string>(sh9_to_json(*list.sh9, list.units));
   const double now_wall = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   if (list.timestamp > 1e9) {  // looks like Unix time: latency is meaningful
     const double latency = now_wall - list.timestamp;
@@ -397,6 +418,7 @@ void LightServer::publish(const LightList& list, std::shared_ptr<const EnvMap> m
     std::lock_guard lock(s.state_mutex);
     snap->generation = s.latest ? s.latest->generation + 1 : 1;
     snap->etag = fmt::format("\"{}-l{}\"", s.etag_prefix, snap->generation);
+    snap->sh_etag = fmt::format("\"{}-h{}\"", s.etag_prefix, snap->generation);
     if (snap->map) s.latest_map = {snap->generation, snap->map, snap->lists};
     s.latest = snap;
     s.publish_times.push_back(Clock::now());

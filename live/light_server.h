@@ -10,7 +10,11 @@
 //   /lights/stream  every new list as it comes: Server-Sent Events ("data: <json>\n\n"),
 //                   or NDJSON with ?format=ndjson (one list per line)
 //   /probe.png      tone-mapped preview of the latest map with its lights (sampling/overlay.h),
-//                   rendered lazily, at most `preview_max_rate` times a second, and cached
+//                   its exposure smoothed over time, unseen parts hatched; rendered lazily,
+//                   at most `preview_max_rate` times a second, and cached
+//   /sh             the latest map's SH9 as `lightprobe sh` writes sh.json (from the list's
+//                   "sh9" of content "map", live/pipeline.h); 503 before the first frame,
+//                   404 when the list carries none (a merge's lists)
 //   /status         JSON numbers for the page: frame, lights, fps, latency, clients, drops
 //   /metrics        Prometheus text: the pipeline's (publish_metrics) plus the server's own
 // The connection policy (caps per address and in all, answered with 503; timeouts per
@@ -42,6 +46,9 @@ struct LightServerOptions {
   int max_streams = 32;      // concurrent /lights/stream clients; past it, 503
   int preview_width = 0;     // /probe.png width; 0: the map's width for latlong (<= 1024), else 1024
   double preview_max_rate = 4;  // /probe.png renders per second at most
+  // /probe.png's exposure follows the map over this time constant (seconds of list
+  // timestamps; core/temporal_tonemap.h) instead of jumping per picture; 0: per picture.
+  double preview_time_constant_s = 0.5;
 };
 
 // Counters as /metrics reports them (for callers that want numbers, not text).

@@ -12,7 +12,9 @@
 #include <fmt/format.h>
 
 #include "core/image_io.h"
+#include "core/image_view.h"
 #include "core/picture_io.h"
+#include "core/temporal_tonemap.h"
 #include "sampling/overlay.h"
 
 namespace lp {
@@ -62,6 +64,9 @@ struct MapViews::Impl {
   std::thread thread;
   bool quit = false, running = false;
   Cached png{"image/png", 'p', 4}, exr{"image/x-exr", 'e', 0};
+  // The PNG's exposure over time; only the render thread touches these.
+  std::optional<TemporalToneMapper> tone;
+  double tone_time = NAN;  // timestamp of the list the exposure was last adapted to
 
   std::shared_ptr<const std::string> render(Cached& c, const MapFrame& f) {
     if (&c == &exr) return std::make_shared<const std::string>(encode_envmap_exr(*f.map));
@@ -70,7 +75,14 @@ struct MapViews::Impl {
     if (width <= 0) width = map.layout == Layout::LatLong ? std::min(map.width, 1024) : 1024;
     width = std::max(2, width - width % 2);
     static const std::vector<Light> none;
-    const std::vector<float> rgb = render_overlay(map, f.lights ? f.lights->lights : none, width);
+    OverlayOptions o;
+    o.unseen = UnseenStyle::Hatch;
+    if (tone) {
+      const double t = f.lights ? f.lights->timestamp : NAN;
+      o.exposure = tone->update(image_view(map), t - tone_time).exposure();
+      tone_time = t;
+    }
+    const std::vector<float> rgb = render_overlay(map, f.lights ? f.lights->lights : none, width, o);
     return std::make_shared<const std::string>(encode_display_png(width, width / 2, rgb));
   }
 
@@ -120,6 +132,9 @@ struct MapViews::Impl {
 MapViews::MapViews(MapViewOptions options) : impl_(std::make_unique<Impl>()) {
   impl_->options = std::move(options);
   impl_->png.max_rate = impl_->options.max_png_rate > 0 ? impl_->options.max_png_rate : 4;
+  TemporalToneMapOptions t;  // time constant 0: the same operator, adapted per picture
+  t.time_constant_s = std::max(0.0, impl_->options.png_time_constant_s);
+  impl_->tone.emplace(t);
 }
 
 MapViews::~MapViews() { stop(); }

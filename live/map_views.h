@@ -1,5 +1,5 @@
-// The light server's pictures of the latest map: /probe.png (tone-mapped, its lights
-// drawn: sampling/overlay.h) and /probe.exr (the float map as core/image_io writes EXR:
+// The light server's pictures of the latest map: /probe.png (tone-mapped with an exposure
+// smoothed over time, its lights drawn: sampling/overlay.h) and /probe.exr (the float map as core/image_io writes EXR:
 // layout, units and nside in its header). Each is rendered lazily on a thread of its own
 // (never on the server's loop), once per new map at most (the PNG at most max_png_rate
 // times a second), cached, and given to every request that waits for it, with an ETag:
@@ -26,6 +26,10 @@ struct MapFrame {
 struct MapViewOptions {
   int png_width = 0;          // 0: the map's width for latlong (<= 1024), else 1024
   double max_png_rate = 4;    // PNG renders per second at most
+  // The PNG's exposure adapts over this time constant (core/temporal_tonemap.h, timed by
+  // the lists' timestamps), not per picture; 0: per picture (the same operator). Unseen
+  // parts are hatched.
+  double png_time_constant_s = 0.5;
   std::string etag_prefix;    // distinguishes this server's tags from an earlier run's
 };
 

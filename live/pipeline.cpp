@@ -8,6 +8,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <iterator>
 
 #include "core/error.h"
 #include "hdr/bracket.h"
@@ -24,10 +25,11 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 }  // namespace
 
 // The stages a bracket can pass through, in the order /metrics lists them.
-constexpr const char* kStages[] = {"fuse", "unwrap", "fuse_unwrap", "sample", "publish"};
+constexpr const char* kStages[] = {"fuse", "unwrap", "fuse_unwrap", "sample", "sh9", "publish"};
+constexpr size_t kStageCount = std::size(kStages);
 
 struct LivePipeline::Timings {
-  double stage[5] = {NAN, NAN, NAN, NAN, NAN};  // as kStages; NaN: not run for this bracket
+  double stage[kStageCount] = {NAN, NAN, NAN, NAN, NAN, NAN};  // as kStages; NaN: not run for this bracket
   double latency = NAN;
 };
 
@@ -320,11 +322,20 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
   // 3. Lights, with the temporal processing of the stream.
   t0 = Clock::now();
   const double timestamp = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-  const LightList lights = sampler_->process(*map, published_++, timestamp);
+  LightList lights = sampler_->process(*map, published_++, timestamp);
   timings.stage[3] = seconds_since(t0);
+  // 4. The map's SH9, once per frame for every consumer (/sh, the list, MQTT). It is the
+  // map's, not a residual: the lights were sampled from the whole map, so the two are
+  // alternatives. project_sh9 refuses what the sampler refused already (NaN, negative).
+  if (options_.sh9) {
+    t0 = Clock::now();
+    lights.sh9 = project_sh9(*map);
+    lights.sh9_content = Sh9Content::Map;
+    timings.stage[4] = seconds_since(t0);
+  }
   t0 = Clock::now();
   publish_(lights, map);
-  timings.stage[4] = seconds_since(t0);
+  timings.stage[5] = seconds_since(t0);
   timings.latency = seconds_since(b.captured);
   return timings;
 }

@@ -50,6 +50,10 @@ struct LivePipelineOptions {
   Layout layout = Layout::Hemisphere;
   int width = 360, height = 90;
   FramePipelineOptions sampling;
+  // Every list carries the SH9 of its map ("sh9", content "map": core/spherical_harmonics.h),
+  // what /sh serves and engines light their ambient with. About 0.5 ms for a 360x90 map
+  // (stage "sh9" in /metrics); off saves it for lists nobody reads SH from.
+  bool sh9 = true;
   size_t queue_brackets = 2;        // brackets waiting for the back end
   double reconnect_delay_s = 0.5;
 };
@@ -85,7 +89,7 @@ class LivePipeline {
   LiveStats stats() const;
   // Prometheus text: the counters of stats(), and histograms of every published list's
   // stage times (lightprobe_stage_duration_seconds{stage=fuse|unwrap|fuse_unwrap|sample|
-  // publish}) and capture-to-publish latency (lightprobe_latency_seconds), in seconds.
+  // sh9|publish}) and capture-to-publish latency (lightprobe_latency_seconds), in seconds.
   // The frame rate gauge comes from the light server (lightprobe_frame_rate_hertz).
   std::string metrics() const;
 

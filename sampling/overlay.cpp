@@ -42,6 +42,8 @@ std::vector<float> render_overlay(const EnvMap& map, const std::vector<Light>& l
   tm.percentile = options.percentile;
   tm.display = options.percentile_display;
   tm.checker_px = options.checker_px;
+  tm.exposure = options.exposure;
+  tm.unseen = options.unseen;
   std::vector<float> out = tone_map(image_view(*view), tm);
 
   // Lights, dimmest first so the brightest stay on top.

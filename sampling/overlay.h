@@ -29,6 +29,7 @@
 
 #include "core/envmap.h"
 #include "core/light_list.h"
+#include "core/tonemap.h"
 
 namespace lp {
 
@@ -44,6 +45,11 @@ struct OverlayOptions {
   double radius_decades = 3;
   // Checkerboard square size in pixels for invalid regions.
   int checker_px = 8;
+  // > 0: this exposure instead of the percentile's (a live preview's temporal mapper,
+  // core/temporal_tonemap.h).
+  double exposure = 0;
+  // How the invalid regions are drawn (core/tonemap.h): checkerboard or "no data" hatching.
+  UnseenStyle unseen = UnseenStyle::Checker;
 };
 
 // Throws InputError when width is not a positive even number.

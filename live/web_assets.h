@@ -17,8 +17,9 @@ namespace lp {
 // True when this binary carries three.js.
 bool have_three_js();
 
-// Answers a GET or HEAD of a static asset (200 with a strong ETag and "no-cache", or 304
-// for a matching If-None-Match); false when `path` names none (the caller answers 404).
+// Answers a GET or HEAD under /three/: 200 with a strong ETag and "no-cache", 304 for a
+// matching If-None-Match, 404 for any other name (or every name in a build without
+// three.js), all without a token; false for paths elsewhere.
 bool answer_web_asset(const HttpRequest& request, HttpExchange& exchange);
 
 }  // namespace lp

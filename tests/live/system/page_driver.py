@@ -40,7 +40,7 @@ class Browser:
         self._next_id = 0
         self._buffer = b""
         self.session = None
-        targets = self.call("Target.getTargets", timeout=30)["targetInfos"]
+        targets = self.call("Target.getTargets", timeout=90)["targetInfos"]  # a loaded machine starts it slowly
         page = next(t for t in targets if t["type"] == "page")
         self.session = self.call("Target.attachToTarget", {"targetId": page["targetId"], "flatten": True},
                                  session=False)["sessionId"]

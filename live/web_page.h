@@ -411,6 +411,10 @@ async function startPreview() {
   // Exposure: the diffuse irradiance facing the key light is put at a fixed display level,
   // eased over about half a second so that a lamp switching does not pump the picture.
   let exposure = null, target = 1, lastTime = 0;
+  // Lists can come faster than a software-rendered WebGL draws (4 shadow maps each): draw
+  // in animation frames only, and leave at least 3x the last draw's cost between draws, so
+  // that the page stays responsive; the newest list is the one drawn.
+  let dirty = false, lastRender = -1e9, renderCost = 0;
   function irradianceLum(sh, n) {  // three's shGetIrradianceAt, luminance of the result
     const [x, y, z] = n, c = sh.coefficients;
     const w = [0.886227, 1.023328 * y, 1.023328 * z, 1.023328 * x, 0.858086 * x * y, 0.858086 * y * z,
@@ -449,10 +453,11 @@ async function startPreview() {
     if (exposure === null) exposure = target;
     this.sh = sh; this.strong = strong; this.keyDirection = key;
     this.pendingFrame = list.frame;
-    this.render();
+    dirty = true;  // drawn by tick(): at most once per animation frame, see there
   };
   preview.render = function () {
     if (!this.sh) return;
+    const started = performance.now();
     for (let i = 0; i < SHADOWED; i++) {
       const l = this.strong[i], sun = suns[i];
       const m = l ? Math.max(l.rgb[0], l.rgb[1], l.rgb[2]) : 0;
@@ -465,6 +470,8 @@ async function startPreview() {
     probe.sh.copy(this.sh).scale(exposure);
     renderer.render(scene, camera);
     this.renderedFrame = this.pendingFrame;
+    dirty = false;
+    lastRender = performance.now(); renderCost = lastRender - started;
   };
   // The sphere's centre and radius on the page, in CSS pixels (tests read the screenshot there).
   preview.sphereOnScreen = function () {
@@ -489,8 +496,9 @@ async function startPreview() {
     const dt = Math.min(1, Math.max(0, (time - lastTime) / 1000)); lastTime = time;
     if (exposure !== null && Math.abs(Math.log(target / exposure)) > 0.005) {
       exposure *= Math.pow(target / exposure, 1 - Math.exp(-dt / 0.5));
-      preview.render();
+      dirty = true;
     }
+    if (dirty && time - lastRender >= Math.min(500, 3 * renderCost)) preview.render();
     requestAnimationFrame(tick);
   }
   requestAnimationFrame(tick);

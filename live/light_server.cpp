@@ -21,6 +21,7 @@
 #include "core/error.h"
 #include "live/map_views.h"
 #include "live/metrics.h"
+#include "live/web_assets.h"
 #include "live/web_page.h"
 
 namespace lp {
@@ -179,6 +180,7 @@ void LightServer::Impl::handle(const HttpRequest& req, HttpExchange& ex) {
     ex.respond(std::move(r));
     return;
   }
+  if (answer_web_asset(req, ex)) return;  // three.js for the page: public like the page
   if (!authorized(req)) {
     HttpResponse r = error_response(401, "missing or wrong bearer token (Authorization: Bearer <token>)");
     r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"lightprobe\"");

@@ -5,7 +5,9 @@
 // slowing anything down).
 //
 // Routes (GET and HEAD only; other methods get 405, unknown paths 404):
-//   /               a self-contained live page (live/web_page.h): preview, lights, numbers
+//   /               the live page (live/web_page.h): a 3D preview and the operator's view
+//   /three/*.js     three.js for the page, embedded at build time (live/web_assets.h);
+//                   public like the page
 //   /lights         the latest light list, CONVENTIONS.md JSON; 503 before the first frame
 //   /lights/stream  every new list as it comes: Server-Sent Events ("data: <json>\n\n"),
 //                   or NDJSON with ?format=ndjson (one list per line)

@@ -19,6 +19,18 @@ nlohmann::json light_count_json(const LiveStats& s) {
   return j;
 }
 
+nlohmann::json pipeline_status_json(const LiveStats& s, const std::string& source, double seconds_since_frame) {
+  const bool streaming = seconds_since_frame < 2;
+  return {{"source", source},
+          {"camera_state", streaming ? "streaming" : fmt::format("no frame for {:.0f} s", seconds_since_frame)},
+          {"frames_in", s.frames_in},
+          {"brackets_processed", s.brackets_processed},
+          {"brackets_dropped", s.brackets_dropped},
+          {"frames_dropped_partial", s.frames_dropped_partial},
+          {"reconnects", s.reconnects},
+          {"last_error", s.last_error}};
+}
+
 StreamSessionReport run_stream_session(const StreamSessionOptions& options, const std::function<void(int port)>& started) {
   LightServer server(options.server);
   std::unique_ptr<MqttPublisher> mqtt;
@@ -41,11 +53,18 @@ StreamSessionReport run_stream_session(const StreamSessionOptions& options, cons
   if (started) started(report.port);
   defer_interrupts();  // a signal stops the loop below: servers stopped, the summary returned
   const auto start = std::chrono::steady_clock::now();
+  auto last_frame_at = start;
+  uint64_t frames_seen = 0;
   while (!interrupt_signal()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    if (!pipeline.stats().input_error.empty() || (mqtt && !mqtt->refused().empty())) break;
+    const LiveStats stats = pipeline.stats();
+    if (!stats.input_error.empty() || (mqtt && !mqtt->refused().empty())) break;
     server.publish_metrics(pipeline.metrics() + (mqtt ? mqtt->metrics() : ""));
-    server.publish_status("light_count", light_count_json(pipeline.stats()).dump());
+    server.publish_status("light_count", light_count_json(stats).dump());
+    const auto now = std::chrono::steady_clock::now();
+    if (stats.frames_in != frames_seen) frames_seen = stats.frames_in, last_frame_at = now;
+    server.publish_status("pipeline",
+                          pipeline_status_json(stats, options.source, std::chrono::duration<double>(now - last_frame_at).count()).dump());
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (options.duration_s > 0 && elapsed >= options.duration_s) break;
   }

@@ -43,6 +43,14 @@ struct StreamSessionReport {
 // "reached", "changes"}.
 nlohmann::json light_count_json(const LiveStats& stats);
 
+// The camera and its brackets as the pipeline counts them, served in /status as the
+// "pipeline" section for the page's operator view: source, camera_state ("streaming" while
+// frames arrive; after 2 s without one, "no frame for N s": a lost camera is being reopened
+// then, and reconnects and last_error tell the rest), frames_in, brackets_processed,
+// brackets_dropped, frames_dropped_partial (frames of broken brackets), reconnects,
+// last_error.
+nlohmann::json pipeline_status_json(const LiveStats& stats, const std::string& source, double seconds_since_frame);
+
 // InputError before anything starts for a malformed publish URL. `started(port)` is called
 // once the server listens and the pipeline runs. Interrupts are deferred (core/interrupt.h).
 StreamSessionReport run_stream_session(const StreamSessionOptions& options, const std::function<void(int port)>& started);

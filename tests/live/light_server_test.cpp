@@ -16,6 +16,8 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -27,6 +29,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/light_list.h"
+#include "live/web_assets.h"
 #include "tests/live/http_attack.h"
 
 namespace {
@@ -479,6 +482,45 @@ TEST(LightServer, PageIsSelfContainedAndSendsTheTokenAsAHeader) {
   const auto status = nlohmann::json::parse(res->body);
   EXPECT_TRUE(status.contains("fps"));
   EXPECT_TRUE(status["frame"].is_null());
+  s.server->stop();
+}
+
+// Issue 18: the page's 3D preview loads three.js from the server itself (no network), as
+// a module that imports its core by a relative name; both are public like the page.
+TEST(LightServer, ServesTheEmbeddedThreeJsWithoutTheToken) {
+  lp::LightServerOptions o;
+  o.token = "t0ken";
+  auto s = start_server(o);
+  const auto get = [&](const std::string& path, const std::string& extra = "") {
+    return lp::test::raw_request(s.port, "GET " + path + " HTTP/1.1\r\nHost: x\r\n" + extra + "\r\n", 30);
+  };
+  const std::string dir = LIGHTPROBE_THREE_JS_DIR;
+  const bool on_disk = std::ifstream(dir + "/three.module.js").good() && std::ifstream(dir + "/three.core.js").good();
+  ASSERT_EQ(lp::have_three_js(), on_disk) << "the build embeds three.js exactly when " << dir << " has it";
+  for (const char* name : {"three.module.js", "three.core.js"}) {
+    const auto res = get(std::string("/three/") + name);
+    if (!on_disk) {  // a build without npm's three: 404, and the page says the preview is off
+      EXPECT_EQ(res.status, 404) << name;
+      continue;
+    }
+    ASSERT_EQ(res.status, 200) << name;
+    EXPECT_EQ(lp::test::header_of(res.answer, "Content-Type"), "text/javascript; charset=utf-8");
+    std::ifstream file(dir + "/" + name, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    EXPECT_GT(bytes.size(), 100000u) << name;
+    EXPECT_TRUE(lp::test::body_of(res.answer) == bytes) << name << ": not the embedded file byte for byte";
+    const std::string etag = lp::test::header_of(res.answer, "ETag");
+    ASSERT_FALSE(etag.empty());
+    EXPECT_EQ(get(std::string("/three/") + name, "If-None-Match: " + etag + "\r\n").status, 304) << name;
+  }
+  // Nothing else under /three/ (404, also without the token: the page tells "not built in"
+  // from "no token" by it), and the token still guards the data.
+  EXPECT_EQ(get("/three/../lights").status, 404);
+  EXPECT_EQ(get("/three/three.webgpu.js").status, 404);
+  EXPECT_EQ(get("/lights").status, 401);
+  const auto page = get("/");
+  ASSERT_EQ(page.status, 200);
+  EXPECT_NE(lp::test::body_of(page.answer).find("import(url(\"/three/three.module.js\"))"), std::string::npos);
   s.server->stop();
 }
 

@@ -10,6 +10,8 @@
 #include "core/error.h"
 #include "live/light_server.h"
 #include "live/pipeline.h"
+#include "live/stream_session.h"
+#include <nlohmann/json.hpp>
 
 namespace lp {
 namespace {
@@ -58,6 +60,28 @@ TEST(Stream, TheFakeCameraIsFusedUnwrappedSampledAndServed) {
   EXPECT_EQ(s.frames_in, 3 * (s.brackets_processed + s.brackets_dropped) + s.frames_dropped_partial);
   ASSERT_TRUE(metrics);
   EXPECT_NE(metrics->body.find("lightprobe_frames_in_total"), std::string::npos);
+}
+
+// The page's operator view reads the camera and its brackets from /status ("pipeline").
+TEST(StreamSession, PipelineStatusSaysWhetherTheCameraDeliversAndCountsItsBrackets) {
+  LiveStats st;
+  st.frames_in = 31;
+  st.brackets_processed = 9;
+  st.brackets_dropped = 1;
+  st.frames_dropped_partial = 1;
+  st.reconnects = 2;
+  st.last_error = "camera lost: gone";
+  const nlohmann::json live = pipeline_status_json(st, "aravis:Fake_1", 0.3);
+  EXPECT_EQ(live["camera_state"], "streaming");
+  EXPECT_EQ(live["source"], "aravis:Fake_1");
+  EXPECT_EQ(live["frames_in"], 31);
+  EXPECT_EQ(live["brackets_processed"], 9);
+  EXPECT_EQ(live["brackets_dropped"], 1);
+  EXPECT_EQ(live["frames_dropped_partial"], 1);
+  EXPECT_EQ(live["reconnects"], 2);
+  EXPECT_EQ(live["last_error"], "camera lost: gone");
+  EXPECT_EQ(pipeline_status_json(st, "aravis:Fake_1", 1.99)["camera_state"], "streaming");
+  EXPECT_EQ(pipeline_status_json(st, "aravis:Fake_1", 7.4)["camera_state"], "no frame for 7 s");
 }
 
 }  // namespace

@@ -5,44 +5,28 @@
 #include <algorithm>
 #include <memory>
 
-#include <atomic>
-#include <chrono>
-#include <thread>
-
 #include "calib/camera_model.h"
 #include "calib/photometric.h"
 #include "cli/cmd_live.h"
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
-#include "core/interrupt.h"
 #include "core/limits.h"
 #include "hdr/response.h"
-#include "live/light_server.h"
-#include "live/merge_client.h"
 #include "live/merge_session.h"
 #include "live/stream_session.h"
-#include "live/mqtt_merge.h"
 #include "live/mqtt_publisher.h"
 #include "live/pipeline.h"
 #include "probe/camera_source.h"
 
 namespace lp::cli {
 
-
 struct MergeArgs {
-  std::vector<std::string> urls;    // light servers: http://HOST:PORT
+  MergeSessionOptions mo;           // URLs or topic, timeout, n, upstream token, MQTT, duration bound directly
   std::string listen = "127.0.0.1:8090";
   std::string token;                // for our server
-  std::string upstream_token;       // for the cameras' servers
   std::string weights;              // one per URL
   std::string camera_positions, target;  // X,Y,Z per URL (';' between) and the point lit: position weights
-  int n = 256;                      // q2tree light count of the merge
-  double timeout = 2.0;             // drop a camera silent this long
-  double duration = 0;
-  std::string subscribe;            // mqtt://HOST:PORT/PREFIX/+/lights instead of URLs
-  int mqtt_qos = 1;
-  std::string mqtt_cafile;
 };
 
 namespace {
@@ -122,30 +106,22 @@ int run_stream(const StreamArgs& args, const Output& out) {
 }
 
 int run_merge(const MergeArgs& args, const Output& out) {
-  MergeSessionOptions mo;
-  mo.urls = args.urls;
-  mo.subscribe = args.subscribe;
-  mo.mqtt.merge.timeout_s = args.timeout;
-  mo.mqtt.merge.token = args.upstream_token;
-  mo.mqtt.merge.merge.n = args.n;
-  check_light_count("--n", args.n);
-  if (!args.weights.empty()) mo.mqtt.merge.merge.weights = parse_numbers(args.weights, "--weights", args.urls.size());
+  MergeSessionOptions mo = args.mo;
+  check_light_count("--n", mo.mqtt.merge.merge.n);
+  if (!args.weights.empty()) mo.mqtt.merge.merge.weights = parse_numbers(args.weights, "--weights", mo.urls.size());
   std::string xyz = args.camera_positions;
   std::replace(xyz.begin(), xyz.end(), ';', ',');
-  const auto p = xyz.empty() ? std::vector<double>{} : parse_numbers(xyz, "--camera-positions", 3 * args.urls.size());
+  const auto p = xyz.empty() ? std::vector<double>{} : parse_numbers(xyz, "--camera-positions", 3 * mo.urls.size());
   for (size_t i = 0; i < p.size(); i += 3) mo.camera_positions.push_back({p[i], p[i + 1], p[i + 2]});
   if (!args.target.empty()) {
     const auto t = parse_numbers(args.target, "--target", 3);
     mo.target = Vec3{t[0], t[1], t[2]};
   }
-  mo.mqtt.client.cafile = args.mqtt_cafile;
-  mo.mqtt.qos = args.mqtt_qos;
   parse_listen(args.listen, &mo.server.host, &mo.server.port);
   if (!args.token.empty()) mo.server.token = args.token;
-  mo.duration_s = args.duration;
   const MergeSessionReport r = run_merge_session(mo, [&](int port) {
     say(out, "lightprobe merge: {} -> http://{}:{}/lights\n",
-        args.subscribe.empty() ? fmt::format("{} cameras", args.urls.size()) : "cameras on MQTT", mo.server.host, port);
+        mo.subscribe.empty() ? fmt::format("{} cameras", mo.urls.size()) : "cameras on MQTT", mo.server.host, port);
     std::fflush(stdout);
   });
   say(out, "{}", r.summary());
@@ -194,19 +170,19 @@ std::vector<Command> live_commands() {
        "lightprobe merge http://cam1:8080 http://cam2:8080 --listen 127.0.0.1:8090\nlightprobe merge --subscribe mqtt://broker:1883/studio/+/lights",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<MergeArgs>();
-         f.arg("URL", a->urls, "Light servers, http://HOST:PORT");
-         f.opt("--subscribe", a->subscribe, "Instead of URLs: the cameras on an MQTT broker, mqtt[s]://[USER[:PASSWORD]@]HOST[:PORT]/PREFIX/+/lights (publishes PREFIX/merged/lights)");
-         f.opt("--mqtt-qos", a->mqtt_qos, "QoS of the subscription and the merged lists, 0 or 1").one_of({"0", "1"});
-         f.opt("--mqtt-cafile", a->mqtt_cafile, "mqtts: CA certificates (PEM); default the system's");
+         f.arg("URL", a->mo.urls, "Light servers, http://HOST:PORT");
+         f.opt("--subscribe", a->mo.subscribe, "Instead of URLs: the cameras on an MQTT broker, mqtt[s]://[USER[:PASSWORD]@]HOST[:PORT]/PREFIX/+/lights (publishes PREFIX/merged/lights)");
+         f.opt("--mqtt-qos", a->mo.mqtt.qos, "QoS of the subscription and the merged lists, 0 or 1").one_of({"0", "1"});
+         f.opt("--mqtt-cafile", a->mo.mqtt.client.cafile, "mqtts: CA certificates (PEM); default the system's");
          f.opt("--listen", a->listen, "HOST:PORT to serve the merged lights on");
          f.opt("--token", a->token, "Bearer token for our server");
-         f.opt("--upstream-token", a->upstream_token, "Bearer token for the cameras' servers");
+         f.opt("--upstream-token", a->mo.mqtt.merge.token, "Bearer token for the cameras' servers");
          f.opt("--weights", a->weights, "Comma-separated weights, one per URL");
          f.opt("--camera-positions", a->camera_positions, "Where each URL's camera stands, X,Y,Z;X,Y,Z;... (with --target: weights 1/distance^2)");
          f.opt("--target", a->target, "X,Y,Z: the point being lit, for --camera-positions");
-         f.opt("--n", a->n, "Light count of a Q2-tree merge");
-         f.opt("--timeout", a->timeout, "Drop a camera silent for this many seconds");
-         f.opt("--duration", a->duration, "Stop after this many seconds");
+         f.opt("--n", a->mo.mqtt.merge.merge.n, "Light count of a Q2-tree merge");
+         f.opt("--timeout", a->mo.mqtt.merge.timeout_s, "Drop a camera silent for this many seconds");
+         f.opt("--duration", a->mo.duration_s, "Stop after this many seconds");
          return [a](const Output& out) { return run_merge(*a, out); };
        }},
   };

@@ -48,8 +48,6 @@ FilterMode filter_mode(const std::string& name) {
   throw InputError(fmt::format("--filter must be auto, on or off, got '{}'", name));
 }
 
-}
-
 bool has_physical_units(ExportFormat f) {
   return f == ExportFormat::Gltf || f == ExportFormat::Glb || f == ExportFormat::Pbrt || f == ExportFormat::Mitsuba;
 }

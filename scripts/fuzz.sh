@@ -17,7 +17,7 @@ data=$(cd .. && pwd)/shared/data
 build=$root/build-fuzz
 seconds=${FUZZ_SECONDS:-20}
 jobs=${FUZZ_JOBS:-$(nproc)}
-all_targets="rgbe pfm exr camera_image cameramodel opencv_yaml light_list response readings_csv timestamps config http_request"
+all_targets="rgbe pfm exr camera_image cameramodel opencv_yaml light_list response readings_csv timestamps config http_request corners_vnl"
 targets=${FUZZ_TARGETS:-$all_targets}
 
 bash scripts/install-deps.sh
@@ -66,6 +66,7 @@ seed response '{"format": "lightprobe.response/1", "levels": 4, "linear": false,
 seed response '{"format": "lightprobe.response/1", "levels": 2, "linear": true}\n' linear.json
 seed readings_csv '# grey card and a lux meter\nregion,camera_value,measured,unit\npatch-1,0.0213,48.2,cd/m2\npatch-2,0.0520,118,cd/m2\nlux,1.5,3400,lux\n' readings.csv
 seed readings_csv 'region,camera_value,measured,unit\nimage:photo.png:10,10,4,4,,48.2,cd/m2\n' region.csv
+seed corners_vnl '# filename x y level\nview1.png 10.5 20.25 0\nview1.png 30 20 0\nview1.png 50 20 1\nview1.png 10 40 0\nview1.png 30 40 0\nview1.png 50 40 0\nview2.png - - -\n' corners.vnl
 seed timestamps '# capture times\n1700000000.0\n1700000000.04\n1700000000.08\n' seconds.txt
 seed timestamps 'a.pfm 0.5\nb.pfm 1.0\nc.pfm 1.5\n' named.txt
 seed config '[stream]\nsource = "replay:frames"\nlisten = "127.0.0.1:8080"\nmethod = "q2tree"\nn = 64\nexposures = "0.001,0.01"\nloop = true\nfps = 30.0\n' rig.toml

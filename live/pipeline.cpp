@@ -103,7 +103,7 @@ std::string LivePipeline::metrics() const {
   m.counter("lightprobe_brackets_processed_total", "Brackets turned into published light lists.",
             double(s.brackets_processed));
   m.counter("lightprobe_camera_reconnects_total", "Times the camera was reopened.", double(s.reconnects));
-  m.gauge("lightprobe_light_count", "Lights of the last list, before clustering (--n auto: chosen per frame).", s.lights);
+  m.gauge("lightprobe_lights", "Lights of the last list, before clustering (--n auto: chosen per frame).", s.lights);
   m.counter("lightprobe_light_count_changes_total", "Times --n auto changed the light count.", double(s.count_changes));
   m.family("lightprobe_stage_duration_seconds", "histogram",
            "Time of each processing stage per published list (fuse_unwrap: bracket fusion and unwrap in one pass).");

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <thread>
@@ -19,8 +20,9 @@ nlohmann::json light_count_json(const LiveStats& s) {
   return j;
 }
 
-nlohmann::json pipeline_status_json(const LiveStats& s, const std::string& source, double seconds_since_frame) {
-  const bool streaming = seconds_since_frame < 2;
+nlohmann::json pipeline_status_json(const LiveStats& s, const std::string& source, double seconds_since_frame,
+                                    double quiet_s) {
+  const bool streaming = seconds_since_frame < quiet_s;
   return {{"source", source},
           {"camera_state", streaming ? "streaming" : fmt::format("no frame for {:.0f} s", seconds_since_frame)},
           {"frames_in", s.frames_in},
@@ -54,6 +56,8 @@ StreamSessionReport run_stream_session(const StreamSessionOptions& options, cons
   defer_interrupts();  // a signal stops the loop below: servers stopped, the summary returned
   const auto start = std::chrono::steady_clock::now();
   auto last_frame_at = start;
+  const double fps = options.source_options.frame_rate;
+  const double quiet_s = fps > 0 ? std::max(2.0, 3.0 / fps) : 2.0;  // three frame periods at a slow pace
   uint64_t frames_seen = 0;
   while (!interrupt_signal()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -64,7 +68,8 @@ StreamSessionReport run_stream_session(const StreamSessionOptions& options, cons
     const auto now = std::chrono::steady_clock::now();
     if (stats.frames_in != frames_seen) frames_seen = stats.frames_in, last_frame_at = now;
     server.publish_status("pipeline",
-                          pipeline_status_json(stats, options.source, std::chrono::duration<double>(now - last_frame_at).count()).dump());
+                          pipeline_status_json(stats, options.source, std::chrono::duration<double>(now - last_frame_at).count(),
+                                               quiet_s).dump());
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (options.duration_s > 0 && elapsed >= options.duration_s) break;
   }

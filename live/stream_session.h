@@ -49,7 +49,10 @@ nlohmann::json light_count_json(const LiveStats& stats);
 // then, and reconnects and last_error tell the rest), frames_in, brackets_processed,
 // brackets_dropped, frames_dropped_partial (frames of broken brackets), reconnects,
 // last_error.
-nlohmann::json pipeline_status_json(const LiveStats& stats, const std::string& source, double seconds_since_frame);
+// `quiet_s`: how long without a frame still counts as streaming (2 s; longer for a source
+// paced slower than a frame per 2 s, which is not lost between its frames).
+nlohmann::json pipeline_status_json(const LiveStats& stats, const std::string& source, double seconds_since_frame,
+                                    double quiet_s = 2);
 
 // InputError before anything starts for a malformed publish URL. `started(port)` is called
 // once the server listens and the pipeline runs. Interrupts are deferred (core/interrupt.h).

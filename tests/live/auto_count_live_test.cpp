@@ -73,7 +73,7 @@ TEST(LiveAutoCount, TheStreamKeepsTheFewestLightsWithinTheTargetAndReportsThem) 
   EXPECT_EQ(j["mode"], "auto");
   EXPECT_EQ(j["lights"], offline.count);
   EXPECT_EQ(j["target_error"], 0.02);
-  EXPECT_NE(p.metrics().find("lightprobe_light_count " + std::to_string(offline.count)), std::string::npos);
+  EXPECT_NE(p.metrics().find("lightprobe_lights " + std::to_string(offline.count)), std::string::npos);
   fs::remove_all(dir);
 }
 

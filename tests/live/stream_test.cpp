@@ -82,6 +82,8 @@ TEST(StreamSession, PipelineStatusSaysWhetherTheCameraDeliversAndCountsItsBracke
   EXPECT_EQ(live["last_error"], "camera lost: gone");
   EXPECT_EQ(pipeline_status_json(st, "aravis:Fake_1", 1.99)["camera_state"], "streaming");
   EXPECT_EQ(pipeline_status_json(st, "aravis:Fake_1", 7.4)["camera_state"], "no frame for 7 s");
+  // A replay paced at 0.4 fps is streaming 2.5 s after its last frame, not lost.
+  EXPECT_EQ(pipeline_status_json(st, "replay:maps", 2.5, 7.5)["camera_state"], "streaming");
 }
 
 }  // namespace

@@ -64,10 +64,10 @@ void write_cameramodel(const std::string& path, const CameraModel& model, const 
 CameraModel read_cameramodel(const std::string& path);
 void write_opencv_yaml(const std::string& path, const CameraModel& model);
 CameraModel read_opencv_yaml(const std::string& path);
-// The OpenCV FileStorage file at `path` (YAML or XML), read through read_text_file and opened;
-// InputError naming the file if it is not one. YAML is checked first for the lines on which
-// OpenCV 4.6's parser reads before its buffer and ends the process in std::terminate (a key
-// that is empty: a line whose text starts with ':'), found by fuzz_opencv_yaml.
+// The OpenCV FileStorage file at `path` (YAML, or XML for a .xml path), read through
+// read_text_file and opened; InputError naming the file if it is not one. YAML is first held
+// to the subset of calib/opencv_yaml_check.h: OpenCV 4.6's parser aborts the process or
+// loops forever on some text outside it (found by fuzz_opencv_yaml).
 cv::FileStorage open_opencv_storage(const std::string& path);
 // An OpenCV FileStorage matrix of at most max_values values into *out; InputError naming
 // `path` and `key` otherwise. The size is checked before OpenCV allocates rows x cols from

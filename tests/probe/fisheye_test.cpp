@@ -229,7 +229,7 @@ TEST(Fisheye, YamlWithAnEmptyKeyIsRefusedBeforeOpenCVCanAbortOnIt) {
     read_fisheye_yaml(path);
     ADD_FAILURE() << "read";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()), path + ": line 8: an empty key (OpenCV cannot read it)");
+    EXPECT_EQ(std::string(e.what()), path + ": line 8: an empty key (not the OpenCV YAML a camera file holds)");
   }
   std::filesystem::remove_all(dir);
 }

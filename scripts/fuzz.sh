@@ -9,6 +9,11 @@
 #   FUZZ_SECONDS=20     seconds per target
 #   FUZZ_TARGETS="..."  only these targets (names as in fuzz/CMakeLists.txt: rgbe pfm ...)
 #   FUZZ_JOBS=N         targets run at once (default: the number of cores)
+#   FUZZ_SEED=1         libFuzzer's random seed; fixed so that a run is a gate, not a lottery:
+#                       one process per target from the same seeds mutates in the same order,
+#                       so CI's 20 s are a prefix of a longer local run with the same seed.
+#                       FUZZ_SEED=0 draws a fresh seed (exploring; what a finding then needs
+#                       is a regression test that reads the minimised input).
 # Running one target longer, and reproducing a finding: docs/fuzzing.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,6 +21,7 @@ root=$PWD
 data=$(cd .. && pwd)/shared/data
 build=$root/build-fuzz
 seconds=${FUZZ_SECONDS:-20}
+fuzz_seed=${FUZZ_SEED:-1}
 jobs=${FUZZ_JOBS:-$(nproc)}
 all_targets="rgbe pfm exr camera_image cameramodel opencv_yaml light_list response readings_csv timestamps config http_request corners_vnl"
 targets=${FUZZ_TARGETS:-$all_targets}
@@ -86,7 +92,7 @@ run_one() {  # target: fuzzes it, then prints one summary line
   local t=$1 log=$build/logs/$1.log rc=0
   # -close_fd_mask=3: the libraries' own chatter (OpenCV, libpng) off; libFuzzer's and the
   # sanitizers' reports still come through. -max_len: whole small seeds, headers of the rest.
-  "$build/fuzz/fuzz_$t" "$corpus/$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+  "$build/fuzz/fuzz_$t" "$corpus/$t" -max_total_time="$seconds" -seed="$fuzz_seed" -timeout=10 -rss_limit_mb=2048 \
     -malloc_limit_mb=2048 -max_len=131072 -close_fd_mask=3 -print_final_stats=1 \
     -artifact_prefix="$build/findings/$t-" >"$log" 2>&1 || rc=$?
   local runs cov ft corpus_n
@@ -105,13 +111,13 @@ run_one() {  # target: fuzzes it, then prints one summary line
   fi
 }
 export -f run_one
-export build corpus seconds
+export build corpus seconds fuzz_seed
 
 start=$SECONDS
 summary=$build/logs/summary.txt
 printf '%s\n' $targets | xargs -P "$jobs" -I{} bash -c 'run_one {}' | tee "$summary"
 passed=$(grep -c ' ok ' "$summary" || true)
 failed=$(grep -c ' FAILED ' "$summary" || true)
-echo "fuzz: ${seconds} s per target, $jobs at once, $((SECONDS - start)) s in all"
+echo "fuzz: ${seconds} s per target, seed $fuzz_seed, $jobs at once, $((SECONDS - start)) s in all"
 echo "fuzz: $passed passed, $failed failed"
 [ "$failed" -eq 0 ] && [ "$passed" -gt 0 ]

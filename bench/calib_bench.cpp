@@ -93,7 +93,8 @@ void register_all() {
   };
   for (const Set& s : sets) {
     for (bool classic : {true, false}) {
-      const std::string name = std::string("BM_DetectBoard/") + s.name + (classic ? "/cascade" : "/sb_only");
+      // Stage groups (bench/stages_bench.cpp): the cascade is what calib runs.
+      const std::string name = std::string("calib/detect_all_") + s.name + (classic ? "/ours" : "/ours:sb only");
       const std::string dir = s.dir;
       const lp::BoardSpec board = s.board;
       benchmark::RegisterBenchmark(name.c_str(), [dir, board, classic](benchmark::State& st) {

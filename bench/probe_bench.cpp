@@ -5,7 +5,8 @@
 // converted to CV_16SC2 fixed point) and with the memory floor: one pass reading the
 // input and writing the output. Arg = threads (TBB arena / cv::setNumThreads).
 // Counter MPix_s = output megapixels per second.
-//   build/bench/lightprobe_bench --benchmark_filter=Remap --benchmark_counters_tabular=true
+//   build/bench/lightprobe_bench --benchmark_filter=^probe/ --benchmark_counters_tabular=true
+// (names: the stage groups of bench/stages_bench.cpp; the last number is the thread count)
 #include <benchmark/benchmark.h>
 
 #include <tbb/blocked_range.h>
@@ -76,7 +77,7 @@ void BM_Remap_Floor(benchmark::State& state) {
   }
   set_counters(state);
 }
-BENCHMARK(BM_Remap_Floor)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Remap_Floor)->Name("probe/unwrap_1280x960_to_1024x512/floor")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Remap_Compiled(benchmark::State& state) {
   const CompiledRemap c = compile_remap(table(), kInW, kInH);
@@ -88,7 +89,7 @@ void BM_Remap_Compiled(benchmark::State& state) {
   }
   set_counters(state);
 }
-BENCHMARK(BM_Remap_Compiled)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Remap_Compiled)->Name("probe/unwrap_1280x960_to_1024x512/ours")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Remap_OpenCvFloatMaps(benchmark::State& state) {
   cv::setNumThreads(int(state.range(0)));
@@ -106,7 +107,7 @@ void BM_Remap_OpenCvFloatMaps(benchmark::State& state) {
   set_counters(state);
   cv::setNumThreads(-1);
 }
-BENCHMARK(BM_Remap_OpenCvFloatMaps)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Remap_OpenCvFloatMaps)->Name("probe/unwrap_1280x960_to_1024x512/peer:cv::remap")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Remap_OpenCvFixedPointMaps(benchmark::State& state) {
   cv::setNumThreads(int(state.range(0)));
@@ -125,18 +126,18 @@ void BM_Remap_OpenCvFixedPointMaps(benchmark::State& state) {
   set_counters(state);
   cv::setNumThreads(-1);
 }
-BENCHMARK(BM_Remap_OpenCvFixedPointMaps)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Remap_OpenCvFixedPointMaps)->Name("probe/unwrap_1280x960_to_1024x512/peer:cv::remap 16-bit maps")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Once per geometry: the fisheye table and its compilation.
 void BM_Remap_BuildFisheyeTable(benchmark::State& state) {
   const FisheyeModel m = equidistant_fisheye(kInW, kInH, 360);
   for (auto _ : state) benchmark::DoNotOptimize(fisheye_remap(m, Layout::LatLong, kOutW, kOutH).src_x.data());
 }
-BENCHMARK(BM_Remap_BuildFisheyeTable)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Remap_BuildFisheyeTable)->Name("probe/unwrap_table_build/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Remap_Compile(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(compile_remap(table(), kInW, kInH).taps.data());
 }
-BENCHMARK(BM_Remap_Compile)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Remap_Compile)->Name("probe/unwrap_table_compile/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

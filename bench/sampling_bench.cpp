@@ -118,19 +118,25 @@ void BM_ToneParameters(benchmark::State& state, Layout layout) {
   for (auto _ : state) benchmark::DoNotOptimize(frame_tone_parameters(image_view(map)));
 }
 
+// Named in the stage groups of bench/stages_bench.cpp: the plain read is the floor of
+// every method's prepare.
 int register_all() {
   for (Layout layout : {Layout::Hemisphere, Layout::LatLong}) {
     const std::string size = layout == Layout::Hemisphere ? "hemisphere360x90" : "latlong1024x512";
-    benchmark::RegisterBenchmark(("PlainRead/" + size).c_str(), BM_PlainRead, layout)->Unit(benchmark::kMicrosecond);
-    benchmark::RegisterBenchmark(("ProjectSh9/" + size).c_str(), BM_ProjectSh9, layout)->Unit(benchmark::kMicrosecond);
-    benchmark::RegisterBenchmark(("ToneParameters/" + size).c_str(), BM_ToneParameters, layout)
+    const std::string prepare = "sampling/prepare_" + size + "/";
+    benchmark::RegisterBenchmark((prepare + "floor").c_str(), BM_PlainRead, layout)->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("sampling/sh9_" + size + "/ours").c_str(), BM_ProjectSh9, layout)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("sampling/tone_parameters_" + size + "/ours").c_str(), BM_ToneParameters, layout)
         ->Unit(benchmark::kMicrosecond);
     for (Method m : all_methods()) {
-      const std::string name = std::string(to_string(m)) + "/" + size;
-      benchmark::RegisterBenchmark(("Prepare/" + name).c_str(), BM_Prepare, m, layout)->Unit(benchmark::kMicrosecond);
-      benchmark::RegisterBenchmark(("Place/" + name).c_str(), BM_Place, m, layout)
+      const std::string method(to_string(m));
+      benchmark::RegisterBenchmark((prepare + "ours:" + method).c_str(), BM_Prepare, m, layout)
+          ->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("sampling/place_" + size + "/ours:" + method).c_str(), BM_Place, m, layout)
           ->Arg(300)->Arg(1000)->Unit(benchmark::kMicrosecond);
-      benchmark::RegisterBenchmark(("PrepareAndPlace/" + name).c_str(), BM_PrepareAndPlace, m, layout)
+      benchmark::RegisterBenchmark(("sampling/prepare_and_place_" + size + "/ours:" + method).c_str(),
+                                   BM_PrepareAndPlace, m, layout)
           ->Arg(300)->Arg(1000)->Unit(benchmark::kMicrosecond);
     }
   }

@@ -1,0 +1,140 @@
+// The stage groups docs/performance.md is made from (scripts/performance.sh), for the stages
+// whose benchmarks live nowhere else: `hdr` (the merge) and `startup` (a whole command).
+// Names follow the table's convention, <stage>/<figure>/<role>, role one of
+//   ours[:variant]   what lightprobe runs
+//   floor            the least any implementation must do on the same bytes (a read of the
+//                    inputs and a write of the output; a process that does nothing)
+//   peer:<name>      another library's answer to the same question, in the same process
+// so that every figure is printed beside its floor and its peer, measured in one run.
+//   build/bench/lightprobe_bench --benchmark_filter='^(hdr|startup)/'
+#include <benchmark/benchmark.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "hdr/merge.h"
+#include "hdr/opencv_peer.h"
+#include "hdr/response.h"
+
+extern char** environ;
+
+namespace {
+
+using namespace lp;
+
+constexpr int kW = 1280, kH = 960;
+const std::vector<double> kExposures = {0.0005, 0.004, 0.032};
+
+// A sky-like radiance ramp over four decades, seen at three exposures by an 8-bit sensor.
+const Bracket& bracket() {
+  static const Bracket b = [] {
+    Bracket out;
+    out.exposure_seconds = kExposures;
+    for (double t : kExposures) {
+      RgbImage f;
+      f.width = kW;
+      f.height = kH;
+      f.rgb.resize(size_t(kW) * kH * 3);
+      for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+          const double radiance = std::pow(10.0, 4.0 * x / kW) * (1.0 + 0.2 * (y % 7));
+          for (int c = 0; c < 3; ++c) {
+            const double v = std::min(1.0, radiance * t * (0.8 + 0.2 * c) / 40.0);
+            f.rgb[(size_t(y) * kW + x) * 3 + c] = float(std::round(v * 255) / 255);
+          }
+        }
+      out.frames.push_back(std::move(f));
+    }
+    return out;
+  }();
+  return b;
+}
+
+void set_pixels(benchmark::State& state) {
+  state.counters["MPix_s"] = benchmark::Counter(double(kW) * kH / 1e6, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+void BM_MergeOurs(benchmark::State& state) {
+  const CameraResponse response = linear_response(256);
+  MergeOptions o;
+  o.threads = 2;
+  const Bracket& b = bracket();  // made once, outside the timing
+  for (auto _ : state) benchmark::DoNotOptimize(merge_bracket(b, response, o).rgb.data());
+  set_pixels(state);
+}
+
+// Read the three frames once and write one float RGB image, on the merge's two threads:
+// the bytes a merge must move.
+void BM_MergeFloor(benchmark::State& state) {
+  const Bracket& b = bracket();
+  std::vector<float> out(b.frames[0].rgb.size());
+  const float* f0 = b.frames[0].rgb.data();
+  const float* f1 = b.frames[1].rgb.data();
+  const float* f2 = b.frames[2].rgb.data();
+  tbb::task_arena arena(2);
+  for (auto _ : state) {
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) out[i] = f0[i] + f1[i] + f2[i];
+      });
+    });
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  set_pixels(state);
+}
+
+// cv::MergeDebevec on the same bracket (as 8-bit frames; the conversion is not timed).
+void BM_MergeOpenCv(benchmark::State& state) {
+  const Bracket& b = bracket();
+  for (auto _ : state) {
+    double seconds = 0;
+    benchmark::DoNotOptimize(opencv_merge(b, OpenCvHdrMethod::Debevec, nullptr, &seconds).rgb.data());
+    state.SetIterationTime(seconds);
+  }
+  set_pixels(state);
+}
+
+// Wall time of a whole process: `lightprobe --version` against /bin/true (the cost of a
+// process that loads nothing but libc).
+void spawn_and_wait(benchmark::State& state, const char* program, std::vector<std::string> args) {
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(program));
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", 1 /* O_WRONLY */, 0);
+  for (auto _ : state) {
+    pid_t pid = 0;
+    if (posix_spawn(&pid, program, &actions, nullptr, argv.data(), environ) != 0) {
+      state.SkipWithError((std::string("cannot run ") + program).c_str());
+      break;
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+      state.SkipWithError((std::string(program) + " failed").c_str());
+      break;
+    }
+  }
+  posix_spawn_file_actions_destroy(&actions);
+}
+
+void BM_StartOurs(benchmark::State& state) { spawn_and_wait(state, LIGHTPROBE_EXE, {"--version"}); }
+void BM_StartFloor(benchmark::State& state) { spawn_and_wait(state, "/bin/true", {}); }
+
+}  // namespace
+
+BENCHMARK(BM_MergeOurs)->Name("hdr/merge_3x1280x960/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeFloor)->Name("hdr/merge_3x1280x960/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeOpenCv)->Name("hdr/merge_3x1280x960/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();
+BENCHMARK(BM_StartOurs)->Name("startup/version/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StartFloor)->Name("startup/version/floor")->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -65,9 +65,9 @@ CameraModel read_cameramodel(const std::string& path);
 void write_opencv_yaml(const std::string& path, const CameraModel& model);
 CameraModel read_opencv_yaml(const std::string& path);
 // The OpenCV FileStorage file at `path` (YAML, or XML for a .xml path), read through
-// read_text_file and opened; InputError naming the file if it is not one. YAML is first held
-// to the subset of calib/opencv_yaml_check.h: OpenCV 4.6's parser aborts the process or
-// loops forever on some text outside it (found by fuzz_opencv_yaml).
+// read_text_file and opened; InputError naming the file if it is not one. The text is first
+// held to the subsets of calib/opencv_storage_check.h: OpenCV 4.6's parsers abort, crash or
+// loop forever on some text outside them (found by fuzz_opencv_yaml and fuzz_opencv_xml).
 cv::FileStorage open_opencv_storage(const std::string& path);
 // An OpenCV FileStorage matrix of at most max_values values into *out; InputError naming
 // `path` and `key` otherwise. The size is checked before OpenCV allocates rows x cols from

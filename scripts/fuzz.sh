@@ -23,7 +23,7 @@ build=$root/build-fuzz
 seconds=${FUZZ_SECONDS:-20}
 fuzz_seed=${FUZZ_SEED:-1}
 jobs=${FUZZ_JOBS:-$(nproc)}
-all_targets="rgbe pfm exr camera_image cameramodel opencv_yaml light_list response readings_csv timestamps config http_request corners_vnl"
+all_targets="rgbe pfm exr camera_image cameramodel opencv_yaml opencv_xml light_list response readings_csv timestamps config http_request corners_vnl"
 targets=${FUZZ_TARGETS:-$all_targets}
 
 bash scripts/install-deps.sh
@@ -67,6 +67,8 @@ seed cameramodel "{'lensmodel': 'LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=4_Ny
 real_seeds opencv_yaml 2 -name '*intrinsics.yml'
 seed opencv_yaml '%%YAML:1.0\n---\nimage_width: 1280\nimage_height: 960\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 400., 0., 640., 0., 400., 480., 0., 0., 1. ]\ndistortion_model: fisheye\ndistortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 4\n   dt: d\n   data: [ 0.01, -0.002, 0., 0. ]\n' fisheye.yaml
 seed opencv_yaml '%%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 300., 0., 320., 0., 300., 240., 0., 0., 1. ]\ndistortion_model: omnidir\nxi: 1.2\ndistortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 4\n   dt: d\n   data: [ 0., 0., 0., 0. ]\n' omnidir.yaml
+real_seeds opencv_xml 1 -name '*.xml'
+seed opencv_xml '<?xml version="1.0"?>\n<opencv_storage>\n<image_width>640</image_width>\n<image_height>480</image_height>\n<camera_matrix type_id="opencv-matrix">\n  <rows>3</rows>\n  <cols>3</cols>\n  <dt>d</dt>\n  <data>\n    300. 0. 320. 0. 300. 240. 0. 0. 1.</data></camera_matrix>\n<distortion_model>plumb_bob</distortion_model>\n<distortion_coefficients type_id="opencv-matrix">\n  <rows>1</rows><cols>5</cols><dt>d</dt><data>0.1 0. 0. 0. 0.</data></distortion_coefficients>\n<!-- a comment -->\n</opencv_storage>\n' plumb_bob.xml
 seed light_list '{"format": "lightprobe.lights/1", "frame": 42, "timestamp": 1700000000.123, "method": "q2tree", "units": "relative", "frame_convention": "z-up", "lights": [{"id": 17, "direction": [0, 0, 1], "rgb": [1, 2, 3], "solid_angle": 0.0123}, {"id": 18, "direction": [0.6, 0, 0.8], "rgb": [0.5, 0.5, 0.5], "solid_angle": 0.5}]}\n' list.json
 seed response '{"format": "lightprobe.response/1", "levels": 4, "linear": false, "log_exposure": {"r": [-3, -1, 0, 1], "g": [-3, -1, 0, 1], "b": [-3, -1, 0, 1]}}\n' response.json
 seed response '{"format": "lightprobe.response/1", "levels": 2, "linear": true}\n' linear.json

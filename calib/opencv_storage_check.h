@@ -1,4 +1,4 @@
-// The YAML that camera files hold, checked before OpenCV's FileStorage parser sees it.
+// The YAML and XML that camera files hold, checked before OpenCV's FileStorage parser sees it.
 //
 // OpenCV 4.6's YAML parser is not safe on text it was not written for: fuzz_opencv_yaml found
 // an empty key that makes it build a string of negative length and end the process in
@@ -29,5 +29,15 @@ namespace lp {
 
 // InputError "<path>: line N: <what>" if `text` is outside the subset above.
 void check_opencv_yaml_text(const std::string& path, const std::string& text);
+
+// OpenCV's XML parser dereferences a null pointer on a NUL byte inside the header
+// (fuzz_opencv_xml), so XML is held to the subset OpenCV writes in the same way:
+//   <?xml version="1.0"?> (attributes name="value" only), then <opencv_storage> ... its
+//   close, with only blanks and <!-- comments --> around;
+//   elements <name> or <name type_id="..."> holding either text or elements (blanks
+//   aside), names [A-Za-z_][A-Za-z0-9_.-]*, closed by </name>, at most 16 deep;
+//   text without '<', entities only &lt; &gt; &amp; &quot; &apos;.
+// Both formats refuse control bytes (NUL and below 0x20 but tab, CR and LF) anywhere.
+void check_opencv_xml_text(const std::string& path, const std::string& text);
 
 }  // namespace lp

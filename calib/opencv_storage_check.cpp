@@ -1,7 +1,8 @@
-#include "calib/opencv_yaml_check.h"
+#include "calib/opencv_storage_check.h"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <string_view>
 #include <vector>
 
@@ -16,6 +17,20 @@ constexpr size_t kMaxBlockDepth = 16;
 bool is_key_start(char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_'; }
 bool is_key_char(char c) { return is_key_start(c) || (c >= '0' && c <= '9') || c == '.' || c == '-'; }
 bool is_control(char c) { return (unsigned char)c < 0x20 || c == 0x7f; }
+
+size_t line_of(const std::string& text, size_t at) {
+  return 1 + size_t(std::count(text.begin(), text.begin() + std::ptrdiff_t(at), '\n'));
+}
+
+// Anywhere, comments included: OpenCV's parsers read C strings and treat these bytes as ends.
+void check_control_bytes(const std::string& path, const std::string& text, const char* format) {
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (is_control(c) && c != '\n' && c != '\r' && c != '\t')
+      throw InputError(fmt::format("{}: line {}: a control byte 0x{:02x} (not the OpenCV {} a camera file holds)", path,
+                                   line_of(text, i), (unsigned char)c, format));
+  }
+}
 
 // One pass over the text, line by line; state that spans lines: the block levels above the
 // current line and an open flow collection.
@@ -273,8 +288,126 @@ class Checker {
   size_t flow_indent_ = 0;  // the indentation of the line whose value opened the collection
 };
 
+// ---- XML ---------------------------------------------------------------------------------
+
+class XmlChecker {
+ public:
+  XmlChecker(const std::string& path, const std::string& text) : path_(path), text_(text) {}
+
+  void run() {
+    if (text_.compare(0, 5, "<?xml") != 0) fail(0, "the text must start with <?xml");
+    at_ = 5;
+    attributes("?>");
+    skip_blanks_and_comments();
+    if (!take("<opencv_storage>")) fail(at_, "the root element must be <opencv_storage>");
+    content("opencv_storage", 1);
+    skip_blanks_and_comments();
+    if (at_ < text_.size()) fail(at_, "text after </opencv_storage>");
+  }
+
+ private:
+  [[noreturn]] void fail(size_t at, const std::string& what) const {
+    throw InputError(
+        fmt::format("{}: line {}: {} (not the OpenCV XML a camera file holds)", path_, line_of(text_, at), what));
+  }
+
+  bool take(std::string_view s) {
+    if (text_.compare(at_, s.size(), s) != 0) return false;
+    at_ += s.size();
+    return true;
+  }
+  void skip_blanks() {
+    while (at_ < text_.size() && (text_[at_] == ' ' || text_[at_] == '\n' || text_[at_] == '\r' || text_[at_] == '\t'))
+      ++at_;
+  }
+  void skip_blanks_and_comments() {
+    while (true) {
+      skip_blanks();
+      if (!take("<!--")) return;
+      const size_t end = text_.find("--", at_);
+      if (end == std::string::npos || text_.compare(end, 3, "-->") != 0) fail(at_, "a comment not closed by -->");
+      at_ = end + 3;
+    }
+  }
+  std::string name() {
+    const size_t start = at_;
+    if (at_ >= text_.size() || !is_key_start(text_[at_])) fail(at_, "an element name must start with a letter or '_'");
+    while (at_ < text_.size() && is_key_char(text_[at_])) ++at_;
+    return text_.substr(start, at_ - start);
+  }
+  // name="value" pairs up to `close`.
+  void attributes(std::string_view close) {
+    while (true) {
+      skip_blanks();
+      if (take(close)) return;
+      name();
+      if (!take("=\"")) fail(at_, "an attribute must be name=\"value\"");
+      const size_t end = text_.find('"', at_);
+      if (end == std::string::npos) fail(at_, "an attribute value that is not closed");
+      if (text_.find_first_of("<>&", at_) < end) fail(at_, "'<', '>' or '&' inside an attribute value");
+      at_ = end + 1;
+    }
+  }
+  // What is inside <parent> up to and including </parent>: text or elements.
+  void content(const std::string& parent, int depth) {
+    bool has_text = false, has_elements = false;
+    while (true) {
+      skip_blanks_and_comments();
+      if (at_ >= text_.size()) fail(at_, "<" + parent + "> is never closed");
+      if (take("</")) {
+        const size_t at = at_;
+        if (name() != parent) fail(at, "</" + text_.substr(at, at_ - at) + "> closes <" + parent + ">");
+        skip_blanks();
+        if (!take(">")) fail(at_, "'>' expected after </" + parent);
+        return;
+      }
+      if (text_[at_] == '<') {
+        if (has_text) fail(at_, "<" + parent + "> holds both text and elements");
+        if (depth >= 16) fail(at_, "elements nested deeper than 16 levels");
+        ++at_;
+        const std::string child = name();
+        attributes(">");
+        content(child, depth + 1);
+        has_elements = true;
+        continue;
+      }
+      if (has_elements) fail(at_, "<" + parent + "> holds both elements and text");
+      text();
+      has_text = true;
+    }
+  }
+  void text() {
+    while (at_ < text_.size() && text_[at_] != '<') {
+      if (text_[at_] == '>') fail(at_, "a '>' in text");
+      if (text_[at_] == '&') {
+        bool known = false;
+        for (std::string_view entity : {"&lt;", "&gt;", "&amp;", "&quot;", "&apos;"})
+          if (take(entity)) {
+            known = true;
+            break;
+          }
+        if (!known) fail(at_, "an entity other than &lt; &gt; &amp; &quot; &apos;");
+        continue;
+      }
+      ++at_;
+    }
+  }
+
+  const std::string& path_;
+  const std::string& text_;
+  size_t at_ = 0;
+};
+
 }  // namespace
 
-void check_opencv_yaml_text(const std::string& path, const std::string& text) { Checker(path, text).run(); }
+void check_opencv_yaml_text(const std::string& path, const std::string& text) {
+  check_control_bytes(path, text, "YAML");
+  Checker(path, text).run();
+}
+
+void check_opencv_xml_text(const std::string& path, const std::string& text) {
+  check_control_bytes(path, text, "XML");
+  XmlChecker(path, text).run();
+}
 
 }  // namespace lp

@@ -1,4 +1,4 @@
-// calib/opencv_yaml_check.h: the YAML subset handed to OpenCV's parser. Everything OpenCV's
+// calib/opencv_storage_check.h: the YAML subset handed to OpenCV's parser. Everything OpenCV's
 // own writer emits for camera-file content passes (the peer is the reference), the real
 // files of the shared sets pass, and the inputs on which OpenCV 4.6 aborts or hangs (found
 // by fuzz_opencv_yaml) are refused naming the line, with the rest of a table of malformed text.
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "calib/opencv_yaml_check.h"
+#include "calib/opencv_storage_check.h"
 #include "core/error.h"
 #include "core/file_io.h"
 
@@ -73,7 +73,7 @@ TEST(OpencvYamlCheck, HandWrittenFormsPass) {
 
 TEST(OpencvYamlCheck, TextOnWhichOpenCVAbortsHangsOrGuessesIsRefusedNamingTheLine) {
   struct Case {
-    const char* text;
+    std::string text;
     const char* error;  // after "cam.yaml: "
   };
   const std::vector<Case> cases = {
@@ -102,12 +102,71 @@ TEST(OpencvYamlCheck, TextOnWhichOpenCVAbortsHangsOrGuessesIsRefusedNamingTheLin
       {"%YAML:1.0\na: &x 1\n", "line 2: a value cannot start with '&'"},
       {"%YAML:1.0\na: 1\n...\n", "line 3: a document marker inside the document"},
       {"%YAML:1.0\na: 1\n%TAG ! x\n", "line 3: a directive after the first line"},
-      {"%YAML:1.0\na: 1\x01\n", "line 2: a control character in a value"},
+      {"%YAML:1.0\na: 1\x01\n", "line 2: a control byte 0x01"},
+      {std::string("%YAML:1.0\na: 1 # \0 in a comment\n", 30), "line 2: a control byte 0x00"},
       {"%YAML:1.0\n\xee: 1\n", "line 2: a key must start with a letter or '_', not '\\xee'"},
       {"%YAML:1.0\na: {b 1}\n", "line 2: a key inside '{' must be followed directly by ':'"},
   };
   for (const Case& c : cases)
     EXPECT_EQ(error_of(c.text), std::string("cam.yaml: ") + c.error + " (not the OpenCV YAML a camera file holds)")
+        << c.text;
+}
+
+std::string xml_error_of(const std::string& text) {
+  try {
+    check_opencv_xml_text("cam.xml", text);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(OpencvXmlCheck, EverythingOpenCVsWriterEmitsForACameraFilePassesAndReadsBack) {
+  cv::FileStorage out(".xml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_XML);
+  out << "image_width" << 1280 << "not_a_number" << std::numeric_limits<double>::quiet_NaN();
+  out << "distortion_model" << "fisheye" << "special" << "a <b> & 'c' \"d\"" << "empty" << "";
+  const cv::Mat K_written = (cv::Mat_<double>(3, 3) << 400, 0, 639.5, 0, 401, 479.5, 0, 0, 1);
+  out << "camera_matrix" << K_written;
+  out << "list" << std::vector<double>{1, -2.5, 3e10} << "no_values" << std::vector<int>{};
+  out << "nested" << "{" << "rows" << 3 << "inner" << "[" << 1 << 2 << "]" << "}";
+  out << "maps" << "[" << "{" << "a" << 1 << "}" << "{" << "a" << 2 << "}" << "]";
+  const std::string text = out.releaseAndGetString();
+  EXPECT_EQ(xml_error_of(text), "") << text;
+
+  cv::FileStorage in(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+  EXPECT_EQ(int(in["image_width"]), 1280);
+  EXPECT_EQ(std::string(in["special"]), "a <b> & 'c' \"d\"");
+  cv::Mat K;
+  in["camera_matrix"] >> K;
+  EXPECT_EQ(K.at<double>(1, 2), 479.5);
+  EXPECT_EQ(int(in["maps"][1]["a"]), 2);
+}
+
+TEST(OpencvXmlCheck, TextOnWhichOpenCVCrashesOrGuessesIsRefusedNamingTheLine) {
+  const std::string head = "<?xml version=\"1.0\"?>\n<opencv_storage>\n";
+  struct Case {
+    std::string text;
+    const char* error;  // after "cam.xml: "
+  };
+  const std::vector<Case> cases = {
+      // fuzz_opencv_xml's findings: OpenCV dereferences a null pointer on both
+      {std::string("<?xml verAion=\0\0\0\"1.0\"?>{\xff\xffpencv_storage>\n", 34), "line 1: a control byte 0x00"},
+      {std::string("<?xml vers_On=\0\1\0ero<p>\neon", 29), "line 1: a control byte 0x00"},
+      {"<opencv_storage></opencv_storage>", "line 1: the text must start with <?xml"},
+      {"<?xml version=1.0?>\n<opencv_storage/>", "line 1: an attribute must be name=\"value\""},
+      {"<?xml version=\"1.0\"?>\n<storage></storage>\n", "line 2: the root element must be <opencv_storage>"},
+      {head + "<a>1</b>\n</opencv_storage>\n", "line 3: </b> closes <a>"},
+      {head + "<a>1\n", "line 4: <a> is never closed"},
+      {head + "<a>1<b>2</b></a>\n</opencv_storage>\n", "line 3: <a> holds both text and elements"},
+      {head + "<a>&nbsp;</a>\n</opencv_storage>\n", "line 3: an entity other than &lt; &gt; &amp; &quot; &apos;"},
+      {head + "<1a>2</1a>\n</opencv_storage>\n", "line 3: an element name must start with a letter or '_'"},
+      {head + "<!-- open\n</opencv_storage>\n", "line 3: a comment not closed by -->"},
+      {head + "</opencv_storage>\n<x/>\n", "line 4: text after </opencv_storage>"},
+      {head + std::string(17, '<').replace(0, 17, "<a><a><a><a><a><a><a><a><a><a><a><a><a><a><a><a><a>") + "\n</opencv_storage>\n",
+       "line 3: elements nested deeper than 16 levels"},
+  };
+  for (const Case& c : cases)
+    EXPECT_EQ(xml_error_of(c.text), std::string("cam.xml: ") + c.error + " (not the OpenCV XML a camera file holds)")
         << c.text;
 }
 

@@ -18,9 +18,10 @@
 namespace lp {
 namespace {
 
-std::string error_of(const std::string& text) {
+// The check's one-line error for `text` ("" when it passes), as cam.yaml or cam.xml.
+std::string error_of(const std::string& text, bool xml = false) {
   try {
-    check_opencv_yaml_text("cam.yaml", text);
+    xml ? check_opencv_xml_text("cam.xml", text) : check_opencv_yaml_text("cam.yaml", text);
   } catch (const InputError& e) {
     return e.what();
   }
@@ -112,15 +113,6 @@ TEST(OpencvYamlCheck, TextOnWhichOpenCVAbortsHangsOrGuessesIsRefusedNamingTheLin
         << c.text;
 }
 
-std::string xml_error_of(const std::string& text) {
-  try {
-    check_opencv_xml_text("cam.xml", text);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 TEST(OpencvXmlCheck, EverythingOpenCVsWriterEmitsForACameraFilePassesAndReadsBack) {
   cv::FileStorage out(".xml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_XML);
   out << "image_width" << 1280 << "not_a_number" << std::numeric_limits<double>::quiet_NaN();
@@ -131,7 +123,7 @@ TEST(OpencvXmlCheck, EverythingOpenCVsWriterEmitsForACameraFilePassesAndReadsBac
   out << "nested" << "{" << "rows" << 3 << "inner" << "[" << 1 << 2 << "]" << "}";
   out << "maps" << "[" << "{" << "a" << 1 << "}" << "{" << "a" << 2 << "}" << "]";
   const std::string text = out.releaseAndGetString();
-  EXPECT_EQ(xml_error_of(text), "") << text;
+  EXPECT_EQ(error_of(text, true), "") << text;
 
   cv::FileStorage in(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
   EXPECT_EQ(int(in["image_width"]), 1280);
@@ -166,7 +158,7 @@ TEST(OpencvXmlCheck, TextOnWhichOpenCVCrashesOrGuessesIsRefusedNamingTheLine) {
        "line 3: elements nested deeper than 16 levels"},
   };
   for (const Case& c : cases)
-    EXPECT_EQ(xml_error_of(c.text), std::string("cam.xml: ") + c.error + " (not the OpenCV XML a camera file holds)")
+    EXPECT_EQ(error_of(c.text, true), std::string("cam.xml: ") + c.error + " (not the OpenCV XML a camera file holds)")
         << c.text;
 }
 

@@ -23,6 +23,7 @@ struct StreamArgs {
   std::string method = "hemigon";
   std::string n = "300";            // a count or "auto" (the fewest within target_error)
   double target_error = 0.01;
+  std::string error_measure = "diffuse";  // what target_error holds (sampling/auto_count.h)
   int cluster = 0;
   double fps = 0;                   // replay pacing; also the temporal filter's rate
   bool loop = false;

@@ -26,7 +26,7 @@ struct SampleArgs {
   std::vector<std::string> inputs;  // one map, several maps (a sequence) or a directory
   std::string method = "pharr";
   std::string n = "256";            // a count or "auto"
-  double target_error = 0.01;
+  std::string error_measure = "diffuse";  // what --target-error holds (sampling/auto_count.h)
   std::string format;               // json|ndjson|pbrt|mitsuba|gltf|glb|csv (default from -o)
   std::string output;
   std::string overlay;              // PNG of the lights on the map
@@ -122,7 +122,7 @@ int run_sample(const SampleArgs& args, const Output& out) {
   po.method = *method;
   po.count = light_count(args.n);
   po.auto_count = po.count == 0;
-  po.auto_options.target_diffuse_error = args.target_error;
+  po.auto_options.measure = error_measure_from_string(args.error_measure);
   check_nside("--q2-nside", po.sampler.q2_nside);
   po.filter = filter_mode(args.filter);
   if (!(po.frame_rate_hz > 0)) throw InputError(fmt::format("--fps must be positive, got {}", po.frame_rate_hz));
@@ -144,8 +144,8 @@ int run_sample(const SampleArgs& args, const Output& out) {
   nlohmann::json frames = nlohmann::json::array();
   for (SampledFrame& f : result.frames) {
     if (f.target_missed)
-      say(out, "{}: the target diffuse error {:.3g} was not reached ({} lights, {:.3g})\n", f.file, args.target_error,
-          f.list.lights.size(), f.error.diffuse);
+      say(out, "{}: the target {} error {:.3g} was not reached ({} lights, {:.3g})\n", f.file, args.error_measure,
+          po.auto_options.target_error, f.list.lights.size(), f.measured_error);
     if (!out.json && !sequence)
       say(out, "{}: {} {} lights in {:.3f} ms (+{:.3f} ms preparing); diffuse error {:.2f} %, glossy {:.2f} % (s=10), {:.2f} % (s=100)\n",
           f.file, f.list.lights.size(), f.list.method, f.timing.place_ms + f.timing.temporal_ms, f.timing.prepare_ms,
@@ -184,7 +184,8 @@ std::vector<Command> sample_commands() {
          f.arg("MAP", a->inputs, "A map, several maps (a sequence: NDJSON, one frame each) or a directory").required();
          f.opt("--method", a->method, "pharr|hemigon|q2tree|mediancut");
          f.opt("--n", a->n, "Number of lights, or 'auto' with --target-error");
-         f.opt("--target-error", a->target_error, "With --n auto: largest diffuse error (0.01 = 1 %)");
+         f.opt("--target-error", a->pipeline.auto_options.target_error, "With --n auto: largest error (0.01 = 1 %)");
+         f.opt("--error-measure", a->error_measure, "What --target-error holds: diffuse|glossy10|glossy100|shadowed|worst");
          f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|glb|csv (default: from -o's extension)");
          f.output(a->output, "Output file");
          f.opt("--overlay", a->overlay, "Also draw the lights on the tone-mapped map (PNG)");

@@ -54,7 +54,8 @@ LivePipeline::LivePipeline(OpenSource open, LivePipelineOptions options, Publish
                                options_.exposure_cycle.size(), options_.response.has_value(), options_.frames_are_maps});
   stats_.decode = to_string(decode_);
   stats_.auto_count = options_.sampling.auto_count;
-  stats_.count_target = options_.sampling.auto_count ? options_.sampling.auto_options.target_diffuse_error : 0;
+  stats_.count_target = options_.sampling.auto_count ? options_.sampling.auto_options.target_error : 0;
+  stats_.count_measure = to_string(options_.sampling.auto_options.measure);
 }
 
 LivePipeline::~LivePipeline() { stop(); }
@@ -234,7 +235,7 @@ void LivePipeline::process_loop() {
       const FrameCount& c = sampler_->last_count();  // the sampler lives on this thread
       stats_.count_changes += stats_.brackets_processed > 1 && c.count != stats_.lights;
       stats_.lights = c.count;
-      stats_.count_error = c.automatic ? c.diffuse_error : 0;
+      stats_.count_error = c.automatic ? c.error : 0;
       stats_.count_reached = c.reached;
       for (size_t k = 0; k < stages_.size(); ++k) stages_[k].second.observe(t.stage[k]);
       latency_.observe(t.latency);

@@ -70,8 +70,9 @@ struct LiveStats {
   // The light count (--n N, or --n auto: the fewest within count_target, with hysteresis).
   int lights = 0;                   // of the last list, before clustering
   bool auto_count = false;
-  double count_target = 0;          // auto: the diffuse error to stay within
-  double count_error = 0;           // auto: the last count's diffuse error
+  double count_target = 0;          // auto: the error to stay within, in count_measure
+  double count_error = 0;           // auto: the last count's error
+  std::string count_measure = "diffuse";  // auto: sampling/auto_count.h to_string(ErrorMeasure)
   bool count_reached = true;        // auto: false when the largest count missed the target
   uint64_t count_changes = 0;       // auto: times the count changed after the first list
 };

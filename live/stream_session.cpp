@@ -15,7 +15,7 @@ namespace lp {
 nlohmann::json light_count_json(const LiveStats& s) {
   nlohmann::json j{{"mode", s.auto_count ? "auto" : "fixed"}, {"lights", s.lights}};
   if (s.auto_count)
-    j.update({{"target_error", s.count_target}, {"diffuse_error", s.count_error}, {"reached", s.count_reached},
+    j.update({{"measure", s.count_measure}, {"target_error", s.count_target}, {"error", s.count_error}, {"reached", s.count_reached},
               {"changes", s.count_changes}});
   return j;
 }
@@ -93,8 +93,8 @@ std::string StreamSessionReport::summary() const {
       "stream stopped: {} frames in ({} decode), {} brackets processed, {} dropped whole, {} frames in partial "
       "brackets, {} reconnects; {} lights{}{}{}\n",
       s.frames_in, s.decode, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects, s.lights,
-      s.auto_count ? fmt::format(" (--n auto: diffuse error {:.4f}, target {:g}{}, {} changes)", s.count_error,
-                                 s.count_target, s.count_reached ? "" : " MISSED", s.count_changes)
+      s.auto_count ? fmt::format(" (--n auto: {} error {:.4f}, target {:g}{}, {} changes)", s.count_measure,
+                                 s.count_error, s.count_target, s.count_reached ? "" : " MISSED", s.count_changes)
                    : "",
       published ? fmt::format("; mqtt: {} lists published, {} dropped, {} connects", mqtt.lists_published,
                               mqtt.lists_dropped, mqtt.link.connects)

@@ -39,7 +39,7 @@ struct StreamSessionReport {
 };
 
 // The light count as /status shows it (section "light_count") and to_json reports it:
-// {"mode": "fixed"|"auto", "lights", and for auto "target_error", "diffuse_error",
+// {"mode": "fixed"|"auto", "lights", and for auto "measure", "target_error", "error",
 // "reached", "changes"}.
 nlohmann::json light_count_json(const LiveStats& stats);
 

@@ -44,12 +44,9 @@ LightList FramePipeline::process(const EnvMap& map, int64_t frame, double timest
   list.method = std::string(to_string(options_.method));
   list.units = map.units;
   if (tracker_) {
-    AccuracyOptions ao;
-    ao.shadowed = false;
-    ao.glossy_exponents.clear();
-    const AccuracyReference reference = make_accuracy_reference(map, ao);
+    const AccuracyReference reference = make_accuracy_reference(map, reference_options_for(options_.auto_options.measure));
     AutoCountResult r = tracker_->update(*sampler_, reference);
-    count_ = {int(r.lights.size()), true, r.diffuse_error, r.reached};
+    count_ = {int(r.lights.size()), true, r.error, r.reached};
     list.lights = std::move(r.lights);
   } else {
     list.lights = sampler_->place(options_.count);

@@ -37,7 +37,7 @@ struct FramePipelineOptions {
 struct FrameCount {
   int count = 0;              // lights placed (before clustering)
   bool automatic = false;     // --n auto
-  double diffuse_error = 0;   // automatic: the chosen count's diffuse error (NaN for a fixed n)
+  double error = 0;           // automatic: the chosen count's error in the measure (NaN for a fixed n)
   bool reached = true;        // automatic: false when even max_count missed the target
 };
 
@@ -49,7 +49,7 @@ class FramePipeline {
  public:
   explicit FramePipeline(const FramePipelineOptions& options);
   // Lights for the next frame of the stream. With auto_count the accuracy reference of
-  // the map is built here (diffuse only), which dominates the cost of such frames.
+  // the map is built here (only what the measure needs), which dominates such frames' cost.
   LightList process(const EnvMap& map, int64_t frame, double timestamp);
   // Frames by which the output lags the input (0 without filtering).
   int delay_frames() const;

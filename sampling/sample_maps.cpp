@@ -24,8 +24,9 @@ nlohmann::json SampledFrame::to_json() const {
 SampleMapsResult sample_maps(const MapSequence& sequence, const SampleMapsOptions& options,
                              const std::function<void()>& frame_done) {
   FramePipeline pipeline(options.pipeline);
-  AccuracyOptions ao;
-  ao.shadowed = false;
+  AccuracyOptions ao;  // the report's diffuse and glossy errors, and shadowed when --n auto holds it
+  const ErrorMeasure measure = options.pipeline.auto_options.measure;
+  ao.shadowed = options.pipeline.auto_count && (measure == ErrorMeasure::Shadowed || measure == ErrorMeasure::Worst);
   SampleMapsResult result;
   const size_t n = sequence.files.size();
   for (size_t f = 0; f < n; ++f) {
@@ -45,8 +46,10 @@ SampleMapsResult sample_maps(const MapSequence& sequence, const SampleMapsOption
     }
     frame.timing = pipeline.last_timing();
     frame.error = light_error(make_accuracy_reference(map, ao), frame.list.lights);
-    frame.target_missed =
-        options.pipeline.auto_count && frame.error.diffuse > options.pipeline.auto_options.target_diffuse_error;
+    if (options.pipeline.auto_count) {
+      frame.measured_error = measured_error(frame.error, ao, measure);
+      frame.target_missed = frame.measured_error > options.pipeline.auto_options.target_error;
+    }
     result.frames.push_back(std::move(frame));
     if (f + 1 == n) result.last_map = std::move(map);
     if (frame_done) frame_done();

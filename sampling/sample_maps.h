@@ -27,7 +27,8 @@ struct SampledFrame {
   LightList list;
   FrameTiming timing;
   LightError error;               // diffuse, glossy {s=10, s=100}
-  bool target_missed = false;     // --n auto did not reach its target diffuse error
+  bool target_missed = false;     // --n auto did not reach its target error
+  double measured_error = 0;      // --n auto: the frame's error in the target's measure
   nlohmann::json to_json() const;  // the per-frame report of `sample --json`
 };
 

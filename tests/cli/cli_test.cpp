@@ -151,6 +151,25 @@ TEST(Cli, BadInputsGetOneLineNamingTheFileAndExitTwo) {
   EXPECT_FALSE(fs::exists(dir / "l.json"));
 }
 
+// --n auto holds the measure asked for: glossy s=100 here, rescored by the report.
+TEST(Cli, SampleAutoCountHoldsTheErrorMeasureAskedFor) {
+  const std::string map = shared("probes-probulator-latlong256/grace.hdr");
+  const std::string out = (scratch() / "measure.json").string();
+  CliRun r = lightprobe("sample --json " + map + " --method q2tree --n auto --target-error 0.1 --error-measure glossy100 -o " + out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto report = nlohmann::json::parse(r.out);
+  EXPECT_LE(report["glossy100_error"].get<double>(), 0.1);
+  CliRun diffuse = lightprobe("sample --json " + map + " --method q2tree --n auto --target-error 0.1 -o " + out);
+  ASSERT_EQ(diffuse.code, 0) << diffuse.err;
+  EXPECT_GT(report["lights"].get<int>(), nlohmann::json::parse(diffuse.out)["lights"].get<int>());
+  for (const std::string command : {"sample " + map + " --n auto --error-measure specular -o " + out,
+                                    "stream --source replay:" + map + " --n auto --error-measure specular"}) {
+    const CliRun bad = lightprobe(command);
+    EXPECT_EQ(bad.code, 2) << command;
+    EXPECT_NE(bad.err.find("--error-measure: unknown measure 'specular'"), std::string::npos) << bad.err;
+  }
+}
+
 TEST(Cli, SampleWritesALightListThatPreservesPower) {
   const fs::path out = scratch() / "lights.json";
   const fs::path png = scratch() / "lights.png";

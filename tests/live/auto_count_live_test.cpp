@@ -36,7 +36,7 @@ TEST(LiveAutoCount, TheStreamKeepsTheFewestLightsWithinTheTargetAndReportsThem) 
   o.sampling.method = Method::Pharr;
   o.sampling.sampler.upper_only = true;
   o.sampling.auto_count = true;
-  o.sampling.auto_options.target_diffuse_error = 0.02;
+  o.sampling.auto_options.target_error = 0.02;
   o.queue_brackets = 16;
   std::mutex m;
   std::vector<LightList> lists;
@@ -63,7 +63,7 @@ TEST(LiveAutoCount, TheStreamKeepsTheFewestLightsWithinTheTargetAndReportsThem) 
   EXPECT_TRUE(s.auto_count);
   EXPECT_EQ(s.lights, offline.count);
   EXPECT_EQ(s.count_changes, 0u);  // a still scene: the hysteresis holds the count
-  EXPECT_NEAR(s.count_error, offline.diffuse_error, 1e-12);
+  EXPECT_NEAR(s.count_error, offline.error, 1e-12);
   EXPECT_LE(s.count_error, 0.02);
   for (const LightList& l : lists) {
     EXPECT_EQ(int(l.lights.size()), offline.count);
@@ -73,6 +73,7 @@ TEST(LiveAutoCount, TheStreamKeepsTheFewestLightsWithinTheTargetAndReportsThem) 
   EXPECT_EQ(j["mode"], "auto");
   EXPECT_EQ(j["lights"], offline.count);
   EXPECT_EQ(j["target_error"], 0.02);
+  EXPECT_EQ(j["measure"], "diffuse");
   EXPECT_NE(p.metrics().find("lightprobe_lights " + std::to_string(offline.count)), std::string::npos);
   fs::remove_all(dir);
 }

@@ -83,7 +83,7 @@ TEST(FramePipeline, AutoCountPerFrameMeetsTheTargetOnEveryFrame) {
   FramePipelineOptions po;
   po.method = Method::Q2Tree;
   po.auto_count = true;
-  po.auto_options.target_diffuse_error = 0.01;
+  po.auto_options.target_error = 0.01;
   FramePipeline pipeline(po);
   SequenceOptions so;
   so.scenario = Scenario::MovingLight;

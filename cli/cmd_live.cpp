@@ -83,6 +83,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
   lo.sampling.auto_count = lo.sampling.count == 0;
   lo.sampling.auto_options.target_error = args.target_error;
   lo.sampling.auto_options.measure = error_measure_from_string(args.error_measure);
+  lo.sampling.budget.budget_ms = args.frame_budget_ms;
   lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21;
   lo.sampling.cluster_max_lights = args.cluster;
   lo.sampling.sampler.upper_only = *layout == Layout::Hemisphere;
@@ -154,6 +155,7 @@ std::vector<Command> live_commands() {
          f.opt("--n", a->n, "Lights per frame, or 'auto': the fewest within --target-error, with hysteresis");
          f.opt("--target-error", a->target_error, "With --n auto: largest error (0.01 = 1 %)");
          f.opt("--error-measure", a->error_measure, "What --target-error holds: diffuse|glossy10|glossy100|shadowed|worst");
+         f.opt("--frame-budget-ms", a->frame_budget_ms, "With --n auto: fewer lights when the back end takes longer");
          f.opt("--cluster", a->cluster, "Cluster to at most this many lights");
          f.opt("--fps", a->fps, "Replay pacing and the temporal filter's frame rate");
          f.flag("--loop", a->loop, "Replay: start over at the end");

@@ -24,6 +24,7 @@ struct StreamArgs {
   std::string n = "300";            // a count or "auto" (the fewest within target_error)
   double target_error = 0.01;
   std::string error_measure = "diffuse";  // what target_error holds (sampling/auto_count.h)
+  double frame_budget_ms = 0;       // caps --n auto's count (sampling/frame_budget.h)
   int cluster = 0;
   double fps = 0;                   // replay pacing; also the temporal filter's rate
   bool loop = false;

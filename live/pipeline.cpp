@@ -56,6 +56,7 @@ LivePipeline::LivePipeline(OpenSource open, LivePipelineOptions options, Publish
   stats_.auto_count = options_.sampling.auto_count;
   stats_.count_target = options_.sampling.auto_count ? options_.sampling.auto_options.target_error : 0;
   stats_.count_measure = to_string(options_.sampling.auto_options.measure);
+  stats_.count_budget_ms = options_.sampling.budget.budget_ms;
 }
 
 LivePipeline::~LivePipeline() { stop(); }
@@ -237,6 +238,8 @@ void LivePipeline::process_loop() {
       stats_.lights = c.count;
       stats_.count_error = c.automatic ? c.error : 0;
       stats_.count_reached = c.reached;
+      stats_.count_budget_limited = c.budget_limited;
+      stats_.count_budget_cap = c.budget_cap;
       for (size_t k = 0; k < stages_.size(); ++k) stages_[k].second.observe(t.stage[k]);
       latency_.observe(t.latency);
     } catch (const std::exception& e) {

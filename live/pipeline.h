@@ -75,6 +75,9 @@ struct LiveStats {
   std::string count_measure = "diffuse";  // auto: sampling/auto_count.h to_string(ErrorMeasure)
   bool count_reached = true;        // auto: false when the largest count missed the target
   uint64_t count_changes = 0;       // auto: times the count changed after the first list
+  double count_budget_ms = 0;       // --frame-budget-ms (0: none)
+  bool count_budget_limited = false;  // the budget placed fewer lights than the target asked
+  int count_budget_cap = 0;         // the most lights the budget allows the next frame
 };
 
 class LivePipeline {

@@ -17,6 +17,9 @@ nlohmann::json light_count_json(const LiveStats& s) {
   if (s.auto_count)
     j.update({{"measure", s.count_measure}, {"target_error", s.count_target}, {"error", s.count_error}, {"reached", s.count_reached},
               {"changes", s.count_changes}});
+  if (s.count_budget_ms > 0)
+    j.update({{"frame_budget_ms", s.count_budget_ms}, {"budget_cap", s.count_budget_cap},
+              {"budget_limited", s.count_budget_limited}});
   return j;
 }
 
@@ -93,8 +96,9 @@ std::string StreamSessionReport::summary() const {
       "stream stopped: {} frames in ({} decode), {} brackets processed, {} dropped whole, {} frames in partial "
       "brackets, {} reconnects; {} lights{}{}{}\n",
       s.frames_in, s.decode, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects, s.lights,
-      s.auto_count ? fmt::format(" (--n auto: {} error {:.4f}, target {:g}{}, {} changes)", s.count_measure,
-                                 s.count_error, s.count_target, s.count_reached ? "" : " MISSED", s.count_changes)
+      s.auto_count ? fmt::format(" (--n auto: {} error {:.4f}, target {:g}{}, {} changes{})", s.count_measure,
+                                 s.count_error, s.count_target, s.count_reached ? "" : " MISSED", s.count_changes,
+                                 s.count_budget_limited ? fmt::format(", held to {} by the frame budget", s.count_budget_cap) : "")
                    : "",
       published ? fmt::format("; mqtt: {} lists published, {} dropped, {} connects", mqtt.lists_published,
                               mqtt.lists_dropped, mqtt.link.connects)

@@ -40,6 +40,7 @@ struct StreamSessionReport {
 
 // The light count as /status shows it (section "light_count") and to_json reports it:
 // {"mode": "fixed"|"auto", "lights", and for auto "measure", "target_error", "error",
+// (with --frame-budget-ms "frame_budget_ms", "budget_cap", "budget_limited"),
 // "reached", "changes"}.
 nlohmann::json light_count_json(const LiveStats& stats);
 

@@ -17,6 +17,8 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 FramePipeline::FramePipeline(const FramePipelineOptions& options) : options_(options) {
   if (!options.auto_count && options.count <= 0) throw InputError("--n must be positive");
   if (options.cluster_max_lights < 0) throw InputError("--cluster must be >= 0");
+  if (options.budget.budget_ms != 0 && !options.auto_count)
+    throw InputError("--frame-budget-ms caps the count of --n auto: give --n auto");
   reset();
 }
 
@@ -28,6 +30,13 @@ void FramePipeline::reset() {
   if (filter) filter_.emplace(filter_for_frame_rate(options_.frame_rate_hz));
   tracker_.reset();
   if (options_.auto_count) tracker_.emplace(options_.auto_options, options_.hysteresis);
+  budget_.reset();
+  if (options_.budget.budget_ms != 0) {
+    FrameBudgetOptions b = options_.budget;
+    b.min_count = options_.auto_options.min_count;
+    b.max_count = options_.auto_options.max_count;
+    budget_.emplace(b);
+  }
 }
 
 int FramePipeline::delay_frames() const { return filter_ ? filter_->filter().delay_frames() : 0; }
@@ -47,6 +56,13 @@ LightList FramePipeline::process(const EnvMap& map, int64_t frame, double timest
     const AccuracyReference reference = make_accuracy_reference(map, reference_options_for(options_.auto_options.measure));
     AutoCountResult r = tracker_->update(*sampler_, reference);
     count_ = {int(r.lights.size()), true, r.error, r.reached};
+    if (budget_ && r.requested > budget_->cap()) {  // the budget cannot afford the target's count
+      r.lights = sampler_->place(budget_->cap());
+      count_.count = int(r.lights.size());
+      count_.error = measured_error(light_error(reference, r.lights), reference.options, options_.auto_options.measure);
+      count_.reached = count_.error <= options_.auto_options.target_error;
+      count_.budget_limited = true;
+    }
     list.lights = std::move(r.lights);
   } else {
     list.lights = sampler_->place(options_.count);
@@ -62,6 +78,7 @@ LightList FramePipeline::process(const EnvMap& map, int64_t frame, double timest
     list.lights = cluster_lights(list.lights, options_.cluster_max_lights, co);
   }
   timing_.temporal_ms = ms_since(t0);
+  if (budget_) count_.budget_cap = budget_->update(count_.count, timing_.prepare_ms + timing_.place_ms + timing_.temporal_ms);
   return list;
 }
 

@@ -12,6 +12,7 @@
 
 #include "core/accuracy.h"
 #include "sampling/auto_count.h"
+#include "sampling/frame_budget.h"
 #include "sampling/sampler.h"
 #include "sampling/temporal_filter.h"
 
@@ -26,6 +27,8 @@ struct FramePipelineOptions {
   bool auto_count = false;          // --n auto: fewest lights reaching the target error
   AutoCountOptions auto_options;
   AutoCountHysteresis hysteresis;
+  FrameBudgetOptions budget;        // --frame-budget-ms (needs auto_count): caps the count
+                                    // (its min/max counts are taken from auto_options)
   // Auto: the FIR filters run for hemigon (as in Havran 2005) and not for the others;
   // q2tree is stable by construction, pharr's global jumps are what the atlas shows.
   FilterMode filter = FilterMode::Auto;
@@ -39,6 +42,8 @@ struct FrameCount {
   bool automatic = false;     // --n auto
   double error = 0;           // automatic: the chosen count's error in the measure (NaN for a fixed n)
   bool reached = true;        // automatic: false when even max_count missed the target
+  bool budget_limited = false;  // the frame budget placed fewer lights than the target asked
+  int budget_cap = 0;           // with a budget: the most lights it allows the next frame
 };
 
 struct FrameTiming {
@@ -63,6 +68,7 @@ class FramePipeline {
   std::unique_ptr<Sampler> sampler_;
   std::optional<LightTemporalFilter> filter_;
   std::optional<AutoCountTracker> tracker_;
+  std::optional<FrameBudget> budget_;
   FrameTiming timing_;
   FrameCount count_;
 };

@@ -78,5 +78,21 @@ TEST(LiveAutoCount, TheStreamKeepsTheFewestLightsWithinTheTargetAndReportsThem) 
   fs::remove_all(dir);
 }
 
+// /status's light_count section with a frame budget: the budget, its cap and whether it held
+// the count down are shown; without one, no budget keys at all.
+TEST(LiveAutoCount, StatusShowsTheFrameBudgetOnlyWhenOneIsSet) {
+  LiveStats s;
+  s.auto_count = true;
+  s.lights = 16;
+  EXPECT_FALSE(light_count_json(s).contains("frame_budget_ms"));
+  s.count_budget_ms = 5;
+  s.count_budget_cap = 16;
+  s.count_budget_limited = true;
+  const nlohmann::json j = light_count_json(s);
+  EXPECT_EQ(j["frame_budget_ms"], 5.0);
+  EXPECT_EQ(j["budget_cap"], 16);
+  EXPECT_EQ(j["budget_limited"], true);
+}
+
 }  // namespace
 }  // namespace lp

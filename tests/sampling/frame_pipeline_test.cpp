@@ -97,6 +97,41 @@ TEST(FramePipeline, AutoCountPerFrameMeetsTheTargetOnEveryFrame) {
   }
 }
 
+// --frame-budget-ms: a budget no frame can meet holds the count at min_count from the
+// second frame on (and says so); a budget every frame meets never changes the count the
+// error target chooses. Neither depends on this machine's speed.
+TEST(FramePipeline, AFrameBudgetCapsTheAutoCountAndOnlyThen) {
+  FramePipelineOptions po;
+  po.method = Method::Pharr;
+  po.auto_count = true;
+  po.auto_options.target_error = 0.002;
+  FramePipeline free_running(po);
+  po.budget.budget_ms = 1e-6;
+  FramePipeline starved(po);
+  po.budget.budget_ms = 1e9;
+  FramePipeline generous(po);
+  for (int f = 0; f < 3; ++f) {
+    const LightList a = free_running.process(base_map(), f, 0);
+    const LightList b = starved.process(base_map(), f, 0);
+    const LightList c = generous.process(base_map(), f, 0);
+    EXPECT_GT(a.lights.size(), 64u) << "a target that needs many lights";
+    EXPECT_EQ(c.lights.size(), a.lights.size()) << f;
+    EXPECT_FALSE(generous.last_count().budget_limited);
+    if (f == 0) {  // the first frame is measured before anything is capped
+      EXPECT_EQ(b.lights.size(), a.lights.size());
+    } else {
+      EXPECT_EQ(int(b.lights.size()), po.auto_options.min_count) << f;
+      EXPECT_TRUE(starved.last_count().budget_limited);
+      EXPECT_FALSE(starved.last_count().reached);  // and the error says what the cap cost
+      EXPECT_GT(starved.last_count().error, po.auto_options.target_error);
+    }
+    EXPECT_EQ(starved.last_count().budget_cap, po.auto_options.min_count);
+  }
+  FramePipelineOptions fixed;
+  fixed.budget.budget_ms = 10;
+  EXPECT_THROW(FramePipeline{fixed}, InputError);  // a budget caps --n auto only
+}
+
 TEST(FramePipeline, RejectsANonPositiveCount) {
   FramePipelineOptions po;
   po.count = 0;

@@ -70,11 +70,13 @@ std::string table_text(const CalibrationResult& r) {
                      r.corners_total);
   else if (incumbent)
     s += fmt::format(
-        "chosen: {}, the simplest model no richer one beats beyond the noise of the {} splits (held-out RMS lower "
-        "on most splits and on average by more than t x its standard error over them; wins: splits on which a "
-        "model had the lowest held-out RMS); the fewest parameters within the noise of the best would be {}; "
-        "{} of {} corners rejected as outliers\n",
-        r.selected, r.cv_splits, r.simplest_within_noise, r.corners_rejected, r.corners_total);
+        "chosen: {}, the {} family's simplest model unless another beats it beyond the noise of the {} splits "
+        "(corners seen to {:.0f} deg; a challenger needs a held-out RMS or cross-validation better on most splits "
+        "and on average by more than t x the standard error of the difference; wins: splits on which a model had "
+        "the lowest held-out RMS); the fewest parameters within the noise of the best would be {}; {} of {} "
+        "corners rejected as outliers\n",
+        r.selected, r.selection_perspective_first ? "perspective" : "wide-angle",
+        r.cv_splits, r.selection_field_deg, r.simplest_within_noise, r.corners_rejected, r.corners_total);
   else
     s += fmt::format(
         "chosen: {}, the fewest parameters within the noise of the best (cross-validation {} within {} x {:.3f} "
@@ -207,6 +209,8 @@ nlohmann::json images_json(const BoardDetections& d) {
 nlohmann::json selection_json(const CalibrationResult& r) {
   return {{"rule", r.selection_rule},
           {"simplest_within_noise", r.simplest_within_noise},
+          {"field_deg", num(r.selection_field_deg)},
+          {"family_first", r.selection_perspective_first ? "perspective" : "wide-angle"},
           {"ranked_on", r.selected_on == "repeated" ? "cross_validation_repeated_px" : "cross_validation_px"},
           {"splits", r.cv_splits},
           {"noise_px", num(r.selection_noise_px)},

@@ -82,6 +82,7 @@ void take_selection(CalibrationResult& res, const SelectionReport& sel, const Mo
   res.selection_rule = sel.rule;
   res.simplest_within_noise = res.table[sel.simplest_within_noise].name;
   res.selection_field_deg = sel.field_deg;
+  res.selection_perspective_first = sel.perspective_first;
   res.no_model_fits = sel.no_model_fits;
   res.selected_on = sel.selected_on;
   res.cv_splits = sel.cv_splits;

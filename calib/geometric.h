@@ -117,6 +117,7 @@ struct CalibrationResult {
   std::string selection_rule;
   std::string simplest_within_noise;
   double selection_field_deg = std::numeric_limits<double>::quiet_NaN();  // SelectionReport::field_deg
+  bool selection_perspective_first = false;                                 // SelectionReport::perspective_first
   // Jackknife standard error of the best candidate's odd/even cross-validation: the
   // selection's noise (unless selection_noise_from_splits).
   double cv_noise_px = 0;

@@ -7,13 +7,13 @@
 // recalibrating (mrcal's "projection difference"). The held-out RMS is each half's model on
 // the other half's corners, poses re-solved.
 //
-// The model chosen (SelectionRule::Incumbent, the default) is the simplest candidate unless a
-// richer one beats it beyond the noise of the comparison, measured on the same balanced
-// splits of the views: each split's halves are refitted and give a held-out RMS (each half's
-// model on the other half's corners) and a cross-validation; a challenger replaces the
-// incumbent when its held-out RMS is lower on most splits and on average by more than a
-// Student t quantile times the standard error of the paired differences over the splits,
-// and its cross-validation is not significantly higher. Deciding on the spread of the
+// The model chosen (SelectionRule::Incumbent, the default) is the simplest candidate of the
+// lens's own family (SelectionOptions::perspective_field_deg) unless another beats it beyond
+// the noise of the comparison, measured on the same balanced splits of the views: each
+// split's halves are refitted and give a held-out RMS (each half's model on the other half's
+// corners) and a cross-validation; a challenger replaces the incumbent when one of the two is
+// better on most splits and on average by more than a Student t quantile times the standard
+// error of the paired differences over the splits, and the other is not significantly worse. Deciding on the spread of the
 // difference over resamples, and keeping the simpler model on a near tie, makes the choice
 // hold on other subsets of the views (issue 21: the rule of before, the fewest parameters
 // among those within a fixed multiple of one jackknife noise of the best, chose Mei on one
@@ -171,6 +171,7 @@ struct SelectionReport {
   std::string rule;
   size_t simplest_within_noise = 0;
   double field_deg = std::numeric_limits<double>::quiet_NaN();  // see SelectionOptions::perspective_field_deg
+  bool perspective_first = false;  // field_deg <= perspective_field_deg: the incumbent's family
   // What ranked the candidates: "repeated" (RMS over cv_splits splits) or "odd/even" (cv_splits
   // = 1, or no candidate survived the screening with every split fitted).
   std::string selected_on;
@@ -215,8 +216,10 @@ SplitValidation split_validation(const CalibrationProblem& problem, const ViewSu
                                  LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
 
 // The incumbent rule on a filled table (cross_validation_splits_px and heldout_splits_px of
-// equal length): the index picked, and every challenger's challenge_gain_px / challenge_se_px
-// and every candidate's split_wins filled. `eligible[i]` false: never picked nor challenging.
+// equal length): the index picked, and every challenger's challenge_* and every candidate's
+// split_wins filled. `eligible[i]` false: never picked nor challenging. perspective_first:
+// the perspective family's simplest candidate is the first incumbent (else the wide-angle
+// families').
 // Returns table.size() when there are fewer than min_rule_splits splits or no eligible
 // candidate has every split finite.
 size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char>& eligible, bool perspective_first,

@@ -429,6 +429,12 @@ TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
     for (const auto& c : det.corners)
       if (!c.empty()) views.push_back(c);
     const auto t0 = std::chrono::steady_clock::now();
+    const CalibrationResult full = calibrate(views, set.board, det.width, det.height, o);
+    std::printf("  %s, all %zu views: %s (before: %s), field %.1f deg, wins:", set.name, views.size(),
+                full.selected.c_str(), full.simplest_within_noise.c_str(), full.selection_field_deg);
+    for (const auto& c : full.table)
+      if (c.split_wins > 0) std::printf(" %s %d/%d", c.name.c_str(), c.split_wins, full.cv_splits);
+    std::printf("\n");
     const HalvesOutcome h = calibrate_halves(views, set.board, det.width, det.height, o, true);
     std::string fixed;
     for (const auto& [n, d] : h.fixed_px) fixed += n + " " + fmt_px(d) + ";";

@@ -49,23 +49,34 @@ std::string table_text(const CalibrationResult& r) {
   std::string s;
   const bool repeated = r.selected_on == "repeated";
   const std::string splits_col = fmt::format("{} splits", r.cv_splits);
-  s += fmt::format("{:<44} {:>6} {:>9} {:>10} {:>10} {:>10} {:>10}\n", "model", "params", "RMS px", "held-out",
-                   "cv odd/even", repeated ? splits_col : "", "lin. sigma");
+  const bool incumbent = r.selection_rule == "incumbent";
+  s += fmt::format("{:<44} {:>6} {:>9} {:>10} {:>10} {:>10} {:>10} {:>6}\n", "model", "params", "RMS px", "held-out",
+                   "cv odd/even", repeated ? splits_col : "", "lin. sigma", incumbent ? "wins" : "");
   for (const ModelCandidate& c : r.table)
     if (c.ok)
-      s += fmt::format("{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f} {:>10} {:>10}{}\n", c.name, c.params, c.rms_px,
+      s += fmt::format("{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f} {:>10} {:>10} {:>6}{}\n", c.name, c.params, c.rms_px,
                        c.heldout_rms_px, c.cross_validation_px,
                        !repeated ? ""
                                  : (std::isnan(c.cross_validation_repeated_px)
                                         ? "screened"
                                         : fmt::format("{:.3f}", c.cross_validation_repeated_px)),
                        std::isfinite(c.linear_sigma_px) ? fmt::format("{:.3f}", c.linear_sigma_px) : "-",
+                       incumbent ? fmt::format("{}/{}", c.split_wins, r.cv_splits) : "",
                        c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
     else
       s += fmt::format("{:<44} failed: {}\n", c.name, c.error);
   if (r.table.size() == 1 || !std::isfinite(r.cv_noise_px))  // a forced model: no selection, no noise estimate
     s += fmt::format("model {} as requested; {} of {} corners rejected as outliers\n", r.selected, r.corners_rejected,
                      r.corners_total);
+  else if (incumbent)
+    s += fmt::format(
+        "chosen: {}, the {} family's simplest model unless another beats it beyond the noise of the {} splits "
+        "(corners seen to {:.0f} deg; a challenger needs a held-out RMS or cross-validation better on most splits "
+        "and on average by more than t x the standard error of the difference; wins: splits on which a model had "
+        "the lowest held-out RMS); the fewest parameters within the noise of the best would be {}; {} of {} "
+        "corners rejected as outliers\n",
+        r.selected, r.selection_perspective_first ? "perspective" : "wide-angle",
+        r.cv_splits, r.selection_field_deg, r.simplest_within_noise, r.corners_rejected, r.corners_total);
   else
     s += fmt::format(
         "chosen: {}, the fewest parameters within the noise of the best (cross-validation {} within {} x {:.3f} "
@@ -167,6 +178,8 @@ nlohmann::json table_json(const CalibrationResult& r) {
                      {"cross_validation_px", c.cross_validation_px},
                      {"cross_validation_splits_px", c.cross_validation_splits_px},
                      {"cross_validation_repeated_px", num(c.cross_validation_repeated_px)},
+                     {"heldout_splits_px", c.heldout_splits_px}, {"split_wins", c.split_wins},
+                     {"challenge_gain_px", num(c.challenge_gain_px)}, {"challenge_se_px", num(c.challenge_se_px)},
                      {"linear_sigma_px", num(c.linear_sigma_px)},
                      {"linear_forecast_cross_validation_px", num(c.linear_forecast_cv_px)},
                      {"within_noise", c.within_noise}});
@@ -194,7 +207,11 @@ nlohmann::json images_json(const BoardDetections& d) {
 }
 
 nlohmann::json selection_json(const CalibrationResult& r) {
-  return {{"ranked_on", r.selected_on == "repeated" ? "cross_validation_repeated_px" : "cross_validation_px"},
+  return {{"rule", r.selection_rule},
+          {"simplest_within_noise", r.simplest_within_noise},
+          {"field_deg", num(r.selection_field_deg)},
+          {"family_first", r.selection_perspective_first ? "perspective" : "wide-angle"},
+          {"ranked_on", r.selected_on == "repeated" ? "cross_validation_repeated_px" : "cross_validation_px"},
           {"splits", r.cv_splits},
           {"noise_px", num(r.selection_noise_px)},
           {"noise_from", r.selection_noise_from_splits ? "split_spread" : "jackknife"},

@@ -59,6 +59,9 @@ SelectionOptions selection_options(const CalibrateOptions& o) {
   out.cv_splits = o.cv_splits;
   out.screen_factor = o.selection_screen_factor;
   out.noise_from_splits = o.selection_noise_from_splits;
+  out.rule = o.selection_rule;
+  out.min_rule_splits = o.selection_min_rule_splits;
+  out.perspective_field_deg = o.selection_perspective_field_deg;
   out.measure_noise = o.model.empty();
   return out;
 }
@@ -76,6 +79,10 @@ std::vector<ViewReport> initial_view_reports(const std::vector<std::vector<std::
 
 void take_selection(CalibrationResult& res, const SelectionReport& sel, const ModelCandidate& pick) {
   res.selected = pick.name;
+  res.selection_rule = sel.rule;
+  res.simplest_within_noise = res.table[sel.simplest_within_noise].name;
+  res.selection_field_deg = sel.field_deg;
+  res.selection_perspective_first = sel.perspective_first;
   res.no_model_fits = sel.no_model_fits;
   res.selected_on = sel.selected_on;
   res.cv_splits = sel.cv_splits;

@@ -67,6 +67,11 @@ struct CalibrateOptions {
   int cv_splits = SelectionOptions{}.cv_splits;
   double selection_screen_factor = SelectionOptions{}.screen_factor;
   bool selection_noise_from_splits = SelectionOptions{}.noise_from_splits;
+  // SelectionOptions::rule, min_rule_splits, perspective_field_deg: the simplest unless beaten beyond the splits'
+  // noise (default), or the fewest parameters within the noise of the best.
+  SelectionRule selection_rule = SelectionOptions{}.rule;
+  int selection_min_rule_splits = SelectionOptions{}.min_rule_splits;
+  double selection_perspective_field_deg = SelectionOptions{}.perspective_field_deg;
   // Jackknife leverage of each view for the chosen model (one extra fit per view);
   // LeverageOptions (view_diagnostics.h).
   bool leverage = true;
@@ -107,6 +112,12 @@ struct CalibrationResult {
   // = 1, or no candidate survived the screening with every split fitted).
   std::string selected_on;
   int cv_splits = 1;
+  // The rule that picked ("incumbent" or "simplest within noise") and the candidate the
+  // simplest-within-noise rule picks (the rule of before, for comparison).
+  std::string selection_rule;
+  std::string simplest_within_noise;
+  double selection_field_deg = std::numeric_limits<double>::quiet_NaN();  // SelectionReport::field_deg
+  bool selection_perspective_first = false;                                 // SelectionReport::perspective_first
   // Jackknife standard error of the best candidate's odd/even cross-validation: the
   // selection's noise (unless selection_noise_from_splits).
   double cv_noise_px = 0;

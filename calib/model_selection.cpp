@@ -5,6 +5,7 @@
 #include <functional>
 #include <numeric>
 #include <random>
+#include <utility>
 
 #include "calib/projection_difference.h"
 #include "core/error.h"
@@ -68,10 +69,12 @@ bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::
       continue;
     const LensType type = candidate_lens_type(c.name);
     c.cross_validation_splits_px = {c.cross_validation_px};
+    c.heldout_splits_px = {c.heldout_rms_px};
     for (size_t k = 1; k < splits.size(); ++k) {
-      c.cross_validation_splits_px.push_back(
-          split_cross_validation(pr, fits.used, splits[k], type, fits.full.get(type), fits.mask, fits.step));
-      if (!std::isfinite(c.cross_validation_splits_px.back())) break;  // cannot qualify: stop paying
+      const SplitValidation v = split_validation(pr, fits.used, splits[k], type, fits.full.get(type), fits.mask, fits.step);
+      c.cross_validation_splits_px.push_back(v.cross_validation_px);
+      c.heldout_splits_px.push_back(v.heldout_rms_px);
+      if (!std::isfinite(v.cross_validation_px)) break;  // cannot qualify: stop paying
     }
     c.cross_validation_repeated_px = rms_over_splits(c.cross_validation_splits_px);
     if (std::isfinite(c.cross_validation_repeated_px)) repeated = true;
@@ -153,7 +156,107 @@ size_t pick_within_noise(const CandidateFits& fits, std::vector<ModelCandidate>&
   return pick;
 }
 
+// Student's t, 97.5 % quantile, for `dof` degrees of freedom (1.96 beyond 30).
+double t975(int dof) {
+  static const double t[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+                             2.201,  2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+                             2.080,  2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042};
+  return dof < 1 ? kInf : dof <= 30 ? t[dof - 1] : 1.96;
+}
+
+// Mean and standard error (sample SD / sqrt(n)) of a[k] - b[k].
+std::pair<double, double> paired_mean_se(const std::vector<double>& a, const std::vector<double>& b) {
+  const size_t n = a.size();
+  double mean = 0, ss = 0;
+  for (size_t k = 0; k < n; ++k) mean += (a[k] - b[k]) / double(n);
+  for (size_t k = 0; k < n; ++k) ss += (a[k] - b[k] - mean) * (a[k] - b[k] - mean);
+  return {mean, n > 1 ? std::sqrt(ss / double(n - 1) / double(n)) : kInf};
+}
+
+bool all_finite(const std::vector<double>& v) {
+  return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+}
+
+// How far off the axis the boards were seen: the largest angle of a used inlier corner's
+// ray, unprojected through the eligible candidate with the lowest held-out RMS (NaN: none).
+double observed_field_deg(const CandidateFits& fits, const std::vector<ModelCandidate>& table,
+                          const std::vector<char>& eligible) {
+  const ModelCandidate* ref = nullptr;
+  for (size_t i = 0; i < table.size(); ++i)
+    if (eligible[i] && (!ref || table[i].heldout_rms_px < ref->heldout_rms_px)) ref = &table[i];
+  if (!ref) return kNaN;
+  double field = 0;
+  for (const BoardView* v : fits.used)
+    for (size_t k = 0; k < v->px.size(); ++k)
+      if (v->inlier[k])
+        if (const auto ray = unproject(ref->model, Pixel{v->px[k][0], v->px[k][1]}))
+          field = std::max(field, std::acos(std::clamp(ray->z / length(*ray), -1.0, 1.0)) * 180 / M_PI);
+  return field;
+}
+
 }  // namespace
+
+size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char>& eligible, bool perspective_first,
+                      const SelectionOptions& o) {
+  // Who takes part: every split fitted, the same number of splits (they are the same splits).
+  size_t splits = 0;
+  for (const auto& c : table) splits = std::max(splits, c.heldout_splits_px.size());
+  std::vector<size_t> order;
+  for (size_t i = 0; i < table.size(); ++i) {
+    const ModelCandidate& c = table[i];
+    if (eligible[i] && splits >= size_t(std::max(2, o.min_rule_splits)) && c.heldout_splits_px.size() == splits &&
+        c.cross_validation_splits_px.size() == splits && all_finite(c.heldout_splits_px) &&
+        all_finite(c.cross_validation_splits_px))
+      order.push_back(i);
+  }
+  for (auto& c : table) {
+    c.split_wins = 0;
+    c.challenge_gain_px = c.challenge_se_px = c.challenge_cv_gain_px = c.challenge_cv_se_px = kNaN;
+  }
+  if (order.empty()) return table.size();
+  // The vote: who fits the held-out corners best on each split (reported; the rule below
+  // asks for a majority of the splits against the incumbent, not of all candidates).
+  for (size_t k = 0; k < splits; ++k) {
+    size_t w = order[0];
+    for (size_t i : order)
+      if (table[i].heldout_splits_px[k] < table[w].heldout_splits_px[k]) w = i;
+    table[w].split_wins++;
+  }
+  // The lens's own family first, simplest first within it (on equal parameter counts, the
+  // lower repeated cross-validation).
+  const auto rank = [&](size_t i) {
+    const bool perspective = lens_type_info(candidate_lens_type(table[i].name)).family == LensFamily::Perspective;
+    return perspective == perspective_first ? 0 : 1;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    if (rank(a) != rank(b)) return rank(a) < rank(b);
+    if (table[a].params != table[b].params) return table[a].params < table[b].params;
+    return rms_over_splits(table[a].cross_validation_splits_px) < rms_over_splits(table[b].cross_validation_splits_px);
+  });
+  const double t = t975(int(splits) - 1);
+  size_t inc = order[0];
+  for (size_t j = 1; j < order.size(); ++j) {
+    ModelCandidate& c = table[order[j]];
+    const ModelCandidate& a = table[inc];
+    const auto [gain, se] = paired_mean_se(a.heldout_splits_px, c.heldout_splits_px);
+    const auto [cv_gain, cv_se] = paired_mean_se(a.cross_validation_splits_px, c.cross_validation_splits_px);
+    c.challenge_gain_px = gain;
+    c.challenge_se_px = se;
+    c.challenge_cv_gain_px = cv_gain;
+    c.challenge_cv_se_px = cv_se;
+    int better = 0, cv_better = 0;
+    for (size_t k = 0; k < splits; ++k) {
+      better += c.heldout_splits_px[k] < a.heldout_splits_px[k];
+      cv_better += c.cross_validation_splits_px[k] < a.cross_validation_splits_px[k];
+    }
+    // Better on most splits and on average beyond the noise, in one statistic, and not
+    // significantly worse in the other.
+    const bool fits_better = 2 * better > int(splits) && gain > t * se && -cv_gain <= t * cv_se + o.floor_px;
+    const bool repeats_better = 2 * cv_better > int(splits) && cv_gain > t * cv_se && -gain <= t * se;
+    if (fits_better || repeats_better) inc = order[j];
+  }
+  return inc;
+}
 
 CandidateFits::CandidateFits(const CalibrationProblem& pr, ViewSubset used_views)
     : used(std::move(used_views)),
@@ -219,7 +322,26 @@ SelectionReport select_model(const CalibrationProblem& pr, CandidateFits& fits, 
   rep.noise_px = std::isfinite(noise_used) ? noise_used : 0.0;
   rep.k = o.k;
   rep.noise_from_splits = from_splits;
-  rep.selected = pick_within_noise(fits, table, best, rep.noise_px, score, o);
+  rep.simplest_within_noise = pick_within_noise(fits, table, best, rep.noise_px, score, o);
+  rep.selected = rep.simplest_within_noise;
+  rep.rule = "simplest within noise";
+  if (o.rule == SelectionRule::Incumbent) {
+    // Who may be picked: a fit of every view and of the odd/even halves that a lens model can
+    // have (fit_max_*). Not the repeated value against fit_max_cross_validation_px: with
+    // halves of 2 views one split of a good model can be 9 px off (190 deg lens, 4 views),
+    // and weighing such a split against the others is the challenge's job.
+    std::vector<char> eligible(table.size(), 0);
+    for (size_t i = 0; i < table.size(); ++i)
+      eligible[i] = table[i].ok && table[i].rms_px <= o.fit_max_rms_px &&
+                    table[i].cross_validation_px <= o.fit_max_cross_validation_px;
+    rep.field_deg = observed_field_deg(fits, table, eligible);
+    rep.perspective_first = rep.field_deg <= o.perspective_field_deg;
+    const size_t pick = incumbent_pick(table, eligible, rep.perspective_first, o);
+    if (pick < table.size()) {
+      rep.selected = pick;
+      rep.rule = "incumbent";
+    }
+  }
   rep.no_model_fits = true;
   for (const auto& c : table)
     if (c.ok && c.rms_px <= o.fit_max_rms_px && c.cross_validation_px <= o.fit_max_cross_validation_px)
@@ -251,21 +373,45 @@ std::vector<std::vector<int>> balanced_view_splits(int n, int k) {
   return out;
 }
 
-double split_cross_validation(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side,
-                              LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step) {
-  ViewSubset hs[2];
+namespace {
+
+// Both halves of a split refitted warm from `full`; false when a half has < 2 views (the
+// odd/even halves of the smallest set calibrate accepts, 4 views) or cannot be fitted.
+bool split_halves(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side, LensType type,
+                  const ModelFit& full, ViewSubset (&hs)[2], ModelFit (&fit)[2]) {
   std::vector<BoardPose> ps[2];
   for (size_t i = 0; i < used.size(); ++i) {
     hs[side[i]].push_back(used[i]);
     ps[side[i]].push_back(full.poses[i]);
   }
-  if (hs[0].size() < 3 || hs[1].size() < 3) return kInf;
-  const ModelFit a = warm_refit(pr, hs[0], type, full, ps[0]);
-  if (!a.ok) return kInf;
-  const ModelFit b = warm_refit(pr, hs[1], type, full, ps[1]);
-  if (!b.ok) return kInf;
-  const ProjectionDiff d = projection_difference(a.model, b.model, mask, step);
+  if (hs[0].size() < 2 || hs[1].size() < 2) return false;
+  for (int h = 0; h < 2; ++h) {
+    fit[h] = warm_refit(pr, hs[h], type, full, ps[h]);
+    if (!fit[h].ok) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+double split_cross_validation(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side,
+                              LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step) {
+  ViewSubset hs[2];
+  ModelFit fit[2];
+  if (!split_halves(pr, used, side, type, full, hs, fit)) return kInf;
+  const ProjectionDiff d = projection_difference(fit[0].model, fit[1].model, mask, step);
   return d.samples > 0 ? d.rms_px : kInf;
+}
+
+SplitValidation split_validation(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side,
+                                 LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step) {
+  ViewSubset hs[2];
+  ModelFit fit[2];
+  if (!split_halves(pr, used, side, type, full, hs, fit)) return {kInf, kInf};
+  const ProjectionDiff d = projection_difference(fit[0].model, fit[1].model, mask, step);
+  if (d.samples == 0) return {kInf, kInf};
+  const double h1 = heldout_rms(pr, fit[0].model, hs[1]), h2 = heldout_rms(pr, fit[1].model, hs[0]);
+  return {d.rms_px, std::sqrt(0.5 * (h1 * h1 + h2 * h2))};
 }
 
 double rms_over_splits(const std::vector<double>& v) {

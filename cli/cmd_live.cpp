@@ -61,10 +61,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
     if (!(t > 0)) throw InputError("--exposures must be positive seconds");
   if (!args.response.empty()) lo.response = load_response(args.response);
   if (!args.photometric.empty()) lo.photometric = load_photometric(args.photometric), lo.photometric_file = args.photometric;
-  if (!args.camera.empty()) {
-    lo.camera = read_camera_model(args.camera);
-    lo.camera_file = args.camera;
-  }
+  if (!args.camera.empty()) lo.camera = read_camera_model(args.camera), lo.camera_file = args.camera;
   lo.fov_deg = args.fov;
   if (!args.rotation.empty()) lo.world_from_probe = parse_rotation(args.rotation);
   lo.frames_are_maps = args.maps;

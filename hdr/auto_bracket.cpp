@@ -118,6 +118,26 @@ MeteredScene meter_image(const RgbImage& radiance, std::vector<double> exposure_
   return scene;
 }
 
+MeteredScene meter_unfusable_bracket(const std::vector<RgbImage>& frames, const std::vector<double>& exposure_seconds,
+                                     const CameraResponse& response, const ExposureWindow& window) {
+  if (frames.empty() || frames.size() != exposure_seconds.size())
+    throw InputError("auto bracket: a bracket to meter needs one exposure time per frame");
+  check_response(response, "auto bracket response");
+  const auto [shortest, longest] = std::minmax_element(exposure_seconds.begin(), exposure_seconds.end());
+  const RgbImage& short_frame = frames[size_t(shortest - exposure_seconds.begin())];
+  const float brightest = short_frame.rgb.empty() ? 0.f : *std::max_element(short_frame.rgb.begin(), short_frame.rgb.end());
+  const size_t brightest_level = size_t(std::lround(std::clamp(double(brightest), 0.0, 1.0) * (response.levels - 1)));
+  const bool all_black = std::exp(double(response.log_exposure[1][brightest_level])) <= window.x_black;
+  const size_t k = size_t((all_black ? longest : shortest) - exposure_seconds.begin());
+  const RgbImage& codes = frames[k];
+  RgbImage radiance = codes;
+  for (size_t i = 0; i < radiance.rgb.size(); ++i) {
+    const size_t level = size_t(std::lround(std::clamp(double(codes.rgb[i]), 0.0, 1.0) * (response.levels - 1)));
+    radiance.rgb[i] = float(std::exp(double(response.log_exposure[i % 3][level])) / exposure_seconds[k]);
+  }
+  return meter_image(radiance, {exposure_seconds[k]});
+}
+
 BracketPlan plan_bracket(const MeteredScene& scene, const ExposureWindow& window, const ExposureLimits& limits,
                          const AutoBracketOptions& options, double headroom) {
   if (headroom < 0) headroom = options.headroom;
@@ -229,8 +249,24 @@ bool AutoBracketPlanner::update(const MeteredScene& scene) {
   decision_ = "steady";
   // Keep the plan's times; say what they cover of the scene as metered now.
   candidate.exposure_seconds = plan_.exposure_seconds;
-  candidate.limit = plan_.limit;
-  candidate.limit_text = plan_.limit_text;
+  // The camera's limits as they bear on the scene now: an end the kept times miss where
+  // they are at a limit (when the plan was made, that end may have been a guess).
+  const std::vector<double>& t = candidate.exposure_seconds;
+  const bool bright_missed = candidate.scene_high > window_.x_high / t.front();
+  const bool dark_missed = candidate.scene_low < window_.x_low / t.back();
+  candidate.limit = BracketLimit::None;
+  candidate.limit_text.clear();
+  if (bright_missed && t.front() <= limits_.min_seconds * 1.000001) {
+    candidate.limit = BracketLimit::BrightShortest;
+    candidate.limit_text = fmt::format("; bright end clipped: {:g} s is the shortest exposure", limits_.min_seconds);
+  }
+  if (dark_missed && (t.back() >= limits_.max_seconds / 1.000001 || int(t.size()) >= limits_.max_exposures)) {
+    const bool longest = t.back() >= limits_.max_seconds / 1.000001;
+    if (candidate.limit == BracketLimit::None)
+      candidate.limit = longest ? BracketLimit::DarkLongest : BracketLimit::DarkMaxExposures;
+    candidate.limit_text += longest ? fmt::format("; dark end under the floor: {:g} s is the longest exposure", limits_.max_seconds)
+                                    : fmt::format("; dark end under the floor: {} exposures at most", limits_.max_exposures);
+  }
   describe_coverage(candidate, scene, window_, options_);
   plan_ = std::move(candidate);
   return false;

@@ -87,6 +87,13 @@ struct MeteredScene {
 // A map's or image's valid pixels as a MeteredScene; pixels that are not finite or not
 // positive are left out (a black pixel has no radiance to plan for).
 MeteredScene meter_image(const RgbImage& radiance, std::vector<double> exposure_seconds = {});
+// One frame's codes metered through the response (L = exp(g(z)) / t), for a bracket that
+// could not be fused because no pixel was well exposed in any frame: its shortest frame
+// when that one is not all black, else its longest. The clipped (black) pixels then tell
+// the planner to look further, so that a first bracket far off the scene still leads
+// somewhere. InputError when the bracket has no frames or its sizes differ.
+MeteredScene meter_unfusable_bracket(const std::vector<RgbImage>& frames, const std::vector<double>& exposure_seconds,
+                                     const CameraResponse& response, const ExposureWindow& window);
 
 struct AutoBracketOptions {
   CoverageCodes codes;

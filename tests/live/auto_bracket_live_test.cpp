@@ -63,14 +63,10 @@ class PaintingCamera : public CameraSource {
 };
 
 LivePipelineOptions auto_options() {
-  LivePipelineOptions o;
+  LivePipelineOptions o;  // a small hemisphere map (the default layout), 8 pharr lights
   o.auto_exposures = true;
-  o.layout = Layout::Hemisphere;
-  o.width = 90;
-  o.height = 23;
-  o.sampling.method = Method::Pharr;
-  o.sampling.count = 8;
-  o.sampling.sampler.upper_only = true;
+  o.width = 90, o.height = 23;
+  o.sampling.method = Method::Pharr, o.sampling.count = 8, o.sampling.sampler.upper_only = true;
   return o;
 }
 

@@ -52,9 +52,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
   // Options in, validated before anything starts.
   StreamSessionOptions st;
   SourceOptions& so = st.source_options;
-  so.loop = args.loop;
-  so.frame_rate = args.fps;
-  so.bracketing = args.bracketing;
+  so.loop = args.loop, so.frame_rate = args.fps, so.bracketing = args.bracketing;
   LivePipelineOptions& lo = st.pipeline;
   if (args.exposures == "auto") lo.auto_exposures = true;  // planned from each map (hdr/auto_bracket.h)
   else if (!args.exposures.empty()) lo.exposure_cycle = parse_numbers(args.exposures, "--exposures");

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/limits.h"
 #include "core/progress.h"
+#include "eval/auto_bracket_eval.h"
 #include "eval/calib_eval.h"
 #include "eval/estimators_eval.h"
 #include "eval/hdr_eval.h"
@@ -234,9 +235,7 @@ std::vector<Command> eval_commands() {
          auto o = std::make_shared<EvalUnwrapOptions>();
          f.arg("MAP", o->maps, "Latlong maps ('scene' for the procedural scene)").required();
          f.output(o->output_dir, "Directory for unwrap.csv");
-         return [o](const Output& out) {
-           return evaluate_and_report("eval unwrap", out, evaluate_unwrap, *o);
-         };
+         return [o](const Output& out) { return evaluate_and_report("eval unwrap", out, evaluate_unwrap, *o); };
        }},
       {"eval merge", "Merging four displaced cameras: position weights against equal ones at a camera placed at the target",
        "lightprobe eval merge -o eval/merge",
@@ -246,6 +245,12 @@ std::vector<Command> eval_commands() {
          f.opt("--n", o->n, "Lights per camera and of the merge");
          f.output(o->output_dir, "Directory for merge.csv and merge.svg");
          return [o](const Output& out) { return evaluate_and_report("eval merge", out, evaluate_merge, *o); };
+       }},
+      {"eval auto-bracket", "Auto-bracketing against fixed 3- and 5-exposure brackets: a lamp, a window, a cloud",
+       "lightprobe eval auto-bracket -o eval/auto_bracket", [](Flags& f) -> Handler {
+         auto o = std::make_shared<EvalAutoBracketOptions>();
+         f.output(o->output_dir, "Directory for auto_bracket.csv (every frame of every bracket)");
+         return [o](const Output& out) { return evaluate_and_report("eval auto-bracket", out, evaluate_auto_bracket, *o); };
        }},
       {"eval metadata", "Diffuse error of the metadata model against real probes along a walk",
        "lightprobe synth walkthrough -o walk/ && lightprobe eval metadata walk/ -o eval/metadata",

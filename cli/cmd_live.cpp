@@ -52,11 +52,10 @@ int run_stream(const StreamArgs& args, const Output& out) {
   // Options in, validated before anything starts.
   StreamSessionOptions st;
   SourceOptions& so = st.source_options;
-  so.loop = args.loop;
-  so.frame_rate = args.fps;
-  so.bracketing = args.bracketing;
+  so.loop = args.loop, so.frame_rate = args.fps, so.bracketing = args.bracketing;
   LivePipelineOptions& lo = st.pipeline;
-  if (!args.exposures.empty()) lo.exposure_cycle = parse_numbers(args.exposures, "--exposures");
+  if (args.exposures == "auto") lo.auto_exposures = true;  // planned from each map (hdr/auto_bracket.h)
+  else if (!args.exposures.empty()) lo.exposure_cycle = parse_numbers(args.exposures, "--exposures");
   for (double t : lo.exposure_cycle)
     if (!(t > 0)) throw InputError("--exposures must be positive seconds");
   if (!args.response.empty()) lo.response = load_response(args.response);
@@ -131,13 +130,13 @@ int run_merge(const MergeArgs& args, const Output& out) {
 std::vector<Command> live_commands() {
   return {
       {"stream", "Run the whole chain live and serve light lists over HTTP",
-       "lightprobe stream --source aravis:Fake_1\nlightprobe stream --source aravis --exposures 0.0002,0.002,0.02 --camera fisheye.yaml --fov 185\nlightprobe stream --config rig.toml",
+       "lightprobe stream --source aravis:Fake_1 --exposures auto\nlightprobe stream --source aravis --exposures 0.0002,0.002,0.02 --camera fisheye.yaml --fov 185\nlightprobe stream --config rig.toml",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<StreamArgs>();
          f.opt("--source", a->source, "replay:DIR | video:FILE | aravis[:ID] | libcamera[:ID] | v4l2:N");
          f.opt("--listen", a->listen, "HOST:PORT to serve on (127.0.0.1 by default; port 0 picks one)");
          f.opt("--token", a->token, "Bearer token required on every route (needed beyond localhost)");
-         f.opt("--exposures", a->exposures, "Bracketing: exposure times cycled by the camera, seconds");
+         f.opt("--exposures", a->exposures, "Bracketing: exposure times cycled by the camera, seconds; or 'auto': the fewest that cover the scene, re-planned as it changes");
          f.opt("--bracketing", a->bracketing, "auto: the camera's sequencer when it has one, else per-frame writes; sequencer; writes").one_of({"auto", "sequencer", "writes"});
          f.opt("--response", a->response, "Camera response (hdr response); default linear");
          f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -50,8 +51,12 @@ LivePipeline::LivePipeline(OpenSource open, LivePipelineOptions options, Publish
   if (options_.queue_brackets < 1) throw InputError("the bracket queue needs room for at least one bracket");
   for (const char* stage : kStages) stages_.emplace_back(stage, Histogram(latency_buckets_seconds()));
   sampler_ = std::make_unique<FramePipeline>(options_.sampling);
+  // Auto-bracketing always fuses brackets of 2 or more frames (its first is 3).
+  const size_t exposures = options_.auto_exposures ? std::max<size_t>(options_.exposure_cycle.size(), 2)
+                                                   : options_.exposure_cycle.size();
   decode_ = plan_frame_decode({options_.photometric ? &*options_.photometric : nullptr, options_.photometric_file,
-                               options_.exposure_cycle.size(), options_.response.has_value(), options_.frames_are_maps});
+                               exposures, options_.response.has_value(), options_.frames_are_maps});
+  stats_.auto_exposures = options_.auto_exposures;
   stats_.decode = to_string(decode_);
   stats_.auto_count = options_.sampling.auto_count;
   stats_.count_target = options_.sampling.auto_count ? options_.sampling.auto_options.target_error : 0;
@@ -64,7 +69,27 @@ LivePipeline::~LivePipeline() { stop(); }
 void LivePipeline::start() {
   if (running_) return;
   source_ = open_();
-  if (!options_.exposure_cycle.empty()) source_->set_exposure_cycle(options_.exposure_cycle);
+  cycle_ = options_.exposure_cycle;
+  if (options_.auto_exposures) {
+    const std::optional<ExposureRange> range = source_->exposure_range();
+    if (!range)
+      throw InputError(source_->describe() +
+                       ": cannot set its exposure, so it cannot auto-bracket (replay, video, V4L2 and libcamera "
+                       "sources deliver what they are given); give exposure times instead");
+    if (!(range->max_seconds > range->min_seconds * 1.01))
+      throw InputError(fmt::format("{}: its exposure range is one time ({:g} s), so it cannot bracket",
+                                   source_->describe(), range->min_seconds));
+    const ExposureLimits limits{range->min_seconds, range->max_seconds, options_.auto_max_exposures, 2};
+    const CameraResponse response = options_.response ? *options_.response : linear_response(256);
+    planner_ = std::make_unique<AutoBracketPlanner>(usable_exposure_window(response, options_.auto_bracket.codes),
+                                                    limits, options_.auto_bracket);
+    if (cycle_.empty()) cycle_ = auto_first_bracket(*range);
+  }
+  if (!cycle_.empty()) source_->set_exposure_cycle(cycle_);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stats_.exposures = cycle_;
+  }
   running_ = true;
   capture_done_ = false;
   capture_ = std::thread([this] { capture_loop(); });
@@ -107,6 +132,25 @@ std::string LivePipeline::metrics() const {
   m.counter("lightprobe_camera_reconnects_total", "Times the camera was reopened.", double(s.reconnects));
   m.gauge("lightprobe_lights", "Lights of the last list, before clustering (--n auto: chosen per frame).", s.lights);
   m.counter("lightprobe_light_count_changes_total", "Times --n auto changed the light count.", double(s.count_changes));
+  if (!s.exposures.empty()) {
+    m.gauge("lightprobe_bracket_exposures", "Exposures in the bracket the camera cycles.", double(s.exposures.size()));
+    m.family("lightprobe_bracket_exposure_seconds", "gauge", "Exposure times of the bracket, shortest first (index).");
+    std::vector<double> sorted = s.exposures;
+    std::sort(sorted.begin(), sorted.end());
+    for (size_t i = 0; i < sorted.size(); ++i)
+      m.sample("lightprobe_bracket_exposure_seconds", sorted[i], fmt::format("index=\"{}\"", i));
+  }
+  if (s.auto_exposures) {
+    const BracketPlan& p = s.bracket_plan;
+    m.gauge("lightprobe_bracket_scene_stops", "--exposures auto: the metered scene's range, stops.", p.scene_stops);
+    m.gauge("lightprobe_bracket_covered_ratio", "--exposures auto: metered pixels the bracket covers.",
+            p.covered_fraction);
+    m.gauge("lightprobe_bracket_camera_limited",
+            "--exposures auto: 1 when the camera's limits leave an end of the scene uncovered (/status bracket.limit).",
+            p.limit == BracketLimit::None ? 0 : 1);
+    m.counter("lightprobe_bracket_changes_total", "--exposures auto: times the planner changed the bracket.",
+              double(s.bracket_changes));
+  }
   m.family("lightprobe_stage_duration_seconds", "histogram",
            "Time of each processing stage per published list (fuse_unwrap: bracket fusion and unwrap in one pass).");
   for (const auto& [stage, h] : stages_)
@@ -117,11 +161,25 @@ std::string LivePipeline::metrics() const {
 }
 
 void LivePipeline::capture_loop() {
-  const size_t cycle = std::max<size_t>(1, options_.exposure_cycle.size());
+  size_t cycle = std::max<size_t>(1, cycle_.size());
   std::unique_ptr<Bracket> current;
   while (running_) {
     std::optional<CameraFrame> frame;
     try {
+      std::vector<double> next_cycle;  // a new plan of the auto-bracketing, from the process thread
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        next_cycle.swap(pending_cycle_);
+      }
+      if (!next_cycle.empty()) {
+        source_->set_exposure_cycle(next_cycle);
+        cycle_ = std::move(next_cycle);
+        cycle = cycle_.size();
+        std::lock_guard<std::mutex> lock(mutex_);
+        stats_.exposures = cycle_;
+        if (current) stats_.frames_dropped_partial += current->frames.size();  // taken at the old times
+        current.reset();
+      }
       frame = source_->next(0.2);
     } catch (const InputError& e) {
       // A frame that is bad input (a replay file that cannot be read): no reconnect
@@ -141,7 +199,7 @@ void LivePipeline::capture_loop() {
       try {
         if (!source_->reconnect()) {
           source_ = open_();
-          if (!options_.exposure_cycle.empty()) source_->set_exposure_cycle(options_.exposure_cycle);
+          if (!cycle_.empty()) source_->set_exposure_cycle(cycle_);
         }
         std::lock_guard<std::mutex> lock(mutex_);
         ++stats_.reconnects;
@@ -252,6 +310,26 @@ void LivePipeline::process_loop() {
   }
 }
 
+void LivePipeline::plan_next_bracket(const MeteredScene& scene) {
+  const bool changed = planner_->update(scene);
+  std::lock_guard<std::mutex> lock(mutex_);
+  stats_.bracket_plan = planner_->plan();
+  stats_.bracket_decision = planner_->last_decision();
+  stats_.bracket_changes = planner_->changes();
+  if (changed) pending_cycle_ = planner_->plan().exposure_seconds;
+}
+
+std::vector<double> auto_first_bracket(const ExposureRange& range) {
+  // Slide the decade-apart times into the range, then clamp what still sticks out.
+  std::vector<double> times = kAutoFirstBracket;
+  const double shift = times.front() < range.min_seconds  ? range.min_seconds / times.front()
+                       : times.back() > range.max_seconds ? range.max_seconds / times.back()
+                                                          : 1.0;
+  for (double& t : times) t = std::clamp(t * shift, range.min_seconds, range.max_seconds);
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+  return times;
+}
+
 void LivePipeline::ensure_remap(int width, int height) {
   if (remap_ && remap_->width == width && remap_->height == height) return;
   const CameraModel model =
@@ -304,7 +382,18 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
       hb.frames.push_back(std::move(f.image));
     }
     const CameraResponse response = options_.response ? *options_.response : linear_response(256);
-    RgbImage radiance = fuse_and_unwrap(hb, response, merge_options, remap_->plan, ro);
+    RgbImage radiance;
+    try {
+      radiance = fuse_and_unwrap(hb, response, merge_options, remap_->plan, ro);
+    } catch (const InputError&) {
+      // Nothing well exposed (a first bracket far off the scene): the bracket is dropped,
+      // but the planner still learns which way to go from its raw frames.
+      if (planner_)
+        plan_next_bracket(meter_unfusable_bracket(hb.frames, hb.exposure_seconds, response,
+                                                  usable_exposure_window(response, options_.auto_bracket.codes)));
+      throw;
+    }
+    if (planner_) plan_next_bracket(meter_image(radiance, hb.exposure_seconds));  // before any photometric scale
     if (options_.photometric) apply_photometric(radiance, *options_.photometric);
     map->rgb = std::move(radiance.rgb);
     map->valid = std::move(radiance.valid);

@@ -22,6 +22,7 @@
 #include "calib/photometric.h"
 #include "core/envmap.h"
 #include "core/light_list.h"
+#include "hdr/auto_bracket.h"
 #include "hdr/response.h"
 #include "live/frame_decode.h"
 #include "live/metrics.h"
@@ -34,6 +35,15 @@ struct LivePipelineOptions {
   // Bracketing: exposure times cycled by the camera; empty = single frames (a linear or
   // log sensor, or a replayed sequence of radiance maps).
   std::vector<double> exposure_cycle;
+  // Auto-bracketing (--exposures auto, hdr/auto_bracket.h): each fused map meters the
+  // scene and the planner picks the next brackets' times within the source's exposure
+  // range (CameraSource::exposure_range; start() refuses a source without one).
+  // exposure_cycle is the first bracket (empty: kAutoFirstBracket moved into the range).
+  // At least 2 exposures: the live chain fuses brackets (a single frame is decoded
+  // without the response, frame_decode.h).
+  bool auto_exposures = false;
+  AutoBracketOptions auto_bracket;
+  int auto_max_exposures = 7;
   std::optional<CameraResponse> response;         // default: linear
   // Absolute units; a log-sensor curve decodes single frames (live/frame_decode.h: what
   // it refuses at start). The file is named in those refusals.
@@ -78,7 +88,18 @@ struct LiveStats {
   double count_budget_ms = 0;       // --frame-budget-ms (0: none)
   bool count_budget_limited = false;  // the budget placed fewer lights than the target asked
   int count_budget_cap = 0;         // the most lights the budget allows the next frame
+  // The bracket (--exposures LIST, or auto: the planner's latest plan and why).
+  bool auto_exposures = false;
+  std::vector<double> exposures;    // the times the camera cycles now
+  BracketPlan bracket_plan;         // auto: the latest plan (reason, coverage, limit)
+  std::string bracket_decision;     // auto: why the last map kept or changed it
+  uint64_t bracket_changes = 0;     // auto: plan changes after the first
 };
+
+// The first bracket of --exposures auto before anything is metered: three exposures a
+// decade apart (moved into the camera's range by auto_first_bracket).
+inline const std::vector<double> kAutoFirstBracket{1e-4, 1e-3, 1e-2};
+std::vector<double> auto_first_bracket(const ExposureRange& range);
 
 class LivePipeline {
  public:
@@ -103,7 +124,8 @@ class LivePipeline {
   void capture_loop();
   void process_loop();
   Timings process(Bracket& bracket);
-  void ensure_remap(int width, int height);  // compiles the unwrap table for this frame size
+  void ensure_remap(int width, int height);
+  void plan_next_bracket(const MeteredScene& scene);  // compiles the unwrap table for this frame size
 
   OpenSource open_;
   LivePipelineOptions options_;
@@ -125,6 +147,11 @@ class LivePipeline {
   struct RemapCache;
   std::unique_ptr<RemapCache> remap_;
   int64_t published_ = 0;
+  // Auto-bracketing: the planner lives on the process thread; a new plan waits in
+  // pending_cycle_ (under mutex_) until the capture thread gives it to the source.
+  std::unique_ptr<AutoBracketPlanner> planner_;
+  std::vector<double> pending_cycle_;
+  std::vector<double> cycle_;  // capture thread: what the source cycles
 };
 
 }  // namespace lp

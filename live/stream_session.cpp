@@ -23,6 +23,17 @@ nlohmann::json light_count_json(const LiveStats& s) {
   return j;
 }
 
+nlohmann::json bracket_json(const LiveStats& s) {
+  nlohmann::json j{{"mode", s.auto_exposures ? "auto" : s.exposures.empty() ? "single" : "fixed"},
+                   {"exposure_seconds", s.exposures}};
+  if (s.auto_exposures) {
+    const BracketPlan& p = s.bracket_plan;
+    j.update({{"reason", p.reason}, {"decision", s.bracket_decision}, {"scene_stops", p.scene_stops},
+              {"covered_fraction", p.covered_fraction}, {"limit", to_string(p.limit)}, {"changes", s.bracket_changes}});
+  }
+  return j;
+}
+
 nlohmann::json pipeline_status_json(const LiveStats& s, const std::string& source, double seconds_since_frame,
                                     double quiet_s) {
   const bool streaming = seconds_since_frame < quiet_s;
@@ -68,6 +79,7 @@ StreamSessionReport run_stream_session(const StreamSessionOptions& options, cons
     if (!stats.input_error.empty() || (mqtt && !mqtt->refused().empty())) break;
     server.publish_metrics(pipeline.metrics() + (mqtt ? mqtt->metrics() : ""));
     server.publish_status("light_count", light_count_json(stats).dump());
+    server.publish_status("bracket", bracket_json(stats).dump());
     const auto now = std::chrono::steady_clock::now();
     if (stats.frames_in != frames_seen) frames_seen = stats.frames_in, last_frame_at = now;
     server.publish_status("pipeline",
@@ -94,12 +106,13 @@ std::string StreamSessionReport::summary() const {
   const LiveStats& s = stats;
   return fmt::format(
       "stream stopped: {} frames in ({} decode), {} brackets processed, {} dropped whole, {} frames in partial "
-      "brackets, {} reconnects; {} lights{}{}{}\n",
+      "brackets, {} reconnects; {} lights{}{}{}{}\n",
       s.frames_in, s.decode, s.brackets_processed, s.brackets_dropped, s.frames_dropped_partial, s.reconnects, s.lights,
       s.auto_count ? fmt::format(" (--n auto: {} error {:.4f}, target {:g}{}, {} changes{})", s.count_measure,
                                  s.count_error, s.count_target, s.count_reached ? "" : " MISSED", s.count_changes,
                                  s.count_budget_limited ? fmt::format(", held to {} by the frame budget", s.count_budget_cap) : "")
                    : "",
+      s.auto_exposures ? fmt::format("; --exposures auto: {} ({} changes)", s.bracket_plan.reason, s.bracket_changes) : "",
       published ? fmt::format("; mqtt: {} lists published, {} dropped, {} connects", mqtt.lists_published,
                               mqtt.lists_dropped, mqtt.link.connects)
                 : "",
@@ -112,7 +125,7 @@ nlohmann::json StreamSessionReport::to_json() const {
           {"brackets_dropped", s.brackets_dropped}, {"frames_dropped_partial", s.frames_dropped_partial},
           {"reconnects", s.reconnects}, {"fps", s.fps_out}, {"last_error", s.last_error},
           {"mqtt_published", mqtt.lists_published}, {"mqtt_dropped", mqtt.lists_dropped},
-          {"mqtt_connects", mqtt.link.connects}, {"light_count", light_count_json(s)}};
+          {"mqtt_connects", mqtt.link.connects}, {"light_count", light_count_json(s)}, {"bracket", bracket_json(s)}};
 }
 
 }  // namespace lp

@@ -44,6 +44,13 @@ struct StreamSessionReport {
 // "reached", "changes"}.
 nlohmann::json light_count_json(const LiveStats& stats);
 
+// The bracket as /status shows it (section "bracket") and to_json reports it:
+// {"mode": "fixed"|"auto"|"single" (no bracket), "exposure_seconds" (what the camera cycles
+// now), and for auto "reason" (the plan's one line: scene range, bracket, coverage, what
+// the camera's limits leave out), "decision" (why the last map kept or changed it),
+// "scene_stops", "covered_fraction", "limit" ("none" or the end given up), "changes"}.
+nlohmann::json bracket_json(const LiveStats& stats);
+
 // The camera and its brackets as the pipeline counts them, served in /status as the
 // "pipeline" section for the page's operator view: source, camera_state ("streaming" while
 // frames arrive; after 2 s without one, "no frame for N s": a lost camera is being reopened

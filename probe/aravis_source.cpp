@@ -328,6 +328,18 @@ class AravisSource final : public CameraSource {
     }
   }
 
+  std::optional<ExposureRange> exposure_range() const override {
+    if (!camera_) return std::nullopt;
+    double lo_us = 0, hi_us = 0;
+    GError* error = nullptr;
+    arv_camera_get_exposure_time_bounds(camera_.get(), &lo_us, &hi_us, &error);
+    if (error || !(lo_us > 0) || !(hi_us >= lo_us)) {
+      g_clear_error(&error);
+      return std::nullopt;
+    }
+    return ExposureRange{lo_us * 1e-6, hi_us * 1e-6};
+  }
+
   void set_exposure_cycle(const std::vector<double>& seconds) override {
     for (double s : seconds)
       if (!(s > 0) || !std::isfinite(s)) throw InputError(spec_ + ": exposure time " + std::to_string(s) + " s is not positive");

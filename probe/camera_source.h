@@ -65,6 +65,11 @@ class CameraLost : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The exposure times a source can set, in seconds.
+struct ExposureRange {
+  double min_seconds = 0, max_seconds = 0;
+};
+
 class CameraSource {
  public:
   virtual ~CameraSource();
@@ -77,6 +82,10 @@ class CameraSource {
   // Bracketing: cycle these exposure times (seconds, > 0) frame by frame; empty = fixed
   // exposure (the last one set stays). Throws InputError on non-positive times.
   virtual void set_exposure_cycle(const std::vector<double>& seconds) = 0;
+  // The exposure times set_exposure_cycle can really take (auto-bracketing plans within
+  // them), or nullopt when the source cannot set exposure: replay, video and V4L2 deliver
+  // what was recorded, and libcamera's range is not read yet.
+  virtual std::optional<ExposureRange> exposure_range() const { return std::nullopt; }
   // After CameraLost: reopen the same camera with the same settings. True when it is
   // back. Sources that cannot reconnect return false.
   virtual bool reconnect() { return false; }

@@ -80,18 +80,15 @@ int run_stream(const StreamArgs& args, const Output& out) {
   lo.sampling.auto_options.target_error = args.target_error;
   lo.sampling.auto_options.measure = error_measure_from_string(args.error_measure);
   lo.sampling.budget.budget_ms = args.frame_budget_ms;
-  lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21;
-  lo.sampling.cluster_max_lights = args.cluster;
+  lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21, lo.sampling.cluster_max_lights = args.cluster;
   lo.sampling.sampler.upper_only = *layout == Layout::Hemisphere;
   parse_listen(args.listen, &st.server.host, &st.server.port);
   if (!args.token.empty()) st.server.token = args.token;
   st.source = args.source;
   st.publish = args.publish;
   st.mqtt.camera = mqtt_camera_name(args.name, args.source, "--name");
-  st.mqtt.qos = args.mqtt_qos;
-  st.mqtt.client.cafile = args.mqtt_cafile;
-  st.method_name = args.method;
-  st.duration_s = args.duration;
+  st.mqtt.qos = args.mqtt_qos, st.mqtt.client.cafile = args.mqtt_cafile;
+  st.method_name = args.method, st.duration_s = args.duration;
   const StreamSessionReport r = run_stream_session(st, [&](int port) {
     say(out, "lightprobe stream: {} -> http://{}:{}/ (lights at /lights, live at /lights/stream, metrics at /metrics)\n",
         args.source, st.server.host, port);

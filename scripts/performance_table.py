@@ -60,7 +60,7 @@ def main():
     load_avg = context.get("load_avg", [])
     print(f"\nMeasured {context.get('date', '?')} on {context.get('host_name', '?')}: {cpu}"
           + (f", load average {load_avg[0]:.2f} at the start" if load_avg else "")
-          + f"; {context.get('library_build_type', '?')} Google Benchmark, medians of the repetitions.\n")
+          + "; lightprobe built Release, wall-clock medians of the repetitions.\n")
     for stage in STAGES:
         figures = sorted({(f) for (s, f, r) in times if s == stage})
         if not figures:

@@ -30,7 +30,7 @@ python3 "$script" "$dir/results.json" "$dir/head.md" >"$dir/out.md"
 cat >"$dir/expected.md" <<'MD'
 # head
 
-Measured 2026-12-02T17:00:00 on ci: 2 CPUs at 3000 MHz, load average 0.50 at the start; release Google Benchmark, medians of the repetitions.
+Measured 2026-12-02T17:00:00 on ci: 2 CPUs at 3000 MHz, load average 0.50 at the start; lightprobe built Release, wall-clock medians of the repetitions.
 
 ## hdr
 

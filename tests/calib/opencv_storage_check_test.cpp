@@ -18,6 +18,8 @@
 namespace lp {
 namespace {
 
+using namespace std::string_literals;  // "...\0..."s keeps the NUL bytes the findings hold
+
 // The check's one-line error for `text` ("" when it passes), as cam.yaml or cam.xml.
 std::string error_of(const std::string& text, bool xml = false) {
   try {
@@ -104,7 +106,7 @@ TEST(OpencvYamlCheck, TextOnWhichOpenCVAbortsHangsOrGuessesIsRefusedNamingTheLin
       {"%YAML:1.0\na: 1\n...\n", "line 3: a document marker inside the document"},
       {"%YAML:1.0\na: 1\n%TAG ! x\n", "line 3: a directive after the first line"},
       {"%YAML:1.0\na: 1\x01\n", "line 2: a control byte 0x01"},
-      {std::string("%YAML:1.0\na: 1 # \0 in a comment\n", 30), "line 2: a control byte 0x00"},
+      {"%YAML:1.0\na: 1 # \0 in a comment\n"s, "line 2: a control byte 0x00"},
       {"%YAML:1.0\n\xee: 1\n", "line 2: a key must start with a letter or '_', not '\\xee'"},
       {"%YAML:1.0\na: {b 1}\n", "line 2: a key inside '{' must be followed directly by ':'"},
   };
@@ -142,8 +144,8 @@ TEST(OpencvXmlCheck, TextOnWhichOpenCVCrashesOrGuessesIsRefusedNamingTheLine) {
   };
   const std::vector<Case> cases = {
       // fuzz_opencv_xml's findings: OpenCV dereferences a null pointer on both
-      {std::string("<?xml verAion=\0\0\0\"1.0\"?>{\xff\xffpencv_storage>\n", 34), "line 1: a control byte 0x00"},
-      {std::string("<?xml vers_On=\0\1\0ero<p>\neon", 29), "line 1: a control byte 0x00"},
+      {"<?xml verAion=\0\0\0\"1.0\"?>{\xff\xffpencv_storage>\n"s, "line 1: a control byte 0x00"},
+      {"<?xml vers_On=\0\1\0ero<p>\neon"s, "line 1: a control byte 0x00"},
       {"<opencv_storage></opencv_storage>", "line 1: the text must start with <?xml"},
       {"<?xml version=1.0?>\n<opencv_storage/>", "line 1: an attribute must be name=\"value\""},
       {"<?xml version=\"1.0\"?>\n<storage></storage>\n", "line 2: the root element must be <opencv_storage>"},

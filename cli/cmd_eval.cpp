@@ -67,9 +67,8 @@ Command eval_sampling_command() {
 
 struct EvalTemporalArgs {
   EvalTemporalOptions o;
-  std::string methods = "all";
-  std::string scenarios = "all";
-  std::string filter = "auto";
+  std::string methods = "all", scenarios = "all", filter = "auto";
+  std::string n = "256", error_measure = "diffuse";
 };
 
 Command eval_temporal_command() {
@@ -81,7 +80,10 @@ Command eval_temporal_command() {
             f.opt("--methods", a->methods, "Comma-separated methods or 'all'");
             f.opt("--scenarios", a->scenarios, "Comma-separated scenarios or 'all'");
             f.opt("--frames", a->o.frames, "Frames per scenario");
-            f.opt("--n", a->o.count, "Lights per frame");
+            f.opt("--n", a->n, "Lights per frame, or 'auto': the fewest within --target-error (charted per frame)");
+            f.opt("--target-error", a->o.auto_options.target_error, "With --n auto: largest error (0.01 = 1 %)");
+            f.opt("--error-measure", a->error_measure, "With --n auto: diffuse|glossy10|glossy100|shadowed|worst");
+            f.opt("--frame-budget-ms", a->o.frame_budget_ms, "With --n auto: fewer lights when the back end takes longer");
             f.opt("--fps", a->o.frame_rate_hz, "Frame rate");
             f.opt("--filter", a->filter, "FIR filtering: auto (hemigon only), on, off");
             f.output(a->o.output_dir, "Directory for temporal.csv and temporal.svg");
@@ -89,8 +91,9 @@ Command eval_temporal_command() {
               EvalTemporalOptions o = a->o;
               o.methods = parse_method_list(a->methods);
               o.scenarios = parse_scenarios(a->scenarios);
-              if (o.count <= 0) throw InputError(fmt::format("--n must be positive, got {}", o.count));
-              check_light_count("--n", o.count);
+              o.count = light_count(a->n), o.auto_count = o.count == 0;
+              if (!o.auto_count) check_light_count("--n", o.count);
+              o.auto_options.measure = error_measure_from_string(a->error_measure);
               check_frame_count("--frames", o.frames);
               o.filter = a->filter == "on" ? FilterMode::On : a->filter == "off" ? FilterMode::Off : FilterMode::Auto;
               return evaluate_and_report("eval temporal", out, evaluate_temporal, o);
@@ -100,10 +103,8 @@ Command eval_temporal_command() {
 
 struct EvalEstimatorsArgs {
   EvalEstimatorsOptions o;
-  std::string estimators = "mis,bis,bis-mix,smc,smc-mix";
-  std::string budgets = "4,16,64,256";
-  std::string scenarios = "moving-light,abrupt-switch,flicker";
-  std::string size = "256x128";
+  std::string estimators = "mis,bis,bis-mix,smc,smc-mix", budgets = "4,16,64,256";
+  std::string scenarios = "moving-light,abrupt-switch,flicker", size = "256x128";
   bool quick = false;  // demo: 4 frames, 2 repeats, budgets 4,16,64, no sweep
 };
 

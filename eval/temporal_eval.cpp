@@ -24,10 +24,11 @@ double mean(const std::vector<double>& v) {
   return v.empty() ? 0 : s / double(v.size());
 }
 
-// The rows and the two chart panels (power, error per frame) of one scenario on one map.
+// The rows and the chart panels (power, error per frame; with auto_count also the light
+// count and the time per frame) of one scenario on one map.
 struct ScenarioResult {
   std::vector<TemporalRow> rows;
-  ChartPanel power, error;
+  ChartPanel power, error, lights, time;
 };
 
 ScenarioResult run_scenario(const EnvMap& base, const std::string& label, Scenario scenario,
@@ -48,6 +49,9 @@ ScenarioResult run_scenario(const EnvMap& base, const std::string& label, Scenar
     FramePipelineOptions po;
     po.method = m;
     po.count = options.count;
+    po.auto_count = options.auto_count;
+    po.auto_options = options.auto_options;
+    po.budget.budget_ms = options.auto_count ? options.frame_budget_ms : 0;
     po.frame_rate_hz = options.frame_rate_hz;
     po.filter = options.filter;
     pipelines.emplace_back(po);
@@ -56,13 +60,17 @@ ScenarioResult run_scenario(const EnvMap& base, const std::string& label, Scenar
                         {fmt::format("{}: {} (power)", label, to_string(scenario)), "frame",
                          "mean irradiance over 256 normals", {}},
                         {fmt::format("{}: {} (error)", label, to_string(scenario)), "frame",
-                         "diffuse error of the frame", {}}};
+                         "diffuse error of the frame", {}},
+                        {fmt::format("{}: {} (lights)", label, to_string(scenario)), "frame", "lights placed", {}},
+                        {fmt::format("{}: {} (time)", label, to_string(scenario)), "frame", "back end, ms", {}}};
   result.power.log_x = result.power.log_y = false;
-  result.error.log_x = false;
+  result.error.log_x = result.lights.log_x = result.time.log_x = false;
+  std::vector<double> light_sum(methods.size(), 0.0);
   ChartSeries truth{"reference", {}, {}, {}};
   std::vector<ChartSeries> series, errors;
   for (Method m : methods) series.push_back({std::string(to_string(m)), {}, {}, {}});
   errors = series;
+  std::vector<ChartSeries> counts = series, times = series;
   for (int f = 0; f < so.frames; ++f) {
     const EnvMap frame = render_sequence_frame(base, so, f);
     const std::vector<double> e_ref = make_accuracy_reference(frame, ao).diffuse;
@@ -71,7 +79,12 @@ ScenarioResult run_scenario(const EnvMap& base, const std::string& label, Scenar
     for (size_t i = 0; i < methods.size(); ++i) {
       const auto t0 = std::chrono::steady_clock::now();
       const LightList lights = pipelines[i].process(frame, f, f / so.frame_rate_hz);
-      ms[i] += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      const double frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      ms[i] += frame_ms;
+      const int placed = pipelines[i].last_count().count;
+      light_sum[i] += placed;
+      counts[i].x.push_back(f), counts[i].y.push_back(placed);
+      times[i].x.push_back(f), times[i].y.push_back(frame_ms);
       scorers[i].add_frame(e_ref, lights.lights);
       series[i].x.push_back(f);
       const std::vector<double>& e_lights = scorers[i].lights_irradiance(f);
@@ -86,10 +99,13 @@ ScenarioResult run_scenario(const EnvMap& base, const std::string& label, Scenar
   const std::optional<int> step = scenario == Scenario::AbruptSwitch ? std::optional<int>(step_frame(so)) : std::nullopt;
   for (size_t i = 0; i < methods.size(); ++i)
     result.rows.push_back({label, std::string(to_string(scenario)), std::string(to_string(methods[i])),
-                           scorers[i].report(step), ms[i] / so.frames, pipelines[i].delay_frames()});
+                           scorers[i].report(step), ms[i] / so.frames, pipelines[i].delay_frames(),
+                           light_sum[i] / so.frames});
   for (auto& s : series) result.power.series.push_back(std::move(s));
   result.power.series.push_back(truth);  // last, so the truth is drawn on top
   for (auto& s : errors) result.error.series.push_back(std::move(s));
+  for (auto& s : counts) result.lights.series.push_back(std::move(s));
+  for (auto& s : times) result.time.series.push_back(std::move(s));
   return result;
 }
 
@@ -110,32 +126,41 @@ EvalTemporalReport evaluate_temporal(const EvalTemporalOptions& options, const E
         for (TemporalRow& row : r.rows) report.rows.push_back(std::move(row));
         panels.push_back(std::move(r.power));
         panels.push_back(std::move(r.error));
+        if (options.auto_count) panels.push_back(std::move(r.lights)), panels.push_back(std::move(r.time));
       }
     }
   }
 
-  std::string csv = "map,scenario,method,flicker,jitter_deg,lag_frames,mean_diffuse_error,ms_per_frame,filter_delay_frames\n";
+  std::string csv =
+      "map,scenario,method,flicker,jitter_deg,lag_frames,mean_diffuse_error,ms_per_frame,filter_delay_frames,mean_lights\n";
   for (const TemporalRow& r : report.rows)
-    csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", r.map, r.scenario, r.method, number_or_nan(r.report.flicker),
+    csv += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", r.map, r.scenario, r.method, number_or_nan(r.report.flicker),
                        number_or_nan(r.report.jitter_deg), number_or_nan(r.report.lag_frames),
-                       number_or_nan(r.report.mean_diffuse_error), number_or_nan(r.ms_per_frame), r.delay);
+                       number_or_nan(r.report.mean_diffuse_error), number_or_nan(r.ms_per_frame), r.delay,
+                       number_or_nan(r.mean_lights));
   report.csv_path = (fs::path(options.output_dir) / "temporal.csv").string();
   write_file_atomically(report.csv_path, csv);
   report.svg_path = (fs::path(options.output_dir) / "temporal.svg").string();
   write_file_atomically(report.svg_path,
-                        svg_chart(fmt::format("Per frame: power (mean irradiance) and diffuse error, n = {}", options.count),
-                                  panels, 2));
+                        svg_chart(options.auto_count
+                                      ? fmt::format("Per frame: power, diffuse error, lights and time; n auto within {:g} {}{}",
+                                                    options.auto_options.target_error, to_string(options.auto_options.measure),
+                                                    options.frame_budget_ms > 0
+                                                        ? fmt::format(", budget {:g} ms", options.frame_budget_ms)
+                                                        : std::string())
+                                      : fmt::format("Per frame: power (mean irradiance) and diffuse error, n = {}", options.count),
+                                  panels, options.auto_count ? 4 : 2));
   return report;
 }
 
 std::string EvalTemporalReport::summary() const {
-  std::string s = fmt::format("{:<10} {:<14} {:<10} {:>9} {:>10} {:>5} {:>9} {:>9}\n", "map", "scenario", "method",
-                              "flicker", "jitter deg", "lag", "diffuse", "ms/frame");
+  std::string s = fmt::format("{:<10} {:<14} {:<10} {:>9} {:>10} {:>5} {:>9} {:>9} {:>7}\n", "map", "scenario", "method",
+                              "flicker", "jitter deg", "lag", "diffuse", "ms/frame", "lights");
   for (const TemporalRow& r : rows)
-    s += fmt::format("{:<10} {:<14} {:<10} {:>8.3f}% {:>10.3f} {:>5} {:>8.2f}% {:>9.3f}\n", r.map, r.scenario, r.method,
+    s += fmt::format("{:<10} {:<14} {:<10} {:>8.3f}% {:>10.3f} {:>5} {:>8.2f}% {:>9.3f} {:>7.1f}\n", r.map, r.scenario, r.method,
                      100 * r.report.flicker, r.report.jitter_deg,
                      std::isfinite(r.report.lag_frames) ? fmt::format("{:g}", r.report.lag_frames) : std::string("-"),
-                     100 * r.report.mean_diffuse_error, r.ms_per_frame);
+                     100 * r.report.mean_diffuse_error, r.ms_per_frame, r.mean_lights);
   s += fmt::format("{} rows -> {}, {}\n", rows.size(), csv_path, svg_path);
   return s;
 }
@@ -147,7 +172,7 @@ nlohmann::json EvalTemporalReport::to_json() const {
                      {"jitter_deg", r.report.jitter_deg},
                      {"lag_frames", std::isfinite(r.report.lag_frames) ? nlohmann::json(r.report.lag_frames) : nlohmann::json()},
                      {"mean_diffuse_error", r.report.mean_diffuse_error}, {"ms_per_frame", r.ms_per_frame},
-                     {"filter_delay_frames", r.delay}});
+                     {"filter_delay_frames", r.delay}, {"mean_lights", r.mean_lights}});
   return {{"csv", csv_path}, {"chart", svg_path}, {"rows", jrows}};
 }
 

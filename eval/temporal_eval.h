@@ -21,7 +21,13 @@ struct EvalTemporalOptions {
   std::vector<Method> methods = all_methods();
   std::vector<Scenario> scenarios = all_scenarios();
   int frames = 48;                      // per scenario
-  int count = 256;                      // lights per frame (positive)
+  int count = 256;                      // lights per frame (positive; ignored with auto_count)
+  // --n auto: each method keeps the fewest lights within auto_options' target and measure
+  // (sampling/auto_count.h), capped by frame_budget_ms when positive (frame_budget.h);
+  // the chart then adds the light count and the back end's time per frame.
+  bool auto_count = false;
+  AutoCountOptions auto_options;
+  double frame_budget_ms = 0;
   double frame_rate_hz = 21;
   FilterMode filter = FilterMode::Auto; // the pipeline's FIR filtering
   // Created; receives temporal.csv and temporal.svg (power and error per frame).
@@ -33,6 +39,7 @@ struct TemporalRow {
   TemporalReport report;
   double ms_per_frame = 0;  // the pipeline's time per frame
   int delay = 0;            // the pipeline's filter delay, frames
+  double mean_lights = 0;   // lights per frame, averaged (varies with auto_count)
 };
 
 struct EvalTemporalReport {

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <unistd.h>
 
@@ -55,6 +57,37 @@ TEST(TemporalEval, AnUnfilteredQ2TreeFollowsTheSwitchAtOnceAndTheFilterLags) {
   const nlohmann::json j = r.to_json();
   EXPECT_TRUE(j["rows"][2]["lag_frames"].is_null());
   EXPECT_EQ(j["rows"][0]["lag_frames"], 0.0);
+}
+
+// --n auto over the temporal scenarios (issue 20 item 2's chart): every frame of an abrupt
+// switch keeps within the target (so the mean does), the count follows the scene (the switch
+// changes it), and the chart gains a light-count and a time panel per scenario. A budget no
+// frame can meet holds the count at the minimum from the second frame on.
+TEST(TemporalEval, AutoCountIsChartedPerFrameWithinItsTarget) {
+  EvalTemporalOptions o;
+  o.maps = {"scene"};
+  o.methods = {Method::Q2Tree};
+  o.scenarios = {Scenario::AbruptSwitch};
+  o.frames = 8;
+  o.auto_count = true;
+  o.auto_options.target_error = 0.003;
+  o.output_dir = (fs::path(::testing::TempDir()) / ("lp_temporal_auto_" + std::to_string(::getpid()))).string();
+  const EvalTemporalReport r = evaluate_temporal(o);
+  ASSERT_EQ(r.rows.size(), 1u);
+  EXPECT_LE(r.rows[0].report.mean_diffuse_error, 0.003);
+  EXPECT_GT(r.rows[0].mean_lights, 32);  // a tight target: well above q2tree's minimum of 16
+  std::ifstream svg(r.svg_path);
+  const std::string chart((std::istreambuf_iterator<char>(svg)), std::istreambuf_iterator<char>());
+  EXPECT_NE(chart.find("abrupt-switch (lights)"), std::string::npos);
+  EXPECT_NE(chart.find("abrupt-switch (time)"), std::string::npos);
+  EXPECT_NE(chart.find("n auto within 0.003 diffuse"), std::string::npos);
+
+  o.frame_budget_ms = 1e-6;
+  const EvalTemporalReport starved = evaluate_temporal(o);
+  // frame 0 is measured uncapped; frames 1..7 hold q2tree's min_count (it may place up to 2 fewer)
+  EXPECT_LT(starved.rows[0].mean_lights, (r.rows[0].mean_lights + 7 * 16) / 8 + 1);
+  EXPECT_LT(starved.rows[0].mean_lights, r.rows[0].mean_lights);
+  EXPECT_GT(starved.rows[0].report.mean_diffuse_error, r.rows[0].report.mean_diffuse_error);
 }
 
 }  // namespace

@@ -132,6 +132,16 @@ std::string LivePipeline::metrics() const {
   m.counter("lightprobe_camera_reconnects_total", "Times the camera was reopened.", double(s.reconnects));
   m.gauge("lightprobe_lights", "Lights of the last list, before clustering (--n auto: chosen per frame).", s.lights);
   m.counter("lightprobe_light_count_changes_total", "Times --n auto changed the light count.", double(s.count_changes));
+  if (s.auto_count) {
+    m.gauge("lightprobe_light_error", "--n auto: the last list's error in the target's measure.", s.count_error);
+    m.gauge("lightprobe_light_error_target", "--n auto: the error the count is chosen to stay within.", s.count_target);
+  }
+  if (s.count_budget_ms > 0) {
+    m.gauge("lightprobe_light_budget_cap", "--frame-budget-ms: the most lights the budget allows the next frame.",
+            double(s.count_budget_cap));
+    m.gauge("lightprobe_light_budget_limited", "--frame-budget-ms: 1 when the budget placed fewer lights than the target asked.",
+            s.count_budget_limited ? 1.0 : 0.0);
+  }
   if (!s.exposures.empty()) {
     m.gauge("lightprobe_bracket_exposures", "Exposures in the bracket the camera cycles.", double(s.exposures.size()));
     m.family("lightprobe_bracket_exposure_seconds", "gauge", "Exposure times of the bracket, shortest first (index).");

@@ -75,6 +75,8 @@ TEST(LiveAutoCount, TheStreamKeepsTheFewestLightsWithinTheTargetAndReportsThem) 
   EXPECT_EQ(j["target_error"], 0.02);
   EXPECT_EQ(j["measure"], "diffuse");
   EXPECT_NE(p.metrics().find("lightprobe_lights " + std::to_string(offline.count)), std::string::npos);
+  EXPECT_NE(p.metrics().find("lightprobe_light_error_target 0.02"), std::string::npos) << p.metrics();
+  EXPECT_EQ(p.metrics().find("lightprobe_light_budget_cap"), std::string::npos);  // no budget, no gauge
   fs::remove_all(dir);
 }
 

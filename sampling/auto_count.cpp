@@ -113,7 +113,12 @@ AutoCountResult choose_light_count(Sampler& sampler, const AccuracyReference& re
 }
 
 AutoCountTracker::AutoCountTracker(const AutoCountOptions& options, const AutoCountHysteresis& hysteresis)
-    : options_(options), hysteresis_(hysteresis) {}
+    : options_(options), ceiling_(options.max_count), hysteresis_(hysteresis) {}
+
+void AutoCountTracker::limit(int max_count) {
+  options_.max_count = std::max(options_.min_count, std::min(ceiling_, max_count));
+  count_ = std::min(count_, options_.max_count);
+}
 
 AutoCountResult AutoCountTracker::update(Sampler& sampler, const AccuracyReference& reference) {
   auto search = [&](int min_count) {

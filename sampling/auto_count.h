@@ -73,9 +73,14 @@ class AutoCountTracker {
   // `sampler` prepared on this frame's map, `reference` built from it.
   AutoCountResult update(Sampler& sampler, const AccuracyReference& reference);
   int count() const { return count_; }
+  // A ceiling below options.max_count from now on (a frame budget, sampling/frame_budget.h):
+  // the search stops there and reports the target as not reached, so a capped frame costs
+  // no more than the cap. The count held is lowered to it at once.
+  void limit(int max_count);
 
  private:
   AutoCountOptions options_;
+  int ceiling_ = 0;       // options.max_count as given: limit() never goes above it
   AutoCountHysteresis hysteresis_;
   int count_ = 0;         // the count asked of the sampler (0: no frame yet)
   int below_streak_ = 0;  // consecutive frames comfortably below the target

@@ -54,15 +54,11 @@ LightList FramePipeline::process(const EnvMap& map, int64_t frame, double timest
   list.units = map.units;
   if (tracker_) {
     const AccuracyReference reference = make_accuracy_reference(map, reference_options_for(options_.auto_options.measure));
+    if (budget_) tracker_->limit(budget_->cap());  // the search goes no further than the budget affords
     AutoCountResult r = tracker_->update(*sampler_, reference);
     count_ = {int(r.lights.size()), true, r.error, r.reached};
-    if (budget_ && r.requested > budget_->cap()) {  // the budget cannot afford the target's count
-      r.lights = sampler_->place(budget_->cap());
-      count_.count = int(r.lights.size());
-      count_.error = measured_error(light_error(reference, r.lights), reference.options, options_.auto_options.measure);
-      count_.reached = count_.error <= options_.auto_options.target_error;
-      count_.budget_limited = true;
-    }
+    count_.budget_limited =
+        budget_ && !r.reached && budget_->cap() < options_.auto_options.max_count && r.requested >= budget_->cap();
     list.lights = std::move(r.lights);
   } else {
     list.lights = sampler_->place(options_.count);

@@ -95,6 +95,30 @@ TEST(AutoCount, TheChosenMeasureIsHeldUnderTheTargetAndCostsLights) {
   EXPECT_GE(worst.count, glossy.count / 2);  // bisection over a non-monotone error: not always >=
 }
 
+// A frame budget's ceiling (FrameBudget through FramePipeline): the tracker searches no
+// further than the ceiling, says the target was missed, and goes back up when it is lifted.
+TEST(AutoCount, ATrackerUnderACeilingStopsThereAndRecoversWhenItLifts) {
+  Fixture f;
+  auto sampler = make_sampler(Method::Pharr);
+  sampler->prepare(f.map);
+  AutoCountOptions o;
+  o.target_error = 0.002;
+  AutoCountTracker tracker(o);
+  const AutoCountResult free = tracker.update(*sampler, f.reference);
+  ASSERT_TRUE(free.reached);
+  ASSERT_GT(free.count, 64);
+  tracker.limit(32);
+  const AutoCountResult capped = tracker.update(*sampler, f.reference);
+  EXPECT_EQ(capped.count, 32);
+  EXPECT_FALSE(capped.reached);
+  EXPECT_LE(capped.evaluations, 3);  // the held count and one search step: no placement beyond the cap
+  EXPECT_NEAR(capped.error, light_error(f.reference, sampler->place(32)).diffuse, 1e-12);
+  tracker.limit(1 << 20);  // lifted (never above the options' max_count)
+  const AutoCountResult lifted = tracker.update(*sampler, f.reference);
+  EXPECT_TRUE(lifted.reached);
+  EXPECT_LE(lifted.error, 0.002);
+}
+
 TEST(AutoCount, MeasuresAreNamedAndAReferenceWithoutOneIsRefused) {
   for (ErrorMeasure m : {ErrorMeasure::Diffuse, ErrorMeasure::Glossy10, ErrorMeasure::Glossy100, ErrorMeasure::Shadowed,
                          ErrorMeasure::Worst})

@@ -13,9 +13,7 @@
 #define LP_HAVE_MXCSR 1
 #endif
 
-extern "C" {
-#include <chealpix.h>
-}
+#include "core/healpix.h"
 
 namespace lp {
 
@@ -109,9 +107,7 @@ PixelSet make_pixel_set(const EnvMap& map) {
   std::vector<size_t> count(cells + 1, 0);
   for (size_t i = 0; i < n; ++i) {
     if (weight[i] == 0) continue;
-    const double v[3] = {table.x[i], table.y[i], table.z[i]};
-    int64_t c = 0;
-    vec2pix_nest64(nside, v, &c);
+    const int64_t c = healpix_pixel(nside, {table.x[i], table.y[i], table.z[i]});
     cell[i] = uint32_t(c);
     ++count[size_t(c) + 1];
   }

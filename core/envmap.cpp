@@ -6,9 +6,7 @@
 
 #include "core/error.h"
 
-extern "C" {
-#include <chealpix.h>
-}
+#include "core/healpix.h"
 
 namespace lp {
 
@@ -85,9 +83,7 @@ EnvMap make_envmap(Layout layout, int width, int height) {
 
 Vec3 pixel_direction(const EnvMap& map, size_t pixel) {
   if (map.layout == Layout::Healpix) {
-    double v[3];
-    pix2vec_nest64(map.nside, int64_t(pixel), v);
-    return {v[0], v[1], v[2]};
+    return healpix_direction(map.nside, int64_t(pixel));
   }
   const size_t u = pixel % size_t(map.width), row = pixel / size_t(map.width);
   const double phi = 2 * M_PI * (double(u) + 0.5) / map.width;
@@ -105,10 +101,7 @@ double pixel_solid_angle(const EnvMap& map, size_t pixel) {
 
 std::optional<size_t> pixel_at(const EnvMap& map, Vec3 d) {
   if (map.layout == Layout::Healpix) {
-    const double v[3] = {d.x, d.y, d.z};
-    int64_t ipix = 0;
-    vec2pix_nest64(map.nside, v, &ipix);
-    return size_t(ipix);
+    return size_t(healpix_pixel(map.nside, d));
   }
   const double span = theta_span(map.layout);
   const double theta = zenith_of(d);

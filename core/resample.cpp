@@ -33,9 +33,7 @@
 
 #include "core/error.h"
 
-extern "C" {
-#include <chealpix.h>
-}
+#include "core/healpix.h"
 
 namespace lp {
 namespace {
@@ -90,11 +88,7 @@ class SubSampler {
   void directions(size_t pixel, Vec3* out) const {
     if (map_.layout == Layout::Healpix) {
       const int64_t first = int64_t(pixel) * k_ * k_;
-      for (int i = 0; i < k_ * k_; ++i) {
-        double v[3];
-        pix2vec_nest64(fine_nside_, first + i, v);
-        out[i] = {v[0], v[1], v[2]};
-      }
+      for (int i = 0; i < k_ * k_; ++i) out[i] = healpix_direction(fine_nside_, first + i);
       return;
     }
     const size_t u = pixel % size_t(map_.width), row = pixel / size_t(map_.width);

@@ -6,9 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-extern "C" {
-#include <chealpix.h>
-}
+#include "core/healpix.h"
 
 namespace lp {
 
@@ -101,9 +99,7 @@ EnvMap render_scene(const SceneDescription& scene, Layout layout, int width, int
       for (size_t p = r.begin(); p != r.end(); ++p) {
         Rgb sum{0, 0, 0};
         for (int64_t j = 0; j < children; ++j) {
-          double v[3];
-          pix2vec_nest64(sub_nside, int64_t(p) * children + j, v);
-          const Rgb L = scene_radiance_without_sun(scene, {v[0], v[1], v[2]});
+          const Rgb L = scene_radiance_without_sun(scene, healpix_direction(sub_nside, int64_t(p) * children + j));
           for (int c = 0; c < 3; ++c) sum[c] += L[c];
         }
         for (int c = 0; c < 3; ++c) map.pixel(p)[c] = float(sum[c] / double(children));

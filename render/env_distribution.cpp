@@ -6,62 +6,13 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/healpix.h"
 
 namespace lp {
 
-namespace {
-
-// NESTED index -> (face, ix, iy): within a face the index interleaves the bits of ix (even
-// bits) and iy (odd bits).
-uint32_t compact_even_bits(uint64_t v) {
-  v &= 0x5555555555555555ull;
-  v = (v | (v >> 1)) & 0x3333333333333333ull;
-  v = (v | (v >> 2)) & 0x0F0F0F0F0F0F0F0Full;
-  v = (v | (v >> 4)) & 0x00FF00FF00FF00FFull;
-  v = (v | (v >> 8)) & 0x0000FFFF0000FFFFull;
-  v = (v | (v >> 16)) & 0x00000000FFFFFFFFull;
-  return uint32_t(v);
-}
-
-// HEALPix face coordinates (x, y) in [0, 1]^2 of base face f -> (z, phi): the inverse
-// HEALPix projection, as xyf2loc of HEALPix C++ (Gorski et al. 2005, Calabretta & Roukema
-// 2007). chealpix offers only pixel centres, hence this dozen lines.
-Vec3 healpix_face_point(int face, double x, double y) {
-  static const int jrll[12] = {2, 2, 2, 2, 3, 3, 3, 3, 4, 4, 4, 4};
-  static const int jpll[12] = {1, 3, 5, 7, 0, 2, 4, 6, 1, 3, 5, 7};
-  const double jr = jrll[face] - x - y;
-  double nr, z, sth;
-  if (jr < 1) {
-    nr = jr;
-    const double tmp = nr * nr / 3.0;
-    z = 1 - tmp;
-    sth = std::sqrt(tmp * (2.0 - tmp));  // accurate near the pole
-  } else if (jr > 3) {
-    nr = 4 - jr;
-    const double tmp = nr * nr / 3.0;
-    z = tmp - 1;
-    sth = std::sqrt(tmp * (2.0 - tmp));
-  } else {
-    nr = 1;
-    z = (2 - jr) * 2.0 / 3.0;
-    sth = std::sqrt(std::max(0.0, (1 - z) * (1 + z)));
-  }
-  double tmp = jpll[face] * nr + x - y;
-  if (tmp < 0) tmp += 8;
-  if (tmp >= 8) tmp -= 8;
-  const double phi = nr < 1e-15 ? 0 : (0.25 * M_PI * tmp) / nr;
-  return {sth * std::cos(phi), sth * std::sin(phi), z};
-}
-
-}  // namespace
-
 Vec3 pixel_point(const EnvMap& map, size_t pixel, double u1, double u2) {
   if (map.layout == Layout::Healpix) {
-    const uint64_t per_face = uint64_t(map.nside) * uint64_t(map.nside);
-    const int face = int(pixel / per_face);
-    const uint64_t p = pixel % per_face;
-    const double ix = compact_even_bits(p), iy = compact_even_bits(p >> 1);
-    return healpix_face_point(face, (ix + u1) / map.nside, (iy + u2) / map.nside);
+    return healpix_point(map.nside, int64_t(pixel), u1, u2);
   }
   const double span = map.layout == Layout::Hemisphere ? M_PI / 2 : M_PI;
   const size_t u = pixel % size_t(map.width), v = pixel / size_t(map.width);

@@ -14,9 +14,7 @@
 #include "core/error.h"
 #include "core/limits.h"
 
-extern "C" {
-#include <chealpix.h>
-}
+#include "core/healpix.h"
 
 namespace lp {
 namespace {
@@ -87,9 +85,7 @@ std::optional<Node> decode_nuniq(uint64_t id) {
 }
 
 Vec3 quad_centre(int level, uint64_t ipix) {
-  double v[3];
-  pix2vec_nest64(int64_t(1) << level, int64_t(ipix), v);
-  return {v[0], v[1], v[2]};
+  return healpix_direction(int64_t(1) << level, int64_t(ipix));
 }
 
 struct Value {
@@ -434,10 +430,7 @@ LightList merge_by_direction(const std::vector<LightList>& cameras, const std::v
       if (!(len > 0)) throw InputError(fmt::format("merge_by_direction: camera {}: light {} has no direction", i, l.id));
       const Vec3 d = (1.0 / len) * l.direction;
       Point p;
-      const double v[3] = {d.x, d.y, d.z};
-      int64_t pixel = 0;
-      vec2pix_nest64(int64_t(1) << kPointLevel, v, &pixel);
-      p.pixel = uint64_t(pixel);
+      p.pixel = uint64_t(healpix_pixel(int64_t(1) << kPointLevel, d));
       for (int c = 0; c < 3; ++c) p.rgb[c] = w[i] * l.rgb[c];
       p.c = luminance(p.rgb.data()) * d;
       points.push_back(p);

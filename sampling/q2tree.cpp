@@ -80,9 +80,7 @@
 #include "sampling/methods.h"
 #include "sampling/q2tree.h"
 
-extern "C" {
-#include <chealpix.h>
-}
+#include "core/healpix.h"
 
 namespace lp {
 namespace {
@@ -150,10 +148,8 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
   std::vector<uint32_t> target(count);
   tbb::parallel_for(0, h, [&](int v) {
     for (int u = 0; u < w; ++u) {
-      const double d[3] = {b->row_sin[v] * b->col_cos[u], b->row_sin[v] * b->col_sin[u], b->row_cos[v]};
-      int64_t ipix = 0;
-      vec2pix_nest64(nside, d, &ipix);
-      target[size_t(v) * w + u] = uint32_t(ipix);
+      const Vec3 d{b->row_sin[v] * b->col_cos[u], b->row_sin[v] * b->col_sin[u], b->row_cos[v]};
+      target[size_t(v) * w + u] = uint32_t(healpix_pixel(nside, d));
     }
   });
   const size_t npix = 12 * size_t(nside) * size_t(nside);
@@ -200,9 +196,8 @@ std::shared_ptr<const std::vector<float>> cached_healpix_directions(int nside) {
   const size_t npix = 12 * size_t(nside) * size_t(nside);
   auto dirs = std::make_shared<std::vector<float>>(3 * npix);
   tbb::parallel_for(size_t(0), npix, [&](size_t i) {
-    double v[3];
-    pix2vec_nest64(nside, int64_t(i), v);
-    for (int c = 0; c < 3; ++c) (*dirs)[3 * i + c] = float(v[c]);
+    const Vec3 d = healpix_direction(nside, int64_t(i));
+    (*dirs)[3 * i] = float(d.x), (*dirs)[3 * i + 1] = float(d.y), (*dirs)[3 * i + 2] = float(d.z);
   });
   cache.emplace_front(nside, dirs);
   if (cache.size() > 4) cache.pop_back();
@@ -558,15 +553,8 @@ class Q2TreeSampler final : public Sampler {
   // A point of the quad (level, ipix) at face offsets (ix, iy) / 256 on a 256 x 256
   // sub-grid (128, 128: the corner shared by the four central sub-pixels, the centre).
   static Vec3 quad_point(int level, int64_t ipix, uint32_t ix, uint32_t iy) {
-    if (ix == 128 && iy == 128) {
-      double v[3];
-      pix2vec_nest64(int64_t(1) << level, ipix, v);
-      return {v[0], v[1], v[2]};
-    }
-    const int64_t nside = int64_t(1) << (level + 8);
-    double v[3];
-    pix2vec_nest64(nside, (ipix << 16) + int64_t(interleave8(ix, iy)), v);
-    return {v[0], v[1], v[2]};
+    if (ix == 128 && iy == 128) return healpix_direction(int64_t(1) << level, ipix);
+    return healpix_direction(int64_t(1) << (level + 8), (ipix << 16) + int64_t(interleave8(ix, iy)));
   }
 
   void prepare_healpix(const EnvMap& map) {

@@ -12,41 +12,29 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::vector<std::string> plugin_candidates() {
+std::vector<std::string> plugin_candidates(const std::string& file, const char* build_path) {
   std::vector<std::string> paths;
-  if (const char* dir = std::getenv("LIGHTPROBE_PLUGIN_DIR"); dir && *dir) paths.push_back((fs::path(dir) / kPluginFile).string());
+  if (const char* dir = std::getenv("LIGHTPROBE_PLUGIN_DIR"); dir && *dir) paths.push_back((fs::path(dir) / file).string());
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (!ec) {
-    paths.push_back((exe.parent_path() / kPluginFile).string());
-    paths.push_back((exe.parent_path() / ".." / "lib" / kPluginFile).lexically_normal().string());
+    paths.push_back((exe.parent_path() / file).string());
+    paths.push_back((exe.parent_path() / ".." / "lib" / file).lexically_normal().string());
   }
-#ifdef LIGHTPROBE_LAZY_LIBS_PATH
-  paths.push_back(LIGHTPROBE_LAZY_LIBS_PATH);  // where the build wrote it
-#endif
+  if (build_path) paths.push_back(build_path);
   return paths;
 }
 
+#ifdef LIGHTPROBE_LAZY_LIBS_PATH
+constexpr const char* kBuildPath = LIGHTPROBE_LAZY_LIBS_PATH;  // where the build wrote it
+#else
+constexpr const char* kBuildPath = nullptr;
+#endif
+
 const PluginTable* load() {
-  std::string tried, last_error = "not found";
-  for (const std::string& path : plugin_candidates()) {
-    tried += (tried.empty() ? "" : ", ") + path;
-    if (!fs::exists(path)) continue;
-    // Never closed: what it returns (decoders, captures) lives as long as the process.
-    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (!handle) {
-      last_error = dlerror();
-      continue;
-    }
-    using Entry = const PluginTable* (*)();
-    auto entry = reinterpret_cast<Entry>(dlsym(handle, "lightprobe_lazy_libs"));
-    const PluginTable* table = entry ? entry() : nullptr;
-    if (table && table->version == kPluginVersion) return table;
-    last_error = path + " is not this build's plugin (stale or foreign)";
-  }
-  throw std::runtime_error(fmt::format("cannot load {} (OpenCV's image and video codecs, omnidir, mrgingham): {}; "
-                                       "looked in {} (set LIGHTPROBE_PLUGIN_DIR)",
-                                       kPluginFile, last_error, tried));
+  return static_cast<const PluginTable*>(open_plugin(
+      kPluginFile, "lightprobe_lazy_libs", "OpenCV's image and video codecs, omnidir, mrgingham", kBuildPath,
+      [](const void* t) { return static_cast<const PluginTable*>(t)->version == kPluginVersion; }));
 }
 
 const PluginTable& table() {
@@ -57,6 +45,28 @@ const PluginTable& table() {
 }  // namespace
 
 void load_plugin() { (void)table(); }
+
+const void* open_plugin(const std::string& file, const char* entry, const std::string& holds, const char* build_path,
+                        bool (*accept)(const void* table)) {
+  std::string tried, last_error = "not found";
+  for (const std::string& path : plugin_candidates(file, build_path)) {
+    tried += (tried.empty() ? "" : ", ") + path;
+    if (!fs::exists(path)) continue;
+    // Never closed: what it returns (decoders, captures, cameras) lives as long as the process.
+    void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      last_error = dlerror();
+      continue;
+    }
+    using Entry = const void* (*)();
+    auto get = reinterpret_cast<Entry>(dlsym(handle, entry));
+    const void* table = get ? get() : nullptr;
+    if (table && accept(table)) return table;
+    last_error = path + " is not this build's plugin (stale or foreign)";
+  }
+  throw std::runtime_error(
+      fmt::format("cannot load {} ({}): {}; looked in {} (set LIGHTPROBE_PLUGIN_DIR)", file, holds, last_error, tried));
+}
 
 cv::Mat decode_image(const std::string& bytes) { return table().decode_image(bytes); }
 

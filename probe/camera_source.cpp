@@ -1,8 +1,11 @@
 // open_source(): spec -> source. The sources live in replay_source.cpp (replay:, video:,
-// v4l2:), aravis_source.cpp and libcamera_source.cpp.
+// v4l2:) and, loaded on first use, in the camera plugin (probe/plugin/: aravis_source.cpp,
+// libcamera_source.cpp; probe/camera_plugin.h).
 #include "probe/camera_source.h"
 
 #include "core/error.h"
+#include "core/lazy_libs.h"
+#include "probe/camera_plugin.h"
 
 namespace lp {
 
@@ -10,11 +13,19 @@ namespace detail {
 std::unique_ptr<CameraSource> open_replay(const std::string& dir, const std::string& spec, const SourceOptions& options);
 std::unique_ptr<CameraSource> open_video(const std::string& file, const std::string& spec, const SourceOptions& options);
 std::unique_ptr<CameraSource> open_v4l2(int index, const std::string& spec, const SourceOptions& options);
-std::unique_ptr<CameraSource> open_aravis(const std::string& id, const std::string& spec, const SourceOptions& options);
-std::unique_ptr<CameraSource> open_libcamera(const std::string& id, const std::string& spec, const SourceOptions& options);
-}  // namespace detail
+#ifdef LIGHTPROBE_CAMERAS_PATH
+constexpr const char* kCameraPluginBuildPath = LIGHTPROBE_CAMERAS_PATH;  // where the build wrote it
+#else
+constexpr const char* kCameraPluginBuildPath = nullptr;
+#endif
 
-CameraSource::~CameraSource() = default;
+const CameraPluginTable& camera_plugin() {
+  static const CameraPluginTable* table = static_cast<const CameraPluginTable*>(lazy::open_plugin(
+      kCameraPluginFile, "lightprobe_cameras", "the Aravis and libcamera sources", kCameraPluginBuildPath,
+      [](const void* t) { return static_cast<const CameraPluginTable*>(t)->version == kCameraPluginVersion; }));
+  return *table;
+}
+}  // namespace detail
 
 std::unique_ptr<CameraSource> open_source(const std::string& spec, const SourceOptions& options) {
   const auto colon = spec.find(':');
@@ -44,14 +55,16 @@ std::unique_ptr<CameraSource> open_source(const std::string& spec, const SourceO
   }
   if (kind == "aravis") {
     if (has_arg && arg.empty()) throw InputError(spec + ": empty camera id (aravis or aravis:ID)");
-    return detail::open_aravis(arg, spec, options);
+    return detail::camera_plugin().open_aravis(arg, spec, options);
   }
   if (kind == "libcamera") {
     if (has_arg && arg.empty()) throw InputError(spec + ": empty camera id (libcamera or libcamera:ID)");
-    return detail::open_libcamera(arg, spec, options);
+    return detail::camera_plugin().open_libcamera(arg, spec, options);
   }
   throw InputError("unknown camera source '" + spec +
                    "' (expected replay:DIR, video:FILE, aravis[:ID], libcamera[:ID] or v4l2:N)");
 }
+
+bool set_fake_scene(CameraSource& source, const FakeScene& scene) { return source.set_fake_scene(scene); }
 
 }  // namespace lp

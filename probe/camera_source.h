@@ -70,9 +70,14 @@ struct ExposureRange {
   double min_seconds = 0, max_seconds = 0;
 };
 
+struct FakeScene;
+
 class CameraSource {
  public:
-  virtual ~CameraSource();
+  // Inline, as every member: the class has no key function, so the camera plugin
+  // (probe/camera_plugin.h) carries its own vtable and type info and needs no symbol of the
+  // executable.
+  virtual ~CameraSource() = default;
   // One line: kind, id, size and format, e.g. "aravis:Fake_1 (Aravis Fake, 512x512 Mono16)".
   virtual std::string describe() const = 0;
   // The next frame, waiting at most timeout_s; nullopt on timeout or at the end of a
@@ -91,6 +96,8 @@ class CameraSource {
   virtual bool reconnect() { return false; }
   // True once a non-looping replay/video has delivered its last frame.
   virtual bool finished() const { return false; }
+  // Aravis' fake camera: paint `scene` from the next frame on (see set_fake_scene).
+  virtual bool set_fake_scene(const FakeScene&) { return false; }
 };
 
 // What the Aravis fake camera paints: an upward fisheye (equidistant, 180 deg across the

@@ -28,7 +28,10 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
   ASSERT_EQ(r.code, 0) << r.err.substr(0, 2000);
   ASSERT_TRUE(loaded(r, "libopencv_core")) << "LD_DEBUG reported nothing: " << r.err.substr(0, 500);
   for (const char* heavy : {"libopencv_imgcodecs", "libopencv_videoio", "libopencv_ccalib", "libopencv_highgui",
-                            "libmrgingham", "libgdal", "libavcodec", "libgstreamer", "libQt5Core", "liblightprobe_lazy_libs"})
+                            "libmrgingham", "libgdal", "libavcodec", "libgstreamer", "libQt5Core", "liblightprobe_lazy_libs",
+                            // the camera drivers (probe/camera_plugin.h) and chealpix's FITS chain (core/healpix.h)
+                            "libaravis", "libcamera", "liblttng-ust", "libglib", "libusb", "liblightprobe_cameras",
+                            "libchealpix", "libcfitsio", "libcurl", "libgnutls"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 
@@ -41,6 +44,13 @@ TEST(Startup, ReadingACameraImageLoadsThePluginAndDecodes) {
   EXPECT_TRUE(loaded(r, "libopencv_imgcodecs"));
   EXPECT_NE(r.err.find("liblightprobe_lazy_libs.so [0];  dynamically loaded"), std::string::npos);
   EXPECT_GT(fs::file_size(out), 100000u);
+}
+
+TEST(Startup, OpeningACameraLoadsTheCameraPlugin) {
+  const CliRun r = traced("stream --source aravis:Fake_1 --listen 127.0.0.1:0 --duration 1 --n 8 --method pharr");
+  ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+  EXPECT_NE(r.err.find("liblightprobe_cameras.so [0];  dynamically loaded"), std::string::npos);
+  EXPECT_TRUE(loaded(r, "libaravis"));
 }
 
 }  // namespace

@@ -31,7 +31,9 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             "libmrgingham", "libgdal", "libavcodec", "libgstreamer", "libQt5Core", "liblightprobe_lazy_libs",
                             // the camera drivers (probe/camera_plugin.h) and chealpix's FITS chain (core/healpix.h)
                             "libaravis", "libcamera", "liblttng-ust", "libglib", "libusb", "liblightprobe_cameras",
-                            "libchealpix", "libcfitsio", "libcurl", "libgnutls"})
+                            "libchealpix", "libcfitsio", "libcurl", "libgnutls",
+                            // mrcal and its FreeImage chain (calib/mrcal_loader.cpp)
+                            "libmrcal", "libfreeimage", "libjxrglue", "libopenjp2"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 

@@ -33,7 +33,7 @@ constexpr const char* kBuildPath = nullptr;
 
 const PluginTable* load() {
   return static_cast<const PluginTable*>(open_plugin(
-      kPluginFile, "lightprobe_lazy_libs", "OpenCV's image and video codecs, omnidir, mrgingham", kBuildPath,
+      kPluginFile, "lightprobe_lazy_libs", "OpenCV's image and video codecs, omnidir, mrgingham, ECC", kBuildPath,
       [](const void* t) { return static_cast<const PluginTable*>(t)->version == kPluginVersion; }));
 }
 
@@ -85,6 +85,11 @@ double omnidir_calibrate(const std::vector<cv::Mat>& object_points, const std::v
 
 int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, const cv::Mat& image, int pyramid_level) {
   return table().find_chessboard_mrgingham(corners, gridn, image, pyramid_level);
+}
+
+double find_transform_ecc(const cv::Mat& templ, const cv::Mat& input, cv::Mat& warp, int motion,
+                          cv::TermCriteria criteria, int gauss_filt_size) {
+  return table().find_transform_ecc(templ, input, warp, motion, criteria, gauss_filt_size);
 }
 
 }  // namespace lp::lazy

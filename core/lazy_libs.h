@@ -1,5 +1,6 @@
 // The heavy libraries, loaded on first use: OpenCV's image codecs and video I/O,
-// cv::omnidir's calibration (contrib ccalib) and mrgingham's chessboard finder. Linked
+// cv::omnidir's calibration (contrib ccalib), mrgingham's chessboard finder and OpenCV's
+// ECC alignment (video module). Linked
 // into the executable they pull about 270 shared libraries (GDAL through imgcodecs, FFmpeg
 // and GStreamer through videoio, Qt through ccalib's highgui, and mrgingham links
 // imgcodecs), and every command, even `--version`, paid 0.2 s and 96 MB to load them. They
@@ -49,6 +50,13 @@ double omnidir_calibrate(const std::vector<cv::Mat>& object_points, const std::v
 // the pyramid level used, or < 0 when no board was found.
 int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, const cv::Mat& image, int pyramid_level);
 
+// cv::findTransformECC(templ, input, warp, motion, criteria, noArray(), gauss_filt_size);
+// throws cv::Exception as it does. OpenCV's video module (with its DNN module and protobuf
+// behind it) is loaded for this one function. motion: cv::MOTION_* below.
+inline constexpr int kMotionTranslation = 0, kMotionEuclidean = 1;
+double find_transform_ecc(const cv::Mat& templ, const cv::Mat& input, cv::Mat& warp, int motion,
+                          cv::TermCriteria criteria, int gauss_filt_size);
+
 // What the plugin exports (its one symbol, `lightprobe_lazy_libs`, returns it). The
 // version changes whenever the table does, so that a stale plugin is refused.
 struct PluginTable {
@@ -59,8 +67,9 @@ struct PluginTable {
   double (*omnidir_calibrate)(const std::vector<cv::Mat>&, const std::vector<cv::Mat>&, cv::Size, cv::Mat&, cv::Mat&,
                               cv::Mat&, std::vector<cv::Mat>&, std::vector<cv::Mat>&, int, cv::TermCriteria, cv::Mat&);
   int (*find_chessboard_mrgingham)(std::vector<cv::Point2d>&, int, const cv::Mat&, int);
+  double (*find_transform_ecc)(const cv::Mat&, const cv::Mat&, cv::Mat&, int, cv::TermCriteria, int);
 };
-inline constexpr int kPluginVersion = 1;
+inline constexpr int kPluginVersion = 2;
 inline constexpr const char* kPluginFile = "liblightprobe_lazy_libs.so";
 
 // Loads the plugin now (idempotent): commands may call it up front to fail before work.

@@ -9,9 +9,9 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/photo.hpp>
-#include <opencv2/video/tracking.hpp>
 
 #include "core/error.h"
+#include "core/lazy_libs.h"
 
 namespace lp {
 namespace {
@@ -165,11 +165,10 @@ std::vector<RgbImage> align_frames(const std::vector<RgbImage>& frames, const st
         const cv::Mat tmpl = clamped_log(ref_lin, tr, lo, hi);
         const cv::Mat input = clamped_log(linear_luma(frames[i]), ti, lo, hi);
         cv::Mat W = (cv::Mat_<float>(2, 3) << 1, 0, float(dx), 0, 1, float(dy));
-        const int motion = options.rotation ? cv::MOTION_EUCLIDEAN : cv::MOTION_TRANSLATION;
+        const int motion = options.rotation ? lazy::kMotionEuclidean : lazy::kMotionTranslation;
         try {
-          cv::findTransformECC(tmpl, input, W, motion,
-                               cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-6),
-                               cv::noArray(), 5);
+          lazy::find_transform_ecc(tmpl, input, W, motion,
+                                   cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-6), 5);
           const double ex = W.at<float>(0, 2), ey = W.at<float>(1, 2);
           const double ea = std::atan2(double(W.at<float>(1, 0)), double(W.at<float>(0, 0)));
           if (std::isfinite(ex) && std::isfinite(ey) && std::isfinite(ea) &&

@@ -1,8 +1,9 @@
 // The plugin of core/lazy_libs.h: the only code linked with OpenCV's imgcodecs, videoio and
-// ccalib and with mrgingham. Each entry is the library call and nothing else.
+// ccalib and video and with mrgingham. Each entry is the library call and nothing else.
 #include <mrgingham.hh>
 #include <opencv2/ccalib/omnidir.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/video/tracking.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "core/lazy_libs.h"
@@ -55,8 +56,15 @@ int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, cons
   return level;
 }
 
-const PluginTable kTable{kPluginVersion, decode_image, encode_image, new_video_capture, omnidir_calibrate,
-                         find_chessboard_mrgingham};
+static_assert(kMotionTranslation == cv::MOTION_TRANSLATION && kMotionEuclidean == cv::MOTION_EUCLIDEAN);
+
+double find_transform_ecc(const cv::Mat& templ, const cv::Mat& input, cv::Mat& warp, int motion,
+                          cv::TermCriteria criteria, int gauss_filt_size) {
+  return cv::findTransformECC(templ, input, warp, motion, criteria, cv::noArray(), gauss_filt_size);
+}
+
+const PluginTable kTable{kPluginVersion,    decode_image,           encode_image,      new_video_capture,
+                         omnidir_calibrate, find_chessboard_mrgingham, find_transform_ecc};
 
 }  // namespace
 

@@ -33,7 +33,9 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             "libaravis", "libcamera", "liblttng-ust", "libglib", "libusb", "liblightprobe_cameras",
                             "libchealpix", "libcfitsio", "libcurl", "libgnutls",
                             // mrcal and its FreeImage chain (calib/mrcal_loader.cpp)
-                            "libmrcal", "libfreeimage", "libjxrglue", "libopenjp2"})
+                            "libmrcal", "libfreeimage", "libjxrglue", "libopenjp2",
+                            // OpenCV's video module (ECC alignment) and its DNN module
+                            "libopencv_video", "libopencv_dnn", "libprotobuf"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 

@@ -77,7 +77,7 @@ void load_plugin();
 
 // Any of the project's plugins (this one, probe/camera_plugin.h's): opens `file` from the
 // places above (build_path last: where the build wrote it, or nullptr) and returns what its
-// entry point `entry` (a `const T* entry()` function) returns, or throws std::runtime_error
+// entry point `entry` (an extern "C" `const void* entry()`) returns, or throws std::runtime_error
 // naming the plugin, what it holds, the places tried and the loader's message. `accept`
 // says whether the table is this build's (the version check).
 const void* open_plugin(const std::string& file, const char* entry, const std::string& holds, const char* build_path,

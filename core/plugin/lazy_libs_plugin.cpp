@@ -68,4 +68,6 @@ const PluginTable kTable{kPluginVersion,    decode_image,           encode_image
 
 }  // namespace
 
-extern "C" __attribute__((visibility("default"))) const lp::lazy::PluginTable* lightprobe_lazy_libs() { return &kTable; }
+// Returns the table as `const void*`: the loader calls every plugin's entry through one
+// function type (a call through another type is undefined; UBSan says so).
+extern "C" __attribute__((visibility("default"))) const void* lightprobe_lazy_libs() { return &kTable; }

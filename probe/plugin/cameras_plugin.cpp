@@ -11,6 +11,7 @@ const lp::detail::CameraPluginTable kTable{lp::detail::kCameraPluginVersion, lp:
                                            lp::detail::open_libcamera};
 }  // namespace
 
-extern "C" __attribute__((visibility("default"))) const lp::detail::CameraPluginTable* lightprobe_cameras() {
+// `const void*`: the loader calls every plugin's entry through one function type.
+extern "C" __attribute__((visibility("default"))) const void* lightprobe_cameras() {
   return &kTable;
 }

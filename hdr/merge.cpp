@@ -88,9 +88,9 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
   if constexpr (!kTrack) {
     redo.resize(size_t(W));
     row_flags.resize(size_t(W));
-    kernel = {frame_rows.data(), T.frame_w.data(), T.frame_wx.data(), nf, size_t(W), T.w3.data(), T.wx3.data(), T.w_wx3.data(), L,
-              T.sat_level, T.black_level, T.by_time.front(), T.by_time.back(), T.bound_short.data(),
-              T.bound_long.data()};
+    kernel = {frame_rows.data(), T.frame_w.data(), T.frame_wx.data(), nf, size_t(W), T.w3.data(), T.wx3.data(),
+              T.w_wx3.data(), L, T.sat_level, T.black_level, T.by_time.front(), T.by_time.back(),
+              T.bound_short.data(), T.bound_long.data()};
   }
   for (int y = y0; y < y1; ++y) {
     const size_t row = size_t(y) * size_t(W);

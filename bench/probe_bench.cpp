@@ -79,17 +79,22 @@ void BM_Remap_Floor(benchmark::State& state) {
 }
 BENCHMARK(BM_Remap_Floor)->Name("probe/unwrap_1280x960_to_1024x512/floor")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// kSimd: the vector kernel (RemapOptions::simd); false: the scalar loop it is tested against.
+template <bool kSimd>
 void BM_Remap_Compiled(benchmark::State& state) {
   const CompiledRemap c = compile_remap(table(), kInW, kInH);
   RgbImage out;
-  const RemapOptions o{int(state.range(0))};
+  RemapOptions o;
+  o.threads = int(state.range(0));
+  o.simd = kSimd;
   for (auto _ : state) {
     apply_remap(frame(), c, &out, o);
     benchmark::DoNotOptimize(out.rgb.data());
   }
   set_counters(state);
 }
-BENCHMARK(BM_Remap_Compiled)->Name("probe/unwrap_1280x960_to_1024x512/ours")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Remap_Compiled<true>)->Name("probe/unwrap_1280x960_to_1024x512/ours")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Remap_Compiled<false>)->Name("probe/unwrap_1280x960_to_1024x512/ours:scalar loop")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Remap_OpenCvFloatMaps(benchmark::State& state) {
   cv::setNumThreads(int(state.range(0)));

@@ -63,10 +63,13 @@ void set_pixels(benchmark::State& state) {
   state.counters["MPix_s"] = benchmark::Counter(double(kW) * kH / 1e6, benchmark::Counter::kIsIterationInvariantRate);
 }
 
+// kSimd: the vector kernel (MergeOptions::simd); false: the scalar loop it is tested against.
+template <bool kSimd>
 void BM_MergeOurs(benchmark::State& state) {
   const CameraResponse response = linear_response(256);
   MergeOptions o;
   o.threads = 2;
+  o.simd = kSimd;
   const Bracket& b = bracket();  // made once, outside the timing
   for (auto _ : state) benchmark::DoNotOptimize(merge_bracket(b, response, o).rgb.data());
   set_pixels(state);
@@ -135,7 +138,8 @@ void BM_StartFloor(benchmark::State& state) { spawn_and_wait(state, "/bin/true",
 
 }  // namespace
 
-BENCHMARK(BM_MergeOurs)->Name("hdr/merge_3x1280x960/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeOurs<true>)->Name("hdr/merge_3x1280x960/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeOurs<false>)->Name("hdr/merge_3x1280x960/ours:scalar loop")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeFloor)->Name("hdr/merge_3x1280x960/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeOpenCv)->Name("hdr/merge_3x1280x960/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();
 BENCHMARK(BM_StartOurs)->Name("startup/version/ours")->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 
 #include <fmt/format.h>
@@ -12,6 +13,7 @@
 #include <tbb/task_arena.h>
 
 #include "core/error.h"
+#include "hdr/merge_kernel.h"
 
 namespace lp {
 namespace {
@@ -20,6 +22,10 @@ struct Tables {
   int levels = 0;
   float scale = 0.0f;                           // code value -> level (before + 0.5)
   std::array<std::vector<float>, 3> w, wx;      // hat(l), hat(l) * exp(g_c(l))
+  std::vector<float> w3, wx3;                   // the same, channel-major in one table (the kernel's)
+  std::vector<uint64_t> w_wx3;                  // w3 and wx3 paired (merge_kernel.h)
+  std::vector<float> bound_short, bound_long;   // float(exp(g_c(l)) / t_k) of the shortest / longest frame
+  bool simd = false;                            // MergeOptions::simd
   std::vector<float> frame_w, frame_wx;         // per frame: s_k and s_k / t_k
   std::vector<size_t> by_time;                  // frame indices, shortest exposure first
   int sat_level = 0, black_level = 0;           // level >= sat_level: saturated; <= black_level: black
@@ -31,8 +37,9 @@ struct Tables {
 inline int level_of(float v, float scale, int levels) {
   const float s = v * scale + 0.5f;
   if (!(s > 0.0f)) return 0;  // also NaN
-  const int l = int(s);
-  return l < levels ? l : levels - 1;
+  // Clamped before the conversion: int(s) of a value beyond int's range (an infinite code) is
+  // undefined. The same order as the vector kernel (merge_kernel.cpp).
+  return int(std::min(s, float(levels - 1)));
 }
 
 // kIgnore: ignore_colour is set. kMask: some frame has a keep mask (frame_masks) or a valid
@@ -72,100 +79,143 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
     return false;
   };
   size_t sat = 0, black = 0, ignored = 0, no_frame = 0, well = 0;
+  // The unmasked merge runs the vector kernel over most of a row (merge_kernel.h) and the
+  // loops below over the rest: the tail of the row and the pixels it hands back.
+  [[maybe_unused]] std::vector<const float*> frame_rows(nf);
+  [[maybe_unused]] std::vector<uint32_t> redo;
+  [[maybe_unused]] std::vector<uint8_t> row_flags;
+  [[maybe_unused]] detail::MergeRowInput kernel;
+  if constexpr (!kTrack) {
+    redo.resize(size_t(W));
+    row_flags.resize(size_t(W));
+    kernel = {frame_rows.data(), T.frame_w.data(), T.frame_wx.data(), nf, size_t(W), T.w3.data(), T.wx3.data(),
+              T.w_wx3.data(), L, T.sat_level, T.black_level, T.by_time.front(), T.by_time.back(),
+              T.bound_short.data(), T.bound_long.data()};
+  }
   for (int y = y0; y < y1; ++y) {
-    std::fill(sw.begin(), sw.end(), 0.0f);
-    std::fill(swx.begin(), swx.end(), 0.0f);
-    if constexpr (kTrack) std::fill(used.begin(), used.end(), uint8_t(0));
     const size_t row = size_t(y) * size_t(W);
-    for (size_t k = 0; k < nf; ++k) {
-      const float* z = b.frames[k].row(y);
-      const float fw = T.frame_w[k], fx = T.frame_wx[k];
-      [[maybe_unused]] const uint8_t* km = nullptr;
-      [[maybe_unused]] const uint8_t* vm = nullptr;
-      if constexpr (kMask) {
-        km = T.keep[k] ? T.keep[k] + row : nullptr;
-        vm = T.valid[k] ? T.valid[k] + size_t(y) * T.valid_stride[k] : nullptr;
-      }
-      for (int x = 0; x < W; ++x) {
+    float* o = &out.rgb[3 * row];
+    // Sums of weights and weighted radiance over the frames for pixels [begin, end), in frame order.
+    auto accumulate = [&](int begin, int end) {
+      std::fill(sw.begin() + 3 * begin, sw.begin() + 3 * end, 0.0f);
+      std::fill(swx.begin() + 3 * begin, swx.begin() + 3 * end, 0.0f);
+      if constexpr (kTrack) std::fill(used.begin() + begin, used.begin() + end, uint8_t(0));
+      for (size_t k = 0; k < nf; ++k) {
+        const float* z = b.frames[k].row(y);
+        const float fw = T.frame_w[k], fx = T.frame_wx[k];
+        [[maybe_unused]] const uint8_t* km = nullptr;
+        [[maybe_unused]] const uint8_t* vm = nullptr;
         if constexpr (kMask) {
-          if ((km && !km[x]) || (vm && !vm[x])) continue;
+          km = T.keep[k] ? T.keep[k] + row : nullptr;
+          vm = T.valid[k] ? T.valid[k] + size_t(y) * T.valid_stride[k] : nullptr;
         }
-        const int l0 = level_of(z[3 * x], scale, L);
-        const int l1 = level_of(z[3 * x + 1], scale, L);
-        const int l2 = level_of(z[3 * x + 2], scale, L);
-        if constexpr (kIgnore) {
-          if (l0 == T.colour_level[0] && l1 == T.colour_level[1] && l2 == T.colour_level[2]) {
-            used[size_t(x)] |= 1;
+        for (int x = begin; x < end; ++x) {
+          if constexpr (kMask) {
+            if ((km && !km[x]) || (vm && !vm[x])) continue;
+          }
+          const int l0 = level_of(z[3 * x], scale, L);
+          const int l1 = level_of(z[3 * x + 1], scale, L);
+          const int l2 = level_of(z[3 * x + 2], scale, L);
+          if constexpr (kIgnore) {
+            if (l0 == T.colour_level[0] && l1 == T.colour_level[1] && l2 == T.colour_level[2]) {
+              used[size_t(x)] |= 1;
+              continue;
+            }
+          }
+          if constexpr (kTrack) used[size_t(x)] = 3;
+          float* a = &sw[3 * size_t(x)];
+          float* c = &swx[3 * size_t(x)];
+          a[0] += w0[l0] * fw;
+          a[1] += w1[l1] * fw;
+          a[2] += w2[l2] * fw;
+          c[0] += x0[l0] * fx;
+          c[1] += x1[l1] * fx;
+          c[2] += x2[l2] * fx;
+        }
+      }
+    };
+    // The output of pixels [begin, end) from their sums, with the fallbacks of channels no frame weighs.
+    auto finish = [&](int begin, int end) {
+      for (int x = begin; x < end; ++x) {
+        if constexpr (kTrack) {
+          if (!(used[size_t(x)] & 2)) {
+            out.valid[row + size_t(x)] = 0;
+            o[3 * x] = o[3 * x + 1] = o[3 * x + 2] = 0.0f;
+            if (used[size_t(x)] & 1)
+              ++ignored;
+            else
+              ++no_frame;
+            if (flags) flags[row + size_t(x)] = 0;
             continue;
           }
         }
-        if constexpr (kTrack) used[size_t(x)] = 3;
-        float* a = &sw[3 * size_t(x)];
-        float* c = &swx[3 * size_t(x)];
-        a[0] += w0[l0] * fw;
-        a[1] += w1[l1] * fw;
-        a[2] += w2[l2] * fw;
-        c[0] += x0[l0] * fx;
-        c[1] += x1[l1] * fx;
-        c[2] += x2[l2] * fx;
-      }
-    }
-    float* o = &out.rgb[3 * row];
-    for (int x = 0; x < W; ++x) {
-      if constexpr (kTrack) {
-        if (!(used[size_t(x)] & 2)) {
-          out.valid[row + size_t(x)] = 0;
-          o[3 * x] = o[3 * x + 1] = o[3 * x + 2] = 0.0f;
-          if (used[size_t(x)] & 1)
-            ++ignored;
-          else
-            ++no_frame;
-          if (flags) flags[row + size_t(x)] = 0;
-          continue;
-        }
-      }
-      uint8_t flag = 0;
-      for (int c = 0; c < 3; ++c) {
-        const size_t i = 3 * size_t(x) + size_t(c);
-        if (sw[i] > 0.0f) {
-          o[i] = swx[i] / sw[i];
-          continue;
-        }
-        // No usable frame for this channel (rare): classify the kept frames and take a bound.
-        bool all_sat = true, all_black = true;
-        size_t best = nf;
-        int best_d = 1 << 30;
-        for (size_t k : T.by_time) {
-          if constexpr (kTrack) {
-            if (dropped(k, x, y)) continue;
+        uint8_t flag = 0;
+        for (int c = 0; c < 3; ++c) {
+          const size_t i = 3 * size_t(x) + size_t(c);
+          if (sw[i] > 0.0f) {
+            o[i] = swx[i] / sw[i];
+            continue;
           }
-          const float* p = b.frames[k].pixel(x, y);
-          const int l = level_of(p[c], scale, L);
-          all_sat = all_sat && l >= T.sat_level;
-          all_black = all_black && l <= T.black_level;
-          const int d = std::abs(2 * l - (L - 1));
-          if (d < best_d) best_d = d, best = k;
-        }
-        size_t pick = best;
-        if (all_sat || all_black) {  // shortest kept exposure (lower bound) / longest (upper bound)
-          for (size_t j = 0; j < nf; ++j) {
-            const size_t k = all_sat ? T.by_time[j] : T.by_time[nf - 1 - j];
+          // No usable frame for this channel (rare): classify the kept frames and take a bound.
+          bool all_sat = true, all_black = true;
+          size_t best = nf;
+          int best_d = 1 << 30;
+          for (size_t k : T.by_time) {
             if constexpr (kTrack) {
               if (dropped(k, x, y)) continue;
             }
-            pick = k;
-            break;
+            const float* p = b.frames[k].pixel(x, y);
+            const int l = level_of(p[c], scale, L);
+            all_sat = all_sat && l >= T.sat_level;
+            all_black = all_black && l <= T.black_level;
+            const int d = std::abs(2 * l - (L - 1));
+            if (d < best_d) best_d = d, best = k;
           }
-          flag |= all_sat ? kSaturatedEverywhere : kBlackEverywhere;
+          size_t pick = best;
+          if (all_sat || all_black) {  // shortest kept exposure (lower bound) / longest (upper bound)
+            for (size_t j = 0; j < nf; ++j) {
+              const size_t k = all_sat ? T.by_time[j] : T.by_time[nf - 1 - j];
+              if constexpr (kTrack) {
+                if (dropped(k, x, y)) continue;
+              }
+              pick = k;
+              break;
+            }
+            flag |= all_sat ? kSaturatedEverywhere : kBlackEverywhere;
+          }
+          const int l = level_of(b.frames[pick].pixel(x, y)[c], scale, L);
+          o[i] = float(std::exp(double(resp.log_exposure[size_t(c)][size_t(l)])) / b.exposure_seconds[pick]);
         }
-        const int l = level_of(b.frames[pick].pixel(x, y)[c], scale, L);
-        o[i] = float(std::exp(double(resp.log_exposure[size_t(c)][size_t(l)])) / b.exposure_seconds[pick]);
+        if (flag & kSaturatedEverywhere) ++sat;
+        if (flag & kBlackEverywhere) ++black;
+        if (!flag) ++well;
+        if (flags) flags[row + size_t(x)] = flag;
       }
-      if (flag & kSaturatedEverywhere) ++sat;
-      if (flag & kBlackEverywhere) ++black;
-      if (!flag) ++well;
-      if (flags) flags[row + size_t(x)] = flag;
+    };
+    int done = 0;
+    size_t n_redo = 0;
+    if constexpr (!kTrack) {
+      if (T.simd) {
+        for (size_t k = 0; k < nf; ++k) frame_rows[k] = b.frames[k].row(y);
+        std::fill(row_flags.begin(), row_flags.end(), uint8_t(0));
+        done = int(detail::merge_row_simd(kernel, o, row_flags.data(), redo.data(), &n_redo));
+        for (int x = 0; x < done; ++x) {
+          const uint8_t flag = row_flags[size_t(x)];
+          sat += flag & kSaturatedEverywhere ? 1 : 0;
+          black += flag & kBlackEverywhere ? 1 : 0;
+          well += flag ? 0 : 1;
+        }
+        well -= n_redo;  // counted by finish() below
+        if (flags) std::copy(row_flags.begin(), row_flags.begin() + done, flags + row);
+        for (size_t i = 0; i < n_redo; ++i) {
+          const int x = int(redo[i]);
+          accumulate(x, x + 1);
+          finish(x, x + 1);
+        }
+      }
     }
+    accumulate(done, W);
+    finish(done, W);
   }
   n_sat += sat;
   n_black += black;
@@ -285,6 +335,10 @@ RgbImage merge_bracket(const BracketView& b, const CameraResponse& resp, const M
     for (int l = 0; l < L; ++l)
       T.wx[size_t(c)][size_t(l)] = float(double(mw.level[size_t(c)][size_t(l)]) * std::exp(double(g[size_t(l)])));
   }
+  for (int c = 0; c < 3; ++c) {
+    T.w3.insert(T.w3.end(), T.w[size_t(c)].begin(), T.w[size_t(c)].end());
+    T.wx3.insert(T.wx3.end(), T.wx[size_t(c)].begin(), T.wx[size_t(c)].end());
+  }
   for (size_t k = 0; k < nf; ++k) {
     T.frame_w.push_back(mw.frame[k]);
     T.frame_wx.push_back(float(double(mw.frame[k]) / b.exposure_seconds[k]));
@@ -295,6 +349,18 @@ RgbImage merge_bracket(const BracketView& b, const CameraResponse& resp, const M
                    [&](size_t a, size_t c) { return b.exposure_seconds[a] < b.exposure_seconds[c]; });
   T.sat_level = int(std::ceil(hi * (L - 1) - 1e-9));
   T.black_level = int(std::floor(lo * (L - 1) + 1e-9));
+  T.simd = o.simd;
+  T.w_wx3.resize(T.w3.size());
+  for (size_t i = 0; i < T.w3.size(); ++i) {
+    const float pair[2] = {T.w3[i], T.wx3[i]};
+    std::memcpy(&T.w_wx3[i], pair, sizeof pair);
+  }
+  for (int c = 0; c < 3; ++c)
+    for (int l = 0; l < L; ++l) {  // as the scalar loop's bounds compute them
+      const double e = std::exp(double(resp.log_exposure[size_t(c)][size_t(l)]));
+      T.bound_short.push_back(float(e / b.exposure_seconds[T.by_time.front()]));
+      T.bound_long.push_back(float(e / b.exposure_seconds[T.by_time.back()]));
+    }
   if (o.ignore_colour)
     for (int c = 0; c < 3; ++c) T.colour_level[size_t(c)] = int(std::lround((*o.ignore_colour)[size_t(c)] / 255.0 * (L - 1)));
 

@@ -21,7 +21,8 @@
 // the top-left source pixel of the 2 x 2 footprint and the two bilinear fractions in
 // 1/32768 px (8 bytes; the four weights are formed on the fly, which is cheaper than
 // reading them; OpenCV's fixed-point maps quantise to 1/32 px); border clamping is folded into index and fractions so the inner loop has no
-// branches but the validity test. Runs over rows in parallel with TBB.
+// branches but the validity test. Runs over rows in parallel with TBB. Without a source
+// mask the compiled table runs a vector kernel (remap_kernel.h, RemapOptions::simd).
 #pragma once
 
 #include <array>
@@ -45,6 +46,11 @@ struct RemapTable {
 
 struct RemapOptions {
   int threads = 0;  // 0 = TBB default (all cores); 1 = run on the calling thread
+  // true (default): apply_remap(src, CompiledRemap, out) without a source validity mask runs
+  // a vector kernel (probe/remap_kernel.h, Google Highway, the best of SSSE3/SSE4/AVX2/AVX-512
+  // chosen at run time); false: the scalar loop, kept as its reference. The two give the same
+  // image bit for bit (tests/probe/remap_kernel_test.cpp); a source mask runs the scalar loop.
+  bool simd = true;
 };
 
 // Resample `src` through `table`. Output: table.out_width x table.out_height, units

@@ -1,0 +1,48 @@
+// The merge's vector kernel (hdr/merge_kernel.cpp): one row of the unmasked merge
+// (hdr/merge.cpp, merge_rows without frame masks, valid masks or ignore_colour) in Google
+// Highway, compiled for every x86 target Highway knows (SSSE3, SSE4, AVX2, AVX-512, and
+// its scalar fallback) and dispatched at run time to the best one the CPU has. Internal to
+// hdr/: merge_bracket calls it, tests/hdr/merge_kernel_test.cpp compares it with the
+// scalar loop on every compiled target.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace lp::detail {
+
+struct MergeRowInput {
+  const float* const* rows;  // per frame: one row of packed RGB code values in [0, 1]
+  const float* frame_w;      // per frame: s_k (the weighting's frame factor)
+  const float* frame_wx;     // per frame: s_k / t_k
+  size_t frames = 0;
+  size_t width = 0;          // pixels in the row
+  // Per-level tables of the three channels, channel-major: w[c * levels + l] = hat(l) (times
+  // the level's noise weight), wx[c * levels + l] = w[c * levels + l] * exp(g_c(l)).
+  const float* w = nullptr;
+  const float* wx = nullptr;
+  const uint64_t* w_wx = nullptr;  // both as one 64-bit entry each: the bits of w in the low half, wx in the high
+  int levels = 0;
+  // The bounds of a channel no frame weighs (MergeReport): at or above sat_level in every
+  // frame, the shortest frame's estimate; at or below black_level in every frame, the longest
+  // frame's. Tables of float(exp(g_c(l)) / t_k) for those two frames, channel-major as w.
+  int sat_level = 0, black_level = 0;
+  size_t shortest = 0, longest = 0;
+  const float* bound_short = nullptr;
+  const float* bound_long = nullptr;
+};
+
+// Writes out[3x + c] = Σ_k wx(z) s_k/t_k / Σ_k w(z) s_k, summed over frames in order, with
+// the scalar loop's operations and order (bit-identical), for the pixels x < the returned
+// count (a multiple of the vector width; the rest are the caller's). A channel of zero total
+// weight takes the bound above and sets flags[x] (zeroed by the caller) to
+// kSaturatedEverywhere / kBlackEverywhere (hdr/merge.h). Pixels with a channel of zero weight
+// that is neither (clipped in some frames, black in the others: rare) are listed in `redo`
+// (room for `width` entries), their count in *n_redo, their flags left 0: the caller's scalar
+// loop finishes them.
+size_t merge_row_simd(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo, size_t* n_redo);
+
+// The Highway target merge_row_simd dispatches to on this CPU (for logs and benchmarks).
+const char* merge_simd_target();
+
+}  // namespace lp::detail

@@ -1,0 +1,155 @@
+// The merge's vector kernel (hdr/merge_kernel.cpp) on every Highway target compiled into it
+// and supported by this CPU, against the scalar loop (MergeOptions::simd = false): the same
+// image bit for bit, the same report and flags.
+#include <gtest/gtest.h>
+#include <hwy/targets.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "hdr/merge.h"
+#include "hdr/merge_kernel.h"
+#include "tests/hdr/synthetic_bracket.h"
+
+namespace lp {
+namespace {
+
+// Random 8-bit codes, with whole pixels and single channels clipped or black in every frame
+// (the kernel hands those back to the scalar fallback), pixels black in the long frame and
+// clipped in the short one, and a few codes outside [0, 1] (negative, above 1, infinite, NaN:
+// level 0 or the top level, as the scalar loop has them).
+Bracket random_bracket(int width, int height, size_t frames, std::mt19937& rng) {
+  Bracket b;
+  std::uniform_int_distribution<int> code(0, 255), kind(0, 99), channel(0, 2);
+  for (size_t k = 0; k < frames; ++k) {
+    RgbImage f;
+    f.width = width;
+    f.height = height;
+    f.rgb.resize(3 * size_t(width) * size_t(height));
+    b.frames.push_back(std::move(f));
+    // Not powers of two: products with the frame factors must round (a fused multiply-add or
+    // another order of operations then shows in the last bit).
+    b.exposure_seconds.push_back(std::pow(3.7, double(k)) / 60.0);
+  }
+  const float odd[] = {-0.25f, 1.5f, std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()};
+  for (size_t p = 0; p < size_t(width) * size_t(height); ++p) {
+    const int what = kind(rng);
+    const int c = channel(rng);
+    for (size_t k = 0; k < frames; ++k)
+      for (int ch = 0; ch < 3; ++ch) {
+        float v = float(code(rng)) / 255.0f;
+        if (what < 4) v = 1.0f;                                     // clipped everywhere
+        else if (what < 8) v = 0.0f;                                // black everywhere
+        else if (what < 12 && ch == c) v = 1.0f;                    // one channel clipped everywhere
+        else if (what < 16 && ch == c) v = 0.0f;                    // one channel black everywhere
+        else if (what < 20 && ch == c) v = k == 0 ? 0.0f : 1.0f;    // black short, clipped long
+        else if (what < 22 && ch == c) v = odd[size_t(code(rng)) % 4];
+        b.frames[k].rgb[3 * p + size_t(ch)] = v;
+      }
+  }
+  return b;
+}
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+// First index where two images differ in their bits, for the failure message.
+std::string first_difference(const std::vector<float>& a, const std::vector<float>& b) {
+  for (size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+    if (std::memcmp(&a[i], &b[i], sizeof(float)) != 0)
+      return "float " + std::to_string(i) + ": " + std::to_string(a[i]) + " vs " + std::to_string(b[i]);
+  return "sizes " + std::to_string(a.size()) + " vs " + std::to_string(b.size());
+}
+
+TEST(MergeKernel, EveryTargetEqualsTheScalarLoopBitForBit) {
+  std::mt19937 rng(23);
+  const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  // On x86-64 at least the scalar fallback and SSSE3: a list of one would test nothing.
+  ASSERT_GE(targets.size(), 2u);
+  for (const int64_t t : targets) std::printf("[ merge kernel ] target %s\n", hwy::TargetName(t));
+  CameraResponse s_curve = test::true_response(test::film_curve());
+  const CameraResponse responses[] = {linear_response(256), s_curve, linear_response(1024)};
+  const MergeOptions::Weighting weightings[] = {MergeOptions::Weighting::Hat, MergeOptions::Weighting::HatTimesExposure,
+                                                MergeOptions::Weighting::NoiseAware};
+  // Widths around every vector length (4, 8, 16 floats per vector; 1 for the scalar target):
+  // full groups, tails, and rows shorter than one group.
+  const int widths[] = {1, 3, 5, 16, 17, 31, 67, 160};
+  size_t cases = 0, redone = 0;
+  for (const int width : widths)
+    for (size_t r = 0; r < 3; ++r)
+      for (const auto weighting : weightings) {
+        const Bracket b = random_bracket(width, 5, 2 + (cases % 3), rng);
+        MergeOptions o;
+        o.weighting = weighting;
+        o.exposure_weighting = (cases % 4) != 3;  // also the legacy switch
+        o.flag_image = true;
+        o.threads = 1 + int(cases % 2);
+        o.simd = false;
+        MergeReport scalar_report;
+        const RgbImage scalar = merge_bracket(b, responses[r], o, &scalar_report);
+        redone += scalar_report.saturated_everywhere + scalar_report.black_everywhere;
+        o.simd = true;
+        for (const int64_t target : targets) {
+          hwy::SetSupportedTargetsForTest(target);
+          // The dispatch really took this target.
+          ASSERT_STREQ(detail::merge_simd_target(), hwy::TargetName(target));
+          MergeReport report;
+          const RgbImage vec = merge_bracket(b, responses[r], o, &report);
+          const std::string where = std::string(hwy::TargetName(target)) + ", width " + std::to_string(width) +
+                                    ", response " + std::to_string(r) + ", weighting " +
+                                    std::to_string(int(weighting));
+          EXPECT_TRUE(same_bits(vec.rgb, scalar.rgb)) << where << ": " << first_difference(vec.rgb, scalar.rgb);
+          EXPECT_EQ(vec.valid, scalar.valid) << where;
+          EXPECT_EQ(report.flags, scalar_report.flags) << where;
+          EXPECT_EQ(report.saturated_everywhere, scalar_report.saturated_everywhere) << where;
+          EXPECT_EQ(report.black_everywhere, scalar_report.black_everywhere) << where;
+          EXPECT_EQ(report.well_exposed, scalar_report.well_exposed) << where;
+        }
+        hwy::SetSupportedTargetsForTest(0);
+        ++cases;
+      }
+  // The fallback pixels the kernel hands back were there to hand back.
+  EXPECT_GT(redone, 100u);
+}
+
+// A bracket of real shape (the benchmark's sky ramp over four decades, 3 frames; a third of
+// its pixels clipped or black in every frame) on the best target: the same bits and report.
+TEST(MergeKernel, SkyRampOnTheBestTargetEqualsTheScalarLoop) {
+  Bracket b;
+  const int w = 333, h = 40;
+  for (double t : {0.0005, 0.004, 0.032}) {
+    RgbImage f;
+    f.width = w;
+    f.height = h;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const double radiance = std::pow(10.0, 4.0 * x / w) * (1.0 + 0.2 * (y % 7));
+          f.rgb.push_back(float(std::round(std::min(1.0, radiance * t * (0.8 + 0.2 * c) / 40.0) * 255) / 255));
+        }
+    b.frames.push_back(std::move(f));
+    b.exposure_seconds.push_back(t);
+  }
+  const CameraResponse response = linear_response(256);
+  MergeOptions o;
+  o.simd = false;
+  MergeReport scalar_report;
+  const RgbImage scalar = merge_bracket(b, response, o, &scalar_report);
+  o.simd = true;
+  MergeReport report;
+  const RgbImage vec = merge_bracket(b, response, o, &report);
+  EXPECT_TRUE(same_bits(vec.rgb, scalar.rgb)) << first_difference(vec.rgb, scalar.rgb);
+  EXPECT_EQ(report.well_exposed, scalar_report.well_exposed);
+  EXPECT_EQ(report.saturated_everywhere, scalar_report.saturated_everywhere);
+  EXPECT_EQ(report.black_everywhere, scalar_report.black_everywhere);
+  EXPECT_EQ(scalar_report.well_exposed, 8818u);  // of 13 320: the fallback's pixels are many
+}
+
+}  // namespace
+}  // namespace lp

@@ -392,37 +392,13 @@ TEST(ModelSelection, DISABLED_HalvesAgree) {
 // natural order (Fisheye1_2 before Fisheye1_10).
 //   calib_tests --gtest_also_run_disabled_tests --gtest_filter='ModelSelection.DISABLED_HalvesAgreeOnRealSets'
 TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
-  const std::string data = LIGHTPROBE_SHARED_DATA;
-  struct Set {
-    const char* name;
-    std::string dir, prefix;
-    BoardSpec board;
-  };
-  const Set sets[] = {{"stereo left", data + "/calib-opencv-stereo-9x6", "left", {9, 6, 25}},
-                      {"fisheye1", data + "/calib-ocamcalib-fisheye1", "Fisheye1_", {6, 8, 32.5}},
-                      {"Ladybug", data + "/calib-ocamcalib-omni-samples/Ladybug", "", {5, 8, 30}},
-                      {"VMRImage", data + "/calib-ocamcalib-omni-samples/VMRImage", "", {6, 7, 30}},
-                      {"KaidanOmni", data + "/calib-ocamcalib-omni-samples/KaidanOmni", "", {7, 11, 30}},
-                      {"MiniOmni", data + "/calib-ocamcalib-omni-samples/MiniOmni", "", {7, 11, 30}},
-                      {"Fisheye190deg", data + "/calib-ocamcalib-omni-samples/Fisheye190deg", "", {6, 7, 30}}};
   const char* only = std::getenv("LP_HALVES_SET");
   CalibrateOptions o;
   o.leverage = false;
   o.uncertainty = false;
-  for (const Set& set : sets) {
+  for (const calib_test::RealSet& set : calib_test::real_sets()) {
     if (only && std::string(set.name).find(only) == std::string::npos) continue;
-    std::vector<std::pair<long, std::string>> files;
-    for (const auto& e : std::filesystem::directory_iterator(set.dir)) {
-      const std::string f = e.path().filename().string();
-      if (f.rfind(set.prefix, 0) != 0 || (e.path().extension() != ".jpg" && e.path().extension() != ".bmp" &&
-                                          e.path().extension() != ".png" && e.path().extension() != ".gif"))
-        continue;
-      const size_t d = f.find_first_of("0123456789", set.prefix.size());
-      files.push_back({d == std::string::npos ? 0 : std::atol(f.c_str() + d), e.path().string()});
-    }
-    std::sort(files.begin(), files.end());
-    std::vector<std::string> images;
-    for (const auto& f : files) images.push_back(f.second);
+    const std::vector<std::string> images = calib_test::real_set_images(set);
     if (images.empty()) GTEST_SKIP() << "no images in " << set.dir;
     const BoardDetections det = detect_boards(images, set.board);
     Corners views;

@@ -10,30 +10,12 @@
 namespace lp {
 namespace {
 
-// One corner of the board in the camera frame: board point (X, Y) lifted by the board warp
-// (mrcal's flex: z = x2 * dx + y2 * dy, dx and dy the corner's parabola factors,
-// board_warp_z), then the pose.
-struct BoardCorner {
-  double X, Y, dx, dy;
+// Kannala-Brandt projection of a camera-frame point (the projection of camera_model.cpp:
+// theta from atan2, so rays beyond 90 deg work, unlike cv::fisheye).
+struct KannalaBrandtProjection {
+  static constexpr int kParams = 8;
   template <typename T>
-  void in_camera(const T* pose, const T* warp, T* C) const {
-    const T P[3] = {T(X), T(Y), warp[0] * dx + warp[1] * dy};
-    ceres::AngleAxisRotatePoint(pose, P, C);
-    C[0] += pose[3];
-    C[1] += pose[4];
-    C[2] += pose[5];
-  }
-};
-
-// Kannala-Brandt reprojection of one corner (the projection of camera_model.cpp: theta
-// from atan2, so rays beyond 90 deg work, unlike cv::fisheye).
-struct KannalaBrandtCost {
-  BoardCorner corner;
-  double qx, qy;
-  template <typename T>
-  bool operator()(const T* in, const T* pose, const T* warp, T* r) const {
-    T C[3];
-    corner.in_camera(pose, warp, C);
+  static void project(const T* in, const T* C, T* q) {
     const T rho2 = C[0] * C[0] + C[1] * C[1];
     T s;
     if (rho2 < T(1e-24)) {
@@ -44,21 +26,17 @@ struct KannalaBrandtCost {
       const T t2 = th * th;
       s = th * (T(1) + t2 * (in[4] + t2 * (in[5] + t2 * (in[6] + t2 * in[7])))) / rho;
     }
-    r[0] = in[0] * s * C[0] + in[2] - T(qx);
-    r[1] = in[1] * s * C[1] + in[3] - T(qy);
-    return true;
+    q[0] = in[0] * s * C[0] + in[2];
+    q[1] = in[1] * s * C[1] + in[3];
   }
 };
 
-// Mei reprojection of one corner, as camera_model.cpp: the point on the unit sphere,
-// projected from (0, 0, -xi), radial-tangential distortion (k1 k2 p1 p2), no skew.
-struct MeiCost {
-  BoardCorner corner;
-  double qx, qy;
+// Mei projection, as camera_model.cpp: the point on the unit sphere, projected from
+// (0, 0, -xi), radial-tangential distortion (k1 k2 p1 p2), no skew.
+struct MeiProjection {
+  static constexpr int kParams = 9;
   template <typename T>
-  bool operator()(const T* in, const T* pose, const T* warp, T* r) const {
-    T C[3];
-    corner.in_camera(pose, warp, C);
+  static void project(const T* in, const T* C, T* q) {
     const T n = ceres::sqrt(C[0] * C[0] + C[1] * C[1] + C[2] * C[2]);
     const T w = C[2] / n + in[4];
     const T xu = C[0] / n / w, yu = C[1] / n / w;
@@ -66,16 +44,35 @@ struct MeiCost {
     const T radial = T(1) + in[5] * r2 + in[6] * r2 * r2;
     const T xd = xu * radial + T(2) * in[7] * xu * yu + in[8] * (r2 + T(2) * xu * xu);
     const T yd = yu * radial + in[7] * (r2 + T(2) * yu * yu) + T(2) * in[8] * xu * yu;
-    r[0] = in[0] * xd + in[2] - T(qx);
-    r[1] = in[1] * yd + in[3] - T(qy);
+    q[0] = in[0] * xd + in[2];
+    q[1] = in[1] * yd + in[3];
+  }
+};
+
+// Reprojection residual of one corner: board point (X, Y) lifted by the board warp
+// (mrcal's flex: z = x2 * dx + y2 * dy, dx and dy the corner's parabola factors,
+// board_warp_z), then the pose, then Projection; minus the observed pixel (qx, qy).
+template <class Projection>
+struct CornerCost {
+  double X, Y, dx, dy, qx, qy;
+  template <typename T>
+  bool operator()(const T* in, const T* pose, const T* warp, T* r) const {
+    const T P[3] = {T(X), T(Y), warp[0] * dx + warp[1] * dy};
+    T C[3];
+    ceres::AngleAxisRotatePoint(pose, P, C);
+    C[0] += pose[3];
+    C[1] += pose[4];
+    C[2] += pose[5];
+    Projection::project(in, C, r);
+    r[0] -= T(qx);
+    r[1] -= T(qy);
     return true;
   }
 };
 
-// Joint solve of intrinsics (N of them, cost functor Cost), poses and, with
-// SolveOptions::board_warp, the board warp from `seed`; the seed when it fails or does not
-// improve.
-template <typename Cost, int N>
+// Joint solve of intrinsics (Projection's), poses and, with SolveOptions::board_warp, the
+// board warp from `seed`; the seed when it fails or does not improve.
+template <class Projection>
 ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
   ModelFit f = seed;
   if (!pr.solve.board_warp) f.warp = {0, 0};
@@ -84,9 +81,10 @@ ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, con
     for (size_t k = 0; k < views[i]->px.size(); ++k) {
       if (!views[i]->inlier[k]) continue;
       const auto X = board_point(pr.board, int(k));
-      const BoardCorner corner{X[0], X[1], board_warp_z(pr.board, int(k), {1, 0}), board_warp_z(pr.board, int(k), {0, 1})};
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Cost, 2, N, 6, 2>(
-                                   new Cost{corner, views[i]->px[k][0], views[i]->px[k][1]}),
+      using Cost = CornerCost<Projection>;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Cost, 2, Projection::kParams, 6, 2>(new Cost{
+                                   X[0], X[1], board_warp_z(pr.board, int(k), {1, 0}),
+                                   board_warp_z(pr.board, int(k), {0, 1}), views[i]->px[k][0], views[i]->px[k][1]}),
                                nullptr, f.model.intrinsics.data(), f.poses[i].data(), f.warp.data());
     }
   if (!pr.solve.board_warp) problem.SetParameterBlockConstant(f.warp.data());
@@ -128,11 +126,11 @@ ModelFit polish(const CalibrationProblem& pr, const ViewSubset& views, const Mod
 }  // namespace
 
 ModelFit refine_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
-  return refine_joint<KannalaBrandtCost, 8>(pr, views, seed);
+  return refine_joint<KannalaBrandtProjection>(pr, views, seed);
 }
 
 ModelFit refine_mei(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
-  return refine_joint<MeiCost, 9>(pr, views, seed);
+  return refine_joint<MeiProjection>(pr, views, seed);
 }
 
 ModelFit solve_mrcal(const CalibrationProblem& pr, const ViewSubset& views, const std::string& lensmodel,

@@ -138,13 +138,9 @@ TEST(BoardWarp, DISABLED_OnRealSets) {
   std::printf("%s", kWarpHeader);
   for (const calib_test::RealSet& set : calib_test::real_sets()) {
     if (only && std::string(set.name).find(only) == std::string::npos) continue;
-    const std::vector<std::string> images = calib_test::real_set_images(set);
-    if (images.empty()) GTEST_SKIP() << "no images in " << set.dir;
-    const BoardDetections det = detect_boards(images, set.board);
-    Corners views;
-    for (const auto& c : det.corners)
-      if (!c.empty()) views.push_back(c);
-    measure_warp(set.name, views, set.board, det.width, det.height);
+    const calib_test::RealSetViews rs = calib_test::real_set_views(set);
+    if (rs.views.empty()) GTEST_SKIP() << "no images in " << set.dir;
+    measure_warp(set.name, rs.views, set.board, rs.width, rs.height);
   }
 }
 

@@ -398,20 +398,17 @@ TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
   o.uncertainty = false;
   for (const calib_test::RealSet& set : calib_test::real_sets()) {
     if (only && std::string(set.name).find(only) == std::string::npos) continue;
-    const std::vector<std::string> images = calib_test::real_set_images(set);
-    if (images.empty()) GTEST_SKIP() << "no images in " << set.dir;
-    const BoardDetections det = detect_boards(images, set.board);
-    Corners views;
-    for (const auto& c : det.corners)
-      if (!c.empty()) views.push_back(c);
+    const calib_test::RealSetViews rs = calib_test::real_set_views(set);
+    if (rs.views.empty()) GTEST_SKIP() << "no images in " << set.dir;
+    const Corners& views = rs.views;
     const auto t0 = std::chrono::steady_clock::now();
-    const CalibrationResult full = calibrate(views, set.board, det.width, det.height, o);
+    const CalibrationResult full = calibrate(views, set.board, rs.width, rs.height, o);
     std::printf("  %s, all %zu views: %s (before: %s), field %.1f deg, wins:", set.name, views.size(),
                 full.selected.c_str(), full.simplest_within_noise.c_str(), full.selection_field_deg);
     for (const auto& c : full.table)
       if (c.split_wins > 0) std::printf(" %s %d/%d", c.name.c_str(), c.split_wins, full.cv_splits);
     std::printf("\n");
-    const HalvesOutcome h = calibrate_halves(views, set.board, det.width, det.height, o, true);
+    const HalvesOutcome h = calibrate_halves(views, set.board, rs.width, rs.height, o, true);
     std::string fixed;
     for (const auto& [n, d] : h.fixed_px) fixed += n + " " + fmt_px(d) + ";";
     std::printf("| %s | %zu | %s / %s | %.3f | %s / %s | %.3f | %s %.3f | (%.1f s) fixed: %s\n", set.name, views.size(),

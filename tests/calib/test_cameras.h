@@ -75,4 +75,22 @@ inline std::vector<std::string> real_set_images(const RealSet& set) {
   return images;
 }
 
+// The corners of every view of `set` with a board (detect_boards) and the images' size; no
+// views when the folder has no images.
+struct RealSetViews {
+  std::vector<std::vector<std::array<double, 2>>> views;
+  int width = 0, height = 0;
+};
+inline RealSetViews real_set_views(const RealSet& set) {
+  RealSetViews out;
+  const std::vector<std::string> images = real_set_images(set);
+  if (images.empty()) return out;
+  const BoardDetections det = detect_boards(images, set.board);
+  for (const auto& c : det.corners)
+    if (!c.empty()) out.views.push_back(c);
+  out.width = det.width;
+  out.height = det.height;
+  return out;
+}
+
 }  // namespace lp::calib_test

@@ -52,6 +52,18 @@ struct BoardSpec {
   double square_mm = 30;
 };
 
+// A board that is not flat: mrcal's two-parameter flex (calobject_warp, mrcal.c and
+// mrcal.ref_calibration_object), a parabola along each board axis with its peak deflection
+// (mm, along the board's +z: away from a camera that faces the board's front) at the
+// centre. Inner corner (r, c) sits at z = x2 * 4 xr (1 - xr) + y2 * 4 yr (1 - yr), with
+// xr = c / (cols - 1) and yr = r / (rows - 1); {0, 0} is flat.
+using BoardWarp = std::array<double, 2>;  // {x2, y2}, mrcal's order
+// z (mm) of inner corner k = r * cols + c under `warp`.
+inline double board_warp_z(const BoardSpec& b, int k, const BoardWarp& warp) {
+  const double xr = double(k % b.cols) / (b.cols - 1), yr = double(k / b.cols) / (b.rows - 1);
+  return warp[0] * 4 * xr * (1 - xr) + warp[1] * 4 * yr * (1 - yr);
+}
+
 struct DetectOptions {
   bool classic = true;        // stages 1, 3 and 6
   bool sb = true;             // stages 2, 5 and 7 (and 4, which uses SB)

@@ -44,8 +44,8 @@ ViewSubset all_of(const std::vector<BoardView>& views) {
   return s;
 }
 
-std::array<double, 3> board_point(const BoardSpec& b, int k) {
-  return {(k % b.cols) * b.square_mm, (k / b.cols) * b.square_mm, 0.0};
+std::array<double, 3> board_point(const BoardSpec& b, int k, const BoardWarp& warp) {
+  return {(k % b.cols) * b.square_mm, (k / b.cols) * b.square_mm, board_warp_z(b, k, warp)};
 }
 
 CameraModel make_model(const CalibrationProblem& pr, const std::string& lensmodel, std::vector<double> intrinsics) {
@@ -60,13 +60,13 @@ CameraModel make_model(const CalibrationProblem& pr, const std::string& lensmode
 namespace {
 
 // Camera-frame points of a view's board corners.
-std::vector<Vec3> board_in_camera(const CalibrationProblem& pr, const BoardPose& p) {
+std::vector<Vec3> board_in_camera(const CalibrationProblem& pr, const BoardWarp& warp, const BoardPose& p) {
   cv::Matx33d R;
   cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
   const int n = pr.board.cols * pr.board.rows;
   std::vector<Vec3> out(n);
   for (int k = 0; k < n; ++k) {
-    const auto b = board_point(pr.board, k);
+    const auto b = board_point(pr.board, k, warp);
     const cv::Vec3d X = R * cv::Vec3d(b[0], b[1], b[2]) + cv::Vec3d(p[3], p[4], p[5]);
     out[k] = {X[0], X[1], X[2]};
   }
@@ -74,9 +74,10 @@ std::vector<Vec3> board_in_camera(const CalibrationProblem& pr, const BoardPose&
 }
 
 // Pixel residuals of a pose (Levenberg-Marquardt with numeric derivatives).
-BoardPose refine_pose(const CalibrationProblem& pr, const CameraModel& m, const BoardView& v, BoardPose p) {
+BoardPose refine_pose(const CalibrationProblem& pr, const CameraModel& m, const BoardWarp& warp, const BoardView& v,
+                      BoardPose p) {
   auto resid = [&](const BoardPose& q, Eigen::VectorXd& r) {
-    const auto rr = view_residuals(pr, m, v, q);
+    const auto rr = view_residuals(pr, m, warp, v, q);
     std::vector<double> out;
     for (size_t k = 0; k < rr.size(); ++k)
       if (v.inlier[k]) {
@@ -158,8 +159,8 @@ std::optional<BoardPose> pnp_on_rays(const std::vector<cv::Point3d>& obj, const 
 }  // namespace
 
 std::vector<std::array<double, 2>> view_residuals(const CalibrationProblem& pr, const CameraModel& m,
-                                                  const BoardView& v, const BoardPose& pose) {
-  const auto P = board_in_camera(pr, pose);
+                                                  const BoardWarp& warp, const BoardView& v, const BoardPose& pose) {
+  const auto P = board_in_camera(pr, warp, pose);
   std::vector<std::array<double, 2>> r(P.size());
   for (size_t k = 0; k < P.size(); ++k) {
     const auto q = project(m, P[k]);
@@ -171,9 +172,9 @@ std::vector<std::array<double, 2>> view_residuals(const CalibrationProblem& pr, 
   return r;
 }
 
-double view_squared_error(const CalibrationProblem& pr, const CameraModel& m, const BoardView& v,
-                          const BoardPose& pose) {
-  const auto r = view_residuals(pr, m, v, pose);
+double view_squared_error(const CalibrationProblem& pr, const CameraModel& m, const BoardWarp& warp,
+                          const BoardView& v, const BoardPose& pose) {
+  const auto r = view_residuals(pr, m, warp, v, pose);
   double s = 0;
   for (size_t k = 0; k < r.size(); ++k)
     if (v.inlier[k]) s += std::isfinite(r[k][0]) ? r[k][0] * r[k][0] + r[k][1] * r[k][1] : 1e12;
@@ -188,7 +189,7 @@ double rms_of(const std::vector<double>& sq) {
 double fit_rms(const CalibrationProblem& pr, const ModelFit& f, const ViewSubset& views) {
   std::vector<double> sq;
   for (size_t i = 0; i < views.size(); ++i) {
-    const auto r = view_residuals(pr, f.model, *views[i], f.poses[i]);
+    const auto r = view_residuals(pr, f.model, f.warp, *views[i], f.poses[i]);
     for (size_t k = 0; k < r.size(); ++k)
       if (views[i]->inlier[k]) {
         const double e = r[k][0] * r[k][0] + r[k][1] * r[k][1];
@@ -198,7 +199,8 @@ double fit_rms(const CalibrationProblem& pr, const ModelFit& f, const ViewSubset
   return rms_of(sq);
 }
 
-std::optional<BoardPose> solve_pose(const CalibrationProblem& pr, const CameraModel& m, const BoardView& v) {
+std::optional<BoardPose> solve_pose(const CalibrationProblem& pr, const CameraModel& m, const BoardWarp& warp,
+                                    const BoardView& v) {
   std::vector<cv::Point3d> obj;
   std::vector<cv::Vec3d> rays;
   int inliers = 0;
@@ -207,7 +209,7 @@ std::optional<BoardPose> solve_pose(const CalibrationProblem& pr, const CameraMo
     ++inliers;
     const auto d = unproject(m, {v.px[k][0], v.px[k][1]});
     if (!d) continue;
-    const auto b = board_point(pr.board, int(k));
+    const auto b = board_point(pr.board, int(k), warp);
     obj.push_back({b[0], b[1], b[2]});
     rays.push_back({d->x, d->y, d->z});
   }
@@ -230,15 +232,15 @@ std::optional<BoardPose> solve_pose(const CalibrationProblem& pr, const CameraMo
     p0 = pnp_on_rays(obj, rays, R0);
   }
   if (!p0) return std::nullopt;
-  return refine_pose(pr, m, v, *p0);
+  return refine_pose(pr, m, warp, v, *p0);
 }
 
-double heldout_rms(const CalibrationProblem& pr, const CameraModel& m, const ViewSubset& views) {
+double heldout_rms(const CalibrationProblem& pr, const ModelFit& f, const ViewSubset& views) {
   std::vector<double> sq;
   for (const BoardView* v : views) {
-    const auto pose = solve_pose(pr, m, *v);
+    const auto pose = solve_pose(pr, f.model, f.warp, *v);
     if (!pose) return std::numeric_limits<double>::infinity();
-    const auto r = view_residuals(pr, m, *v, *pose);
+    const auto r = view_residuals(pr, f.model, f.warp, *v, *pose);
     for (size_t k = 0; k < r.size(); ++k)
       if (v->inlier[k]) {
         const double e = r[k][0] * r[k][0] + r[k][1] * r[k][1];

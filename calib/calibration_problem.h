@@ -4,8 +4,10 @@
 // inlier flags), board poses, a model fitted to a subset of the views, and the residual and
 // pose helpers they all use.
 //
-// Board frame: inner corner k = r * cols + c at (c, r, 0) * square_mm. Poses map board to
-// camera (Rodrigues r, then t in mm). Pixels and camera frame as calib/camera_model.h.
+// Board frame: inner corner k = r * cols + c at (c * square_mm, r * square_mm, z), z = 0 for a
+// flat board, else the fit's board warp (BoardWarp, board_detect.h: mrcal's calobject_warp).
+// Poses map board to camera (Rodrigues r, then t in mm). Pixels and camera frame as
+// calib/camera_model.h.
 #pragma once
 
 #include <array>
@@ -38,6 +40,10 @@ struct ModelFit {
   std::vector<BoardPose> poses;  // aligned with the subset it was fitted on
   int params = 0;            // free intrinsics
   std::string solver;        // how it was obtained, e.g. "cv::fisheye + Ceres"
+  // The board's flex fitted with it (SolveOptions::board_warp; {0, 0}: flat, or not fitted,
+  // as for OpenCV's own solutions, which warp_fitted tells apart).
+  BoardWarp warp{};
+  bool warp_fitted = false;
 };
 
 // What the solvers need to know beyond the corners.
@@ -47,6 +53,12 @@ struct SolveOptions {
   // The splined candidate: cubic, spline_nx x spline_ny control points, field of view from
   // its stereographic seed.
   int spline_order = 3, spline_nx = 8, spline_ny = 6;
+  // Fit the board's flex (BoardWarp: mrcal's calobject_warp, two parameters) in every joint
+  // solve, Ceres and mrcal alike. On by default, as mrcal-calibrate-cameras does: real
+  // boards are not flat to a tenth of a pixel at close range, and the misfit of a flat
+  // board model otherwise ends as outliers on the boards' outer rows (docs/calibration.md,
+  // "Board warp"). OpenCV's closed-form seeds are flat.
+  bool board_warp = true;
 };
 
 struct CalibrationProblem {
@@ -68,28 +80,28 @@ std::vector<BoardView> make_board_views(const std::vector<std::vector<std::array
                                         bool check_inside);
 ViewSubset all_of(const std::vector<BoardView>& views);
 
-// Board-frame point of corner k (mm).
-std::array<double, 3> board_point(const BoardSpec& board, int k);
+// Board-frame point of corner k (mm), on a board flexed by `warp`.
+std::array<double, 3> board_point(const BoardSpec& board, int k, const BoardWarp& warp = {});
 CameraModel make_model(const CalibrationProblem& problem, const std::string& lensmodel, std::vector<double> intrinsics);
 
-// observed - projected per corner (every corner, inlier or not); NaN where the model cannot
-// image the corner.
+// observed - projected per corner (every corner, inlier or not) of a board flexed by
+// `warp`; NaN where the model cannot image the corner.
 std::vector<std::array<double, 2>> view_residuals(const CalibrationProblem& problem, const CameraModel& model,
-                                                  const BoardView& view, const BoardPose& pose);
+                                                  const BoardWarp& warp, const BoardView& view, const BoardPose& pose);
 // Sum of squared inlier residuals of a view; a corner the model cannot image counts 1e12.
-double view_squared_error(const CalibrationProblem& problem, const CameraModel& model, const BoardView& view,
-                          const BoardPose& pose);
+double view_squared_error(const CalibrationProblem& problem, const CameraModel& model, const BoardWarp& warp,
+                          const BoardView& view, const BoardPose& pose);
 // RMS (2-D) of a fit over the inliers of its subset; 1e6 px per corner it cannot image.
 double fit_rms(const CalibrationProblem& problem, const ModelFit& fit, const ViewSubset& views);
 
-// Board pose of a view under fixed intrinsics: PnP on the unprojected rays (in a frame
-// turned towards the view's mean ray when some rays point sideways or backwards), then
-// refined on pixels. nullopt when too few rays are usable.
+// Board pose of a view under fixed intrinsics and board warp: PnP on the unprojected rays
+// (in a frame turned towards the view's mean ray when some rays point sideways or
+// backwards), then refined on pixels. nullopt when too few rays are usable.
 std::optional<BoardPose> solve_pose(const CalibrationProblem& problem, const CameraModel& model,
-                                    const BoardView& view);
-// RMS of the views' inlier corners under `model`'s intrinsics with their poses re-solved;
-// inf when some view cannot be posed.
-double heldout_rms(const CalibrationProblem& problem, const CameraModel& model, const ViewSubset& views);
+                                    const BoardWarp& warp, const BoardView& view);
+// RMS of the views' inlier corners under `fit`'s intrinsics and board warp with their poses
+// re-solved; inf when some view cannot be posed.
+double heldout_rms(const CalibrationProblem& problem, const ModelFit& fit, const ViewSubset& views);
 
 // The area the boards covered: union of each view's convex hull of inlier corners
 // (width * height, row-major, 255 inside).

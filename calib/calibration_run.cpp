@@ -88,6 +88,14 @@ std::string table_text(const CalibrationResult& r) {
   return s;
 }
 
+// One line: the fitted board warp with its standard deviation, or that the board was taken as flat.
+std::string board_warp_text(const BoardWarpReport& w) {
+  if (!w.fitted) return "board taken as flat (no board warp fitted)\n";
+  const std::string sd = std::isfinite(w.sd_mm[0]) ? fmt::format(" (+- {:.3f}, +- {:.3f})", w.sd_mm[0], w.sd_mm[1])
+                                                   : fmt::format(" (no uncertainty: {})", w.sd_error);
+  return fmt::format("board warp (peak deflection along x, y): {:.3f}, {:.3f} mm{}\n", w.mm[0], w.mm[1], sd);
+}
+
 std::string views_text(const GeometricCalibration& run) {
   const CalibrationResult& r = run.result;
   const std::vector<std::string>& images = run.detections.images;
@@ -147,6 +155,12 @@ std::string uncertainty_text(const CalibrationResult& r) {
 // ---- JSON ------------------------------------------------------------------------------
 
 nlohmann::json num(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
+
+nlohmann::json board_warp_json(const BoardWarpReport& w) {
+  if (!w.fitted) return nullptr;
+  return {{"x2_mm", w.mm[0]}, {"y2_mm", w.mm[1]}, {"x2_sd_mm", num(w.sd_mm[0])}, {"y2_sd_mm", num(w.sd_mm[1])},
+          {"sd_error", w.sd_error}};
+}
 
 nlohmann::json grid_json(const UncertaintyGrid& g) {
   if (g.nx <= 0) return nullptr;
@@ -230,6 +244,7 @@ std::string GeometricCalibration::summary() const {
   s += table_text(result);
   s += views_text(*this);
   s += uncertainty_text(result);
+  s += board_warp_text(result.board_warp);
   if (optimization_inputs)
     s += "the .cameramodel carries mrcal's optimization_inputs: mrcal-show-projection-uncertainty and "
          "mrcal-show-residuals-board-observation read it\n";
@@ -251,6 +266,7 @@ std::string GeometricCalibration::to_json() const {
   const nlohmann::json j = {
       {"output", written}, {"optimization_inputs", optimization_inputs}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
       {"uncertainty", uncertainty_json(*this)}, {"intrinsics", r.model.intrinsics},
+      {"board_warp", board_warp_json(r.board_warp)},
       {"rms_px", r.model.rms_reprojection_px}, {"cross_validation_px", r.cross_validation_px},
       {"cross_validation_noise_px", num(r.cv_noise_px)},
       {"cross_validation_repeated_px", num(r.cross_validation_repeated_px)}, {"selection", selection_json(r)},

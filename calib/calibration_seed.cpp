@@ -23,13 +23,13 @@ cv::Vec3d board_vec(const BoardSpec& b, int k) {
 bool repose_views(const CalibrationProblem& pr, const ViewSubset& views, const std::vector<char>& has_pose,
                   ModelFit& f, int* reposed, const std::string& seed_name) {
   for (size_t i = 0; i < views.size(); ++i) {
-    const auto p = solve_pose(pr, f.model, *views[i]);
+    const auto p = solve_pose(pr, f.model, f.warp, *views[i]);
     if (!has_pose[i] && !p) {
       f.error = "cannot pose a view under the " + seed_name + " seed";
       return false;
     }
-    if (p && (!has_pose[i] || view_squared_error(pr, f.model, *views[i], *p) <
-                                  view_squared_error(pr, f.model, *views[i], f.poses[i]))) {
+    if (p && (!has_pose[i] || view_squared_error(pr, f.model, f.warp, *views[i], *p) <
+                                  view_squared_error(pr, f.model, f.warp, *views[i], f.poses[i]))) {
       f.poses[i] = *p;
       ++*reposed;
     }

@@ -10,18 +10,12 @@
 namespace lp {
 namespace {
 
-// Kannala-Brandt reprojection of one corner (the projection of camera_model.cpp: theta
-// from atan2, so rays beyond 90 deg work, unlike cv::fisheye).
-struct KannalaBrandtCost {
-  double X, Y, qx, qy;
+// Kannala-Brandt projection of a camera-frame point (the projection of camera_model.cpp:
+// theta from atan2, so rays beyond 90 deg work, unlike cv::fisheye).
+struct KannalaBrandtProjection {
+  static constexpr int kParams = 8;
   template <typename T>
-  bool operator()(const T* in, const T* pose, T* r) const {
-    const T P[3] = {T(X), T(Y), T(0)};
-    T C[3];
-    ceres::AngleAxisRotatePoint(pose, P, C);
-    C[0] += pose[3];
-    C[1] += pose[4];
-    C[2] += pose[5];
+  static void project(const T* in, const T* C, T* q) {
     const T rho2 = C[0] * C[0] + C[1] * C[1];
     T s;
     if (rho2 < T(1e-24)) {
@@ -32,24 +26,17 @@ struct KannalaBrandtCost {
       const T t2 = th * th;
       s = th * (T(1) + t2 * (in[4] + t2 * (in[5] + t2 * (in[6] + t2 * in[7])))) / rho;
     }
-    r[0] = in[0] * s * C[0] + in[2] - T(qx);
-    r[1] = in[1] * s * C[1] + in[3] - T(qy);
-    return true;
+    q[0] = in[0] * s * C[0] + in[2];
+    q[1] = in[1] * s * C[1] + in[3];
   }
 };
 
-// Mei reprojection of one corner, as camera_model.cpp: the point on the unit sphere,
-// projected from (0, 0, -xi), radial-tangential distortion (k1 k2 p1 p2), no skew.
-struct MeiCost {
-  double X, Y, qx, qy;
+// Mei projection, as camera_model.cpp: the point on the unit sphere, projected from
+// (0, 0, -xi), radial-tangential distortion (k1 k2 p1 p2), no skew.
+struct MeiProjection {
+  static constexpr int kParams = 9;
   template <typename T>
-  bool operator()(const T* in, const T* pose, T* r) const {
-    const T P[3] = {T(X), T(Y), T(0)};
-    T C[3];
-    ceres::AngleAxisRotatePoint(pose, P, C);
-    C[0] += pose[3];
-    C[1] += pose[4];
-    C[2] += pose[5];
+  static void project(const T* in, const T* C, T* q) {
     const T n = ceres::sqrt(C[0] * C[0] + C[1] * C[1] + C[2] * C[2]);
     const T w = C[2] / n + in[4];
     const T xu = C[0] / n / w, yu = C[1] / n / w;
@@ -57,26 +44,51 @@ struct MeiCost {
     const T radial = T(1) + in[5] * r2 + in[6] * r2 * r2;
     const T xd = xu * radial + T(2) * in[7] * xu * yu + in[8] * (r2 + T(2) * xu * xu);
     const T yd = yu * radial + in[7] * (r2 + T(2) * yu * yu) + T(2) * in[8] * xu * yu;
-    r[0] = in[0] * xd + in[2] - T(qx);
-    r[1] = in[1] * yd + in[3] - T(qy);
+    q[0] = in[0] * xd + in[2];
+    q[1] = in[1] * yd + in[3];
+  }
+};
+
+// Reprojection residual of one corner: board point (X, Y) lifted by the board warp
+// (mrcal's flex: z = x2 * dx + y2 * dy, dx and dy the corner's parabola factors,
+// board_warp_z), then the pose, then Projection; minus the observed pixel (qx, qy).
+template <class Projection>
+struct CornerCost {
+  double X, Y, dx, dy, qx, qy;
+  template <typename T>
+  bool operator()(const T* in, const T* pose, const T* warp, T* r) const {
+    const T P[3] = {T(X), T(Y), warp[0] * dx + warp[1] * dy};
+    T C[3];
+    ceres::AngleAxisRotatePoint(pose, P, C);
+    C[0] += pose[3];
+    C[1] += pose[4];
+    C[2] += pose[5];
+    Projection::project(in, C, r);
+    r[0] -= T(qx);
+    r[1] -= T(qy);
     return true;
   }
 };
 
-// Joint solve of intrinsics (N of them, cost functor Cost) and poses from `seed`; the
-// seed when it fails or does not improve.
-template <typename Cost, int N>
+// Joint solve of intrinsics (Projection's), poses and, with SolveOptions::board_warp, the
+// board warp from `seed`; the seed when it fails or does not improve.
+template <class Projection>
 ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
   ModelFit f = seed;
+  if (!pr.solve.board_warp) f.warp = {0, 0};
   ceres::Problem problem;
   for (size_t i = 0; i < views.size(); ++i)
     for (size_t k = 0; k < views[i]->px.size(); ++k) {
       if (!views[i]->inlier[k]) continue;
       const auto X = board_point(pr.board, int(k));
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Cost, 2, N, 6>(
-                                   new Cost{X[0], X[1], views[i]->px[k][0], views[i]->px[k][1]}),
-                               nullptr, f.model.intrinsics.data(), f.poses[i].data());
+      using Cost = CornerCost<Projection>;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Cost, 2, Projection::kParams, 6, 2>(new Cost{
+                                   X[0], X[1], board_warp_z(pr.board, int(k), {1, 0}),
+                                   board_warp_z(pr.board, int(k), {0, 1}), views[i]->px[k][0], views[i]->px[k][1]}),
+                               nullptr, f.model.intrinsics.data(), f.poses[i].data(), f.warp.data());
     }
+  if (!pr.solve.board_warp) problem.SetParameterBlockConstant(f.warp.data());
+  f.warp_fitted = pr.solve.board_warp;
   ceres::Solver::Options o;
   o.linear_solver_type = ceres::DENSE_SCHUR;
   o.num_threads = 1;
@@ -94,6 +106,7 @@ ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, con
   ceres::Solve(o, &problem, &summary);
   bool finite = summary.IsSolutionUsable();
   for (double x : f.model.intrinsics) finite = finite && std::isfinite(x);
+  finite = finite && std::isfinite(f.warp[0]) && std::isfinite(f.warp[1]);
   if (!finite || summary.final_cost > summary.initial_cost) return seed;
   if (f.solver.find("Ceres") == std::string::npos) f.solver += " + Ceres";
   return f;
@@ -113,17 +126,20 @@ ModelFit polish(const CalibrationProblem& pr, const ViewSubset& views, const Mod
 }  // namespace
 
 ModelFit refine_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
-  return refine_joint<KannalaBrandtCost, 8>(pr, views, seed);
+  return refine_joint<KannalaBrandtProjection>(pr, views, seed);
 }
 
 ModelFit refine_mei(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
-  return refine_joint<MeiCost, 9>(pr, views, seed);
+  return refine_joint<MeiProjection>(pr, views, seed);
 }
 
 ModelFit solve_mrcal(const CalibrationProblem& pr, const ViewSubset& views, const std::string& lensmodel,
-                     std::vector<double> intrinsics, const std::vector<BoardPose>& poses, bool regularization) {
+                     std::vector<double> intrinsics, const std::vector<BoardPose>& poses, bool regularization,
+                     const BoardWarp& warp) {
   ModelFit f;
   MrcalProblem mp;
+  mp.optimize_warp = pr.solve.board_warp;
+  mp.warp_seed = pr.solve.board_warp ? warp : BoardWarp{0, 0};
   mp.lensmodel = lensmodel;
   mp.intrinsics_seed = std::move(intrinsics);
   mp.poses_seed = poses;
@@ -145,6 +161,8 @@ ModelFit solve_mrcal(const CalibrationProblem& pr, const ViewSubset& views, cons
   }
   f.model = make_model(pr, lensmodel, s.intrinsics);
   f.poses = s.poses;
+  f.warp = s.warp;
+  f.warp_fitted = mp.optimize_warp;
   f.params = int(s.intrinsics.size());
   f.solver = "mrcal";
   f.ok = true;
@@ -177,7 +195,7 @@ ModelFit CandidateSolver::solve(LensType type) {
     case LensType::Stereographic:
     case LensType::SplinedStereographic: {
       ModelFit f = solve_mrcal(problem_, views_, seed.fit.model.lensmodel, seed.fit.model.intrinsics, seed.fit.poses,
-                               type == LensType::SplinedStereographic);
+                               type == LensType::SplinedStereographic, seed.fit.warp);
       if (f.ok) f.solver = seed.fit.solver + " + mrcal";
       return f;
     }
@@ -194,7 +212,7 @@ ModelFit warm_refit(const CalibrationProblem& pr, const ViewSubset& views, LensT
   if (type == LensType::OmnidirMei) return refine_mei(pr, views, seed);
   if (pr.solve.use_mrcal) {
     ModelFit f = solve_mrcal(pr, views, from.model.lensmodel, from.model.intrinsics, poses,
-                             LensModel::parse(from.model.lensmodel).is_splined());
+                             LensModel::parse(from.model.lensmodel).is_splined(), from.warp);
     if (f.ok) return f;
   }
   CandidateSolver cold(pr, views);

@@ -23,14 +23,17 @@
 
 namespace lp {
 
-// Ceres joint solve of a Kannala-Brandt or Mei fit from `seed` (poses aligned with `views`);
-// the seed when the solve fails or does not lower the cost.
+// Ceres joint solve of a Kannala-Brandt or Mei fit from `seed` (poses aligned with `views`),
+// the board warp with it (SolveOptions::board_warp); the seed when the solve fails or does
+// not lower the cost.
 ModelFit refine_kannala_brandt(const CalibrationProblem& problem, const ViewSubset& views, const ModelFit& seed);
 ModelFit refine_mei(const CalibrationProblem& problem, const ViewSubset& views, const ModelFit& seed);
-// mrcal's solve of model `lensmodel` from the intrinsics and poses given (no outlier
-// rejection: outliers come in ignored); not ok with mrcal's reason when it fails.
+// mrcal's solve of model `lensmodel` from the intrinsics, poses and board warp given (the
+// warp is fitted by mrcal's calobject_warp term with SolveOptions::board_warp, else flat; no
+// outlier rejection: outliers come in ignored); not ok with mrcal's reason when it fails.
 ModelFit solve_mrcal(const CalibrationProblem& problem, const ViewSubset& views, const std::string& lensmodel,
-                     std::vector<double> intrinsics, const std::vector<BoardPose>& poses, bool regularization);
+                     std::vector<double> intrinsics, const std::vector<BoardPose>& poses, bool regularization,
+                     const BoardWarp& warp = {});
 
 // Every candidate of one set of views, each solved once, on demand: a candidate's seed may
 // need another's solve (stereographic from Kannala-Brandt), which is then shared.

@@ -14,14 +14,22 @@ std::vector<SolvedView> solved(const ViewSubset& s, const ModelFit& f) {
   return out;
 }
 
+}  // namespace
+
+LinearCovariance fit_covariance(const CalibrationProblem& pr, const ModelFit& f, const ViewSubset& views) {
+  return linearised_covariance(f.model, pr.board, solved(views, f), pr.solve.board_warp ? &f.warp : nullptr);
+}
+
+namespace {
+
 // Linear from each half's own covariance (rotation fitted out), NaN when one is singular.
 double predicted_cv_linear(const CalibrationProblem& pr, CandidateFits& fits, LensType type,
                            const std::vector<std::array<double, 2>>& cv_pixels) {
   const ModelFit& a = fits.halves[0].get(type);
   const ModelFit& b = fits.halves[1].get(type);
   if (!a.ok || !b.ok) return kNaN;
-  const LinearCovariance ca = linearised_covariance(a.model, pr.board, solved(fits.half[0], a));
-  const LinearCovariance cb = linearised_covariance(b.model, pr.board, solved(fits.half[1], b));
+  const LinearCovariance ca = fit_covariance(pr, a, fits.half[0]);
+  const LinearCovariance cb = fit_covariance(pr, b, fits.half[1]);
   if (!ca.ok || !cb.ok) return kNaN;
   const int n = int(cv_pixels.size());
   const double ra = rms_over(linear_uncertainty_rotation_fitted(ca, a.model, fits.mask, fits.step, cv_pixels, n, 1));
@@ -43,7 +51,7 @@ void candidate_linear_sigmas(const CalibrationProblem& pr, CandidateFits& fits, 
     if (!c.ok) continue;
     const ModelFit& f = fits.full.get(candidate_lens_type(c.name));
     if (!f.ok) continue;
-    const LinearCovariance cc = linearised_covariance(f.model, pr.board, solved(fits.used, f));
+    const LinearCovariance cc = fit_covariance(pr, f, fits.used);
     if (!cc.ok) continue;
     const double s =
         rms_over(linear_uncertainty_rotation_fitted(cc, f.model, fits.mask, fits.step, coarse, int(coarse.size()), 1));
@@ -68,7 +76,7 @@ UncertaintyReport calibration_uncertainty(const CalibrationProblem& pr, Candidat
   const auto cv_pixels = mask_pixels(fits.mask, pr.width, pr.height, fits.step);
   // Linear: the full fit over the image; each half's own for the cross-validation forecast.
   const auto sv = solved(fits.used, chosen);
-  const LinearCovariance cov = linearised_covariance(chosen.model, pr.board, sv);
+  const LinearCovariance cov = fit_covariance(pr, chosen, fits.used);
   u.linear_ok = cov.ok;
   u.linear_error = cov.error;
   u.sigma_px = cov.sigma_px;

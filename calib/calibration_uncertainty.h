@@ -49,6 +49,11 @@ struct UncertaintyOptions {
   int repeated_splits = 4;
 };
 
+// The linearised covariance (projection_uncertainty.h) of `fit` on `views` (its poses
+// aligned with them); its board warp is a parameter of the solve when
+// problem.solve.board_warp (warp_covariance filled).
+LinearCovariance fit_covariance(const CalibrationProblem& problem, const ModelFit& fit, const ViewSubset& views);
+
 // `pick`: the chosen row of `table` (its fit: fits.full); `leave_one_out`: view_leverage's
 // models (the jackknife needs at least 3). Sets every candidate's linear_sigma_px and
 // linear_forecast_cv_px. Progress stage "uncertainty", one step per candidate.

@@ -20,6 +20,7 @@ CalibrationProblem problem_of(const BoardSpec& board, int width, int height, con
   pr.solve.spline_order = o.spline_order;
   pr.solve.spline_nx = o.spline_nx;
   pr.solve.spline_ny = o.spline_ny;
+  pr.solve.board_warp = o.board_warp;
   pr.diff_step_px = o.diff_step_px;
   return pr;
 }
@@ -98,6 +99,20 @@ void take_selection(CalibrationResult& res, const SelectionReport& sel, const Mo
   res.heldout_rms_px = pick.heldout_rms_px;
 }
 
+BoardWarpReport board_warp_report(const CalibrationProblem& pr, const ModelFit& chosen, const ViewSubset& used) {
+  BoardWarpReport w;
+  w.fitted = chosen.warp_fitted;
+  if (!w.fitted) return w;
+  w.mm = chosen.warp;
+  const LinearCovariance cov = fit_covariance(pr, chosen, used);
+  if (!cov.ok) {
+    w.sd_error = cov.error;
+    return w;
+  }
+  w.sd_mm = {std::sqrt(cov.warp_covariance[0]), std::sqrt(cov.warp_covariance[3])};
+  return w;
+}
+
 void take_diagnostics(CalibrationResult& res, ViewDiagnostics d) {
   res.view_rms_px = std::move(d.view_rms_px);
   res.residuals = std::move(d.residuals);
@@ -140,6 +155,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   const LensType pick = candidate_lens_type(res.selected);
   const ModelFit& chosen = fits.full.get(pick);
   res.solve = record_solve(fits.used, chosen);
+  res.board_warp = board_warp_report(pr, chosen, fits.used);
 
   // How the chosen model fits each view; what each view weighs.
   take_diagnostics(res, diagnose_views(pr, views, outliers.view_used, chosen, res.views,

@@ -50,6 +50,8 @@ struct CalibrateOptions {
   bool use_mrcal = SolveOptions{}.use_mrcal;
   int spline_order = SolveOptions{}.spline_order, spline_nx = SolveOptions{}.spline_nx,
       spline_ny = SolveOptions{}.spline_ny;
+  // Fit the board's flex (mrcal's calobject_warp) in every solve: SolveOptions::board_warp.
+  bool board_warp = SolveOptions{}.board_warp;
   // SelectionOptions (model_selection.h): what "fits" means.
   double fit_max_rms_px = SelectionOptions{}.fit_max_rms_px;
   double fit_max_cross_validation_px = SelectionOptions{}.fit_max_cross_validation_px;
@@ -94,6 +96,18 @@ struct CalibrateOptions {
   StageProgress progress;
 };
 
+// The board warp fitted with the chosen model (BoardWarp, board_detect.h: mrcal's
+// calobject_warp, the peak deflection in mm of a parabola along each board axis).
+struct BoardWarpReport {
+  bool fitted = false;  // CalibrateOptions::board_warp, and the chosen fit's solver fitted it
+  BoardWarp mm{};       // {x2, y2}
+  // One standard deviation of each, from the solve's linearised covariance
+  // (sigma^2 (J^T J)^-1 over intrinsics, poses and warp; calib/projection_uncertainty.h);
+  // NaN with sd_error saying why (splined models: their regularisation is not modelled).
+  std::array<double, 2> sd_mm{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
+  std::string sd_error;
+};
+
 struct CalibrationResult {
   CameraModel model;  // rms_reprojection_px, cross_validation_px filled
   std::string selected;  // candidate name
@@ -134,6 +148,7 @@ struct CalibrationResult {
   std::array<int, 4> edge_observations{};
   bool corners_poorly_covered = false;  // some side has < min_edge_observations
   UncertaintyReport uncertainty;        // empty unless options.uncertainty
+  BoardWarpReport board_warp;
   // The chosen model's solve (views, corners with inlier weights, board poses): what mrcal's
   // optimization_inputs state (calib/mrcal_optimization_inputs.h).
   SolveRecord solve;

@@ -46,7 +46,7 @@ ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensT
   const ProjectionDiff d = projection_difference(a.model, b.model, fits.mask, fits.step);
   c.cross_validation_px = d.samples > 0 ? d.rms_px : kInf;
   c.cross_validation_median_px = d.median_px;
-  const double h1 = heldout_rms(pr, a.model, fits.half[1]), h2 = heldout_rms(pr, b.model, fits.half[0]);
+  const double h1 = heldout_rms(pr, a, fits.half[1]), h2 = heldout_rms(pr, b, fits.half[0]);
   c.heldout_rms_px = std::sqrt(0.5 * (h1 * h1 + h2 * h2));
   c.model.cross_validation_px = c.cross_validation_px;
   c.ok = std::isfinite(c.cross_validation_px);
@@ -410,7 +410,7 @@ SplitValidation split_validation(const CalibrationProblem& pr, const ViewSubset&
   if (!split_halves(pr, used, side, type, full, hs, fit)) return {kInf, kInf};
   const ProjectionDiff d = projection_difference(fit[0].model, fit[1].model, mask, step);
   if (d.samples == 0) return {kInf, kInf};
-  const double h1 = heldout_rms(pr, fit[0].model, hs[1]), h2 = heldout_rms(pr, fit[1].model, hs[0]);
+  const double h1 = heldout_rms(pr, fit[0], hs[1]), h2 = heldout_rms(pr, fit[1], hs[0]);
   return {d.rms_px, std::sqrt(0.5 * (h1 * h1 + h2 * h2))};
 }
 

@@ -12,6 +12,8 @@ SolveRecord record_solve(const ViewSubset& views, const ModelFit& fit) {
   SolveRecord r;
   r.regularization = LensModel::parse(fit.model.lensmodel).is_splined();  // as calibration_solve.cpp solves them
   r.poses = fit.poses;
+  r.warp_fitted = fit.warp_fitted;
+  r.warp = fit.warp;
   for (const BoardView* v : views) {
     r.views.push_back(v->index);
     auto& obs = r.observations.emplace_back();
@@ -55,12 +57,13 @@ std::string mrcal_optimization_inputs(const CameraModel& model, const BoardSpec&
       {"indices_point_camintrinsics_camextrinsics", V::none()},
       {"lensmodel", V::text(model.lensmodel)},
       {"imagersizes", V::array(std::vector<int32_t>{model.width, model.height}, {1, 2})},
-      {"calobject_warp", V::none()},
+      {"calobject_warp", solve.warp_fitted ? V::array(std::vector<double>{solve.warp[0], solve.warp[1]}, {2})
+                                           : V::none()},
       {"do_optimize_intrinsics_core", V::scalar(true)},
       {"do_optimize_intrinsics_distortions", V::scalar(true)},
       {"do_optimize_extrinsics", V::scalar(true)},
       {"do_optimize_frames", V::scalar(true)},
-      {"do_optimize_calobject_warp", V::scalar(false)},
+      {"do_optimize_calobject_warp", V::scalar(solve.warp_fitted)},
       {"calibration_object_spacing", V::scalar(board.square_mm)},
       {"do_apply_outlier_rejection", V::scalar(false)},
       {"do_apply_regularization", V::scalar(solve.regularization)},

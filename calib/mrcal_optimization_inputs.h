@@ -9,7 +9,8 @@
 // camera is the reference frame (no extrinsics), one frame per view, observations_board
 // (views x rows x cols x (x, y, weight)) with the corners lightprobe rejected as outliers at
 // weight -1 (mrcal's mark), regularisation as the solve used it, no outlier rejection of its
-// own (lightprobe's rejection is in the weights), no board warp.
+// own (lightprobe's rejection is in the weights), the board warp as fitted (calobject_warp
+// and do_optimize_calobject_warp; None and false for a flat board).
 #pragma once
 
 #include <array>
@@ -29,6 +30,8 @@ struct SolveRecord {
   std::vector<BoardPose> poses;  // board -> camera: mrcal's frames_rt_toref (the camera is the reference)
   std::vector<std::vector<std::array<double, 3>>> observations;  // per view, cols * rows (x, y, weight)
   bool regularization = false;   // mrcal's regularisation was part of the cost (splined models)
+  bool warp_fitted = false;      // the board warp was a parameter of the solve (mrcal's do_optimize_calobject_warp)
+  BoardWarp warp{};              // its value, mrcal's calobject_warp
 };
 // The record of `fit` (poses aligned with `views`).
 SolveRecord record_solve(const ViewSubset& views, const ModelFit& fit);

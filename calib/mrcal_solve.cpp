@@ -59,7 +59,10 @@ MrcalSolution mrcal_solve(const MrcalProblem& p) {
   sel.do_optimize_intrinsics_distortions = p.optimize_intrinsics;
   sel.do_optimize_extrinsics = false;
   sel.do_optimize_frames = true;
-  sel.do_optimize_calobject_warp = false;
+  sel.do_optimize_calobject_warp = p.optimize_warp;
+  mrcal_calobject_warp_t warp{};
+  warp.x2 = p.warp_seed[0];
+  warp.y2 = p.warp_seed[1];
   sel.do_apply_regularization = p.regularization;
   sel.do_apply_outlier_rejection = false;
   mrcal_problem_constants_t constants{};
@@ -75,7 +78,8 @@ MrcalSolution mrcal_solve(const MrcalProblem& p) {
   const int devnull = open("/dev/null", O_WRONLY);
   if (saved_stderr >= 0 && devnull >= 0) dup2(devnull, 2);
   const mrcal_stats_t stats =
-      mrcal_optimize(nullptr, 0, nullptr, 0, intrinsics.data(), nullptr, frames.data(), nullptr, nullptr, 1, 0,
+      mrcal_optimize(nullptr, 0, nullptr, 0, intrinsics.data(), nullptr, frames.data(), nullptr,
+                     p.optimize_warp ? &warp : nullptr, 1, 0,
                      nframes, 0, 0, obs.data(), nullptr, nframes, 0, pool.data(), &lensmodel, imagersizes, sel,
                      &constants, p.spacing, p.cols, p.rows, false, false);
   std::fflush(stderr);
@@ -87,13 +91,14 @@ MrcalSolution mrcal_solve(const MrcalProblem& p) {
     return out;
   }
   for (double v : intrinsics)
-    if (!std::isfinite(v)) {
+    if (!std::isfinite(v) || !std::isfinite(warp.x2) || !std::isfinite(warp.y2)) {
       out.error = "mrcal_optimize diverged for " + p.lensmodel;
       return out;
     }
   out.ok = true;
   out.intrinsics = intrinsics;
   out.rms_px = stats.rms_reproj_error__pixels;
+  if (p.optimize_warp) out.warp = {warp.x2, warp.y2};
   out.poses.resize(nframes);
   for (int i = 0; i < nframes; ++i)
     out.poses[i] = {frames[i].r.x, frames[i].r.y, frames[i].r.z, frames[i].t.x, frames[i].t.y, frames[i].t.z};

@@ -23,6 +23,10 @@ struct MrcalProblem {
   double spacing = 1;
   bool optimize_intrinsics = true;
   bool regularization = false;  // mrcal's regularisation (wanted for splined models)
+  // Fit the board's flex (mrcal's calobject_warp: {x2, y2}, calib/board_detect.h BoardWarp)
+  // from warp_seed; else the board is flat.
+  bool optimize_warp = false;
+  std::array<double, 2> warp_seed{};
 };
 
 struct MrcalSolution {
@@ -30,6 +34,7 @@ struct MrcalSolution {
   std::string error;
   std::vector<double> intrinsics;
   std::vector<std::array<double, 6>> poses;
+  std::array<double, 2> warp{};  // the fitted calobject_warp ({0, 0} unless optimize_warp)
   double rms_px = 0;
 };
 

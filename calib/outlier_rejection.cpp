@@ -55,7 +55,7 @@ bool update_inliers(const CalibrationProblem& pr, std::vector<BoardView>& views,
   std::vector<std::vector<std::array<double, 2>>> rs;
   std::vector<double> comps;
   for (size_t i = 0; i < sub.size(); ++i) {
-    rs.push_back(view_residuals(pr, f.model, *sub[i], f.poses[i]));
+    rs.push_back(view_residuals(pr, f.model, f.warp, *sub[i], f.poses[i]));
     for (size_t k = 0; k < rs.back().size(); ++k)
       if (sub[i]->inlier[k] && std::isfinite(rs.back()[k][0])) {
         comps.push_back(std::abs(rs.back()[k][0]));

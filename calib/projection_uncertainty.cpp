@@ -119,7 +119,7 @@ UncertaintyGrid empty_grid(const std::vector<std::array<double, 2>>& pixels, int
 }  // namespace
 
 LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec& board,
-                                       const std::vector<SolvedView>& views) {
+                                       const std::vector<SolvedView>& views, const BoardWarp* warp) {
   LinearCovariance out;
   if (LensModel::parse(model.lensmodel).is_splined()) {
     out.error = "splined models are not supported (their regularisation is not modelled)";
@@ -127,9 +127,10 @@ LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec
   }
   const int ncorners = board.cols * board.rows;
   const int n = int(model.intrinsics.size());
-  const int P = n + 6 * int(views.size());
+  const int W = warp ? 2 : 0;  // the warp's parameters, last
+  const int P = n + 6 * int(views.size()) + W;
   out.intrinsics = n;
-  out.params = P;
+  out.params = P - W;
   Eigen::MatrixXd JtJ = Eigen::MatrixXd::Zero(P, P);
   double ssr = 0;
   int used = 0;
@@ -141,7 +142,8 @@ LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec
                        " corners, the board has " + std::to_string(ncorners));
     std::array<double, 6> pose = sv.pose;
     auto corner_in_camera = [&](const std::array<double, 6>& p, int k) {
-      const Eigen::Vector3d X((k % board.cols) * board.square_mm, (k / board.cols) * board.square_mm, 0);
+      const Eigen::Vector3d X((k % board.cols) * board.square_mm, (k / board.cols) * board.square_mm,
+                              warp ? board_warp_z(board, k, *warp) : 0.0);
       return Eigen::Vector3d(rotation_of(p.data()) * X + Eigen::Vector3d(p[3], p[4], p[5]));
     };
     for (int k = 0; k < ncorners; ++k) {
@@ -149,7 +151,7 @@ LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec
       const Eigen::Vector3d C = corner_in_camera(pose, k);
       const auto q = proj(model, C);
       if (!q) continue;
-      Eigen::MatrixXd J(2, n + 6);
+      Eigen::MatrixXd J(2, n + 6 + W);
       Eigen::MatrixXd G;
       if (!intrinsics_jacobian(model, C, G)) continue;
       J.leftCols(n) = G;
@@ -164,6 +166,15 @@ LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec
         else J.col(n + j) = (*qa - *qb) / (2 * h);
       }
       if (!ok) continue;
+      if (warp) {
+        // The corner moves along the board's z axis (the pose's third rotation column) by
+        // the warp's parabola factors: chain rule through the projection's point Jacobian.
+        Eigen::Matrix<double, 2, 3> Jp;
+        if (!point_jacobian(model, C, Jp)) continue;
+        const Eigen::Vector2d dq_dz = Jp * rotation_of(pose.data()).col(2);
+        J.col(n + 6) = dq_dz * board_warp_z(board, k, {1, 0});
+        J.col(n + 7) = dq_dz * board_warp_z(board, k, {0, 1});
+      }
       const Eigen::Vector2d r(sv.px[k][0] - (*q)[0], sv.px[k][1] - (*q)[1]);
       ssr += r.squaredNorm();
       ++used;
@@ -171,9 +182,17 @@ LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec
       const int o = n + 6 * int(v);
       const Eigen::MatrixXd JtJl = J.transpose() * J;
       JtJ.topLeftCorner(n, n) += JtJl.topLeftCorner(n, n);
-      JtJ.block(0, o, n, 6) += JtJl.topRightCorner(n, 6);
-      JtJ.block(o, 0, 6, n) += JtJl.bottomLeftCorner(6, n);
-      JtJ.block(o, o, 6, 6) += JtJl.bottomRightCorner(6, 6);
+      JtJ.block(0, o, n, 6) += JtJl.block(0, n, n, 6);
+      JtJ.block(o, 0, 6, n) += JtJl.block(n, 0, 6, n);
+      JtJ.block(o, o, 6, 6) += JtJl.block(n, n, 6, 6);
+      if (W) {  // warp x intrinsics, warp x this pose, warp x warp
+        const int w = P - W;
+        JtJ.block(w, 0, W, n) += JtJl.block(n + 6, 0, W, n);
+        JtJ.block(0, w, n, W) += JtJl.block(0, n + 6, n, W);
+        JtJ.block(w, o, W, 6) += JtJl.block(n + 6, n, W, 6);
+        JtJ.block(o, w, 6, W) += JtJl.block(n, n + 6, 6, W);
+        JtJ.block(w, w, W, W) += JtJl.block(n + 6, n + 6, W, W);
+      }
     }
   }
   const int dof = 2 * used - P;
@@ -200,7 +219,9 @@ LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec
       es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
   const Eigen::MatrixXd cov =
       out.sigma_px * out.sigma_px * (d.cwiseInverse().asDiagonal() * Sinv * d.cwiseInverse().asDiagonal());
-  out.covariance.assign(cov.data(), cov.data() + size_t(P) * P);  // symmetric: layout does not matter
+  const Eigen::MatrixXd marginal = cov.topLeftCorner(P - W, P - W);
+  out.covariance.assign(marginal.data(), marginal.data() + size_t(P - W) * (P - W));  // symmetric: layout does not matter
+  if (W) out.warp_covariance = {cov(P - 2, P - 2), cov(P - 2, P - 1), cov(P - 1, P - 2), cov(P - 1, P - 1)};
   out.ok = true;
   return out;
 }

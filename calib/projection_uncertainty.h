@@ -58,13 +58,19 @@ struct LinearCovariance {
   double sigma_px = 0;    // per-component residual sigma: sqrt(SSR / (2 corners - params))
   int intrinsics = 0;     // N; the parameters are N intrinsics, then 6 per view
   int params = 0;
-  std::vector<double> covariance;  // params x params, row-major, sigma^2 (J^T J)^-1
+  // params x params, row-major, sigma^2 (J^T J)^-1; with a fitted board warp, the marginal
+  // block of the intrinsics and poses (the warp's uncertainty is in theirs).
+  std::vector<double> covariance;
+  // With a fitted board warp: its 2 x 2 covariance (mm^2, row-major; x2, y2 as BoardWarp).
+  std::array<double, 4> warp_covariance{};
 };
 
 // Throws InputError for views whose corner count is not the board's. ok = false (with
-// error) for splined models or a singular J^T J.
+// error) for splined models or a singular J^T J. warp: the board warp fitted with the
+// model (a free parameter pair of the solve, after the poses), nullptr for a flat board
+// that was not fitted.
 LinearCovariance linearised_covariance(const CameraModel& model, const BoardSpec& board,
-                                       const std::vector<SolvedView>& views);
+                                       const std::vector<SolvedView>& views, const BoardWarp* warp = nullptr);
 
 // The pixels a grid of nx x ny cells covers (cell centres) over the model's image.
 std::vector<std::array<double, 2>> grid_pixels(const CameraModel& model, int nx, int ny);

@@ -287,7 +287,7 @@ namespace lp {
 std::vector<std::vector<std::array<double, 2>>> project_board_views(const CameraModel& cam, const BoardSpec& board,
                                                                     int nviews, double max_theta_deg,
                                                                     double distance, double noise_px, uint64_t seed,
-                                                                    double max_corner_deg) {
+                                                                    double max_corner_deg, const BoardWarp& warp) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> gauss(0.0, noise_px > 0 ? noise_px : 1.0);
   const double scale = noise_px > 0 ? 1.0 : 0.0;
@@ -310,11 +310,13 @@ std::vector<std::vector<std::array<double, 2>>> project_board_views(const Camera
       e1 = rotate(axis, tilt, e1);
       e2 = rotate(axis, tilt, e2);
       const double cx = (board.cols - 1) * board.square_mm / 2, cy = (board.rows - 1) * board.square_mm / 2;
+      const Vec3 normal = cross(e1, e2);  // the board frame's z axis
       std::vector<std::array<double, 2>> v;
       bool inside = true;
       for (int k = 0; k < board.rows * board.cols && inside; ++k) {
         const int r = k / board.cols, c = k % board.cols;
-        const Vec3 P = distance * dir + (c * board.square_mm - cx) * e1 + (r * board.square_mm - cy) * e2;
+        const Vec3 P = distance * dir + (c * board.square_mm - cx) * e1 + (r * board.square_mm - cy) * e2 +
+                       board_warp_z(board, k, warp) * normal;
         const auto q = project(cam, P);
         inside = q && std::acos(P.z / length(P)) <= max_corner_deg * M_PI / 180 && q->x >= 2 && q->y >= 2 &&
                  q->x <= cam.width - 3 && q->y <= cam.height - 3;

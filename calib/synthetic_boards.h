@@ -79,10 +79,13 @@ namespace lp {
 // golden-angle spiral out to max_theta_deg off the axis, each tilted 15-35 deg, shrunk
 // towards the axis until every corner is within max_corner_deg of the axis and 2 px inside
 // the image; Gaussian noise_px on each coordinate (deterministic per seed). Views that
-// cannot be placed are left out. For calibration sweeps (eval calib) and tests.
+// cannot be placed are left out. warp: the board is not flat but flexed as mrcal models it
+// (BoardWarp, board_detect.h), each corner moved along the board's normal; the views'
+// placement is that of the flat board. For calibration sweeps (eval calib) and tests.
 std::vector<std::vector<std::array<double, 2>>> project_board_views(const CameraModel& camera, const BoardSpec& board,
                                                                     int views, double max_theta_deg,
                                                                     double distance_mm, double noise_px,
-                                                                    uint64_t seed, double max_corner_deg = 93);
+                                                                    uint64_t seed, double max_corner_deg = 93,
+                                                                    const BoardWarp& warp = {});
 
 }  // namespace lp

@@ -26,11 +26,11 @@ ViewDiagnostics diagnose_views(const CalibrationProblem& pr, const std::vector<B
     if (view_used[i]) {
       pose = chosen.poses[ui++];
     } else {
-      const auto p = solve_pose(pr, chosen.model, v);
+      const auto p = solve_pose(pr, chosen.model, chosen.warp, v);
       if (!p) continue;
       pose = *p;
     }
-    const auto r = view_residuals(pr, chosen.model, v, pose);
+    const auto r = view_residuals(pr, chosen.model, chosen.warp, v, pose);
     std::vector<double> sq;
     int rejected = 0;
     for (size_t k = 0; k < r.size(); ++k) {

@@ -25,6 +25,7 @@ struct CalibGeometricArgs {
   double square_mm = 0;
   std::string model;                // override the selection
   bool no_mrcal = false;
+  std::string board_warp = "on";    // fit the board's flex (mrcal's calobject_warp)
   std::string report_dir;           // pictures; default beside the output
   std::string output;               // camera.cameramodel or camera.yaml
   int drop_influential = 0;         // recalibrate without up to N flagged views, worst first
@@ -58,6 +59,7 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   GeometricCalibrationOptions o;
   o.calibrate.model = args.model;
   o.calibrate.use_mrcal = !args.no_mrcal;
+  o.calibrate.board_warp = args.board_warp == "on";
   o.calibrate.progress = stage_progress_bars("solve: ", out.progress);
   o.drop_influential = args.drop_influential;
   if (args.images.empty() == args.corners_in.empty()) throw InputError("give either IMAGE... or --corners-in");
@@ -96,13 +98,8 @@ int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out) {
   auto readings = read_readings_csv(args.readings);
   resolve_regions(readings, fs::path(args.readings).parent_path().string());
   PhotometricOptions o;
-  if (args.model == "linear") o.model = PhotometricOptions::Model::Linear;
-  else if (args.model == "log") o.model = PhotometricOptions::Model::LogSensor;
-  else throw InputError(fmt::format("--model must be linear or log, got '{}'", args.model));
-  if (args.loss == "huber") o.loss = RobustLoss::Huber;
-  else if (args.loss == "cauchy") o.loss = RobustLoss::Cauchy;
-  else if (args.loss == "none") o.loss = RobustLoss::None;
-  else throw InputError(fmt::format("--loss must be huber, cauchy or none, got '{}'", args.loss));
+  o.model = args.model == "log" ? PhotometricOptions::Model::LogSensor : PhotometricOptions::Model::Linear;  // one_of
+  o.loss = args.loss == "huber" ? RobustLoss::Huber : args.loss == "cauchy" ? RobustLoss::Cauchy : RobustLoss::None;
   const PhotometricCalibration cal = fit_photometric(readings, o);
   save_photometric(args.output, cal);
   if (cal.log_sensor)
@@ -149,6 +146,7 @@ std::vector<Command> calib_commands() {
          f.opt("--square", a->square_mm, "Square size, mm").required();
          f.opt("--model", a->model, "Use this model instead of the selection (see the printed table)");
          f.flag("--no-mrcal", a->no_mrcal, "OpenCV models only");
+         f.opt("--board-warp", a->board_warp, "Fit the board's flex (mrcal's calobject_warp): on|off").one_of({"on", "off"});
          f.opt("--report", a->report_dir, "Directory for the residual and coverage pictures");
          f.opt("--drop-influential", a->drop_influential, "Recalibrate without up to N views flagged influential (highest leverage first)");
          f.output(a->output, "camera.cameramodel (and .yaml) or camera.yaml");
@@ -169,8 +167,8 @@ std::vector<Command> calib_commands() {
        [](Flags& f) -> Handler {
          auto a = std::make_shared<CalibPhotometricArgs>();
          f.arg("READINGS", a->readings, "CSV: region,camera_value,measured,unit").required();
-         f.opt("--model", a->model, "linear|log");
-         f.opt("--loss", a->loss, "Robust loss: huber|cauchy|none");
+         f.opt("--model", a->model, "linear|log").one_of({"linear", "log"});
+         f.opt("--loss", a->loss, "Robust loss: huber|cauchy|none").one_of({"huber", "cauchy", "none"});
          f.output(a->output, "photometric.json");
          return [a](const Output& out) { return run_calib_photometric(*a, out); };
        }},

@@ -2,6 +2,8 @@
 // detect_boards): what `lightprobe calib geometric` prints and writes.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -156,6 +158,24 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   EXPECT_EQ(j["uncertainty"]["headline"], "jackknife");
   EXPECT_EQ(j["uncertainty"]["plot"], run.picture_stem + "_uncertainty.png");
   EXPECT_EQ(j["views_with_board"], 8);
+  // The board warp (fitted by default; a flat board here): its line and its key, with the
+  // values and deviations of the result.
+  const BoardWarpReport& w = run.result.board_warp;
+  ASSERT_TRUE(w.fitted);
+  ASSERT_TRUE(std::isfinite(w.sd_mm[0]) && std::isfinite(w.sd_mm[1]));
+  char line[160];
+  std::snprintf(line, sizeof line, "board warp (peak deflection along x, y): %.3f, %.3f mm (+- %.3f, +- %.3f)\n",
+                w.mm[0], w.mm[1], w.sd_mm[0], w.sd_mm[1]);
+  EXPECT_NE(text.find(line), std::string::npos) << line;
+  EXPECT_EQ(j["board_warp"]["x2_mm"].get<double>(), w.mm[0]);
+  EXPECT_EQ(j["board_warp"]["y2_sd_mm"].get<double>(), w.sd_mm[1]);
+  EXPECT_LT(std::abs(w.mm[0]), 3 * w.sd_mm[0]);  // the truth is flat
+  // --board-warp off: the board taken as flat, said, and null in --json.
+  o.calibrate.board_warp = false;
+  const GeometricCalibration flat = calibrate_detections(detections_of(corners, truth), kBoard, o);
+  EXPECT_FALSE(flat.result.board_warp.fitted);
+  EXPECT_NE(flat.summary().find("board taken as flat (no board warp fitted)\n"), std::string::npos);
+  EXPECT_TRUE(nlohmann::json::parse(flat.to_json())["board_warp"].is_null());
 }
 
 TEST(CalibrationRun, DropsTheMostInfluentialViewAndReportsBothAnswers) {

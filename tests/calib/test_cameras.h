@@ -1,8 +1,12 @@
 // Cameras the calibration tests share.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cstdlib>
+#include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "calib/board_detect.h"
@@ -34,6 +38,59 @@ inline BoardDetections detections_of(const std::vector<std::vector<std::array<do
   d.width = cam.width;
   d.height = cam.height;
   return d;
+}
+
+// The shared real chessboard sets (../shared/data, each folder's PROVENANCE.md gives the
+// board): name, folder, file-name prefix of the images, board.
+struct RealSet {
+  const char* name;
+  std::string dir, prefix;
+  BoardSpec board;
+};
+inline std::vector<RealSet> real_sets() {
+  const std::string data = LIGHTPROBE_SHARED_DATA;
+  return {{"stereo left", data + "/calib-opencv-stereo-9x6", "left", {9, 6, 25}},
+          {"fisheye1", data + "/calib-ocamcalib-fisheye1", "Fisheye1_", {6, 8, 32.5}},
+          {"Ladybug", data + "/calib-ocamcalib-omni-samples/Ladybug", "", {5, 8, 30}},
+          {"VMRImage", data + "/calib-ocamcalib-omni-samples/VMRImage", "", {6, 7, 30}},
+          {"KaidanOmni", data + "/calib-ocamcalib-omni-samples/KaidanOmni", "", {7, 11, 30}},
+          {"MiniOmni", data + "/calib-ocamcalib-omni-samples/MiniOmni", "", {7, 11, 30}},
+          {"Fisheye190deg", data + "/calib-ocamcalib-omni-samples/Fisheye190deg", "", {6, 7, 30}}};
+}
+// The images of a set in their natural order (Fisheye1_2 before Fisheye1_10); empty when
+// the folder is missing.
+inline std::vector<std::string> real_set_images(const RealSet& set) {
+  std::vector<std::pair<long, std::string>> files;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(set.dir, ec)) {
+    const std::string f = e.path().filename().string();
+    const std::string ext = e.path().extension().string();
+    if (f.rfind(set.prefix, 0) != 0 || (ext != ".jpg" && ext != ".bmp" && ext != ".png" && ext != ".gif")) continue;
+    const size_t d = f.find_first_of("0123456789", set.prefix.size());
+    files.push_back({d == std::string::npos ? 0 : std::atol(f.c_str() + d), e.path().string()});
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<std::string> images;
+  for (const auto& f : files) images.push_back(f.second);
+  return images;
+}
+
+// The corners of every view of `set` with a board (detect_boards) and the images' size; no
+// views when the folder has no images.
+struct RealSetViews {
+  std::vector<std::vector<std::array<double, 2>>> views;
+  int width = 0, height = 0;
+};
+inline RealSetViews real_set_views(const RealSet& set) {
+  RealSetViews out;
+  const std::vector<std::string> images = real_set_images(set);
+  if (images.empty()) return out;
+  const BoardDetections det = detect_boards(images, set.board);
+  for (const auto& c : det.corners)
+    if (!c.empty()) out.views.push_back(c);
+  out.width = det.width;
+  out.height = det.height;
+  return out;
 }
 
 }  // namespace lp::calib_test

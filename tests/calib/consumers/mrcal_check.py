@@ -8,6 +8,8 @@ Usage: mrcal_check.py MODEL REPORT_JSON [--uncertainty-factor F]
   lightprobe's RMS reprojection error (REPORT_JSON's rms_px) to 1e-3 relative;
 - mrcal.optimize() from the stored state lowers that RMS by less than 1e-3 relative (the
   state is the optimum of the stored problem, as mrcal-calibrate-cameras leaves it);
+- the stored calobject_warp is the report's board_warp, and mrcal.optimize() moves it by
+  less than 5 % of its reported standard deviation;
 - with --uncertainty-factor: mrcal.projection_uncertainty (rays at infinity, worst
   direction) at the image centre and its median over a grid of pixels are finite and
   within a factor F of lightprobe's linear mean-frames estimate
@@ -55,6 +57,20 @@ rms_again = np.sqrt(np.sum(stats['x'][:nboards] ** 2) / inliers)
 print(f"mrcal.optimize from the stored state: RMS {rms_again:.6f} px")
 if not rms_again >= rms * (1 - 1e-3):
     fail(f"the stored state is not the optimum: mrcal lowers the RMS from {rms} to {rms_again}")
+
+# The board warp: stored as lightprobe fitted it, and mrcal's own optimum of the stored
+# problem (mrcal.optimize updated `again` in place) within 5 % of its standard deviation.
+w = report.get('board_warp')
+if w is not None:
+    lp_w = np.array((w['x2_mm'], w['y2_mm']))
+    cw = oi['calobject_warp']
+    if cw is None or not oi['do_optimize_calobject_warp'] or not np.allclose(cw, lp_w, rtol=1e-12, atol=1e-12):
+        fail(f"optimization_inputs' calobject_warp {cw} is not lightprobe's board warp {lp_w}")
+    sd = np.array((w['x2_sd_mm'] or 0.02, w['y2_sd_mm'] or 0.02))  # splined models: no deviation
+    moved = np.abs(again['calobject_warp'] - lp_w)
+    print(f"calobject_warp: lightprobe {lp_w} mm (sd {sd}), after mrcal.optimize {again['calobject_warp']}")
+    if not np.all(moved <= 0.05 * sd):
+        fail(f"mrcal's optimum moves the board warp by {moved} mm, more than 5 % of its deviation {sd}")
 
 if factor is not None:
     lp = report['uncertainty']['linear_mean_frames_px']

@@ -71,8 +71,10 @@ if command -v mrgingham >/dev/null; then
   (cd "$WORK/square" && mrgingham --gridn 10 board_*.png >corners.vnl) || fail "mrgingham"
   # Relative names, found beside the file as mrcal-calibrate-cameras finds them; views
   # mrgingham missed ("- - -") are read as views without a board.
+  # `synth boards` draws flat boards: solved as flat (with the board warp fitted to these
+  # 6 views the model is 0.326 px from the truth, docs/calibration.md "Board warp").
   run calib geometric --corners-in "$WORK/square/corners.vnl" --board 10x10 --square 30 --model plumb_bob \
-    -o "$WORK/mrgingham.cameramodel"
+    --board-warp off -o "$WORK/mrgingham.cameramodel"
   run calib compare "$WORK/mrgingham.cameramodel" "$WORK/camera.yaml" --json
   # Measured 0.185 px (mrgingham found 6 of the 8 views; lightprobe's own detection of all 8: 0.070 px).
   "$PY" -c "import json,sys; d=json.load(open('$WORK/out')); print('model from mrgingham corners vs the true camera:', d['median_px'], 'px median'); sys.exit(0 if d['median_px'] < 0.3 else 1)" ||

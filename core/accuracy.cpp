@@ -6,275 +6,324 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <numeric>
 
-#if defined(__SSE__) || defined(__x86_64__)
-#include <xmmintrin.h>
-#define LP_HAVE_MXCSR 1
-#endif
-
-#include "core/healpix.h"
+#include "core/pixel_rings.h"
 
 namespace lp {
 
 namespace {
 
 // ---------------------------------------------------------------------------------------
-// The pixel table the reference integrates: every valid pixel with a non-zero weight
-// w = luminance * solid angle, as float structure-of-arrays. Pixels are grouped into
-// spatially coherent blocks (one coarse HEALPix cell each, padded with w = 0 to a multiple
-// of kLanes), and every block carries a bounding cone, so whole blocks that face away from
-// a normal (or lie far outside a glossy lobe) are skipped without touching their pixels.
+// The reference integrates the map on its rings (core/pixel_rings.h). For a direction n and
+// a ring (z, r), the pixel at azimuth phi has t = n.d = a + r (nx cos phi + ny sin phi) with
+// a = nz z: linear in (1, cos phi, sin phi). So
+//   diffuse   sum over the arc where t > 0 of w t = a S0 + r nx Sc + r ny Ss, from prefix
+//             sums S0, Sc, Ss of w, w cos phi, w sin phi: O(1) per ring, exact;
+//   shadowed  the same over the intersection of that arc with the cap's arc on the ring
+//             (the cap's rim decided per pixel as the definition does): O(1) per ring;
+//   glossy    t^s is not linear in t: for an integer s <= 16 (the s = 10 lobe) through the
+//             lobe's harmonics in azimuth, from per-ring prefix sums of w cos(m phi),
+//             w sin(m phi): O(s^2) per ring, exact; for a larger s (the s = 100 lobe, a
+//             narrow one) pixel by pixel over the short arc where t^s >= kTail.
+// w = luminance * solid angle, in double; every value equals the pixel-by-pixel sums of the
+// definition up to rounding (tests/core/accuracy_reference_test.cpp holds it to the plain
+// sums), except the narrow lobes' tail below.
 // ---------------------------------------------------------------------------------------
 
-constexpr int kLanes = 8;  // float accumulators per reduction: SSE2 does them as 2 x 4
+// Pixels with t^s < kTail are left out of the lobes summed pixel by pixel. Each contributes less than kTail (s+1)/(2 pi) w,
+// so a value drops by at most kTail (s+1)/(2 pi) W (W the map's luminance power), while the
+// mean of the values over the lattice is about W / (4 pi) (the lobe integrates to 1): at
+// most 2 (s+1) kTail = 2e-8 of the mean for s = 100, far below any error the yardstick
+// reports (1e-3 .. 1e-1). It keeps the s = 100 lobe within 37 deg of its axis (t > 0.79).
+constexpr double kTail = 1e-10;
 
-struct Block {
-  size_t begin = 0, end = 0;  // [begin, end) into the arrays; (end - begin) % kLanes == 0
-  Vec3 centre;                // unit
-  double radius = 0;          // max angle (rad) from centre to any pixel of the block
-  double cos_radius = -1, sin_radius = 0;
+// One map on its rings: weights in ring order and, per ring, prefix sums of w, w cos phi,
+// w sin phi (count + 1 entries each, from base[ring]).
+struct RingSums {
+  std::shared_ptr<const RingLayout> layout;
+  std::vector<double> w, s0, sc, ss;
+  std::vector<size_t> base;
 };
 
-struct PixelSet {
-  std::vector<float> x, y, z, w;  // w normalised: w = weight / scale, so max w = 1
-  std::vector<Block> blocks;
-  double scale = 0;  // multiply a float sum of w by this to get luminance power
-  size_t max_block = 0;
-};
-
-void pad_to_lanes(PixelSet& s) {
-  while (s.x.size() % kLanes) {
-    s.x.push_back(0);
-    s.y.push_back(0);
-    s.z.push_back(1);
-    s.w.push_back(0);
-  }
-}
-
-void close_block(PixelSet& s, size_t begin) {
-  pad_to_lanes(s);
-  const size_t end = s.x.size();
-  if (end == begin) return;
-  Block b;
-  b.begin = begin;
-  b.end = end;
-  double cx = 0, cy = 0, cz = 0;
-  for (size_t i = begin; i < end; ++i) {
-    if (s.w[i] == 0) continue;
-    cx += s.x[i];
-    cy += s.y[i];
-    cz += s.z[i];
-  }
-  const double len = std::sqrt(cx * cx + cy * cy + cz * cz);
-  if (len < 1e-9) {
-    b.centre = {0, 0, 1};
-    b.radius = M_PI;  // no useful bound
-  } else {
-    b.centre = {cx / len, cy / len, cz / len};
-    double min_cos = 1;
-    for (size_t i = begin; i < end; ++i)
-      if (s.w[i] != 0)
-        min_cos = std::min(min_cos, b.centre.x * s.x[i] + b.centre.y * s.y[i] + b.centre.z * s.z[i]);
-    // A little slack covers float rounding of the stored directions.
-    b.radius = std::min(M_PI, std::acos(std::clamp(min_cos, -1.0, 1.0)) + 1e-4);
-  }
-  b.cos_radius = std::cos(b.radius);
-  b.sin_radius = std::sin(b.radius);
-  s.max_block = std::max(s.max_block, end - begin);
-  s.blocks.push_back(b);
-}
-
-// All pixels with w != 0, grouped by coarse HEALPix cell (~1000 pixels per cell).
-PixelSet make_pixel_set(const EnvMap& map) {
-  const PixelTable table = make_pixel_table(map);
-  const size_t n = map.pixel_count();
-  std::vector<double> weight(n, 0.0);
-  double wmax = 0;
-  for (size_t i = 0; i < n; ++i) {
-    if (!map.is_valid(i)) continue;
-    const float* p = map.pixel(i);
-    weight[i] = double(luminance(p[0], p[1], p[2])) * double(table.solid_angle[i]);
-    wmax = std::max(wmax, std::fabs(weight[i]));
-  }
-  PixelSet s;
-  s.scale = wmax > 0 ? wmax : 1;
-
-  int nside = 1;
-  while (12.0 * (2 * nside) * (2 * nside) * 1024.0 <= double(n)) nside *= 2;
-  const size_t cells = 12 * size_t(nside) * size_t(nside);
-  std::vector<uint32_t> cell(n);
-  std::vector<size_t> count(cells + 1, 0);
-  for (size_t i = 0; i < n; ++i) {
-    if (weight[i] == 0) continue;
-    const int64_t c = healpix_pixel(nside, {table.x[i], table.y[i], table.z[i]});
-    cell[i] = uint32_t(c);
-    ++count[size_t(c) + 1];
-  }
-  std::partial_sum(count.begin(), count.end(), count.begin());
-  std::vector<uint32_t> order(count[cells]);
-  {
-    std::vector<size_t> next(count.begin(), count.end() - 1);
-    for (size_t i = 0; i < n; ++i)
-      if (weight[i] != 0) order[next[cell[i]]++] = uint32_t(i);
-  }
-  const size_t reserve = order.size() + cells * kLanes;
-  s.x.reserve(reserve);
-  s.y.reserve(reserve);
-  s.z.reserve(reserve);
-  s.w.reserve(reserve);
-  for (size_t c = 0; c < cells; ++c) {
-    const size_t begin = s.x.size();
-    for (size_t k = count[c]; k < count[c + 1]; ++k) {
-      const size_t i = order[k];
-      s.x.push_back(table.x[i]);
-      s.y.push_back(table.y[i]);
-      s.z.push_back(table.z[i]);
-      s.w.push_back(float(weight[i] / s.scale));
-    }
-    close_block(s, begin);
-  }
-  return s;
-}
-
-// The pixels of `all` inside the cap {d : d.c >= cos_half}, keeping the blocks. Blocks that
-// lie wholly inside the cap are not copied but listed in `whole` (indices into all.blocks),
-// so that their sums, already known from the full pass, can be reused.
-PixelSet pixels_in_cap(const PixelSet& all, Vec3 c, double half_angle, std::vector<size_t>& whole) {
-  const double cos_half = std::cos(half_angle);
-  PixelSet s;
-  s.scale = all.scale;
-  whole.clear();
-  for (size_t bi = 0; bi < all.blocks.size(); ++bi) {
-    const Block& b = all.blocks[bi];
-    const double a = std::acos(std::clamp(dot(c, b.centre), -1.0, 1.0));
-    if (a - b.radius > half_angle) continue;  // block entirely outside the cap
-    if (a + b.radius < half_angle) {          // entirely inside (radius carries 1e-4 slack)
-      whole.push_back(bi);
-      continue;
-    }
-    const size_t begin = s.x.size();
-    for (size_t i = b.begin; i < b.end; ++i) {
-      if (all.w[i] == 0) continue;
-      if (c.x * all.x[i] + c.y * all.y[i] + c.z * all.z[i] < cos_half) continue;
-      s.x.push_back(all.x[i]);
-      s.y.push_back(all.y[i]);
-      s.z.push_back(all.z[i]);
-      s.w.push_back(all.w[i]);
-    }
-    close_block(s, begin);
-  }
-  return s;
-}
-
-// Sum of a[i] * b[i] over n (a multiple of kLanes) with kLanes float accumulators, a form
-// GCC vectorises at -O3 without -ffast-math (no reassociation of one accumulator).
-inline float dot_sum(const float* __restrict a, const float* __restrict b, size_t n) {
-  float acc[kLanes] = {0, 0, 0, 0, 0, 0, 0, 0};
-  for (size_t i = 0; i < n; i += kLanes)
-    for (int j = 0; j < kLanes; ++j) acc[j] += a[i + j] * b[i + j];
-  return ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
-}
-
-// p[i] = t[i]^s for an integer s >= 1, by repeated squaring over whole arrays.
-void integer_power(const float* __restrict t, float* __restrict p, float* __restrict base, size_t n,
-                   unsigned s) {
-  for (size_t i = 0; i < n; ++i) base[i] = t[i];
-  bool first = true;
-  while (true) {
-    if (s & 1u) {
-      if (first) {
-        for (size_t i = 0; i < n; ++i) p[i] = base[i];
-        first = false;
-      } else {
-        for (size_t i = 0; i < n; ++i) p[i] *= base[i];
+// Fills `s` for one map, reusing its buffers: a sequence's frames (eval temporal, the
+// frame pipeline's --n auto) would otherwise fault in ~16 MB of fresh pages per 1024x512
+// frame, which cost more than the integration itself.
+void fill_ring_sums(const EnvMap& map, RingSums& s) {
+  s.layout = ring_layout(map);
+  const RingLayout& L = *s.layout;
+  const size_t total = L.pixel_count + L.rings.size();
+  s.w.resize(L.pixel_count);
+  s.s0.resize(total);
+  s.sc.resize(total);
+  s.ss.resize(total);
+  s.base.resize(L.rings.size());
+  for (size_t k = 0; k < L.rings.size(); ++k) {
+    const PixelRing& ring = L.rings[k];
+    const size_t b = ring.first + k;
+    s.base[k] = b;
+    double a0 = 0, ac = 0, as = 0;
+    s.s0[b] = s.sc[b] = s.ss[b] = 0;
+    for (size_t j = 0; j < ring.count; ++j) {
+      const size_t i = L.map_index(ring.first + j);
+      double w = 0;
+      if (map.is_valid(i)) {
+        const float* p = map.pixel(i);
+        w = double(luminance(p[0], p[1], p[2])) * ring.solid_angle;
       }
+      s.w[ring.first + j] = w;
+      a0 += w;
+      ac += w * L.cos_phi[ring.table + j];
+      as += w * L.sin_phi[ring.table + j];
+      s.s0[b + j + 1] = a0;
+      s.sc[b + j + 1] = ac;
+      s.ss[b + j + 1] = as;
     }
-    s >>= 1;
-    if (!s) break;
-    for (size_t i = 0; i < n; ++i) base[i] *= base[i];
   }
+}
+
+// Buffers a thread keeps between calls, up to maps of 2^21 pixels (~70 MB); larger maps
+// get fresh ones.
+struct Scratch {
+  RingSums sums;
+  std::vector<RingArc> lit;
+  std::vector<double> by_ring;
+};
+constexpr size_t kKeptPixels = size_t(1) << 21;
+
+// Sum of w t over an arc of ring k, t = a + bx cos phi + by sin phi.
+double linear_sum(const RingSums& s, size_t k, RingArc arc, double a, double bx, double by) {
+  const size_t b = s.base[k], n = s.layout->rings[k].count;
+  auto part = [&](size_t from, size_t to) {
+    return a * (s.s0[b + to] - s.s0[b + from]) + bx * (s.sc[b + to] - s.sc[b + from]) +
+           by * (s.ss[b + to] - s.ss[b + from]);
+  };
+  const size_t end = arc.start + arc.length;
+  return end <= n ? part(arc.start, end) : part(arc.start, n) + part(0, end - n);
+}
+
+// A direction seen from the rings: t = a(ring) + r (bx cos phi + by sin phi).
+struct Axis {
+  Vec3 d;
+  double rho = 0, phi = 0;  // length and azimuth of d's horizontal part
+  explicit Axis(Vec3 v) : d(v), rho(std::hypot(v.x, v.y)), phi(std::atan2(v.y, v.x)) {}
+};
+
+// The arc of a ring where t >= t_min (t_min >= 0 for a lobe clamped at 0): empty, whole,
+// or the azimuths within acos((t_min - a) / b) of the axis.
+RingArc arc_above(const PixelRing& ring, const Axis& axis, double t_min) {
+  const double a = axis.d.z * ring.z, b = axis.rho * ring.r;
+  if (a + b <= t_min) return {0, 0};
+  if (a - b >= t_min) return {0, ring.count};
+  return arc_within(ring, axis.phi, std::acos(std::clamp((t_min - a) / b, -1.0, 1.0)));
 }
 
 bool is_small_integer(double s) { return s >= 1 && s <= 65536 && s == std::floor(s); }
 
-// Below this a block's largest possible lobe value t^s is dropped: with w <= 1 per pixel
-// that is far below float resolution of any sum that matters (and keeps clear of denormals).
-constexpr double kNegligible = 1e-30;
+// max(0, t) without a branch, exactly (t + t = 2t and the halving are exact), so that the
+// loops below vectorise (GCC keeps a conditional as control flow).
+inline double clamp_at_zero(double t) { return 0.5 * (t + std::fabs(t)); }
 
-// Flush denormals to zero for the duration of a scope (x86); t^100 of small t would
-// otherwise make the inner loops crawl. Denormal contributions are < 1e-38 of the
-// normalised weights, far below anything the yardstick resolves.
-class FlushDenormals {
- public:
-#ifdef LP_HAVE_MXCSR
-  FlushDenormals() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }
-  ~FlushDenormals() { _mm_setcsr(saved_); }
-
- private:
-  unsigned saved_;
-#endif
-};
-
-// For each direction k in [first, last): diffuse[k] = sum w max(0, n.d) and, for each
-// exponent e, glossy[e][k] = sum w max(0, n.d)^s_e (unnormalised, in units of the set's
-// normalised w; the caller multiplies by scale and the lobe's constant).
-// When `per_block` is given, it also receives each block's diffuse sum at [block * dirs.size() + k].
-void integrate(const PixelSet& s, const std::vector<Vec3>& dirs, size_t first, size_t last,
-               const std::vector<double>& exponents, double* diffuse, std::vector<double*>& glossy,
-               double* per_block = nullptr) {
-  FlushDenormals ftz;
-  // A block's lobe values are all negligible when its largest cosine t_max < t_min(s).
-  std::vector<double> t_min(exponents.size());
-  for (size_t e = 0; e < exponents.size(); ++e) t_min[e] = std::pow(kNegligible, 1.0 / exponents[e]);
-  const size_t nb = s.max_block;
-  std::vector<float> t(nb), p(nb), base(nb);
-  for (size_t k = first; k < last; ++k) {
-    diffuse[k] = 0;
-    for (double* g : glossy) g[k] = 0;
+template <unsigned S>
+inline double integer_power(double t) {
+  if constexpr (S == 0) {
+    return 1.0;
+  } else if constexpr (S % 2) {
+    return t * integer_power<S - 1>(t);
+  } else {
+    const double h = integer_power<S / 2>(t);
+    return h * h;
   }
-  const size_t nd = dirs.size();
-  if (per_block)
-    for (size_t bi = 0; bi < s.blocks.size(); ++bi)
-      for (size_t k = first; k < last; ++k) per_block[bi * nd + k] = 0;
-  for (size_t bi = 0; bi < s.blocks.size(); ++bi) {
-    const Block& b = s.blocks[bi];
-    const size_t n = b.end - b.begin;
-    const float* __restrict x = s.x.data() + b.begin;
-    const float* __restrict y = s.y.data() + b.begin;
-    const float* __restrict z = s.z.data() + b.begin;
-    const float* __restrict w = s.w.data() + b.begin;
-    for (size_t k = first; k < last; ++k) {
-      const Vec3 d = dirs[k];
-      // With a the angle from d to the block's centre, every pixel is at least a - radius
-      // away: the block is wholly behind when a >= pi/2 + radius, i.e. cos a <= -sin radius.
-      const double ca = std::clamp(dot(d, b.centre), -1.0, 1.0);
-      if (ca <= -b.sin_radius) continue;
-      const float nx = float(d.x), ny = float(d.y), nz = float(d.z);
-      float* __restrict tt = t.data();
-      for (size_t i = 0; i < n; ++i) {
-        const float v = nx * x[i] + ny * y[i] + nz * z[i];
-        tt[i] = v > 0.0f ? v : 0.0f;
-      }
-      const double block_sum = double(dot_sum(w, tt, n));
-      diffuse[k] += block_sum;
-      if (per_block) per_block[bi * nd + k] = block_sum;
-      // Largest cosine in the block: cos(a - radius), or 1 when d points into the block.
-      const double max_t = ca >= b.cos_radius
-                               ? 1.0
-                               : ca * b.cos_radius + std::sqrt(std::max(0.0, 1 - ca * ca)) * b.sin_radius;
-      for (size_t e = 0; e < exponents.size(); ++e) {
-        const double sexp = exponents[e];
-        if (max_t < t_min[e]) continue;
-        if (is_small_integer(sexp)) {
-          integer_power(tt, p.data(), base.data(), n, unsigned(sexp));
-        } else {
-          for (size_t i = 0; i < n; ++i) p[i] = std::pow(tt[i], float(sexp));
+}
+
+// Sum of w t^100 over at most 256 pixels (the yardstick's narrow lobe, the costliest loop
+// of the reference): the terms in one loop and their sum with four accumulators, both of
+// which GCC vectorises (one accumulator it may not reorder without -ffast-math); built
+// twice, for AVX2 and the baseline, and chosen at run time (GCC's target_clones).
+__attribute__((target_clones("avx2", "default")))
+double power100_sum(const double* __restrict w, const double* __restrict c, const double* __restrict sn, size_t m,
+                    double a, double bx, double by) {
+  double p[256];
+  for (size_t i = 0; i < m; ++i) p[i] = w[i] * integer_power<100>(clamp_at_zero(a + bx * c[i] + by * sn[i]));
+  double acc[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= m; i += 4)
+    for (int q = 0; q < 4; ++q) acc[q] += p[i + q];
+  for (; i < m; ++i) acc[0] += p[i];
+  return (acc[0] + acc[1]) + (acc[2] + acc[3]);
+}
+
+// Sum of w t^s over an arc, t = a + bx cos phi + by sin phi clamped at 0: fused for the
+// yardstick's s = 100; otherwise in chunks whose loops GCC vectorises (an integer power by
+// repeated squaring over the whole chunk).
+double power_sum(const RingSums& s, size_t k, RingArc arc, double a, double bx, double by, double exponent) {
+  const RingLayout& L = *s.layout;
+  const PixelRing& ring = L.rings[k];
+  constexpr size_t kChunk = 256;
+  double t[kChunk], p[kChunk];
+  const bool integer = is_small_integer(exponent);
+  double sum = 0;
+  size_t j = arc.start, left = arc.length;
+  while (left > 0) {
+    const size_t m = std::min({left, ring.count - j, kChunk});
+    const double* __restrict c = L.cos_phi.data() + ring.table + j;
+    const double* __restrict sn = L.sin_phi.data() + ring.table + j;
+    const double* __restrict w = s.w.data() + ring.first + j;
+    left -= m;
+    j = (j + m) % ring.count;
+    if (exponent == 100) {
+      sum += power100_sum(w, c, sn, m, a, bx, by);
+      continue;
+    }
+    for (size_t i = 0; i < m; ++i) t[i] = clamp_at_zero(a + bx * c[i] + by * sn[i]);
+    if (integer) {
+      unsigned e = unsigned(exponent);
+      bool first = true;
+      while (true) {
+        if (e & 1u) {
+          if (first) {
+            for (size_t i = 0; i < m; ++i) p[i] = t[i];
+            first = false;
+          } else {
+            for (size_t i = 0; i < m; ++i) p[i] *= t[i];
+          }
         }
-        glossy[e][k] += double(dot_sum(w, p.data(), n));
+        e >>= 1;
+        if (!e) break;
+        for (size_t i = 0; i < m; ++i) t[i] *= t[i];
       }
+    } else {
+      for (size_t i = 0; i < m; ++i) p[i] = std::pow(t[i], exponent);
+    }
+    double acc[4] = {0, 0, 0, 0};
+    size_t i = 0;
+    for (; i + 4 <= m; i += 4)
+      for (int q = 0; q < 4; ++q) acc[q] += w[i + q] * p[i + q];
+    for (; i < m; ++i) acc[0] += w[i] * p[i];
+    sum += (acc[0] + acc[1]) + (acc[2] + acc[3]);
+  }
+  return sum;
+}
+
+// ---------------------------------------------------------------------------------------
+// Wide glossy lobes through harmonics. For an integer s, (a + b cos x)^s is a trigonometric
+// polynomial of degree s: sum_m c_m cos(m x). On a ring, x = phi - phi_n, so the lobe summed
+// over the arc where t > 0 is
+//   c_0 C_0 + sum_{m >= 1} c_m (cos(m phi_n) C_m + sin(m phi_n) S_m),
+// C_m, S_m the sums of w cos(m phi), w sin(m phi) over the arc: from per-ring prefix sums,
+// O(s^2) per (direction, ring) instead of O(pixels on the arc). Exact but for rounding,
+// which |c_m| <= (|a| + b)^s <= 2^(s/2) bounds: 1e-16 * 2^(s/2) of the ring's power, so
+// only exponents up to kMaxHarmonic go this way (the narrow s = 100 lobe is summed pixel
+// by pixel on its short arcs).
+// ---------------------------------------------------------------------------------------
+constexpr unsigned kMaxHarmonic = 16;
+
+bool is_harmonic(double s) { return is_small_integer(s) && s <= kMaxHarmonic; }
+
+// cos(m x) coefficients c_0..c_s of (a + b cos x)^s, by multiplying out one factor at a
+// time on the symmetric exponential form (d_m = d_-m, c_0 = d_0, c_m = 2 d_m).
+void lobe_harmonics(double a, double b, unsigned s, double* c) {
+  double d[kMaxHarmonic + 2] = {1.0};
+  const double h = 0.5 * b;
+  for (unsigned n = 1; n <= s; ++n) {
+    double prev = d[1];  // d_{-1} = d_1
+    for (unsigned m = 0; m <= n; ++m) {
+      const double cur = d[m];
+      d[m] = a * cur + h * (prev + d[m + 1]);
+      prev = cur;
     }
   }
+  c[0] = d[0];
+  for (unsigned m = 1; m <= s; ++m) c[m] = 2 * d[m];
+}
+
+// Prefix sums over one ring of w cos(m phi), w sin(m phi), m = 0..M, as rows of 2M + 1
+// (C_0, C_1, S_1, ..., C_M, S_M); row j holds the sums over pixels [0, j).
+struct HarmonicRing {
+  size_t M = 0, width = 0;
+  std::vector<double> rows;
+  // The cos/sin(m phi) table of the ring's azimuths, kept while rings share them (every
+  // row of a latlong map).
+  std::vector<double> table;
+  size_t table_key = SIZE_MAX, table_count = 0;
+
+  void fill(const RingSums& s, size_t k, size_t max_m) {
+    const RingLayout& L = *s.layout;
+    const PixelRing& ring = L.rings[k];
+    M = max_m;
+    width = 2 * M + 1;
+    if (table_key != ring.table || table_count != ring.count || table.size() != ring.count * width) {
+      table.resize(ring.count * width);
+      for (size_t j = 0; j < ring.count; ++j) {
+        double* t = &table[j * width];
+        const double c1 = L.cos_phi[ring.table + j], s1 = L.sin_phi[ring.table + j];
+        t[0] = 1;
+        double cm = 1, sm = 0;
+        for (size_t m = 1; m <= M; ++m) {
+          const double cn = cm * c1 - sm * s1, sn = sm * c1 + cm * s1;
+          cm = cn, sm = sn;
+          t[2 * m - 1] = cm;
+          t[2 * m] = sm;
+        }
+      }
+      table_key = ring.table;
+      table_count = ring.count;
+    }
+    rows.resize((ring.count + 1) * width);
+    std::fill(rows.begin(), rows.begin() + ptrdiff_t(width), 0.0);
+    const double* w = s.w.data() + ring.first;
+    for (size_t j = 0; j < ring.count; ++j) {
+      const double* __restrict t = &table[j * width];
+      const double* __restrict from = &rows[j * width];
+      double* __restrict to = &rows[(j + 1) * width];
+      const double wj = w[j];
+      for (size_t m = 0; m < width; ++m) to[m] = from[m] + wj * t[m];
+    }
+  }
+
+  // sum_m c_m (cos(m phi_n) C_m + sin(m phi_n) S_m) over an arc, cs = (1, cos phi_n,
+  // sin phi_n, cos 2 phi_n, ...) in the rows' order.
+  double lobe_sum(RingArc arc, size_t count, const double* c, unsigned s, const double* cs) const {
+    auto part = [&](size_t from, size_t to) {
+      const double* lo = &rows[from * width];
+      const double* hi = &rows[to * width];
+      double v = c[0] * (hi[0] - lo[0]);
+      for (unsigned m = 1; m <= s; ++m)
+        v += c[m] * (cs[2 * m - 1] * (hi[2 * m - 1] - lo[2 * m - 1]) + cs[2 * m] * (hi[2 * m] - lo[2 * m]));
+      return v;
+    };
+    const size_t end = arc.start + arc.length;
+    return end <= count ? part(arc.start, end) : part(arc.start, count) + part(0, end - count);
+  }
+};
+
+// The pixels of ring k inside the cap {d : c.d >= cos_half}: the arc from the ring's
+// geometry, its two ends then decided pixel by pixel with the definition's own test on
+// pixel_direction, so that no pixel on the rim is counted differently from the definition.
+RingArc cap_arc(const EnvMap& map, const RingLayout& L, size_t k, const Axis& cap, double cos_half) {
+  const PixelRing& ring = L.rings[k];
+  const double a = cap.d.z * ring.z, b = cap.rho * ring.r;
+  constexpr double kSlack = 1e-9;  // far above rounding of a, b; below it the ends are tested
+  if (a + b < cos_half - kSlack) return {0, 0};
+  if (a - b > cos_half + kSlack) return {0, ring.count};
+  const auto n = int64_t(ring.count);
+  auto wrap = [n](int64_t j) { return size_t(((j % n) + n) % n); };
+  auto inside = [&](int64_t j) {
+    return dot(cap.d, pixel_direction(map, L.map_index(ring.first + wrap(j)))) >= cos_half;
+  };
+  int64_t lo = 0, hi = n - 1;
+  if (b > 1e-12) {
+    const double half = std::acos(std::clamp((cos_half - a) / b, -1.0, 1.0));
+    lo = int64_t(std::ceil((cap.phi - half - ring.phi0) / ring.dphi)) - 1;
+    hi = int64_t(std::floor((cap.phi + half - ring.phi0) / ring.dphi)) + 1;
+    if (hi - lo + 1 > n) {  // the whole ring but perhaps a pixel or two opposite the centre
+      lo = int64_t(std::lround((cap.phi - ring.phi0) / ring.dphi)) - n / 2;
+      hi = lo + n - 1;
+    }
+  }
+  while (lo <= hi && !inside(lo)) ++lo;
+  while (hi >= lo && !inside(hi)) --hi;
+  if (hi < lo) return {0, 0};
+  return {wrap(lo), size_t(hi - lo + 1)};
 }
 
 double rel_rms(const std::vector<double>& ref, const std::vector<double>& est) {
@@ -299,6 +348,57 @@ uint64_t splitmix64(uint64_t& state) {
 }
 
 double unit_double(uint64_t& state) { return double(splitmix64(state) >> 11) * 0x1.0p-53; }
+
+// The glossy sums of the harmonic exponents (unnormalised), ring by ring: each ring's
+// prefix rows are built once and serve every direction. Per-ring values go to `by_ring`
+// and are added in ring order, so the result does not depend on the threads.
+void glossy_by_harmonics(const RingSums& sums, const std::vector<Vec3>& dirs, const std::vector<RingArc>& lit,
+                         const std::vector<double>& exponents, std::vector<std::vector<double>>& glossy,
+                         std::vector<double>& by_ring) {
+  std::vector<size_t> which;
+  size_t max_m = 0;
+  for (size_t e = 0; e < exponents.size(); ++e)
+    if (is_harmonic(exponents[e])) which.push_back(e), max_m = std::max(max_m, size_t(exponents[e]));
+  if (which.empty()) return;
+  const RingLayout& L = *sums.layout;
+  const size_t nr = L.rings.size(), nd = dirs.size(), width = 2 * max_m + 1;
+  // cos/sin(m phi_n) of every direction, in the rows' order.
+  std::vector<double> cs(nd * width), rho(nd);
+  for (size_t k = 0; k < nd; ++k) {
+    const double phi = std::atan2(dirs[k].y, dirs[k].x);
+    rho[k] = std::hypot(dirs[k].x, dirs[k].y);
+    cs[k * width] = 1;
+    for (size_t m = 1; m <= max_m; ++m) {
+      cs[k * width + 2 * m - 1] = std::cos(double(m) * phi);
+      cs[k * width + 2 * m] = std::sin(double(m) * phi);
+    }
+  }
+  by_ring.resize(which.size() * nr * nd);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nr, 4), [&](const auto& range) {
+    thread_local HarmonicRing h;
+    double c[kMaxHarmonic + 1];
+    for (size_t q = range.begin(); q != range.end(); ++q) {
+      const PixelRing& ring = L.rings[q];
+      h.fill(sums, q, max_m);
+      for (size_t k = 0; k < nd; ++k) {
+        const RingArc arc = lit[k * nr + q];
+        const double a = dirs[k].z * ring.z, b = rho[k] * ring.r;
+        for (size_t i = 0; i < which.size(); ++i) {
+          double v = 0;
+          if (arc.length) {
+            const auto s = unsigned(exponents[which[i]]);
+            lobe_harmonics(a, b, s, c);
+            v = h.lobe_sum(arc, ring.count, c, s, &cs[k * width]);
+          }
+          by_ring[(i * nr + q) * nd + k] = v;
+        }
+      }
+    }
+  });
+  for (size_t i = 0; i < which.size(); ++i)
+    for (size_t q = 0; q < nr; ++q)
+      for (size_t k = 0; k < nd; ++k) glossy[which[i]][k] += by_ring[(i * nr + q) * nd + k];
+}
 
 }  // namespace
 
@@ -342,25 +442,46 @@ AccuracyReference make_accuracy_reference(const EnvMap& map, const AccuracyOptio
   const size_t ne = options.glossy_exponents.size();
   ref.diffuse.assign(nd, 0.0);
   ref.glossy.assign(ne, std::vector<double>(nd, 0.0));
+  if (nd == 0) return ref;
 
-  const PixelSet all = make_pixel_set(map);
-
-  // Diffuse and glossy together, in chunks of directions: each chunk streams the pixel
-  // blocks once and reuses each block (in cache) for all of its directions.
-  // The per-block diffuse sums are kept for the shadowed pass (blocks wholly inside a cap).
-  std::vector<double> per_block(options.shadowed ? all.blocks.size() * nd : 0);
-  double* per_block_data = options.shadowed ? per_block.data() : nullptr;
-  const size_t chunk = 8;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, (nd + chunk - 1) / chunk, 1), [&](const auto& r) {
-    std::vector<double*> g(ne);
-    for (size_t e = 0; e < ne; ++e) g[e] = ref.glossy[e].data();
-    for (size_t c = r.begin(); c != r.end(); ++c)
-      integrate(all, ref.directions, c * chunk, std::min(nd, (c + 1) * chunk), options.glossy_exponents,
-                ref.diffuse.data(), g, per_block_data);
-  });
-  for (size_t k = 0; k < nd; ++k) ref.diffuse[k] *= all.scale;
+  thread_local Scratch kept;
+  Scratch fresh;
+  Scratch& scratch = map.pixel_count() <= kKeptPixels ? kept : fresh;
+  fill_ring_sums(map, scratch.sums);
+  const RingSums& sums = scratch.sums;
+  const RingLayout& L = *sums.layout;
+  const size_t nr = L.rings.size();
+  std::vector<double> t_min(ne);
   for (size_t e = 0; e < ne; ++e) {
-    const double norm = all.scale * (options.glossy_exponents[e] + 1) / (2 * M_PI);
+    const double s = options.glossy_exponents[e];
+    t_min[e] = s > 0 ? std::pow(kTail, 1.0 / s) : 0.0;
+  }
+  // The arcs where each direction's cosine is positive, kept for the shadowed pass.
+  std::vector<RingArc>& lit = scratch.lit;
+  lit.resize(nd * nr);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nd, 8), [&](const auto& range) {
+    for (size_t k = range.begin(); k != range.end(); ++k) {
+      const Axis axis(ref.directions[k]);
+      double diffuse = 0;
+      for (size_t q = 0; q < nr; ++q) {
+        const PixelRing& ring = L.rings[q];
+        const double a = axis.d.z * ring.z, bx = ring.r * axis.d.x, by = ring.r * axis.d.y;
+        const RingArc arc = arc_above(ring, axis, 0.0);
+        lit[k * nr + q] = arc;
+        if (arc.length == 0) continue;
+        diffuse += linear_sum(sums, q, arc, a, bx, by);
+        for (size_t e = 0; e < ne; ++e) {
+          if (is_harmonic(options.glossy_exponents[e])) continue;  // below, ring by ring
+          const RingArc lobe = t_min[e] > 0 ? arc_above(ring, axis, t_min[e]) : arc;
+          if (lobe.length) ref.glossy[e][k] += power_sum(sums, q, lobe, a, bx, by, options.glossy_exponents[e]);
+        }
+      }
+      ref.diffuse[k] = diffuse;
+    }
+  });
+  glossy_by_harmonics(sums, ref.directions, lit, options.glossy_exponents, ref.glossy, scratch.by_ring);
+  for (size_t e = 0; e < ne; ++e) {
+    const double norm = (options.glossy_exponents[e] + 1) / (2 * M_PI);
     for (double& v : ref.glossy[e]) v *= norm;
   }
 
@@ -368,20 +489,28 @@ AccuracyReference make_accuracy_reference(const EnvMap& map, const AccuracyOptio
     ref.caps = occluder_caps(options.caps, options.cap_seed);
     const size_t nc = ref.caps.size();
     ref.shadowed.assign(nc, std::vector<double>(nd, 0.0));
-    const double half = options.cap_half_angle_deg * M_PI / 180.0;
-    // Shadowed = diffuse - (irradiance from the pixels inside the cap). Blocks wholly inside
-    // the cap reuse their sums from the full pass; only blocks on the rim are integrated again.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, nc, 1), [&](const auto& r) {
-      std::vector<double> in_cap(nd);
-      std::vector<double*> none;
-      std::vector<size_t> whole;
-      for (size_t c = r.begin(); c != r.end(); ++c) {
-        const PixelSet rim = pixels_in_cap(all, ref.caps[c], half, whole);
-        integrate(rim, ref.directions, 0, nd, {}, in_cap.data(), none);
-        for (size_t bi : whole)
-          for (size_t k = 0; k < nd; ++k) in_cap[k] += per_block[bi * nd + k];
-        for (size_t k = 0; k < nd; ++k)
-          ref.shadowed[c][k] = std::max(0.0, ref.diffuse[k] - in_cap[k] * all.scale);
+    const double cos_half = std::cos(options.cap_half_angle_deg * M_PI / 180.0);
+    // Shadowed = diffuse - the irradiance from the pixels inside the cap: on each ring the
+    // lit arc of the direction intersected with the cap's arc.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nc, 1), [&](const auto& range) {
+      std::vector<std::pair<size_t, RingArc>> in_cap;
+      for (size_t c = range.begin(); c != range.end(); ++c) {
+        const Axis cap(ref.caps[c]);
+        in_cap.clear();
+        for (size_t q = 0; q < nr; ++q)
+          if (const RingArc arc = cap_arc(map, L, q, cap, cos_half); arc.length) in_cap.emplace_back(q, arc);
+        for (size_t k = 0; k < nd; ++k) {
+          const Vec3 n = ref.directions[k];
+          double occluded = 0;
+          for (const auto& [q, arc] : in_cap) {
+            const PixelRing& ring = L.rings[q];
+            RingArc parts[2];
+            const int found = intersect_arcs(lit[k * nr + q], arc, ring.count, parts);
+            for (int i = 0; i < found; ++i)
+              occluded += linear_sum(sums, q, parts[i], n.z * ring.z, ring.r * n.x, ring.r * n.y);
+          }
+          ref.shadowed[c][k] = std::max(0.0, ref.diffuse[k] - occluded);
+        }
       }
     });
   }

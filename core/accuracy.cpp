@@ -19,7 +19,7 @@ namespace {
 struct Scratch {
   RingSums sums;
   std::vector<RingArc> lit;
-  std::vector<double> by_ring;
+  std::vector<double> per_ring, by_ring;
 };
 constexpr size_t kKeptPixels = size_t(1) << 21;
 
@@ -79,8 +79,8 @@ double phong_lobe(double cos_angle, double exponent) {
   return (exponent + 1) / (2 * M_PI) * std::pow(cos_angle, exponent);
 }
 
-// On the map's rings (core/ring_integrals.h): per direction, the diffuse sum and the narrow
-// lobes ring by ring; then the wide lobes through harmonics, ring by ring; then per cap.
+// On the map's rings (core/ring_integrals.h): ring by ring the diffuse sum and the narrow
+// lobes of every direction, then the wide lobes through harmonics, then cap by cap.
 AccuracyReference make_accuracy_reference(const EnvMap& map, const AccuracyOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   AccuracyReference ref;
@@ -115,29 +115,40 @@ AccuracyReference make_accuracy_reference(const EnvMap& map, const AccuracyOptio
     const double s = options.glossy_exponents[e];
     t_min[e] = s > 0 ? std::pow(kLobeTail, 1.0 / s) : 0.0;
   }
-  // The arcs where each direction's cosine is positive, kept for the shadowed pass.
+  const std::vector<RingAxis> axes(ref.directions.begin(), ref.directions.end());
+  std::vector<size_t> narrow;  // the exponents summed pixel by pixel
+  for (size_t e = 0; e < ne; ++e)
+    if (!is_harmonic(options.glossy_exponents[e])) narrow.push_back(e);
+  // Ring by ring (a ring's prefix sums stay in cache for every direction): the arcs where
+  // each direction's cosine is positive, its diffuse sum and its narrow lobes, per (ring,
+  // direction); then added in ring order, so that the result does not depend on threads.
   std::vector<RingArc>& lit = scratch.lit;
-  lit.resize(nd * nr);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, nd, 8), [&](const auto& range) {
-    for (size_t k = range.begin(); k != range.end(); ++k) {
-      const RingAxis axis(ref.directions[k]);
-      double diffuse = 0;
-      for (size_t q = 0; q < nr; ++q) {
-        const PixelRing& ring = L.rings[q];
+  lit.resize(nr * nd);
+  std::vector<double>& per_ring = scratch.per_ring;
+  per_ring.resize((1 + narrow.size()) * nr * nd);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nr, 4), [&](const auto& range) {
+    for (size_t q = range.begin(); q != range.end(); ++q) {
+      const PixelRing& ring = L.rings[q];
+      for (size_t k = 0; k < nd; ++k) {
+        const RingAxis& axis = axes[k];
         const double a = axis.d.z * ring.z, bx = ring.r * axis.d.x, by = ring.r * axis.d.y;
         const RingArc arc = arc_above(ring, axis, 0.0);
-        lit[k * nr + q] = arc;
-        if (arc.length == 0) continue;
-        diffuse += linear_sum(sums, q, arc, a, bx, by);
-        for (size_t e = 0; e < ne; ++e) {
-          if (is_harmonic(options.glossy_exponents[e])) continue;  // below, ring by ring
-          const RingArc lobe = t_min[e] > 0 ? arc_above(ring, axis, t_min[e]) : arc;
-          if (lobe.length) ref.glossy[e][k] += power_sum(sums, q, lobe, a, bx, by, options.glossy_exponents[e]);
+        lit[q * nd + k] = arc;
+        per_ring[q * nd + k] = arc.length ? linear_sum(sums, q, arc, a, bx, by) : 0.0;
+        for (size_t i = 0; i < narrow.size(); ++i) {
+          const size_t e = narrow[i];
+          const RingArc lobe = arc.length && t_min[e] > 0 ? arc_above(ring, axis, t_min[e]) : arc;
+          per_ring[((1 + i) * nr + q) * nd + k] =
+              lobe.length ? power_sum(sums, q, lobe, a, bx, by, options.glossy_exponents[e]) : 0.0;
         }
       }
-      ref.diffuse[k] = diffuse;
     }
   });
+  for (size_t q = 0; q < nr; ++q)
+    for (size_t k = 0; k < nd; ++k) {
+      ref.diffuse[k] += per_ring[q * nd + k];
+      for (size_t i = 0; i < narrow.size(); ++i) ref.glossy[narrow[i]][k] += per_ring[((1 + i) * nr + q) * nd + k];
+    }
   harmonic_lobe_sums(sums, ref.directions, lit, options.glossy_exponents, ref.glossy, scratch.by_ring);
   for (size_t e = 0; e < ne; ++e) {
     const double norm = (options.glossy_exponents[e] + 1) / (2 * M_PI);
@@ -164,7 +175,7 @@ AccuracyReference make_accuracy_reference(const EnvMap& map, const AccuracyOptio
           for (const auto& [q, arc] : in_cap) {
             const PixelRing& ring = L.rings[q];
             RingArc parts[2];
-            const int found = intersect_arcs(lit[k * nr + q], arc, ring.count, parts);
+            const int found = intersect_arcs(lit[q * nd + k], arc, ring.count, parts);
             for (int i = 0; i < found; ++i)
               occluded += linear_sum(sums, q, parts[i], n.z * ring.z, ring.r * n.x, ring.r * n.y);
           }

@@ -13,16 +13,14 @@ void fill_ring_sums(const EnvMap& map, RingSums& s) {
   const RingLayout& L = *s.layout;
   const size_t total = L.pixel_count + L.rings.size();
   s.w.resize(L.pixel_count);
-  s.s0.resize(total);
-  s.sc.resize(total);
-  s.ss.resize(total);
+  s.prefix.resize(total);
   s.base.resize(L.rings.size());
   for (size_t k = 0; k < L.rings.size(); ++k) {
     const PixelRing& ring = L.rings[k];
     const size_t b = ring.first + k;
     s.base[k] = b;
     double a0 = 0, ac = 0, as = 0;
-    s.s0[b] = s.sc[b] = s.ss[b] = 0;
+    s.prefix[b] = {0, 0, 0};
     for (size_t j = 0; j < ring.count; ++j) {
       const size_t i = L.map_index(ring.first + j);
       double w = 0;
@@ -34,21 +32,9 @@ void fill_ring_sums(const EnvMap& map, RingSums& s) {
       a0 += w;
       ac += w * L.cos_phi[ring.table + j];
       as += w * L.sin_phi[ring.table + j];
-      s.s0[b + j + 1] = a0;
-      s.sc[b + j + 1] = ac;
-      s.ss[b + j + 1] = as;
+      s.prefix[b + j + 1] = {a0, ac, as};
     }
   }
-}
-
-double linear_sum(const RingSums& s, size_t k, RingArc arc, double a, double bx, double by) {
-  const size_t b = s.base[k], n = s.layout->rings[k].count;
-  auto part = [&](size_t from, size_t to) {
-    return a * (s.s0[b + to] - s.s0[b + from]) + bx * (s.sc[b + to] - s.sc[b + from]) +
-           by * (s.ss[b + to] - s.ss[b + from]);
-  };
-  const size_t end = arc.start + arc.length;
-  return end <= n ? part(arc.start, end) : part(arc.start, n) + part(0, end - n);
 }
 
 RingAxis::RingAxis(Vec3 v) : d(v), rho(std::hypot(v.x, v.y)), phi(std::atan2(v.y, v.x)) {}
@@ -309,7 +295,7 @@ void harmonic_lobe_sums(const RingSums& sums, const std::vector<Vec3>& dirs, con
       const PixelRing& ring = L.rings[q];
       h.fill(sums, q, max_m);
       for (size_t k = 0; k < nd; ++k) {
-        const RingArc arc = lit[k * nr + q];
+        const RingArc arc = lit[q * nd + k];
         const double a = dirs[k].z * ring.z, b = rho[k] * ring.r;
         for (size_t i = 0; i < which.size(); ++i) {
           double v = 0;

@@ -38,10 +38,15 @@ constexpr unsigned kMaxHarmonicExponent = 16;
 bool is_harmonic(double exponent);
 
 // One map on its rings: weights in ring order and, per ring, prefix sums of w, w cos phi,
-// w sin phi (count + 1 entries each, from base[ring]).
+// w sin phi (count + 1 entries, from base[ring]; the three side by side, so that an arc's
+// sum reads two cache lines).
+struct RingPrefix {
+  double s0 = 0, sc = 0, ss = 0;
+};
 struct RingSums {
   std::shared_ptr<const RingLayout> layout;
-  std::vector<double> w, s0, sc, ss;
+  std::vector<double> w;
+  std::vector<RingPrefix> prefix;
   std::vector<size_t> base;
 };
 
@@ -62,7 +67,15 @@ struct RingAxis {
 RingArc arc_above(const PixelRing& ring, const RingAxis& axis, double t_min);
 
 // Sum of w t over an arc of ring k, t = a + bx cos phi + by sin phi.
-double linear_sum(const RingSums& s, size_t k, RingArc arc, double a, double bx, double by);
+inline double linear_sum(const RingSums& s, size_t k, RingArc arc, double a, double bx, double by) {
+  const RingPrefix* p = s.prefix.data() + s.base[k];
+  const size_t n = s.layout->rings[k].count;
+  auto part = [&](size_t from, size_t to) {
+    return a * (p[to].s0 - p[from].s0) + bx * (p[to].sc - p[from].sc) + by * (p[to].ss - p[from].ss);
+  };
+  const size_t end = arc.start + arc.length;
+  return end <= n ? part(arc.start, end) : part(arc.start, n) + part(0, end - n);
+}
 
 // Sum of w max(0, t)^exponent over an arc of ring k, pixel by pixel.
 double power_sum(const RingSums& s, size_t k, RingArc arc, double a, double bx, double by, double exponent);
@@ -71,7 +84,7 @@ double power_sum(const RingSums& s, size_t k, RingArc arc, double a, double bx, 
 RingArc cap_arc(const EnvMap& map, const RingLayout& L, size_t k, const RingAxis& cap, double cos_half);
 
 // glossy[e][k] += sum of w max(0, t)^s_e (unnormalised) for every harmonic exponent s_e and
-// direction k, over the arcs lit[k * rings + ring] where t > 0. `by_ring` is scratch.
+// direction k, over the arcs lit[ring * directions + k] where t > 0. `by_ring` is scratch.
 void harmonic_lobe_sums(const RingSums& sums, const std::vector<Vec3>& dirs, const std::vector<RingArc>& lit,
                         const std::vector<double>& exponents, std::vector<std::vector<double>>& glossy,
                         std::vector<double>& by_ring);

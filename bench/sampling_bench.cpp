@@ -9,6 +9,7 @@
 #include <map>
 #include <vector>
 
+#include "core/accuracy.h"
 #include "core/spherical_harmonics.h"
 #include "core/temporal_tonemap.h"
 #include "eval/synthetic_scene.h"
@@ -118,8 +119,20 @@ void BM_ToneParameters(benchmark::State& state, Layout layout) {
   for (auto _ : state) benchmark::DoNotOptimize(frame_tone_parameters(image_view(map)));
 }
 
+// The accuracy yardstick's reference (core/accuracy.h) per set of measures: `diffuse` is what
+// eval temporal integrates per frame, `report` adds the glossy lobes s = 10, 100 (what
+// `sample` reports), `full` the 64 shadowing caps too (eval sampling).
+void BM_AccuracyReference(benchmark::State& state, Layout layout, int measures) {
+  const EnvMap& map = scene_map(layout);
+  AccuracyOptions options;
+  options.shadowed = measures == 2;
+  if (measures == 0) options.glossy_exponents.clear();
+  RatioTimer ratio(state, map);
+  for (auto _ : state) benchmark::DoNotOptimize(make_accuracy_reference(map, options).diffuse.data());
+}
+
 // Named in the stage groups of bench/stages_bench.cpp: the plain read is the floor of
-// every method's prepare.
+// every method's prepare and of the accuracy reference.
 int register_all() {
   for (Layout layout : {Layout::Hemisphere, Layout::LatLong}) {
     const std::string size = layout == Layout::Hemisphere ? "hemisphere360x90" : "latlong1024x512";
@@ -129,6 +142,13 @@ int register_all() {
         ->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark(("sampling/tone_parameters_" + size + "/ours").c_str(), BM_ToneParameters, layout)
         ->Unit(benchmark::kMicrosecond);
+    const std::string reference = "sampling/accuracy_reference_" + size + "/";
+    benchmark::RegisterBenchmark((reference + "floor").c_str(), BM_PlainRead, layout)->Unit(benchmark::kMillisecond);
+    const char* measures[] = {"ours:diffuse", "ours:report", "ours:full"};
+    for (int m = 0; m < 3; ++m)
+      benchmark::RegisterBenchmark((reference + measures[m]).c_str(), BM_AccuracyReference, layout, m)
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime();
     for (Method m : all_methods()) {
       const std::string method(to_string(m));
       benchmark::RegisterBenchmark((prepare + "ours:" + method).c_str(), BM_Prepare, m, layout)

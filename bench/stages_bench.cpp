@@ -1,5 +1,6 @@
 // The stage groups docs/performance.md is made from (scripts/performance.sh), for the stages
-// whose benchmarks live nowhere else: `hdr` (the merge) and `startup` (a whole command).
+// whose benchmarks live nowhere else: `hdr` (the merge), `startup` (a whole command) and the
+// whole commands a user waits for (`sampling/sample_command`, `eval/temporal_command`).
 // Names follow the table's convention, <stage>/<figure>/<role>, role one of
 //   ours[:variant]   what lightprobe runs
 //   floor            the least any implementation must do on the same bytes (a read of the
@@ -18,6 +19,8 @@
 #include <sys/wait.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -136,6 +139,27 @@ void spawn_and_wait(benchmark::State& state, const char* program, std::vector<st
 void BM_StartOurs(benchmark::State& state) { spawn_and_wait(state, LIGHTPROBE_EXE, {"--version"}); }
 void BM_StartFloor(benchmark::State& state) { spawn_and_wait(state, "/bin/true", {}); }
 
+// Whole commands on the shared 1024x512 Blender "sunrise" probe (LIGHTPROBE_SHARED_DATA, as
+// scripts/performance.sh sets it): `sample --n 256` with its accuracy report (issue 23 aim
+// <= 60 ms), and `eval temporal` with its defaults, 4 methods x 7 scenarios x 48 frames
+// (aim <= 10 s). Their start is in startup/version.
+std::string shared_probe(benchmark::State& state) {
+  const char* data = std::getenv("LIGHTPROBE_SHARED_DATA");
+  const std::string path = std::string(data ? data : "") + "/probes-blender-studiolights/sunrise.exr";
+  if (!data || !std::filesystem::exists(path)) state.SkipWithError("LIGHTPROBE_SHARED_DATA has no sunrise.exr");
+  return path;
+}
+
+void BM_SampleCommand(benchmark::State& state) {
+  const std::string probe = shared_probe(state), out = std::filesystem::temp_directory_path() / "lightprobe_bench_lights.json";
+  if (!state.error_occurred()) spawn_and_wait(state, LIGHTPROBE_EXE, {"sample", probe, "--n", "256", "-o", out});
+}
+
+void BM_EvalTemporalCommand(benchmark::State& state) {
+  const std::string probe = shared_probe(state), out = std::filesystem::temp_directory_path() / "lightprobe_bench_temporal";
+  if (!state.error_occurred()) spawn_and_wait(state, LIGHTPROBE_EXE, {"eval", "temporal", probe, "-o", out});
+}
+
 }  // namespace
 
 BENCHMARK(BM_MergeOurs<true>)->Name("hdr/merge_3x1280x960/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -144,3 +168,5 @@ BENCHMARK(BM_MergeFloor)->Name("hdr/merge_3x1280x960/floor")->Unit(benchmark::kM
 BENCHMARK(BM_MergeOpenCv)->Name("hdr/merge_3x1280x960/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();
 BENCHMARK(BM_StartOurs)->Name("startup/version/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StartFloor)->Name("startup/version/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SampleCommand)->Name("sampling/sample_command_n256/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_EvalTemporalCommand)->Name("eval/temporal_command_1024x512/ours")->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

@@ -47,7 +47,7 @@ class TemporalScorer {
  public:
   explicit TemporalScorer(int directions = 256);
 
-  // Integrates the reference map (diffuse only; ~50 ms per latlong 1024x512 frame on 2 cores).
+  // Integrates the reference map (diffuse only; ~6 ms per latlong 1024x512 frame on 2 cores).
   void add_frame(const EnvMap& reference_map, std::span<const Light> lights);
   // Reuses a computed reference: E_ref per normal of normals(), in that order (InputError
   // when the count differs). A reference from make_accuracy_reference with the same

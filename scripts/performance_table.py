@@ -12,7 +12,7 @@ import json
 import re
 import sys
 
-STAGES = ["hdr", "probe", "sampling", "calib", "live", "startup"]
+STAGES = ["hdr", "probe", "sampling", "calib", "live", "eval", "startup"]
 # Suffixes Google Benchmark appends to a name; not part of the figure.
 RUN_SUFFIX = re.compile(r"^(real_time|manual_time|process_time|iterations:\d+|repeats:\d+|threads:\d+|min_time:.*)$")
 TO_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}

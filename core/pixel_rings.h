@@ -44,10 +44,10 @@ struct RingArc {
   size_t start = 0, length = 0;
 };
 
-// The arc of ring `ring` on which a + b cos(phi - phi_c) > 0 (b > 0) when a + b cos x > 0
-// for |x| < half_angle: the pixels whose azimuth is within half_angle of phi_c (pixels on
-// the rim itself are included or not as rounding falls: callers use it where the lobe is
-// zero on the rim). half_angle >= pi gives the whole ring.
+// The pixels of a ring whose azimuth is within half_angle of phi_c (modulo 2 pi): where a
+// lobe a + b cos(phi - phi_c) of the ring exceeds a threshold. A pixel within rounding of
+// the rim may fall either way: callers use it where the lobe is ~0 on the rim, or test the
+// rim's pixels themselves (core/ring_integrals.h, cap_arc). half_angle >= pi: the whole ring.
 RingArc arc_within(const PixelRing& ring, double phi_c, double half_angle);
 
 // Intersection of two arcs of one ring: at most two arcs.

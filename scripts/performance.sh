@@ -40,8 +40,9 @@ faster. Aims (issue 23): merge ≤ 3× floor and ≥ 40× faster than MergeDebev
 ≤ 2.5× floor and ≥ 1.8× faster than cv::remap; sampler prepare ≤ 1.5× one read; start
 ≤ 30 ms; `sample --n 256` ≤ 60 ms with its accuracy report; `eval temporal` on one
 1024×512 map ≤ 10 s (it took 43 s when the accuracy reference was integrated pixel by
-pixel per frame, `sample` 0.40–0.49 s; see docs/sampling.md, "The accuracy reference"). Where a row misses its aim, the table says so by its numbers; nothing here is
-asserted by a test (speed lives in benchmarks, never in timed tests).
+pixel per frame, `sample` 0.40–0.49 s; see docs/sampling.md, "The accuracy reference").
+Where a row misses its aim, the table says so by its numbers; nothing here is asserted by
+a test (speed lives in benchmarks, never in timed tests).
 Times are wall-clock medians; calib rows detect every image of a shared set once.
 MD
 python3 scripts/performance_table.py "$results" "$header" >"$table"

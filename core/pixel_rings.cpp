@@ -5,9 +5,6 @@
 #include <mutex>
 #include <tuple>
 
-extern "C" {
-#include <chealpix.h>
-}
 
 namespace lp {
 
@@ -43,41 +40,43 @@ RingLayout row_rings(const EnvMap& map) {
   return out;
 }
 
-// HEALPix iso-latitude rings 1 .. 4 nside - 1 in RING order (Gorski et al. 2005): 4i pixels
-// on ring i of the polar caps, 4 nside on the equatorial ones, azimuths phi0 + j 2 pi / count.
+// HEALPix iso-latitude rings i = 1 .. 4 nside - 1 (Gorski et al. 2005, ApJ 622:759, eqs. 4-9):
+// 4i pixels on ring i of the north cap at z = 1 - i^2 / (3 nside^2) and azimuths
+// (j + 1/2) pi / (2i); 4 nside on the equatorial rings, z = 4/3 - 2i / (3 nside), azimuths
+// (j + 1/2) pi / (2 nside) on rings i - nside even, (j + 1) pi / (2 nside) on odd ones; the
+// south cap mirrors the north. Each centre's NESTED index is the layout's own pixel_at (a
+// centre lies far from any pixel edge), and the ring's z and r are taken from its first
+// pixel's pixel_direction, so that the rings hold the map's own directions.
 RingLayout healpix_rings(const EnvMap& map) {
   RingLayout out;
   const int64_t nside = map.nside;
+  const double n = double(nside);
   out.pixel_count = map.pixel_count();
-  out.pixel.resize(out.pixel_count);
-  for (int64_t p = 0; p < int64_t(out.pixel_count); ++p) {
-    int64_t nest = 0;
-    ring2nest64(nside, p, &nest);
-    out.pixel[size_t(p)] = uint32_t(nest);
-  }
+  out.pixel.reserve(out.pixel_count);
   const double omega = 4 * M_PI / double(out.pixel_count);
-  size_t first = 0;
   for (int64_t i = 1; i < 4 * nside; ++i) {
-    const int64_t count = i < nside ? 4 * i : i <= 3 * nside ? 4 * nside : 4 * (4 * nside - i);
-    double theta = 0, phi = 0;
-    pix2ang_ring64(nside, int64_t(first), &theta, &phi);
-    double v[3];
-    pix2vec_ring64(nside, int64_t(first), v);
+    const int64_t cap = i < nside ? i : i > 3 * nside ? 4 * nside - i : 0;  // 0: equatorial
+    const int64_t count = cap ? 4 * cap : 4 * nside;
+    const double z = cap ? (i < nside ? 1 : -1) * (1 - double(cap * cap) / (3 * n * n)) : 4.0 / 3 - 2.0 * double(i) / (3 * n);
+    const double shift = cap || (i - nside) % 2 == 0 ? 0.5 : 1.0;
     PixelRing ring;
-    ring.z = v[2];
-    ring.r = std::hypot(v[0], v[1]);
     ring.count = size_t(count);
     ring.dphi = 2 * M_PI / double(count);
-    ring.phi0 = phi;
-    ring.first = first;
+    ring.phi0 = shift * ring.dphi;
+    ring.first = out.pixel.size();
     ring.table = out.cos_phi.size();
     ring.solid_angle = omega;
+    const double r = std::sqrt(std::max(0.0, 1 - z * z));
     for (int64_t j = 0; j < count; ++j) {
-      out.cos_phi.push_back(std::cos(ring.phi0 + double(j) * ring.dphi));
-      out.sin_phi.push_back(std::sin(ring.phi0 + double(j) * ring.dphi));
+      const double phi = ring.phi0 + double(j) * ring.dphi;
+      out.cos_phi.push_back(std::cos(phi));
+      out.sin_phi.push_back(std::sin(phi));
+      out.pixel.push_back(uint32_t(*pixel_at(map, {r * out.cos_phi.back(), r * out.sin_phi.back(), z})));
     }
+    const Vec3 d = pixel_direction(map, out.pixel[ring.first]);
+    ring.z = d.z;
+    ring.r = std::hypot(d.x, d.y);
     out.rings.push_back(ring);
-    first += size_t(count);
   }
   return out;
 }

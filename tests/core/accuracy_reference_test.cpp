@@ -148,7 +148,8 @@ TEST(AccuracyReference, BlackMapGivesZerosAndNoDirectionsGiveNothing) {
 }
 
 TEST(PixelRings, EveryPixelOnceWithItsDirectionAndSolidAngle) {
-  for (const EnvMap& map : {make_latlong(64, 32), make_hemisphere(36, 9), make_healpix(8)}) {
+  for (const EnvMap& map :
+       {make_latlong(64, 32), make_hemisphere(36, 9), make_healpix(1), make_healpix(8), make_healpix(64)}) {
     SCOPED_TRACE(describe_size(map));
     const auto layout = ring_layout(map);
     std::vector<int> seen(map.pixel_count(), 0);

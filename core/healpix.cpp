@@ -141,4 +141,16 @@ Vec3 healpix_point(int64_t nside, int64_t pixel, double u1, double u2) {
   return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), z};
 }
 
+size_t healpix_nested_index(int nside, int face, int ix, int iy) {
+  return size_t(face) * size_t(nside) * size_t(nside) + size_t(spread_bits(uint64_t(ix)) | (spread_bits(uint64_t(iy)) << 1));
+}
+
+void healpix_face_xy(int nside, size_t nested, int* face, int* ix, int* iy) {
+  const size_t per_face = size_t(nside) * size_t(nside);
+  *face = int(nested / per_face);
+  const uint64_t in_face = nested % per_face;
+  *ix = int(compress_bits(in_face));
+  *iy = int(compress_bits(in_face >> 1));
+}
+
 }  // namespace lp

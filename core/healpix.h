@@ -9,6 +9,7 @@
 // and inline where chealpix's cannot.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "core/vec3.h"
@@ -24,5 +25,9 @@ int64_t healpix_pixel(int64_t nside, Vec3 direction);
 // Roukema 2007): uniform (u1, u2) give points uniform in solid angle over the pixel, as
 // all HEALPix pixels have equal area and the projection is equal-area.
 Vec3 healpix_point(int64_t nside, int64_t pixel, double u1, double u2);
+
+// NESTED index <-> (face, ix, iy) within the face (the file layout of core/image_io.h).
+size_t healpix_nested_index(int nside, int face, int ix, int iy);
+void healpix_face_xy(int nside, size_t nested, int* face, int* ix, int* iy);
 
 }  // namespace lp

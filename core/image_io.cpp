@@ -982,37 +982,4 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
   }
 }
 
-namespace {
-// Spreads the low 16 bits of v onto the even bits.
-uint64_t spread_bits(uint64_t v) {
-  v &= 0xffff;
-  v = (v | (v << 8)) & 0x00ff00ffULL;
-  v = (v | (v << 4)) & 0x0f0f0f0fULL;
-  v = (v | (v << 2)) & 0x33333333ULL;
-  v = (v | (v << 1)) & 0x55555555ULL;
-  return v;
-}
-// Inverse of spread_bits: gathers the even bits.
-int compact_bits(uint64_t v) {
-  v &= 0x55555555ULL;
-  v = (v | (v >> 1)) & 0x33333333ULL;
-  v = (v | (v >> 2)) & 0x0f0f0f0fULL;
-  v = (v | (v >> 4)) & 0x00ff00ffULL;
-  v = (v | (v >> 8)) & 0x0000ffffULL;
-  return int(v);
-}
-}  // namespace
-
-size_t healpix_nested_index(int nside, int face, int ix, int iy) {
-  return size_t(face) * size_t(nside) * size_t(nside) + size_t(spread_bits(uint64_t(ix)) | (spread_bits(uint64_t(iy)) << 1));
-}
-
-void healpix_face_xy(int nside, size_t nested, int* face, int* ix, int* iy) {
-  const size_t per_face = size_t(nside) * size_t(nside);
-  *face = int(nested / per_face);
-  const uint64_t in_face = nested % per_face;
-  *ix = compact_bits(in_face);
-  *iy = compact_bits(in_face >> 1);
-}
-
 }  // namespace lp

@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "core/envmap.h"
+#include "core/healpix.h"  // healpix_nested_index: the healpix file layout below
 
 namespace lp {
 
@@ -90,8 +91,5 @@ void write_file_atomically(const std::string& path, const std::string& bytes);
 // Creates `dir` and its parents (an output directory); InputError naming it on failure.
 void make_output_directory(const std::string& dir);
 
-// Healpix NESTED index <-> (face, ix, iy) within the face, used by the file layout above.
-size_t healpix_nested_index(int nside, int face, int ix, int iy);
-void healpix_face_xy(int nside, size_t nested, int* face, int* ix, int* iy);
 
 }  // namespace lp

@@ -48,7 +48,9 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             "libopencv_video", "libopencv_dnn", "libprotobuf",
                             // Ceres (static in Debian, in the plugin of calib/ceres_plugin.h) and its solver chain
                             "liblightprobe_ceres", "libglog", "libgflags", "libspqr", "libcholmod",
-                            "libcxsparse", "libmetis"})
+                            "libcxsparse", "libmetis",
+                            // LibRaw and Exiv2 (hdr/camera_files_plugin.h)
+                            "liblightprobe_camera_files", "libraw_r", "libexiv2", "liblcms2", "libexpat"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 
@@ -60,7 +62,19 @@ TEST(Startup, ReadingACameraImageLoadsThePluginAndDecodes) {
   ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
   EXPECT_TRUE(loaded(r, "libopencv_imgcodecs"));
   EXPECT_NE(r.err.find("liblightprobe_lazy_libs.so [0];  dynamically loaded"), std::string::npos);
+  EXPECT_FALSE(loaded(r, "libexiv2"));  // the exposure times are given: no EXIF read
   EXPECT_GT(fs::file_size(out), 100000u);
+}
+
+// The shared mirror-ball crops differ in size, so fusing them is refused, but only after the
+// first frame's EXIF exposure time was read: through the plugin, with Exiv2.
+TEST(Startup, ReadingExifLoadsTheCameraFilesPlugin) {
+  const std::string k = shared("hdr-mirrorball-kartik") + "/";
+  const CliRun r = traced("hdr fuse " + k + "ball_1-10s.jpg " + k + "ball_1-40s.jpg -o " + (scratch() / "k.exr").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("ball_1-40s.jpg: size 484x468 differs"), std::string::npos) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+  EXPECT_TRUE(loaded(r, "liblightprobe_camera_files.so"));
+  EXPECT_TRUE(loaded(r, "libexiv2"));
 }
 
 TEST(Startup, APhotometricFitLoadsCeresThroughItsPlugin) {

@@ -12,10 +12,8 @@ constexpr const char* kCeresPluginBuildPath = nullptr;
 }  // namespace
 
 const CeresPluginTable& ceres_plugin() {
-  static const CeresPluginTable* table = static_cast<const CeresPluginTable*>(lazy::open_plugin(
-      kCeresPluginFile, "lightprobe_ceres", "the Ceres solves of calibration", kCeresPluginBuildPath,
-      [](const void* t) { return static_cast<const CeresPluginTable*>(t)->version == kCeresPluginVersion; }));
-  return *table;
+  return lazy::plugin_table<CeresPluginTable, kCeresPluginVersion>(
+      kCeresPluginFile, "lightprobe_ceres", "the Ceres solves of calibration", kCeresPluginBuildPath);
 }
 
 }  // namespace lp::detail

@@ -83,4 +83,13 @@ void load_plugin();
 const void* open_plugin(const std::string& file, const char* entry, const std::string& holds, const char* build_path,
                         bool (*accept)(const void* table));
 
+// A plugin's table (a struct whose first member is `int version`), opened once by the
+// first call (open_plugin above) and accepted when its version is `Version`.
+template <class Table, int Version>
+const Table& plugin_table(const std::string& file, const char* entry, const std::string& holds, const char* build_path) {
+  static const Table* table = static_cast<const Table*>(open_plugin(
+      file, entry, holds, build_path, [](const void* t) { return static_cast<const Table*>(t)->version == Version; }));
+  return *table;
+}
+
 }  // namespace lp::lazy

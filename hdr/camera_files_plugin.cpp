@@ -12,11 +12,9 @@ constexpr const char* kCameraFilesBuildPath = nullptr;
 }  // namespace
 
 const CameraFilesPluginTable& camera_files_plugin() {
-  static const CameraFilesPluginTable* table = static_cast<const CameraFilesPluginTable*>(lazy::open_plugin(
+  return lazy::plugin_table<CameraFilesPluginTable, kCameraFilesPluginVersion>(
       kCameraFilesPluginFile, "lightprobe_camera_files", "LibRaw's RAW development and Exiv2's EXIF reading",
-      kCameraFilesBuildPath,
-      [](const void* t) { return static_cast<const CameraFilesPluginTable*>(t)->version == kCameraFilesPluginVersion; }));
-  return *table;
+      kCameraFilesBuildPath);
 }
 
 }  // namespace lp::detail

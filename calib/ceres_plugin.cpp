@@ -3,17 +3,11 @@
 #include "core/lazy_libs.h"
 
 namespace lp::detail {
-namespace {
-#ifdef LIGHTPROBE_CERES_PLUGIN_PATH
-constexpr const char* kCeresPluginBuildPath = LIGHTPROBE_CERES_PLUGIN_PATH;  // where the build wrote it
-#else
-constexpr const char* kCeresPluginBuildPath = nullptr;
-#endif
-}  // namespace
 
 const CeresPluginTable& ceres_plugin() {
+  // LIGHTPROBE_CERES_PLUGIN_PATH: where the build wrote it (calib/CMakeLists.txt).
   return lazy::plugin_table<CeresPluginTable, kCeresPluginVersion>(
-      kCeresPluginFile, "lightprobe_ceres", "the Ceres solves of calibration", kCeresPluginBuildPath);
+      kCeresPluginFile, "lightprobe_ceres", "the Ceres solves of calibration", LIGHTPROBE_CERES_PLUGIN_PATH);
 }
 
 }  // namespace lp::detail

@@ -50,7 +50,9 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             "liblightprobe_ceres", "libglog", "libgflags", "libspqr", "libcholmod",
                             "libcxsparse", "libmetis",
                             // LibRaw and Exiv2 (hdr/camera_files_plugin.h)
-                            "liblightprobe_camera_files", "libraw_r", "libexiv2", "liblcms2", "libexpat"})
+                            "liblightprobe_camera_files", "libraw_r", "libexiv2", "liblcms2", "libexpat",
+                            // libmosquitto (live/mosquitto_loader.cpp)
+                            "libmosquitto"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 

@@ -51,8 +51,10 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             "libcxsparse", "libmetis",
                             // LibRaw and Exiv2 (hdr/camera_files_plugin.h)
                             "liblightprobe_camera_files", "libraw_r", "libexiv2", "liblcms2", "libexpat",
-                            // libmosquitto (live/mosquitto_loader.cpp)
-                            "libmosquitto"})
+                            // libmosquitto (live/mosquitto_loader.cpp), cpp-httplib's client
+                            // (live/http_client_plugin.h) and what they pull
+                            "libmosquitto", "liblightprobe_http_client", "libcpp-httplib", "libssl", "libcrypto",
+                            "libbrotli"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 

@@ -54,7 +54,9 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             // libmosquitto (live/mosquitto_loader.cpp), cpp-httplib's client
                             // (live/http_client_plugin.h) and what they pull
                             "libmosquitto", "liblightprobe_http_client", "libcpp-httplib", "libssl", "libcrypto",
-                            "libbrotli"})
+                            "libbrotli",
+                            // Highway, whose library calibrates its timer at load (cli/highway_loader.cpp)
+                            "libhwy"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 
@@ -79,6 +81,20 @@ TEST(Startup, ReadingExifLoadsTheCameraFilesPlugin) {
   EXPECT_NE(r.err.find("ball_1-40s.jpg: size 484x468 differs"), std::string::npos) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
   EXPECT_TRUE(loaded(r, "liblightprobe_camera_files.so"));
   EXPECT_TRUE(loaded(r, "libexiv2"));
+}
+
+// Unwrapping runs the vector remap kernel: its first dispatch loads Highway.
+TEST(Startup, TheFirstVectorKernelLoadsHighway) {
+  const fs::path ball = scratch() / "startup_ball.exr", map = scratch() / "startup_map.exr";
+  ASSERT_EQ(std::system((std::string(LIGHTPROBE_CLI) + " synth probe scene --type mirrorball --size 200x200 -o " +
+                         ball.string() + " >/dev/null 2>&1")
+                            .c_str()),
+            0);
+  const CliRun r = traced("probe unwrap " + ball.string() + " --type mirrorball --layout latlong --size 128x64 -o " +
+                          map.string());
+  ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+  EXPECT_NE(r.err.find("file=libhwy.so.1 [0];  dynamically loaded"), std::string::npos);
+  EXPECT_GT(fs::file_size(map), 1000u);
 }
 
 TEST(Startup, APhotometricFitLoadsCeresThroughItsPlugin) {

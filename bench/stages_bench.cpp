@@ -150,9 +150,13 @@ std::string shared_probe(benchmark::State& state) {
   return path;
 }
 
+// The report's default (the diffuse error) or, with `glossy`, also the glossy errors.
+template <bool glossy>
 void BM_SampleCommand(benchmark::State& state) {
   const std::string probe = shared_probe(state), out = std::filesystem::temp_directory_path() / "lightprobe_bench_lights.json";
-  if (!state.error_occurred()) spawn_and_wait(state, LIGHTPROBE_EXE, {"sample", probe, "--n", "256", "-o", out});
+  std::vector<std::string> args{"sample", probe, "--n", "256", "-o", out};
+  if (glossy) args.push_back("--glossy-errors");
+  if (!state.error_occurred()) spawn_and_wait(state, LIGHTPROBE_EXE, args);
 }
 
 void BM_EvalTemporalCommand(benchmark::State& state) {
@@ -168,5 +172,6 @@ BENCHMARK(BM_MergeFloor)->Name("hdr/merge_3x1280x960/floor")->Unit(benchmark::kM
 BENCHMARK(BM_MergeOpenCv)->Name("hdr/merge_3x1280x960/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();
 BENCHMARK(BM_StartOurs)->Name("startup/version/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StartFloor)->Name("startup/version/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_SampleCommand)->Name("sampling/sample_command_n256/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SampleCommand<false>)->Name("sampling/sample_command_n256/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SampleCommand<true>)->Name("sampling/sample_command_n256/ours:glossy errors")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_EvalTemporalCommand)->Name("eval/temporal_command_1024x512/ours")->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

@@ -2,109 +2,43 @@
 
 #include <cmath>
 
-#include <ceres/ceres.h>
-#include <ceres/rotation.h>
-
+#include "calib/ceres_plugin.h"
 #include "calib/mrcal_solve.h"
 
 namespace lp {
 namespace {
 
-// Kannala-Brandt projection of a camera-frame point (the projection of camera_model.cpp:
-// theta from atan2, so rays beyond 90 deg work, unlike cv::fisheye).
-struct KannalaBrandtProjection {
-  static constexpr int kParams = 8;
-  template <typename T>
-  static void project(const T* in, const T* C, T* q) {
-    const T rho2 = C[0] * C[0] + C[1] * C[1];
-    T s;
-    if (rho2 < T(1e-24)) {
-      s = T(1) / C[2];
-    } else {
-      const T rho = ceres::sqrt(rho2);
-      const T th = ceres::atan2(rho, C[2]);
-      const T t2 = th * th;
-      s = th * (T(1) + t2 * (in[4] + t2 * (in[5] + t2 * (in[6] + t2 * in[7])))) / rho;
-    }
-    q[0] = in[0] * s * C[0] + in[2];
-    q[1] = in[1] * s * C[1] + in[3];
-  }
-};
-
-// Mei projection, as camera_model.cpp: the point on the unit sphere, projected from
-// (0, 0, -xi), radial-tangential distortion (k1 k2 p1 p2), no skew.
-struct MeiProjection {
-  static constexpr int kParams = 9;
-  template <typename T>
-  static void project(const T* in, const T* C, T* q) {
-    const T n = ceres::sqrt(C[0] * C[0] + C[1] * C[1] + C[2] * C[2]);
-    const T w = C[2] / n + in[4];
-    const T xu = C[0] / n / w, yu = C[1] / n / w;
-    const T r2 = xu * xu + yu * yu;
-    const T radial = T(1) + in[5] * r2 + in[6] * r2 * r2;
-    const T xd = xu * radial + T(2) * in[7] * xu * yu + in[8] * (r2 + T(2) * xu * xu);
-    const T yd = yu * radial + in[7] * (r2 + T(2) * yu * yu) + T(2) * in[8] * xu * yu;
-    q[0] = in[0] * xd + in[2];
-    q[1] = in[1] * yd + in[3];
-  }
-};
-
-// Reprojection residual of one corner: board point (X, Y) lifted by the board warp
-// (mrcal's flex: z = x2 * dx + y2 * dy, dx and dy the corner's parabola factors,
-// board_warp_z), then the pose, then Projection; minus the observed pixel (qx, qy).
-template <class Projection>
-struct CornerCost {
-  double X, Y, dx, dy, qx, qy;
-  template <typename T>
-  bool operator()(const T* in, const T* pose, const T* warp, T* r) const {
-    const T P[3] = {T(X), T(Y), warp[0] * dx + warp[1] * dy};
-    T C[3];
-    ceres::AngleAxisRotatePoint(pose, P, C);
-    C[0] += pose[3];
-    C[1] += pose[4];
-    C[2] += pose[5];
-    Projection::project(in, C, r);
-    r[0] -= T(qx);
-    r[1] -= T(qy);
-    return true;
-  }
-};
-
-// Joint solve of intrinsics (Projection's), poses and, with SolveOptions::board_warp, the
-// board warp from `seed`; the seed when it fails or does not improve.
-template <class Projection>
-ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
+// Joint solve of intrinsics (the projection's), poses and, with SolveOptions::board_warp,
+// the board warp from `seed` (Ceres, in the plugin of calib/ceres_plugin.h); the seed when it
+// fails or does not improve.
+ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed,
+                      detail::CeresProjection projection) {
   ModelFit f = seed;
   if (!pr.solve.board_warp) f.warp = {0, 0};
-  ceres::Problem problem;
+  std::vector<detail::CeresCorner> corners;
   for (size_t i = 0; i < views.size(); ++i)
     for (size_t k = 0; k < views[i]->px.size(); ++k) {
       if (!views[i]->inlier[k]) continue;
       const auto X = board_point(pr.board, int(k));
-      using Cost = CornerCost<Projection>;
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Cost, 2, Projection::kParams, 6, 2>(new Cost{
-                                   X[0], X[1], board_warp_z(pr.board, int(k), {1, 0}),
-                                   board_warp_z(pr.board, int(k), {0, 1}), views[i]->px[k][0], views[i]->px[k][1]}),
-                               nullptr, f.model.intrinsics.data(), f.poses[i].data(), f.warp.data());
+      corners.push_back({X[0], X[1], board_warp_z(pr.board, int(k), {1, 0}), board_warp_z(pr.board, int(k), {0, 1}),
+                         views[i]->px[k][0], views[i]->px[k][1], i});
     }
-  if (!pr.solve.board_warp) problem.SetParameterBlockConstant(f.warp.data());
+  std::vector<double*> poses;
+  for (BoardPose& pose : f.poses) poses.push_back(pose.data());
+  if (f.model.intrinsics.size() != size_t(detail::kCeresProjectionParams[int(projection)]) || poses.size() < views.size())
+    return seed;  // not a fit of this projection: nothing to refine
+  detail::CeresJointSolve problem;
+  problem.projection = projection;
+  problem.corners = corners.data();
+  problem.corner_count = corners.size();
+  problem.intrinsics = f.model.intrinsics.data();
+  problem.poses = poses.data();
+  problem.warp = f.warp.data();
+  problem.fit_warp = pr.solve.board_warp;
   f.warp_fitted = pr.solve.board_warp;
-  ceres::Solver::Options o;
-  o.linear_solver_type = ceres::DENSE_SCHUR;
-  o.num_threads = 1;
-  o.max_num_iterations = 200;
-  // Converged when the cost changes by < 1e-12 (relative) or a step moves the parameters
-  // by < 1e-10 (relative): corners are good to ~0.1 px, and at these tolerances the
-  // projection agrees with a solve run to 1e-16 within 1e-7 px on the real sets, while
-  // 1e-16 kept iterating on rounding noise (10-20 iterations with no change of the cost).
-  o.function_tolerance = 1e-12;
-  o.gradient_tolerance = 1e-10;
-  o.parameter_tolerance = 1e-10;
-  o.logging_type = ceres::SILENT;
-  o.minimizer_progress_to_stdout = false;
-  ceres::Solver::Summary summary;
-  ceres::Solve(o, &problem, &summary);
-  bool finite = summary.IsSolutionUsable();
+  // Ceres and its 17 libraries are loaded by the first solve (calib/ceres_plugin.h).
+  const detail::CeresSolveSummary summary = detail::ceres_plugin().solve_joint(problem);
+  bool finite = summary.usable;
   for (double x : f.model.intrinsics) finite = finite && std::isfinite(x);
   finite = finite && std::isfinite(f.warp[0]) && std::isfinite(f.warp[1]);
   if (!finite || summary.final_cost > summary.initial_cost) return seed;
@@ -126,11 +60,11 @@ ModelFit polish(const CalibrationProblem& pr, const ViewSubset& views, const Mod
 }  // namespace
 
 ModelFit refine_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
-  return refine_joint<KannalaBrandtProjection>(pr, views, seed);
+  return refine_joint(pr, views, seed, detail::CeresProjection::KannalaBrandt);
 }
 
 ModelFit refine_mei(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
-  return refine_joint<MeiProjection>(pr, views, seed);
+  return refine_joint(pr, views, seed, detail::CeresProjection::Mei);
 }
 
 ModelFit solve_mrcal(const CalibrationProblem& pr, const ViewSubset& views, const std::string& lensmodel,

@@ -8,10 +8,7 @@
 // overloaded: a wrong parameter list does not compile). A program that also links libmrcal
 // (a test) still works: dlsym on mrcal's own handle finds mrcal's definitions, not these.
 // A function the project starts to call must be added here: the link fails until it is.
-#include <dlfcn.h>
-#include <fmt/format.h>
-
-#include <stdexcept>
+#include "core/lazy_libs.h"
 
 extern "C" {
 #include <mrcal/mrcal.h>
@@ -21,19 +18,9 @@ namespace {
 
 constexpr const char* kMrcalLibrary = "libmrcal.so.2";
 
-void* mrcal_symbol(const char* name) {
-  static void* library = [] {
-    void* handle = dlopen(kMrcalLibrary, RTLD_NOW | RTLD_LOCAL);  // never closed
-    if (!handle) throw std::runtime_error(fmt::format("cannot load mrcal ({}): {}", kMrcalLibrary, dlerror()));
-    return handle;
-  }();
-  void* symbol = dlsym(library, name);
-  if (!symbol) throw std::runtime_error(fmt::format("{} has no {}: not the mrcal 2.x this was built for", kMrcalLibrary, name));
-  return symbol;
-}
-
 // The real function `name`, resolved once.
-#define LP_MRCAL(name) static const auto real = reinterpret_cast<decltype(&::name)>(mrcal_symbol(#name))
+#define LP_MRCAL(name) \
+  static const auto real = reinterpret_cast<decltype(&::name)>(lp::lazy::library_symbol(kMrcalLibrary, #name, "mrcal 2.x"))
 
 }  // namespace
 

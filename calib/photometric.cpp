@@ -1,7 +1,5 @@
 #include "calib/photometric.h"
 
-#include <ceres/ceres.h>
-
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -12,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "calib/ceres_plugin.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/json_file.h"
@@ -123,35 +122,6 @@ const char* loss_name(RobustLoss loss) {
   return "none";
 }
 
-ceres::LossFunction* make_loss(const PhotometricOptions& options) {
-  switch (options.loss) {
-    case RobustLoss::None: return nullptr;
-    case RobustLoss::Huber: return new ceres::HuberLoss(options.loss_scale);
-    case RobustLoss::Cauchy: return new ceres::CauchyLoss(options.loss_scale);
-  }
-  return nullptr;
-}
-
-// r = theta + ln(camera) - ln(measured), theta = ln k.
-struct LinearCost {
-  double log_camera, log_measured;
-  template <typename T>
-  bool operator()(const T* theta, T* residual) const {
-    residual[0] = theta[0] + T(log_camera) - T(log_measured);
-    return true;
-  }
-};
-
-// r = (v - a) / b - ln(measured), ab = {a, b}.
-struct LogSensorCost {
-  double value, log_measured;
-  template <typename T>
-  bool operator()(const T* ab, T* residual) const {
-    residual[0] = (T(value) - ab[0]) / ab[1] - T(log_measured);
-    return true;
-  }
-};
-
 double median(std::vector<double> v) {
   const size_t n = v.size();
   std::sort(v.begin(), v.end());
@@ -188,47 +158,37 @@ Fit solve(const std::vector<PhotometricReading>& readings, const std::vector<siz
     fit.params = {median(offsets), b};
   }
 
-  ceres::Problem problem;
-  double* params = fit.params.data();
+  // The robust fit itself runs in the Ceres plugin (calib/ceres_plugin.h): Huber or Cauchy
+  // loss, dense QR, tolerances 1e-16; Ceres is loaded by the first fit.
+  std::vector<double> a, b;
   for (size_t i : use) {
     const auto& r = readings[i];
-    if (!log_model) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LinearCost, 1, 1>(
-                                   new LinearCost{std::log(r.camera_value), std::log(r.measured)}),
-                               make_loss(options), params);
-    } else {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LogSensorCost, 1, 2>(
-                                   new LogSensorCost{r.camera_value, std::log(r.measured)}),
-                               make_loss(options), params);
-    }
+    a.push_back(log_model ? r.camera_value : std::log(r.camera_value));
+    b.push_back(std::log(r.measured));
   }
-  ceres::Solver::Options solver;
-  solver.linear_solver_type = ceres::DENSE_QR;
-  solver.logging_type = ceres::SILENT;
-  solver.minimizer_progress_to_stdout = false;
-  solver.max_num_iterations = 200;
-  solver.function_tolerance = 1e-16;
-  solver.gradient_tolerance = 1e-16;
-  solver.parameter_tolerance = 1e-16;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  if (!summary.IsSolutionUsable() || !std::all_of(fit.params.begin(), fit.params.end(),
-                                                    [](double p) { return std::isfinite(p); }))
-    throw std::runtime_error("photometric fit failed: " + summary.BriefReport());
+  const size_t p = fit.params.size();
+  std::vector<double> cov(p * p);
+  static_assert(int(RobustLoss::None) == 0 && int(RobustLoss::Huber) == 1 && int(RobustLoss::Cauchy) == 2,
+                "CeresPhotometricFit::loss numbers the losses so");
+  detail::CeresPhotometricFit problem;
+  problem.log_sensor = log_model;
+  problem.loss = int(options.loss);
+  problem.loss_scale = options.loss_scale;
+  problem.a = a.data();
+  problem.b = b.data();
+  problem.count = use.size();
+  problem.params = fit.params.data();
+  problem.with_covariance = with_covariance;
+  problem.covariance = cov.data();
+  const detail::CeresPhotometricSummary summary = detail::ceres_plugin().fit_photometric(problem);
+  if (!summary.usable) throw std::runtime_error("photometric fit failed: " + summary.brief_report);
 
-  fit.sigma.assign(fit.params.size(), 0.0);
+  fit.sigma.assign(p, 0.0);
   if (with_covariance) {
-    const size_t p = fit.params.size();
+    // Ceres' covariance assumes unit-variance residuals: scaled by s^2 = 2 cost / (n - p).
     const double dof = double(use.size()) - double(p);
     const double s2 = dof > 0 ? 2 * summary.final_cost / dof : 0.0;
-    ceres::Covariance::Options cov_options;
-    cov_options.algorithm_type = ceres::DENSE_SVD;
-    cov_options.null_space_rank = -1;  // pseudo-inverse: never fails on a flat direction
-    ceres::Covariance covariance(cov_options);
-    std::vector<std::pair<const double*, const double*>> blocks{{params, params}};
-    if (covariance.Compute(blocks, &problem)) {
-      std::vector<double> cov(p * p);
-      covariance.GetCovarianceBlock(params, params, cov.data());
+    if (summary.covariance_ok) {
       for (size_t k = 0; k < p; ++k) fit.sigma[k] = std::sqrt(std::max(0.0, cov[k * p + k] * s2));
     } else {
       fit.sigma.assign(p, std::numeric_limits<double>::infinity());
@@ -292,7 +252,9 @@ std::vector<double> held_out_linear_fast(const std::vector<PhotometricReading>& 
 // Prediction of reading r in its own unit.
 double predict(const Fit& fit, const PhotometricReading& r, bool log_model) {
   if (!log_model) return std::exp(fit.params[0]) * r.camera_value;
-  return std::exp((r.camera_value - fit.params[0]) / fit.params[1]);
+  // {a, b}: b read as the last one, which GCC's -Warray-bounds (it cannot tie the length of
+  // params to log_model once solve() is inlined) accepts.
+  return std::exp((r.camera_value - fit.params.front()) / fit.params.back());
 }
 
 void validate(const std::vector<PhotometricReading>& readings, const PhotometricOptions& options) {

@@ -5,6 +5,8 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <stdexcept>
 
 namespace lp::lazy {
@@ -66,6 +68,22 @@ const void* open_plugin(const std::string& file, const char* entry, const std::s
   }
   throw std::runtime_error(
       fmt::format("cannot load {} ({}): {}; looked in {} (set LIGHTPROBE_PLUGIN_DIR)", file, holds, last_error, tried));
+}
+
+void* library_symbol(const char* library, const char* name, const char* what) {
+  static std::mutex mutex;
+  static std::map<std::string, void*> opened;  // never closed: their functions stay in use
+  void* handle = nullptr;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    void*& h = opened[library];
+    if (!h) h = dlopen(library, RTLD_NOW | RTLD_LOCAL);
+    if (!h) throw std::runtime_error(fmt::format("cannot load {} ({}): {}", what, library, dlerror()));
+    handle = h;
+  }
+  void* symbol = dlsym(handle, name);
+  if (!symbol) throw std::runtime_error(fmt::format("{} has no {}: not the {} this was built for", library, name, what));
+  return symbol;
 }
 
 cv::Mat decode_image(const std::string& bytes) { return table().decode_image(bytes); }

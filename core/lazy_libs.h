@@ -83,4 +83,19 @@ void load_plugin();
 const void* open_plugin(const std::string& file, const char* entry, const std::string& holds, const char* build_path,
                         bool (*accept)(const void* table));
 
+// A function of a system library that is not linked (mrcal, libmosquitto: the forwarders
+// of calib/mrcal_loader.cpp, live/mosquitto_loader.cpp), the library opened with dlopen on
+// the first call and never closed. Throws std::runtime_error naming the library and `what`
+// it is ("mrcal 2.x") when the library or the symbol is missing.
+void* library_symbol(const char* library, const char* name, const char* what);
+
+// A plugin's table (a struct whose first member is `int version`), opened once by the
+// first call (open_plugin above) and accepted when its version is `Version`.
+template <class Table, int Version>
+const Table& plugin_table(const std::string& file, const char* entry, const std::string& holds, const char* build_path) {
+  static const Table* table = static_cast<const Table*>(open_plugin(
+      file, entry, holds, build_path, [](const void* t) { return static_cast<const Table*>(t)->version == Version; }));
+  return *table;
+}
+
 }  // namespace lp::lazy

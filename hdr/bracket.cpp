@@ -4,13 +4,13 @@
 #include <cmath>
 #include <sstream>
 
-#include <exiv2/exiv2.hpp>
 #include <fmt/format.h>
 
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
 #include "core/picture_io.h"
+#include "hdr/camera_files_plugin.h"
 #include "hdr/raw_input.h"
 
 namespace lp {
@@ -92,32 +92,11 @@ void check_bracket(const Bracket& b) {
 }
 
 std::optional<double> read_exif_exposure_seconds(const std::string& path) {
-  try {
-    // Exiv2 writes warnings to stderr by default; library code prints nothing.
-    static const bool muted = [] {
-      Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
-      return true;
-    }();
-    (void)muted;
-    auto image = Exiv2::ImageFactory::open(path);
-    if (image.get() == nullptr) throw InputError(path + ": cannot open to read EXIF");
-    image->readMetadata();
-    const Exiv2::ExifData& exif = image->exifData();
-    for (const char* key : {"Exif.Photo.ExposureTime", "Exif.Image.ExposureTime"}) {
-      const auto it = exif.findKey(Exiv2::ExifKey(key));
-      if (it == exif.end() || it->count() == 0) continue;
-      const Exiv2::Rational r = it->toRational(0);
-      if (r.second != 0 && r.first > 0) return double(r.first) / double(r.second);
-    }
-    const auto it = exif.findKey(Exiv2::ExifKey("Exif.Photo.ShutterSpeedValue"));
-    if (it != exif.end() && it->count() > 0) {
-      const Exiv2::Rational r = it->toRational(0);  // APEX: t = 2^-Tv
-      if (r.second != 0) return std::exp2(-double(r.first) / double(r.second));
-    }
-    return std::nullopt;
-  } catch (const Exiv2::AnyError& e) {
-    throw InputError(fmt::format("{}: cannot read EXIF: {}", path, trim(e.what())));
-  }
+  // Exiv2 is loaded by the first EXIF read (hdr/camera_files_plugin.h).
+  const detail::ExifExposure e = detail::camera_files_plugin().exif_exposure(path);
+  if (e.status == detail::ExifExposure::Status::Failed) throw InputError(fmt::format("{}: {}", path, e.message));
+  if (e.status == detail::ExifExposure::Status::Absent) return std::nullopt;
+  return e.seconds;
 }
 
 Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<std::vector<double>>& times) {

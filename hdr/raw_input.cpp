@@ -5,12 +5,12 @@
 #include <memory>
 #include <string>
 
-#include <libraw/libraw.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
 #include "core/limits.h"
+#include "hdr/camera_files_plugin.h"
 
 namespace lp {
 namespace {
@@ -85,46 +85,30 @@ RgbImage mono_to_rgb(const std::vector<uint16_t>& data, int width, int height, i
 }
 
 RgbImage read_camera_raw(const std::string& path, double* exposure_seconds_out) {
-  auto raw = std::make_unique<LibRaw>();  // large: keep it off the stack
-  auto fail = [&](const char* step, int rc) {
-    throw InputError(path + ": LibRaw cannot " + step + " it (" + libraw_strerror(rc) + ")");
-  };
-  int rc = raw->open_file(path.c_str());
-  if (rc != LIBRAW_SUCCESS) fail("open", rc);
-  // open_file reads only the metadata: check the sensor size before unpack allocates it.
-  check_image_size(path, raw->imgdata.sizes.raw_width, raw->imgdata.sizes.raw_height, "sensor");
-  auto& params = raw->imgdata.params;
-  params.output_bps = 16;
-  params.gamm[0] = params.gamm[1] = 1.0;
-  params.no_auto_bright = 1;
-  params.use_camera_wb = 1;
-  params.output_color = 1;  // sRGB primaries, linear with the gamma above
-  if ((rc = raw->unpack()) != LIBRAW_SUCCESS) fail("unpack", rc);
-  if ((rc = raw->dcraw_process()) != LIBRAW_SUCCESS) fail("develop", rc);
-  std::unique_ptr<libraw_processed_image_t, void (*)(libraw_processed_image_t*)> img(
-      raw->dcraw_make_mem_image(&rc), &LibRaw::dcraw_clear_mem);
-  if (!img || rc != LIBRAW_SUCCESS) fail("develop", rc);
-  if (img->type != LIBRAW_IMAGE_BITMAP || img->bits != 16 || (img->colors != 3 && img->colors != 1))
-    throw InputError(path + ": LibRaw produced an unexpected image (" + std::to_string(img->colors) + " colours, " +
-                     std::to_string(img->bits) + " bits)");
+  // LibRaw is loaded by the first RAW file (hdr/camera_files_plugin.h).
+  const detail::DevelopedRaw img = detail::camera_files_plugin().develop_raw(path, [](int width, int height) {
+    try {
+      check_image_size("", width, height);
+      return true;
+    } catch (const InputError&) {
+      return false;
+    }
+  });
+  if (img.status == detail::DevelopedRaw::Status::SensorTooLarge) {
+    check_image_size(path, img.sensor_width, img.sensor_height, "sensor");  // throws the limit's own message
+    throw InputError(path + ": sensor too large");
+  }
+  if (img.status != detail::DevelopedRaw::Status::Ok) throw InputError(path + ": " + img.message);
 
   RgbImage out;
-  out.width = img->width;
-  out.height = img->height;
+  out.width = img.width;
+  out.height = img.height;
   const size_t n = size_t(out.width) * out.height;
   out.rgb.resize(n * 3);
-  const int colors = img->colors;
-  for (size_t i = 0; i < n; ++i) {
-    for (int c = 0; c < 3; ++c) {
-      uint16_t v;
-      std::memcpy(&v, img->data + (i * colors + (colors == 3 ? c : 0)) * 2, 2);
-      out.rgb[3 * i + c] = v / 65535.0f;
-    }
-  }
-  if (exposure_seconds_out) {
-    const double t = raw->imgdata.other.shutter;
-    *exposure_seconds_out = t > 0 ? t : 0.0;
-  }
+  const int colors = img.colors;
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) out.rgb[3 * i + c] = img.samples[i * colors + (colors == 3 ? c : 0)] / 65535.0f;
+  if (exposure_seconds_out) *exposure_seconds_out = img.shutter_seconds;
   return out;
 }
 

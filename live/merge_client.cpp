@@ -1,7 +1,6 @@
 #include "live/merge_client.h"
 
 #include <fmt/format.h>
-#include <httplib.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -11,6 +10,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "live/http_client_plugin.h"
 
 namespace lp {
 
@@ -56,7 +56,7 @@ double now_s() {
 // One upstream: its connection.
 struct Upstream {
   Endpoint endpoint;
-  std::unique_ptr<httplib::Client> client;
+  std::unique_ptr<detail::HttpGetClient> client;  // cpp-httplib's, in live/http_client_plugin.h's plugin
 };
 
 // Fetches one upstream's list into `input` (and `status`, and `malformed`: why its answer
@@ -67,15 +67,16 @@ void poll(Upstream& up, MergeInput& input, MergeInputStatus& status, std::string
   // the connection closes, so every conditional poll would time out.
   // The whole request within request_timeout_s, however the upstream trickles its bytes.
   const double deadline = now_s() + options.request_timeout_s;
-  auto progress = [&](uint64_t current, uint64_t) { return now_s() < deadline && current <= options.max_body_bytes; };
-  httplib::Result r = up.client->Get(up.endpoint.path, httplib::Headers{}, progress);
-  if (!r || r->status != 200) {
+  auto progress = [&](uint64_t current) { return now_s() < deadline && current <= options.max_body_bytes; };
+  int code = 0;
+  std::string body;
+  if (!up.client->get(up.endpoint.path, progress, code, body) || code != 200) {
     ++status.polls_failed;
     return;
   }
   ++status.polls_ok;
   try {
-    input.latest = light_list_from_json(r->body, up.endpoint.url);
+    input.latest = light_list_from_json(body, up.endpoint.url);
     input.last_seen_s = t;
     malformed.clear();
   } catch (const std::exception& e) {
@@ -141,14 +142,8 @@ void run_merge_client(const std::vector<std::string>& urls, const MergeClientOpt
   for (const std::string& u : urls) {
     Upstream up;
     up.endpoint = parse_url(u);
-    up.client = std::make_unique<httplib::Client>(up.endpoint.host, up.endpoint.port);
-    const auto secs = time_t(options.request_timeout_s);
-    const auto usecs = time_t((options.request_timeout_s - double(secs)) * 1e6);
-    up.client->set_connection_timeout(secs, usecs);
-    up.client->set_read_timeout(secs, usecs);
-    up.client->set_write_timeout(secs, usecs);
-    up.client->set_keep_alive(true);
-    if (!options.token.empty()) up.client->set_bearer_token_auth(options.token.c_str());
+    up.client.reset(detail::http_client_plugin().new_client(up.endpoint.host, up.endpoint.port,
+                                                            options.request_timeout_s, options.token));
     inputs.push_back({u, std::nullopt, 0});
     status.inputs.emplace_back().name = u;
     ups.push_back(std::move(up));

@@ -20,10 +20,8 @@ constexpr const char* kCameraPluginBuildPath = nullptr;
 #endif
 
 const CameraPluginTable& camera_plugin() {
-  static const CameraPluginTable* table = static_cast<const CameraPluginTable*>(lazy::open_plugin(
-      kCameraPluginFile, "lightprobe_cameras", "the Aravis and libcamera sources", kCameraPluginBuildPath,
-      [](const void* t) { return static_cast<const CameraPluginTable*>(t)->version == kCameraPluginVersion; }));
-  return *table;
+  return lazy::plugin_table<CameraPluginTable, kCameraPluginVersion>(
+      kCameraPluginFile, "lightprobe_cameras", "the Aravis and libcamera sources", kCameraPluginBuildPath);
 }
 }  // namespace detail
 

@@ -41,7 +41,7 @@ void FramePipeline::reset() {
 
 int FramePipeline::delay_frames() const { return filter_ ? filter_->filter().delay_frames() : 0; }
 
-LightList FramePipeline::process(const EnvMap& map, int64_t frame, double timestamp) {
+LightList FramePipeline::process(const EnvMap& map, int64_t frame, double timestamp, const AccuracyReference* reference) {
   auto t0 = std::chrono::steady_clock::now();
   sampler_->prepare(map);
   timing_.prepare_ms = ms_since(t0);
@@ -53,9 +53,10 @@ LightList FramePipeline::process(const EnvMap& map, int64_t frame, double timest
   list.method = std::string(to_string(options_.method));
   list.units = map.units;
   if (tracker_) {
-    const AccuracyReference reference = make_accuracy_reference(map, reference_options_for(options_.auto_options.measure));
+    AccuracyReference built;
+    if (!reference) built = make_accuracy_reference(map, reference_options_for(options_.auto_options.measure));
     if (budget_) tracker_->limit(budget_->cap());  // the search goes no further than the budget affords
-    AutoCountResult r = tracker_->update(*sampler_, reference);
+    AutoCountResult r = tracker_->update(*sampler_, reference ? *reference : built);
     count_ = {int(r.lights.size()), true, r.error, r.reached};
     count_.budget_limited =
         budget_ && !r.reached && budget_->cap() < options_.auto_options.max_count && r.requested >= budget_->cap();

@@ -54,8 +54,10 @@ class FramePipeline {
  public:
   explicit FramePipeline(const FramePipelineOptions& options);
   // Lights for the next frame of the stream. With auto_count the accuracy reference of
-  // the map is built here (only what the measure needs), which dominates such frames' cost.
-  LightList process(const EnvMap& map, int64_t frame, double timestamp);
+  // the map is built here (only what the measure needs), which dominates such frames' cost;
+  // a caller that builds one anyway (`sample`'s report) passes it as `reference` (of this
+  // map, holding the measure) and it is not built twice.
+  LightList process(const EnvMap& map, int64_t frame, double timestamp, const AccuracyReference* reference = nullptr);
   // Frames by which the output lags the input (0 without filtering).
   int delay_frames() const;
   bool filtering() const { return filter_.has_value(); }

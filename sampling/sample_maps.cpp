@@ -17,16 +17,24 @@ nlohmann::json SampledFrame::to_json() const {
           {"place_seconds", timing.place_ms / 1e3},
           {"temporal_seconds", timing.temporal_ms / 1e3},
           {"diffuse_error", error.diffuse},
-          {"glossy10_error", error.glossy.at(0)},
-          {"glossy100_error", error.glossy.at(1)}};
+          {"glossy10_error", error.glossy.empty() ? nlohmann::json() : nlohmann::json(error.glossy.at(0))},
+          {"glossy100_error", error.glossy.empty() ? nlohmann::json() : nlohmann::json(error.glossy.at(1))}};
+}
+
+AccuracyOptions report_reference_options(const SampleMapsOptions& options) {
+  const bool auto_count = options.pipeline.auto_count;
+  const AccuracyOptions needed = reference_options_for(options.pipeline.auto_options.measure);
+  AccuracyOptions ao;  // defaults: both lobes, the caps
+  ao.shadowed = auto_count && needed.shadowed;
+  if (!options.glossy_errors && !(auto_count && !needed.glossy_exponents.empty())) ao.glossy_exponents.clear();
+  return ao;
 }
 
 SampleMapsResult sample_maps(const MapSequence& sequence, const SampleMapsOptions& options,
                              const std::function<void()>& frame_done) {
   FramePipeline pipeline(options.pipeline);
-  AccuracyOptions ao;  // the report's diffuse and glossy errors, and shadowed when --n auto holds it
+  const AccuracyOptions ao = report_reference_options(options);
   const ErrorMeasure measure = options.pipeline.auto_options.measure;
-  ao.shadowed = options.pipeline.auto_count && (measure == ErrorMeasure::Shadowed || measure == ErrorMeasure::Worst);
   SampleMapsResult result;
   const size_t n = sequence.files.size();
   for (size_t f = 0; f < n; ++f) {
@@ -39,13 +47,14 @@ SampleMapsResult sample_maps(const MapSequence& sequence, const SampleMapsOption
             : std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
     SampledFrame frame;
     frame.file = file;
+    const AccuracyReference reference = make_accuracy_reference(map, ao);
     try {
-      frame.list = pipeline.process(map, int64_t(f), now);
+      frame.list = pipeline.process(map, int64_t(f), now, options.pipeline.auto_count ? &reference : nullptr);
     } catch (const InputError& e) {
       throw InputError(fmt::format("{}: {}", file, e.what()));
     }
     frame.timing = pipeline.last_timing();
-    frame.error = light_error(make_accuracy_reference(map, ao), frame.list.lights);
+    frame.error = light_error(reference, frame.list.lights);
     if (options.pipeline.auto_count) {
       frame.measured_error = measured_error(frame.error, ao, measure);
       frame.target_missed = frame.measured_error > options.pipeline.auto_options.target_error;

@@ -16,6 +16,9 @@
 
 #include <cmath>
 
+#include "core/accuracy.h"
+#include "core/image_io.h"
+#include "core/light_list.h"
 #include "tests/cli/cli_run.h"
 
 namespace fs = std::filesystem;
@@ -149,6 +152,33 @@ TEST(Cli, BadInputsGetOneLineNamingTheFileAndExitTwo) {
   expect_one_line_error(lightprobe("sample " + (dir / "black.pfm").string() + " --n 16 -o " + (dir / "l.json").string()),
                         "black.pfm");
   EXPECT_FALSE(fs::exists(dir / "l.json"));
+}
+
+// sample's report: the diffuse error by default, the glossy errors with --glossy-errors,
+// each equal to the yardstick computed here from the map and the written lights.
+TEST(Cli, SampleReportsDiffuseByDefaultAndGlossyWhenAsked) {
+  const std::string map = shared("probes-probulator-latlong256/grace.hdr");
+  const std::string out = (scratch() / "report.json").string();
+  const CliRun plain = lightprobe("sample --json " + map + " --n 64 -o " + out);
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  const auto p = nlohmann::json::parse(plain.out);
+  EXPECT_TRUE(p["glossy10_error"].is_null());
+  EXPECT_TRUE(p["glossy100_error"].is_null());
+  EXPECT_NE(p["not_scored"].get<std::string>().find("--glossy-errors"), std::string::npos);
+  const CliRun text = lightprobe("sample " + map + " --n 64 -o " + out);
+  EXPECT_NE(text.out.find("glossy errors not scored (--glossy-errors)"), std::string::npos) << text.out;
+
+  const CliRun full = lightprobe("sample --json --glossy-errors " + map + " --n 64 -o " + out);
+  ASSERT_EQ(full.code, 0) << full.err;
+  const auto f = nlohmann::json::parse(full.out);
+  EXPECT_FALSE(f.contains("not_scored"));
+  const lp::LightList lights = lp::light_list_from_json(slurp(out));
+  const lp::EnvMap m = lp::read_envmap(map);
+  const lp::LightError want = lp::light_error(lp::make_accuracy_reference(m), lights.lights);
+  EXPECT_DOUBLE_EQ(p["diffuse_error"].get<double>(), want.diffuse);
+  EXPECT_DOUBLE_EQ(f["diffuse_error"].get<double>(), want.diffuse);
+  EXPECT_DOUBLE_EQ(f["glossy10_error"].get<double>(), want.glossy[0]);
+  EXPECT_DOUBLE_EQ(f["glossy100_error"].get<double>(), want.glossy[1]);
 }
 
 // --n auto holds the measure asked for: glossy s=100 here, rescored by the report.

@@ -4,6 +4,8 @@
 // dynamic loader itself reports what it loads (LD_DEBUG=files).
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "cli_run.h"
@@ -19,8 +21,16 @@ CliRun traced(const std::string& args) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }
 
+// Whether the loader opened `library` (a file name's start: "libceres" matches
+// libceres.so.3), named bare or by a path (the plugins are opened by path).
 bool loaded(const CliRun& r, const std::string& library) {
-  return r.err.find("file=" + library) != std::string::npos;
+  for (size_t at = r.err.find("file="); at != std::string::npos; at = r.err.find("file=", at + 5)) {
+    const size_t end = r.err.find_first_of(" \t\n", at);
+    const std::string file = r.err.substr(at + 5, end == std::string::npos ? std::string::npos : end - at - 5);
+    const size_t slash = file.rfind('/');
+    if (file.compare(slash == std::string::npos ? 0 : slash + 1, library.size(), library) == 0) return true;
+  }
+  return false;
 }
 
 TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
@@ -35,7 +45,18 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             // mrcal and its FreeImage chain (calib/mrcal_loader.cpp)
                             "libmrcal", "libfreeimage", "libjxrglue", "libopenjp2",
                             // OpenCV's video module (ECC alignment) and its DNN module
-                            "libopencv_video", "libopencv_dnn", "libprotobuf"})
+                            "libopencv_video", "libopencv_dnn", "libprotobuf",
+                            // Ceres (static in Debian, in the plugin of calib/ceres_plugin.h) and its solver chain
+                            "liblightprobe_ceres", "libglog", "libgflags", "libspqr", "libcholmod",
+                            "libcxsparse", "libmetis",
+                            // LibRaw and Exiv2 (hdr/camera_files_plugin.h)
+                            "liblightprobe_camera_files", "libraw_r", "libexiv2", "liblcms2", "libexpat",
+                            // libmosquitto (live/mosquitto_loader.cpp), cpp-httplib's client
+                            // (live/http_client_plugin.h) and what they pull
+                            "libmosquitto", "liblightprobe_http_client", "libcpp-httplib", "libssl", "libcrypto",
+                            "libbrotli",
+                            // Highway, whose library calibrates its timer at load (cli/highway_loader.cpp)
+                            "libhwy"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 
@@ -47,7 +68,44 @@ TEST(Startup, ReadingACameraImageLoadsThePluginAndDecodes) {
   ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
   EXPECT_TRUE(loaded(r, "libopencv_imgcodecs"));
   EXPECT_NE(r.err.find("liblightprobe_lazy_libs.so [0];  dynamically loaded"), std::string::npos);
+  EXPECT_FALSE(loaded(r, "libexiv2"));  // the exposure times are given: no EXIF read
   EXPECT_GT(fs::file_size(out), 100000u);
+}
+
+// The shared mirror-ball crops differ in size, so fusing them is refused, but only after the
+// first frame's EXIF exposure time was read: through the plugin, with Exiv2.
+TEST(Startup, ReadingExifLoadsTheCameraFilesPlugin) {
+  const std::string k = shared("hdr-mirrorball-kartik") + "/";
+  const CliRun r = traced("hdr fuse " + k + "ball_1-10s.jpg " + k + "ball_1-40s.jpg -o " + (scratch() / "k.exr").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("ball_1-40s.jpg: size 484x468 differs"), std::string::npos) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+  EXPECT_TRUE(loaded(r, "liblightprobe_camera_files.so"));
+  EXPECT_TRUE(loaded(r, "libexiv2"));
+}
+
+// Unwrapping runs the vector remap kernel: its first dispatch loads Highway.
+TEST(Startup, TheFirstVectorKernelLoadsHighway) {
+  const fs::path ball = scratch() / "startup_ball.exr", map = scratch() / "startup_map.exr";
+  ASSERT_EQ(std::system((std::string(LIGHTPROBE_CLI) + " synth probe scene --type mirrorball --size 200x200 -o " +
+                         ball.string() + " >/dev/null 2>&1")
+                            .c_str()),
+            0);
+  const CliRun r = traced("probe unwrap " + ball.string() + " --type mirrorball --layout latlong --size 128x64 -o " +
+                          map.string());
+  ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+  EXPECT_NE(r.err.find("file=libhwy.so.1 [0];  dynamically loaded"), std::string::npos);
+  EXPECT_GT(fs::file_size(map), 1000u);
+}
+
+TEST(Startup, APhotometricFitLoadsCeresThroughItsPlugin) {
+  const fs::path csv = scratch() / "startup_readings.csv", cal = scratch() / "startup_photometric.json";
+  std::ofstream(csv) << "region,camera_value,measured,unit\npatch1,0.5,100,cd/m2\npatch2,1.0,200,cd/m2\n"
+                        "patch3,2.0,400,cd/m2\n";
+  const CliRun r = traced("calib photometric --json " + csv.string() + " -o " + cal.string());
+  ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+  EXPECT_TRUE(loaded(r, "liblightprobe_ceres.so"));
+  EXPECT_TRUE(loaded(r, "libglog"));  // Debian's Ceres is a static library: glog and SuiteSparse show it
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["scale_luminance"].get<double>(), 200.0, 200.0 * 1e-6);
 }
 
 TEST(Startup, OpeningACameraLoadsTheCameraPlugin) {

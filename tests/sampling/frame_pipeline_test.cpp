@@ -67,6 +67,36 @@ TEST(FramePipeline, FilteredHemigonLagsAnAbruptSwitchByTheFilterStepResponse) {
   EXPECT_LE(run(Scenario::AbruptSwitch, Method::Hemigon, 24, FilterMode::Off).lag_frames, 1.0);
 }
 
+// `sample --n auto` hands its report's reference (both lobes, no caps) to the pipeline
+// instead of letting it build its own: the same count and the same lights, bit for bit; a
+// reference without the measure's lobe is refused, not misread.
+TEST(FramePipeline, AutoCountWithTheCallersReferenceChoosesWhatItsOwnWould) {
+  FramePipelineOptions po;
+  po.method = Method::Pharr;
+  po.auto_count = true;
+  po.auto_options.measure = ErrorMeasure::Glossy100;
+  po.auto_options.target_error = 0.15;
+  FramePipeline own(po), given(po);
+  AccuracyOptions report;  // both lobes
+  report.shadowed = false;
+  const AccuracyReference reference = make_accuracy_reference(base_map(), report);
+  const LightList a = own.process(base_map(), 0, 0);
+  const LightList b = given.process(base_map(), 0, 0, &reference);
+  ASSERT_EQ(a.lights.size(), b.lights.size());
+  EXPECT_GT(a.lights.size(), 1u);
+  for (size_t i = 0; i < a.lights.size(); ++i) {
+    EXPECT_EQ(a.lights[i].direction.x, b.lights[i].direction.x) << i;
+    EXPECT_EQ(a.lights[i].rgb, b.lights[i].rgb) << i;
+  }
+  EXPECT_EQ(own.last_count().error, given.last_count().error);
+
+  AccuracyOptions diffuse_only = report;
+  diffuse_only.glossy_exponents.clear();
+  const AccuracyReference lacking = make_accuracy_reference(base_map(), diffuse_only);
+  FramePipeline refused(po);
+  EXPECT_THROW(refused.process(base_map(), 0, 0, &lacking), InputError);
+}
+
 TEST(FramePipeline, ClusteringBoundsTheLightCountAndKeepsPower) {
   FramePipelineOptions po;
   po.method = Method::Pharr;

@@ -360,10 +360,11 @@ std::array<double, 3> samplable_total_power(const EnvMap& map) {
 // height, a power-of-two width (every column boundary u / w exact in binary: no column
 // overlaps its neighbour), and the row boundaries' cosines equal to the bit, computed as
 // core/resample.cpp computes them (cos(span * v / height)). Each pixel is then
-// float(L * a / a') with a, a' the same area to a few double ulps: L itself. For the lower
-// half the resample compares -cos(pi - x) with cos(x), which differ in the last bit at
-// about two boundaries in three, so it gives each pixel ~1e-16 of its neighbour row's
-// radiance as well; the copy leaves that rounding out (see docs/sampling.md).
+// float(L * a / a') with a, a' the same area to a few double ulps: L itself (a -0 comes out
+// +0: equal as a number, kept as -0 here). For the lower half the resample compares
+// -cos(pi - x) with cos(x), which differ in the last bit at about two boundaries in three,
+// so it gives each pixel ~1e-16 of its neighbour row's radiance as well; the copy leaves
+// that rounding out (see docs/sampling.md).
 bool rows_are_halves(const EnvMap& map, int w, int h) {
   if (map.layout != Layout::LatLong || map.width != w || map.height != 2 * h || (w & (w - 1)) != 0) return false;
   static std::mutex mutex;

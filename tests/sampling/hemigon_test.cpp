@@ -433,12 +433,12 @@ TEST(Hemigon, OnGraceTheWarpIsContinuousWhereverTheMapIsNotBlack) {
 
 // The sampler builds the two halves of a latlong map whose grid is the hemisphere's (same
 // width, a power of two; half the height) from the map's rows instead of resampling it. The
-// upper half is the resample's copy bit for bit. The lower half (Rx(180)) differs only where
-// the resample leaked ~1e-16 of a neighbour row into a pixel (its row boundaries compare
-// -cos(pi - x) with cos(x), unequal in the last bit): warped points agree to 1e-10 rad (a
-// point in a black pixel that the resample made 1e-16 bright may sit elsewhere in it) and
-// their radiance to 1e-10 of the larger of itself and the mean radiance (the map itself is
-// float: 6e-8).
+// upper half is the resample's copy (as numbers: it writes -0 as +0). The lower half
+// (Rx(180)) differs only where the resample leaked ~1e-16 of a neighbour row into a pixel
+// (its row boundaries compare -cos(pi - x) with cos(x), unequal in the last bit): warped
+// points agree to 1e-10 rad (a point in a black pixel that the resample made 1e-16 bright
+// may sit elsewhere in it) and their radiance to 1e-10 of the larger of itself and the mean
+// radiance (the map itself is float: 6e-8).
 TEST(HemigonWarp, RowsOfALatlongHalfWarpLikeTheResampledHalf) {
   const std::string night = std::string(LIGHTPROBE_SHARED_DATA) + "/probes-blender-studiolights/night.exr";
   if (!std::filesystem::exists(night)) GTEST_SKIP() << night << " is missing";

@@ -8,7 +8,7 @@
 // Cost: prepare is one pass over the pixels in blocks of eight rows (CDFs, per-channel
 // power, a copy of the colours so that place() does not depend on the caller's map staying
 // alive): the vector row kernels of sampling/row_sweep.h, then the serial luminance sums of
-// the eight rows in lockstep; 1.5-1.65x one plain read of the map (was 2.9x, docs/sampling.md).
+// the eight rows in lockstep; 1.3-1.45x one plain read of the map (was 2.9x, docs/sampling.md).
 // place is two binary searches and one sincos per light. Buffers and the per-row geometry
 // are reused across frames; Halton points are cached across calls.
 #include <fmt/format.h>

@@ -62,7 +62,11 @@ bool ColourAndLuminanceRow(const float* rgb, const uint8_t* valid, size_t width,
     }
     const VF y = hn::Add(hn::Add(hn::Mul(kr, r), hn::Mul(kg, g)), hn::Mul(kb, b));
     bad = hn::Or(bad, hn::VecFromMask(df, hn::Not(hn::Ge(y, zero))));
-    hn::StoreInterleaved3(r, g, b, df, colour + 3 * x);
+    if (valid || reversed) {
+      hn::StoreInterleaved3(r, g, b, df, colour + 3 * x);
+    } else {  // a plain copy: three loads and stores instead of re-interleaving
+      for (size_t v = 0; v < 3; ++v) hn::StoreU(hn::LoadU(df, rgb + 3 * s + v * N), df, colour + 3 * x + v * N);
+    }
     hn::StoreU(hn::IfThenElseZero(hn::Gt(y, zero), y), df, lum + x);
   }
   bool any_bad = !hn::AllFalse(df, hn::MaskFromVec(bad));

@@ -8,7 +8,9 @@
 //     (world_from_source = Rx(180) = diag(1, -1, -1)), so a lower-map direction
 //     (x, y, z) is the world direction (x, -y, -z). The polar size follows the input's
 //     pixel size (latlong W x H -> W x H/2; healpix: pixels of about the same angular
-//     size), at least 360 x 90 and at most 8192 x 2048.
+//     size), at least 360 x 90 and at most 8192 x 2048. A latlong map whose grid is already
+//     the two hemispheres' (W a power of two from 512, H = W/2: see rows_are_halves) is not
+//     resampled: its rows are the halves' rows (1024 x 512: prepare 4.5 -> 0.74 ms).
 //   - Full sphere: one Halton sequence (bases 2, 3; indices 1..n; id = index). With
 //     q = P_upper / P (luminance powers), a point with first coordinate x < q goes to the
 //     upper hemisphere as (x / q, y), otherwise to the lower as ((x - q) / (1 - q), y).
@@ -33,17 +35,25 @@
 #include "sampling/halton.h"
 #include "sampling/methods.h"
 #include "sampling/power.h"
+#include "sampling/row_sweep.h"
 
 namespace lp {
 
 void HemigonWarp::build(const EnvMap& map) {
   if (map.layout != Layout::Hemisphere)
     throw InputError(fmt::format("hemigon: the warp needs a hemisphere map, got {}", describe_size(map)));
-  const int W = map.width, H = map.height;
+  std::vector<Row> rows(size_t(map.height));
+  const size_t w = size_t(map.width);
+  for (size_t v = 0; v < rows.size(); ++v)
+    rows[v] = {map.rgb.data() + 3 * v * w, map.valid.empty() ? nullptr : map.valid.data() + v * w, false};
+  build(map.width, map.height, rows.data());
+}
+
+void HemigonWarp::build(int W, int H, const Row* rows) {
   width_ = W;
   height_ = H;
   dphi_ = 2 * M_PI / W;
-  const size_t npix = map.pixel_count();
+  const size_t npix = size_t(W) * size_t(H);
   rgb_.resize(3 * npix);
   cum_.resize(size_t(H) * size_t(W + 1));
   bounds_.resize(size_t(H) + 2);
@@ -58,40 +68,54 @@ void HemigonWarp::build(const EnvMap& map) {
     const double half = 0.5 * (M_PI / 2) * double(v) / H;
     return 2 * std::sin(half) * std::sin(half);
   };
+  // Rows in blocks of eight: the colours (invalid pixels zeroed), luminances and channel
+  // sums from the vector kernels of sampling/row_sweep.h, then the rows' running luminance
+  // sums in lockstep (each the same chain as a row alone: invalid pixels add an exact 0).
+  constexpr int kBlock = 8;
+  lum_.resize(size_t(kBlock) * size_t(W));
   double s0 = 0;
-  for (int v = 0; v < H; ++v) {
-    const double s1 = s_at(v + 1);
-    const double ds = s1 - s0;  // pixel solid angle / dphi
-    const float* src = map.rgb.data() + 3 * size_t(v) * size_t(W);
-    float* dst = rgb_.data() + 3 * size_t(v) * size_t(W);
-    double* cum = cum_.data() + size_t(v) * size_t(W + 1);
-    double acc = 0, r = 0, g = 0, b = 0;
-    cum[0] = 0;
-    const bool all_valid = map.valid.empty();
-    for (int u = 0; u < W; ++u) {
-      const size_t i = size_t(v) * size_t(W) + size_t(u);
-      if (all_valid || map.valid[i]) {
-        dst[3 * u] = src[3 * u];
-        dst[3 * u + 1] = src[3 * u + 1];
-        dst[3 * u + 2] = src[3 * u + 2];
-        r += src[3 * u];
-        g += src[3 * u + 1];
-        b += src[3 * u + 2];
-        const float y = luminance(src[3 * u], src[3 * u + 1], src[3 * u + 2]);
-        if (!(y >= 0))
-          throw InputError(fmt::format("hemigon: pixel ({}, {}) is NaN or negative", u, v));
-        acc += double(y);
-      } else {
-        dst[3 * u] = dst[3 * u + 1] = dst[3 * u + 2] = 0.0f;
+  for (int v0 = 0; v0 < H; v0 += kBlock) {
+    const int K = std::min(kBlock, H - v0);
+    const float* colour[kBlock];
+    const float* lum[kBlock];
+    double* cum[kBlock];
+    for (int k = 0; k < K; ++k) {
+      const int v = v0 + k;
+      float* dst = rgb_.data() + 3 * size_t(v) * size_t(W);
+      float* y = lum_.data() + size_t(k) * size_t(W);
+      colour[k] = dst;
+      lum[k] = y;
+      cum[k] = cum_.data() + size_t(v) * size_t(W + 1);
+      cum[k][0] = 0;
+      if (detail::colour_and_luminance_row(rows[v].rgb, rows[v].valid, size_t(W), rows[v].reversed, dst, y)) {
+        for (int u = 0; u < W; ++u) {  // name the first pixel, as the pixel-by-pixel loop did
+          const float* p = dst + 3 * u;
+          const int su = rows[v].reversed ? W - 1 - u : u;
+          const bool ok = !rows[v].valid || rows[v].valid[su];
+          if (ok && !(luminance(p[0], p[1], p[2]) >= 0))
+            throw InputError(fmt::format("hemigon: pixel ({}, {}) is NaN or negative", u, v));
+        }
       }
-      cum[u + 1] = acc;
     }
-    row_density_[size_t(v)] = dphi_ * acc;
-    power_ += dphi_ * acc * ds;
-    rgb_power_[0] += dphi_ * ds * r;
-    rgb_power_[1] += dphi_ * ds * g;
-    rgb_power_[2] += dphi_ * ds * b;
-    s0 = s1;
+    double sums[kBlock][6] = {};
+    detail::add_channel_sums(colour, size_t(K), size_t(W), false, &sums[0][0]);
+    double acc[kBlock] = {};
+    if (K == kBlock) {
+      for (int u = 0; u < W; ++u)
+        for (int k = 0; k < kBlock; ++k) cum[k][u + 1] = acc[k] += double(lum[k][u]);
+    } else {
+      for (int k = 0; k < K; ++k)
+        for (int u = 0; u < W; ++u) cum[k][u + 1] = acc[k] += double(lum[k][u]);
+    }
+    for (int k = 0; k < K; ++k) {
+      const int v = v0 + k;
+      const double s1 = s_at(v + 1);
+      const double ds = s1 - s0;  // pixel solid angle / dphi
+      row_density_[size_t(v)] = dphi_ * acc[k];
+      power_ += dphi_ * acc[k] * ds;
+      for (int c = 0; c < 3; ++c) rgb_power_[size_t(c)] += dphi_ * ds * sums[k][c];
+      s0 = s1;
+    }
   }
 
   // Knots k_v in s where ring v's value is taken; f is linear in s between knots and
@@ -299,6 +323,61 @@ const std::vector<std::array<double, 2>>& lloyd_relaxed_halton(int n) {
 
 namespace {
 
+// core/envmap.h's total_power of an unmasked row grid, with the same sums (per row in pixel
+// order, then the rows in order, each times its pixel solid angle) from the vector kernel.
+std::array<double, 3> row_grid_total_power(const EnvMap& map) {
+  const size_t w = size_t(map.width);
+  std::array<double, 3> total{0, 0, 0};
+  constexpr int kBlock = 8;
+  for (int r0 = 0; r0 < map.height; r0 += kBlock) {
+    const int k_end = std::min(kBlock, map.height - r0);
+    const float* rows[kBlock];
+    for (int k = 0; k < k_end; ++k) rows[k] = map.rgb.data() + 3 * size_t(r0 + k) * w;
+    double sums[kBlock][6] = {};
+    detail::add_channel_sums(rows, size_t(k_end), w, false, &sums[0][0]);
+    for (int k = 0; k < k_end; ++k) {
+      const double dw = pixel_solid_angle(map, size_t(r0 + k) * w);
+      for (int c = 0; c < 3; ++c) total[size_t(c)] += dw * sums[k][c];
+    }
+  }
+  return total;
+}
+
+// The map's power per channel (total_power), after require_samplable's checks without a
+// second pass: only a map that fails them is read again, for its message.
+std::array<double, 3> samplable_total_power(const EnvMap& map) {
+  if (map.pixel_count() == 0) require_samplable(map, "hemigon");
+  const bool plain_rows = map.layout != Layout::Healpix && map.valid.empty() && map.rgb.size() == 3 * map.pixel_count();
+  const std::array<double, 3> total = plain_rows ? row_grid_total_power(map) : total_power(map);
+  const double p = luminance(total.data());
+  if (!std::isfinite(p) || !(p > 0)) require_samplable(map, "hemigon");  // throws its message
+  return total;
+}
+
+// True when the hemisphere grid w x h is the latlong's own grid cut at the horizon, so that
+// the exact path of resample(latlong, hemisphere, w, h) copies each of the top h rows (and,
+// turned by Rx(180), each bottom row upside down and right to left): same width, half the
+// height, a power-of-two width (every column boundary u / w exact in binary: no column
+// overlaps its neighbour), and the row boundaries' cosines equal to the bit, computed as
+// core/resample.cpp computes them (cos(span * v / height)). Each pixel is then
+// float(L * a / a') with a, a' the same area to a few double ulps: L itself (a -0 comes out
+// +0: equal as a number, kept as -0 here). For the lower half the resample compares
+// -cos(pi - x) with cos(x), which differ in the last bit at about two boundaries in three,
+// so it gives each pixel ~1e-16 of its neighbour row's radiance as well; the copy leaves
+// that rounding out (see docs/sampling.md).
+bool rows_are_halves(const EnvMap& map, int w, int h) {
+  if (map.layout != Layout::LatLong || map.width != w || map.height != 2 * h || (w & (w - 1)) != 0) return false;
+  static std::mutex mutex;
+  static std::map<int, bool> checked;  // by latlong height
+  std::lock_guard lock(mutex);
+  auto it = checked.find(map.height);
+  if (it != checked.end()) return it->second;
+  bool same = true;
+  for (int v = 0; v <= h && same; ++v) same = std::cos(M_PI * double(v) / map.height) == std::cos((M_PI / 2) * double(v) / h);
+  checked.emplace(map.height, same);
+  return same;
+}
+
 class HemigonSampler final : public Sampler {
  public:
   explicit HemigonSampler(const SamplerOptions& options) : options_(options) {}
@@ -310,7 +389,7 @@ class HemigonSampler final : public Sampler {
       has_lower_ = false;
       target_ = half_[0].rgb_power();
     } else {
-      require_samplable(map, "hemigon");
+      const std::array<double, 3> total = samplable_total_power(map);
       int w = 0, h = 0;
       if (map.layout == Layout::LatLong) {
         w = map.width;
@@ -322,19 +401,32 @@ class HemigonSampler final : public Sampler {
       }
       w = std::clamp(w, 360, 8192);
       h = std::clamp(h, 90, 2048);
-      upper_ = resample(map, Layout::Hemisphere, w, h);
-      half_[0].build(upper_);
-      if (options_.upper_only) {
-        has_lower_ = false;
-        target_ = half_[0].rgb_power();
+      if (rows_are_halves(map, w, h)) {
+        // The resample below would copy each pixel (the grids coincide): take the rows as
+        // they are, the lower half upside down and right to left (Rx(180): theta -> pi -
+        // theta, phi -> -phi), without the two resampled maps.
+        const size_t W = size_t(map.width);
+        const bool masked = !map.valid.empty();
+        rows_.resize(size_t(h));
+        for (int half = 0; half < (options_.upper_only ? 1 : 2); ++half) {
+          for (int v = 0; v < h; ++v) {
+            const size_t row = half == 0 ? size_t(v) : size_t(map.height - 1 - v);
+            rows_[size_t(v)] = {map.rgb.data() + 3 * row * W, masked ? map.valid.data() + row * W : nullptr, half == 1};
+          }
+          half_[half].build(w, h, rows_.data());
+        }
       } else {
-        ResampleOptions ro;
-        ro.world_from_source = Mat3{{1, 0, 0, 0, -1, 0, 0, 0, -1}};  // Rx(180), its own inverse
-        lower_ = resample(map, Layout::Hemisphere, w, h, ro);
-        half_[1].build(lower_);
-        has_lower_ = true;
-        target_ = total_power(map);
+        upper_ = resample(map, Layout::Hemisphere, w, h);
+        half_[0].build(upper_);
+        if (!options_.upper_only) {
+          ResampleOptions ro;
+          ro.world_from_source = Mat3{{1, 0, 0, 0, -1, 0, 0, 0, -1}};  // Rx(180), its own inverse
+          lower_ = resample(map, Layout::Hemisphere, w, h, ro);
+          half_[1].build(lower_);
+        }
       }
+      has_lower_ = !options_.upper_only;
+      target_ = options_.upper_only ? half_[0].rgb_power() : total;
     }
     power_ = half_[0].power() + (has_lower_ ? half_[1].power() : 0.0);
     if (!std::isfinite(power_)) throw InputError("hemigon: the map has non-finite pixels");
@@ -388,7 +480,8 @@ class HemigonSampler final : public Sampler {
  private:
   SamplerOptions options_;
   HemigonWarp half_[2];
-  EnvMap upper_, lower_;
+  EnvMap upper_, lower_;                 // resampled halves, when the rows are not the halves
+  std::vector<HemigonWarp::Row> rows_;   // the halves' rows, when they are
   bool has_lower_ = false;
   bool prepared_ = false;
   double power_ = 0, upper_share_ = 1;

@@ -52,6 +52,17 @@ class HemigonWarp {
   // then undefined.
   void build(const EnvMap& hemisphere_map);
 
+  // The same from the map's rows given one by one: row v of a width x height hemisphere map
+  // is rows[v] (packed RGB, read right to left when `reversed`; valid null: all valid). Lets
+  // the sampler take both halves of a latlong map whose rows are the hemisphere's rows
+  // without resampling it.
+  struct Row {
+    const float* rgb = nullptr;
+    const uint8_t* valid = nullptr;
+    bool reversed = false;
+  };
+  void build(int width, int height, const Row* rows);
+
   struct Sample {
     Vec3 direction;                // unit, z >= 0
     std::array<double, 3> rgb{};   // interpolated radiance at the sample (f's colour)
@@ -79,6 +90,7 @@ class HemigonWarp {
   int knots_height_ = -1;
   double power_ = 0;
   std::array<double, 3> rgb_power_{0, 0, 0};
+  std::vector<float> lum_;  // scratch: clamped luminance of the rows being swept
 };
 
 // The first n Halton points (bases 2, 3; indices 1..n) after Lloyd relaxation on the unit

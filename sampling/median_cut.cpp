@@ -7,7 +7,9 @@
 // area, id = split-path code (root 1, children 2k and 2k + 1).
 //
 // Cost: prepare is one pass (a summed-area table of luminance * solid angle in double and a
-// copy of the colours, so that place() does not depend on the caller's map staying alive).
+// copy of the colours, so that place() does not depend on the caller's map staying alive),
+// in blocks of eight rows: the vector row kernels of sampling/row_sweep.h, then the rows'
+// serial sums in lockstep.
 // place is n heap steps with O(log size) table look-ups each, then one pass over the
 // colours to integrate each final region (the regions partition the map).
 #include <fmt/format.h>
@@ -19,6 +21,7 @@
 #include "core/error.h"
 #include "sampling/methods.h"
 #include "sampling/power.h"
+#include "sampling/row_sweep.h"
 
 namespace lp {
 namespace {
@@ -63,32 +66,10 @@ class MedianCutSampler final : public Sampler {
     colour_.resize(3 * count);
     lum_.resize(count);
     std::array<double, 3> power{0, 0, 0};
-    const bool masked = !map->valid.empty();
-    for (int r = 0; r < h; ++r) {
-      const size_t base = size_t(r) * size_t(w);
-      const float* src = map->rgb.data() + 3 * base;
-      float* dst = colour_.data() + 3 * base;
-      float* lum = lum_.data() + base;
-      const uint8_t* valid = masked ? map->valid.data() + base : nullptr;
-      const double dw = row_solid_angle_[size_t(r)];
-      const double* above = sat_.data() + size_t(r) * stride;
-      double* out = sat_.data() + (size_t(r) + 1) * stride;
-      out[0] = 0;
-      double s[3] = {0, 0, 0}, run = 0;
-      for (int c = 0; c < w; ++c) {
-        float a[3] = {src[3 * c], src[3 * c + 1], src[3 * c + 2]};
-        if (valid && !valid[c]) a[0] = a[1] = a[2] = 0;
-        for (int k = 0; k < 3; ++k) {
-          dst[3 * c + k] = a[k];
-          s[k] += a[k];
-        }
-        const float y = std::max(0.0f, luminance(a[0], a[1], a[2]));
-        lum[c] = y;
-        run += dw * double(y);
-        out[c + 1] = above[c + 1] + run;
-      }
-      for (int k = 0; k < 3; ++k) power[k] += dw * s[k];
-    }
+    // Rows in blocks of eight (see sweep_rows); the sums across rows stay in row order.
+    int r = 0;
+    for (; r + 8 <= h; r += 8) sweep_rows<8>(*map, r, power);
+    for (; r < h; ++r) sweep_rows<1>(*map, r, power);
     const double lum_power = luminance(power.data());
     const double table_power = sat_.back();
     if (!std::isfinite(lum_power) || !std::isfinite(table_power) || !(lum_power > 0) || !(table_power > 0)) {
@@ -136,6 +117,45 @@ class MedianCutSampler final : public Sampler {
   }
 
  private:
+  // Rows r .. r + K - 1: copies the colours (invalid pixels zeroed) and the clamped
+  // luminances, writes the rows of the summed-area table and adds the rows' power to `power`
+  // in row order. The element-wise work and the channel sums are the vector kernels' of
+  // sampling/row_sweep.h; each row's running sum is the same chain of additions as a row
+  // alone, the K rows in lockstep so that the CPU overlaps their chains.
+  template <int K>
+  void sweep_rows(const EnvMap& map, int r, std::array<double, 3>& power) {
+    const size_t w = size_t(map.width), stride = w + 1;
+    const bool masked = !map.valid.empty();
+    const float* colour[K];
+    const float* lum[K];
+    double* out[K];
+    double dw[K];
+    for (int k = 0; k < K; ++k) {
+      const size_t base = size_t(r + k) * w;
+      colour[k] = colour_.data() + 3 * base;
+      lum[k] = lum_.data() + base;
+      out[k] = sat_.data() + (size_t(r + k) + 1) * stride;
+      out[k][0] = 0;
+      dw[k] = row_solid_angle_[size_t(r + k)];
+      detail::colour_and_luminance_row(map.rgb.data() + 3 * base, masked ? map.valid.data() + base : nullptr, w,
+                                       false, colour_.data() + 3 * base, lum_.data() + base);
+    }
+    double s[K][6] = {};  // per row: r, g, b sums (the last three unused)
+    detail::add_channel_sums(colour, K, w, false, &s[0][0]);
+    const double* above = sat_.data() + size_t(r) * stride;
+    double run[K] = {};
+    for (size_t c = 0; c < w; ++c) {
+      run[0] += dw[0] * double(lum[0][c]);
+      out[0][c + 1] = above[c + 1] + run[0];
+      for (int k = 1; k < K; ++k) {
+        run[k] += dw[k] * double(lum[k][c]);
+        out[k][c + 1] = out[k - 1][c + 1] + run[k];
+      }
+    }
+    for (int k = 0; k < K; ++k)
+      for (int j = 0; j < 3; ++j) power[j] += dw[k] * s[k][j];
+  }
+
   double rect(int r0, int r1, int c0, int c1) const {
     const size_t stride = size_t(width_) + 1;
     const double* s = sat_.data();

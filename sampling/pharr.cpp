@@ -5,10 +5,12 @@
 // Every light carries 1/n of the luminance power with the colour of its pixel; the total is
 // then matched per channel to the map's power.
 //
-// Cost: prepare is one pass over the pixels (CDFs, per-channel power, a copy of the
-// colours so that place() does not depend on the caller's map staying alive); place is
-// two binary searches and one sincos per light. Buffers and the per-row geometry are
-// reused across frames; Halton points are cached across calls.
+// Cost: prepare is one pass over the pixels in blocks of eight rows (CDFs, per-channel
+// power, a copy of the colours so that place() does not depend on the caller's map staying
+// alive): the vector row kernels of sampling/row_sweep.h, then the serial luminance sums of
+// the eight rows in lockstep; 1.3-1.45x one plain read of the map (was 2.9x, docs/sampling.md).
+// place is two binary searches and one sincos per light. Buffers and the per-row geometry
+// are reused across frames; Halton points are cached across calls.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 #include "sampling/halton.h"
 #include "sampling/methods.h"
 #include "sampling/power.h"
+#include "sampling/row_sweep.h"
 
 namespace lp {
 namespace {
@@ -43,50 +46,10 @@ class PharrSampler final : public Sampler {
     row_cdf_.resize(size_t(h));
     std::array<double, 3> power{0, 0, 0};
     double marginal = 0;
-    const bool masked = !map->valid.empty();
-    for (int r = 0; r < h; ++r) {
-      const size_t base = size_t(r) * size_t(w);
-      const float* src = map->rgb.data() + 3 * base;
-      float* dst = colour_.data() + 3 * base;
-      float* cdf = cdf_.data() + base;
-      const uint8_t* valid = masked ? map->valid.data() + base : nullptr;
-      // Two partial sums per channel keep the add chains short.
-      double s0[3] = {0, 0, 0}, s1[3] = {0, 0, 0};
-      float run = 0;
-      int c = 0;
-      for (; c + 1 < w; c += 2) {
-        float a[3] = {src[3 * c], src[3 * c + 1], src[3 * c + 2]};
-        float b[3] = {src[3 * c + 3], src[3 * c + 4], src[3 * c + 5]};
-        if (valid) {
-          if (!valid[c]) a[0] = a[1] = a[2] = 0;
-          if (!valid[c + 1]) b[0] = b[1] = b[2] = 0;
-        }
-        for (int k = 0; k < 3; ++k) {
-          dst[3 * c + k] = a[k];
-          dst[3 * c + 3 + k] = b[k];
-          s0[k] += a[k];
-          s1[k] += b[k];
-        }
-        run += std::max(0.0f, luminance(a[0], a[1], a[2]));
-        cdf[c] = run;
-        run += std::max(0.0f, luminance(b[0], b[1], b[2]));
-        cdf[c + 1] = run;
-      }
-      for (; c < w; ++c) {
-        float a[3] = {src[3 * c], src[3 * c + 1], src[3 * c + 2]};
-        if (valid && !valid[c]) a[0] = a[1] = a[2] = 0;
-        for (int k = 0; k < 3; ++k) {
-          dst[3 * c + k] = a[k];
-          s0[k] += a[k];
-        }
-        run += std::max(0.0f, luminance(a[0], a[1], a[2]));
-        cdf[c] = run;
-      }
-      const double dw = row_solid_angle_[size_t(r)];
-      for (int k = 0; k < 3; ++k) power[k] += dw * (s0[k] + s1[k]);
-      marginal += dw * double(run);
-      row_cdf_[size_t(r)] = marginal;
-    }
+    // Rows in blocks of eight (see sweep_rows); the sums across rows stay in row order.
+    int r = 0;
+    for (; r + 8 <= h; r += 8) sweep_rows<8>(*map, r, power, marginal);
+    for (; r < h; ++r) sweep_rows<1>(*map, r, power, marginal);
     const double lum_power = luminance(power.data());
     if (!std::isfinite(lum_power) || !std::isfinite(marginal) || !(lum_power > 0) || !(marginal > 0)) {
       require_samplable(*map, "pharr");  // throws the shared message
@@ -148,6 +111,41 @@ class PharrSampler final : public Sampler {
   }
 
  private:
+  // Rows r .. r + K - 1: copies the colours (invalid pixels zeroed) and writes each row's
+  // luminance CDF, then adds the rows' power to `power` and `marginal` in row order. The
+  // element-wise work is the vector kernel's (sampling/row_sweep.h); each row's sums are
+  // the same chains of additions in the same order as before (two partial sums per
+  // channel, one running luminance sum), swept K rows at a time so that the CPU overlaps
+  // K independent chains instead of waiting on each addition (one row alone runs at the
+  // adder's latency: the speed of the whole plain read).
+  template <int K>
+  void sweep_rows(const EnvMap& map, int r, std::array<double, 3>& power, double& marginal) {
+    const size_t w = size_t(map.width);
+    const bool masked = !map.valid.empty();
+    const float* colour[K];
+    float* cdf[K];
+    for (int k = 0; k < K; ++k) {
+      const size_t base = size_t(r + k) * w;
+      colour[k] = colour_.data() + 3 * base;
+      cdf[k] = cdf_.data() + base;
+      detail::colour_and_luminance_row(map.rgb.data() + 3 * base, masked ? map.valid.data() + base : nullptr, w,
+                                       false, colour_.data() + 3 * base, cdf[k]);
+    }
+    // Per-channel sums: even pixels into s[k][0..2], odd into s[k][3..5].
+    double s[K][6] = {};
+    detail::add_channel_sums(colour, K, w, true, &s[0][0]);
+    // The luminance CDF, in place over the luminances.
+    float run[K] = {};
+    for (size_t c = 0; c < w; ++c)
+      for (int k = 0; k < K; ++k) cdf[k][c] = run[k] += cdf[k][c];
+    for (int k = 0; k < K; ++k) {
+      const double dw = row_solid_angle_[size_t(r + k)];
+      for (int j = 0; j < 3; ++j) power[j] += dw * (s[k][j] + s[k][3 + j]);
+      marginal += dw * double(run[k]);
+      row_cdf_[size_t(r + k)] = marginal;
+    }
+  }
+
   // Per-row geometry, a function of the layout and size only.
   void update_geometry(const EnvMap& map) {
     if (map.layout == geo_layout_ && map.width == geo_width_ && map.height == geo_height_) return;

@@ -1,0 +1,38 @@
+// The row passes of the row-grid samplers' prepare (pharr, mediancut, hemigon) in Google
+// Highway, compiled for every x86 target Highway knows and dispatched at run time (as
+// hdr/merge_kernel.h): one row of packed RGB radiance -> its colours with invalid pixels
+// zeroed and each pixel's luminance clamped at zero; rows' running channel sums in double.
+// Each lane does the scalar loop's operations in its order (bit-identical: no fused
+// multiply-add, sampling/CMakeLists.txt compiles this file with -ffp-contract=off).
+// Internal to sampling/; tests/sampling/row_sweep_test.cpp compares every compiled target
+// with the *_scalar loops.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace lp::detail {
+
+// For x < width, with p = rgb + 3 * (reversed ? width - 1 - x : x) and ok = !valid || valid[..]:
+//   colour[3x + c] = ok ? p[c] : 0
+//   lum[x] = y > 0 ? y : 0 with y = (0.2126f r + 0.7152f g) + 0.0722f b of colour (std::max(0.0f, y))
+// Returns true when a valid pixel's unclamped y is negative or NaN (hemigon rejects those).
+// `valid` may be null (every pixel valid); it is indexed like rgb (reversed too).
+bool colour_and_luminance_row(const float* rgb, const uint8_t* valid, size_t width, bool reversed, float* colour,
+                              float* lum);
+
+// The plain loop the kernel must equal bit for bit.
+bool colour_and_luminance_row_scalar(const float* rgb, const uint8_t* valid, size_t width, bool reversed,
+                                     float* colour, float* lum);
+
+// Adds `count` rows of packed RGB (`width` pixels each, e.g. colour rows from above) to
+// running sums in double, each row's in pixel order: sums[6k + c] += every pixel's channel c
+// of rows[k]; with `pairs`, even pixels go to sums[6k + c] and odd ones to sums[6k + 3 + c]
+// (two partial sums per channel, as pharr keeps them). The caller sets the start values.
+void add_channel_sums(const float* const* rows, size_t count, size_t width, bool pairs, double* sums);
+void add_channel_sums_scalar(const float* const* rows, size_t count, size_t width, bool pairs, double* sums);
+
+// The Highway target colour_and_luminance_row dispatches to on this CPU.
+const char* row_sweep_simd_target();
+
+}  // namespace lp::detail

@@ -1,0 +1,109 @@
+// sampling/row_sweep.h: the row kernels of the samplers' prepare give the scalar loops' bits
+// on every compiled Highway target (colours, clamped luminance, the bad-pixel flag, the
+// channel sums in both orders), forwards and reversed, with and without a mask, on widths
+// around every vector length, with negative, NaN, -0 and huge values among the pixels.
+#include <gtest/gtest.h>
+
+#include <hwy/targets.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "sampling/row_sweep.h"
+
+namespace lp {
+namespace {
+
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+std::vector<float> random_row(size_t pixels, std::mt19937& rng, bool hostile) {
+  std::lognormal_distribution<float> radiance(0.0f, 3.0f);
+  std::vector<float> row(3 * pixels);
+  for (float& v : row) v = radiance(rng);
+  if (hostile && pixels > 2) {  // values whose clamp or sign the kernel must get right
+    row[1] = -0.0f;
+    row[3] = -2.0f, row[4] = 0.1f, row[5] = 0.1f;  // negative luminance
+    row[3 * pixels - 2] = std::numeric_limits<float>::quiet_NaN();
+    row[6 % row.size()] = 3e38f;
+  }
+  return row;
+}
+
+TEST(RowSweep, EveryTargetEqualsTheScalarLoopsBitForBit) {
+  std::mt19937 rng(11);
+  const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  ASSERT_GE(targets.size(), 2u);  // at least the fallback and SSSE3: one would test nothing
+  const size_t widths[] = {1, 2, 3, 7, 8, 9, 15, 16, 17, 33, 360, 1025};
+  size_t flagged = 0;
+  for (const size_t w : widths)
+    for (int variant = 0; variant < 8; ++variant) {
+      const bool reversed = variant & 1, masked = variant & 2, hostile = variant & 4;
+      const std::vector<float> rgb = random_row(w, rng, hostile);
+      std::vector<uint8_t> valid(w);
+      for (uint8_t& v : valid) v = rng() % 4 != 0;
+      const uint8_t* mask = masked ? valid.data() : nullptr;
+      std::vector<float> colour0(3 * w), lum0(w);
+      const bool bad0 = detail::colour_and_luminance_row_scalar(rgb.data(), mask, w, reversed, colour0.data(),
+                                                                lum0.data());
+      flagged += bad0;
+      // Four rows of sums: the kernel's lockstep group, and one more row on its own.
+      std::vector<std::vector<float>> rows;
+      for (int k = 0; k < 5; ++k) rows.push_back(random_row(w, rng, false));
+      const float* row_ptr[5] = {rows[0].data(), rows[1].data(), rows[2].data(), rows[3].data(), rows[4].data()};
+      std::vector<double> sums_single0(30, 0.5), sums_pairs0(30, 0.25);
+      detail::add_channel_sums_scalar(row_ptr, 5, w, false, sums_single0.data());
+      detail::add_channel_sums_scalar(row_ptr, 5, w, true, sums_pairs0.data());
+      for (const int64_t target : targets) {
+        hwy::SetSupportedTargetsForTest(target);
+        ASSERT_STREQ(detail::row_sweep_simd_target(), hwy::TargetName(target));
+        const std::string where = std::string(hwy::TargetName(target)) + ", width " + std::to_string(w) +
+                                  (reversed ? ", reversed" : "") + (masked ? ", masked" : "") +
+                                  (hostile ? ", hostile" : "");
+        std::vector<float> colour(3 * w), lum(w);
+        const bool bad = detail::colour_and_luminance_row(rgb.data(), mask, w, reversed, colour.data(), lum.data());
+        EXPECT_EQ(bad, bad0) << where;
+        EXPECT_TRUE(same_bits(colour, colour0)) << where;
+        EXPECT_TRUE(same_bits(lum, lum0)) << where;
+        std::vector<double> single(30, 0.5), pairs(30, 0.25);
+        detail::add_channel_sums(row_ptr, 5, w, false, single.data());
+        detail::add_channel_sums(row_ptr, 5, w, true, pairs.data());
+        // Single sums use entries 0..2 of each row's six; the rest must stay untouched.
+        EXPECT_TRUE(same_bits(single, sums_single0)) << where;
+        EXPECT_TRUE(same_bits(pairs, sums_pairs0)) << where;
+      }
+      hwy::SetSupportedTargetsForTest(0);
+    }
+  EXPECT_GT(flagged, 10u);  // the hostile rows did reach the flag
+}
+
+// The scalar loops themselves against the definitions written out by hand.
+TEST(RowSweep, ScalarLoopsFollowTheirDefinition) {
+  const std::vector<float> rgb = {1, 2, 3, -5, 0, 0, 4, 5, 6};
+  const uint8_t valid[3] = {1, 1, 0};
+  std::vector<float> colour(9), lum(3);
+  EXPECT_TRUE(detail::colour_and_luminance_row_scalar(rgb.data(), valid, 3, true, colour.data(), lum.data()));
+  // Reversed: pixel 2 (invalid: zero), then pixel 1 (negative luminance: clamped), pixel 0.
+  EXPECT_EQ(colour, (std::vector<float>{0, 0, 0, -5, 0, 0, 1, 2, 3}));
+  EXPECT_EQ(lum[0], 0.0f);
+  EXPECT_EQ(lum[1], 0.0f);
+  EXPECT_EQ(lum[2], 0.2126f * 1 + 0.7152f * 2 + 0.0722f * 3);
+  const float* rows[1] = {rgb.data()};
+  double pairs[6] = {0, 0, 0, 0, 0, 0};
+  detail::add_channel_sums_scalar(rows, 1, 3, true, pairs);
+  EXPECT_EQ(pairs[0], 5.0);   // even pixels 0 and 2
+  EXPECT_EQ(pairs[3], -5.0);  // odd pixel 1
+  double single[6] = {0, 0, 0, 9, 9, 9};
+  detail::add_channel_sums_scalar(rows, 1, 3, false, single);
+  EXPECT_EQ(single[2], 9.0);
+  EXPECT_EQ(single[3], 9.0);
+}
+
+}  // namespace
+}  // namespace lp

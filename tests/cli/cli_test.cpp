@@ -192,7 +192,7 @@ TEST(Cli, SampleAutoCountHoldsTheErrorMeasureAskedFor) {
   CliRun diffuse = lightprobe("sample --json " + map + " --method q2tree --n auto --target-error 0.1 -o " + out);
   ASSERT_EQ(diffuse.code, 0) << diffuse.err;
   EXPECT_GT(report["lights"].get<int>(), nlohmann::json::parse(diffuse.out)["lights"].get<int>());
-  for (const std::string command : {"sample " + map + " --n auto --error-measure specular -o " + out,
+  for (const std::string& command : {"sample " + map + " --n auto --error-measure specular -o " + out,
                                     "stream --source replay:" + map + " --n auto --error-measure specular"}) {
     const CliRun bad = lightprobe(command);
     EXPECT_EQ(bad.code, 2) << command;

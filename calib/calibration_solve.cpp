@@ -170,9 +170,25 @@ ModelFit solve_mrcal(const CalibrationProblem& pr, const ViewSubset& views, cons
 }
 
 const ModelFit& CandidateSolver::get(LensType type) {
-  auto it = cache_.find(type);
-  if (it != cache_.end()) return it->second;
-  return adopt(type, solve(type));
+  {
+    std::unique_lock lock(mutex_);
+    solved_.wait(lock, [&] { return !solving_.count(type); });
+    auto it = cache_.find(type);
+    if (it != cache_.end()) return it->second;
+    solving_.insert(type);
+  }
+  // Solved outside the lock: other candidates proceed meanwhile. (Seeds depend on other
+  // candidates without cycles, so a thread never waits for a fit it is solving itself.)
+  ModelFit f;
+  try {
+    f = solve(type);
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    solving_.erase(type);
+    solved_.notify_all();
+    throw;
+  }
+  return adopt(type, std::move(f));
 }
 
 const ModelFit& CandidateSolver::adopt(LensType type, ModelFit f) {
@@ -180,7 +196,11 @@ const ModelFit& CandidateSolver::adopt(LensType type, ModelFit f) {
     f.ok = false;
     f.error = "the fit cannot image some corners";
   }
-  return cache_.insert_or_assign(type, std::move(f)).first->second;
+  std::lock_guard lock(mutex_);
+  const ModelFit& kept = cache_.try_emplace(type, std::move(f)).first->second;
+  solving_.erase(type);
+  solved_.notify_all();
+  return kept;
 }
 
 ModelFit CandidateSolver::solve(LensType type) {

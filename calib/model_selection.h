@@ -38,6 +38,9 @@ struct ModelCandidate {
   int params = 0;         // free intrinsics
   bool ok = false;
   std::string error;      // why the fit failed (when !ok)
+  // Not ok because its fit of every used view misses the corners (rms_px above
+  // CandidateOptions::screen_rms_px): the halves were not fitted, nothing below rms_px is.
+  bool screened = false;
   double rms_px = 0;                 // reprojection RMS (per corner, 2-D) of the full fit
   // One half's intrinsics on the other half's corners (poses re-solved with intrinsics
   // fixed: PnP on the unprojected rays, then pixel refinement), both ways; inf when some
@@ -86,10 +89,27 @@ struct CandidateFits {
   CandidateSolver full, halves[2];
 };
 
+// What the candidate stage solves, and how.
+struct CandidateOptions {
+  // Screening: a candidate whose fit of every used view has a reprojection RMS above this
+  // is not fitted on the halves (it is reported with its RMS, not ok, `screened`). It could
+  // not be chosen: the incumbent rule takes only candidates within
+  // SelectionOptions::fit_max_rms_px (the default here), and the halves of such a model
+  // are most of its cost (pinhole, plumb_bob and OpenCV8 on fisheyes and mirrors, Kannala-
+  // Brandt on mirrors). Not applied when no candidate is within it (no model fits: the least
+  // bad one is still ranked on its halves). Infinity: every candidate's halves.
+  double screen_rms_px = 1.5;
+  // Solve the candidates (and their halves) on every core (calib/parallel_jobs.h); the
+  // table is the same either way.
+  bool parallel = true;
+};
+
 // Stage "solve candidates": one table row per candidate, in the order given (full fit,
-// halves, odd/even cross-validation, held-out RMS). Progress stage "candidates".
+// halves, odd/even cross-validation, held-out RMS). Progress stage "candidates" (two steps:
+// the full fits, the halves).
 std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& problem, CandidateFits& fits,
                                              const std::vector<LensType>& candidates,
+                                             const CandidateOptions& options = {},
                                              const StageProgress& progress = {});
 
 enum class SelectionRule {
@@ -162,6 +182,9 @@ struct SelectionOptions {
   bool noise_from_splits = false;
   // false when the model is forced (one candidate): no noise jackknife (cv_noise_px NaN).
   bool measure_noise = true;
+  // The repeated splits' and the noise jackknife's refits on every core (the numbers are the
+  // same either way).
+  bool parallel = true;
 };
 
 struct SelectionReport {

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "calib/calibration_solve.h"
+#include "calib/parallel_jobs.h"
 #include "core/error.h"
 
 namespace lp {
@@ -28,6 +29,9 @@ std::optional<LensType> choose_reference(const CalibrationProblem& pr, Candidate
   }
   CandidateSolver sampled(pr, sample);
   CandidateSolver& chooser = sample.size() == fitter.views().size() ? fitter : sampled;
+  // The references' fits on every core (they are independent); the choice below reads them.
+  run_jobs(options.references.size(), [&](size_t i) { chooser.get(options.references[i]); },
+           options.parallel ? 0 : 1);
   std::optional<LensType> ref;
   double best_rms = std::numeric_limits<double>::infinity();
   for (LensType r : options.references) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <set>
 
 #include "calib/calibration_problem.h"
@@ -244,6 +245,56 @@ TEST(ModelSelection, PicksTheFewestParametersWithinTheMeasuredNoise) {
     if (c.within_noise) {
       EXPECT_GE(c.params, table[sel.selected].params) << c.name;
     }
+}
+
+// The screening of the candidate stage (CandidateOptions::screen_rms_px): a wide plumb_bob
+// lens (94 deg across) that a pinhole cannot fit (RMS ~4 px). The pinhole's halves are not
+// fitted; every other number of the table is the one of a run without screening, and the
+// rows are the same whether the candidates are solved on one thread or on all.
+TEST(ModelSelection, ScreeningSkipsTheHalvesOfAModelThatMissesTheCorners) {
+  const CameraModel truth{"LENSMODEL_OPENCV5", {600, 601, 639.2, 481.7, -0.28, 0.09, 0, 0, -0.012}, 1280, 960};
+  const auto corners = project_board_views(truth, kBoard, 10, 40, 700, 0.2, 4, 60);
+  ASSERT_GE(corners.size(), 8u);
+  const CalibrationProblem pr = problem_for(truth);
+  const std::vector<LensType> types = {LensType::Pinhole, LensType::OpenCV5, LensType::KannalaBrandt};
+  auto views = make_board_views(corners, pr, "test", true);
+  auto table_with = [&](double screen_rms_px, bool parallel) {
+    CandidateFits fits(pr, all_of(views));
+    CandidateOptions o;
+    o.screen_rms_px = screen_rms_px;
+    o.parallel = parallel;
+    return solve_candidates(pr, fits, types, o);
+  };
+  const auto all = table_with(std::numeric_limits<double>::infinity(), false);
+  const auto screened = table_with(1.5, true);
+  ASSERT_EQ(all.size(), 3u);
+  ASSERT_EQ(screened.size(), 3u);
+  std::printf("  RMS px: pinhole %.3f, plumb_bob %.3f, Kannala-Brandt %.3f\n", all[0].rms_px, all[1].rms_px,
+              all[2].rms_px);
+  // The pinhole misses the corners by far more than their noise; the others fit them.
+  EXPECT_GT(all[0].rms_px, 1.5);
+  EXPECT_LT(all[1].rms_px, 0.35);
+  EXPECT_LT(all[2].rms_px, 0.5);
+  EXPECT_TRUE(all[0].ok);
+  EXPECT_GT(all[0].cross_validation_px, 0);
+  EXPECT_TRUE(screened[0].screened);
+  EXPECT_FALSE(screened[0].ok);
+  EXPECT_EQ(screened[0].rms_px, all[0].rms_px);  // the full fit is still made and reported
+  EXPECT_EQ(screened[0].params, 4);
+  EXPECT_EQ(screened[0].cross_validation_px, 0);  // no halves
+  for (size_t i = 1; i < 3; ++i) {
+    EXPECT_FALSE(screened[i].screened) << all[i].name;
+    EXPECT_TRUE(screened[i].ok) << all[i].name;
+    EXPECT_EQ(screened[i].rms_px, all[i].rms_px) << all[i].name;
+    EXPECT_EQ(screened[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
+    EXPECT_EQ(screened[i].heldout_rms_px, all[i].heldout_rms_px) << all[i].name;
+  }
+  // When no candidate is within the limit, none is screened: the least bad is still ranked.
+  const auto none_fit = table_with(0.01, true);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_FALSE(none_fit[i].screened) << all[i].name;
+    EXPECT_EQ(none_fit[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
+  }
 }
 
 TEST(ViewDiagnostics, CoverageCountsTheUsedInliersAndLeverageFlagsTheRimView) {

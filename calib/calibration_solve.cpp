@@ -203,7 +203,48 @@ const ModelFit& CandidateSolver::adopt(LensType type, ModelFit f) {
   return kept;
 }
 
+namespace {
+
+// The models whose OpenCV seed is cubic in the views (SeedOptions::sample_views).
+bool seeds_on_a_sample(LensType type) {
+  return type == LensType::Pinhole || type == LensType::OpenCV5 || type == LensType::OpenCV8 ||
+         type == LensType::OmnidirMei;
+}
+
+}  // namespace
+
 ModelFit CandidateSolver::solve(LensType type) {
+  const bool mei = type == LensType::OmnidirMei;
+  if (seed_.sample_views >= 4 && views_.size() >= 2 * size_t(seed_.sample_views) && seeds_on_a_sample(type) &&
+      (mei || problem_.solve.use_mrcal)) {
+    // Solved on the sample, every view posed under that fit, then refined on all of them.
+    const ViewSubset sample = evenly_spaced(views_, size_t(seed_.sample_views));
+    CandidateSolver on_sample(problem_, sample, seed_);
+    const ModelFit& s = on_sample.get(type);
+    if (s.ok) {
+      ModelFit seed = s;
+      seed.poses.clear();
+      bool posed = true;
+      for (size_t i = 0, j = 0; i < views_.size() && posed; ++i) {
+        if (j < sample.size() && sample[j] == views_[i]) {
+          seed.poses.push_back(s.poses[j++]);
+        } else if (const auto p = solve_pose(problem_, s.model, s.warp, *views_[i])) {
+          seed.poses.push_back(*p);
+        } else {
+          posed = false;
+        }
+      }
+      if (posed) {
+        ModelFit f = mei ? refine_mei(problem_, views_, seed)
+                         : solve_mrcal(problem_, views_, s.model.lensmodel, s.model.intrinsics, seed.poses, false, s.warp);
+        if (f.ok) {
+          f.solver = s.solver + " on " + std::to_string(sample.size()) + " views, refined on all";
+          return f;
+        }
+      }
+    }
+    // A view the sample's fit cannot pose, or a refinement that fails: the whole solve.
+  }
   const SeedReport seed =
       seed_candidate(problem_, views_, type, [this](LensType t) -> const ModelFit& { return get(t); }, seed_);
   if (!seed.fit.ok) return seed.fit;

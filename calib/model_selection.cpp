@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
+#include <map>
 #include <numeric>
 #include <random>
 #include <utility>
@@ -323,22 +325,59 @@ CandidateFits::CandidateFits(const CalibrationProblem& pr, ViewSubset used_views
 std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, CandidateFits& fits,
                                              const std::vector<LensType>& candidates, const CandidateOptions& o,
                                              const StageProgress& progress) {
-  // Every full fit first (in parallel), so that the screening knows which halves to fit.
-  report_progress(progress, "candidates", 0, 2);
-  solve_all({&fits.full}, candidates, o.parallel);
+  report_progress(progress, "candidates", 0, 3);
+  // Many views: one short solve of each candidate on a sample first; a model that misses
+  // even those corners by far is not fitted on every view (see CandidateOptions).
+  std::vector<LensType> fitted = candidates;
+  std::map<LensType, ModelCandidate> on_sample;
+  const ViewSubset sample = evenly_spaced(fits.used, size_t(std::max(4, o.sample_views)));
+  if (std::isfinite(o.screen_rms_px) && 2 * sample.size() <= fits.used.size()) {
+    CandidateSolver sampled(pr, sample);
+    solve_all({&sampled}, candidates, o.parallel);
+    double best = kInf;
+    for (LensType type : candidates)
+      if (const ModelFit& f = sampled.get(type); f.ok) best = std::min(best, fit_rms(pr, f, sample));
+    if (best <= o.screen_rms_px) {  // else nothing fits the sample: every candidate on every view
+      fitted.clear();
+      for (LensType type : candidates) {
+        const ModelFit& f = sampled.get(type);
+        const double rms = f.ok ? fit_rms(pr, f, sample) : kInf;
+        if (!f.ok || rms <= o.sample_margin * o.screen_rms_px) {
+          fitted.push_back(type);
+          continue;
+        }
+        ModelCandidate& c = on_sample[type];
+        c.name = candidate_name(type);
+        c.lensmodel = f.model.lensmodel;
+        c.params = f.params;
+        c.rms_px = rms;
+        c.screened = true;
+        char buf[200];
+        std::snprintf(buf, sizeof buf,
+                      "screened out: RMS %.3f px on %zu of the %zu views, above %.3g x %.3g px; not fitted on all", rms,
+                      sample.size(), fits.used.size(), o.sample_margin, o.screen_rms_px);
+        c.error = buf;
+      }
+    }
+  }
+  // The full fits, so that the screening knows which halves to fit.
+  report_progress(progress, "candidates", 1, 3);
+  solve_all({&fits.full}, fitted, o.parallel);
   double best_rms = kInf;
-  for (LensType type : candidates)
+  for (LensType type : fitted)
     if (const ModelFit& f = fits.full.get(type); f.ok) best_rms = std::min(best_rms, fit_rms(pr, f, fits.used));
   // No candidate fits: nothing is screened (the least bad one is still ranked on its halves).
   const double screen = best_rms <= o.screen_rms_px ? o.screen_rms_px : kInf;
   std::vector<LensType> kept;
-  for (LensType type : candidates)
+  for (LensType type : fitted)
     if (const ModelFit& f = fits.full.get(type); f.ok && fit_rms(pr, f, fits.used) <= screen) kept.push_back(type);
-  report_progress(progress, "candidates", 1, 2);
+  report_progress(progress, "candidates", 2, 3);
   solve_all({&fits.halves[0], &fits.halves[1]}, kept, o.parallel);
   std::vector<ModelCandidate> table(candidates.size());
-  run_jobs(candidates.size(), [&](size_t i) { table[i] = evaluate(pr, fits, candidates[i], screen); },
-           o.parallel ? 0 : 1);
+  run_jobs(candidates.size(), [&](size_t i) {
+    const auto it = on_sample.find(candidates[i]);
+    table[i] = it != on_sample.end() ? it->second : evaluate(pr, fits, candidates[i], screen);
+  }, o.parallel ? 0 : 1);
   return table;
 }
 

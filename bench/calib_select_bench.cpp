@@ -194,7 +194,7 @@ const bool registered = [] {
                                    [set, forced](benchmark::State& st) { BM_Select(st, set, forced); })
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime()
-          ->Iterations(3);
+          ->Iterations(1);  // seconds to a minute a run: repetitions (performance.sh) give the median
   }
   return true;
 }();

@@ -1,7 +1,9 @@
 // Stages "solve candidates" and "cross-validate and select" of a geometric calibration.
 //
 // Every candidate is solved (calibration_solve.h) on the views left after outlier rejection
-// and on each odd/even half of them. Accuracy is cross-validation: the two half-models
+// and on each odd/even half of them, except those screened out as unable to fit the lens
+// (CandidateOptions: one short solve on a sample, then the fit of every view), the
+// independent solves on every core. Accuracy is cross-validation: the two half-models
 // compared over the area the boards covered (unproject with A, best rotation between the
 // two camera frames, project with B): the pixel disagreement is what a user can expect from
 // recalibrating (mrcal's "projection difference"). The held-out RMS is each half's model on

@@ -44,6 +44,13 @@ ViewSubset all_of(const std::vector<BoardView>& views) {
   return s;
 }
 
+ViewSubset evenly_spaced(const ViewSubset& views, size_t count) {
+  if (views.size() <= count) return views;
+  ViewSubset spaced;
+  for (size_t k = 0; k < count; ++k) spaced.push_back(views[k * views.size() / count]);
+  return spaced;
+}
+
 std::array<double, 3> board_point(const BoardSpec& b, int k, const BoardWarp& warp) {
   return {(k % b.cols) * b.square_mm, (k / b.cols) * b.square_mm, board_warp_z(b, k, warp)};
 }

@@ -79,6 +79,9 @@ std::vector<BoardView> make_board_views(const std::vector<std::vector<std::array
                                         const CalibrationProblem& problem, const std::string& who,
                                         bool check_inside);
 ViewSubset all_of(const std::vector<BoardView>& views);
+// At most `count` of `views`, evenly spaced (view k * size / count): all of them when there
+// are no more.
+ViewSubset evenly_spaced(const ViewSubset& views, size_t count);
 
 // Board-frame point of corner k (mm), on a board flexed by `warp`.
 std::array<double, 3> board_point(const BoardSpec& board, int k, const BoardWarp& warp = {});

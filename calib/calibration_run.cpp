@@ -63,6 +63,8 @@ std::string table_text(const CalibrationResult& r) {
                        std::isfinite(c.linear_sigma_px) ? fmt::format("{:.3f}", c.linear_sigma_px) : "-",
                        incumbent ? fmt::format("{}/{}", c.split_wins, r.cv_splits) : "",
                        c.name == r.selected ? "   <- chosen" : (c.within_noise ? "   (within noise)" : ""));
+    else if (c.screened)
+      s += fmt::format("{:<44} {:>6} {:>9.3f} {}\n", c.name, c.params, c.rms_px, c.error);
     else
       s += fmt::format("{:<44} failed: {}\n", c.name, c.error);
   if (r.table.size() == 1 || !std::isfinite(r.cv_noise_px))  // a forced model: no selection, no noise estimate
@@ -188,7 +190,7 @@ nlohmann::json table_json(const CalibrationResult& r) {
   nlohmann::json table = nlohmann::json::array();
   for (const ModelCandidate& c : r.table)
     table.push_back({{"model", c.name}, {"lensmodel", c.lensmodel}, {"params", c.params}, {"ok", c.ok},
-                     {"error", c.error}, {"rms_px", c.rms_px}, {"heldout_rms_px", c.heldout_rms_px},
+                     {"error", c.error}, {"screened", c.screened}, {"rms_px", c.rms_px}, {"heldout_rms_px", c.heldout_rms_px},
                      {"cross_validation_px", c.cross_validation_px},
                      {"cross_validation_splits_px", c.cross_validation_splits_px},
                      {"cross_validation_repeated_px", num(c.cross_validation_repeated_px)},

@@ -104,9 +104,25 @@ ModelFit solve_mrcal(const CalibrationProblem& pr, const ViewSubset& views, cons
 }
 
 const ModelFit& CandidateSolver::get(LensType type) {
-  auto it = cache_.find(type);
-  if (it != cache_.end()) return it->second;
-  return adopt(type, solve(type));
+  {
+    std::unique_lock lock(mutex_);
+    solved_.wait(lock, [&] { return !solving_.count(type); });
+    auto it = cache_.find(type);
+    if (it != cache_.end()) return it->second;
+    solving_.insert(type);
+  }
+  // Solved outside the lock: other candidates proceed meanwhile. (Seeds depend on other
+  // candidates without cycles, so a thread never waits for a fit it is solving itself.)
+  ModelFit f;
+  try {
+    f = solve(type);
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    solving_.erase(type);
+    solved_.notify_all();
+    throw;
+  }
+  return adopt(type, std::move(f));
 }
 
 const ModelFit& CandidateSolver::adopt(LensType type, ModelFit f) {
@@ -114,10 +130,55 @@ const ModelFit& CandidateSolver::adopt(LensType type, ModelFit f) {
     f.ok = false;
     f.error = "the fit cannot image some corners";
   }
-  return cache_.insert_or_assign(type, std::move(f)).first->second;
+  std::lock_guard lock(mutex_);
+  const ModelFit& kept = cache_.try_emplace(type, std::move(f)).first->second;
+  solving_.erase(type);
+  solved_.notify_all();
+  return kept;
 }
 
+namespace {
+
+// The models whose OpenCV seed is cubic in the views (SeedOptions::sample_views).
+bool seeds_on_a_sample(LensType type) {
+  return type == LensType::Pinhole || type == LensType::OpenCV5 || type == LensType::OpenCV8 ||
+         type == LensType::OmnidirMei;
+}
+
+}  // namespace
+
 ModelFit CandidateSolver::solve(LensType type) {
+  const bool mei = type == LensType::OmnidirMei;
+  if (seed_.sample_views >= 4 && views_.size() >= 2 * size_t(seed_.sample_views) && seeds_on_a_sample(type) &&
+      (mei || problem_.solve.use_mrcal)) {
+    // Solved on the sample, every view posed under that fit, then refined on all of them.
+    const ViewSubset sample = evenly_spaced(views_, size_t(seed_.sample_views));
+    CandidateSolver on_sample(problem_, sample, seed_);
+    const ModelFit& s = on_sample.get(type);
+    if (s.ok) {
+      ModelFit seed = s;
+      seed.poses.clear();
+      bool posed = true;
+      for (size_t i = 0, j = 0; i < views_.size() && posed; ++i) {
+        if (j < sample.size() && sample[j] == views_[i]) {
+          seed.poses.push_back(s.poses[j++]);
+        } else if (const auto p = solve_pose(problem_, s.model, s.warp, *views_[i])) {
+          seed.poses.push_back(*p);
+        } else {
+          posed = false;
+        }
+      }
+      if (posed) {
+        ModelFit f = mei ? refine_mei(problem_, views_, seed)
+                         : solve_mrcal(problem_, views_, s.model.lensmodel, s.model.intrinsics, seed.poses, false, s.warp);
+        if (f.ok) {
+          f.solver = s.solver + " on " + std::to_string(sample.size()) + " views, refined on all";
+          return f;
+        }
+      }
+    }
+    // A view the sample's fit cannot pose, or a refinement that fails: the whole solve.
+  }
   const SeedReport seed =
       seed_candidate(problem_, views_, type, [this](LensType t) -> const ModelFit& { return get(t); }, seed_);
   if (!seed.fit.ok) return seed.fit;

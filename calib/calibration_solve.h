@@ -13,7 +13,10 @@
 // bit-identical intrinsics.
 #pragma once
 
+#include <condition_variable>
 #include <map>
+#include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -37,6 +40,10 @@ ModelFit solve_mrcal(const CalibrationProblem& problem, const ViewSubset& views,
 
 // Every candidate of one set of views, each solved once, on demand: a candidate's seed may
 // need another's solve (stereographic from Kannala-Brandt), which is then shared.
+// Thread-safe: several threads may ask for candidates at once (the selection solves them in
+// parallel); each fit is solved by one thread, and a thread that asks for a fit another is
+// solving waits for it. A fit, once made, is never replaced (references stay valid), and is
+// the same whichever thread made it: every solve is a function of the views alone.
 class CandidateSolver {
  public:
   CandidateSolver(const CalibrationProblem& problem, ViewSubset views, SeedOptions seed = {})
@@ -45,7 +52,8 @@ class CandidateSolver {
   // The solved fit of candidate `type` (not ok, with the reason, when it cannot be fitted or
   // cannot image some inlier corner).
   const ModelFit& get(LensType type);
-  // A fit of `type` on these views made elsewhere (warm-started): used instead of solving.
+  // A fit of `type` on these views made elsewhere (warm-started): used instead of solving
+  // (ignored when that candidate was solved already).
   const ModelFit& adopt(LensType type, ModelFit fit);
 
  private:
@@ -53,6 +61,9 @@ class CandidateSolver {
   const CalibrationProblem& problem_;
   ViewSubset views_;
   SeedOptions seed_;
+  std::mutex mutex_;
+  std::condition_variable solved_;
+  std::set<LensType> solving_;  // being solved by some thread
   std::map<LensType, ModelFit> cache_;
 };
 

@@ -3,6 +3,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "calib/calibration_seed.h"
 #include "calib/calibration_solve.h"
@@ -47,6 +50,7 @@ OutlierOptions outlier_options(const CalibrateOptions& o) {
   out.rounds = o.outlier_rounds;
   out.reference_views = o.reference_views;
   out.max_view_outlier_fraction = o.max_view_outlier_fraction;
+  out.parallel = o.parallel;
   if (!o.model.empty()) out.model = candidate_lens_type(o.model);
   return out;
 }
@@ -64,6 +68,7 @@ SelectionOptions selection_options(const CalibrateOptions& o) {
   out.min_rule_splits = o.selection_min_rule_splits;
   out.perspective_field_deg = o.selection_perspective_field_deg;
   out.measure_noise = o.model.empty();
+  out.parallel = o.parallel;
   return out;
 }
 
@@ -113,6 +118,25 @@ BoardWarpReport board_warp_report(const CalibrationProblem& pr, const ModelFit& 
   return w;
 }
 
+// The solvers allocate and free dense matrices by the thousand (cv::omnidir::calibrate zeroes
+// a fresh Jacobian and normal matrix every iteration; cv::calibrateCamera, Ceres, mrcal do
+// alike): with glibc's defaults the heap's top is handed back to the kernel after each and
+// faulted in again, zeroed, by the next. On this project's 2-core VM, page faults are dear:
+// `calib geometric` on fisheye1 spent 6.5 s of 16.5 in the kernel and 58 % of its samples
+// in memset's faults; with 64 MB kept at the heap's top it took 6 s, 0.15 s in the kernel,
+// the same answer (docs/calibration.md, "Selection at the cost of one solve"). Process-wide
+// and never undone: the memory stays with the process, as it would once touched anyway.
+void keep_heap_top() {
+#if defined(__GLIBC__)
+  static const bool once = [] {
+    mallopt(M_TOP_PAD, 64 << 20);
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);  // large blocks from the heap too, reused
+    return true;
+  }();
+  (void)once;
+#endif
+}
+
 void take_diagnostics(CalibrationResult& res, ViewDiagnostics d) {
   res.view_rms_px = std::move(d.view_rms_px);
   res.residuals = std::move(d.residuals);
@@ -137,6 +161,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   const std::vector<LensType> candidates = candidate_types(options);
   const CalibrationProblem pr = problem_of(board, width, height, options);
   std::vector<BoardView> views = make_board_views(corners_per_view, pr, "calibrate", true);
+  keep_heap_top();
   CalibrationResult res;
   res.views = initial_view_reports(corners_per_view);
 
@@ -149,7 +174,10 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   // Candidates on the views left and their halves; the selection.
   CandidateFits fits(pr, used_views(views, outliers.view_used));
   if (std::optional<ModelFit> f = reference_fit(pr, outliers, fits.used)) fits.full.adopt(outliers.reference, *f);
-  res.table = solve_candidates(pr, fits, candidates, options.progress);
+  CandidateOptions co;
+  co.screen_rms_px = options.model.empty() ? options.fit_max_rms_px : std::numeric_limits<double>::infinity();
+  co.parallel = options.parallel;
+  res.table = solve_candidates(pr, fits, candidates, co, options.progress);
   const SelectionReport sel = select_model(pr, fits, res.table, selection_options(options), options.progress);
   take_selection(res, sel, res.table[sel.selected]);
   const LensType pick = candidate_lens_type(res.selected);
@@ -164,7 +192,8 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   std::vector<CameraModel> leave_one_out;
   if (options.leverage)
     leave_one_out = view_leverage(pr, views, outliers.view_used, pick, chosen, fits.mask, fits.step, res.views,
-                                  {options.leverage_flag_factor, options.leverage_min_px}, options.progress);
+                                  {options.leverage_flag_factor, options.leverage_min_px, options.parallel},
+                                  options.progress);
   res.model.rms_reprojection_px = res.table[sel.selected].rms_px;
   res.model.cross_validation_px = res.table[sel.selected].cross_validation_px;
 

@@ -90,6 +90,9 @@ struct CalibrateOptions {
   // `leverage` (its leave-one-out fits).
   bool uncertainty = true;
   int uncertainty_nx = UncertaintyOptions{}.nx, uncertainty_ny = UncertaintyOptions{}.ny;
+  // Run the independent solves of a stage (candidates, halves, splits, leave-one-out refits)
+  // on every core (calib/parallel_jobs.h); the result is the same either way.
+  bool parallel = true;
   // Called as the solve goes, from the calling thread: the stage ("outlier rejection",
   // "candidates", "repeated splits", "noise jackknife", "leverage", "uncertainty", then
   // "done"), steps done and steps in that stage. Empty: nothing is reported.

@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
+#include <map>
 #include <numeric>
 #include <random>
 #include <utility>
 
+#include "calib/parallel_jobs.h"
 #include "calib/projection_difference.h"
 #include "core/error.h"
 
@@ -16,6 +19,38 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+std::string fmt_screened(double rms_px, double limit_px) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "screened out: RMS %.3f px of every view above %.3g px, halves not fitted", rms_px,
+                limit_px);
+  return buf;
+}
+
+// The order the candidates' solves start in (run_jobs): a seed that needs another fit
+// (stereographic: Kannala-Brandt's, else pinhole's; splined: stereographic's) after it, and
+// the slow solves first so that the last job to finish is a short one.
+int start_rank(LensType t) {
+  switch (t) {
+    case LensType::OmnidirMei: return 0;
+    case LensType::OpenCV8: return 1;
+    case LensType::KannalaBrandt: return 2;
+    case LensType::OpenCV5: return 3;
+    case LensType::Pinhole: return 4;
+    case LensType::Stereographic: return 5;
+    case LensType::SplinedStereographic: return 6;
+    default: return 3;
+  }
+}
+
+// Every fit of `types` in `solvers` (each solver's own views), on every core.
+void solve_all(std::vector<CandidateSolver*> solvers, std::vector<LensType> types, bool parallel) {
+  std::stable_sort(types.begin(), types.end(), [](LensType a, LensType b) { return start_rank(a) < start_rank(b); });
+  std::vector<std::pair<CandidateSolver*, LensType>> jobs;
+  for (LensType t : types)
+    for (CandidateSolver* s : solvers) jobs.push_back({s, t});
+  run_jobs(jobs.size(), [&](size_t i) { jobs[i].first->get(jobs[i].second); }, parallel ? 0 : 1);
+}
+
 ViewSubset half_of(const ViewSubset& used, int h) {
   ViewSubset s;
   for (size_t i = 0; i < used.size(); ++i)
@@ -23,8 +58,9 @@ ViewSubset half_of(const ViewSubset& used, int h) {
   return s;
 }
 
-// One table row: full fit, halves, cross-validation, held-out RMS.
-ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensType type) {
+// One table row: full fit, halves, cross-validation, held-out RMS. screen_rms_px: a full fit
+// above it is screened out (see CandidateOptions::screen_rms_px), its halves not fitted.
+ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensType type, double screen_rms_px) {
   ModelCandidate c;
   c.name = candidate_name(type);
   const ModelFit& f = fits.full.get(type);
@@ -37,6 +73,11 @@ ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensT
   c.rms_px = fit_rms(pr, f, fits.used);
   c.model = f.model;
   c.model.rms_reprojection_px = c.rms_px;
+  if (c.rms_px > screen_rms_px) {
+    c.screened = true;
+    c.error = fmt_screened(c.rms_px, screen_rms_px);
+    return c;
+  }
   const ModelFit& a = fits.halves[0].get(type);
   const ModelFit& b = fits.halves[1].get(type);
   if (!a.ok || !b.ok) {
@@ -60,21 +101,32 @@ ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensT
 bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::vector<ModelCandidate>& table,
                         const std::vector<std::vector<int>>& splits, double best_odd_even,
                         const SelectionOptions& o, const StageProgress& progress) {
-  bool repeated = false;
   if (splits.size() <= 1) return false;
-  for (auto& c : table) {
-    report_progress(progress, "repeated splits", size_t(&c - table.data()), table.size());
-    if (!c.ok || c.cross_validation_px > o.fit_max_cross_validation_px ||
-        c.cross_validation_px > o.screen_factor * best_odd_even + o.floor_px)
-      continue;
-    const LensType type = candidate_lens_type(c.name);
+  std::vector<size_t> repeat;
+  for (size_t i = 0; i < table.size(); ++i) {
+    const ModelCandidate& c = table[i];
+    if (c.ok && c.cross_validation_px <= o.fit_max_cross_validation_px &&
+        c.cross_validation_px <= o.screen_factor * best_odd_even + o.floor_px)
+      repeat.push_back(i);
+  }
+  // Every (candidate, split) refit on every core; each writes its own slot.
+  const size_t per = splits.size() - 1;
+  std::vector<SplitValidation> values(repeat.size() * per);
+  report_progress(progress, "repeated splits", 0, 1);
+  run_jobs(values.size(), [&](size_t j) {
+    const LensType type = candidate_lens_type(table[repeat[j / per]].name);
+    values[j] = split_validation(pr, fits.used, splits[1 + j % per], type, fits.full.get(type), fits.mask, fits.step);
+  }, o.parallel ? 0 : 1);
+  bool repeated = false;
+  for (size_t r = 0; r < repeat.size(); ++r) {
+    ModelCandidate& c = table[repeat[r]];
     c.cross_validation_splits_px = {c.cross_validation_px};
     c.heldout_splits_px = {c.heldout_rms_px};
-    for (size_t k = 1; k < splits.size(); ++k) {
-      const SplitValidation v = split_validation(pr, fits.used, splits[k], type, fits.full.get(type), fits.mask, fits.step);
+    for (size_t k = 0; k < per; ++k) {
+      const SplitValidation& v = values[r * per + k];
       c.cross_validation_splits_px.push_back(v.cross_validation_px);
       c.heldout_splits_px.push_back(v.heldout_rms_px);
-      if (!std::isfinite(v.cross_validation_px)) break;  // cannot qualify: stop paying
+      if (!std::isfinite(v.cross_validation_px)) break;  // cannot qualify: the rest are not reported
     }
     c.cross_validation_repeated_px = rms_over_splits(c.cross_validation_splits_px);
     if (std::isfinite(c.cross_validation_repeated_px)) repeated = true;
@@ -87,11 +139,12 @@ bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::
 // halves are independent samples, Var = sum over halves of (m_h - 1) * s_h^2 (the two-sample
 // jackknife), with s_h a robust spread (1.4826 MAD) of that half's values so that one
 // influential view does not make every model "within noise". NaN with < 3 refits per half.
-double cross_validation_noise(const CalibrationProblem& pr, CandidateFits& fits, LensType best,
+double cross_validation_noise(const CalibrationProblem& pr, CandidateFits& fits, LensType best, bool parallel,
                               const StageProgress& progress) {
-  std::vector<double> cvs[2];
-  for (size_t i = 0; i < fits.used.size(); ++i) {
-    report_progress(progress, "noise jackknife", i, fits.used.size());
+  report_progress(progress, "noise jackknife", 0, 1);
+  // One warm refit per view, on every core; NaN where it failed.
+  std::vector<double> cv(fits.used.size(), kNaN);
+  run_jobs(fits.used.size(), [&](size_t i) {
     const int h = int(i % 2), pos = int(i / 2);
     ViewSubset rest;
     for (size_t j = 0; j < fits.half[h].size(); ++j)
@@ -101,10 +154,13 @@ double cross_validation_noise(const CalibrationProblem& pr, CandidateFits& fits,
     for (size_t j = 0; j < from.poses.size(); ++j)
       if (int(j) != pos) poses.push_back(from.poses[j]);
     const ModelFit refit = warm_refit(pr, rest, best, from, poses);
-    if (!refit.ok) continue;
+    if (!refit.ok) return;
     const ProjectionDiff d = projection_difference(refit.model, fits.halves[1 - h].get(best).model, fits.mask, fits.step);
-    if (d.samples > 0) cvs[h].push_back(d.rms_px);
-  }
+    if (d.samples > 0) cv[i] = d.rms_px;
+  }, parallel ? 0 : 1);
+  std::vector<double> cvs[2];
+  for (size_t i = 0; i < cv.size(); ++i)
+    if (!std::isnan(cv[i])) cvs[i % 2].push_back(cv[i]);
   if (cvs[0].size() < 3 || cvs[1].size() < 3) return kNaN;
   double var = 0;
   for (const auto& v : cvs) {
@@ -267,12 +323,61 @@ CandidateFits::CandidateFits(const CalibrationProblem& pr, ViewSubset used_views
       halves{CandidateSolver(pr, half[0]), CandidateSolver(pr, half[1])} {}
 
 std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, CandidateFits& fits,
-                                             const std::vector<LensType>& candidates, const StageProgress& progress) {
-  std::vector<ModelCandidate> table;
-  for (LensType type : candidates) {
-    report_progress(progress, "candidates", table.size(), candidates.size());
-    table.push_back(evaluate(pr, fits, type));
+                                             const std::vector<LensType>& candidates, const CandidateOptions& o,
+                                             const StageProgress& progress) {
+  report_progress(progress, "candidates", 0, 3);
+  // Many views: one short solve of each candidate on a sample first; a model that misses
+  // even those corners by far is not fitted on every view (see CandidateOptions).
+  std::vector<LensType> fitted = candidates;
+  std::map<LensType, ModelCandidate> on_sample;
+  const ViewSubset sample = evenly_spaced(fits.used, size_t(std::max(4, o.sample_views)));
+  if (std::isfinite(o.screen_rms_px) && 2 * sample.size() <= fits.used.size()) {
+    CandidateSolver sampled(pr, sample);
+    solve_all({&sampled}, candidates, o.parallel);
+    double best = kInf;
+    for (LensType type : candidates)
+      if (const ModelFit& f = sampled.get(type); f.ok) best = std::min(best, fit_rms(pr, f, sample));
+    if (best <= o.screen_rms_px) {  // else nothing fits the sample: every candidate on every view
+      fitted.clear();
+      for (LensType type : candidates) {
+        const ModelFit& f = sampled.get(type);
+        const double rms = f.ok ? fit_rms(pr, f, sample) : kInf;
+        if (!f.ok || rms <= o.sample_margin * o.screen_rms_px) {
+          fitted.push_back(type);
+          continue;
+        }
+        ModelCandidate& c = on_sample[type];
+        c.name = candidate_name(type);
+        c.lensmodel = f.model.lensmodel;
+        c.params = f.params;
+        c.rms_px = rms;
+        c.screened = true;
+        char buf[200];
+        std::snprintf(buf, sizeof buf,
+                      "screened out: RMS %.3f px on %zu of the %zu views, above %.3g x %.3g px; not fitted on all", rms,
+                      sample.size(), fits.used.size(), o.sample_margin, o.screen_rms_px);
+        c.error = buf;
+      }
+    }
   }
+  // The full fits, so that the screening knows which halves to fit.
+  report_progress(progress, "candidates", 1, 3);
+  solve_all({&fits.full}, fitted, o.parallel);
+  double best_rms = kInf;
+  for (LensType type : fitted)
+    if (const ModelFit& f = fits.full.get(type); f.ok) best_rms = std::min(best_rms, fit_rms(pr, f, fits.used));
+  // No candidate fits: nothing is screened (the least bad one is still ranked on its halves).
+  const double screen = best_rms <= o.screen_rms_px ? o.screen_rms_px : kInf;
+  std::vector<LensType> kept;
+  for (LensType type : fitted)
+    if (const ModelFit& f = fits.full.get(type); f.ok && fit_rms(pr, f, fits.used) <= screen) kept.push_back(type);
+  report_progress(progress, "candidates", 2, 3);
+  solve_all({&fits.halves[0], &fits.halves[1]}, kept, o.parallel);
+  std::vector<ModelCandidate> table(candidates.size());
+  run_jobs(candidates.size(), [&](size_t i) {
+    const auto it = on_sample.find(candidates[i]);
+    table[i] = it != on_sample.end() ? it->second : evaluate(pr, fits, candidates[i], screen);
+  }, o.parallel ? 0 : 1);
   return table;
 }
 
@@ -311,7 +416,8 @@ SelectionReport select_model(const CalibrationProblem& pr, CandidateFits& fits, 
     rep.cv_split_noise_px = split_noise(table[best].cross_validation_splits_px);
   }
   // Only the selection uses the jackknife noise: skipped (NaN) when the model is forced.
-  if (o.measure_noise) rep.cv_noise_px = cross_validation_noise(pr, fits, candidate_lens_type(table[best].name), progress);
+  if (o.measure_noise)
+    rep.cv_noise_px = cross_validation_noise(pr, fits, candidate_lens_type(table[best].name), o.parallel, progress);
   // The tolerance. The K-split mean scatters less than one split, by up to sqrt(K) (less:
   // the splits share the views, and the data's own noise is common to all of them), so the
   // odd/even jackknife SE is a conservative bound on its noise; the per-split spread /

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fcntl.h>
+#include <mutex>
 #include <unistd.h>
 
 extern "C" {
@@ -10,6 +11,52 @@ extern "C" {
 }
 
 namespace lp {
+namespace {
+
+// mrcal's solver (libdogleg/CHOLMOD) writes warnings to stderr; the library prints nothing,
+// so stderr points at /dev/null while any solve runs. Process-wide, and solves run on
+// several threads at once (the selection's candidates): the first solve to start redirects,
+// the last to end restores (a save/restore per solve would let two overlapping solves leave
+// stderr at /dev/null for good).
+class QuietStderr {
+ public:
+  QuietStderr() {
+    std::lock_guard lock(mutex());
+    if (state().depth++ > 0) return;
+    std::fflush(stderr);
+    state().saved = dup(2);
+    const int devnull = open("/dev/null", O_WRONLY);
+    if (state().saved >= 0 && devnull >= 0) dup2(devnull, 2);
+    if (devnull >= 0) close(devnull);
+  }
+  ~QuietStderr() {
+    std::lock_guard lock(mutex());
+    if (--state().depth > 0) return;
+    std::fflush(stderr);
+    if (state().saved >= 0) {
+      dup2(state().saved, 2);
+      close(state().saved);
+    }
+    state().saved = -1;
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  struct State {
+    int depth = 0, saved = -1;
+  };
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  static State& state() {
+    static State s;
+    return s;
+  }
+};
+
+}  // namespace
 
 int mrcal_model_param_count(const std::string& lensmodel) {
   mrcal_lensmodel_t m;
@@ -70,22 +117,14 @@ MrcalSolution mrcal_solve(const MrcalProblem& p) {
   constants.point_max_range = -1;
   const int imagersizes[2] = {p.width, p.height};
 
-  // mrcal's solver (libdogleg/CHOLMOD) writes warnings to stderr; the library prints
-  // nothing, so stderr points at /dev/null for the duration of the solve (process-wide:
-  // calibrate() is not meant to run beside other threads that print).
-  std::fflush(stderr);
-  const int saved_stderr = dup(2);
-  const int devnull = open("/dev/null", O_WRONLY);
-  if (saved_stderr >= 0 && devnull >= 0) dup2(devnull, 2);
-  const mrcal_stats_t stats =
-      mrcal_optimize(nullptr, 0, nullptr, 0, intrinsics.data(), nullptr, frames.data(), nullptr,
-                     p.optimize_warp ? &warp : nullptr, 1, 0,
-                     nframes, 0, 0, obs.data(), nullptr, nframes, 0, pool.data(), &lensmodel, imagersizes, sel,
-                     &constants, p.spacing, p.cols, p.rows, false, false);
-  std::fflush(stderr);
-  if (saved_stderr >= 0 && devnull >= 0) dup2(saved_stderr, 2);
-  if (saved_stderr >= 0) close(saved_stderr);
-  if (devnull >= 0) close(devnull);
+  mrcal_stats_t stats;
+  {
+    const QuietStderr quiet;
+    stats = mrcal_optimize(nullptr, 0, nullptr, 0, intrinsics.data(), nullptr, frames.data(), nullptr,
+                           p.optimize_warp ? &warp : nullptr, 1, 0, nframes, 0, 0, obs.data(), nullptr, nframes, 0,
+                           pool.data(), &lensmodel, imagersizes, sel, &constants, p.spacing, p.cols, p.rows, false,
+                           false);
+  }
   if (!(stats.rms_reproj_error__pixels >= 0) || !std::isfinite(stats.rms_reproj_error__pixels)) {
     out.error = "mrcal_optimize failed for " + p.lensmodel;
     return out;

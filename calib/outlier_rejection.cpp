@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "calib/calibration_solve.h"
+#include "calib/parallel_jobs.h"
 #include "core/error.h"
 
 namespace lp {
@@ -19,15 +20,12 @@ std::optional<LensType> choose_reference(const CalibrationProblem& pr, Candidate
       if (fitter.get(r).ok) return r;
     return std::nullopt;
   }
-  ViewSubset sample = fitter.views();
-  const size_t cap = size_t(std::max(4, options.reference_views));
-  if (sample.size() > cap) {
-    ViewSubset spaced;
-    for (size_t k = 0; k < cap; ++k) spaced.push_back(sample[k * sample.size() / cap]);
-    sample = spaced;
-  }
+  const ViewSubset sample = evenly_spaced(fitter.views(), size_t(std::max(4, options.reference_views)));
   CandidateSolver sampled(pr, sample);
   CandidateSolver& chooser = sample.size() == fitter.views().size() ? fitter : sampled;
+  // The references' fits on every core (they are independent); the choice below reads them.
+  run_jobs(options.references.size(), [&](size_t i) { chooser.get(options.references[i]); },
+           options.parallel ? 0 : 1);
   std::optional<LensType> ref;
   double best_rms = std::numeric_limits<double>::infinity();
   for (LensType r : options.references) {

@@ -45,6 +45,8 @@ struct OutlierOptions {
   std::optional<LensType> model;
   // The candidates for the reference, one per lens family, in order of preference on a tie.
   std::vector<LensType> references = {LensType::KannalaBrandt, LensType::OmnidirMei, LensType::OpenCV8};
+  // The references fitted on every core (calib/parallel_jobs.h); the same choice.
+  bool parallel = true;
 };
 
 struct OutlierReport {

@@ -6,6 +6,7 @@
 
 #include "calib/calibration_solve.h"
 #include "calib/outlier_rejection.h"
+#include "calib/parallel_jobs.h"
 #include "calib/projection_difference.h"
 
 namespace lp {
@@ -69,29 +70,33 @@ std::vector<CameraModel> view_leverage(const CalibrationProblem& pr, const std::
                                        const std::vector<uint8_t>& mask, int step,
                                        std::vector<ViewReport>& view_reports, const LeverageOptions& o,
                                        const StageProgress& progress) {
+  // One warm refit per used view, on every core (o.parallel); each writes its own slot.
+  std::vector<size_t> used;
+  for (size_t i = 0; i < views.size(); ++i)
+    if (view_used[i]) used.push_back(i);
+  std::vector<ModelFit> refits(used.size());
+  report_progress(progress, "leverage", 0, 1);
+  run_jobs(used.size(), [&](size_t u) {
+    const size_t i = used[u];
+    std::vector<BoardPose> poses;
+    for (size_t j = 0; j < used.size(); ++j)
+      if (j != u) poses.push_back(chosen.poses[j]);
+    refits[u] = warm_refit(pr, used_views(views, view_used, int(i)), type, chosen, poses);
+  }, o.parallel ? 0 : 1);
   std::vector<CameraModel> leave_one_out;
   std::vector<double> lev;
   std::vector<int> idx;
-  for (size_t i = 0; i < views.size(); ++i) {
-    report_progress(progress, "leverage", i, views.size());
-    if (!view_used[i]) continue;
-    const ViewSubset loo = used_views(views, view_used, int(i));
-    std::vector<BoardPose> poses;
-    for (size_t j = 0, u = 0; j < views.size(); ++j) {
-      if (!view_used[j]) continue;
-      if (j != i) poses.push_back(chosen.poses[u]);
-      ++u;
-    }
-    const ModelFit f = warm_refit(pr, loo, type, chosen, poses);
+  for (size_t u = 0; u < used.size(); ++u) {
+    const ModelFit& f = refits[u];
     double l = std::numeric_limits<double>::infinity();
     if (f.ok) {
       const ProjectionDiff d = projection_difference(f.model, chosen.model, mask, step);
       if (d.samples > 0) l = d.rms_px;
       leave_one_out.push_back(f.model);
     }
-    view_reports[size_t(views[i].index)].leverage_px = l;
+    view_reports[size_t(views[used[u]].index)].leverage_px = l;
     lev.push_back(l);
-    idx.push_back(views[i].index);
+    idx.push_back(views[used[u]].index);
   }
   const double med = median_of(lev);
   for (size_t j = 0; j < lev.size(); ++j)

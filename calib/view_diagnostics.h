@@ -59,6 +59,8 @@ struct LeverageOptions {
   // by a few hundredths of a pixel is not worth a look, however it ranks).
   double flag_factor = 3.0;
   double min_px = 0.05;
+  // The leave-one-out refits on every core (calib/parallel_jobs.h); the same numbers.
+  bool parallel = true;
 };
 
 // Jackknife leverage of each used view for the chosen candidate `type`: the fit without it

@@ -43,7 +43,10 @@ faster. Aims (issue 23): merge ≤ 3× floor and ≥ 40× faster than MergeDebev
 pixel per frame, `sample` 0.40–0.49 s; see docs/sampling.md, "The accuracy reference").
 Where a row misses its aim, the table says so by its numbers; nothing here is asserted by
 a test (speed lives in benchmarks, never in timed tests).
-Times are wall-clock medians; calib rows detect every image of a shared set once.
+Times are wall-clock medians; calib rows detect every image of a shared set once. The
+`calib/select_<set>` rows time the whole `calib geometric --corners-in` command with the
+automatic model choice; their floor is the same command with the chosen model forced
+(`--model`), aim ≤ 3× floor (docs/calibration.md, "Selection at the cost of one solve").
 MD
 python3 scripts/performance_table.py "$results" "$header" >"$table"
 mv "$table" docs/performance.md

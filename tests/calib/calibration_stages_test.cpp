@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <set>
 
 #include "calib/calibration_problem.h"
@@ -244,6 +245,109 @@ TEST(ModelSelection, PicksTheFewestParametersWithinTheMeasuredNoise) {
     if (c.within_noise) {
       EXPECT_GE(c.params, table[sel.selected].params) << c.name;
     }
+}
+
+// The screening of the candidate stage (CandidateOptions::screen_rms_px): a wide plumb_bob
+// lens (94 deg across) that a pinhole cannot fit (RMS ~4 px). The pinhole's halves are not
+// fitted; every other number of the table is the one of a run without screening, and the
+// rows are the same whether the candidates are solved on one thread or on all.
+TEST(ModelSelection, ScreeningSkipsTheHalvesOfAModelThatMissesTheCorners) {
+  const CameraModel truth{"LENSMODEL_OPENCV5", {600, 601, 639.2, 481.7, -0.28, 0.09, 0, 0, -0.012}, 1280, 960};
+  const auto corners = project_board_views(truth, kBoard, 10, 40, 700, 0.2, 4, 60);
+  ASSERT_GE(corners.size(), 8u);
+  const CalibrationProblem pr = problem_for(truth);
+  const std::vector<LensType> types = {LensType::Pinhole, LensType::OpenCV5, LensType::KannalaBrandt};
+  auto views = make_board_views(corners, pr, "test", true);
+  auto table_with = [&](double screen_rms_px, bool parallel) {
+    CandidateFits fits(pr, all_of(views));
+    CandidateOptions o;
+    o.screen_rms_px = screen_rms_px;
+    o.parallel = parallel;
+    return solve_candidates(pr, fits, types, o);
+  };
+  const auto all = table_with(std::numeric_limits<double>::infinity(), false);
+  const auto screened = table_with(1.5, true);
+  ASSERT_EQ(all.size(), 3u);
+  ASSERT_EQ(screened.size(), 3u);
+  std::printf("  RMS px: pinhole %.3f, plumb_bob %.3f, Kannala-Brandt %.3f\n", all[0].rms_px, all[1].rms_px,
+              all[2].rms_px);
+  // The pinhole misses the corners by far more than their noise; the others fit them.
+  EXPECT_GT(all[0].rms_px, 1.5);
+  EXPECT_LT(all[1].rms_px, 0.35);
+  EXPECT_LT(all[2].rms_px, 0.5);
+  EXPECT_TRUE(all[0].ok);
+  EXPECT_GT(all[0].cross_validation_px, 0);
+  EXPECT_TRUE(screened[0].screened);
+  EXPECT_FALSE(screened[0].ok);
+  EXPECT_EQ(screened[0].rms_px, all[0].rms_px);  // the full fit is still made and reported
+  EXPECT_EQ(screened[0].params, 4);
+  EXPECT_EQ(screened[0].cross_validation_px, 0);  // no halves
+  for (size_t i = 1; i < 3; ++i) {
+    EXPECT_FALSE(screened[i].screened) << all[i].name;
+    EXPECT_TRUE(screened[i].ok) << all[i].name;
+    EXPECT_EQ(screened[i].rms_px, all[i].rms_px) << all[i].name;
+    EXPECT_EQ(screened[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
+    EXPECT_EQ(screened[i].heldout_rms_px, all[i].heldout_rms_px) << all[i].name;
+  }
+  // When no candidate is within the limit, none is screened: the least bad is still ranked.
+  const auto none_fit = table_with(0.01, true);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_FALSE(none_fit[i].screened) << all[i].name;
+    EXPECT_EQ(none_fit[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
+  }
+  // Screening on a sample (4 of the 10 views, limit 1 px, margin 2): the pinhole misses the
+  // sample's corners by > 2 px and is not fitted on every view; the others are, as before.
+  CandidateFits fits(pr, all_of(views));
+  CandidateOptions o;
+  o.screen_rms_px = 1.0;
+  o.sample_views = 4;
+  const auto sampled = solve_candidates(pr, fits, types, o);
+  std::printf("  pinhole on the sample: %s\n", sampled[0].error.c_str());
+  EXPECT_TRUE(sampled[0].screened);
+  EXPECT_GT(sampled[0].rms_px, 2.0);
+  EXPECT_NEAR(sampled[0].rms_px, all[0].rms_px, 0.35 * all[0].rms_px);  // the misfit shows in every view alike
+  EXPECT_NE(sampled[0].error.find("on 4 of the 10 views"), std::string::npos);
+  for (size_t i = 1; i < 3; ++i) {
+    EXPECT_EQ(sampled[i].rms_px, all[i].rms_px) << all[i].name;
+    EXPECT_EQ(sampled[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
+  }
+}
+
+// SeedOptions::sample_views: plumb_bob and Mei seeded and solved on a sample of the views,
+// the others posed under that fit, then refined on all, land on the whole solve's minimum.
+TEST(CandidateSolver, FitsSeededOnASampleReachTheWholeSolvesMinimum) {
+  struct Case {
+    CameraModel truth;
+    double max_theta, distance;
+    LensType type;
+  };
+  const Case cases[] = {{narrow(), 30, 900, LensType::OpenCV5},
+                        {{"LENSMODEL_OMNIDIR_MEI", {540, 541, 640.5, 479.5, 1.1, -0.05, 0.01, 0, 0}, 1280, 960},
+                         75,
+                         600,
+                         LensType::OmnidirMei}};
+  for (const Case& k : cases) {
+    const CameraModel& truth = k.truth;
+    const LensType type = k.type;
+    const auto corners = project_board_views(truth, kBoard, 12, k.max_theta, k.distance, 0.2, 6);
+    ASSERT_GE(corners.size(), 10u);
+    const CalibrationProblem pr = problem_for(truth);
+    const auto views = make_board_views(corners, pr, "test", true);
+    SeedOptions whole, sample;
+    whole.sample_views = 0;
+    sample.sample_views = 4;
+    CandidateSolver a(pr, all_of(views), whole), b(pr, all_of(views), sample);
+    const std::vector<uint8_t> mask = coverage_mask(pr, all_of(views));
+    const ModelFit &fa = a.get(type), &fb = b.get(type);
+    ASSERT_TRUE(fa.ok && fb.ok) << fa.error << fb.error;
+    EXPECT_NE(fb.solver.find("on 4 views, refined on all"), std::string::npos) << fb.solver;
+    const double ra = fit_rms(pr, fa, all_of(views)), rb = fit_rms(pr, fb, all_of(views));
+    const double diff = projection_difference(fa.model, fb.model, mask, 8).rms_px;
+    std::printf("  %s: RMS %.6f whole, %.6f from the sample; models %.2g px apart\n", fa.model.lensmodel.c_str(), ra,
+                rb, diff);
+    EXPECT_NEAR(rb, ra, 1e-4 * ra);
+    EXPECT_LT(diff, 0.01);
+  }
 }
 
 TEST(ViewDiagnostics, CoverageCountsTheUsedInliersAndLeverageFlagsTheRimView) {

@@ -11,6 +11,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <sys/stat.h>
 
 #include "calib/geometric.h"
 #include "calib/synthetic_boards.h"
@@ -417,6 +418,87 @@ TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), fixed.c_str());
     std::fflush(stdout);
   }
+}
+
+// The choice on every shared real set (docs/calibration.md "Real sets" and "Selection at the
+// cost of one solve"), as the selection made it before candidates were screened and solved
+// in parallel: a screening that drops the right model, or a parallel solve that changes a
+// number the rule reads, fails here. ~40 s on the shared 2-core machine.
+TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
+  const std::map<std::string, std::string> expected = {
+      {"stereo left", "plumb_bob"},
+      {"fisheye1", "LENSMODEL_KANNALA_BRANDT"},
+      {"Ladybug", "plumb_bob"},
+      {"VMRImage", "LENSMODEL_OMNIDIR_MEI"},
+      {"KaidanOmni", "LENSMODEL_OMNIDIR_MEI"},
+      {"MiniOmni", "LENSMODEL_OMNIDIR_MEI"},
+      {"Fisheye190deg", "LENSMODEL_KANNALA_BRANDT"}};
+  CalibrateOptions o;
+  o.leverage = false;
+  o.uncertainty = false;
+  for (const calib_test::RealSet& set : calib_test::real_sets()) {
+    const calib_test::RealSetViews rs = calib_test::real_set_views(set);
+    if (rs.views.empty()) GTEST_SKIP() << "no images in " << set.dir;
+    const CalibrationResult r = calibrate(rs.views, set.board, rs.width, rs.height, o);
+    EXPECT_EQ(r.selected, expected.at(set.name)) << set.name;
+    EXPECT_EQ(r.selection_rule, "incumbent") << set.name;
+    std::string screened;
+    for (const ModelCandidate& c : r.table)
+      if (c.screened) {
+        screened += " " + c.name;
+        EXPECT_GT(c.rms_px, o.fit_max_rms_px) << set.name << " " << c.name;
+        EXPECT_NE(c.name, r.selected) << set.name;
+      }
+    std::printf("  %s: %s; screened:%s\n", set.name, r.selected.c_str(), screened.c_str());
+  }
+}
+
+// The stages' parallel solves (CalibrateOptions::parallel) give the serial loop's numbers:
+// every candidate's row, the choice, each view's leverage and the uncertainty. And mrcal's
+// solves, which quiet stderr while they run, leave it as it was when they overlap.
+TEST(ModelSelection, ParallelSolvesGiveTheSerialNumbers) {
+  const CameraModel truth = kb190();
+  const Corners views = project_board_views(truth, kBoard, 10, 80, 600, 0.2, 2);
+  ASSERT_GE(views.size(), 8u);
+  struct stat before {};
+  ASSERT_EQ(fstat(2, &before), 0);
+  CalibrateOptions o;
+  o.parallel = false;
+  const CalibrationResult serial = calibrate(views, kBoard, truth.width, truth.height, o);
+  o.parallel = true;
+  const CalibrationResult parallel = calibrate(views, kBoard, truth.width, truth.height, o);
+  struct stat after {};
+  ASSERT_EQ(fstat(2, &after), 0);
+  EXPECT_EQ(before.st_dev, after.st_dev);
+  EXPECT_EQ(before.st_ino, after.st_ino);
+  EXPECT_EQ(serial.selected, parallel.selected);
+  ASSERT_EQ(serial.table.size(), parallel.table.size());
+  for (size_t i = 0; i < serial.table.size(); ++i) {
+    const ModelCandidate &a = serial.table[i], &b = parallel.table[i];
+    // OpenCV8 is not reproducible between two calls (cv::calibrateCamera's seed,
+    // docs/calibration.md "Determinism"), and on a 190 deg lens, which the rational model
+    // cannot fit, two calls landed 0.89 and 1.07 px RMS apart: not compared. Mei's fits
+    // differ in the last digits (~1e-14 relative) when cv::omnidir::calibrate runs on
+    // another thread (not pinned down further; far below anything the rule reads): 1e-10.
+    if (a.name == "LENSMODEL_OPENCV8") continue;
+    const double tol = a.name == "LENSMODEL_OMNIDIR_MEI" ? 1e-10 : 0.0;
+    EXPECT_EQ(a.ok, b.ok) << a.name;
+    EXPECT_EQ(a.screened, b.screened) << a.name;
+    EXPECT_NEAR(a.rms_px, b.rms_px, tol * a.rms_px) << a.name;
+    EXPECT_NEAR(a.cross_validation_px, b.cross_validation_px, tol * a.cross_validation_px) << a.name;
+    ASSERT_EQ(a.heldout_splits_px.size(), b.heldout_splits_px.size()) << a.name;
+    for (size_t k = 0; k < a.heldout_splits_px.size(); ++k) {
+      EXPECT_NEAR(a.heldout_splits_px[k], b.heldout_splits_px[k], tol * a.heldout_splits_px[k]) << a.name << " " << k;
+      EXPECT_NEAR(a.cross_validation_splits_px[k], b.cross_validation_splits_px[k],
+                  tol * a.cross_validation_splits_px[k])
+          << a.name << " " << k;
+    }
+  }
+  EXPECT_EQ(serial.cv_noise_px, parallel.cv_noise_px);
+  ASSERT_EQ(serial.views.size(), parallel.views.size());
+  for (size_t v = 0; v < serial.views.size(); ++v) EXPECT_EQ(serial.views[v].leverage_px, parallel.views[v].leverage_px);
+  EXPECT_EQ(serial.uncertainty.jackknife.median_px, parallel.uncertainty.jackknife.median_px);
+  EXPECT_EQ(serial.model.intrinsics, parallel.model.intrinsics);
 }
 
 // The hard case of issue 21 item 1, synthetic: 8 views through the 190 deg Kannala-Brandt

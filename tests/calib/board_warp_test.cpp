@@ -73,8 +73,9 @@ void recovers(const Lens& lens, const BoardWarp& truth, double noise_px) {
   }
   // With the warp fitted the residuals are the corner noise (2-D RMS = sqrt(2) sigma).
   EXPECT_LT(on.model.rms_reprojection_px, 1.2 * std::sqrt(2.0) * noise_px);
-  if (truth[0] != 0 || truth[1] != 0)  // a flat board's misfit: measurably worse
+  if (truth[0] != 0 || truth[1] != 0) {  // a flat board's misfit: measurably worse
     EXPECT_GT(off.model.rms_reprojection_px, 1.5 * on.model.rms_reprojection_px);
+  }
 }
 
 TEST(BoardWarp, CeresRecoversAKnownWarp) { recovers(fisheye(), kWarp, 0.1); }

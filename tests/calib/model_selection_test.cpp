@@ -340,7 +340,7 @@ HalvesOutcome calibrate_halves(const Corners& views, const BoardSpec& board, int
 // The measurement of docs/calibration.md ("A choice that holds"): lenses x set sizes x noise
 // draws, each set calibrated in two disjoint halves; the chosen pair's agreement against the
 // best fixed family's, with the incumbent rule and the simplest-within-noise rule of before.
-//   LP_HALVES_VIEWS=8,16,32 LP_HALVES_SEEDS=4 LP_HALVES_NOISE=0.2 LP_HALVES_VERBOSE=1 \
+//   LP_HALVES_VIEWS=8,16,32 LP_HALVES_SEEDS=4 LP_HALVES_NOISE=0.2 LP_HALVES_VERBOSE=1
 //   calib_tests --gtest_also_run_disabled_tests --gtest_filter='ModelSelection.DISABLED_HalvesAgree'
 TEST(ModelSelection, DISABLED_HalvesAgree) {
   std::vector<int> sizes;
@@ -545,7 +545,9 @@ TEST(ModelSelection, HalvesOfAFisheyeSetChooseOneFamily) {
       const std::vector<double>&x = a.table[i].*member, &y = b.table[i].*member;
       ASSERT_EQ(x.size(), y.size()) << a.table[i].name;
       for (size_t k = 0; k < x.size(); ++k)
-        if (x[k] != y[k]) EXPECT_NEAR(x[k], y[k], 1e-6 * std::abs(x[k])) << a.table[i].name << " split " << k;
+        if (x[k] != y[k]) {
+          EXPECT_NEAR(x[k], y[k], 1e-6 * std::abs(x[k])) << a.table[i].name << " split " << k;
+        }
     }
     wins += a.table[i].split_wins;
   }

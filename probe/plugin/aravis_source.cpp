@@ -7,6 +7,7 @@
 #include <cstring>
 #include <map>
 #include <mutex>
+#include <set>
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
@@ -534,10 +535,20 @@ class AravisSource final : public CameraSource {
     GError* error = nullptr;
     arv_camera_set_exposure_time(camera_.get(), seconds * 1e6, &error);
     if (error) {
+      // A camera pulled mid-stream fails this write (a GVCP timeout) before its heartbeat
+      // thread has flagged the link as lost (lost_), the later the busier the machine: the
+      // error's kind, or a value this camera took before, says it is the link, not the value.
+      // Only a value refused from the start is bad input (gige_fault.sh failed now and then
+      // under load when this ended the stream instead of reconnecting).
+      const bool link_error = error->domain == ARV_DEVICE_ERROR &&
+                              (error->code == ARV_DEVICE_ERROR_TIMEOUT || error->code == ARV_DEVICE_ERROR_TRANSFER_ERROR ||
+                               error->code == ARV_DEVICE_ERROR_PROTOCOL_ERROR || error->code == ARV_DEVICE_ERROR_NOT_CONNECTED);
       const std::string message = take_error(error);
-      if (lost_) throw CameraLost(spec_ + ": camera lost (control link down)");
+      if (lost_ || link_error || exposures_taken_.count(seconds))
+        throw CameraLost(one_line(spec_ + ": camera lost (cannot set exposure " + std::to_string(seconds) + " s: " + message + ")"));
       throw InputError(one_line(spec_ + ": cannot set exposure " + std::to_string(seconds) + " s: " + message));
     }
+    exposures_taken_.insert(seconds);
     // What the camera really set (rounded to its resolution, clamped to its range).
     target_us_ = arv_camera_get_exposure_time(camera_.get(), &error);
     if (error) {
@@ -628,6 +639,7 @@ class AravisSource final : public CameraSource {
   bool chunks_ = false;
   double gain_db_ = 0;
   double target_us_ = 0;  // exposure the camera was last set to (read back)
+  std::set<double> exposures_taken_;  // exposures this camera has accepted (write_exposure)
   int settle_left_ = 0;
   std::vector<double> cycle_;
   size_t cycle_index_ = 0;

@@ -8,7 +8,7 @@
 // overloaded: a wrong parameter list does not compile). A program that also links libmrcal
 // (a test) still works: dlsym on mrcal's own handle finds mrcal's definitions, not these.
 // A function the project starts to call must be added here: the link fails until it is.
-#include "core/lazy_libs.h"
+#include "core/lazy_function.h"
 
 extern "C" {
 #include <mrcal/mrcal.h>
@@ -18,9 +18,7 @@ namespace {
 
 constexpr const char* kMrcalLibrary = "libmrcal.so.2";
 
-// The real function `name`, resolved once.
-#define LP_MRCAL(name) \
-  static const auto real = reinterpret_cast<decltype(&::name)>(lp::lazy::library_symbol(kMrcalLibrary, #name, "mrcal 2.x"))
+#define LP_MRCAL(name) LP_LAZY_FUNCTION(kMrcalLibrary, "mrcal 2.x", name)
 
 }  // namespace
 

@@ -8,7 +8,7 @@
 // The definitions are checked against mosquitto.h by the compiler (a C function cannot be
 // overloaded: a wrong parameter list does not compile). A function the project starts to
 // call must be added here: the link fails until it is.
-#include "core/lazy_libs.h"
+#include "core/lazy_function.h"
 
 #include <mosquitto.h>
 
@@ -16,9 +16,7 @@ namespace {
 
 constexpr const char* kMosquittoLibrary = "libmosquitto.so.1";
 
-// The real function `name`, resolved once.
-#define LP_MOSQUITTO(name) \
-  static const auto real = reinterpret_cast<decltype(&::name)>(lp::lazy::library_symbol(kMosquittoLibrary, #name, "libmosquitto 2.x"))
+#define LP_MOSQUITTO(name) LP_LAZY_FUNCTION(kMosquittoLibrary, "libmosquitto 2.x", name)
 
 }  // namespace
 

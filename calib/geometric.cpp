@@ -3,9 +3,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 
 #include "calib/calibration_seed.h"
 #include "calib/calibration_solve.h"
@@ -118,25 +115,6 @@ BoardWarpReport board_warp_report(const CalibrationProblem& pr, const ModelFit& 
   return w;
 }
 
-// The solvers allocate and free dense matrices by the thousand (cv::omnidir::calibrate zeroes
-// a fresh Jacobian and normal matrix every iteration; cv::calibrateCamera, Ceres, mrcal do
-// alike): with glibc's defaults the heap's top is handed back to the kernel after each and
-// faulted in again, zeroed, by the next. On this project's 2-core VM, page faults are dear:
-// `calib geometric` on fisheye1 spent 6.5 s of 16.5 in the kernel and 58 % of its samples
-// in memset's faults; with 64 MB kept at the heap's top it took 6 s, 0.15 s in the kernel,
-// the same answer (docs/calibration.md, "Selection at the cost of one solve"). Process-wide
-// and never undone: the memory stays with the process, as it would once touched anyway.
-void keep_heap_top() {
-#if defined(__GLIBC__)
-  static const bool once = [] {
-    mallopt(M_TOP_PAD, 64 << 20);
-    mallopt(M_MMAP_THRESHOLD, 32 << 20);  // large blocks from the heap too, reused
-    return true;
-  }();
-  (void)once;
-#endif
-}
-
 void take_diagnostics(CalibrationResult& res, ViewDiagnostics d) {
   res.view_rms_px = std::move(d.view_rms_px);
   res.residuals = std::move(d.residuals);
@@ -161,7 +139,6 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   const std::vector<LensType> candidates = candidate_types(options);
   const CalibrationProblem pr = problem_of(board, width, height, options);
   std::vector<BoardView> views = make_board_views(corners_per_view, pr, "calibrate", true);
-  keep_heap_top();
   CalibrationResult res;
   res.views = initial_view_reports(corners_per_view);
 

@@ -8,6 +8,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/heap_tuning.h"
 #include "core/limits.h"
 #include "core/progress.h"
 #include "eval/auto_bracket_eval.h"
@@ -227,6 +228,7 @@ std::vector<Command> eval_commands() {
            EvalCalibOptions o = a->o;
            parse_size(a->board, "--board", &o.board.cols, &o.board.rows);
            o.board.square_mm = a->square_mm;
+           keep_heap_top_for_solvers();
            return evaluate_and_report("eval calib", out, evaluate_calib, o);
          };
        }},

@@ -9,9 +9,15 @@
 #include "calib/synthetic_boards.h"
 #include "tests/calib/test_cameras.h"
 #include "core/error.h"
+#include "core/heap_tuning.h"
 
 namespace lp {
 namespace {
+
+// The calibration tests run the solvers as the commands do, with their heap settings
+// (core/heap_tuning.h): without them the selection tests spend much of their time in page
+// faults.
+[[maybe_unused]] const bool solver_heap = (keep_heap_top_for_solvers(), true);
 
 using calib_test::kb190;
 

@@ -55,7 +55,7 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             // (live/http_client_plugin.h) and what they pull
                             "libmosquitto", "liblightprobe_http_client", "libcpp-httplib", "libssl", "libcrypto",
                             "libbrotli",
-                            // Highway, whose library calibrates its timer at load (cli/highway_loader.cpp)
+                            // Highway, whose library calibrates its timer at load (cli/process/highway_loader.cpp)
                             "libhwy"})
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }

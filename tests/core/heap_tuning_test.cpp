@@ -1,0 +1,47 @@
+// The solvers' heap settings (core/heap_tuning.h), read back through glibc's own counters.
+#include "core/heap_tuning.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
+// Under AddressSanitizer malloc is the sanitizer's: glibc's settings do not apply.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LIGHTPROBE_ASAN 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define LIGHTPROBE_ASAN 1
+#endif
+
+namespace lp {
+namespace {
+
+#if defined(__GLIBC__) && !defined(LIGHTPROBE_ASAN)
+// A 16 MB block, as a solver's normal matrix: from the heap, not a fresh mapping, and once
+// freed its pages stay with the process (64 MB kept at the top) instead of going back to
+// the kernel to be faulted in and zeroed again by the next solve.
+TEST(HeapTuning, ASolversLargeBlockComesFromTheHeapAndStaysAfterItsFree) {
+  keep_heap_top_for_solvers();
+  keep_heap_top_for_solvers();  // idempotent
+  const struct mallinfo2 before = mallinfo2();
+  void* volatile block = std::malloc(std::size_t(16) << 20);  // volatile: not elided
+  ASSERT_NE(block, nullptr);
+  std::memset(block, 1, std::size_t(16) << 20);
+  const struct mallinfo2 during = mallinfo2();
+  EXPECT_EQ(during.hblks, before.hblks) << "the block was mmapped: the threshold was not raised";
+  std::free(block);
+  const struct mallinfo2 after = mallinfo2();
+  EXPECT_GE(after.arena, std::size_t(64) << 20) << "the heap's top went back to the kernel";
+  EXPECT_GE(after.fordblks, std::size_t(16) << 20);
+}
+#endif
+
+}  // namespace
+}  // namespace lp

@@ -275,7 +275,10 @@ std::string GeometricCalibration::to_json() const {
       {"heldout_rms_px", r.heldout_rms_px}, {"dropped_views", dropped_json}, {"before_dropping", before},
       {"views_with_board", detections.found}, {"detect_seconds", detections.seconds},
       {"solve_seconds", solve_seconds}, {"corners_poorly_covered", r.corners_poorly_covered},
-      {"no_model_fits", r.no_model_fits}, {"table", table_json(r)}, {"views", views_json(*this)},
+      {"no_model_fits", r.no_model_fits},
+      {"outliers", {{"reference", r.outlier_reference}, {"rounds", r.outlier_rounds},
+                    {"corners_rejected", r.corners_rejected}, {"corners_total", r.corners_total}}},
+      {"table", table_json(r)}, {"views", views_json(*this)},
       {"images", images_json(detections)}};
   return j.dump();
 }

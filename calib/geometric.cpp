@@ -145,6 +145,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   // Outliers, with one reference model.
   const OutlierReport outliers = reject_outliers(pr, views, outlier_options(options), options.progress);
   res.outlier_rounds = outliers.rounds;
+  res.outlier_reference = lens_type_name(outliers.reference);
   for (size_t i = 0; i < views.size(); ++i)
     if (!outliers.why[i].empty()) res.views[size_t(views[i].index)].why = outliers.why[i];
 

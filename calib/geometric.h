@@ -147,6 +147,7 @@ struct CalibrationResult {
   double cross_validation_median_px = 0;
   double heldout_rms_px = 0;
   int corners_total = 0, corners_rejected = 0, outlier_rounds = 0;
+  std::string outlier_reference;  // the model the outliers were flagged against (lens_type_name)
   // Inlier corners in the outer edge_band of each side: left, right, top, bottom.
   std::array<int, 4> edge_observations{};
   bool corners_poorly_covered = false;  // some side has < min_edge_observations

@@ -32,7 +32,7 @@ std::optional<LensType> choose_reference(const CalibrationProblem& pr, Candidate
     const ModelFit& g = chooser.get(r);
     if (!g.ok) continue;
     const double e = fit_rms(pr, g, sample);
-    if (e < best_rms) {
+    if (e < best_rms * (1 - options.reference_tie)) {
       best_rms = e;
       ref = r;
     }

@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "probe/camera_source.h"
 #include "probe/genicam_sequencer.h"
+#include "probe/plugin/aravis_errors.h"
 
 namespace lp {
 
@@ -535,16 +536,9 @@ class AravisSource final : public CameraSource {
     GError* error = nullptr;
     arv_camera_set_exposure_time(camera_.get(), seconds * 1e6, &error);
     if (error) {
-      // A camera pulled mid-stream fails this write (a GVCP timeout) before its heartbeat
-      // thread has flagged the link as lost (lost_), the later the busier the machine: the
-      // error's kind, or a value this camera took before, says it is the link, not the value.
-      // Only a value refused from the start is bad input (gige_fault.sh failed now and then
-      // under load when this ended the stream instead of reconnecting).
-      const bool link_error = error->domain == ARV_DEVICE_ERROR &&
-                              (error->code == ARV_DEVICE_ERROR_TIMEOUT || error->code == ARV_DEVICE_ERROR_TRANSFER_ERROR ||
-                               error->code == ARV_DEVICE_ERROR_PROTOCOL_ERROR || error->code == ARV_DEVICE_ERROR_NOT_CONNECTED);
+      const bool camera_lost = exposure_write_lost_camera(*error, lost_, exposures_taken_.count(seconds) > 0);
       const std::string message = take_error(error);
-      if (lost_ || link_error || exposures_taken_.count(seconds))
+      if (camera_lost)
         throw CameraLost(one_line(spec_ + ": camera lost (cannot set exposure " + std::to_string(seconds) + " s: " + message + ")"));
       throw InputError(one_line(spec_ + ": cannot set exposure " + std::to_string(seconds) + " s: " + message));
     }

@@ -448,11 +448,12 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   // Seeds refined down to level 1 (half resolution) only: the rim fit's first window
   // covers the difference, and the winner's region answer is refined on level 0 below.
   const int last_level = levels.size() > 1 ? 1 : 0;
+  const double edge_noise = edge_noise_level(fine, valid8);
   for (auto [c, whole] : seeds) {
     for (int li = int(levels.size()) - 1; li >= last_level; --li)
       c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction, whole);
     Pick p{c, region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction), {}};
-    p.rim = fit_rim(fine, lin, valid8, {c.cx, c.cy, c.r}, options.rays);
+    p.rim = fit_rim(fine, lin, valid8, {c.cx, c.cy, c.r}, options.rays, edge_noise);
     const bool near = std::hypot(p.rim.ball.cx - c.cx, p.rim.ball.cy - c.cy) <= 8 + 0.02 * c.r &&
                       std::abs(p.rim.ball.radius_px - c.r) <= 8 + 0.02 * c.r;
     if (!near) p.rim.ok = false;
@@ -470,6 +471,7 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
     result = {rim.ball.cx, rim.ball.cy, rim.ball.radius_px};
     rep.rms_residual_px = rim.rms_px, rep.edge_points = rim.inliers;
     rep.sigma_centre_px = rim.sigma_centre_px, rep.sigma_radius_px = rim.sigma_radius_px;
+    rep.rim_agreement = rim.agreement, rep.inner_rim_dropped = rim.inner_rim_dropped;
   }
   rep.confidence = confidence;
   rep.cut_fraction = cut_fraction(result, w, h);
@@ -479,6 +481,18 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
                      " % of its rim outside, max_cut_fraction allows " +
                      std::to_string(int(std::round(100 * options.max_cut_fraction))) + " %)");
   return {result.cx, result.cy, result.r};
+}
+
+std::string ball_fit_warning(const FindBallReport& r) {
+  const int pct = int(std::lround(100 * r.rim_agreement));
+  if (!r.subpixel)
+    return "no sub-pixel rim fit held; the ball is the region answer, good to a few pixels";
+  if (r.rim_agreement < kPartialRimAgreement)
+    return "the ball's rim has an edge along only " + std::to_string(pct) +
+           " % of its circumference (dark on dark?): centre and radius rest on that arc" +
+           (r.inner_rim_dropped ? ", a circle inside it set aside" : "") +
+           "; they may be off by more than the sigmas if the rest of the rim is not where the arc puts it";
+  return {};
 }
 
 // ---------------------------------------------------------------------------------------

@@ -122,8 +122,10 @@ class MirrorBallProjection {
 // out). Exhaustive search over centre and radius on the coarsest level, the
 // best 8 local maxima refined level by level (+-2 level px, parabolic sub-step). Each is
 // then fitted to its silhouette on the linear image (probe/ball_rim_fit.h: edges along
-// rays, half-rim hypotheses against a rim that is dark on a dark background, a Tukey-
-// weighted circle fit, then each ray's edge placed by area); the one whose rim agrees with
+// rays, steps from dark to darker that stand clear of the noise counted as well, half-rim
+// and outermost-edge hypotheses with circles enclosed by another dropped, against a rim
+// that is dark on a dark background, a Tukey-weighted circle fit, then each ray's edge
+// placed by area); the one whose rim agrees with
 // the edges along the longest arc wins (texture and round features of a background agree
 // along little of it); the region answer stands when no fit agrees along half the rim
 // (report.subpixel false). Precision: docs/probes.md "Finding the ball".

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <random>
 #include <cstdlib>
@@ -251,14 +252,29 @@ struct RegionScore {
   double score_whole = 0;
 };
 
+// cos and sin of 2 pi (k + 0.5) / angles, k < angles: region_score's directions, computed
+// once per angle count and thread (the search scores hundreds of thousands of circles with
+// the same few counts; the sines were an eighth of find_ball's time).
+const std::vector<std::array<double, 2>>& ring_directions(int angles) {
+  thread_local std::map<int, std::vector<std::array<double, 2>>> cache;  // nodes stay put
+  auto& dirs = cache[angles];
+  if (dirs.empty())
+    for (int k = 0; k < angles; ++k) {
+      const double t = 2 * M_PI * (k + 0.5) / angles;
+      dirs.push_back({std::cos(t), std::sin(t)});
+    }
+  return dirs;
+}
+
 RegionScore region_score(const FeatureLevel& L, const Circle& c_full, int angles, double max_cut) {
   const double cx = c_full.cx / L.sx, cy = c_full.cy / L.sy, r = c_full.r / L.s();
   RegionScore out;
   if (r < 4) return out;
   int vis = 0, sup = 0;
   double sum = 0;
+  const auto& dirs = ring_directions(angles);
   for (int k = 0; k < angles; ++k) {
-    const double t = 2 * M_PI * (k + 0.5) / angles, dx = std::cos(t), dy = std::sin(t);
+    const double dx = dirs[size_t(k)][0], dy = dirs[size_t(k)][1];
     cv::Vec4f in(0, 0, 0, 0), outv(0, 0, 0, 0), v;
     int n_in = 0, n_out = 0;
     for (int j = 1; j <= 3; ++j) {

@@ -125,9 +125,9 @@ TEST(BallPrecision, AStudioBallIsFoundToAFewTenthsOfAPixelOnFourBackgrounds) {
 // A rim dark against a dark background (issue 21 item 4): the harness's dark cases, where
 // the lower half of the rim reflects black (its outer 3.4 % of R) in front of a photo
 // darkened 100 x. The step from nothing to dim is the silhouette there; the stronger
-// border of the dark reflection further in used to win. Before (docs/probes.md): centre /
-// radius 0.39 / -4.81 px (uffizi), 1.20 / -4.53 (sunrise), 2.86 / -2.59 (pisa); measured
-// after: 0.29 / +0.21, 0.15 / -0.12, 0.27 / -0.16.
+// border of the dark reflection further in used to win. Before this change, on these
+// renders: centre / radius 0.39 / -4.81 px (uffizi), 1.20 / -4.53 (sunrise), 2.86 / -2.59
+// (pisa); measured after: 0.29 / +0.21, 0.15 / -0.12, 0.27 / -0.16.
 TEST(BallPrecision, ARimDarkAgainstADarkBackgroundIsFound) {
   EvalBallOptions o;
   o.maps = every_shared_map();

@@ -113,7 +113,8 @@ nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions
       fj["ball_raw"] = {f.ball_detected->cx, f.ball_detected->cy, f.ball_detected->radius_px};
     }
     if (const auto& b = f.ball_fit)  // how the ball was found: sub-pixel or not, the fit's standard errors
-      fj["ball_fit"] = {{"subpixel", b->subpixel}, {"sigma_centre_px", b->sigma_centre_px}, {"sigma_radius_px", b->sigma_radius_px}};
+      fj["ball_fit"] = {{"subpixel", b->subpixel}, {"sigma_centre_px", b->sigma_centre_px}, {"sigma_radius_px", b->sigma_radius_px},
+                        {"rim_agreement", b->rim_agreement}, {"warning", ball_fit_warning(*b)}};
     fj["valid_fraction"] = f.valid_fraction;
     if (f.circle) fj["circle"] = {f.circle->cx, f.circle->cy, f.circle->r};
     per_frame.push_back(fj);
@@ -148,10 +149,13 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
       },
       [&] { progress.advance(); });
   progress.finish();
-  for (const auto& f : r.frames)  // a sliver of a probe: a map, but mostly holes
+  for (const auto& f : r.frames) {  // a sliver of a probe: a map, but mostly holes
+    if (f.ball_fit && !ball_fit_warning(*f.ball_fit).empty())
+      std::fprintf(stderr, "lightprobe: warning: %s: %s\n", f.file.c_str(), ball_fit_warning(*f.ball_fit).c_str());
     if (f.valid_fraction < kFewValidWarning)
       std::fprintf(stderr, "lightprobe: warning: %s: only %.1f %% of the map is valid (is the probe cut by the image edge?)\n",
                    f.file.c_str(), 100 * f.valid_fraction);
+  }
   const UnwrapSequenceReport::Frame& first = r.frames[0];
   if (first.ball && !sequence)
     say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px -> {} {}x{}{}\n", args.output, first.ball->cx, first.ball->cy,

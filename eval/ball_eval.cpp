@@ -187,23 +187,35 @@ EvalBallReport evaluate_ball_detection(const EvalBallOptions& options, const Eva
   ProgressSteps steps(progress, options.maps.size());
   uint64_t seed = 1;
   for (const std::string& path : options.maps) {
-    const EnvMap world = read_world(path);
     const std::string label = map_label(fs::path(path).has_filename() ? path : fs::path(path).parent_path().string());
+    bool any = !options.include;
     for (double r : options.radii)
-      for (BallBackground bg : options.backgrounds)
-        report.rows.push_back(measure(label, render_ball_case(world, bg, r, photo, seed++), bg));
+      for (BallBackground bg : options.backgrounds) any = any || options.include(label, r, bg);
+    if (!any) {
+      seed += options.radii.size() * options.backgrounds.size();
+      steps.advance();
+      continue;
+    }
+    const EnvMap world = read_world(path);
+    for (double r : options.radii)
+      for (BallBackground bg : options.backgrounds) {
+        const uint64_t case_seed = seed++;
+        if (!options.include || options.include(label, r, bg))
+          report.rows.push_back(measure(label, render_ball_case(world, bg, r, photo, case_seed), bg));
+      }
     steps.advance();
   }
   if (options.output_dir.empty()) return report;
   make_output_directory(options.output_dir);
   std::string csv =
       "map,background,radius_px,found,centre_error_px,radius_error_px,sigma_centre_px,sigma_radius_px,"
-      "confidence,ms,unwrap_ms,error\n";
+      "confidence,subpixel,rim_agreement,inner_rim_dropped,ms,unwrap_ms,error\n";
   for (const BallRow& r : report.rows)
-    csv += fmt::format("{},{},{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.3f},{:.2f},{:.2f},\"{}\"\n", r.map,
+    csv += fmt::format("{},{},{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.3f},{},{:.2f},{:.2f},\"{}\"\n", r.map,
                        r.background, r.radius_px, r.found ? 1 : 0, r.centre_error_px, r.radius_error_px,
-                       r.report.sigma_centre_px, r.report.sigma_radius_px, r.report.confidence, r.ms, r.unwrap_ms,
-                       r.error);
+                       r.report.sigma_centre_px, r.report.sigma_radius_px, r.report.confidence,
+                       r.report.subpixel ? 1 : 0, r.report.rim_agreement, r.report.inner_rim_dropped ? 1 : 0, r.ms,
+                       r.unwrap_ms, r.error);
   report.csv_path = (fs::path(options.output_dir) / "ball.csv").string();
   write_file_atomically(report.csv_path, csv);
   return report;

@@ -17,6 +17,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,9 @@ struct EvalBallOptions {
   std::vector<double> radii{60, 150, 400};
   std::vector<BallBackground> backgrounds = all_ball_backgrounds();
   std::string output_dir;  // created; receives ball.csv (empty: no file)
+  // A subset of the grid (empty: all): cases for which it returns false are skipped, and
+  // the others keep the seeds, hence the renders, they have in the whole grid.
+  std::function<bool(const std::string& map_label, double radius_px, BallBackground)> include;
 };
 
 struct BallRow {

@@ -28,7 +28,9 @@ std::vector<RimEdge> radial_edges(const cv::Mat& img, double cx, double cy, doub
   // within a pixel, so a shorter baseline would quantise the peak to pixel cells); peak
   // refined by a parabola through the derivative at -1, 0, +1 px.
   const int half = int(std::lround(0.5 / step)), reach = 2 * half;
-  const double lo = std::max(0.0, r_lo - (reach + 1) * step), hi = r_hi + (reach + 1) * step;
+  // The step's two sides for its relative contrast, 1.5 px either way (past the blur).
+  const int side = int(std::lround(1.5 / step)), margin = std::max(reach + 1, side);
+  const double lo = std::max(0.0, r_lo - margin * step), hi = r_hi + margin * step;
   for (double rr : {lo, hi}) {
     const double x = cx + rr * dx, y = cy + rr * dy;
     if (x < 0.5 || y < 0.5 || x > w - 0.5 || y > h - 0.5) return {};
@@ -50,7 +52,10 @@ std::vector<RimEdge> radial_edges(const cv::Mat& img, double cx, double cy, doub
     const double off = denom < 0 ? std::clamp(0.5 * (dm - dp) / denom, -0.5, 0.5) * reach : 0.0;
     const double rr = lo + (i + off) * step;
     if (rr < r_lo || rr > r_hi) continue;
-    out.push_back({cx + rr * dx, cy + rr * dy, d[i]});
+    const cv::Vec3f& a = p[std::max(0, i - side)];
+    const cv::Vec3f& b = p[std::min(n - 1, i + side)];
+    const double inner = a[0] + a[1] + a[2], outer = b[0] + b[1] + b[2], level = std::max(inner, outer);
+    out.push_back({cx + rr * dx, cy + rr * dy, d[i], level > 0 ? std::abs(inner - outer) / level : 0.0});
   }
   std::sort(out.begin(), out.end(), [](const RimEdge& a, const RimEdge& b) { return a.strength > b.strength; });
   if (int(out.size()) > keep) out.resize(keep);
@@ -82,7 +87,7 @@ RayEdges ray_edges(const cv::Mat& img, const cv::Mat& valid8, const BallInImage&
   RayEdges out(rays);
   tbb::parallel_for(0, rays, [&](int k) {
     if (!ray_in_view(img, valid8, c, window, k, rays)) return;
-    out[k] = radial_edges(img, c.cx, c.cy, ray_angle(k, rays), c.radius_px - window, c.radius_px + window, 6);
+    out[k] = radial_edges(img, c.cx, c.cy, ray_angle(k, rays), c.radius_px - window, c.radius_px + window, 64);
   });
   return out;
 }
@@ -97,9 +102,27 @@ double median_of(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// Per ray, the outermost edge (or the strongest) at least 10 % as strong as the median
-// ray's strongest.
-std::vector<Weighted> pick_edges(const RayEdges& cands, const BallInImage& c, bool strongest) {
+// Whether an edge counts: at least 10 % as strong as the median ray's strongest, or a
+// step whose darker side is less than kDarkStep of its brighter one and which stands
+// clear of the noise (a dark reflection at the rim against a dark background: weak in
+// absolute terms, yet the ball's silhouette).
+constexpr double kDarkStep = 0.5;
+bool counts(const RimEdge& e, double floor, double noise) {
+  return e.strength >= floor || (e.rel >= kDarkStep && e.strength > noise);
+}
+
+// An edge's weight in the circle fit: its strength relative to the median ray's (`med`),
+// or, for a dark step (as in counts), its strength against the noise: such an edge is
+// placed as precisely as a bright one where the noise allows, and weighting it by its
+// absolute strength would leave the dark arc to the bright one's fit.
+double edge_weight(double strength, double rel, double med, double noise) {
+  double w = std::min(1.0, strength / med);
+  if (rel >= kDarkStep && strength > noise) w = std::max(w, noise > 0 ? std::min(1.0, strength / (2 * noise)) : 1.0);
+  return w;
+}
+
+// Per ray, the outermost edge (or the strongest) that counts.
+std::vector<Weighted> pick_edges(const RayEdges& cands, const BallInImage& c, bool strongest, double noise) {
   std::vector<double> tops;
   for (const auto& ray : cands)
     if (!ray.empty()) tops.push_back(ray[0].strength);
@@ -109,8 +132,8 @@ std::vector<Weighted> pick_edges(const RayEdges& cands, const BallInImage& c, bo
   for (const auto& ray : cands) {
     const RimEdge* best = nullptr;
     for (const auto& e : ray)
-      if (e.strength >= floor && (!best || (!strongest && residual(e, c) > residual(*best, c)))) best = &e;
-    if (best) pts.push_back({*best, std::min(1.0, best->strength / med)});
+      if (counts(e, floor, noise) && (!best || (!strongest && residual(e, c) > residual(*best, c)))) best = &e;
+    if (best) pts.push_back({*best, edge_weight(best->strength, best->rel, med, noise)});
   }
   return pts;
 }
@@ -159,7 +182,8 @@ FitResult robust_circle(const std::vector<Weighted>& pts, BallInImage c) {
 // interpolation, and an error of either sign (not always inwards, as a derivative peak
 // merged with the rings just inside is) where the rim's last pixel differs from A.
 // Weight: |A - B| relative to the median ray's, capped at 1.
-std::vector<Weighted> area_edges(const cv::Mat& img, const cv::Mat& valid8, const BallInImage& c, int rays) {
+std::vector<Weighted> area_edges(const cv::Mat& img, const cv::Mat& valid8, const BallInImage& c, int rays,
+                                 double noise) {
   constexpr double half = 1.5, step = 0.125;
   std::vector<Weighted> pts(rays, {{0, 0, 0}, -1});
   tbb::parallel_for(0, rays, [&](int k) {
@@ -181,7 +205,8 @@ std::vector<Weighted> area_edges(const cv::Mat& img, const cv::Mat& valid8, cons
       area += std::clamp(f, -0.5, 1.5) * step;
     }
     const double e = lo + area;
-    pts[k] = {{c.cx + e * ct, c.cy + e * st, std::sqrt(den)}, 1};
+    const double sa = a[0] + a[1] + a[2], sb = b[0] + b[1] + b[2], level = std::max(sa, sb);
+    pts[k] = {{c.cx + e * ct, c.cy + e * st, std::sqrt(den), level > 0 ? std::abs(sa - sb) / level : 0.0}, 1};
   });
   std::vector<Weighted> out;
   std::vector<double> s;
@@ -189,7 +214,9 @@ std::vector<Weighted> area_edges(const cv::Mat& img, const cv::Mat& valid8, cons
     if (p.w > 0) out.push_back(p), s.push_back(p.e.strength);
   if (out.empty()) return out;
   const double med = median_of(s);
-  for (auto& p : out) p.w = std::min(1.0, p.e.strength / med);
+  // A and B are unsmoothed samples, about 4 x noisier than the smoothed differences
+  // `noise` was measured on (three channels, two samples, no Gaussian of 1 px).
+  for (auto& p : out) p.w = edge_weight(p.e.strength, p.e.rel, med, 4 * noise);
   return out;
 }
 
@@ -199,9 +226,9 @@ namespace {
 
 // Windows of 3, 2, 1.5, 1 px around c, the outermost edges; nullopt when the fit fails
 // or runs away (more than two windows).
-std::optional<BallInImage> narrow(const cv::Mat& smooth, const cv::Mat& valid8, BallInImage c, int rays) {
+std::optional<BallInImage> narrow(const cv::Mat& smooth, const cv::Mat& valid8, BallInImage c, int rays, double noise) {
   for (const double window : {3.0, 2.0, 1.5, 1.0}) {
-    const auto pts = pick_edges(ray_edges(smooth, valid8, c, window, rays), c, false);
+    const auto pts = pick_edges(ray_edges(smooth, valid8, c, window, rays), c, false, noise);
     if (pts.size() < 12) return std::nullopt;
     const FitResult f = robust_circle(pts, c);
     if (f.inliers == 0 || !(f.c.radius_px > 0)) return std::nullopt;
@@ -213,53 +240,81 @@ std::optional<BallInImage> narrow(const cv::Mat& smooth, const cv::Mat& valid8, 
 }
 
 // Share of the rays in view whose outermost edge within 1 px of c lies within 0.5 px of it.
-double agreement(const cv::Mat& smooth, const cv::Mat& valid8, const BallInImage& c, int rays) {
+double agreement(const cv::Mat& smooth, const cv::Mat& valid8, const BallInImage& c, int rays, double noise) {
   int agree = 0, in_view = 0;
   for (int k = 0; k < rays; ++k) in_view += ray_in_view(smooth, valid8, c, 1.0, k, rays);
-  for (const Weighted& p : pick_edges(ray_edges(smooth, valid8, c, 1.0, rays), c, false))
+  for (const Weighted& p : pick_edges(ray_edges(smooth, valid8, c, 1.0, rays), c, false, noise))
     agree += std::abs(residual(p.e, c)) < 0.5;
   return in_view ? double(agree) / in_view : 0;
 }
 
-// The wide pass: the strongest edges within 4 px + 2 % of R of the start, a circle fitted
-// to all of them and to each half of the rim (eight half-circles 45 deg apart), each
-// narrowed; the one agreeing with the most rays wins. Where part of the rim has no
-// silhouette (dark against dark) the edges there are something else, consistently (the
-// inner border of a dark reflection): half the rays, too many for the biweights alone.
+// An enclosing hypothesis must agree along this share of the rays, half the rim: random
+// circles through texture agree along 0.2-0.35, through the night renders' noise up to
+// 0.49, the kartik photos' blurred rims 0.2-0.35.
+constexpr double kMinArc = 0.5;
+
+// Whether circle `outer` encloses `inner` with at least `margin` px to spare everywhere.
+bool encloses(const BallInImage& outer, const BallInImage& inner, double margin) {
+  return outer.radius_px - inner.radius_px - std::hypot(outer.cx - inner.cx, outer.cy - inner.cy) >= margin;
+}
+
+// The wide pass: per ray the strongest edge within 4 px + 2 % of R of the start, and
+// apart the outermost that counts (a dark rim's silhouette further out than the stronger
+// border of its reflection, beyond the narrowing windows' reach), a circle fitted to all
+// of them and to each half of the rim (eight half-circles 45 deg apart), each narrowed.
+// Where part of the rim has no silhouette (dark against dark) the edges there are something
+// else, consistently (the inner border of a dark reflection): half the rays, too
+// many for the biweights alone. Of the hypotheses agreeing along kMinArc of the rim, those
+// enclosed by another are dropped: the silhouette is the ball's outer boundary, and a
+// circle inside it that agrees along an arc is a border in the reflection (a dark object
+// reflected at the rim agrees along the whole dark arc, the ball's interior along some
+// more, more than the true rim, which agrees only where it has contrast). The one left
+// agreeing with the most rays wins.
 std::optional<BallInImage> coarse_rim(const cv::Mat& smooth, const cv::Mat& valid8, const BallInImage& start,
-                                      int rays, double* best_agreement) {
-  const auto pts = pick_edges(ray_edges(smooth, valid8, start, 4 + 0.02 * start.radius_px, rays), start, true);
-  if (pts.size() < 12) return std::nullopt;
+                                      int rays, double noise, double* best_agreement, bool* enclosed_dropped) {
+  const RayEdges wide = ray_edges(smooth, valid8, start, 4 + 0.02 * start.radius_px, rays);
+  std::vector<std::pair<BallInImage, double>> hyps;  // narrowed circle, agreement
+  for (const bool strongest : {true, false}) {
+    const auto pts = pick_edges(wide, start, strongest, noise);
+    if (pts.size() < 12) continue;
+    for (int h = -1; h < 8; ++h) {
+      std::vector<Weighted> sub;
+      for (const Weighted& p : pts) {
+        const double a = std::atan2(p.e.y - start.cy, p.e.x - start.cx) - h * M_PI / 4;
+        if (h < 0 || std::cos(a) > 0) sub.push_back(p);
+      }
+      if (sub.size() < 12) continue;
+      const FitResult f = robust_circle(sub, start);
+      if (f.inliers == 0 || !(f.c.radius_px > 0)) continue;
+      const auto c = narrow(smooth, valid8, f.c, rays, noise);
+      if (c) hyps.push_back({*c, agreement(smooth, valid8, *c, rays, noise)});
+    }
+  }
   std::optional<BallInImage> best;
   *best_agreement = -1;
-  for (int h = -1; h < 8; ++h) {
-    std::vector<Weighted> sub;
-    for (const Weighted& p : pts) {
-      const double a = std::atan2(p.e.y - start.cy, p.e.x - start.cx) - h * M_PI / 4;
-      if (h < 0 || std::cos(a) > 0) sub.push_back(p);
-    }
-    if (sub.size() < 12) continue;
-    const FitResult f = robust_circle(sub, start);
-    if (f.inliers == 0 || !(f.c.radius_px > 0)) continue;
-    const auto c = narrow(smooth, valid8, f.c, rays);
-    if (!c) continue;
-    const double ag = agreement(smooth, valid8, *c, rays);
-    if (ag > *best_agreement) *best_agreement = ag, best = c;
+  *enclosed_dropped = false;
+  for (const auto& [c, ag] : hyps) {
+    bool enclosed = false;
+    for (const auto& [o, og] : hyps) enclosed = enclosed || (og >= kMinArc && encloses(o, c, 1.0));
+    *enclosed_dropped = *enclosed_dropped || enclosed;
+    if (!enclosed && ag > *best_agreement) *best_agreement = ag, best = c;
   }
   return best;
 }
 
 }  // namespace
 
-RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& start, int rays) {
+RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& start, int rays,
+              double edge_noise) {
   RimFit out;
   double ag = 0;
-  const auto coarse = coarse_rim(smooth, valid8, start, rays, &ag);
+  bool enclosed_dropped = false;
+  const auto coarse = coarse_rim(smooth, valid8, start, rays, edge_noise, &ag, &enclosed_dropped);
   if (!coarse) return out;
   BallInImage c = *coarse;
   FitResult f;
   for (int pass = 0; pass < 3; ++pass) {
-    const auto pts = area_edges(linear, valid8, c, rays);
+    const auto pts = area_edges(linear, valid8, c, rays, edge_noise);
     if (pts.size() < 12) break;
     const FitResult g = robust_circle(pts, c);
     if (g.inliers == 0 || std::hypot(g.c.cx - c.cx, g.c.cy - c.cy) > 1 || std::abs(g.c.radius_px - c.radius_px) > 1) break;
@@ -276,8 +331,26 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
   out.rms_px = f.rms;
   out.inliers = f.inliers;
   out.agreement = ag;
+  out.inner_rim_dropped = enclosed_dropped;
   out.ok = true;
   return out;
+}
+
+double edge_noise_level(const cv::Mat& smooth, const cv::Mat& valid8) {
+  std::vector<float> d;
+  d.reserve(size_t(smooth.rows) * smooth.cols);
+  for (int y = 0; y < smooth.rows; ++y) {
+    const cv::Vec3f* row = smooth.ptr<cv::Vec3f>(y);
+    const uint8_t* ok = valid8.empty() ? nullptr : valid8.ptr<uint8_t>(y);
+    for (int x = 0; x + 1 < smooth.cols; ++x) {
+      if (ok && !(ok[x] && ok[x + 1])) continue;
+      const cv::Vec3f g = row[x + 1] - row[x];
+      d.push_back(std::abs(g[0]) + std::abs(g[1]) + std::abs(g[2]));
+    }
+  }
+  if (d.empty()) return 0;
+  std::nth_element(d.begin(), d.begin() + d.size() / 20, d.end());
+  return 7.0 * d[d.size() / 20];
 }
 
 }  // namespace lp

@@ -9,8 +9,10 @@
 // rings just inside that a strongest-edge rule would follow. A circle is fitted to them
 // by Gauss-Newton with Tukey biweights (scale from the residuals' MAD) times the edge's
 // strength relative to the median edge, capped at 1, so that a rim dark against a dark
-// background (no edge, only noise) counts little and a blinding arc no more than any
-// other edge. Windows shrink 3, 2, 1.5, 1 px as the circle settles.
+// background counts little and a blinding arc no more than any other edge. A step too weak
+// for that floor still counts when one side is less than half the other and it stands
+// clear of the image's noise (a dark reflection at the rim against a dark background):
+// per ray it blocks the stronger border of the dark reflection further in. Windows shrink 3, 2, 1.5, 1 px as the circle settles.
 //
 // Uncertainty: the weighted least-squares covariance s^2 (J^T W J)^-1 with
 // s^2 = sum w r^2 / (sum w - 3), inflated by the rays' correlation (neighbouring rays
@@ -27,6 +29,9 @@ namespace lp {
 
 struct RimEdge {
   double x, y, strength;
+  // |inner - outer| / max(inner, outer) of the channel sums 1.5 px either side: 1 for a
+  // step from nothing, whatever its height.
+  double rel = 0;
 };
 
 // Bilinear sample of a 3-channel float image at (x, y), pixel centres at +0.5; the
@@ -46,11 +51,26 @@ struct RimFit {
   // Share of the rays in view (inside the image, on valid pixels) whose outermost edge
   // within 1 px of the circle lies within 0.5 px of it.
   double agreement = 0;
+  // A hypothesis agreeing along an arc lay inside this one by more than a pixel and was
+  // dropped (the border of a dark reflection at the rim): the rim here may have arcs
+  // without contrast.
+  bool inner_rim_dropped = false;
   bool ok = false;      // false: too few edges, or the fit ran away (> 2 windows)
 };
 
 // `linear`: CV_32FC3, values proportional to radiance; `valid8`: CV_8U (1 valid) of the
 // same size, or empty. Rays whose band touches an invalid pixel are skipped.
-RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& start, int rays);
+// `edge_noise`: the edge strength (1 px difference of `smooth`, summed over the channels)
+// that noise alone reaches (edge_noise_level): weaker steps never count, however
+// dark one side is.
+RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& start, int rays,
+               double edge_noise);
+
+// The edge strength noise alone reaches in `smooth` (CV_32FC3): 7 x the 5th percentile of
+// the 1 px horizontal differences (summed over channels) on valid pixels. Flat regions
+// have none, so noise sets the low percentiles and texture the upper ones; for Gaussian
+// noise 7 x the 5th percentile is beyond the 99.9th (a sum of three half-normals: p5
+// 0.87 sigma, p99.9 6.3 sigma).
+double edge_noise_level(const cv::Mat& smooth, const cv::Mat& valid8);
 
 }  // namespace lp

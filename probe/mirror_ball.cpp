@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <random>
 #include <cstdlib>
@@ -251,14 +252,29 @@ struct RegionScore {
   double score_whole = 0;
 };
 
+// cos and sin of 2 pi (k + 0.5) / angles, k < angles: region_score's directions, computed
+// once per angle count and thread (the search scores hundreds of thousands of circles with
+// the same few counts; the sines were an eighth of find_ball's time).
+const std::vector<std::array<double, 2>>& ring_directions(int angles) {
+  thread_local std::map<int, std::vector<std::array<double, 2>>> cache;  // nodes stay put
+  auto& dirs = cache[angles];
+  if (dirs.empty())
+    for (int k = 0; k < angles; ++k) {
+      const double t = 2 * M_PI * (k + 0.5) / angles;
+      dirs.push_back({std::cos(t), std::sin(t)});
+    }
+  return dirs;
+}
+
 RegionScore region_score(const FeatureLevel& L, const Circle& c_full, int angles, double max_cut) {
   const double cx = c_full.cx / L.sx, cy = c_full.cy / L.sy, r = c_full.r / L.s();
   RegionScore out;
   if (r < 4) return out;
   int vis = 0, sup = 0;
   double sum = 0;
+  const auto& dirs = ring_directions(angles);
   for (int k = 0; k < angles; ++k) {
-    const double t = 2 * M_PI * (k + 0.5) / angles, dx = std::cos(t), dy = std::sin(t);
+    const double dx = dirs[size_t(k)][0], dy = dirs[size_t(k)][1];
     cv::Vec4f in(0, 0, 0, 0), outv(0, 0, 0, 0), v;
     int n_in = 0, n_out = 0;
     for (int j = 1; j <= 3; ++j) {
@@ -448,11 +464,12 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   // Seeds refined down to level 1 (half resolution) only: the rim fit's first window
   // covers the difference, and the winner's region answer is refined on level 0 below.
   const int last_level = levels.size() > 1 ? 1 : 0;
+  const double edge_noise = edge_noise_level(fine, valid8);
   for (auto [c, whole] : seeds) {
     for (int li = int(levels.size()) - 1; li >= last_level; --li)
       c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction, whole);
     Pick p{c, region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction), {}};
-    p.rim = fit_rim(fine, lin, valid8, {c.cx, c.cy, c.r}, options.rays);
+    p.rim = fit_rim(fine, lin, valid8, {c.cx, c.cy, c.r}, options.rays, edge_noise);
     const bool near = std::hypot(p.rim.ball.cx - c.cx, p.rim.ball.cy - c.cy) <= 8 + 0.02 * c.r &&
                       std::abs(p.rim.ball.radius_px - c.r) <= 8 + 0.02 * c.r;
     if (!near) p.rim.ok = false;
@@ -470,6 +487,7 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
     result = {rim.ball.cx, rim.ball.cy, rim.ball.radius_px};
     rep.rms_residual_px = rim.rms_px, rep.edge_points = rim.inliers;
     rep.sigma_centre_px = rim.sigma_centre_px, rep.sigma_radius_px = rim.sigma_radius_px;
+    rep.rim_agreement = rim.agreement, rep.inner_rim_dropped = rim.inner_rim_dropped;
   }
   rep.confidence = confidence;
   rep.cut_fraction = cut_fraction(result, w, h);
@@ -479,6 +497,18 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
                      " % of its rim outside, max_cut_fraction allows " +
                      std::to_string(int(std::round(100 * options.max_cut_fraction))) + " %)");
   return {result.cx, result.cy, result.r};
+}
+
+std::string ball_fit_warning(const FindBallReport& r) {
+  const int pct = int(std::lround(100 * r.rim_agreement));
+  if (!r.subpixel)
+    return "no sub-pixel rim fit held; the ball is the region answer, good to a few pixels";
+  if (r.rim_agreement < kPartialRimAgreement)
+    return "the ball's rim has an edge along only " + std::to_string(pct) +
+           " % of its circumference (dark on dark?): centre and radius rest on that arc" +
+           (r.inner_rim_dropped ? ", a circle inside it set aside" : "") +
+           "; they may be off by more than the sigmas if the rest of the rim is not where the arc puts it";
+  return {};
 }
 
 // ---------------------------------------------------------------------------------------

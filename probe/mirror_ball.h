@@ -40,6 +40,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <string>
 
 #include "core/envmap.h"
 #include "core/image_io.h"
@@ -121,8 +122,10 @@ class MirrorBallProjection {
 // out). Exhaustive search over centre and radius on the coarsest level, the
 // best 8 local maxima refined level by level (+-2 level px, parabolic sub-step). Each is
 // then fitted to its silhouette on the linear image (probe/ball_rim_fit.h: edges along
-// rays, half-rim hypotheses against a rim that is dark on a dark background, a Tukey-
-// weighted circle fit, then each ray's edge placed by area); the one whose rim agrees with
+// rays, steps from dark to darker that stand clear of the noise counted as well, half-rim
+// and outermost-edge hypotheses with circles enclosed by another dropped, against a rim
+// that is dark on a dark background, a Tukey-weighted circle fit, then each ray's edge
+// placed by area); the one whose rim agrees with
 // the edges along the longest arc wins (texture and round features of a background agree
 // along little of it); the region answer stands when no fit agrees along half the rim
 // (report.subpixel false). Precision: docs/probes.md "Finding the ball".
@@ -158,10 +161,24 @@ struct FindBallReport {
   // The fit's own standard errors (px): of the centre (the larger axis of its 1-sigma
   // ellipse) and of the radius (probe/ball_rim_fit.h).
   double sigma_centre_px = 0, sigma_radius_px = 0;
+  // Share of the rim in view along which the fitted circle has an edge (within 0.5 px):
+  // clean renders 0.7-1; about 0.5 where half the rim is dark on a dark background.
+  double rim_agreement = 0;
+  // A circle agreeing along an arc inside the one reported was set aside as a border in
+  // the reflection (probe/ball_rim_fit.h): some of the rim has no contrast.
+  bool inner_rim_dropped = false;
 };
 
 BallInImage find_ball(const RgbImage& image, const FindBallOptions& options = {},
                       FindBallReport* report = nullptr);
+
+// Below this rim agreement a fit rests on part of the rim only (half the rim dark on dark:
+// about 0.5; clean renders 0.7-1).
+constexpr double kPartialRimAgreement = 0.6;
+
+// One line saying why the ball may be off by more than the report's sigmas (no sub-pixel
+// fit; edges along less than kPartialRimAgreement of the rim), or empty.
+std::string ball_fit_warning(const FindBallReport& report);
 
 // ---------------------------------------------------------------------------------------
 // Unwrapping.

@@ -121,6 +121,10 @@ struct RowGridBinning {
     uint32_t first, count, from;
   };
   std::vector<EmptyRun> empty;
+  // Prefix entries kept: a run of empty pixels at the end of the nested order (a hemisphere
+  // map's four southern base quads, a third of its pixels) is not stored, its entries all
+  // being the last one's (Q2TreeSampler::entry reads them so).
+  size_t stored_entries = 0;
   std::vector<double> row;      // 4 per row: exact solid angle, sin theta, cos theta, 0
   std::vector<double> col;      // 2 per column: cos phi, sin phi
 
@@ -167,6 +171,11 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
       else b->empty.push_back({entry, 1, entry - 1});
     }
     offset[i + 1] += offset[i];
+  }
+  b->stored_entries = npix + 1;
+  if (!b->empty.empty() && b->empty.back().first + b->empty.back().count == npix + 1) {
+    b->stored_entries = b->empty.back().first;
+    b->empty.pop_back();
   }
   b->source.resize(count);
   b->entry.resize(count);
@@ -532,6 +541,10 @@ class Q2TreeSampler final : public Sampler {
     return pairs;
   }
 
+  // Prefix entry i: the sum over pixels [0, i); entries past the stored ones (a trailing
+  // run of empty pixels) equal the last.
+  const Prefix& entry(size_t i) const { return prefix_[std::min(i, prefix_.size() - 1)]; }
+
   // Finest-level range of a node.
   std::pair<size_t, size_t> range(int level, int64_t ipix) const {
     const int shift = 2 * (finest_level_ - level);
@@ -540,15 +553,15 @@ class Q2TreeSampler final : public Sampler {
 
   double node_luminance_power(int level, int64_t ipix) const {
     const auto [b, e] = range(level, ipix);
-    const Prefix& p = prefix_[b];
-    const Prefix& q = prefix_[e];
+    const Prefix& p = entry(b);
+    const Prefix& q = entry(e);
     return 0.2126 * (q.r - p.r) + 0.7152 * (q.g - p.g) + 0.0722 * (q.b - p.b);
   }
 
   Light make_light(int level, int64_t ipix) const {
     const auto [b, e] = range(level, ipix);
-    const Prefix& p = prefix_[b];
-    const Prefix& q = prefix_[e];
+    const Prefix& p = entry(b);
+    const Prefix& q = entry(e);
     Light l;
     l.id = (uint64_t(4) << (2 * level)) + uint64_t(ipix);
     l.rgb = {q.r - p.r, q.g - p.g, q.b - p.b};
@@ -611,8 +624,7 @@ class Q2TreeSampler final : public Sampler {
       binning_ = cached_binning(map, nside);
     const RowGridBinning& bin = *binning_;
     finest_level_ = max_level_ = log2_int(nside);
-    const size_t npix = 12 * size_t(nside) * size_t(nside);
-    prefix_.resize(npix + 1);
+    prefix_.resize(bin.stored_entries);
     prefix_[0] = Prefix{};
     // The running sums in nested order (sampling/q2tree_sums.h), then the pixels no source
     // falls in: each holds the sums of the entry before its run (copied from that entry,

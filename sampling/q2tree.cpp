@@ -637,7 +637,7 @@ class Q2TreeSampler final : public Sampler {
     // falls in: each holds the sums of the entry before its run (copied from that entry,
     // not from the neighbour just written, which would chain every copy on the one before).
     // A sampler's first frame takes the plain loop (the same bits): the vector kernel's
-    // first call loads libhwy, whose static initializer costs ~3 ms (cli/highway_loader.cpp),
+    // first call loads libhwy, whose static initializer costs ~3 ms (cli/'s lazy loader),
     // more than the kernel saves on one 1024 x 512 frame (~0.4 ms); a stream gains from its
     // second frame on, and a one-map command no longer pays for a library it did not load.
     const uint8_t* valid = map.valid.empty() ? nullptr : map.valid.data();

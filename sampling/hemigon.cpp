@@ -49,7 +49,7 @@ void HemigonWarp::build(const EnvMap& map) {
   build(map.width, map.height, rows.data());
 }
 
-void HemigonWarp::build(int W, int H, const Row* rows) {
+void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
   width_ = W;
   height_ = H;
   dphi_ = 2 * M_PI / W;
@@ -98,7 +98,7 @@ void HemigonWarp::build(int W, int H, const Row* rows) {
       }
     }
     double sums[kBlock][6] = {};
-    detail::add_channel_sums(colour, size_t(K), size_t(W), false, &sums[0][0]);
+    if (rgb_power) detail::add_channel_sums(colour, size_t(K), size_t(W), false, &sums[0][0]);
     double acc[kBlock] = {};
     if (K == kBlock) {
       for (int u = 0; u < W; ++u)
@@ -413,7 +413,8 @@ class HemigonSampler final : public Sampler {
             const size_t row = half == 0 ? size_t(v) : size_t(map.height - 1 - v);
             rows_[size_t(v)] = {map.rgb.data() + 3 * row * W, masked ? map.valid.data() + row * W : nullptr, half == 1};
           }
-          half_[half].build(w, h, rows_.data());
+          // Both halves: the target is the map's power (above), not the halves' channel sums.
+          half_[half].build(w, h, rows_.data(), options_.upper_only);
         }
       } else {
         upper_ = resample(map, Layout::Hemisphere, w, h);

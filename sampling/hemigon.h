@@ -55,13 +55,15 @@ class HemigonWarp {
   // The same from the map's rows given one by one: row v of a width x height hemisphere map
   // is rows[v] (packed RGB, read right to left when `reversed`; valid null: all valid). Lets
   // the sampler take both halves of a latlong map whose rows are the hemisphere's rows
-  // without resampling it.
+  // without resampling it. With `rgb_power` false the per-channel sums are left out
+  // (rgb_power() is then zero): a pass over the colours a caller that takes the power of the
+  // whole map from elsewhere does not need (a third of hemigon's prepare on a latlong map).
   struct Row {
     const float* rgb = nullptr;
     const uint8_t* valid = nullptr;
     bool reversed = false;
   };
-  void build(int width, int height, const Row* rows);
+  void build(int width, int height, const Row* rows, bool rgb_power = true);
 
   struct Sample {
     Vec3 direction;                // unit, z >= 0
@@ -73,7 +75,7 @@ class HemigonWarp {
 
   // Luminance power of the map: integral of f = sum of Y * pixel solid angle.
   double power() const { return power_; }
-  // Per-channel power sum L * solid angle over valid pixels.
+  // Per-channel power sum L * solid angle over valid pixels (zero when built without).
   const std::array<double, 3>& rgb_power() const { return rgb_power_; }
   int width() const { return width_; }
   int height() const { return height_; }

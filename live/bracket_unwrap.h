@@ -7,6 +7,9 @@
 // unclipped, so the merge falls back to a saturation bound.)
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "hdr/bracket.h"
 #include "hdr/merge.h"
 #include "hdr/response.h"
@@ -20,6 +23,10 @@ namespace lp {
 struct BracketUnwrapPlan {
   const CompiledRemap* full = nullptr;  // the remap of the camera frames (not owned)
   CompiledRemap compact;
+  // The valid taps of `full` in the order of their source pixels: the gather reads the
+  // cache-cold frames front to back, which the hardware prefetches, instead of in map order,
+  // which jumps around the fisheye circle.
+  std::vector<uint32_t> gather_order;
 };
 BracketUnwrapPlan plan_bracket_unwrap(const CompiledRemap& remap);
 

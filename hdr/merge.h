@@ -131,6 +131,12 @@ struct BracketView {
 BracketView bracket_view(const Bracket& bracket);
 RgbImage merge_bracket(const BracketView& bracket, const CameraResponse& response, const MergeOptions& options = {},
                        MergeReport* report = nullptr);
+// The same into *out, whose storage is reused when it already holds an image of the frames'
+// size: a stream or a benchmark merging bracket after bracket allocates and zero-fills no
+// 15 MB output per call (a single-threaded memset, 7 % of the 2-thread merge's CPU at
+// 1280x960). Every value of out->rgb is overwritten; out->valid as merge_bracket returns it.
+void merge_bracket(const BracketView& bracket, const CameraResponse& response, const MergeOptions& options,
+                   RgbImage* out, MergeReport* report = nullptr);
 
 // The merge's weights, as merge_bracket precomputes them: frame k's weight at code level l
 // of channel c is level[c][l] * frame[k] (0 outside the thresholds). Throws InputError on a

@@ -55,7 +55,7 @@ HWY_INLINE void LookUp(DF df, const MergeRowInput& in, VI index, hn::Vec<DF>& w,
 #endif
 }
 
-size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo, size_t* n_redo) {
+MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
   using VF = hn::Vec<decltype(df)>;
@@ -71,6 +71,7 @@ size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* r
   const VF half = hn::Set(df, 0.5f);
   const VF top = hn::Set(df, float(in.levels - 1));
   const VF zero = hn::Zero(df);
+  const VI zero_through = hn::Set(di, in.zero_through), zero_from = hn::Set(di, in.zero_from);
   const VI below_sat = hn::Set(di, in.sat_level - 1);
   const VI above_black = hn::Set(di, in.black_level + 1);
   const VI first = hn::Set(di, in.levels), last = hn::Set(di, -1), none_yet = hn::Zero(di);
@@ -79,7 +80,7 @@ size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* r
   static_assert(kSaturatedEverywhere == 1 && kBlackEverywhere == 2, "lane codes are the flag bits");
   HWY_ALIGN int32_t lane_code[3 * hn::MaxLanes(df)];
   const size_t groups = in.width / N;
-  size_t redone = 0;
+  MergeRowResult result;
   for (size_t g = 0; g < groups; ++g) {
     const size_t first_float = 3 * N * g;
     VF sw[3] = {zero, zero, zero}, swx[3] = {zero, zero, zero};
@@ -99,6 +100,8 @@ size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* r
         const VI index = hn::Add(level, offset[v]);
         if (k == in.shortest) at_shortest[v] = index;
         if (k == in.longest) at_longest[v] = index;
+        // Every lane black or clipped in this frame: it adds +0 to both sums, so skip the reads.
+        if (hn::AllFalse(di, hn::And(hn::Gt(level, zero_through), hn::Lt(level, zero_from)))) continue;
         VF w, wx;
         LookUp(df, in, index, w, wx);
         sw[v] = hn::Add(sw[v], hn::Mul(w, fw));
@@ -124,16 +127,20 @@ size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* r
       }
       for (size_t p = 0; p < N; ++p) {
         const int32_t c = lane_code[3 * p] | lane_code[3 * p + 1] | lane_code[3 * p + 2];
-        if (c & kMixed)
-          redo[redone++] = uint32_t(N * g + p);
-        else
-          flags[N * g + p] = uint8_t(c);
+        if (c & kMixed) {
+          redo[result.redone++] = uint32_t(N * g + p);
+        } else if (c) {
+          result.saturated += c & kSaturatedEverywhere;
+          result.black += (c & kBlackEverywhere) >> 1;
+          ++result.flagged;
+          if (flags) flags[N * g + p] = uint8_t(c);
+        }
       }
     }
     for (size_t v = 0; v < 3; ++v) hn::StoreU(value[v], df, out + first_float + v * N);
   }
-  *n_redo = redone;
-  return groups * N;
+  result.done = groups * N;
+  return result;
 }
 
 const char* MergeTargetName() { return hwy::TargetName(HWY_TARGET); }
@@ -148,8 +155,8 @@ namespace lp::detail {
 HWY_EXPORT(MergeRow);
 HWY_EXPORT(MergeTargetName);
 
-size_t merge_row_simd(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo, size_t* n_redo) {
-  return HWY_DYNAMIC_DISPATCH(MergeRow)(in, out, flags, redo, n_redo);
+MergeRowResult merge_row_simd(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
+  return HWY_DYNAMIC_DISPATCH(MergeRow)(in, out, flags, redo);
 }
 
 const char* merge_simd_target() { return HWY_DYNAMIC_DISPATCH(MergeTargetName)(); }

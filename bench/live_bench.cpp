@@ -178,12 +178,13 @@ void BM_Live_FuseUnwrapBracket(benchmark::State& state, bool gathered) {
   }
   size_t k = 0;
   RgbImage out;
+  FuseUnwrapWorkspace workspace;  // as the stream keeps it (live/pipeline.cpp)
   for (auto _ : state) {
     const Bracket& b = brackets[k++ % brackets.size()];
     if (!gathered) {
       apply_remap(merge_bracket(b, response, mo), remap, &out, ro);
     } else {
-      out = fuse_and_unwrap(b, response, mo, plan, ro);
+      out = fuse_and_unwrap(b, response, mo, plan, ro, &workspace);
     }
     benchmark::DoNotOptimize(out.rgb.data());
   }

@@ -31,9 +31,10 @@ BracketUnwrapPlan plan_bracket_unwrap(const CompiledRemap& remap) {
 
 namespace {
 
-// The 2 x 2 footprint of every valid tap j of `remap` (k values per source pixel, rows
-// `width` pixels long) into dst[4 k j, 4 k (j + 1)): p[i], p[i + 1], p[i + W], p[i + W + 1],
-// in the plan's gather order. Invalid taps leave their footprint as it is. k is a template
+// The 2 x 2 footprint of every tap j of `remap` (k values per source pixel, rows `width`
+// pixels long) into dst[4 k j, 4 k (j + 1)): p[i], p[i + 1], p[i + W], p[i + W + 1], the
+// valid taps in the plan's gather order; an invalid tap's footprint is zeroed (the remap never
+// reads it: this only keeps a reused buffer free of an older bracket's values). k is a template
 // constant so that the two copies per tap are inlined moves rather than memcpy calls.
 template <size_t k, class T>
 void gather_footprints(const T* src, size_t width, const BracketUnwrapPlan& plan, T* dst) {
@@ -43,6 +44,9 @@ void gather_footprints(const T* src, size_t width, const BracketUnwrapPlan& plan
     std::memcpy(dst + 4 * k * j, src + k * i, 2 * k * sizeof(T));
     std::memcpy(dst + 4 * k * j + 2 * k, src + k * (i + width), 2 * k * sizeof(T));
   }
+  if (remap.any_invalid)
+    for (size_t j = 0; j < remap.taps.size(); ++j)
+      if (remap.taps[j].index < 0) std::fill(dst + 4 * k * j, dst + 4 * k * (j + 1), T(0));
 }
 
 // The merge is per pixel, so the footprints' layout is free: it sees them as rows of
@@ -58,55 +62,67 @@ MergeShape merge_shape(const CompiledRemap& remap) {
   return {2, int(2 * n)};
 }
 
-// Frame -> its footprints, as the merge sees them (merge_shape).
-RgbImage gather(const RgbImage& frame, const BracketUnwrapPlan& plan) {
+// Frame -> its footprints, as the merge sees them (merge_shape), into g (its storage reused).
+void gather(const RgbImage& frame, const BracketUnwrapPlan& plan, RgbImage& g) {
   const CompiledRemap& remap = *plan.full;
   const size_t n = remap.taps.size();
-  RgbImage g;
   const MergeShape shape = merge_shape(remap);
   g.width = shape.width;
   g.height = shape.height;
   g.units = frame.units;
-  g.rgb.assign(12 * n, 0.0f);
+  g.rgb.resize(12 * n);  // every value is written below
   const size_t W = size_t(frame.width);
   gather_footprints<3>(frame.rgb.data(), W, plan, g.rgb.data());
   if (!frame.valid.empty()) {
-    g.valid.assign(4 * n, 0);
+    g.valid.resize(4 * n);
     gather_footprints<1>(frame.valid.data(), W, plan, g.valid.data());
+  } else {
+    g.valid.clear();
   }
-  return g;
 }
 
 }  // namespace
 
 RgbImage fuse_and_unwrap(const Bracket& bracket, const CameraResponse& response, const MergeOptions& merge,
-                         const BracketUnwrapPlan& plan, const RemapOptions& remap_options) {
+                         const BracketUnwrapPlan& plan, const RemapOptions& remap_options,
+                         FuseUnwrapWorkspace* workspace) {
   if (!plan.full) throw InputError("fuse_and_unwrap: the plan has no remap");
   const CompiledRemap& full = *plan.full;
-  Bracket compact;
+  check_bracket(bracket);  // before the gather reads the frames (and their masks) by the remap's indices
+  FuseUnwrapWorkspace local;
+  FuseUnwrapWorkspace& ws = workspace ? *workspace : local;
+  ws.footprints.resize(bracket.frames.size());
+  BracketView compact;
   compact.exposure_seconds = bracket.exposure_seconds;
   compact.bit_depth = bracket.bit_depth;
-  compact.linear = bracket.linear;
+  if (!bracket.paths.empty()) compact.label = bracket.paths.front() + " .. " + bracket.paths.back();
   for (size_t k = 0; k < bracket.frames.size(); ++k) {
     const RgbImage& f = bracket.frames[k];
     if (f.width != full.src_width || f.height != full.src_height)
       throw InputError("bracket frame " + std::to_string(k + 1) + " is " + std::to_string(f.width) + "x" +
                        std::to_string(f.height) + ", the unwrap expects " + std::to_string(full.src_width) + "x" +
                        std::to_string(full.src_height));
-    compact.frames.push_back(gather(f, plan));
+    if (!f.valid.empty() && f.valid.size() != size_t(f.width) * size_t(f.height))
+      throw InputError("bracket frame " + std::to_string(k + 1) + ": valid mask of " + std::to_string(f.valid.size()) +
+                       " bytes, need width*height = " + std::to_string(size_t(f.width) * size_t(f.height)));
+    gather(f, plan, ws.footprints[k]);
+    compact.frames.push_back(image_view(ws.footprints[k]));
   }
   MergeOptions options = merge;
   // Masks are per pixel of the frames: gather them like the pixels.
   for (auto& mask : options.frame_masks) {
+    if (mask.size() != size_t(full.src_width) * size_t(full.src_height))
+      throw InputError("merge frame_masks: " + std::to_string(mask.size()) + " bytes, need width*height = " +
+                       std::to_string(size_t(full.src_width) * size_t(full.src_height)));
     std::vector<uint8_t> g(4 * full.taps.size(), 0);
     gather_footprints<1>(mask.data(), size_t(full.src_width), plan, g.data());
     mask = std::move(g);
   }
-  RgbImage merged = merge_bracket(compact, response, options);
-  merged.width = plan.compact.src_width;  // the same pixels, as the remap reads them
-  merged.height = plan.compact.src_height;
+  merge_bracket(compact, response, options, &ws.merged);
+  ws.merged.width = plan.compact.src_width;  // the same pixels, as the remap reads them
+  ws.merged.height = plan.compact.src_height;
   RgbImage out;
-  apply_remap(merged, plan.compact, &out, remap_options);
+  apply_remap(ws.merged, plan.compact, &out, remap_options);
   return out;
 }
 

@@ -30,9 +30,18 @@ struct BracketUnwrapPlan {
 };
 BracketUnwrapPlan plan_bracket_unwrap(const CompiledRemap& remap);
 
+// Buffers of fuse_and_unwrap kept from one bracket to the next, as a stream keeps them: the
+// gathered footprints and the merged image are then neither allocated nor zero-filled per
+// bracket (6 MB at 1280x960 -> 360x90). One workspace serves one thread at a time.
+struct FuseUnwrapWorkspace {
+  std::vector<RgbImage> footprints;  // per frame
+  RgbImage merged;
+};
+
 // Every frame must have the remap's source size (InputError otherwise). Units and the
-// valid mask are those of apply_remap(merge_bracket(...)).
+// valid mask are those of apply_remap(merge_bracket(...)). workspace: optional, see above.
 RgbImage fuse_and_unwrap(const Bracket& bracket, const CameraResponse& response, const MergeOptions& merge,
-                         const BracketUnwrapPlan& plan, const RemapOptions& remap_options = {});
+                         const BracketUnwrapPlan& plan, const RemapOptions& remap_options = {},
+                         FuseUnwrapWorkspace* workspace = nullptr);
 
 }  // namespace lp

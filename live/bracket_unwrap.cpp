@@ -39,7 +39,19 @@ namespace {
 template <size_t k, class T>
 void gather_footprints(const T* src, size_t width, const BracketUnwrapPlan& plan, T* dst) {
   const CompiledRemap& remap = *plan.full;
-  for (const uint32_t j : plan.gather_order) {
+  // The footprints of the tap 24 ahead are requested early (a compiler builtin, a no-op
+  // where the CPU has no prefetch): the frames are cache-cold and the two rows of a
+  // footprint are two interleaved streams. Fuse+unwrap CPU time 2.75 -> 2.33 ms (median of 4
+  // interleaved pairs, load ~5).
+  const size_t count = plan.gather_order.size();
+  constexpr size_t kAhead = 24;
+  for (size_t o = 0; o < count; ++o) {
+    const uint32_t j = plan.gather_order[o];
+    if (o + kAhead < count) {
+      const size_t a = size_t(remap.taps[plan.gather_order[o + kAhead]].index);
+      __builtin_prefetch(src + k * a);
+      __builtin_prefetch(src + k * (a + width));
+    }
     const size_t i = size_t(remap.taps[j].index);
     std::memcpy(dst + 4 * k * j, src + k * i, 2 * k * sizeof(T));
     std::memcpy(dst + 4 * k * j + 2 * k, src + k * (i + width), 2 * k * sizeof(T));

@@ -119,9 +119,16 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
         const auto none = hn::Not(hn::Gt(sw[v], zero));
         const auto sat = hn::Gt(lowest[v], below_sat);
         const auto black = hn::Lt(highest[v], above_black);
-        const VF bound = hn::IfThenElse(hn::RebindMask(df, sat), hn::GatherIndex(df, in.bound_short, at_shortest[v]),
-                                        hn::GatherIndex(df, in.bound_long, at_longest[v]));
-        value[v] = hn::IfThenElse(none, bound, value[v]);
+        // Unweighted lanes saturated everywhere take the shortest frame's bound, the others the
+        // longest's; each table is read only when some lane takes it (in a clipped or black
+        // region, one of the two).
+        const auto sat_f = hn::RebindMask(df, sat);
+        const auto take_short = hn::And(none, sat_f);
+        const auto take_long = hn::AndNot(sat_f, none);
+        if (!hn::AllFalse(df, take_short))
+          value[v] = hn::IfThenElse(take_short, hn::GatherIndex(df, in.bound_short, at_shortest[v]), value[v]);
+        if (!hn::AllFalse(df, take_long))
+          value[v] = hn::IfThenElse(take_long, hn::GatherIndex(df, in.bound_long, at_longest[v]), value[v]);
         const VI code = hn::IfThenElse(sat, hn::Set(di, 1), hn::IfThenElse(black, hn::Set(di, 2), hn::Set(di, kMixed)));
         hn::Store(hn::IfThenElseZero(hn::RebindMask(di, none), code), di, lane_code + v * N);
       }

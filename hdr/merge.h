@@ -73,8 +73,8 @@ struct MergeOptions {
   int threads = 0;
   // true (default): the unmasked merge (no frame_masks, valid masks or ignore_colour) runs a
   // vector kernel (hdr/merge_kernel.h, Google Highway, the best of SSSE3/SSE4/AVX2/AVX-512
-  // chosen at run time; 3.8x faster with AVX-512 on the benchmark's bracket); false: the scalar
-  // loop, kept as its reference. The two give the same image, flags and counts bit for bit
+  // chosen at run time; ~7x faster with AVX-512 on the benchmark's bracket, docs/hdr.md);
+  // false: the scalar loop, kept as its reference. The two give the same image, flags and counts bit for bit
   // (tests/hdr/merge_kernel_test.cpp). Masked merges and ignore_colour run the scalar loop.
   bool simd = true;
   // Pixel/frame pairs of exactly this 8-bit colour (registration borders, pure blue in

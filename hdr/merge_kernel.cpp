@@ -16,6 +16,13 @@
 // bracket on one thread (best of 7): scalar loop 36.7 ms; kernel AVX-512 9.6 ms, AVX2 11.1,
 // SSE4 13.9, SSSE3 21.5, Highway's one-lane fallback 37.6 (reading w and wx as two gathers
 // instead of one paired read: AVX-512 20.1 ms, AVX2 14.8). Two threads: docs/performance.md.
+// Since then (docs/hdr.md, "Speed"): a frame whose vector of codes is all black or clipped
+// skips its reads (they would add +0), and a bound table is read only when some lane takes
+// it: one thread's CPU time on that bracket 9.1-9.4 -> 5.2-5.3 ms (AVX-512, load 6-7).
+// Not done, and why: in-register lookups (the 256-level tables in vector registers instead of
+// gathers) need a two-table permute (vpermt2ps; Highway's TwoTablesLookupLanes) that the
+// Highway 1.0.3 in Debian 12 does not have; with single 16-lane TableLookupLanes a 256-entry
+// table takes 16 lookups and 15 selects per vector and table, more than the gather costs.
 //
 // Bit-identical to the scalar loop: every lane does the scalar loop's operations in its order
 // (level = int(min(z * scale + 0.5, levels - 1)) after zeroing non-positive and NaN values;

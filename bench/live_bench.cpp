@@ -5,7 +5,8 @@
 //     HDR_frames_s = frames of processed brackets per second (aim >= 60 on 2 cores).
 //   Latency: the source is paced at 8 brackets/s so nothing queues; counter latency_ms =
 //     mean time from the last frame of a bracket leaving the source to its light list
-//     being published (aim <= 10 ms), latency_max_ms the worst.
+//     being published (aim <= 10 ms; issue 23: <= 5 ms), latency_max_ms the worst,
+//     latency_median_ms the median.
 //   build/bench/lightprobe_bench --benchmark_filter=Live --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
@@ -149,6 +150,10 @@ void BM_Live_Latency(benchmark::State& state) {
   for (double v : all) sum += v;
   state.counters["latency_ms"] = sum / double(all.size());
   state.counters["latency_max_ms"] = *std::max_element(all.begin(), all.end());
+  // The median: on a shared machine the mean and the worst are those of the brackets whose
+  // thread waited for a core; the median is closer to what the chain itself costs.
+  std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(all.size() / 2), all.end());
+  state.counters["latency_median_ms"] = all[all.size() / 2];
   state.counters["unwrap_ms"] = r.unwrap_ms;
   state.counters["fuse_ms"] = r.fuse_ms;
   state.counters["sample_ms"] = r.sample_ms;
@@ -178,12 +183,13 @@ void BM_Live_FuseUnwrapBracket(benchmark::State& state, bool gathered) {
   }
   size_t k = 0;
   RgbImage out;
+  FuseUnwrapWorkspace workspace;  // as the stream keeps it (live/pipeline.cpp)
   for (auto _ : state) {
     const Bracket& b = brackets[k++ % brackets.size()];
     if (!gathered) {
       apply_remap(merge_bracket(b, response, mo), remap, &out, ro);
     } else {
-      out = fuse_and_unwrap(b, response, mo, plan, ro);
+      out = fuse_and_unwrap(b, response, mo, plan, ro, &workspace);
     }
     benchmark::DoNotOptimize(out.rgb.data());
   }

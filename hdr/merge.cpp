@@ -29,6 +29,7 @@ struct Tables {
   std::vector<float> frame_w, frame_wx;         // per frame: s_k and s_k / t_k
   std::vector<size_t> by_time;                  // frame indices, shortest exposure first
   int sat_level = 0, black_level = 0;           // level >= sat_level: saturated; <= black_level: black
+  int zero_through = -1, zero_from = 0;         // levels of w = wx = 0 in every channel (merge_kernel.h)
   std::array<int, 3> colour_level{-1, -1, -1};  // ignore_colour in levels, or -1
   std::vector<const uint8_t*> keep, valid;      // per frame: frame_masks[k] / frames[k].valid, or null
   std::vector<size_t> valid_stride;             // per frame: bytes between the valid mask's rows
@@ -83,13 +84,11 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
   // loops below over the rest: the tail of the row and the pixels it hands back.
   [[maybe_unused]] std::vector<const float*> frame_rows(nf);
   [[maybe_unused]] std::vector<uint32_t> redo;
-  [[maybe_unused]] std::vector<uint8_t> row_flags;
   [[maybe_unused]] detail::MergeRowInput kernel;
   if constexpr (!kTrack) {
     redo.resize(size_t(W));
-    row_flags.resize(size_t(W));
     kernel = {frame_rows.data(), T.frame_w.data(), T.frame_wx.data(), nf, size_t(W), T.w3.data(), T.wx3.data(),
-              T.w_wx3.data(), L, T.sat_level, T.black_level, T.by_time.front(), T.by_time.back(),
+              T.w_wx3.data(), L, T.zero_through, T.zero_from, T.sat_level, T.black_level, T.by_time.front(), T.by_time.back(),
               T.bound_short.data(), T.bound_long.data()};
   }
   for (int y = y0; y < y1; ++y) {
@@ -193,21 +192,16 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
       }
     };
     int done = 0;
-    size_t n_redo = 0;
     if constexpr (!kTrack) {
       if (T.simd) {
         for (size_t k = 0; k < nf; ++k) frame_rows[k] = b.frames[k].row(y);
-        std::fill(row_flags.begin(), row_flags.end(), uint8_t(0));
-        done = int(detail::merge_row_simd(kernel, o, row_flags.data(), redo.data(), &n_redo));
-        for (int x = 0; x < done; ++x) {
-          const uint8_t flag = row_flags[size_t(x)];
-          sat += flag & kSaturatedEverywhere ? 1 : 0;
-          black += flag & kBlackEverywhere ? 1 : 0;
-          well += flag ? 0 : 1;
-        }
-        well -= n_redo;  // counted by finish() below
-        if (flags) std::copy(row_flags.begin(), row_flags.begin() + done, flags + row);
-        for (size_t i = 0; i < n_redo; ++i) {
+        // Flags go straight into the report's image (zeroed by the caller), or nowhere.
+        const detail::MergeRowResult r = detail::merge_row_simd(kernel, o, flags ? flags + row : nullptr, redo.data());
+        done = int(r.done);
+        sat += r.saturated;
+        black += r.black;
+        well += r.done - r.redone - r.flagged;  // the redone pixels are counted by finish() below
+        for (size_t i = 0; i < r.redone; ++i) {
           const int x = int(redo[i]);
           accumulate(x, x + 1);
           finish(x, x + 1);
@@ -301,6 +295,14 @@ RgbImage merge_bracket(const Bracket& b, const CameraResponse& resp, const Merge
 }
 
 RgbImage merge_bracket(const BracketView& b, const CameraResponse& resp, const MergeOptions& o, MergeReport* report) {
+  RgbImage out;
+  merge_bracket(b, resp, o, &out, report);
+  return out;
+}
+
+void merge_bracket(const BracketView& b, const CameraResponse& resp, const MergeOptions& o, RgbImage* out_image,
+                   MergeReport* report) {
+  if (!out_image) throw InputError(fmt::format("{}: no output image to merge into", b.label));
   const auto start = std::chrono::steady_clock::now();
   if (b.frames.size() < 2 || b.exposure_seconds.size() != b.frames.size())
     throw InputError(fmt::format("{}: {} frames and {} exposure times (need at least 2, one each)", b.label,
@@ -350,6 +352,19 @@ RgbImage merge_bracket(const BracketView& b, const CameraResponse& resp, const M
   T.sat_level = int(std::ceil(hi * (L - 1) - 1e-9));
   T.black_level = int(std::floor(lo * (L - 1) + 1e-9));
   T.simd = o.simd;
+  auto weightless = [&](int l) {
+    for (int c = 0; c < 3; ++c)
+      if (T.w[size_t(c)][size_t(l)] != 0.0f || T.wx[size_t(c)][size_t(l)] != 0.0f) return false;
+    return true;
+  };
+  // 0 times a frame factor is +0 only when the factor is finite (an absurd exposure time can
+  // make s_k / t_k overflow): otherwise no level is skipped.
+  bool finite_factors = true;
+  for (size_t k = 0; k < nf; ++k) finite_factors = finite_factors && std::isfinite(T.frame_w[k]) && std::isfinite(T.frame_wx[k]);
+  T.zero_through = -1;
+  while (finite_factors && T.zero_through + 1 < L && weightless(T.zero_through + 1)) ++T.zero_through;
+  T.zero_from = L;
+  while (finite_factors && T.zero_from - 1 > T.zero_through && weightless(T.zero_from - 1)) --T.zero_from;
   T.w_wx3.resize(T.w3.size());
   for (size_t i = 0; i < T.w3.size(); ++i) {
     const float pair[2] = {T.w3[i], T.wx3[i]};
@@ -375,12 +390,15 @@ RgbImage merge_bracket(const BracketView& b, const CameraResponse& resp, const M
     masked = masked || T.keep[k] || T.valid[k];
   }
 
-  RgbImage out;
+  RgbImage& out = *out_image;
   out.width = b.frames[0].width;
   out.height = b.frames[0].height;
   out.units = Units::Relative;
-  out.rgb.resize(3 * size_t(out.width) * size_t(out.height));
-  if (o.ignore_colour || masked) out.valid.assign(npix, 1);
+  out.rgb.resize(3 * size_t(out.width) * size_t(out.height));  // every value is written below
+  if (o.ignore_colour || masked)
+    out.valid.assign(npix, 1);
+  else
+    out.valid.clear();
   std::vector<uint8_t> flags;
   const bool want_flags = report && o.flag_image;
   if (want_flags) flags.assign(size_t(out.width) * size_t(out.height), 0);
@@ -419,7 +437,6 @@ RgbImage merge_bracket(const BracketView& b, const CameraResponse& resp, const M
     report->flags = std::move(flags);
     report->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
-  return out;
 }
 
 }  // namespace lp

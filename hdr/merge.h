@@ -73,8 +73,8 @@ struct MergeOptions {
   int threads = 0;
   // true (default): the unmasked merge (no frame_masks, valid masks or ignore_colour) runs a
   // vector kernel (hdr/merge_kernel.h, Google Highway, the best of SSSE3/SSE4/AVX2/AVX-512
-  // chosen at run time; 3.8x faster with AVX-512 on the benchmark's bracket); false: the scalar
-  // loop, kept as its reference. The two give the same image, flags and counts bit for bit
+  // chosen at run time; ~7x faster with AVX-512 on the benchmark's bracket, docs/hdr.md);
+  // false: the scalar loop, kept as its reference. The two give the same image, flags and counts bit for bit
   // (tests/hdr/merge_kernel_test.cpp). Masked merges and ignore_colour run the scalar loop.
   bool simd = true;
   // Pixel/frame pairs of exactly this 8-bit colour (registration borders, pure blue in
@@ -131,6 +131,12 @@ struct BracketView {
 BracketView bracket_view(const Bracket& bracket);
 RgbImage merge_bracket(const BracketView& bracket, const CameraResponse& response, const MergeOptions& options = {},
                        MergeReport* report = nullptr);
+// The same into *out, whose storage is reused when it already holds an image of the frames'
+// size: a stream or a benchmark merging bracket after bracket allocates and zero-fills no
+// 15 MB output per call (a single-threaded memset, 7 % of the 2-thread merge's CPU at
+// 1280x960). Every value of out->rgb is overwritten; out->valid as merge_bracket returns it.
+void merge_bracket(const BracketView& bracket, const CameraResponse& response, const MergeOptions& options,
+                   RgbImage* out, MergeReport* report = nullptr);
 
 // The merge's weights, as merge_bracket precomputes them: frame k's weight at code level l
 // of channel c is level[c][l] * frame[k] (0 outside the thresholds). Throws InputError on a

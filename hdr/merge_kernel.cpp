@@ -16,6 +16,13 @@
 // bracket on one thread (best of 7): scalar loop 36.7 ms; kernel AVX-512 9.6 ms, AVX2 11.1,
 // SSE4 13.9, SSSE3 21.5, Highway's one-lane fallback 37.6 (reading w and wx as two gathers
 // instead of one paired read: AVX-512 20.1 ms, AVX2 14.8). Two threads: docs/performance.md.
+// Since then (docs/hdr.md, "Speed"): a frame whose vector of codes is all black or clipped
+// skips its reads (they would add +0), and a bound table is read only when some lane takes
+// it: one thread's CPU time on that bracket 9.1-9.4 -> 5.2-5.3 ms (AVX-512, load 6-7).
+// Not done, and why: in-register lookups (the 256-level tables in vector registers instead of
+// gathers) need a two-table permute (vpermt2ps; Highway's TwoTablesLookupLanes) that the
+// Highway 1.0.3 in Debian 12 does not have; with single 16-lane TableLookupLanes a 256-entry
+// table takes 16 lookups and 15 selects per vector and table, more than the gather costs.
 //
 // Bit-identical to the scalar loop: every lane does the scalar loop's operations in its order
 // (level = int(min(z * scale + 0.5, levels - 1)) after zeroing non-positive and NaN values;
@@ -55,7 +62,7 @@ HWY_INLINE void LookUp(DF df, const MergeRowInput& in, VI index, hn::Vec<DF>& w,
 #endif
 }
 
-size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo, size_t* n_redo) {
+MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
   using VF = hn::Vec<decltype(df)>;
@@ -71,6 +78,7 @@ size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* r
   const VF half = hn::Set(df, 0.5f);
   const VF top = hn::Set(df, float(in.levels - 1));
   const VF zero = hn::Zero(df);
+  const VI zero_through = hn::Set(di, in.zero_through), zero_from = hn::Set(di, in.zero_from);
   const VI below_sat = hn::Set(di, in.sat_level - 1);
   const VI above_black = hn::Set(di, in.black_level + 1);
   const VI first = hn::Set(di, in.levels), last = hn::Set(di, -1), none_yet = hn::Zero(di);
@@ -79,7 +87,7 @@ size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* r
   static_assert(kSaturatedEverywhere == 1 && kBlackEverywhere == 2, "lane codes are the flag bits");
   HWY_ALIGN int32_t lane_code[3 * hn::MaxLanes(df)];
   const size_t groups = in.width / N;
-  size_t redone = 0;
+  MergeRowResult result;
   for (size_t g = 0; g < groups; ++g) {
     const size_t first_float = 3 * N * g;
     VF sw[3] = {zero, zero, zero}, swx[3] = {zero, zero, zero};
@@ -99,6 +107,8 @@ size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* r
         const VI index = hn::Add(level, offset[v]);
         if (k == in.shortest) at_shortest[v] = index;
         if (k == in.longest) at_longest[v] = index;
+        // Every lane black or clipped in this frame: it adds +0 to both sums, so skip the reads.
+        if (hn::AllFalse(di, hn::And(hn::Gt(level, zero_through), hn::Lt(level, zero_from)))) continue;
         VF w, wx;
         LookUp(df, in, index, w, wx);
         sw[v] = hn::Add(sw[v], hn::Mul(w, fw));
@@ -116,24 +126,35 @@ size_t MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* r
         const auto none = hn::Not(hn::Gt(sw[v], zero));
         const auto sat = hn::Gt(lowest[v], below_sat);
         const auto black = hn::Lt(highest[v], above_black);
-        const VF bound = hn::IfThenElse(hn::RebindMask(df, sat), hn::GatherIndex(df, in.bound_short, at_shortest[v]),
-                                        hn::GatherIndex(df, in.bound_long, at_longest[v]));
-        value[v] = hn::IfThenElse(none, bound, value[v]);
+        // Unweighted lanes saturated everywhere take the shortest frame's bound, the others the
+        // longest's; each table is read only when some lane takes it (in a clipped or black
+        // region, one of the two).
+        const auto sat_f = hn::RebindMask(df, sat);
+        const auto take_short = hn::And(none, sat_f);
+        const auto take_long = hn::AndNot(sat_f, none);
+        if (!hn::AllFalse(df, take_short))
+          value[v] = hn::IfThenElse(take_short, hn::GatherIndex(df, in.bound_short, at_shortest[v]), value[v]);
+        if (!hn::AllFalse(df, take_long))
+          value[v] = hn::IfThenElse(take_long, hn::GatherIndex(df, in.bound_long, at_longest[v]), value[v]);
         const VI code = hn::IfThenElse(sat, hn::Set(di, 1), hn::IfThenElse(black, hn::Set(di, 2), hn::Set(di, kMixed)));
         hn::Store(hn::IfThenElseZero(hn::RebindMask(di, none), code), di, lane_code + v * N);
       }
       for (size_t p = 0; p < N; ++p) {
         const int32_t c = lane_code[3 * p] | lane_code[3 * p + 1] | lane_code[3 * p + 2];
-        if (c & kMixed)
-          redo[redone++] = uint32_t(N * g + p);
-        else
-          flags[N * g + p] = uint8_t(c);
+        if (c & kMixed) {
+          redo[result.redone++] = uint32_t(N * g + p);
+        } else if (c) {
+          result.saturated += c & kSaturatedEverywhere;
+          result.black += (c & kBlackEverywhere) >> 1;
+          ++result.flagged;
+          if (flags) flags[N * g + p] = uint8_t(c);
+        }
       }
     }
     for (size_t v = 0; v < 3; ++v) hn::StoreU(value[v], df, out + first_float + v * N);
   }
-  *n_redo = redone;
-  return groups * N;
+  result.done = groups * N;
+  return result;
 }
 
 const char* MergeTargetName() { return hwy::TargetName(HWY_TARGET); }
@@ -148,8 +169,8 @@ namespace lp::detail {
 HWY_EXPORT(MergeRow);
 HWY_EXPORT(MergeTargetName);
 
-size_t merge_row_simd(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo, size_t* n_redo) {
-  return HWY_DYNAMIC_DISPATCH(MergeRow)(in, out, flags, redo, n_redo);
+MergeRowResult merge_row_simd(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
+  return HWY_DYNAMIC_DISPATCH(MergeRow)(in, out, flags, redo);
 }
 
 const char* merge_simd_target() { return HWY_DYNAMIC_DISPATCH(MergeTargetName)(); }

@@ -23,6 +23,11 @@ struct MergeRowInput {
   const float* wx = nullptr;
   const uint64_t* w_wx = nullptr;  // both as one 64-bit entry each: the bits of w in the low half, wx in the high
   int levels = 0;
+  // Levels at or below zero_through and at or above zero_from have w = wx = 0 in all three
+  // channels (the hat's black and clipped ends). A frame whose vector of codes lies there in
+  // every lane adds +0 to non-negative sums, which changes no bit: its table reads are skipped.
+  int zero_through = -1;
+  int zero_from = 0;
   // The bounds of a channel no frame weighs (MergeReport): at or above sat_level in every
   // frame, the shortest frame's estimate; at or below black_level in every frame, the longest
   // frame's. Tables of float(exp(g_c(l)) / t_k) for those two frames, channel-major as w.
@@ -33,14 +38,21 @@ struct MergeRowInput {
 };
 
 // Writes out[3x + c] = Σ_k wx(z) s_k/t_k / Σ_k w(z) s_k, summed over frames in order, with
-// the scalar loop's operations and order (bit-identical), for the pixels x < the returned
-// count (a multiple of the vector width; the rest are the caller's). A channel of zero total
-// weight takes the bound above and sets flags[x] (zeroed by the caller) to
-// kSaturatedEverywhere / kBlackEverywhere (hdr/merge.h). Pixels with a channel of zero weight
-// that is neither (clipped in some frames, black in the others: rare) are listed in `redo`
-// (room for `width` entries), their count in *n_redo, their flags left 0: the caller's scalar
-// loop finishes them.
-size_t merge_row_simd(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo, size_t* n_redo);
+// the scalar loop's operations and order (bit-identical), for the pixels x < done (a multiple
+// of the vector width; the rest are the caller's). A channel of zero total weight takes the
+// bound above; its pixel is counted in `saturated` / `black` and, when flags is not null,
+// flags[x] (zeroed by the caller) gets kSaturatedEverywhere / kBlackEverywhere (hdr/merge.h).
+// Pixels with a channel of zero weight that is neither (clipped in some frames, black in the
+// others: rare) are listed in `redo` (room for `width` entries), `redone` of them, neither
+// flagged nor counted: the caller's scalar loop finishes them.
+struct MergeRowResult {
+  size_t done = 0;       // pixels written
+  size_t redone = 0;     // pixels listed in redo
+  size_t saturated = 0;  // pixels with kSaturatedEverywhere
+  size_t black = 0;      // pixels with kBlackEverywhere
+  size_t flagged = 0;    // pixels with either (the rest of done minus redone are well exposed)
+};
+MergeRowResult merge_row_simd(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo);
 
 // The Highway target merge_row_simd dispatches to on this CPU (for logs and benchmarks).
 const char* merge_simd_target();

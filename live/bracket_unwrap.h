@@ -7,6 +7,9 @@
 // unclipped, so the merge falls back to a saturation bound.)
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "hdr/bracket.h"
 #include "hdr/merge.h"
 #include "hdr/response.h"
@@ -20,12 +23,25 @@ namespace lp {
 struct BracketUnwrapPlan {
   const CompiledRemap* full = nullptr;  // the remap of the camera frames (not owned)
   CompiledRemap compact;
+  // The valid taps of `full` in the order of their source pixels: the gather reads the
+  // cache-cold frames front to back, which the hardware prefetches, instead of in map order,
+  // which jumps around the fisheye circle.
+  std::vector<uint32_t> gather_order;
 };
 BracketUnwrapPlan plan_bracket_unwrap(const CompiledRemap& remap);
 
+// Buffers of fuse_and_unwrap kept from one bracket to the next, as a stream keeps them: the
+// gathered footprints and the merged image are then neither allocated nor zero-filled per
+// bracket (6 MB at 1280x960 -> 360x90). One workspace serves one thread at a time.
+struct FuseUnwrapWorkspace {
+  std::vector<RgbImage> footprints;  // per frame
+  RgbImage merged;
+};
+
 // Every frame must have the remap's source size (InputError otherwise). Units and the
-// valid mask are those of apply_remap(merge_bracket(...)).
+// valid mask are those of apply_remap(merge_bracket(...)). workspace: optional, see above.
 RgbImage fuse_and_unwrap(const Bracket& bracket, const CameraResponse& response, const MergeOptions& merge,
-                         const BracketUnwrapPlan& plan, const RemapOptions& remap_options = {});
+                         const BracketUnwrapPlan& plan, const RemapOptions& remap_options = {},
+                         FuseUnwrapWorkspace* workspace = nullptr);
 
 }  // namespace lp

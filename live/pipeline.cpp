@@ -43,6 +43,7 @@ struct LivePipeline::RemapCache {
   int width = 0, height = 0;
   CompiledRemap compiled;
   BracketUnwrapPlan plan;  // over `compiled`
+  FuseUnwrapWorkspace fuse;  // buffers reused from bracket to bracket
   RgbImage out;
 };
 
@@ -394,7 +395,7 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     const CameraResponse response = options_.response ? *options_.response : linear_response(256);
     RgbImage radiance;
     try {
-      radiance = fuse_and_unwrap(hb, response, merge_options, remap_->plan, ro);
+      radiance = fuse_and_unwrap(hb, response, merge_options, remap_->plan, ro, &remap_->fuse);
     } catch (const InputError&) {
       // Nothing well exposed (a first bracket far off the scene): the bracket is dropped,
       // but the planner still learns which way to go from its raw frames.

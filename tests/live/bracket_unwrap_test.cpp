@@ -87,5 +87,41 @@ TEST(BracketUnwrap, AFrameOfAnotherSizeIsAnInputError) {
   EXPECT_THROW(fuse_and_unwrap(b, linear_response(256), {}, plan_bracket_unwrap(remap)), InputError);
 }
 
+// A workspace kept from bracket to bracket (as the stream keeps it) carries nothing over: a
+// bracket with valid masks, then one without, then a darker one give each the map a fresh
+// call gives, bit for bit.
+TEST(BracketUnwrap, AReusedWorkspaceGivesTheMapOfAFreshCall) {
+  const CompiledRemap remap = hemisphere_remap();
+  const BracketUnwrapPlan plan = plan_bracket_unwrap(remap);
+  const CameraResponse response = linear_response(256);
+  Bracket masked = fake_bracket();
+  masked.frames[0].valid.assign(size_t(kW) * kH, 1);
+  for (size_t i = 0; i < masked.frames[0].valid.size(); i += 5) masked.frames[0].valid[i] = 0;
+  Bracket plain = fake_bracket();
+  Bracket darker = fake_bracket();
+  for (RgbImage& f : darker.frames)
+    for (float& v : f.rgb) v = std::round(v * 0.5f * 255.0f) / 255.0f;
+  FuseUnwrapWorkspace workspace;
+  for (const Bracket* b : {&masked, &plain, &darker, &masked}) {
+    const RgbImage fresh = fuse_and_unwrap(*b, response, {}, plan);
+    expect_identical(fuse_and_unwrap(*b, response, {}, plan, {}, &workspace), fresh);
+  }
+  RgbImage reference;  // and the reused result is still the right one
+  apply_remap(merge_bracket(darker, response), remap, &reference);
+  expect_identical(fuse_and_unwrap(darker, response, {}, plan, {}, &workspace), reference);
+}
+
+// Masks are read by the remap's indices: one of the wrong size is refused, not read past.
+TEST(BracketUnwrap, MasksOfTheWrongSizeAreAnInputError) {
+  const CompiledRemap remap = hemisphere_remap();
+  const BracketUnwrapPlan plan = plan_bracket_unwrap(remap);
+  Bracket b = fake_bracket();
+  b.frames[1].valid.assign(10, 1);
+  EXPECT_THROW(fuse_and_unwrap(b, linear_response(256), {}, plan), InputError);
+  MergeOptions options;
+  options.frame_masks.assign(3, std::vector<uint8_t>(10, 1));
+  EXPECT_THROW(fuse_and_unwrap(fake_bracket(), linear_response(256), options, plan), InputError);
+}
+
 }  // namespace
 }  // namespace lp

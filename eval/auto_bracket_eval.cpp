@@ -115,7 +115,9 @@ EvalAutoBracketReport evaluate_auto_bracket(const EvalAutoBracketOptions& option
   ProgressSteps steps(progress, options.scenarios.size());
   for (const auto& scenario : options.scenarios) {
     for (const std::string strategy : {"auto", "fixed3", "fixed5"}) {
-      AutoBracketRow row{scenario, strategy};
+      AutoBracketRow row;
+      row.scenario = scenario;
+      row.strategy = strategy;
       std::vector<double> times = strategy == "fixed5" ? options.fixed5 : options.fixed3;
       std::unique_ptr<AutoBracketPlanner> planner;
       for (int f = 0; f < options.frames; ++f) {

@@ -62,11 +62,6 @@ void mosquitto_log_callback_set(struct mosquitto* mosq, void (*on_log)(struct mo
   real(mosq, on_log);
 }
 
-int mosquitto_reconnect_delay_set(struct mosquitto* mosq, unsigned int reconnect_delay, unsigned int reconnect_delay_max, bool reconnect_exponential_backoff) {
-  LP_MOSQUITTO(mosquitto_reconnect_delay_set);
-  return real(mosq, reconnect_delay, reconnect_delay_max, reconnect_exponential_backoff);
-}
-
 int mosquitto_username_pw_set(struct mosquitto* mosq, const char* username, const char* password) {
   LP_MOSQUITTO(mosquitto_username_pw_set);
   return real(mosq, username, password);
@@ -82,14 +77,19 @@ int mosquitto_will_set(struct mosquitto* mosq, const char* topic, int payloadlen
   return real(mosq, topic, payloadlen, payload, qos, retain);
 }
 
-int mosquitto_loop_start(struct mosquitto* mosq) {
-  LP_MOSQUITTO(mosquitto_loop_start);
-  return real(mosq);
+int mosquitto_threaded_set(struct mosquitto* mosq, bool threaded) {
+  LP_MOSQUITTO(mosquitto_threaded_set);
+  return real(mosq, threaded);
 }
 
-int mosquitto_loop_stop(struct mosquitto* mosq, bool force) {
-  LP_MOSQUITTO(mosquitto_loop_stop);
-  return real(mosq, force);
+int mosquitto_loop(struct mosquitto* mosq, int timeout, int max_packets) {
+  LP_MOSQUITTO(mosquitto_loop);
+  return real(mosq, timeout, max_packets);
+}
+
+int mosquitto_socket(struct mosquitto* mosq) {
+  LP_MOSQUITTO(mosquitto_socket);
+  return real(mosq);
 }
 
 int mosquitto_connect_async(struct mosquitto* mosq, const char* host, int port, int keepalive) {

@@ -105,8 +105,6 @@ MqttConnection::MqttConnection(const MqttUrl& url, const std::string& flag, cons
   mosquitto_message_callback_set(mosq_, &MqttConnection::message_cb);
   mosquitto_publish_callback_set(mosq_, &MqttConnection::published_cb);
   mosquitto_log_callback_set(mosq_, &MqttConnection::log_cb);
-  mosquitto_reconnect_delay_set(mosq_, unsigned(std::max(1, options.reconnect_delay_s)),
-                                unsigned(std::max({1, options.reconnect_delay_s, options.reconnect_delay_max_s})), true);
   if (!url.user.empty())
     mosquitto_username_pw_set(mosq_, url.user.c_str(), url.password.empty() ? nullptr : url.password.c_str());
   if (url.tls) {
@@ -134,46 +132,64 @@ MqttConnection::~MqttConnection() {
 
 void MqttConnection::start() {
   if (started_) throw std::logic_error("MqttConnection started twice");
-  // The thread first: then the connection is non-blocking and a broker that is not there
-  // yet is retried with backoff. Connecting first (libmosquitto 2.0.11), a refused first
-  // attempt left the thread idle for good.
-  if (mosquitto_loop_start(mosq_) != MOSQ_ERR_SUCCESS)
-    throw std::runtime_error("libmosquitto was built without thread support");
-  started_ = true;
-  if (mosquitto_connect_async(mosq_, url_.host.c_str(), url_.port, options_.keepalive_s) == MOSQ_ERR_INVAL) {
-    stop();
+  // Our own network thread (run()) calls libmosquitto's loop, so that every call that
+  // touches the socket and its TLS state is made by that one thread. With libmosquitto's
+  // thread (mosquitto_loop_start) that could not hold: 2.0.11 ends its thread on any TLS
+  // error, a broker's SIGKILL included, and starting it again while reconnecting from
+  // another thread raced on the SSL object (a crash in libssl, 1 in ~10 broker kills).
+  // "Threaded" tells libmosquitto that publishing threads only queue and wake the loop.
+  mosquitto_threaded_set(mosq_, true);
+  // Before the thread exists: a non-blocking connect (its failure is retried by run()),
+  // and malformed arguments are an error now rather than a silent retry loop.
+  if (mosquitto_connect_async(mosq_, url_.host.c_str(), url_.port, options_.keepalive_s) == MOSQ_ERR_INVAL)
     throw InputError(fmt::format("{}: cannot connect to {}", flag_, address_));
-  }
-  if (url_.tls) tls_revive_ = std::thread([this] { revive_tls_loop(); });
+  started_ = true;
+  network_ = std::thread([this] { run(); });
 }
 
-void MqttConnection::revive_tls_loop() {
-  const int first_s = std::max(1, options_.reconnect_delay_s);
-  int delay_s = first_s;
-  while (!stopped_) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    if (connected_) delay_s = first_s;  // a connection worked: the backoff starts over
-    if (!tls_lost_) continue;
-    for (int waited = 0; waited < 10 * delay_s && !stopped_; ++waited)
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    if (stopped_) break;
-    delay_s = std::min(2 * delay_s, std::max(delay_s, options_.reconnect_delay_max_s));
-    tls_lost_ = false;
-    mosquitto_loop_stop(mosq_, false);  // joins the thread that gave up
-    mosquitto_loop_start(mosq_);        // the thread first, as in start()
-    mosquitto_reconnect_async(mosq_);   // a broker still away is retried by that thread (not a TLS error)
+void MqttConnection::run() {
+  using Clock = std::chrono::steady_clock;
+  const auto first = std::chrono::seconds(std::max(1, options_.reconnect_delay_s));
+  const auto longest = std::max(first, std::chrono::seconds(options_.reconnect_delay_max_s));
+  auto delay = first;                          // until the next attempt; doubles up to `longest`
+  auto next_attempt = Clock::now() + delay;    // start() made the first one
+  auto stop_deadline = Clock::time_point::max();
+  constexpr int kLoopMs = 100;                 // how soon stop() is noticed; publishing wakes the loop at once
+  while (true) {
+    if (stopping_ && stop_deadline == Clock::time_point::max())
+      stop_deadline = Clock::now() + std::chrono::seconds(2);  // for the farewell and the DISCONNECT to go out
+    if (connected_) delay = first;  // a connection worked: the backoff starts over
+    if (mosquitto_socket(mosq_) < 0) {  // no connection, nor one under way
+      if (stopping_) break;
+      const bool gave_up = [&] {
+        std::lock_guard lock(mutex_);
+        return !stats_.refused.empty();  // credentials or TLS refused: retrying cannot help
+      }();
+      if (gave_up || Clock::now() < next_attempt) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(kLoopMs));
+        continue;
+      }
+      mosquitto_reconnect_async(mosq_);  // a failure leaves no socket: the next attempt after `delay`
+      next_attempt = Clock::now() + delay;
+      delay = std::min(2 * delay, longest);
+      continue;
+    }
+    if (Clock::now() > stop_deadline) break;
+    // Reads, writes, the TLS handshake and keepalive; an error closes the socket (and calls
+    // disconnected_cb), and the next round connects again after the backoff.
+    mosquitto_loop(mosq_, kLoopMs, 1);
   }
 }
 
 void MqttConnection::stop(const std::optional<std::pair<std::string, std::string>>& farewell) {
-  if (!started_ || stopped_.exchange(true)) return;
-  if (tls_revive_.joinable()) tls_revive_.join();
-  // Queued in order: the farewell is written before the DISCONNECT.
+  if (!started_ || stopping_.exchange(true)) return;
+  // Queued in order for the network thread: the farewell is written before the DISCONNECT,
+  // which also makes the broker forget the will.
   if (farewell && connected_)
     mosquitto_publish(mosq_, nullptr, farewell->first.c_str(), int(farewell->second.size()), farewell->second.data(), 1,
                       true);
   mosquitto_disconnect(mosq_);
-  mosquitto_loop_stop(mosq_, false);
+  network_.join();
 }
 
 bool MqttConnection::publish(const std::string& topic, std::string_view payload, int qos, bool retain, int* mid) {
@@ -231,10 +247,9 @@ void MqttConnection::published_cb(mosquitto*, void* self, int mid) {
 }
 
 void MqttConnection::log_cb(mosquitto*, void* self, int level, const char* text) {
-  // A TLS failure (an unknown CA, a name mismatch) ends libmosquitto's thread without a
-  // callback; its log line is the only word of it.
+  // A TLS failure comes without a callback of its own; its log line is the only word of it.
   // Before any connection worked it is the setup's fault (an unknown CA, a name mismatch):
-  // fatal. Afterwards it is a lost connection, which revive_tls_loop() restores.
+  // fatal. Afterwards it is a lost connection, which run() restores.
   auto& c = *static_cast<MqttConnection*>(self);
   if (level != MOSQ_LOG_ERR || std::string_view(text).rfind("OpenSSL Error", 0) != 0) return;
   std::lock_guard lock(c.mutex_);
@@ -243,7 +258,6 @@ void MqttConnection::log_cb(mosquitto*, void* self, int level, const char* text)
     return;
   }
   if (c.connected_.exchange(false)) ++c.stats_.disconnects;
-  c.tls_lost_ = true;
 }
 
 std::string mqtt_link_metrics(const std::vector<std::pair<std::string, MqttLinkStats>>& links) {

@@ -1,6 +1,6 @@
 // One connection to an MQTT broker through libmosquitto (issue 19): the URL, credentials,
-// TLS, a last will, and a network thread of libmosquitto's own that reconnects by itself
-// with exponential backoff. What rides on it is the publisher's (live/mqtt_publisher.h)
+// TLS, a last will, and a network thread that reconnects by itself with exponential
+// backoff. What rides on it is the publisher's (live/mqtt_publisher.h)
 // and the merge's (live/mqtt_merge.h) business. The library prints nothing.
 #pragma once
 
@@ -102,12 +102,11 @@ class MqttConnection {
   MqttLinkStats stats_;
   std::atomic<bool> connected_{false};
   bool started_ = false;
-  std::atomic<bool> stopped_{false};
-  // TLS: libmosquitto 2.0.11 ends its thread on any TLS error, a broker's restart included;
-  // this thread starts it again (with the backoff) once a connection had worked.
-  std::atomic<bool> tls_lost_{false};
-  std::thread tls_revive_;
-  void revive_tls_loop();
+  std::atomic<bool> stopping_{false};
+  // The one thread that drives libmosquitto's socket: connects, reconnects after the
+  // backoff, runs mosquitto_loop, and on stop() lets the farewell out (see start()).
+  std::thread network_;
+  void run();
 };
 
 // Prometheus text of named links ("publish", "subscribe"): lightprobe_mqtt_connected and

@@ -85,7 +85,7 @@ seed http_request 'HEAD /status HTTP/1.0\r\nAuthorization: Bearer secret\r\nConn
 seed http_request 'GET /%%ff?access_token=x HTTP/1.1\r\nContent-Length: 0, 0\r\nExpect: 100-continue\r\n\r\n' odd.txt
 
 # ---- runs -------------------------------------------------------------------------------
-export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0}
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0:intercept_tls_get_addr=0}  # see sanitize.sh
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export ASAN_SYMBOLIZER_PATH=${ASAN_SYMBOLIZER_PATH:-/usr/lib/llvm-14/bin/llvm-symbolizer}
 export TMPDIR=$build/tmp

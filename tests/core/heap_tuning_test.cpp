@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 
@@ -38,7 +39,10 @@ TEST(HeapTuning, ASolversLargeBlockComesFromTheHeapAndStaysAfterItsFree) {
   EXPECT_EQ(during.hblks, before.hblks) << "the block was mmapped: the threshold was not raised";
   std::free(block);
   const struct mallinfo2 after = mallinfo2();
-  EXPECT_GE(after.arena, std::size_t(64) << 20) << "the heap's top went back to the kernel";
+  // At least 64 MB of the heap stayed with the process (the trim threshold), or all of it
+  // when it is smaller: earlier tests in the same process may have left the free chunk the
+  // block came from, and then the top never moved.
+  EXPECT_GE(after.arena, std::min(during.arena, std::size_t(64) << 20)) << "the heap's top went back to the kernel";
   EXPECT_GE(after.fordblks, std::size_t(16) << 20);
 }
 #endif

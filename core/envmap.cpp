@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <bit>
+#include <cstdint>
 #include <cmath>
 
 #include "core/error.h"
@@ -157,6 +159,22 @@ double total_luminance_power(const EnvMap& map) {
 
 std::string find_bad_pixel(const EnvMap& map, std::string_view source) {
   const size_t n = map.pixel_count();
+  // First one branch-free pass on the bits, which the compiler vectorises (integer ops only:
+  // float comparisons with NaN did not vectorise): the common answer, "none", at about the
+  // cost of one read (the classification below ran ~2 ns a value, a third of project_sh9's
+  // time on a 1024x512 map). With m the bits without the sign: NaN and Inf have
+  // m >= 0x7f800000, which carries into bit 31 once 0x00800000 is added; a negative value
+  // has the sign bit and m != 0 (-0 is not negative, as below).
+  const float* values = map.rgb.data();
+  uint32_t flags = 0;
+  for (size_t i = 0, m = 3 * n; i < m; ++i) {
+    const uint32_t bits = std::bit_cast<uint32_t>(values[i]);
+    const uint32_t magnitude = bits & 0x7fffffffu;
+    const uint32_t nan_or_inf = (magnitude + 0x00800000u) & 0x80000000u;
+    const uint32_t negative = (0u - (bits >> 31)) & magnitude;
+    flags |= nan_or_inf | negative;
+  }
+  if (flags == 0) return {};
   for (size_t i = 0; i < n; ++i) {
     const float* p = map.pixel(i);
     for (int c = 0; c < 3; ++c) {

@@ -86,6 +86,33 @@ TEST(SphericalHarmonics, SingleBrightPixelGivesTheBasisTimesItsPower) {
   }
 }
 
+// The row-separable projection of latlong and hemisphere maps against the definition:
+// every valid pixel's basis at its own direction, times its radiance and solid angle.
+TEST(SphericalHarmonics, RowMapsEqualThePerPixelProjection) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> radiance(0.0f, 50.0f);
+  for (const Layout layout : {Layout::LatLong, Layout::Hemisphere}) {
+    EnvMap map = make_envmap(layout, 96, layout == Layout::LatLong ? 48 : 24);
+    map.valid.assign(map.pixel_count(), 1);
+    for (size_t i = 0; i < map.pixel_count(); ++i) {
+      for (int c = 0; c < 3; ++c) map.pixel(i)[c] = radiance(rng);
+      if (i % 7 == 3) map.valid[i] = 0, map.pixel(i)[0] = 1e30f;  // masked: never read
+    }
+    Sh9 reference;
+    for (size_t i = 0; i < map.pixel_count(); ++i) {
+      if (!map.valid[i]) continue;
+      const auto y = sh9_basis(pixel_direction(map, i));
+      for (int k = 0; k < 9; ++k)
+        for (int c = 0; c < 3; ++c) reference.coefficients[k][c] += map.pixel(i)[c] * y[k] * pixel_solid_angle(map, i);
+    }
+    const Sh9 sh = project_sh9(map);
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(sh.coefficients[k][c], reference.coefficients[k][c], 1e-12 * std::abs(reference.coefficients[0][c]))
+            << to_string(layout) << " k " << k << " c " << c;
+  }
+}
+
 TEST(SphericalHarmonics, IrradianceOfASmoothMapMatchesBruteForce) {
   // L = exp(2 d.s): a broad lobe, not band-limited. Its radiance is sum (2l+1) i_l(2) P_l;
   // the clamped cosine kills l = 3 and SH9 drops l = 4 onwards, whose largest term is

@@ -141,6 +141,21 @@ TEST(EnvMap, FindBadPixelNamesNanInfAndNegativePixels) {
   map.pixel(7 * 16 + 0)[0] = -1e-3f;
   EXPECT_EQ(find_bad_pixel(map, "sky.exr"), "sky.exr: pixel (0, 7) is negative");
 
+  // The edges of the bit test that answers "none" first: -0, the largest float and the
+  // smallest denormal pass; the smallest negative denormal, a negative NaN and a value
+  // beside the last one fail.
+  map.pixel(7 * 16 + 0)[0] = -0.0f;
+  map.pixel(1)[1] = std::numeric_limits<float>::max();
+  map.pixel(2)[2] = std::numeric_limits<float>::denorm_min();
+  EXPECT_EQ(find_bad_pixel(map, "sky.exr"), "");
+  map.pixel(4)[0] = -std::numeric_limits<float>::denorm_min();
+  EXPECT_EQ(find_bad_pixel(map, "sky.exr"), "sky.exr: pixel (4, 0) is negative");
+  map.pixel(4)[0] = -std::numeric_limits<float>::quiet_NaN();
+  EXPECT_EQ(find_bad_pixel(map, "sky.exr"), "sky.exr: pixel (4, 0) is NaN");
+  map.pixel(4)[0] = 0;
+  map.pixel(map.pixel_count() - 1)[2] = -1;
+  EXPECT_EQ(find_bad_pixel(map, "sky.exr"), "sky.exr: pixel (15, 7) is negative");
+
   EnvMap hp = make_healpix(2);
   hp.pixel(13)[0] = -std::numeric_limits<float>::infinity();
   EXPECT_EQ(find_bad_pixel(hp, "probe.exr"), "probe.exr: healpix pixel 13 is infinite");

@@ -636,14 +636,9 @@ class Q2TreeSampler final : public Sampler {
     // The running sums in nested order (sampling/q2tree_sums.h), then the pixels no source
     // falls in: each holds the sums of the entry before its run (copied from that entry,
     // not from the neighbour just written, which would chain every copy on the one before).
-    // A sampler's first frame takes the plain loop (the same bits): the vector kernel's
-    // first call loads libhwy, whose static initializer costs ~3 ms (cli/'s lazy loader),
-    // more than the kernel saves on one 1024 x 512 frame (~0.4 ms); a stream gains from its
-    // second frame on, and a one-map command no longer pays for a library it did not load.
     const uint8_t* valid = map.valid.empty() ? nullptr : map.valid.data();
-    const auto sums = row_grid_frames_++ == 0 ? detail::q2tree_prefix_sums_scalar : detail::q2tree_prefix_sums;
-    const bool negative = sums(map.rgb.data(), valid, size_t(map.width), size_t(map.height), bin.view(),
-                               reinterpret_cast<double*>(prefix_.data()));
+    const bool negative = detail::q2tree_prefix_sums(map.rgb.data(), valid, size_t(map.width), size_t(map.height),
+                                                     bin.view(), reinterpret_cast<double*>(prefix_.data()));
     for (const RowGridBinning::EmptyRun& run : bin.empty)
       std::fill_n(prefix_.begin() + run.first, run.count, prefix_[run.from]);
     negative_pixels_ = negative;
@@ -669,7 +664,6 @@ class Q2TreeSampler final : public Sampler {
   int tree_splits_ = 0;
   std::optional<int> update_operations_;
   std::shared_ptr<const RowGridBinning> binning_;
-  int64_t row_grid_frames_ = 0;  // row-grid frames prepared (the first takes the plain loop)
   std::vector<Prefix> prefix_;
   int finest_level_ = 0;  // level of the prefix array's pixels
   int max_level_ = 0;     // deepest level a leaf may reach

@@ -33,8 +33,7 @@ struct NestedSources {
 bool q2tree_prefix_sums(const float* rgb, const uint8_t* valid, size_t width, size_t height,
                         const NestedSources& sources, double* prefix);
 
-// The plain loop the kernel must equal bit for bit; also what runs on CPUs without AVX2,
-// and on a q2tree sampler's first frame (see q2tree.cpp: the kernel's first call loads libhwy).
+// The plain loop the kernel must equal bit for bit; also what runs on CPUs without AVX2.
 bool q2tree_prefix_sums_scalar(const float* rgb, const uint8_t* valid, size_t width, size_t height,
                                const NestedSources& sources, double* prefix);
 

@@ -83,8 +83,10 @@ TEST(Startup, ReadingExifLoadsTheCameraFilesPlugin) {
   EXPECT_TRUE(loaded(r, "libexiv2"));
 }
 
-// Unwrapping runs the vector remap kernel: its first dispatch loads Highway.
-TEST(Startup, TheFirstVectorKernelLoadsHighway) {
+// Unwrapping runs the vector remap kernel. On x86 its dispatch needs no libhwy (whose
+// loading timed its timer, 3.4 ms: cli/process/highway_loader.cpp); elsewhere the first
+// dispatch loads it.
+TEST(Startup, TheFirstVectorKernelDispatchesWithoutLibhwyOnX86) {
   const fs::path ball = scratch() / "startup_ball.exr", map = scratch() / "startup_map.exr";
   ASSERT_EQ(std::system((std::string(LIGHTPROBE_CLI) + " synth probe scene --type mirrorball --size 200x200 -o " +
                          ball.string() + " >/dev/null 2>&1")
@@ -93,7 +95,11 @@ TEST(Startup, TheFirstVectorKernelLoadsHighway) {
   const CliRun r = traced("probe unwrap " + ball.string() + " --type mirrorball --layout latlong --size 128x64 -o " +
                           map.string());
   ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+#if defined(__x86_64__) || defined(__i386__)
+  EXPECT_FALSE(loaded(r, "libhwy"));
+#else
   EXPECT_NE(r.err.find("file=libhwy.so.1 [0];  dynamically loaded"), std::string::npos);
+#endif
   EXPECT_GT(fs::file_size(map), 1000u);
 }
 

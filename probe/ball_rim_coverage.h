@@ -1,0 +1,52 @@
+// The ball's silhouette by pixel coverage: the last step of find_ball (probe/mirror_ball.h),
+// after the rim fit (probe/ball_rim_fit.h) has the circle to a few tenths of a pixel.
+//
+// Why: the rim fit places each ray's edge by area, taking the ball's value 1.5 px inside as
+// the value of its last 1.5 px. A mirror ball compresses the cap of directions behind it
+// into those pixels: at depth d inside the silhouette it reflects the direction at
+// 2 sqrt(2 d / R) rad from the one straight behind it (16 deg at R 150, d 1.5 px), so the
+// last 1.5 px show a different part of the scene than the pixel that stands for them, and
+// the edge moves by 1.5 px x (their mean - that value) / contrast: 0.1-0.5 px per ray on the
+// shared maps, inward or outward with the scene.
+//
+// How: the rim is cut into arcs about 8 px long. Within an arc the ball's radiance changes
+// slowly along the rim (the same depth sees directions a fraction of a degree apart) and
+// fast across it, while the circle crosses the arc's pixels at every sub-pixel phase. Each
+// pixel is modelled as the mean over its square (8 x 8 points) of the ball inside the
+// circle and the background outside:
+//   ball(d, t)       = b0 + b1 d + b2 t   (d: depth inside the circle, t: along the rim)
+//   background(s, t) = g0 + g1 s + g2 t   (s: distance outside)
+// per colour channel, linear given the circle. The arc's edge is the radius (within
+// +-`reach_px` of the circle) where that least-squares fit leaves the least residual: the
+// straddling pixels must be explained by their coverage, not by the pixel 1.5 px inside.
+// What it cannot see: content that changes within the last fraction of a pixel (a scene
+// textured at the blind spot) is, per arc, indistinguishable from a shifted edge; a model
+// with a sqrt(d) term (the reflection's own expansion near the rim) can mimic such a
+// sliver and did slightly worse (docs/probes.md). The model assumes pixels that integrate
+// light over their square and no further blur.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+#include "probe/ball_rim_fit.h"
+#include "probe/mirror_ball.h"
+
+namespace lp {
+
+struct CoverageEdgeOptions {
+  double arc_px = 8;      // arc length per edge along the rim
+  double band_px = 2.5;   // pixels whose centre lies within this of the circle take part
+  double reach_px = 0.75; // the edge is searched within this of the circle
+};
+
+// One edge per arc of `c` that lies inside the image on valid pixels (`valid8`: CV_8U, 1
+// valid, or empty), at the arc's mid-angle. `strength`: the contrast |ball - background|
+// (3-channel norm) half a pixel either side of the edge; `rel`: the channel sums' contrast
+// relative to the brighter side. Arcs whose best edge is at the end of the search range are
+// left out. `linear`: CV_32FC3, values proportional to radiance.
+std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& c,
+                                    const CoverageEdgeOptions& options = {});
+
+}  // namespace lp

@@ -81,7 +81,7 @@ ArcFit fit_arc(const std::vector<ArcPixel>& px, double edge) {
 
 std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& c,
                                     const CoverageEdgeOptions& o) {
-  const double r = c.radius_px, band = o.band_px;
+  const double r = c.radius_px, band = std::max(o.inner_band_px, o.outer_band_px);
   const int arcs = std::max(16, int(std::lround(2 * M_PI * r / o.arc_px)));
   const double arc_angle = 2 * M_PI / arcs;
   std::vector<std::vector<ArcPixel>> px(arcs);
@@ -99,7 +99,7 @@ std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {
       const double dx = x + 0.5 - c.cx, dy = y + 0.5 - c.cy, dc = std::hypot(dx, dy);
-      if (std::abs(dc - r) > band) continue;
+      if (dc - r > o.outer_band_px || r - dc > o.inner_band_px) continue;
       double a = std::atan2(dy, dx);
       if (a < 0) a += 2 * M_PI;
       const int k = std::min(arcs - 1, int(a / arc_angle));

@@ -80,8 +80,16 @@ ArcFit fit_arc(const std::vector<ArcPixel>& px, double edge) {
 }  // namespace
 
 std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& c,
-                                    const CoverageEdgeOptions& o) {
-  const double r = c.radius_px, band = std::max(o.inner_band_px, o.outer_band_px);
+                                    const CoverageEdgeOptions& o, double* residual) {
+  const double r = c.radius_px, inner_band = o.inner_band_px + 2 * o.blur_px;
+  const double band = std::max(inner_band, o.outer_band_px);
+  // The aperture's blur: each area point moved by a fixed standard normal offset (Box-Muller
+  // on stratified uniforms, paired with the grid in a scrambled order), times blur_px.
+  std::array<std::array<double, 2>, kPoints> blur;
+  for (int q = 0; q < kPoints; ++q) {
+    const double u1 = (q + 0.5) / kPoints, u2 = std::fmod(q * 0.6180339887, 1.0), m = std::sqrt(-2 * std::log(u1));
+    blur[(q * 37) % kPoints] = {m * std::cos(2 * M_PI * u2), m * std::sin(2 * M_PI * u2)};
+  }
   const int arcs = std::max(16, int(std::lround(2 * M_PI * r / o.arc_px)));
   const double arc_angle = 2 * M_PI / arcs;
   std::vector<std::vector<ArcPixel>> px(arcs);
@@ -99,7 +107,7 @@ std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {
       const double dx = x + 0.5 - c.cx, dy = y + 0.5 - c.cy, dc = std::hypot(dx, dy);
-      if (dc - r > o.outer_band_px || r - dc > o.inner_band_px) continue;
+      if (dc - r > o.outer_band_px || r - dc > inner_band) continue;
       double a = std::atan2(dy, dx);
       if (a < 0) a += 2 * M_PI;
       const int k = std::min(arcs - 1, int(a / arc_angle));
@@ -112,12 +120,16 @@ std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8
       p.value = linear.at<cv::Vec3f>(y, x);
       p.t = float(r * (a - (k + 0.5) * arc_angle));
       for (int j = 0; j < kSub; ++j)
-        for (int i = 0; i < kSub; ++i)
-          p.dist[j * kSub + i] = float(std::hypot(x + (i + 0.5) / kSub - c.cx, y + (j + 0.5) / kSub - c.cy));
+        for (int i = 0; i < kSub; ++i) {
+          const auto& n = blur[j * kSub + i];
+          p.dist[j * kSub + i] = float(std::hypot(x + (i + 0.5) / kSub + o.blur_px * n[0] - c.cx,
+                                                  y + (j + 0.5) / kSub + o.blur_px * n[1] - c.cy));
+        }
       px[k].push_back(p);
     }
 
   std::vector<RimEdge> edges(arcs, RimEdge{0, 0, -1});
+  std::vector<double> arc_ssr(arcs, 0.0);
   tbb::parallel_for(0, arcs, [&](int k) {
     if (!usable[k] || px[k].size() < 2 * kTerms) return;
     // Coarse steps of 0.05 px over the reach, then 0.01 px around the best, a parabola last.
@@ -129,6 +141,7 @@ std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8
       const double s = fit_arc(px[k], r + i * coarse).ssr;
       if (s < best_ssr) best_ssr = s, best = i;
     }
+    arc_ssr[k] = best_ssr;
     if (std::abs(best) == nc) return;  // no minimum within reach
     std::array<double, 11> ssr;
     for (int i = 0; i < 11; ++i) ssr[i] = fit_arc(px[k], r + best * coarse + (i - 5) * fine).ssr;
@@ -148,6 +161,10 @@ std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8
     edges[k] = {c.cx + edge * std::cos(a), c.cy + edge * std::sin(a), cv::norm(in - out),
                 level > 0 ? std::abs(si - so) / level : 0.0};
   });
+  if (residual) {
+    *residual = 0;
+    for (const double v : arc_ssr) *residual += std::isfinite(v) ? v : 0.0;
+  }
   std::vector<RimEdge> found;
   for (const RimEdge& e : edges)
     if (e.strength >= 0) found.push_back(e);

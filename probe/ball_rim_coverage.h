@@ -17,15 +17,15 @@
 // circle and the background outside:
 //   ball(d, t)       = b0 + b1 d + b2 t   (d: depth inside the circle, t: along the rim)
 //   background(s, t) = g0 + g1 s + g2 t   (s: distance outside)
-// per colour channel, linear given the circle, on the pixels within 2.5 px of it. The
+// per colour channel, linear given the circle, on the pixels from 1.5 px (+ blur) inside to
+// 2.5 px outside it; the pixel's square may be blurred further (`blur_px`). The
 // arc's edge is the radius (within +-`reach_px` of the circle) where that least-squares fit
 // leaves the least residual: the straddling pixels must be explained by their coverage,
 // not by the pixel 1.5 px inside.
 // What it cannot see: content that changes within the last fraction of a pixel (a scene
 // textured at the blind spot) is, per arc, indistinguishable from a shifted edge; a model
 // with a sqrt(d) term (the reflection's own expansion near the rim) can mimic such a
-// sliver and did slightly worse (docs/probes.md). The model assumes pixels that integrate
-// light over their square and no further blur.
+// sliver and did slightly worse (docs/probes.md).
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -39,13 +39,17 @@ namespace lp {
 
 struct CoverageEdgeOptions {
   double arc_px = 8;      // arc length per edge along the rim
-  // Pixels whose centre lies within these of the circle take part. A narrower inner band
-  // keeps the reflection's own edges (the border of a dark band at the rim) out of the fit:
-  // 1.5 px did better on the unblurred renders (160 against 136 of 239 cases within 0.2 px)
-  // but put a resampled, hence blurred, rim 0.39 px out (BallRegister.ARegistered...): the
-  // model has no blur, so the band must hold the whole ramp.
-  double inner_band_px = 2.5;
+  // Pixels whose centre lies within these of the circle take part. Inside, only the last
+  // 1.5 px plus twice the blur: deeper, the reflection holds edges of its own (the border of
+  // a dark band at the rim) that a model linear in depth cannot follow and whose residual
+  // would pull the edge onto them (whole grid: 157 of 239 within 0.2 px, 136 with 2.5 px),
+  // while the blurred ramp must lie inside the band (without the blur term a resampled rim
+  // came out 0.39 px too large, BallRegister.ARegisteredRenderHasTheRegisteredGeometry).
+  double inner_band_px = 1.5;  // plus 2 x blur_px
   double outer_band_px = 2.5;
+  // Gaussian sigma of the blur beyond the pixel's square (lens, demosaicing, resampling):
+  // each area point is moved by a fixed normal offset times this.
+  double blur_px = 0;
   double reach_px = 0.75; // the edge is searched within this of the circle
 };
 
@@ -54,7 +58,9 @@ struct CoverageEdgeOptions {
 // (3-channel norm) half a pixel either side of the edge; `rel`: the channel sums' contrast
 // relative to the brighter side. Arcs whose best edge is at the end of the search range are
 // left out. `linear`: CV_32FC3, values proportional to radiance.
+// `residual` (optional): the sum over the arcs of the least residual found, for comparing
+// options on the same circle.
 std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& c,
-                                    const CoverageEdgeOptions& options = {});
+                                    const CoverageEdgeOptions& options = {}, double* residual = nullptr);
 
 }  // namespace lp

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <optional>
 
 namespace lp {
@@ -341,9 +342,20 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
 RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise) {
   if (!rim.ok) return rim;
   BallInImage c = rim.ball;
+  // The blur that explains the rim best (0, 0.5 or 1 px), compared on the same pixels, 2.5 px
+  // either side: the edges then use the last 1.5 px + 2 x blur inside (CoverageEdgeOptions).
+  CoverageEdgeOptions o;
+  double best = std::numeric_limits<double>::infinity();
+  for (const double blur : {0.0, 0.5, 1.0}) {
+    CoverageEdgeOptions trial;
+    trial.inner_band_px = 2.5, trial.outer_band_px = 2.5, trial.blur_px = blur;
+    double ssr = 0;
+    coverage_edges(linear, valid8, c, trial, &ssr);
+    if (ssr < best) best = ssr, o.blur_px = blur;
+  }
   FitResult f;
   for (int pass = 0; pass < 3; ++pass) {
-    const std::vector<RimEdge> edges = coverage_edges(linear, valid8, c);
+    const std::vector<RimEdge> edges = coverage_edges(linear, valid8, c, o);
     if (edges.size() < 12) break;
     std::vector<double> s;
     for (const RimEdge& e : edges) s.push_back(e.strength);

@@ -150,7 +150,7 @@ TEST(BallPrecision, ARimDarkAgainstADarkBackgroundIsFound) {
 // directions behind the ball. On these renders (harness seeds) the area rule's circle was
 // off by centre / radius 0.25 / -0.13 px (pisa, black, R 150), 0.31 / -0.14 (pisa, photo,
 // R 150), 0.16 / -0.08 (pisa, black, R 400), 0.27 / +0.18 (uffizi, black, R 400); measured
-// with the coverage model: 0.02 / -0.01, 0.01 / -0.00, 0.00 / -0.00, 0.07 / -0.01.
+// with the coverage model: 0.01 / -0.00, 0.01 / +0.00, 0.00 / -0.00, 0.01 / -0.06.
 TEST(BallPrecision, TheSilhouetteByPixelCoverageHasNoBiasFromTheRimsReflection) {
   EvalBallOptions o;
   o.maps = every_shared_map();

@@ -1,10 +1,13 @@
 #include "probe/ball_rim_fit.h"
 
+#include "probe/ball_rim_coverage.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <optional>
 
 namespace lp {
@@ -333,6 +336,49 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
   out.agreement = ag;
   out.inner_rim_dropped = enclosed_dropped;
   out.ok = true;
+  return out;
+}
+
+RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise) {
+  if (!rim.ok) return rim;
+  BallInImage c = rim.ball;
+  // The blur that explains the rim best (0, 0.5 or 1 px), compared on the same pixels, 2.5 px
+  // either side: the edges then use the last 1.5 px + 2 x blur inside (CoverageEdgeOptions).
+  CoverageEdgeOptions o;
+  double best = std::numeric_limits<double>::infinity();
+  for (const double blur : {0.0, 0.5, 1.0}) {
+    CoverageEdgeOptions trial;
+    trial.inner_band_px = 2.5, trial.outer_band_px = 2.5, trial.blur_px = blur;
+    double ssr = 0;
+    coverage_edges(linear, valid8, c, trial, &ssr);
+    if (ssr < best) best = ssr, o.blur_px = blur;
+  }
+  FitResult f;
+  for (int pass = 0; pass < 3; ++pass) {
+    const std::vector<RimEdge> edges = coverage_edges(linear, valid8, c, o);
+    if (edges.size() < 12) break;
+    std::vector<double> s;
+    for (const RimEdge& e : edges) s.push_back(e.strength);
+    const double med = median_of(s);
+    std::vector<Weighted> pts;
+    // Each edge rests on an arc's ~40 pixels, yet as for area_edges the contrast of its two
+    // sides is weighed against 4 x the smoothed image's noise (a conservative floor).
+    for (const RimEdge& e : edges) pts.push_back({e, edge_weight(e.strength, e.rel, med, 4 * edge_noise)});
+    const FitResult g = robust_circle(pts, c);
+    if (g.inliers == 0 || std::hypot(g.c.cx - c.cx, g.c.cy - c.cy) > 1 || std::abs(g.c.radius_px - c.radius_px) > 1) break;
+    const bool settled = std::hypot(g.c.cx - c.cx, g.c.cy - c.cy) < 0.01 && std::abs(g.c.radius_px - c.radius_px) < 0.01;
+    f = g, c = g.c;
+    if (settled) break;
+  }
+  if (f.inliers == 0) return rim;
+  RimFit out = rim;
+  cv::Vec2d ev;
+  cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);
+  out.ball = c;
+  out.sigma_centre_px = std::sqrt(std::max(0.0, ev[0]));
+  out.sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)));
+  out.rms_px = f.rms;
+  out.inliers = f.inliers;
   return out;
 }
 

@@ -66,6 +66,13 @@ struct RimFit {
 RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& start, int rays,
                double edge_noise);
 
+// The rim fit's circle refined on the silhouette by pixel coverage (probe/ball_rim_coverage.h:
+// one edge per arc of about 8 px, the circle fitted to them as above, up to three passes
+// while it moves less than 1 px; the blur, 0, 0.5 or 1 px, is the one whose model leaves
+// the least residual at the start). `rim` unchanged when it is not ok or fewer than 12 arcs
+// give an edge. The sigmas are those of this fit (the arcs share no pixels).
+RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise);
+
 // The edge strength noise alone reaches in `smooth` (CV_32FC3): 7 x the 5th percentile of
 // the 1 px horizontal differences (summed over channels) on valid pixels. Flat regions
 // have none, so noise sets the low percentiles and texture the upper ones; for Gaussian

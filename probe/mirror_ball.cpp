@@ -482,7 +482,8 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   Circle result = last_level ? local_search(levels[0], best->c, r_min, r_max, options.max_cut_fraction) : best->c;
   FindBallReport rep;
   if (arc(*best) > 0) {
-    const RimFit& rim = best->rim;
+    // Only the winner: the coverage model costs tens of milliseconds per fit.
+    const RimFit rim = refine_rim_by_coverage(lin, valid8, best->rim, edge_noise);
     rep.subpixel = true;
     result = {rim.ball.cx, rim.ball.cy, rim.ball.radius_px};
     rep.rms_residual_px = rim.rms_px, rep.edge_points = rim.inliers;

@@ -32,6 +32,15 @@ bool colour_and_luminance_row_scalar(const float* rgb, const uint8_t* valid, siz
 void add_channel_sums(const float* const* rows, size_t count, size_t width, bool pairs, double* sums);
 void add_channel_sums_scalar(const float* const* rows, size_t count, size_t width, bool pairs, double* sums);
 
+// `count` rows of a summed-area table of weighted luminance (each out[k] has width + 1
+// entries): out[k][0] = 0 and out[k][x + 1] = prev[x + 1] + run, where prev is out[k - 1]
+// (`above` for k = 0) and run = sum over i <= x of weight[k] * double(lum[k][i]), added in
+// pixel order: the plain loop's values bit for bit.
+void summed_area_rows(const float* const* lum, const double* weight, size_t count, size_t width, const double* above,
+                      double* const* out);
+void summed_area_rows_scalar(const float* const* lum, const double* weight, size_t count, size_t width,
+                             const double* above, double* const* out);
+
 // The Highway target colour_and_luminance_row dispatches to on this CPU.
 const char* row_sweep_simd_target();
 

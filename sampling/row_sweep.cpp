@@ -223,36 +223,39 @@ HWY_INLINE void Transpose4(hn::Full256<double> d, hn::Vec<hn::Full256<double>>* 
 
 // G groups of four rows, four columns at a time. In a group the running sums along the rows
 // are one vector whose lanes are the four rows (each lane the scalar chain: the four
-// columns' products added one after the other), the sums down the columns are vectors
-// whose lanes are columns; a 4 x 4 transpose turns one into the other. Stores are whole
-// vectors (the plain loop stored one double per entry and was bound by it), and G groups
-// keep G chains of adds in flight.
-template <size_t G>
-void SummedAreaTiles(const float* const* lum, const double* weight, size_t width, const double* above,
-                     double* const* out) {
+// columns' values added one after the other), the sums down the columns (kTable) are
+// vectors whose lanes are columns; a 4 x 4 transpose turns one into the other. Stores are
+// whole vectors (the plain loop stored one double per entry and was bound by it), and G
+// groups keep G chains of adds in flight. kTable: the summed-area rows of
+// summed_area_rows (weighted values, each row added to the one above); otherwise each
+// row's own running sums of its plain values (running_sums_rows).
+template <size_t G, bool kTable>
+void TransposedRowSums(const float* const* lum, const double* weight, size_t width, const double* above,
+                       double* const* out) {
   const hn::Full256<double> d;
   const hn::Full128<float> f;
   using V = hn::Vec<decltype(d)>;
   V w[G], run[G];
   for (size_t g = 0; g < G; ++g) {
-    w[g] = hn::LoadU(d, weight + 4 * g);
+    if (kTable) w[g] = hn::LoadU(d, weight + 4 * g);
     run[g] = hn::Zero(d);
   }
   size_t x = 0;
   for (; x + 4 <= width; x += 4) {
-    V down = hn::LoadU(d, above + 1 + x);
+    V down;
+    if (kTable) down = hn::LoadU(d, above + 1 + x);
     for (size_t g = 0; g < G; ++g) {
       V v[4];
       for (size_t i = 0; i < 4; ++i) v[i] = hn::PromoteTo(d, hn::LoadU(f, lum[4 * g + i] + x));
       Transpose4(d, v);  // v[j]: column x + j, lanes = rows
       for (size_t j = 0; j < 4; ++j) {
-        run[g] = hn::Add(run[g], hn::Mul(w[g], v[j]));
+        run[g] = hn::Add(run[g], kTable ? hn::Mul(w[g], v[j]) : v[j]);
         v[j] = run[g];
       }
       Transpose4(d, v);  // v[i]: row 4g + i, lanes = columns
       for (size_t i = 0; i < 4; ++i) {
-        down = hn::Add(down, v[i]);
-        hn::StoreU(down, d, out[4 * g + i] + 1 + x);
+        if (kTable) v[i] = down = hn::Add(down, v[i]);
+        hn::StoreU(v[i], d, out[4 * g + i] + 1 + x);
       }
     }
   }
@@ -263,8 +266,12 @@ void SummedAreaTiles(const float* const* lum, const double* weight, size_t width
     const double* a = k ? out[k - 1] : above;
     double sum = carried[k];
     for (size_t c = x; c < width; ++c) {
-      sum += weight[k] * double(lum[k][c]);
-      out[k][c + 1] = a[c + 1] + sum;
+      if (kTable) {
+        sum += weight[k] * double(lum[k][c]);
+        out[k][c + 1] = a[c + 1] + sum;
+      } else {
+        out[k][c + 1] = sum += double(lum[k][c]);
+      }
     }
     out[k][0] = 0;
   }
@@ -275,10 +282,21 @@ void SummedAreaRows(const float* const* lum, const double* weight, size_t count,
                     double* const* out) {
   size_t k = 0;
 #if HWY_TARGET != HWY_SCALAR && HWY_TARGET <= HWY_AVX2  // 256-bit vectors: four doubles
-  for (; k + 8 <= count; k += 8) SummedAreaTiles<2>(lum + k, weight + k, width, k ? out[k - 1] : above, out + k);
-  for (; k + 4 <= count; k += 4) SummedAreaTiles<1>(lum + k, weight + k, width, k ? out[k - 1] : above, out + k);
+  for (; k + 8 <= count; k += 8)
+    TransposedRowSums<2, true>(lum + k, weight + k, width, k ? out[k - 1] : above, out + k);
+  for (; k + 4 <= count; k += 4)
+    TransposedRowSums<1, true>(lum + k, weight + k, width, k ? out[k - 1] : above, out + k);
 #endif
   if (k < count) summed_area_rows_scalar(lum + k, weight + k, count - k, width, k ? out[k - 1] : above, out + k);
+}
+
+void RunningSumsRows(const float* const* lum, size_t count, size_t width, double* const* out) {
+  size_t k = 0;
+#if HWY_TARGET != HWY_SCALAR && HWY_TARGET <= HWY_AVX2
+  for (; k + 8 <= count; k += 8) TransposedRowSums<2, false>(lum + k, nullptr, width, nullptr, out + k);
+  for (; k + 4 <= count; k += 4) TransposedRowSums<1, false>(lum + k, nullptr, width, nullptr, out + k);
+#endif
+  if (k < count) running_sums_rows_scalar(lum + k, count - k, width, out + k);
 }
 
 const char* RowSweepTargetName() { return hwy::TargetName(HWY_TARGET); }
@@ -294,6 +312,19 @@ HWY_EXPORT(ColourAndLuminanceRow);
 HWY_EXPORT(RowSweepTargetName);
 HWY_EXPORT(AddChannelSums);
 HWY_EXPORT(SummedAreaRows);
+HWY_EXPORT(RunningSumsRows);
+
+void running_sums_rows(const float* const* values, size_t count, size_t width, double* const* out) {
+  HWY_DYNAMIC_DISPATCH(RunningSumsRows)(values, count, width, out);
+}
+
+void running_sums_rows_scalar(const float* const* values, size_t count, size_t width, double* const* out) {
+  for (size_t k = 0; k < count; ++k) {
+    double sum = 0;
+    out[k][0] = 0;
+    for (size_t x = 0; x < width; ++x) out[k][x + 1] = sum += double(values[k][x]);
+  }
+}
 
 void summed_area_rows(const float* const* lum, const double* weight, size_t count, size_t width, const double* above,
                       double* const* out) {

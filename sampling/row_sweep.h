@@ -41,6 +41,11 @@ void summed_area_rows(const float* const* lum, const double* weight, size_t coun
 void summed_area_rows_scalar(const float* const* lum, const double* weight, size_t count, size_t width,
                              const double* above, double* const* out);
 
+// Each row's own running sums (each out[k] has width + 1 entries): out[k][0] = 0 and
+// out[k][x + 1] = sum over i <= x of double(values[k][i]), added in pixel order.
+void running_sums_rows(const float* const* values, size_t count, size_t width, double* const* out);
+void running_sums_rows_scalar(const float* const* values, size_t count, size_t width, double* const* out);
+
 // The Highway target colour_and_luminance_row dispatches to on this CPU.
 const char* row_sweep_simd_target();
 

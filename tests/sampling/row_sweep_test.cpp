@@ -88,10 +88,11 @@ TEST(RowSweep, EveryTargetEqualsTheScalarLoopsBitForBit) {
   EXPECT_GT(flagged, 10u);  // the hostile rows did reach the flag
 }
 
-// A summed-area table's rows from the kernel equal the plain loop's on every target: 15
-// rows (the kernel's groups of eight and four, then three left to the plain loop), widths
-// around every vector length, luminances from zero to huge, weights per row.
-TEST(RowSweep, SummedAreaRowsEqualThePlainLoopOnEveryTarget) {
+// A summed-area table's rows, and rows' own running sums, from the kernels equal the plain
+// loops' on every target: 15 rows (the kernels' groups of eight and four, then three left
+// to the plain loop), widths around every vector length, luminances from zero to huge,
+// weights per row.
+TEST(RowSweep, RunningSumRowsEqualThePlainLoopsOnEveryTarget) {
   std::mt19937 rng(23);
   std::lognormal_distribution<float> radiance(0.0f, 3.0f);
   const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
@@ -123,9 +124,20 @@ TEST(RowSweep, SummedAreaRowsEqualThePlainLoopOnEveryTarget) {
     ASSERT_EQ(want[1 + w], above[w] + sum);
     ASSERT_EQ(want[0], -7.0);
     ASSERT_EQ(want[1], 0.0);
+    // Each row's own running sums (hemigon's), from the same rows.
+    auto own = [&](auto kernel) {
+      return run([&](const float* const* l, const double*, size_t count, size_t width, const double*,
+                     double* const* out) { kernel(l, count, width, out); });
+    };
+    const std::vector<double> want_own = own(detail::running_sums_rows_scalar);
+    sum = 0;
+    for (size_t x = 0; x < w; ++x) sum += double(lum[kRows - 1][x]);
+    ASSERT_EQ(want_own[(kRows - 1) * (w + 3) + 1 + w], sum);
+    ASSERT_EQ(want_own[(kRows - 1) * (w + 3) + w + 2], -7.0);
     for (const int64_t target : targets) {
       hwy::SetSupportedTargetsForTest(target);
       EXPECT_TRUE(same_bits(run(detail::summed_area_rows), want)) << hwy::TargetName(target) << ", width " << w;
+      EXPECT_TRUE(same_bits(own(detail::running_sums_rows), want_own)) << hwy::TargetName(target) << ", width " << w;
     }
     hwy::SetSupportedTargetsForTest(0);
   }

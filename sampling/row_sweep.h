@@ -1,7 +1,8 @@
 // The row passes of the row-grid samplers' prepare (pharr, mediancut, hemigon) in Google
 // Highway, compiled for every x86 target Highway knows and dispatched at run time (as
 // hdr/merge_kernel.h): one row of packed RGB radiance -> its colours with invalid pixels
-// zeroed and each pixel's luminance clamped at zero; rows' running channel sums in double.
+// zeroed and each pixel's luminance clamped at zero; rows' running channel sums in double;
+// rows' running luminance sums (mediancut's summed-area table, hemigon's per-row sums).
 // Each lane does the scalar loop's operations in its order (bit-identical: no fused
 // multiply-add, sampling/CMakeLists.txt compiles this file with -ffp-contract=off).
 // Internal to sampling/; tests/sampling/row_sweep_test.cpp compares every compiled target

@@ -68,9 +68,9 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
     const double half = 0.5 * (M_PI / 2) * double(v) / H;
     return 2 * std::sin(half) * std::sin(half);
   };
-  // Rows in blocks of eight: the colours (invalid pixels zeroed), luminances and channel
-  // sums from the vector kernels of sampling/row_sweep.h, then the rows' running luminance
-  // sums in lockstep (each the same chain as a row alone: invalid pixels add an exact 0).
+  // Rows in blocks of eight: the colours (invalid pixels zeroed), luminances, channel sums
+  // and the rows' running luminance sums (each the same chain as a row alone: invalid
+  // pixels add an exact 0), each from a vector kernel of sampling/row_sweep.h.
   constexpr int kBlock = 8;
   lum_.resize(size_t(kBlock) * size_t(W));
   double s0 = 0;
@@ -86,7 +86,6 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
       colour[k] = dst;
       lum[k] = y;
       cum[k] = cum_.data() + size_t(v) * size_t(W + 1);
-      cum[k][0] = 0;
       if (detail::colour_and_luminance_row(rows[v].rgb, rows[v].valid, size_t(W), rows[v].reversed, dst, y)) {
         for (int u = 0; u < W; ++u) {  // name the first pixel, as the pixel-by-pixel loop did
           const float* p = dst + 3 * u;
@@ -99,20 +98,14 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
     }
     double sums[kBlock][6] = {};
     if (rgb_power) detail::add_channel_sums(colour, size_t(K), size_t(W), false, &sums[0][0]);
-    double acc[kBlock] = {};
-    if (K == kBlock) {
-      for (int u = 0; u < W; ++u)
-        for (int k = 0; k < kBlock; ++k) cum[k][u + 1] = acc[k] += double(lum[k][u]);
-    } else {
-      for (int k = 0; k < K; ++k)
-        for (int u = 0; u < W; ++u) cum[k][u + 1] = acc[k] += double(lum[k][u]);
-    }
+    detail::running_sums_rows(lum, size_t(K), size_t(W), cum);
     for (int k = 0; k < K; ++k) {
       const int v = v0 + k;
+      const double acc_k = cum[k][W];
       const double s1 = s_at(v + 1);
       const double ds = s1 - s0;  // pixel solid angle / dphi
-      row_density_[size_t(v)] = dphi_ * acc[k];
-      power_ += dphi_ * acc[k] * ds;
+      row_density_[size_t(v)] = dphi_ * acc_k;
+      power_ += dphi_ * acc_k * ds;
       for (int c = 0; c < 3; ++c) rgb_power_[size_t(c)] += dphi_ * ds * sums[k][c];
       s0 = s1;
     }

@@ -8,8 +8,7 @@
 //
 // Cost: prepare is one pass (a summed-area table of luminance * solid angle in double and a
 // copy of the colours, so that place() does not depend on the caller's map staying alive),
-// in blocks of eight rows: the vector row kernels of sampling/row_sweep.h, then the rows'
-// serial sums in lockstep.
+// in blocks of eight rows, each step a vector row kernel of sampling/row_sweep.h.
 // place is n heap steps with O(log size) table look-ups each, then one pass over the
 // colours to integrate each final region (the regions partition the map).
 #include <fmt/format.h>
@@ -44,8 +43,25 @@ struct ByPower {
 // which is unique among the leaves because they partition the map.
 constexpr uint64_t kDeep = uint64_t(1) << 63;
 
+// Rows prepare sweeps at once: enough running sums in flight to hide the adds' latency,
+// few enough that the block's colours and luminances are still in cache for the sums.
+constexpr int kBlock = 8;
+
+// `count` elements of `storage` from its first 64-byte boundary on (kept in its slack).
+template <class T>
+T* line_aligned(std::vector<T>& storage, size_t count) {
+  constexpr size_t kLine = 64;
+  storage.resize(count + kLine / sizeof(T));
+  const size_t offset = reinterpret_cast<uintptr_t>(storage.data()) % kLine;
+  return storage.data() + (kLine - offset) % kLine / sizeof(T);
+}
+
 class MedianCutSampler final : public Sampler {
  public:
+  MedianCutSampler() = default;
+  MedianCutSampler(const MedianCutSampler&) = delete;  // sat_, colour_, lum_ point into its own storage
+  MedianCutSampler& operator=(const MedianCutSampler&) = delete;
+
   Method method() const override { return Method::MedianCut; }
 
   void prepare(const EnvMap& input) override {
@@ -60,18 +76,14 @@ class MedianCutSampler final : public Sampler {
     const int w = map->width, h = map->height;
     const size_t count = map->pixel_count();
     if (map->rgb.size() < 3 * count) throw InputError("mediancut: the map has fewer pixels than its size says");
-    const size_t stride = size_t(w) + 1;
-    sat_.resize(stride * (size_t(h) + 1));
-    std::fill(sat_.begin(), sat_.begin() + ptrdiff_t(stride), 0.0);
-    colour_.resize(3 * count);
-    lum_.resize(count);
+    allocate_table(w, h);
+    colour_ = line_aligned(colour_storage_, 3 * count);
+    lum_ = line_aligned(lum_storage_, count);
     std::array<double, 3> power{0, 0, 0};
-    // Rows in blocks of eight (see sweep_rows); the sums across rows stay in row order.
-    int r = 0;
-    for (; r + 8 <= h; r += 8) sweep_rows<8>(*map, r, power);
-    for (; r < h; ++r) sweep_rows<1>(*map, r, power);
+    // Rows in blocks (see sweep_rows); the sums across rows stay in row order.
+    for (int r = 0; r < h; r += kBlock) sweep_rows(*map, r, std::min(kBlock, h - r), power);
     const double lum_power = luminance(power.data());
-    const double table_power = sat_.back();
+    const double table_power = table(h, w);
     if (!std::isfinite(lum_power) || !std::isfinite(table_power) || !(lum_power > 0) || !(table_power > 0)) {
       require_samplable(*map, "mediancut");  // throws the shared message
       throw InputError("mediancut: the map has no positive luminance to sample");
@@ -91,7 +103,7 @@ class MedianCutSampler final : public Sampler {
 
     heap_.clear();
     leaves_.clear();
-    heap_.push_back({0, height_, 0, width_, sat_.back(), 1});
+    heap_.push_back({0, height_, 0, width_, table(height_, width_), 1});
     while (heap_.size() + leaves_.size() < size_t(n)) {
       std::pop_heap(heap_.begin(), heap_.end(), ByPower{});
       const Region top = heap_.back();
@@ -117,50 +129,47 @@ class MedianCutSampler final : public Sampler {
   }
 
  private:
-  // Rows r .. r + K - 1: copies the colours (invalid pixels zeroed) and the clamped
-  // luminances, writes the rows of the summed-area table and adds the rows' power to `power`
-  // in row order. The element-wise work and the channel sums are the vector kernels' of
-  // sampling/row_sweep.h; each row's running sum is the same chain of additions as a row
-  // alone, the K rows in lockstep so that the CPU overlaps their chains.
-  template <int K>
-  void sweep_rows(const EnvMap& map, int r, std::array<double, 3>& power) {
-    const size_t w = size_t(map.width), stride = w + 1;
+  // Rows r .. r + count - 1 (count <= kBlock): copies the colours (invalid pixels zeroed)
+  // and the clamped luminances, writes the rows of the summed-area table and adds the rows'
+  // power to `power` in row order, each step a vector kernel of sampling/row_sweep.h whose
+  // results equal the plain loops' bit for bit.
+  void sweep_rows(const EnvMap& map, int r, int count, std::array<double, 3>& power) {
+    const size_t w = size_t(map.width), stride = sat_stride_;
     const bool masked = !map.valid.empty();
-    const float* colour[K];
-    const float* lum[K];
-    double* out[K];
-    double dw[K];
-    for (int k = 0; k < K; ++k) {
+    const float* colour[kBlock];
+    const float* lum[kBlock];
+    double* out[kBlock];
+    double dw[kBlock];
+    for (int k = 0; k < count; ++k) {
       const size_t base = size_t(r + k) * w;
-      colour[k] = colour_.data() + 3 * base;
-      lum[k] = lum_.data() + base;
-      out[k] = sat_.data() + (size_t(r + k) + 1) * stride;
-      out[k][0] = 0;
+      colour[k] = colour_ + 3 * base;
+      lum[k] = lum_ + base;
+      out[k] = sat_ + (size_t(r + k) + 1) * stride;
       dw[k] = row_solid_angle_[size_t(r + k)];
       detail::colour_and_luminance_row(map.rgb.data() + 3 * base, masked ? map.valid.data() + base : nullptr, w,
-                                       false, colour_.data() + 3 * base, lum_.data() + base);
+                                       false, colour_ + 3 * base, lum_ + base);
     }
-    double s[K][6] = {};  // per row: r, g, b sums (the last three unused)
-    detail::add_channel_sums(colour, K, w, false, &s[0][0]);
-    const double* above = sat_.data() + size_t(r) * stride;
-    double run[K] = {};
-    for (size_t c = 0; c < w; ++c) {
-      run[0] += dw[0] * double(lum[0][c]);
-      out[0][c + 1] = above[c + 1] + run[0];
-      for (int k = 1; k < K; ++k) {
-        run[k] += dw[k] * double(lum[k][c]);
-        out[k][c + 1] = out[k - 1][c + 1] + run[k];
-      }
-    }
-    for (int k = 0; k < K; ++k)
+    double s[kBlock][6] = {};  // per row: r, g, b sums (the last three unused)
+    detail::add_channel_sums(colour, size_t(count), w, false, &s[0][0]);
+    detail::summed_area_rows(lum, dw, size_t(count), w, sat_ + size_t(r) * stride, out);
+    for (int k = 0; k < count; ++k)
       for (int j = 0; j < 3; ++j) power[j] += dw[k] * s[k][j];
   }
 
+  // The table's rows are padded so that every row's entries from column 1 on (what the
+  // kernels write) start on a cache line, as do the colours: a vector store that straddles
+  // two lines costs two, and with 64-byte vectors every unaligned one does.
+  void allocate_table(int w, int h) {
+    sat_stride_ = (size_t(w) + 8 + 7) / 8 * 8;  // >= w + 8: column w fits before the next row's column 1
+    sat_ = line_aligned(sat_storage_, (size_t(h) + 1) * sat_stride_ + 7) + 7;
+    std::fill(sat_, sat_ + size_t(w) + 1, 0.0);
+  }
+
+  // The summed-area table's entry for rows [0, r) and columns [0, c).
+  double table(int r, int c) const { return sat_[size_t(r) * sat_stride_ + size_t(c)]; }
+
   double rect(int r0, int r1, int c0, int c1) const {
-    const size_t stride = size_t(width_) + 1;
-    const double* s = sat_.data();
-    const double v = s[size_t(r1) * stride + size_t(c1)] - s[size_t(r0) * stride + size_t(c1)] -
-                     s[size_t(r1) * stride + size_t(c0)] + s[size_t(r0) * stride + size_t(c0)];
+    const double v = table(r1, c1) - table(r0, c1) - table(r1, c0) + table(r0, c0);
     return std::max(0.0, v);
   }
 
@@ -240,8 +249,8 @@ class MedianCutSampler final : public Sampler {
   Light integrate(const Region& g) const {
     double rgb[3] = {0, 0, 0}, d[3] = {0, 0, 0};
     for (int r = g.r0; r < g.r1; ++r) {
-      const float* p = colour_.data() + 3 * (size_t(r) * size_t(width_) + size_t(g.c0));
-      const float* py = lum_.data() + size_t(r) * size_t(width_);
+      const float* p = colour_ + 3 * (size_t(r) * size_t(width_) + size_t(g.c0));
+      const float* py = lum_ + size_t(r) * size_t(width_);
       // Two pixels per step into separate accumulators: the add chains, not the
       // arithmetic, bound this loop.
       float s[3] = {0, 0, 0}, lc = 0, ls = 0, l = 0;
@@ -330,9 +339,14 @@ class MedianCutSampler final : public Sampler {
   }
 
   EnvMap grid_;                 // healpix input resampled to latlong
-  std::vector<double> sat_;     // (H+1) x (W+1) summed-area table of luminance * solid angle
-  std::vector<float> colour_;   // the map's rgb, invalid pixels zeroed
-  std::vector<float> lum_;      // clamped luminance per pixel (0 where invalid)
+  // (H+1) x (W+1) summed-area table of luminance * solid angle (see table()), in
+  // sat_storage_; the colours and luminances in theirs, each from a cache line on.
+  std::vector<double> sat_storage_;
+  double* sat_ = nullptr;
+  size_t sat_stride_ = 0;
+  std::vector<float> colour_storage_, lum_storage_;
+  float* colour_ = nullptr;  // the map's rgb, invalid pixels zeroed
+  float* lum_ = nullptr;     // clamped luminance per pixel (0 where invalid)
   std::array<double, 3> power_{0, 0, 0};
   int width_ = 0, height_ = 0;
   bool prepared_ = false;

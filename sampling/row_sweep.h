@@ -1,7 +1,8 @@
 // The row passes of the row-grid samplers' prepare (pharr, mediancut, hemigon) in Google
 // Highway, compiled for every x86 target Highway knows and dispatched at run time (as
 // hdr/merge_kernel.h): one row of packed RGB radiance -> its colours with invalid pixels
-// zeroed and each pixel's luminance clamped at zero; rows' running channel sums in double.
+// zeroed and each pixel's luminance clamped at zero; rows' running channel sums in double;
+// rows' running luminance sums (mediancut's summed-area table, hemigon's per-row sums).
 // Each lane does the scalar loop's operations in its order (bit-identical: no fused
 // multiply-add, sampling/CMakeLists.txt compiles this file with -ffp-contract=off).
 // Internal to sampling/; tests/sampling/row_sweep_test.cpp compares every compiled target
@@ -31,6 +32,20 @@ bool colour_and_luminance_row_scalar(const float* rgb, const uint8_t* valid, siz
 // (two partial sums per channel, as pharr keeps them). The caller sets the start values.
 void add_channel_sums(const float* const* rows, size_t count, size_t width, bool pairs, double* sums);
 void add_channel_sums_scalar(const float* const* rows, size_t count, size_t width, bool pairs, double* sums);
+
+// `count` rows of a summed-area table of weighted luminance (each out[k] has width + 1
+// entries): out[k][0] = 0 and out[k][x + 1] = prev[x + 1] + run, where prev is out[k - 1]
+// (`above` for k = 0) and run = sum over i <= x of weight[k] * double(lum[k][i]), added in
+// pixel order: the plain loop's values bit for bit.
+void summed_area_rows(const float* const* lum, const double* weight, size_t count, size_t width, const double* above,
+                      double* const* out);
+void summed_area_rows_scalar(const float* const* lum, const double* weight, size_t count, size_t width,
+                             const double* above, double* const* out);
+
+// Each row's own running sums (each out[k] has width + 1 entries): out[k][0] = 0 and
+// out[k][x + 1] = sum over i <= x of double(values[k][i]), added in pixel order.
+void running_sums_rows(const float* const* values, size_t count, size_t width, double* const* out);
+void running_sums_rows_scalar(const float* const* values, size_t count, size_t width, double* const* out);
 
 // The Highway target colour_and_luminance_row dispatches to on this CPU.
 const char* row_sweep_simd_target();

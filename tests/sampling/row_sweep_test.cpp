@@ -1,7 +1,8 @@
 // sampling/row_sweep.h: the row kernels of the samplers' prepare give the scalar loops' bits
 // on every compiled Highway target (colours, clamped luminance, the bad-pixel flag, the
-// channel sums in both orders), forwards and reversed, with and without a mask, on widths
-// around every vector length, with negative, NaN, -0 and huge values among the pixels.
+// channel sums in both orders, the summed-area table rows), forwards and reversed, with and
+// without a mask, on widths around every vector length, with negative, NaN, -0 and huge
+// values among the pixels.
 #include <gtest/gtest.h>
 
 #include <hwy/targets.h>
@@ -53,13 +54,17 @@ TEST(RowSweep, EveryTargetEqualsTheScalarLoopsBitForBit) {
       const bool bad0 = detail::colour_and_luminance_row_scalar(rgb.data(), mask, w, reversed, colour0.data(),
                                                                 lum0.data());
       flagged += bad0;
-      // Four rows of sums: the kernel's lockstep group, and one more row on its own.
+      // 13 rows of sums: the kernel's lockstep groups of eight and four, and one row on its own.
+      constexpr size_t kRows = 13;
       std::vector<std::vector<float>> rows;
-      for (int k = 0; k < 5; ++k) rows.push_back(random_row(w, rng, false));
-      const float* row_ptr[5] = {rows[0].data(), rows[1].data(), rows[2].data(), rows[3].data(), rows[4].data()};
-      std::vector<double> sums_single0(30, 0.5), sums_pairs0(30, 0.25);
-      detail::add_channel_sums_scalar(row_ptr, 5, w, false, sums_single0.data());
-      detail::add_channel_sums_scalar(row_ptr, 5, w, true, sums_pairs0.data());
+      const float* row_ptr[kRows];
+      for (size_t k = 0; k < kRows; ++k) {
+        rows.push_back(random_row(w, rng, false));
+        row_ptr[k] = rows[k].data();
+      }
+      std::vector<double> sums_single0(6 * kRows, 0.5), sums_pairs0(6 * kRows, 0.25);
+      detail::add_channel_sums_scalar(row_ptr, kRows, w, false, sums_single0.data());
+      detail::add_channel_sums_scalar(row_ptr, kRows, w, true, sums_pairs0.data());
       for (const int64_t target : targets) {
         hwy::SetSupportedTargetsForTest(target);
         ASSERT_STREQ(detail::row_sweep_simd_target(), hwy::TargetName(target));
@@ -71,9 +76,9 @@ TEST(RowSweep, EveryTargetEqualsTheScalarLoopsBitForBit) {
         EXPECT_EQ(bad, bad0) << where;
         EXPECT_TRUE(same_bits(colour, colour0)) << where;
         EXPECT_TRUE(same_bits(lum, lum0)) << where;
-        std::vector<double> single(30, 0.5), pairs(30, 0.25);
-        detail::add_channel_sums(row_ptr, 5, w, false, single.data());
-        detail::add_channel_sums(row_ptr, 5, w, true, pairs.data());
+        std::vector<double> single(6 * kRows, 0.5), pairs(6 * kRows, 0.25);
+        detail::add_channel_sums(row_ptr, kRows, w, false, single.data());
+        detail::add_channel_sums(row_ptr, kRows, w, true, pairs.data());
         // Single sums use entries 0..2 of each row's six; the rest must stay untouched.
         EXPECT_TRUE(same_bits(single, sums_single0)) << where;
         EXPECT_TRUE(same_bits(pairs, sums_pairs0)) << where;
@@ -81,6 +86,61 @@ TEST(RowSweep, EveryTargetEqualsTheScalarLoopsBitForBit) {
       hwy::SetSupportedTargetsForTest(0);
     }
   EXPECT_GT(flagged, 10u);  // the hostile rows did reach the flag
+}
+
+// A summed-area table's rows, and rows' own running sums, from the kernels equal the plain
+// loops' on every target: 15 rows (the kernels' groups of eight and four, then three left
+// to the plain loop), widths around every vector length, luminances from zero to huge,
+// weights per row.
+TEST(RowSweep, RunningSumRowsEqualThePlainLoopsOnEveryTarget) {
+  std::mt19937 rng(23);
+  std::lognormal_distribution<float> radiance(0.0f, 3.0f);
+  const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  constexpr size_t kRows = 15;
+  for (const size_t w : {1, 2, 3, 4, 5, 7, 8, 9, 15, 16, 17, 33, 360, 1025}) {
+    std::vector<std::vector<float>> lum(kRows, std::vector<float>(w));
+    double weight[kRows];
+    const float* lum_ptr[kRows];
+    for (size_t k = 0; k < kRows; ++k) {
+      for (float& v : lum[k]) v = rng() % 5 == 0 ? 0.0f : radiance(rng);
+      weight[k] = 1e-3 * (1 + double(k)) + 1e-7 * double(rng() % 1000);
+      lum_ptr[k] = lum[k].data();
+    }
+    lum[1][0] = 3e38f;
+    std::vector<double> above(w + 1);
+    for (size_t x = 1; x <= w; ++x) above[x] = above[x - 1] + 0.1 * double(rng() % 100);
+    // Rows of width + 1 entries with a guard entry on each side that must stay untouched.
+    auto run = [&](auto kernel) {
+      std::vector<double> table(kRows * (w + 3), -7.0);
+      double* out[kRows];
+      for (size_t k = 0; k < kRows; ++k) out[k] = table.data() + k * (w + 3) + 1;
+      kernel(lum_ptr, weight, kRows, w, above.data(), out);
+      return table;
+    };
+    const std::vector<double> want = run(detail::summed_area_rows_scalar);
+    // The plain loop follows the definition: row 0 starts from `above`.
+    double sum = 0;
+    for (size_t x = 0; x < w; ++x) sum += weight[0] * double(lum[0][x]);
+    ASSERT_EQ(want[1 + w], above[w] + sum);
+    ASSERT_EQ(want[0], -7.0);
+    ASSERT_EQ(want[1], 0.0);
+    // Each row's own running sums (hemigon's), from the same rows.
+    auto own = [&](auto kernel) {
+      return run([&](const float* const* l, const double*, size_t count, size_t width, const double*,
+                     double* const* out) { kernel(l, count, width, out); });
+    };
+    const std::vector<double> want_own = own(detail::running_sums_rows_scalar);
+    sum = 0;
+    for (size_t x = 0; x < w; ++x) sum += double(lum[kRows - 1][x]);
+    ASSERT_EQ(want_own[(kRows - 1) * (w + 3) + 1 + w], sum);
+    ASSERT_EQ(want_own[(kRows - 1) * (w + 3) + w + 2], -7.0);
+    for (const int64_t target : targets) {
+      hwy::SetSupportedTargetsForTest(target);
+      EXPECT_TRUE(same_bits(run(detail::summed_area_rows), want)) << hwy::TargetName(target) << ", width " << w;
+      EXPECT_TRUE(same_bits(own(detail::running_sums_rows), want_own)) << hwy::TargetName(target) << ", width " << w;
+    }
+    hwy::SetSupportedTargetsForTest(0);
+  }
 }
 
 // The scalar loops themselves against the definitions written out by hand.

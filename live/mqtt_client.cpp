@@ -136,7 +136,7 @@ void MqttConnection::start() {
   // touches the socket and its TLS state is made by that one thread. With libmosquitto's
   // thread (mosquitto_loop_start) that could not hold: 2.0.11 ends its thread on any TLS
   // error, a broker's SIGKILL included, and starting it again while reconnecting from
-  // another thread raced on the SSL object (a crash in libssl, 1 in ~10 broker kills).
+  // another thread raced on the SSL object (a crash in libssl, about 1 in 50 broker kills).
   // "Threaded" tells libmosquitto that publishing threads only queue and wake the loop.
   mosquitto_threaded_set(mosq_, true);
   // Before the thread exists: a non-blocking connect (its failure is retried by run()),

@@ -290,28 +290,50 @@ size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char
     return rms_over_splits(table[a].cross_validation_splits_px) < rms_over_splits(table[b].cross_validation_splits_px);
   });
   const double t = t975(int(splits) - 1);
-  size_t inc = order[0];
-  for (size_t j = 1; j < order.size(); ++j) {
-    ModelCandidate& c = table[order[j]];
-    const ModelCandidate& a = table[inc];
-    const auto [gain, se] = paired_mean_se(a.heldout_splits_px, c.heldout_splits_px);
-    const auto [cv_gain, cv_se] = paired_mean_se(a.cross_validation_splits_px, c.cross_validation_splits_px);
-    c.challenge_gain_px = gain;
-    c.challenge_se_px = se;
-    c.challenge_cv_gain_px = cv_gain;
-    c.challenge_cv_se_px = cv_se;
+  // Challenger c against a: the paired gains (a's value minus c's, per split) and whether c
+  // wins, i.e. is better on most splits and on average beyond the noise in one statistic,
+  // and not significantly worse in the other.
+  struct Challenge {
+    double gain, se, cv_gain, cv_se;
+    bool wins;
+  };
+  const auto challenge = [&](const ModelCandidate& c, const ModelCandidate& a) {
+    Challenge r{};
+    std::tie(r.gain, r.se) = paired_mean_se(a.heldout_splits_px, c.heldout_splits_px);
+    std::tie(r.cv_gain, r.cv_se) = paired_mean_se(a.cross_validation_splits_px, c.cross_validation_splits_px);
     int better = 0, cv_better = 0;
     for (size_t k = 0; k < splits; ++k) {
       better += c.heldout_splits_px[k] < a.heldout_splits_px[k];
       cv_better += c.cross_validation_splits_px[k] < a.cross_validation_splits_px[k];
     }
-    // Better on most splits and on average beyond the noise, in one statistic, and not
-    // significantly worse in the other.
-    const bool fits_better = 2 * better > int(splits) && gain > t * se && -cv_gain <= t * cv_se + o.floor_px;
-    const bool repeats_better = 2 * cv_better > int(splits) && cv_gain > t * cv_se && -gain <= t * se;
-    if (fits_better || repeats_better) inc = order[j];
+    const bool fits_better = 2 * better > int(splits) && r.gain > t * r.se && -r.cv_gain <= t * r.cv_se + o.floor_px;
+    const bool repeats_better = 2 * cv_better > int(splits) && r.cv_gain > t * r.cv_se && -r.gain <= t * r.se;
+    r.wins = fits_better || repeats_better;
+    return r;
+  };
+  const auto beats = [&](size_t c, size_t a) { return challenge(table[order[c]], table[order[a]]).wins; };
+  // The pick: the first candidate, in that order, that no candidate after it beats. Not the
+  // last winner of a chain of challenges: there the pick depended on the order of the
+  // challengers (Fisheye190deg's half of 4 views: Mei beat the stereographic first incumbent,
+  // so Kannala-Brandt, which Mei does not beat and which one diverged split kept from beating
+  // the stereographic model itself, was never compared with Mei; the two halves then chose
+  // Mei and Kannala-Brandt and agreed to 2.0 px against 0.15 for Kannala-Brandt on both).
+  const auto beaten_by_a_later_one = [&](size_t j) {
+    for (size_t i = j + 1; i < order.size(); ++i)
+      if (beats(i, j)) return true;
+    return false;
+  };
+  size_t pick = 0;  // the last candidate has none after it: there always is one
+  while (beaten_by_a_later_one(pick)) ++pick;
+  // Reported: every other candidate's comparison with the pick.
+  for (size_t j = 0; j < order.size(); ++j) {
+    if (j == pick) continue;
+    ModelCandidate& c = table[order[j]];
+    const Challenge r = challenge(c, table[order[pick]]);
+    c.challenge_gain_px = r.gain, c.challenge_se_px = r.se;
+    c.challenge_cv_gain_px = r.cv_gain, c.challenge_cv_se_px = r.cv_se;
   }
-  return inc;
+  return order[pick];
 }
 
 CandidateFits::CandidateFits(const CalibrationProblem& pr, ViewSubset used_views)

@@ -13,9 +13,11 @@
 // lens's own family (SelectionOptions::perspective_field_deg) unless another beats it beyond
 // the noise of the comparison, measured on the same balanced splits of the views: each
 // split's halves are refitted and give a held-out RMS (each half's model on the other half's
-// corners) and a cross-validation; a challenger replaces the incumbent when one of the two is
-// better on most splits and on average by more than a Student t quantile times the standard
-// error of the paired differences over the splits, and the other is not significantly worse. Deciding on the spread of the
+// corners) and a cross-validation; a candidate beats another when one of the two is better
+// on most splits and on average by more than a Student t quantile times the standard error of
+// the paired differences over the splits, and the other is not significantly worse. The pick
+// is the first candidate, in that order, that no later candidate beats (not the last winner
+// of a chain of challenges, which depended on their order). Deciding on the spread of the
 // difference over resamples, and keeping the simpler model on a near tie, makes the choice
 // hold on other subsets of the views (issue 21: the rule of before, the fewest parameters
 // among those within a fixed multiple of one jackknife noise of the best, chose Mei on one
@@ -61,13 +63,13 @@ struct ModelCandidate {
   // RMS of the candidates with every split (a vote over resamples, reported).
   std::vector<double> heldout_splits_px;
   int split_wins = 0;
-  // Its challenge to the incumbent of the time (SelectionRule::Incumbent): mean over splits
-  // of the incumbent's held-out RMS minus its own (> 0: it fits the other halves' corners
-  // better) and the standard error of that mean from the splits' spread; NaN when it did not
-  // challenge (the first incumbent, or not every split fitted).
+  // Its comparison with the pick (SelectionRule::Incumbent): mean over splits of the pick's
+  // held-out RMS minus its own (> 0: it fits the other halves' corners better) and the
+  // standard error of that mean from the splits' spread; NaN for the pick itself and when
+  // not every split was fitted.
   double challenge_gain_px = std::numeric_limits<double>::quiet_NaN();
   double challenge_se_px = std::numeric_limits<double>::quiet_NaN();
-  // The same for the cross-validation (the incumbent's minus its own, per split).
+  // The same for the cross-validation (the pick's minus its own, per split).
   double challenge_cv_gain_px = std::numeric_limits<double>::quiet_NaN();
   double challenge_cv_se_px = std::numeric_limits<double>::quiet_NaN();
   bool within_noise = false;  // cv and held-out RMS within the noise of the best's (see options)
@@ -253,10 +255,10 @@ SplitValidation split_validation(const CalibrationProblem& problem, const ViewSu
                                  LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
 
 // The incumbent rule on a filled table (cross_validation_splits_px and heldout_splits_px of
-// equal length): the index picked, and every challenger's challenge_* and every candidate's
-// split_wins filled. `eligible[i]` false: never picked nor challenging. perspective_first:
-// the perspective family's simplest candidate is the first incumbent (else the wide-angle
-// families').
+// equal length): the index picked, every other candidate's challenge_* (against the pick)
+// and every candidate's split_wins filled. `eligible[i]` false: never picked nor compared.
+// perspective_first: the perspective family comes first in the order (else the wide-angle
+// families).
 // Returns table.size() when there are fewer than min_rule_splits splits or no eligible
 // candidate has every split finite.
 size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char>& eligible, bool perspective_first,

@@ -72,8 +72,8 @@ std::string table_text(const CalibrationResult& r) {
                      r.corners_total);
   else if (incumbent)
     s += fmt::format(
-        "chosen: {}, the {} family's simplest model unless another beats it beyond the noise of the {} splits "
-        "(corners seen to {:.0f} deg; a challenger needs a held-out RMS or cross-validation better on most splits "
+        "chosen: {}, the simplest model, the {} family first, that no later one beats beyond the noise of the {} "
+        "splits (corners seen to {:.0f} deg; to beat, a held-out RMS or cross-validation better on most splits "
         "and on average by more than t x the standard error of the difference; wins: splits on which a model had "
         "the lowest held-out RMS); the fewest parameters within the noise of the best would be {}; {} of {} "
         "corners rejected as outliers\n",

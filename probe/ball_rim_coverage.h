@@ -22,6 +22,14 @@
 // arc's edge is the radius (within +-`reach_px` of the circle) where that least-squares fit
 // leaves the least residual: the straddling pixels must be explained by their coverage,
 // not by the pixel 1.5 px inside.
+// A band at the rim: where the ball reflects a band (dark, say) a few pixels wide along its
+// rim, the band's inner border is the stronger step and wins that search, while the
+// silhouette is the band's outer edge, which the earlier passes (on an image smoothed by
+// 1 px) cannot separate from it when the band is narrower than about 3 px. So beyond each
+// arc's edge, on the pixels wholly outside it, a band (constant along the radius) up to
+// `band_px` wide followed by the background is tried against the background alone; where
+// it wins by an F test the arc has a second, outer edge (coverage_arcs), and the caller
+// decides per circle which to believe (refine_rim_by_coverage).
 // What it cannot see: content that changes within the last fraction of a pixel (a scene
 // textured at the blind spot) is, per arc, indistinguishable from a shifted edge; a model
 // with a sqrt(d) term (the reflection's own expansion near the rim) can mimic such a
@@ -51,6 +59,9 @@ struct CoverageEdgeOptions {
   // each area point is moved by a fixed normal offset times this.
   double blur_px = 0;
   double reach_px = 0.75; // the edge is searched within this of the circle
+  // A band of the rim's reflection up to this wide outside the one-step edge is looked for
+  // (0: not): the silhouette is then its outer edge.
+  double band_px = 0;
 };
 
 // One edge per arc of `c` that lies inside the image on valid pixels (`valid8`: CV_8U, 1
@@ -62,5 +73,15 @@ struct CoverageEdgeOptions {
 // options on the same circle.
 std::vector<RimEdge> coverage_edges(const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& c,
                                     const CoverageEdgeOptions& options = {}, double* residual = nullptr);
+
+// Per arc, its one-step edge (as coverage_edges) and, with `band_px`, the silhouette as the
+// outer edge of a band of the rim's reflection beyond it, where the pixels outside the
+// one-step edge show one; strength < 0 where there is none. Arcs in the same order as the
+// angles, every arc listed.
+struct CoverageArc {
+  RimEdge step{0, 0, -1}, band{0, 0, -1};
+};
+std::vector<CoverageArc> coverage_arcs(const cv::Mat& linear, const cv::Mat& valid8, const BallInImage& c,
+                                       const CoverageEdgeOptions& options = {}, double* residual = nullptr);
 
 }  // namespace lp

@@ -341,7 +341,7 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
 
 RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise) {
   if (!rim.ok) return rim;
-  BallInImage c = rim.ball;
+  const BallInImage& c = rim.ball;
   // The blur that explains the rim best (0, 0.5 or 1 px), compared on the same pixels, 2.5 px
   // either side: the edges then use the last 1.5 px + 2 x blur inside (CoverageEdgeOptions).
   CoverageEdgeOptions o;
@@ -353,28 +353,72 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
     coverage_edges(linear, valid8, c, trial, &ssr);
     if (ssr < best) best = ssr, o.blur_px = blur;
   }
-  FitResult f;
-  for (int pass = 0; pass < 3; ++pass) {
-    const std::vector<RimEdge> edges = coverage_edges(linear, valid8, c, o);
-    if (edges.size() < 12) break;
-    std::vector<double> s;
-    for (const RimEdge& e : edges) s.push_back(e.strength);
-    const double med = median_of(s);
-    std::vector<Weighted> pts;
-    // Each edge rests on an arc's ~40 pixels, yet as for area_edges the contrast of its two
-    // sides is weighed against 4 x the smoothed image's noise (a conservative floor).
-    for (const RimEdge& e : edges) pts.push_back({e, edge_weight(e.strength, e.rel, med, 4 * edge_noise)});
-    const FitResult g = robust_circle(pts, c);
-    if (g.inliers == 0 || std::hypot(g.c.cx - c.cx, g.c.cy - c.cy) > 1 || std::abs(g.c.radius_px - c.radius_px) > 1) break;
-    const bool settled = std::hypot(g.c.cx - c.cx, g.c.cy - c.cy) < 0.01 && std::abs(g.c.radius_px - c.radius_px) < 0.01;
-    f = g, c = g.c;
-    if (settled) break;
+  // Bands of the rim's reflection up to 3 px wide outside the one-step edge: the rim fit
+  // looks for edges on the image smoothed by 1 px, where a band narrower than about 3 sigma
+  // merges with its stronger inner border (a dark band at the rim of a ball 60 px across is
+  // 2 px wide); wider bands it resolves, its outermost edge being the silhouette.
+  o.band_px = 3;
+  // Two circles, each refined in up to three passes while it moves less than max_move: on
+  // the arcs' one-step edges, and with the band's outer edge where an arc shows one. The
+  // background's own edges near the ball show up as bands too, on arcs scattered round the
+  // rim, while a band of the reflection lies along a stretch of it; so the circle more of
+  // the arcs agree with (any of an arc's edges within 0.5 px, Tukey-weighted) wins, the
+  // one-step circle on a tie.
+  struct Refined {
+    BallInImage c;
+    FitResult f;
+    double support = -1;
+  };
+  auto refine = [&](bool use_bands) {
+    Refined out{rim.ball, {}, -1};
+    // A pass may move the circle by 1 px; with bands by up to half the widest band more
+    // (a band along half the rim moves it by about half its width).
+    const double max_move = use_bands ? 1 + 0.5 * o.band_px : 1.0;
+    for (int pass = 0; pass < 3; ++pass) {
+      const std::vector<CoverageArc> arcs = coverage_arcs(linear, valid8, out.c, o);
+      std::vector<RimEdge> edges;
+      for (const CoverageArc& a : arcs)
+        if (use_bands && a.band.strength >= 0) edges.push_back(a.band);
+        else if (a.step.strength >= 0) edges.push_back(a.step);
+      if (edges.size() < 12) break;
+      std::vector<double> s;
+      for (const RimEdge& e : edges) s.push_back(e.strength);
+      const double med = median_of(s);
+      std::vector<Weighted> pts;
+      // Each edge rests on an arc's ~40 pixels, yet as for area_edges the contrast of its two
+      // sides is weighed against 4 x the smoothed image's noise (a conservative floor).
+      for (const RimEdge& e : edges) pts.push_back({e, edge_weight(e.strength, e.rel, med, 4 * edge_noise)});
+      const FitResult g = robust_circle(pts, out.c);
+      if (g.inliers == 0 || std::hypot(g.c.cx - out.c.cx, g.c.cy - out.c.cy) > max_move ||
+          std::abs(g.c.radius_px - out.c.radius_px) > max_move)
+        break;
+      const bool settled =
+          std::hypot(g.c.cx - out.c.cx, g.c.cy - out.c.cy) < 0.01 && std::abs(g.c.radius_px - out.c.radius_px) < 0.01;
+      out.f = g, out.c = g.c, out.support = 0;
+      for (const CoverageArc& a : arcs) {
+        double w = 0;
+        for (const RimEdge* e : {&a.step, &a.band}) {
+          const double u = residual(*e, g.c) / 0.5;
+          if (e->strength >= 0 && std::abs(u) < 1) w = std::max(w, (1 - u * u) * (1 - u * u));
+        }
+        out.support += w;
+      }
+      if (settled) break;
+    }
+    return out;
+  };
+  Refined best_fit = refine(false);
+  if (o.band_px > 0) {
+    const Refined banded = refine(true);
+    if (banded.support > best_fit.support) best_fit = banded;
   }
+  const FitResult f = best_fit.f;
+  const BallInImage fitted = best_fit.c;
   if (f.inliers == 0) return rim;
   RimFit out = rim;
   cv::Vec2d ev;
   cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);
-  out.ball = c;
+  out.ball = fitted;
   out.sigma_centre_px = std::sqrt(std::max(0.0, ev[0]));
   out.sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)));
   out.rms_px = f.rms;

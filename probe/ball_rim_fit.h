@@ -69,7 +69,10 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
 // The rim fit's circle refined on the silhouette by pixel coverage (probe/ball_rim_coverage.h:
 // one edge per arc of about 8 px, the circle fitted to them as above, up to three passes
 // while it moves less than 1 px; the blur, 0, 0.5 or 1 px, is the one whose model leaves
-// the least residual at the start). `rim` unchanged when it is not ok or fewer than 12 arcs
+// the least residual at the start). A second circle takes, on the arcs that show one, the
+// outer edge of a band of the rim's reflection up to 3 px wide instead (passes may move it
+// 2.5 px); the circle that more arcs agree with (one of their edges within 0.5 px) wins,
+// the first on a tie. `rim` unchanged when it is not ok or fewer than 12 arcs
 // give an edge. The sigmas are those of this fit (the arcs share no pixels).
 RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise);
 

@@ -1,6 +1,8 @@
 // Q2-tree internals visible to tests and benchmarks (sampling/q2tree.cpp).
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <optional>
 
 #include "sampling/sampler.h"
@@ -12,5 +14,10 @@ namespace lp {
 // geometry change, q2_incremental off or exactness not guaranteed: place() rebuilds).
 // Throws InputError when `sampler` is not a q2tree sampler.
 std::optional<int> q2tree_last_update_operations(const Sampler& sampler);
+
+// The rgb sums of node (level, ipix) as the tree sees them after the last prepare() (the
+// difference of two prefix entries; its luminance is the node's importance). Throws
+// InputError when `sampler` is not a q2tree sampler or has not prepared a map.
+std::array<double, 3> q2tree_node_rgb(const Sampler& sampler, int level, int64_t ipix);
 
 }  // namespace lp

@@ -130,7 +130,11 @@ struct RowGridBinning {
   std::vector<float> row;  // 8 per row: 1, 1, 1, sin theta, sin theta, cos theta, exact pixel solid angle, 0
   std::vector<float> col;  // 8 per column: 1, 1, 1, cos phi, sin phi, 1, 0, 0
 
-  detail::RowSources view() const { return {target.data(), row.data(), col.data()}; }
+  std::vector<float> cos_phi, sin_phi;  // per column: col's cos phi and sin phi in a row
+
+  detail::RowSources view() const {
+    return {target.data(), row.data(), col.data(), cos_phi.data(), sin_phi.data()};
+  }
 };
 
 std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside) {
@@ -162,6 +166,8 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
     c[0] = c[1] = c[2] = c[5] = 1.0f;
     c[3] = float(col_cos[u]);
     c[4] = float(col_sin[u]);
+    b->cos_phi.push_back(c[3]);
+    b->sin_phi.push_back(c[4]);
   }
   b->target.resize(map.pixel_count());
   // From separate cosine and sine tables: built from the interleaved ones (one 16-byte

@@ -50,6 +50,7 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
   const auto rgb_lanes = hn::FirstN(f4, 3);
   const auto rgb_bits = hn::VecFromMask(f4, rgb_lanes);  // all ones in lanes 0-2
   auto low = hn::Zero(f4);  // the smallest r, g, b seen (lane 3 stays 0)
+  auto low8 = hn::Zero(f8);  // the same over the eight-pixel blocks
   HWY_ALIGN static constexpr float kZeros[8] = {0, 0, 0, 0, 0, 0, 0, 0};
   const size_t last_pixel = width * height - 1;
   for (size_t v = 0; v < height; ++v) {
@@ -70,7 +71,52 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
     };
     auto run = hn::Zero(f8);
     uint32_t current = width ? target[0] : 0;  // the run's tagged target
-    for (size_t u = 0; u < width; ++u) {
+    // Eight pixels at a time: their values computed with a lane a pixel, then transposed to
+    // eight vectors laid out as the bins, (r, g, b, lx, ly, lz, 0 l, 0 l) (24 shuffles).
+    size_t u = 0;
+    const auto st8 = hn::Set(f8, row[3]), ct8 = hn::Set(f8, row[5]), dw8 = hn::Set(f8, row[6]);
+    const auto zero8 = hn::Zero(f8);
+    for (; u + 8 <= width; u += 8) {
+      hn::Vec<decltype(f8)> r, g, b;
+      hn::LoadInterleaved3(f8, px + 3 * u, r, g, b);
+      if (ok) {
+        const auto bytes = hn::LoadU(hn::Full64<uint8_t>(), ok + u);
+        const auto m = hn::RebindMask(f8, hn::Ne(hn::PromoteTo(hn::Full256<int32_t>(), bytes), hn::Zero(hn::Full256<int32_t>())));
+        r = hn::IfThenElseZero(m, r), g = hn::IfThenElseZero(m, g), b = hn::IfThenElseZero(m, b);
+      }
+      const auto R = hn::Mul(r, dw8), G = hn::Mul(g, dw8), B = hn::Mul(b, dw8);
+      low8 = hn::Min(B, hn::Min(G, hn::Min(R, low8)));
+      const auto l = hn::Add(hn::Add(hn::Mul(R, hn::Set(f8, 0.2126f)), hn::Mul(G, hn::Set(f8, 0.7152f))),
+                             hn::Add(hn::Mul(B, hn::Set(f8, 0.0722f)), zero8));
+      const auto X = hn::Mul(l, hn::Mul(st8, hn::LoadU(f8, s.cos_phi + u)));
+      const auto Y = hn::Mul(l, hn::Mul(st8, hn::LoadU(f8, s.sin_phi + u)));
+      const auto Z = hn::Mul(l, ct8);
+      const auto W = hn::Mul(l, zero8);
+      const auto t0 = hn::InterleaveLower(f8, R, G), t1 = hn::InterleaveUpper(f8, R, G);
+      const auto t2 = hn::InterleaveLower(f8, B, X), t3 = hn::InterleaveUpper(f8, B, X);
+      const auto t4 = hn::InterleaveLower(f8, Y, Z), t5 = hn::InterleaveUpper(f8, Y, Z);
+      const auto t6 = hn::InterleaveLower(f8, W, W), t7 = hn::InterleaveUpper(f8, W, W);
+      const hn::Repartition<double, decltype(f8)> d4;
+      auto pairs = [&](decltype(t0) lo, decltype(t0) hi, bool upper) {
+        const auto a = hn::BitCast(d4, lo), c = hn::BitCast(d4, hi);
+        return hn::BitCast(f8, upper ? hn::InterleaveUpper(d4, a, c) : hn::InterleaveLower(d4, a, c));
+      };
+      const auto u0 = pairs(t0, t2, false), u1 = pairs(t0, t2, true), u2 = pairs(t1, t3, false), u3 = pairs(t1, t3, true);
+      const auto v0 = pairs(t4, t6, false), v1 = pairs(t4, t6, true), v2 = pairs(t5, t7, false), v3 = pairs(t5, t7, true);
+      const decltype(u0) p[8] = {hn::ConcatLowerLower(f8, v0, u0), hn::ConcatLowerLower(f8, v1, u1),
+                                 hn::ConcatLowerLower(f8, v2, u2), hn::ConcatLowerLower(f8, v3, u3),
+                                 hn::ConcatUpperUpper(f8, v0, u0), hn::ConcatUpperUpper(f8, v1, u1),
+                                 hn::ConcatUpperUpper(f8, v2, u2), hn::ConcatUpperUpper(f8, v3, u3)};
+      for (size_t j = 0; j < 8; ++j) {
+        if ((target[u + j] ^ current) & ~kQ2FirstRun) {
+          add_run(current, run);
+          run = hn::Zero(f8);
+          current = target[u + j];
+        }
+        run = hn::Add(run, p[j]);
+      }
+    }
+    for (; u < width; ++u) {
       if ((target[u] ^ current) & ~kQ2FirstRun) {
         add_run(current, run);
         run = hn::Zero(f8);
@@ -98,7 +144,7 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
   }
   HWY_ALIGN float flags[4];
   hn::Store(low, f4, flags);
-  return flags[0] < 0 || flags[1] < 0 || flags[2] < 0;
+  return flags[0] < 0 || flags[1] < 0 || flags[2] < 0 || !hn::AllFalse(f8, hn::Lt(low8, hn::Zero(f8)));
 #else  // 128-bit vectors would split every pixel in two: the plain loop
   return q2tree_bin_sums_scalar(rgb, valid, width, height, s, bins);
 #endif

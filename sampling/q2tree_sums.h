@@ -24,6 +24,8 @@ struct RowSources {
   const uint32_t* target = nullptr;
   const float* row = nullptr;  // 8 per row: 1, 1, 1, sin t, sin t, cos t, dw, 0 (dw: the pixel's solid angle)
   const float* col = nullptr;  // 8 per column: 1, 1, 1, cos p, sin p, 1, 0, 0
+  const float* cos_phi = nullptr;  // per column: col[8 u + 3], col[8 u + 4] again, in a row
+  const float* sin_phi = nullptr;
 };
 
 // Each healpix pixel's 8 floats in `bins` (8 a pixel, 32-byte aligned): for each run in

@@ -28,9 +28,9 @@ struct Case {
   std::vector<float> rgb;
   std::vector<uint8_t> valid;
   std::vector<uint32_t> target;
-  std::vector<float> row, col;
+  std::vector<float> row, col, cos_phi, sin_phi;
 
-  detail::RowSources view() const { return {target.data(), row.data(), col.data()}; }
+  detail::RowSources view() const { return {target.data(), row.data(), col.data(), cos_phi.data(), sin_phi.data()}; }
 };
 
 Case make_case(size_t width, size_t height, bool hostile, std::mt19937& rng) {
@@ -80,6 +80,8 @@ Case make_case(size_t width, size_t height, bool hostile, std::mt19937& rng) {
     q[0] = q[1] = q[2] = q[5] = 1.0f;
     q[3] = unit(rng);
     q[4] = unit(rng);
+    c.cos_phi.push_back(q[3]);
+    c.sin_phi.push_back(q[4]);
   }
   return c;
 }

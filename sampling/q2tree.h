@@ -15,9 +15,10 @@ namespace lp {
 // Throws InputError when `sampler` is not a q2tree sampler.
 std::optional<int> q2tree_last_update_operations(const Sampler& sampler);
 
-// The rgb sums of node (level, ipix) as the tree sees them after the last prepare() (the
-// difference of two prefix entries; its luminance is the node's importance). Throws
-// InputError when `sampler` is not a q2tree sampler or has not prepared a map.
+// The rgb sums of node (level, ipix) as the tree sees them after the last prepare() (healpix
+// input: the difference of two prefix entries; latlong and hemisphere maps: the node
+// pyramid's float sums; its luminance is the node's importance). Throws InputError when
+// `sampler` is not a q2tree sampler or has not prepared a map, or there is no such node.
 std::array<double, 3> q2tree_node_rgb(const Sampler& sampler, int level, int64_t ipix);
 
 }  // namespace lp

@@ -7,24 +7,30 @@
 // luminance over the quad), dw = pi / (3 * 4^level) its solid angle, a and b from the
 // options (Agarwal et al.'s a = 1, b = 1/4 by default).
 //
-// Key design: in HEALPix NESTED order, the pixels of a quadtree node at level l are ONE
-// CONTIGUOUS RANGE of the finest-level pixel array ([ipix << 2(L-l), (ipix+1) << 2(L-l))
-// for finest level L). A 1D prefix sum over the nested pixel array therefore gives the
-// sums of any node in O(1): the role the paper gives to summed-area tables, with one
-// table instead of twelve and no 2D corner arithmetic. We keep double prefix sums of
-// r, g, b times dw (luminance is their linear combination) and of luminance * dw * (x, y, z)
-// for the luminance-weighted centroids. The leaves partition the array, so the sum of
-// the leaves' rgb telescopes to the map's total power (double rounding only).
+// Key design: every node's sums are at hand in O(1), the role the paper gives to summed-area
+// tables: r, g, b times dw (luminance is their linear combination) and luminance * dw *
+// (x, y, z) for the luminance-weighted centroids. On a healpix map they come from a double
+// prefix sum over the nested pixel array (a node at level l is ONE CONTIGUOUS RANGE of it,
+// [ipix << 2(L-l), (ipix+1) << 2(L-l)) for finest level L, so its sums are two entries'
+// difference). On a latlong or hemisphere map they are a pyramid of float sums: each healpix
+// pixel's from its source pixels, each coarser node's from its four children,
+// (c0 + c1) + (c2 + c3). That took one pass over the map in row order and a quarter pass per
+// level instead of a gather of every pixel in nested order into a 48-byte double entry per
+// healpix pixel (4.8-5.3x a plain read of the map; see sampling/q2tree_sums.cpp). Each sum
+// is its own node's, so its error is relative to that node (a few float roundings: lights
+// within 2e-7 of the double sums, tests/sampling/q2tree_float_bins_test.cpp), where a float
+// prefix would have made a dim node after a bright one in the same range as uncertain as the
+// bright one. The leaves partition the sphere, so the sum of the leaves' rgb is the map's
+// total power up to float rounding.
 //
 // Input: a healpix map is used as it is (its nside; q2_nside, when set and smaller, only
 // caps the tree depth). Latlong and hemisphere maps are binned into healpix pixels at
 // nside = q2_nside, or, when 0, the largest power of two (1..256) whose pixels are no
 // smaller than the input's mean pixel (4 pi or 2 pi / pixel count). The binning
-// geometry (which source pixels fall in each healpix pixel, by pixel centre, as a
-// compressed list in nested order) depends only on layout and size and is cached, so a
-// frame costs one gather pass over the map that writes the prefix sums sequentially.
-// Each source pixel gives its rgb * (exact pixel solid angle) to exactly one healpix
-// pixel, so power is preserved exactly; invalid pixels give nothing. Leaves never split
+// geometry (which healpix pixel each source pixel's centre falls in) depends only on layout
+// and size and is cached, so a frame costs one pass over the map in row order and the
+// pyramid's levels. Each source pixel gives its rgb * (its solid angle, in float) to exactly
+// one healpix pixel, so power is preserved up to float rounding; invalid pixels give nothing. Leaves never split
 // below the binned nside: a finest-level leaf is retired and the next leaf is split.
 //
 // Light count: the count goes 12, 15, 18, ... (12 + 3k). We stop at the first count
@@ -43,8 +49,11 @@
 // Between frames (q2_incremental, Nikodym et al. end of 3.2) the tree is kept and only
 // repaired. Why that is exact: rank nodes by the total order the rebuild's heap uses,
 // importance first, then the smaller NUNIQ. With a >= 0, b >= 0 and no negative pixel a
-// child ranks strictly below its parent, in floating point too: the r, g, b prefix sums
-// only grow, so a child's range differences are <= its parent's, and so are its
+// child ranks strictly below its parent, in floating point too: a child's r, g, b are <= its
+// parent's (healpix input: the prefix sums only grow, so a child's range differences are <=
+// its parent's; row grids: a parent is (c0 + c1) + (c2 + c3) of non-negative children, and
+// rounding is monotone, so it is >= each child, tested on hostile maps by
+// Q2TreeFloatBins.NoChildsSumsExceedItsParentsOnHostileMaps), and so are its
 // luminance (positive weights), power^a (pow is monotone; a = 0 gives 1 for both),
 // dw^b (<= for b >= 0, equal for b = 0) and the product; where the importances tie
 // (zero-power regions, b = 0, a = 0) the parent wins on its smaller NUNIQ. So the rebuild
@@ -65,6 +74,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -74,7 +84,6 @@
 #include <optional>
 #include <queue>
 #include <tuple>
-#include <type_traits>
 #include <vector>
 
 #include "core/error.h"
@@ -100,7 +109,7 @@ int log2_int(int n) {
 // 4 pi / (12 nside^2) is at least the input's mean pixel, so that healpix pixels hold one
 // or more source pixel centres rather than leaving holes (1024 x 512 latlong -> 128,
 // 2048 x 1024 -> 256, 360 x 90 hemisphere -> 64). One step finer would double the
-// tree's depth budget at four times the prefix memory for no better leaves.
+// tree's depth budget at four times the node sums' memory for no better leaves.
 int auto_nside(const EnvMap& map) {
   const double mean = layout_solid_angle(map.layout) / double(map.pixel_count());
   int nside = 1;
@@ -112,23 +121,20 @@ int auto_nside(const EnvMap& map) {
 struct RowGridBinning {
   Layout layout;
   int width = 0, height = 0, nside = 0;
-  // Source pixels grouped by healpix pixel in nested order, row-major within one: column
-  // u | row v << 16, and the prefix entry of its healpix pixel (pixel + 1).
-  std::vector<uint32_t> source, entry;
-  // Runs of healpix pixels no source centre falls in: entries [first, first + count) hold the
-  // sums of entry `from`, the last one before them (a hemisphere map's lower half is one).
-  struct EmptyRun {
-    uint32_t first, count, from;
-  };
-  std::vector<EmptyRun> empty;
-  // Prefix entries kept: a run of empty pixels at the end of the nested order (a hemisphere
-  // map's four southern base quads, a third of its pixels) is not stored, its entries all
-  // being the last one's (Q2TreeSampler::entry reads them so).
-  size_t stored_entries = 0;
-  std::vector<double> row;      // 4 per row: exact solid angle, sin theta, cos theta, 0
-  std::vector<double> col;      // 2 per column: cos phi, sin phi
+  // Per map pixel, row-major: the healpix pixel its centre falls in, tagged where its first
+  // run starts (sampling/q2tree_sums.h).
+  std::vector<uint32_t> target;
+  // Healpix pixels up to the last one a source falls in: the nodes after them (a hemisphere
+  // map's four southern base quads, a third of its pixels) are zero, never summed.
+  size_t stored_pixels = 0;
+  std::vector<float> row;  // 8 per row: 1, 1, 1, sin theta, sin theta, cos theta, exact pixel solid angle, 0
+  std::vector<float> col;  // 8 per column: 1, 1, 1, cos phi, sin phi, 1, 0, 0
 
-  detail::NestedSources view() const { return {source.data(), entry.data(), source.size(), row.data(), col.data()}; }
+  std::vector<float> cos_phi, sin_phi;  // per column: col's cos phi and sin phi in a row
+
+  detail::RowSources view() const {
+    return {target.data(), row.data(), col.data(), cos_phi.data(), sin_phi.data()};
+  }
 };
 
 std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside) {
@@ -140,56 +146,45 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
   const int w = map.width, h = map.height;
   const double span = map.layout == Layout::Hemisphere ? M_PI / 2 : M_PI;
   std::vector<double> row_sin(h), row_cos(h), col_cos(w), col_sin(w);
-  b->row.assign(4 * size_t(h), 0.0);
+  b->row.assign(8 * size_t(h), 0.0f);
   for (int v = 0; v < h; ++v) {
     const double t = span * (v + 0.5) / h;
     row_sin[v] = std::sin(t);
     row_cos[v] = std::cos(t);
-    b->row[4 * size_t(v)] = pixel_solid_angle(map, size_t(v) * size_t(w));
-    b->row[4 * size_t(v) + 1] = row_sin[v];
-    b->row[4 * size_t(v) + 2] = row_cos[v];
+    float* r = b->row.data() + 8 * size_t(v);
+    r[0] = r[1] = r[2] = 1.0f;
+    r[3] = r[4] = float(row_sin[v]);
+    r[5] = float(row_cos[v]);
+    r[6] = float(pixel_solid_angle(map, size_t(v) * size_t(w)));
   }
-  b->col.resize(2 * size_t(w));
+  b->col.assign(8 * size_t(w), 0.0f);
   for (int u = 0; u < w; ++u) {
     const double p = 2 * M_PI * (u + 0.5) / w;
     col_cos[u] = std::cos(p);
     col_sin[u] = std::sin(p);
-    b->col[2 * size_t(u)] = col_cos[u];
-    b->col[2 * size_t(u) + 1] = col_sin[u];
+    float* c = b->col.data() + 8 * size_t(u);
+    c[0] = c[1] = c[2] = c[5] = 1.0f;
+    c[3] = float(col_cos[u]);
+    c[4] = float(col_sin[u]);
+    b->cos_phi.push_back(c[3]);
+    b->sin_phi.push_back(c[4]);
   }
-  const size_t count = map.pixel_count();
-  std::vector<uint32_t> target(count);
+  b->target.resize(map.pixel_count());
   // From separate cosine and sine tables: built from the interleaved ones (one 16-byte
   // multiply for x and y, likely a store healpix_pixel's loads cannot forward from), this
   // loop took 34-35 ms of CPU instead of 25-27 on a 1024 x 512 map (measured, same values).
   tbb::parallel_for(0, h, [&](int v) {
     for (int u = 0; u < w; ++u) {
       const Vec3 d{row_sin[v] * col_cos[u], row_sin[v] * col_sin[u], row_cos[v]};
-      target[size_t(v) * w + u] = uint32_t(healpix_pixel(nside, d));
+      b->target[size_t(v) * w + u] = uint32_t(healpix_pixel(nside, d));
     }
   });
-  const size_t npix = 12 * size_t(nside) * size_t(nside);
-  std::vector<uint32_t> offset(npix + 1, 0);  // healpix pixel h holds sources [offset[h], offset[h + 1])
-  for (uint32_t t : target) ++offset[t + 1];
-  for (size_t i = 0; i < npix; ++i) {
-    if (offset[i + 1] == 0) {
-      const uint32_t entry = uint32_t(i) + 1;
-      if (!b->empty.empty() && b->empty.back().first + b->empty.back().count == entry) ++b->empty.back().count;
-      else b->empty.push_back({entry, 1, entry - 1});
-    }
-    offset[i + 1] += offset[i];
-  }
-  b->stored_entries = npix + 1;
-  if (!b->empty.empty() && b->empty.back().first + b->empty.back().count == npix + 1) {
-    b->stored_entries = b->empty.back().first;
-    b->empty.pop_back();
-  }
-  b->source.resize(count);
-  b->entry.resize(count);
-  for (size_t i = 0; i < count; ++i) {
-    const uint32_t k = offset[target[i]]++;
-    b->source[k] = uint32_t(i % size_t(w)) | uint32_t(i / size_t(w)) << 16;
-    b->entry[k] = target[i] + 1;
+  b->stored_pixels = size_t(*std::max_element(b->target.begin(), b->target.end())) + 1;
+  std::vector<uint8_t> seen(12 * size_t(nside) * size_t(nside), 0);
+  for (size_t i = 0; i < b->target.size(); ++i) {
+    const uint32_t t = b->target[i];
+    const bool run_start = i % size_t(w) == 0 || b->target[i - 1] % detail::kQ2FirstRun != t;
+    if (run_start && !seen[t]) b->target[i] |= detail::kQ2FirstRun, seen[t] = 1;
   }
   return b;
 }
@@ -235,13 +230,12 @@ std::shared_ptr<const std::vector<float>> cached_healpix_directions(int nside) {
   return dirs;
 }
 
-// Running sums over the nested pixel array: entry i holds the sum over pixels [0, i).
-// Six doubles in this order: sampling/q2tree_sums.h writes them as an array.
+// Sums over a node, or (healpix input) running sums over the nested pixel array: entry i
+// holds the sum over pixels [0, i).
 struct Prefix {
   double r = 0, g = 0, b = 0;  // rgb * dw
   double x = 0, y = 0, z = 0;  // luminance * dw * direction
 };
-static_assert(sizeof(Prefix) == 6 * sizeof(double) && std::is_standard_layout_v<Prefix>);
 
 uint64_t splitmix64(uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
@@ -277,7 +271,11 @@ class Q2TreeSampler final : public Sampler {
       prepare_healpix(map);
     else
       prepare_row_grid(map);
-    const Prefix& t = prefix_.back();
+    Prefix t;  // the map's sums: its twelve base quads'
+    for (int f = 0; f < 12; ++f) {
+      const Prefix q = node_sums(0, f);
+      t.r += q.r, t.g += q.g, t.b += q.b;
+    }
     const double rgb[3] = {t.r, t.g, t.b};
     const double lum = luminance(rgb);
     if (!std::isfinite(lum)) throw InputError("q2tree: the map has non-finite pixels");
@@ -296,7 +294,7 @@ class Q2TreeSampler final : public Sampler {
   }
 
   std::vector<Light> place(int n) override {
-    if (prefix_.empty()) throw InputError("q2tree: place() called before prepare()");
+    if (prefix_.empty() && levels_.empty()) throw InputError("q2tree: place() called before prepare()");
     if (n < 12)
       throw InputError(fmt::format("q2tree: needs n >= 12 lights (one per HEALPix base quad), got {}", n));
     const int cap_nside = 1 << max_level_;
@@ -335,6 +333,14 @@ class Q2TreeSampler final : public Sampler {
   }
 
   std::optional<int> last_update_operations() const { return update_operations_; }
+
+  std::array<double, 3> node_rgb(int level, int64_t ipix) const {
+    if (prefix_.empty() && levels_.empty()) throw InputError("q2tree: node_rgb() called before prepare()");
+    if (level < 0 || level > finest_level_ || ipix < 0 || ipix >= 12 * (int64_t(1) << (2 * level)))
+      throw InputError(fmt::format("q2tree: no node {} at level {}", ipix, level));
+    const Prefix s = node_sums(level, ipix);
+    return {s.r, s.g, s.b};
+  }
 
  private:
   // The greedy rebuild of Algorithm 1: split the most important leaf until n - 2 <= count.
@@ -548,9 +554,21 @@ class Q2TreeSampler final : public Sampler {
     return pairs;
   }
 
-  // Prefix entry i: the sum over pixels [0, i); entries past the stored ones (a trailing
-  // run of empty pixels) equal the last.
-  const Prefix& entry(size_t i) const { return prefix_[std::min(i, prefix_.size() - 1)]; }
+  // Prefix entry i of a healpix map: the sum over pixels [0, i).
+  const Prefix& entry(size_t i) const { return prefix_[i]; }
+
+  // A node's sums: on a healpix map the difference of two prefix entries, on a row grid its
+  // float sums in the node pyramid.
+  Prefix node_sums(int level, int64_t ipix) const {
+    if (levels_.empty()) {
+      const auto [b, e] = range(level, ipix);
+      const Prefix& p = entry(b);
+      const Prefix& q = entry(e);
+      return {q.r - p.r, q.g - p.g, q.b - p.b, q.x - p.x, q.y - p.y, q.z - p.z};
+    }
+    const float* f = levels_[size_t(level)] + 8 * size_t(ipix);
+    return {f[0], f[1], f[2], f[3], f[4], f[5]};
+  }
 
   // Finest-level range of a node.
   std::pair<size_t, size_t> range(int level, int64_t ipix) const {
@@ -559,22 +577,18 @@ class Q2TreeSampler final : public Sampler {
   }
 
   double node_luminance_power(int level, int64_t ipix) const {
-    const auto [b, e] = range(level, ipix);
-    const Prefix& p = entry(b);
-    const Prefix& q = entry(e);
-    return 0.2126 * (q.r - p.r) + 0.7152 * (q.g - p.g) + 0.0722 * (q.b - p.b);
+    const Prefix s = node_sums(level, ipix);
+    return 0.2126 * s.r + 0.7152 * s.g + 0.0722 * s.b;
   }
 
   Light make_light(int level, int64_t ipix) const {
-    const auto [b, e] = range(level, ipix);
-    const Prefix& p = entry(b);
-    const Prefix& q = entry(e);
+    const Prefix s = node_sums(level, ipix);
     Light l;
     l.id = (uint64_t(4) << (2 * level)) + uint64_t(ipix);
-    l.rgb = {q.r - p.r, q.g - p.g, q.b - p.b};
+    l.rgb = {s.r, s.g, s.b};
     l.solid_angle = M_PI / (3.0 * std::ldexp(1.0, 2 * level));
     const double power = luminance(l.rgb.data());
-    const Vec3 c{q.x - p.x, q.y - p.y, q.z - p.z};
+    const Vec3 c{s.x, s.y, s.z};
     const double len = length(c);
     if (!(power > 0) || !(len > 1e-12 * power)) {
       l.direction = quad_point(level, ipix, 128, 128);
@@ -603,6 +617,7 @@ class Q2TreeSampler final : public Sampler {
     const auto dirs = cached_healpix_directions(nside);
     const size_t npix = map.pixel_count();
     const double dw = 4 * M_PI / double(npix);
+    levels_.clear();
     prefix_.resize(npix + 1);
     Prefix s;
     prefix_[0] = s;
@@ -631,16 +646,27 @@ class Q2TreeSampler final : public Sampler {
       binning_ = cached_binning(map, nside);
     const RowGridBinning& bin = *binning_;
     finest_level_ = max_level_ = log2_int(nside);
-    prefix_.resize(bin.stored_entries);
-    prefix_[0] = Prefix{};
-    // The running sums in nested order (sampling/q2tree_sums.h), then the pixels no source
-    // falls in: each holds the sums of the entry before its run (copied from that entry,
-    // not from the neighbour just written, which would chain every copy on the one before).
+    // Each healpix pixel's sums, the map read in row order, then each coarser level's from
+    // the one below (sampling/q2tree_sums.h). Levels past the stored pixels stay zero.
+    const int finest = finest_level_;
+    size_t offset = 0;
+    std::vector<size_t> offsets(size_t(finest) + 1);
+    for (int l = finest; l >= 0; --l) offsets[size_t(l)] = offset, offset += 12 * (size_t(1) << (2 * l));
+    if (pyramid_binning_ != binning_) {  // pixels no source falls in must read zero
+      pyramid_.assign(offset, Bin{});
+      pyramid_binning_ = binning_;
+    }
+    levels_.resize(size_t(finest) + 1);
+    for (int l = 0; l <= finest; ++l) levels_[size_t(l)] = pyramid_[offsets[size_t(l)]].v;
+    prefix_.clear();
     const uint8_t* valid = map.valid.empty() ? nullptr : map.valid.data();
-    const bool negative = detail::q2tree_prefix_sums(map.rgb.data(), valid, size_t(map.width), size_t(map.height),
-                                                     bin.view(), reinterpret_cast<double*>(prefix_.data()));
-    for (const RowGridBinning::EmptyRun& run : bin.empty)
-      std::fill_n(prefix_.begin() + run.first, run.count, prefix_[run.from]);
+    const bool negative = detail::q2tree_bin_sums(map.rgb.data(), valid, size_t(map.width), size_t(map.height),
+                                                  bin.view(), pyramid_[0].v);
+    size_t stored = bin.stored_pixels;
+    for (int l = finest - 1; l >= 0; --l) {
+      stored = (stored + 3) / 4;
+      detail::q2tree_quad_sums(levels_[size_t(l) + 1], stored, levels_[size_t(l)]);
+    }
     negative_pixels_ = negative;
   }
 
@@ -664,8 +690,17 @@ class Q2TreeSampler final : public Sampler {
   int tree_splits_ = 0;
   std::optional<int> update_operations_;
   std::shared_ptr<const RowGridBinning> binning_;
-  std::vector<Prefix> prefix_;
-  int finest_level_ = 0;  // level of the prefix array's pixels
+  std::vector<Prefix> prefix_;  // healpix input: the prefix entries
+  // Row grids: every node's sums in float (r, g, b, x, y, z and two unused), the finest level
+  // first, then each coarser one; levels_[l] points at level l's first node. 32-byte aligned:
+  // one vector load and store a node (sampling/q2tree_sums.h).
+  struct alignas(32) Bin {
+    float v[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  };
+  std::vector<Bin> pyramid_;
+  std::vector<float*> levels_;
+  std::shared_ptr<const RowGridBinning> pyramid_binning_;  // the geometry pyramid_ was zeroed for
+  int finest_level_ = 0;  // level of the map's (or binning's) healpix pixels
   int max_level_ = 0;     // deepest level a leaf may reach
 };
 
@@ -680,6 +715,12 @@ std::optional<int> q2tree_last_update_operations(const Sampler& sampler) {
   if (!q2) throw InputError(fmt::format("q2tree_last_update_operations: the sampler is {}, not q2tree",
                                         to_string(sampler.method())));
   return q2->last_update_operations();
+}
+
+std::array<double, 3> q2tree_node_rgb(const Sampler& sampler, int level, int64_t ipix) {
+  const auto* q2 = dynamic_cast<const Q2TreeSampler*>(&sampler);
+  if (!q2) throw InputError(fmt::format("q2tree_node_rgb: the sampler is {}, not q2tree", to_string(sampler.method())));
+  return q2->node_rgb(level, ipix);
 }
 
 }  // namespace lp

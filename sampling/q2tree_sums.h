@@ -1,9 +1,10 @@
-// The prefix sums of q2tree's prepare on a latlong or hemisphere map (sampling/q2tree.cpp):
-// the map's pixels taken in HEALPix nested order, each weighed by its solid angle and
-// direction, and summed in that order. Google Highway, compiled for every x86 target Highway
-// knows and dispatched at run time (as sampling/row_sweep.h). Each sum is the scalar loop's
-// chain of additions in its order (bit-identical: no fused multiply-add, sampling/CMakeLists.txt
-// compiles the file with -ffp-contract=off). Internal to sampling/;
+// The sums of q2tree's prepare on a latlong or hemisphere map (sampling/q2tree.cpp), in two
+// passes: each healpix pixel's sums of its source pixels (weighed by their solid angle and
+// direction), the map read in row order; then the sums of every coarser quadtree node, four
+// children at a time. All in float. Google Highway, compiled for every x86 target Highway
+// knows and dispatched at run time (as sampling/row_sweep.h). Every sum is the plain loop's
+// chain of operations in its order (bit-identical: no fused multiply-add,
+// sampling/CMakeLists.txt compiles the file with -ffp-contract=off). Internal to sampling/;
 // tests/sampling/q2tree_sums_test.cpp compares every compiled target with a plain loop.
 #pragma once
 
@@ -12,29 +13,41 @@
 
 namespace lp::detail {
 
-// Views into q2tree's cached binning of one layout and size (built once, see q2tree.cpp).
-struct NestedSources {
-  const uint32_t* source = nullptr;  // count: column u | row v << 16, in nested order
-  const uint32_t* entry = nullptr;   // count: the prefix entry of the source's healpix pixel (pixel + 1)
-  size_t count = 0;
-  const double* row = nullptr;  // 4 per row: exact pixel solid angle, sin theta, cos theta, unused
-  const double* col = nullptr;  // 2 per column: cos phi, sin phi
+// Set in a target entry on the first pixel of the first run of its healpix pixel (in row-major
+// order): that run's sum replaces the bin's old content instead of adding to it.
+inline constexpr uint32_t kQ2FirstRun = 1u << 31;
+
+// q2tree's cached binning of one layout and size (built once, see q2tree.cpp).
+struct RowSources {
+  // Per map pixel, row-major: its healpix pixel (nested), | kQ2FirstRun as above. A run is a
+  // maximal stretch of one row whose pixels have the same healpix pixel.
+  const uint32_t* target = nullptr;
+  const float* row = nullptr;  // 8 per row: 1, 1, 1, sin t, sin t, cos t, dw, 0 (dw: the pixel's solid angle)
+  const float* col = nullptr;  // 8 per column: 1, 1, 1, cos p, sin p, 1, 0, 0
+  const float* cos_phi = nullptr;  // per column: col[8 u + 3], col[8 u + 4] again, in a row
+  const float* sin_phi = nullptr;
 };
 
-// Running sums s (six doubles, from +0) over the sources k = 0 .. count - 1 in order; after
-// source k, prefix[6 entry[k] .. 6 entry[k] + 5] = s, so a healpix pixel's entry ends with
-// the sums up to its last source. Entries of pixels without sources are not written. For
-// source (u, v) of the width x height map, i = v width + u, p = rgb + 3 i, dw = row[4 v]:
-//   (r, g, b) = valid && !valid[i] ? 0 : (double(p[0]) dw, double(p[1]) dw, double(p[2]) dw)
-//   l = (0.2126 r + 0.7152 g) + 0.0722 b,  t = l row[4 v + 1]
-//   s += (r, g, b, t col[2 u], t col[2 u + 1], l row[4 v + 2])
-// An invalid pixel adds zeros, which leave every sum's bits as they were (a sum from +0 is
-// never -0). Returns true when a valid pixel's r, g or b is negative.
-bool q2tree_prefix_sums(const float* rgb, const uint8_t* valid, size_t width, size_t height,
-                        const NestedSources& sources, double* prefix);
+// Each healpix pixel's 8 floats in `bins` (8 a pixel, 32-byte aligned): for each run in
+// row-major order, its sum s (from +0, over its valid pixels in order) is added to the bin,
+// bin = (first run ? +0 : bin) + s, lane by lane. For pixel i = v width + u, p = rgb + 3 i,
+// R = row + 8 v, C = col + 8 u, dw = R[6]:
+//   (r, g, b) = (p[0] dw, p[1] dw, p[2] dw),  l = (0.2126f r + 0.7152f g) + (0.0722f b + 0)
+//   s[k] += (r, g, b, l, l, l, l, l)[k] (R[k] C[k])
+// (lanes 0-2 multiply by 1, lanes 6 and 7 by 0; the "+ 0" only turns a -0 into +0, as the
+// kernel's lane sums do, and a sum from +0 never changes its bits by adding a zero of either
+// sign). Bins of healpix pixels without sources are not touched. Returns true when a valid
+// pixel's r, g or b is negative.
+bool q2tree_bin_sums(const float* rgb, const uint8_t* valid, size_t width, size_t height, const RowSources& sources,
+                     float* bins);
 
 // The plain loop the kernel must equal bit for bit; also what runs on CPUs without AVX2.
-bool q2tree_prefix_sums_scalar(const float* rgb, const uint8_t* valid, size_t width, size_t height,
-                               const NestedSources& sources, double* prefix);
+bool q2tree_bin_sums_scalar(const float* rgb, const uint8_t* valid, size_t width, size_t height,
+                            const RowSources& sources, float* bins);
+
+// One quadtree level up: parent[8 p + k] = (child[32 p + k] + child[32 p + 8 + k]) +
+// (child[32 p + 16 + k] + child[32 p + 24 + k]) for p < parents, k < 8 (both 32-byte aligned).
+void q2tree_quad_sums(const float* child, size_t parents, float* parent);
+void q2tree_quad_sums_scalar(const float* child, size_t parents, float* parent);
 
 }  // namespace lp::detail

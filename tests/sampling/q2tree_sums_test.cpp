@@ -1,19 +1,19 @@
-// sampling/q2tree_sums.h: q2tree's nested-order prefix sums give a plain loop's bits on every
-// compiled Highway target (the running sums in every written entry, the negative flag), with
-// and without a mask, on odd map sizes, sources in a scrambled order that ends pixels at
-// irregular places and leaves some entries unwritten, the map's last pixel among them (the
-// kernel's 16-byte load must not read past it), and negative, -0, huge and (in invalid
-// pixels) NaN values. PrepareEquivalence.* checks the whole q2tree prepare against the lists
-// of the scalar code it replaced.
+// sampling/q2tree_sums.h: q2tree's bin sums and quad sums give a plain loop's bits on every
+// compiled Highway target (every bin, the negative flag, every parent), with and without a
+// mask, on odd map sizes, runs of a bin along a row and bins met again in later rows (some
+// never), bins holding an earlier frame's sums (a first run must replace them, a later one
+// add to them), the map's last pixel (the kernel's 16-byte load must not read past it), and
+// negative, -0, huge and (in invalid pixels) NaN values. PrepareEquivalence.* and
+// Q2TreeFloatBins.* check the whole q2tree prepare.
 #include <gtest/gtest.h>
 
+#include <hwy/aligned_allocator.h>
 #include <hwy/targets.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <numeric>
 #include <random>
 #include <string>
 #include <vector>
@@ -23,21 +23,16 @@
 namespace lp {
 namespace {
 
-constexpr double kUnwritten = -12345.0;
-
 struct Case {
-  size_t width = 0, height = 0;
+  size_t width = 0, height = 0, bins = 0;
   std::vector<float> rgb;
   std::vector<uint8_t> valid;
-  std::vector<uint32_t> source, entry;
-  std::vector<double> row, col;
-  size_t entries = 0;
+  std::vector<uint32_t> target;
+  std::vector<float> row, col, cos_phi, sin_phi;
 
-  detail::NestedSources view() const { return {source.data(), entry.data(), source.size(), row.data(), col.data()}; }
+  detail::RowSources view() const { return {target.data(), row.data(), col.data(), cos_phi.data(), sin_phi.data()}; }
 };
 
-// Sources: a random subset of the pixels (the last one always in) in random order, grouped
-// into healpix "pixels" of 1 to 5 sources with empty ones between some of them.
 Case make_case(size_t width, size_t height, bool hostile, std::mt19937& rng) {
   Case c;
   c.width = width;
@@ -55,55 +50,77 @@ Case make_case(size_t width, size_t height, bool hostile, std::mt19937& rng) {
     for (size_t i = 0; i < pixels; ++i)
       if (!c.valid[i] && i % 2) c.rgb[3 * i + 2] = std::numeric_limits<float>::quiet_NaN();
   }
-  std::vector<uint32_t> order(pixels);
-  std::iota(order.begin(), order.end(), 0u);
-  std::shuffle(order.begin(), order.end(), rng);
-  order.resize(pixels - pixels / 4);
-  if (std::find(order.begin(), order.end(), uint32_t(pixels - 1)) == order.end()) order[order.size() / 2] = uint32_t(pixels - 1);
-  uint32_t entry = 1 + rng() % 3;
-  for (size_t k = 0; k < order.size();) {
-    const size_t group = 1 + rng() % 5;
-    for (size_t g = 0; g < group && k < order.size(); ++g, ++k) {
-      c.source.push_back(uint32_t(order[k] % width) | uint32_t(order[k] / width) << 16);
-      c.entry.push_back(entry);
-    }
-    entry += 1 + (rng() % 4 == 0 ? rng() % 3 : 0);
+  // Runs of 1 to 4 pixels share a bin, as along a healpix pixel (a run may go on into the
+  // next row: it is two runs there); bins are drawn from half the pixel count, so some bins
+  // collect several runs and some none. The first run of each bin is tagged.
+  c.bins = std::max<size_t>(2, pixels / 2);
+  c.target.resize(pixels);
+  for (size_t i = 0; i < pixels;) {
+    const uint32_t t = uint32_t(rng() % c.bins);
+    for (size_t run = 1 + rng() % 4; run > 0 && i < pixels; --run) c.target[i++] = t;
   }
-  c.entries = entry + 1;
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  c.row.resize(4 * height);
+  std::vector<uint8_t> seen(c.bins, 0);
+  for (size_t i = 0; i < pixels; ++i) {
+    const uint32_t t = c.target[i];
+    if ((i % width == 0 || c.target[i - 1] % detail::kQ2FirstRun != t) && !seen[t])
+      c.target[i] |= detail::kQ2FirstRun, seen[t] = 1;
+  }
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  c.row.resize(8 * height);
   for (size_t v = 0; v < height; ++v) {
-    c.row[4 * v] = 1e-3 * (1.0 + unit(rng));
-    c.row[4 * v + 1] = unit(rng);
-    c.row[4 * v + 2] = unit(rng);
+    float* r = c.row.data() + 8 * v;
+    r[0] = r[1] = r[2] = 1.0f;
+    r[3] = r[4] = unit(rng);
+    r[5] = unit(rng);
+    r[6] = 1e-3f * (1.0f + unit(rng));
   }
-  c.col.resize(2 * width);
-  for (double& x : c.col) x = unit(rng);
+  c.col.resize(8 * width);
+  for (size_t u = 0; u < width; ++u) {
+    float* q = c.col.data() + 8 * u;
+    q[0] = q[1] = q[2] = q[5] = 1.0f;
+    q[3] = unit(rng);
+    q[4] = unit(rng);
+    c.cos_phi.push_back(q[3]);
+    c.sin_phi.push_back(q[4]);
+  }
   return c;
 }
 
-// The definition written as q2tree's scalar prepare had it: invalid pixels skipped.
-bool plain_sums(const Case& c, std::vector<double>& prefix) {
-  double s[6] = {0, 0, 0, 0, 0, 0};
+// The definition written out plainly: each run's sum over its valid pixels, then added to
+// its bin, or replacing it on the bin's first run.
+bool plain_bins(const Case& c, std::vector<float>& bins) {
   bool negative = false;
-  for (size_t k = 0; k < c.source.size(); ++k) {
-    const size_t u = c.source[k] & 0xFFFF, v = c.source[k] >> 16, i = v * c.width + u;
-    if (c.valid.empty() || c.valid[i]) {
-      const double dw = c.row[4 * v];
-      const double r = c.rgb[3 * i] * dw, g = c.rgb[3 * i + 1] * dw, b = c.rgb[3 * i + 2] * dw;
-      negative |= (r < 0) | (g < 0) | (b < 0);
-      const double l = 0.2126 * r + 0.7152 * g + 0.0722 * b;
-      const double t = l * c.row[4 * v + 1];
-      s[0] += r, s[1] += g, s[2] += b;
-      s[3] += t * c.col[2 * u], s[4] += t * c.col[2 * u + 1], s[5] += l * c.row[4 * v + 2];
+  for (size_t v = 0; v < c.height; ++v)
+    for (size_t u = 0; u < c.width;) {
+      const uint32_t tagged = c.target[v * c.width + u], t = tagged % detail::kQ2FirstRun;
+      float run[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+      for (; u < c.width && c.target[v * c.width + u] % detail::kQ2FirstRun == t; ++u) {
+        const size_t i = v * c.width + u;
+        if (!c.valid.empty() && !c.valid[i]) continue;
+        const float* row = c.row.data() + 8 * v;
+        const float* col = c.col.data() + 8 * u;
+        const float r = c.rgb[3 * i] * row[6], g = c.rgb[3 * i + 1] * row[6], b = c.rgb[3 * i + 2] * row[6];
+        negative |= (r < 0) | (g < 0) | (b < 0);
+        const float l = (0.2126f * r + 0.7152f * g) + (0.0722f * b + 0.0f);
+        run[0] += r, run[1] += g, run[2] += b;
+        for (int k = 3; k < 8; ++k) run[k] += l * (row[k] * col[k]);
+      }
+      float* bin = bins.data() + 8 * t;
+      for (int k = 0; k < 8; ++k) bin[k] = (tagged & detail::kQ2FirstRun ? 0.0f : bin[k]) + run[k];
     }
-    std::copy(s, s + 6, prefix.begin() + 6 * c.entry[k]);
-  }
   return negative;
 }
 
-bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+template <typename T>
+bool same_bits(const T* a, const std::vector<T>& b) {
+  return std::memcmp(a, b.data(), b.size() * sizeof(T)) == 0;
+}
+
+// Bins in 32-byte aligned memory, each starting at `start` (the kernel adds to what is there).
+hwy::AlignedFreeUniquePtr<float[]> aligned_bins(const std::vector<float>& start) {
+  auto bins = hwy::AllocateAligned<float>(start.size());
+  std::copy(start.begin(), start.end(), bins.get());
+  return bins;
 }
 
 TEST(Q2treeSums, EveryTargetEqualsThePlainLoopBitForBit) {
@@ -122,48 +139,74 @@ TEST(Q2treeSums, EveryTargetEqualsThePlainLoopBitForBit) {
           if (std::isnan(v)) v = 1.5f;
         c.valid.clear();
       }
-      std::vector<double> expected(6 * c.entries, kUnwritten);
-      const bool negative = plain_sums(c, expected);
+      std::vector<float> start(8 * c.bins, 0.0f);
+      if (variant != 0)  // an earlier frame's sums: first runs replace them, later runs add
+        for (size_t k = 0; k < start.size(); ++k) start[k] = 0.25f + float(k % 7);
+      std::vector<float> expected = start;
+      const bool negative = plain_bins(c, expected);
       negative_cases += negative;
-      std::vector<double> scalar(6 * c.entries, kUnwritten);
+      // One level up, written out (the bins padded to whole quads with zeros).
+      const size_t parents = (c.bins + 3) / 4;
+      std::vector<float> children(32 * parents, 0.0f);
+      std::copy(expected.begin(), expected.end(), children.begin());
+      std::vector<float> expected_parents(8 * parents);
+      for (size_t p = 0; p < parents; ++p)
+        for (int k = 0; k < 8; ++k) {
+          const float* q = children.data() + 32 * p + k;
+          expected_parents[8 * p + k] = (q[0] + q[8]) + (q[16] + q[24]);
+        }
+
       const std::string what = std::to_string(size[0]) + "x" + std::to_string(size[1]) + (masked ? ", masked" : "") +
                                (hostile ? ", hostile" : "");
-      EXPECT_EQ(detail::q2tree_prefix_sums_scalar(c.rgb.data(), mask, c.width, c.height, c.view(), scalar.data()),
-                negative)
+      auto scalar = aligned_bins(start);
+      EXPECT_EQ(detail::q2tree_bin_sums_scalar(c.rgb.data(), mask, c.width, c.height, c.view(), scalar.get()), negative)
           << what;
-      EXPECT_TRUE(same_bits(scalar, expected)) << "scalar, " << what;
+      EXPECT_TRUE(same_bits(scalar.get(), expected)) << "scalar, " << what;
+      auto child_bins = aligned_bins(children);
+      auto parent_bins = aligned_bins(std::vector<float>(8 * parents, -1.0f));
+      detail::q2tree_quad_sums_scalar(child_bins.get(), parents, parent_bins.get());
+      EXPECT_TRUE(same_bits(parent_bins.get(), expected_parents)) << "scalar quads, " << what;
       for (const int64_t target : targets) {
         hwy::SetSupportedTargetsForTest(target);
-        std::vector<double> prefix(6 * c.entries, kUnwritten);
-        EXPECT_EQ(detail::q2tree_prefix_sums(c.rgb.data(), mask, c.width, c.height, c.view(), prefix.data()), negative)
+        auto bins = aligned_bins(start);
+        EXPECT_EQ(detail::q2tree_bin_sums(c.rgb.data(), mask, c.width, c.height, c.view(), bins.get()), negative)
             << hwy::TargetName(target) << ", " << what;
-        EXPECT_TRUE(same_bits(prefix, expected)) << hwy::TargetName(target) << ", " << what;
+        EXPECT_TRUE(same_bits(bins.get(), expected)) << hwy::TargetName(target) << ", " << what;
+        auto parent = aligned_bins(std::vector<float>(8 * parents, -1.0f));
+        detail::q2tree_quad_sums(child_bins.get(), parents, parent.get());
+        EXPECT_TRUE(same_bits(parent.get(), expected_parents)) << hwy::TargetName(target) << " quads, " << what;
       }
       hwy::SetSupportedTargetsForTest(0);
     }
   EXPECT_GT(negative_cases, 4u);  // the hostile maps did reach the flag
 }
 
-// The plain loop itself against numbers worked out by hand: two pixels, one invalid.
+// The plain loop itself against numbers worked out by hand: two pixels, one invalid, both
+// in bin 1 (its first run, so the 7s there go); bin 0 untouched.
 TEST(Q2treeSums, ScalarLoopFollowsItsDefinition) {
   const std::vector<float> rgb = {1, 2, 4, 8, 16, 32};
   const uint8_t valid[2] = {1, 0};
-  const uint32_t source[2] = {1, 0};  // pixel (1, 0) first, then (0, 0)
-  const uint32_t entry[2] = {1, 1};
-  const double row[4] = {0.5, 0.25, 2.0, 0.0};
-  const double col[4] = {1.0, -1.0, 0.5, 3.0};
-  const detail::NestedSources s{source, entry, 2, row, col};
-  std::vector<double> prefix(12, kUnwritten);
-  EXPECT_FALSE(detail::q2tree_prefix_sums_scalar(rgb.data(), valid, 2, 1, s, prefix.data()));
-  const double l = 0.2126 * 0.5 + 0.7152 * 1.0 + 0.0722 * 2.0;  // pixel 0 only: pixel 1 is invalid
-  const double t = l * 0.25;
-  EXPECT_EQ(prefix[0], kUnwritten);
-  EXPECT_EQ(prefix[6], 0.5);
-  EXPECT_EQ(prefix[7], 1.0);
-  EXPECT_EQ(prefix[8], 2.0);
-  EXPECT_EQ(prefix[9], t * 1.0);
-  EXPECT_EQ(prefix[10], t * -1.0);
-  EXPECT_EQ(prefix[11], l * 2.0);
+  const uint32_t target[2] = {1 | detail::kQ2FirstRun, 1};
+  const float row[8] = {1, 1, 1, 0.25f, 0.25f, 2.0f, 0.5f, 0};
+  const float col[16] = {1, 1, 1, 1.0f, -1.0f, 1, 0, 0, 1, 1, 1, 0.5f, 3.0f, 1, 0, 0};
+  const detail::RowSources s{target, row, col};
+  auto bins = aligned_bins(std::vector<float>(16, 7.0f));
+  EXPECT_FALSE(detail::q2tree_bin_sums_scalar(rgb.data(), valid, 2, 1, s, bins.get()));
+  const float l = (0.2126f * 0.5f + 0.7152f * 1.0f) + 0.0722f * 2.0f;  // pixel 0 only: pixel 1 is invalid
+  const float* b = bins.get() + 8;
+  for (int k = 0; k < 8; ++k) EXPECT_EQ(bins[k], 7.0f);
+  EXPECT_EQ(b[0], 0.5f);
+  EXPECT_EQ(b[1], 1.0f);
+  EXPECT_EQ(b[2], 2.0f);
+  EXPECT_EQ(b[3], l * 0.25f);
+  EXPECT_EQ(b[4], -l * 0.25f);
+  EXPECT_EQ(b[5], l * 2.0f);
+  // Once more without the tag: the run adds to what the bin holds.
+  const uint32_t again[2] = {1, 1};
+  const detail::RowSources s2{again, row, col};
+  EXPECT_FALSE(detail::q2tree_bin_sums_scalar(rgb.data(), valid, 2, 1, s2, bins.get()));
+  EXPECT_EQ(b[0], 1.0f);
+  EXPECT_EQ(b[5], l * 2.0f + l * 2.0f);
 }
 
 }  // namespace

@@ -145,6 +145,20 @@ TEST(BallPrecision, ARimDarkAgainstADarkBackgroundIsFound) {
   }
 }
 
+// Runs the harness on the cases `o` includes: `cases` of them, each found with sub-pixel
+// refinement, centre and radius within `limit_px` of the truth.
+void expect_found_within(const EvalBallOptions& o, size_t cases, double limit_px) {
+  const EvalBallReport rep = evaluate_ball_detection(o);
+  std::printf("%s", rep.summary().c_str());
+  ASSERT_EQ(rep.rows.size(), cases);
+  for (const BallRow& r : rep.rows) {
+    ASSERT_TRUE(r.found) << r.map << " " << r.background << ": " << r.error;
+    EXPECT_TRUE(r.report.subpixel) << r.map << " " << r.background;
+    EXPECT_LT(r.centre_error_px, limit_px) << r.map << " " << r.background << " R " << r.radius_px;
+    EXPECT_LT(std::abs(r.radius_error_px), limit_px) << r.map << " " << r.background << " R " << r.radius_px;
+  }
+}
+
 // The edge by pixel coverage (probe/ball_rim_coverage.h) instead of by area: the area rule
 // took the ball's value 1.5 px inside for its last 1.5 px, which reflect the cap of
 // directions behind the ball. On these renders (harness seeds) the area rule's circle was
@@ -159,15 +173,7 @@ TEST(BallPrecision, TheSilhouetteByPixelCoverageHasNoBiasFromTheRimsReflection) 
     return (map == "pisa" && radius == 150 && (bg == BallBackground::Black || bg == BallBackground::Photo)) ||
            ((map == "pisa" || map == "uffizi") && radius == 400 && bg == BallBackground::Black);
   };
-  const EvalBallReport rep = evaluate_ball_detection(o);
-  std::printf("%s", rep.summary().c_str());
-  ASSERT_EQ(rep.rows.size(), 4u);
-  for (const BallRow& r : rep.rows) {
-    ASSERT_TRUE(r.found) << r.map << " " << r.background << ": " << r.error;
-    EXPECT_TRUE(r.report.subpixel) << r.map << " " << r.background;
-    EXPECT_LT(r.centre_error_px, 0.1) << r.map << " " << r.background << " R " << r.radius_px;
-    EXPECT_LT(std::abs(r.radius_error_px), 0.1) << r.map << " " << r.background << " R " << r.radius_px;
-  }
+  expect_found_within(o, 4, 0.1);
 }
 
 // A band of the rim's reflection outside the edge the coverage model picks (probe/
@@ -186,15 +192,7 @@ TEST(BallPrecision, TheSilhouetteIsTheOuterEdgeOfABandAtTheRim) {
     return ((map == "uffizi" || map == "sunrise" || map == "pisa") && radius == 60 && bg == BallBackground::Dark) ||
            (map == "wells" && radius == 400 && bg == BallBackground::Black);
   };
-  const EvalBallReport rep = evaluate_ball_detection(o);
-  std::printf("%s", rep.summary().c_str());
-  ASSERT_EQ(rep.rows.size(), 4u);
-  for (const BallRow& r : rep.rows) {
-    ASSERT_TRUE(r.found) << r.map << " " << r.background << ": " << r.error;
-    EXPECT_TRUE(r.report.subpixel) << r.map << " " << r.background;
-    EXPECT_LT(r.centre_error_px, 0.2) << r.map << " " << r.background << " R " << r.radius_px;
-    EXPECT_LT(std::abs(r.radius_error_px), 0.2) << r.map << " " << r.background << " R " << r.radius_px;
-  }
+  expect_found_within(o, 4, 0.2);
 }
 
 // Where the dark arc has no step at all (a uniform ball whose lower rim reflects black, in

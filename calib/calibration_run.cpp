@@ -265,8 +265,17 @@ std::string GeometricCalibration::to_json() const {
     before = {{"selected", before_dropping->selected}, {"rms_px", before_dropping->rms_px},
               {"cross_validation_px", before_dropping->cross_validation_px},
               {"heldout_rms_px", before_dropping->heldout_rms_px}};
+  nlohmann::json stand_in = nullptr;  // CalibrationResult::mrcal_stand_in, and the file holding it
+  if (const auto& s = r.mrcal_stand_in) {
+    nlohmann::json file = nullptr;
+    for (const std::string& w : written)
+      if (fs::path(w).extension() == ".cameramodel") file = w;
+    stand_in = {{"candidate", s->name}, {"lensmodel", s->model.lensmodel}, {"file", file},
+                {"rms_px", num(s->rms_px)}, {"heldout_rms_px", num(s->heldout_rms_px)},
+                {"median_from_chosen_px", num(s->median_from_chosen_px)}, {"fits_poorly", s->fits_poorly}};
+  }
   const nlohmann::json j = {
-      {"output", written}, {"optimization_inputs", optimization_inputs}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
+      {"output", written}, {"optimization_inputs", optimization_inputs}, {"mrcal_stand_in", stand_in}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
       {"uncertainty", uncertainty_json(*this)}, {"intrinsics", r.model.intrinsics},
       {"board_warp", board_warp_json(r.board_warp)},
       {"rms_px", r.model.rms_reprojection_px}, {"cross_validation_px", r.cross_validation_px},
@@ -367,9 +376,28 @@ void write_calibration_files(GeometricCalibration& run, const std::string& outpu
                         solve.views.empty() ? "" : mrcal_optimization_inputs(model, run.board, solve, run.detections.images));
       run.optimization_inputs = !solve.views.empty();
       run.written.push_back(output);
+    } else if (const auto& s = run.result.mrcal_stand_in) {
+      // The choice has no mrcal form; the best mrcal candidate of the same solve stands in, so
+      // that mrcal's tools have this calibration to work on. Said in one line, with how far the
+      // two project apart.
+      write_cameramodel(output, s->model, mrcal_optimization_inputs(s->model, run.board, s->solve, run.detections.images));
+      run.optimization_inputs = true;
+      run.written.push_back(output);
+      run.notes.push_back(fmt::format(
+          "{} (the choice) is not an mrcal model: {} holds it; {} holds {}, the best mrcal candidate of the same "
+          "solve (RMS {:.3f} px, held-out {:.3f} px{}), {:.3f} px from the choice over the covered area",
+          model.lensmodel, yaml, output, s->model.lensmodel, s->rms_px, s->heldout_rms_px,
+          s->fits_poorly ? ", beyond the fit limits: use with care" : "", s->median_from_chosen_px));
     } else {
+      // No stand-in: the model was forced (--model), or no mrcal candidate fits; say which.
+      const ModelCandidate* best = nullptr;
+      for (const ModelCandidate& c : run.result.table)
+        if (is_mrcal_model(c.model.lensmodel) && c.rms_px > 0 && (!best || c.rms_px < best->rms_px)) best = &c;
       run.notes.push_back(model.lensmodel + " is not an mrcal model: writing OpenCV YAML only (" + yaml +
-                          "; mrcal's tools cannot read it)");
+                          "; mrcal's tools cannot read it" +
+                          (best ? fmt::format("; no mrcal candidate fits these corners, the best {} at RMS {:.3f} px)",
+                                              best->model.lensmodel, best->rms_px)
+                                : std::string(")")));
     }
   }
   if (LensModel::parse(model.lensmodel).has_opencv_form()) {

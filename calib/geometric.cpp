@@ -115,6 +115,47 @@ BoardWarpReport board_warp_report(const CalibrationProblem& pr, const ModelFit& 
   return w;
 }
 
+// The held-out RMS a candidate is ranked on: the mean over the splits where every split was
+// fitted, else the odd/even one; inf when some split could not be posed.
+double mean_heldout_px(const ModelCandidate& c) {
+  if (c.heldout_splits_px.empty()) return c.heldout_rms_px;
+  double sum = 0;
+  for (double h : c.heldout_splits_px) sum += h;
+  return sum / double(c.heldout_splits_px.size());
+}
+
+// CalibrationResult::mrcal_stand_in: only candidates whose full fit exists (ok) are looked at,
+// so nothing is solved again.
+std::optional<CalibrationResult::MrcalStandIn> mrcal_stand_in(CandidateFits& fits,
+                                                              const std::vector<ModelCandidate>& table,
+                                                              const CameraModel& chosen, const CalibrateOptions& o) {
+  if (is_mrcal_model(chosen.lensmodel)) return std::nullopt;
+  const ModelCandidate* best = nullptr;
+  auto fits_well = [&](const ModelCandidate& c) {
+    return c.rms_px <= o.fit_max_rms_px && c.cross_validation_px <= o.fit_max_cross_validation_px;
+  };
+  auto better = [&](const ModelCandidate& a, const ModelCandidate& b) {  // a ranks before b
+    if (fits_well(a) != fits_well(b)) return fits_well(a);
+    const double ha = fits_well(a) ? mean_heldout_px(a) : a.rms_px, hb = fits_well(b) ? mean_heldout_px(b) : b.rms_px;
+    if (!(ha == hb)) return ha < hb || std::isnan(hb);
+    return a.params < b.params;
+  };
+  for (const ModelCandidate& c : table)
+    if (c.ok && is_mrcal_model(c.model.lensmodel) && (!best || better(c, *best))) best = &c;
+  if (!best) return std::nullopt;
+  CalibrationResult::MrcalStandIn s;
+  s.name = best->name;
+  s.model = best->model;
+  s.model.rms_reprojection_px = best->rms_px;
+  s.model.cross_validation_px = best->cross_validation_px;
+  s.solve = record_solve(fits.used, fits.full.get(candidate_lens_type(best->name)));
+  s.rms_px = best->rms_px;
+  s.heldout_rms_px = mean_heldout_px(*best);
+  s.fits_poorly = !fits_well(*best);
+  s.median_from_chosen_px = projection_difference(chosen, best->model, fits.mask, fits.step).median_px;
+  return s;
+}
+
 void take_diagnostics(CalibrationResult& res, ViewDiagnostics d) {
   res.view_rms_px = std::move(d.view_rms_px);
   res.residuals = std::move(d.residuals);
@@ -174,6 +215,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
                                   options.progress);
   res.model.rms_reprojection_px = res.table[sel.selected].rms_px;
   res.model.cross_validation_px = res.table[sel.selected].cross_validation_px;
+  res.mrcal_stand_in = mrcal_stand_in(fits, res.table, res.model, options);
 
   if (options.uncertainty) {
     UncertaintyOptions uo;

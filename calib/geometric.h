@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -156,6 +157,20 @@ struct CalibrationResult {
   // The chosen model's solve (views, corners with inlier weights, board poses): what mrcal's
   // optimization_inputs state (calib/mrcal_optimization_inputs.h).
   SolveRecord solve;
+  // When the chosen model is not one of mrcal's (Kannala-Brandt, Mei): the candidate that is,
+  // solved on the same views, with the lowest held-out RMS (mean over the splits) among those
+  // within CalibrateOptions::fit_max_rms_px (else the lowest RMS, fits_poorly). What a
+  // .cameramodel output holds then, so that mrcal's tools have the calibration to work on;
+  // median_from_chosen_px says how far it projects from the choice over the covered area
+  // (rotation fitted out). Empty when the choice is an mrcal model or no mrcal candidate fitted.
+  struct MrcalStandIn {
+    std::string name;  // candidate name
+    CameraModel model;
+    SolveRecord solve;
+    double rms_px = 0, heldout_rms_px = 0, median_from_chosen_px = 0;
+    bool fits_poorly = false;
+  };
+  std::optional<MrcalStandIn> mrcal_stand_in;
 };
 
 // corners_per_view[i]: board.cols * board.rows pixel corners (row-major) or empty.

@@ -441,10 +441,25 @@ TEST(Cli, GeometricCalibrationRecoversASyntheticFisheyeAndRefusesBadSets) {
       EXPECT_EQ(row["cross_validation_repeated_px"].get<double>(), j["cross_validation_repeated_px"].get<double>());
     }
   EXPECT_TRUE(chosen_row);
-  // Kannala-Brandt is not an mrcal model: YAML only, and it loads back in OpenCV's keys.
+  // Kannala-Brandt is not an mrcal model: the YAML holds it, and it loads back in OpenCV's
+  // keys; the .cameramodel holds the best mrcal candidate of the same solve (the stand-in),
+  // near the choice over the covered area, and the report says which file holds what.
   EXPECT_TRUE(fs::exists(out / "cam.yaml"));
-  EXPECT_FALSE(fs::exists(out / "cam.cameramodel"));
   EXPECT_NE(slurp(out / "cam.yaml").find("distortion_model: fisheye"), std::string::npos);
+  const auto& stand_in = j["mrcal_stand_in"];
+  ASSERT_TRUE(stand_in.is_object()) << j.dump();
+  EXPECT_EQ(stand_in["file"], (out / "cam.cameramodel").string());
+  EXPECT_EQ(j["output"], (std::vector<std::string>{(out / "cam.cameramodel").string(), (out / "cam.yaml").string()}));
+  EXPECT_TRUE(j["optimization_inputs"].get<bool>());
+  EXPECT_LT(stand_in["median_from_chosen_px"].get<double>(), 0.5);
+  EXPECT_FALSE(stand_in["fits_poorly"].get<bool>());
+  const std::string cameramodel = slurp(out / "cam.cameramodel");
+  EXPECT_NE(cameramodel.find("'lensmodel':  '" + stand_in["lensmodel"].get<std::string>() + "'"), std::string::npos);
+  EXPECT_NE(cameramodel.find("'optimization_inputs'"), std::string::npos);
+  EXPECT_NE(r.err.find("LENSMODEL_KANNALA_BRANDT (the choice) is not an mrcal model: " + (out / "cam.yaml").string() +
+                       " holds it; " + (out / "cam.cameramodel").string() + " holds LENSMODEL_"),
+            std::string::npos)
+      << r.err;
   EXPECT_TRUE(fs::exists(out / "cam_residuals.png"));
   // Projection uncertainty: the headline (jackknife) at the centre below the median below the
   // rim, the linear one alongside, and the heat map.

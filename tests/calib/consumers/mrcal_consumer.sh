@@ -5,6 +5,8 @@
 #   to 1e-3 and whose projection uncertainty agrees with lightprobe's (mrcal_check.py);
 # - mrcal-show-projection-uncertainty and mrcal-show-residuals-board-observation draw it
 #   headless (--hardcopy) when the tools (Debian package mrcal) and gnuplot are there;
+# - a fisheye whose choice is Kannala-Brandt (no mrcal model) gets a .cameramodel holding
+#   the best mrcal candidate of the same solve, which passes the same checks;
 # - mrgingham's own corners.vnl of 10x10 boards is solved with --corners-in and gives the
 #   true camera to 0.3 px (median over the image).
 # Usage: mrcal_consumer.sh LIGHTPROBE   (exit 77 = skipped: no python3 with mrcal)
@@ -54,6 +56,17 @@ for model in LENSMODEL_OPENCV8 LENSMODEL_SPLINED_STEREOGRAPHIC; do
     fail "mrcal's Python on the $model model"
 done
 
+# A fisheye (the Kannala-Brandt camera `synth boards` renders by default): the choice is
+# Kannala-Brandt, which mrcal has no model for, so the .cameramodel holds the best mrcal
+# candidate of the same solve, with its optimization_inputs, and the YAML the choice.
+run synth boards --views 10 --seed 3 -o "$WORK/fisheye"
+run calib geometric "$WORK"/fisheye/board_*.png --board 9x6 --square 30 --json -o "$WORK/fisheye.cameramodel"
+cp "$WORK/out" "$WORK/fisheye.json"
+"$PY" -c "import json,sys; d=json.load(open('$WORK/fisheye.json')); s=d['mrcal_stand_in']; print('choice', d['lensmodel'], '; stand-in', s['lensmodel'], s['median_from_chosen_px'], 'px from it'); sys.exit(0 if d['lensmodel'] == 'LENSMODEL_KANNALA_BRANDT' and s['file'] == '$WORK/fisheye.cameramodel' and s['median_from_chosen_px'] < 0.5 else 1)" ||
+  fail "no mrcal stand-in for the Kannala-Brandt choice: $(head -c 300 "$WORK/fisheye.json")"
+[ -s "$WORK/fisheye.yaml" ] || fail "the Kannala-Brandt choice was not written as YAML"
+"$PY" "$HERE/mrcal_check.py" "$WORK/fisheye.cameramodel" "$WORK/fisheye.json" || fail "mrcal's Python on the stand-in"
+
 if command -v mrcal-show-projection-uncertainty >/dev/null && command -v gnuplot >/dev/null; then
   mrcal-show-projection-uncertainty --hardcopy "$WORK/uncertainty.png" --terminal 'pngcairo size 640,480' \
     "$WORK/LENSMODEL_OPENCV8.cameramodel" >"$WORK/tool.log" 2>&1 || fail "mrcal-show-projection-uncertainty: $(tail -3 "$WORK/tool.log")"
@@ -61,7 +74,10 @@ if command -v mrcal-show-projection-uncertainty >/dev/null && command -v gnuplot
   mrcal-show-residuals-board-observation --hardcopy "$WORK/residuals.png" --terminal 'pngcairo size 640,480' \
     "$WORK/LENSMODEL_OPENCV8.cameramodel" 0 >"$WORK/tool.log" 2>&1 || fail "mrcal-show-residuals-board-observation: $(tail -3 "$WORK/tool.log")"
   [ -s "$WORK/residuals.png" ] || fail "mrcal-show-residuals-board-observation wrote no picture"
-  echo "mrcal-show-projection-uncertainty and mrcal-show-residuals-board-observation drew the model"
+  mrcal-show-projection-uncertainty --hardcopy "$WORK/stand_in.png" --terminal 'pngcairo size 640,480' \
+    "$WORK/fisheye.cameramodel" >"$WORK/tool.log" 2>&1 || fail "mrcal-show-projection-uncertainty on the stand-in: $(tail -3 "$WORK/tool.log")"
+  [ -s "$WORK/stand_in.png" ] || fail "mrcal-show-projection-uncertainty wrote no picture of the stand-in"
+  echo "mrcal-show-projection-uncertainty and mrcal-show-residuals-board-observation drew the models"
 else
   echo "skipped the mrcal command-line tools: mrcal-show-projection-uncertainty or gnuplot missing (Debian packages mrcal, gnuplot)"
 fi

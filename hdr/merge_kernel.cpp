@@ -176,7 +176,16 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
   HWY_ALIGN int32_t lane_code[3 * hn::MaxLanes(df)];
   const size_t groups = in.width / N;
   MergeRowResult result;
-  for (size_t g = 0; g < groups; ++g) {
+  size_t first_group = 0;
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  // 256 levels on a CPU with VBMI: table reads as byte permutes (merge_kernel_vbmi.cpp) for
+  // the row's blocks of 64 pixels, the gathers below for the rest.
+  if (merge_vbmi_usable(in)) {
+    result = merge_row_vbmi(in, out, flags, redo);
+    first_group = result.done / N;
+  }
+#endif
+  for (size_t g = first_group; g < groups; ++g) {
     const size_t first_float = 3 * N * g;
     FrameSums<decltype(df)> sums[3] = {FrameSums<decltype(df)>(df), FrameSums<decltype(df)>(df),
                                        FrameSums<decltype(df)>(df)};

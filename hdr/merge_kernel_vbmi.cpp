@@ -184,10 +184,11 @@ MergeRowResult merge_row_vbmi(const MergeRowInput& in, float* out, uint8_t* flag
       for (int g = 0; g < 3; ++g) {
         __m512i l[4];
         for (int m = 0; m < 4; ++m) {
-          // The scalar loop's level_of: max returns its second operand for NaN.
-          __m512 s = _mm512_add_ps(_mm512_mul_ps(_mm512_loadu_ps(z + 64 * g + 16 * m), scale), half);
-          s = _mm512_min_ps(_mm512_max_ps(s, zero), top);
-          l[m] = _mm512_cvttps_epi32(s);  // in [0, 255]: the packs below saturate nothing
+          // The scalar loop's level_of without its max(s, 0): min returns its second operand
+          // when either is NaN, so s = NaN stays NaN; the conversion makes NaN and every s <= -1
+          // INT_MIN and s in (-1, 0] 0, and the packs below saturate negative levels to 0.
+          const __m512 s = _mm512_add_ps(_mm512_mul_ps(_mm512_loadu_ps(z + 64 * g + 16 * m), scale), half);
+          l[m] = _mm512_cvttps_epi32(_mm512_min_ps(top, s));  // in [INT_MIN, 255]
         }
         packed[g] = _mm512_packus_epi16(_mm512_packus_epi32(l[0], l[1]), _mm512_packus_epi32(l[2], l[3]));
       }

@@ -21,13 +21,21 @@
 // products and sums are separate intrinsics). Only this file is compiled for AVX-512 VBMI
 // (the pragma below, after every include, so no inline function of a header gets AVX-512
 // code); merge_kernel.cpp's AVX-512 target calls it when the CPU has VBMI.
-#include <immintrin.h>
-
 #include <cstddef>
 #include <cstdint>
 
 #include "hdr/merge.h"
 #include "hdr/merge_kernel.h"
+
+#if !defined(__x86_64__)
+namespace lp::detail {  // not x86-64: never usable, never called
+void set_merge_vbmi_for_test(bool) {}
+bool merge_vbmi_supported() { return false; }
+bool merge_vbmi_usable(const MergeRowInput&) { return false; }
+MergeRowResult merge_row_vbmi(const MergeRowInput&, float*, uint8_t*, uint32_t*) { return {}; }
+}  // namespace lp::detail
+#else
+#include <immintrin.h>
 
 namespace lp::detail {
 namespace {
@@ -108,12 +116,17 @@ bool merge_vbmi_usable(const MergeRowInput& in) {
 
 }  // namespace lp::detail
 
-#pragma GCC push_options
+#if defined(__clang__)  // clang has no GCC target pragma (the sanitizer and fuzzer builds)
+#pragma clang attribute push(__attribute__((target("avx512f,avx512bw,avx512dq,avx512vl,avx512vbmi,popcnt,bmi,bmi2"))), \
+                             apply_to = function)
+#else
 // GCC 12's intrinsics start some results from _mm512_undefined_*(), which -Wmaybe-uninitialized
 // takes for a read of an uninitialised value (Highway silences it the same way).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC push_options
 #pragma GCC target("avx512f,avx512bw,avx512dq,avx512vl,avx512vbmi,popcnt,bmi,bmi2")
+#endif
 
 namespace lp::detail {
 namespace {
@@ -292,5 +305,10 @@ MergeRowResult merge_row_vbmi(const MergeRowInput& in, float* out, uint8_t* flag
 
 }  // namespace lp::detail
 
-#pragma GCC diagnostic pop
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#pragma GCC diagnostic pop
+#endif
+#endif  // __x86_64__

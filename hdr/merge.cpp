@@ -25,6 +25,7 @@ struct Tables {
   std::vector<float> w3, wx3;                   // the same, channel-major in one table (the kernel's)
   std::vector<uint64_t> w_wx3;                  // w3 and wx3 paired (merge_kernel.h)
   std::vector<float> bound_short, bound_long;   // float(exp(g_c(l)) / t_k) of the shortest / longest frame
+  std::vector<uint8_t> planes;                  // 256 levels: w3, wx3 and the bounds as byte planes (merge_kernel.h)
   bool simd = false;                            // MergeOptions::simd
   std::vector<float> frame_w, frame_wx;         // per frame: s_k and s_k / t_k
   std::vector<size_t> by_time;                  // frame indices, shortest exposure first
@@ -54,7 +55,9 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
   const size_t nf = b.frames.size();
   const int L = T.levels;
   const float scale = T.scale;
-  std::vector<float> sw(3 * size_t(W)), swx(3 * size_t(W));
+  // Sized at the first use: the kernel leaves the scalar loop nothing in most rows, and
+  // zeroing these per task was 4 % of the benchmark's merge on one thread.
+  std::vector<float> sw, swx;
   // kTrack, per pixel: bit 1 some frame was kept (mask), bit 2 some kept frame was not ignore_colour.
   std::vector<uint8_t> used;
   if constexpr (kTrack) used.resize(size_t(W));
@@ -89,13 +92,14 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
     redo.resize(size_t(W));
     kernel = {frame_rows.data(), T.frame_w.data(), T.frame_wx.data(), nf, size_t(W), T.w3.data(), T.wx3.data(),
               T.w_wx3.data(), L, T.zero_through, T.zero_from, T.sat_level, T.black_level, T.by_time.front(), T.by_time.back(),
-              T.bound_short.data(), T.bound_long.data()};
+              T.bound_short.data(), T.bound_long.data(), T.planes.empty() ? nullptr : T.planes.data()};
   }
   for (int y = y0; y < y1; ++y) {
     const size_t row = size_t(y) * size_t(W);
     float* o = &out.rgb[3 * row];
     // Sums of weights and weighted radiance over the frames for pixels [begin, end), in frame order.
     auto accumulate = [&](int begin, int end) {
+      if (sw.empty()) sw.resize(3 * size_t(W)), swx.resize(3 * size_t(W));
       std::fill(sw.begin() + 3 * begin, sw.begin() + 3 * end, 0.0f);
       std::fill(swx.begin() + 3 * begin, swx.begin() + 3 * end, 0.0f);
       if constexpr (kTrack) std::fill(used.begin() + begin, used.begin() + end, uint8_t(0));
@@ -376,6 +380,17 @@ void merge_bracket(const BracketView& b, const CameraResponse& resp, const Merge
       T.bound_short.push_back(float(e / b.exposure_seconds[T.by_time.front()]));
       T.bound_long.push_back(float(e / b.exposure_seconds[T.by_time.back()]));
     }
+  if (L == 256) {  // the VBMI kernel's tables: byte p of every float, per table and channel
+    const std::vector<float>* tables[] = {&T.w3, &T.wx3, &T.bound_short, &T.bound_long};
+    T.planes.resize(4 * 3 * 4 * 256);
+    for (size_t t = 0; t < 4; ++t)
+      for (size_t c = 0; c < 3; ++c)
+        for (size_t l = 0; l < 256; ++l) {
+          uint8_t bytes[4];
+          std::memcpy(bytes, &(*tables[t])[c * 256 + l], 4);
+          for (size_t p = 0; p < 4; ++p) T.planes[((t * 3 + c) * 4 + p) * 256 + l] = bytes[p];
+        }
+  }
   if (o.ignore_colour)
     for (int c = 0; c < 3; ++c) T.colour_level[size_t(c)] = int(std::lround((*o.ignore_colour)[size_t(c)] / 255.0 * (L - 1)));
 

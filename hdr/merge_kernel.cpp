@@ -28,10 +28,16 @@
 // takes its bound from a register instead of a gather; and the per-pixel codes are ORed and
 // counted as vectors. One thread's CPU time, median of 5, four interleaved runs at load 3.5:
 // 5.0-5.1 -> 4.2 ms.
-// Not done, and why: in-register lookups (the 256-level tables in vector registers instead of
-// gathers) need a two-table permute (vpermt2ps; Highway's TwoTablesLookupLanes) that the
-// Highway 1.0.3 in Debian 12 does not have; with single 16-lane TableLookupLanes a 256-entry
-// table takes 16 lookups and 15 selects per vector and table, more than the gather costs.
+// Then (issue 23, a third pass): on CPUs with AVX-512 VBMI and 256-level tables the AVX3
+// target hands the row's blocks of 64 pixels to merge_kernel_vbmi.cpp, which reads the tables
+// by byte permutes (vpermi2b on 4 byte planes per table, in registers) instead of gathers,
+// per channel plane of 64 codes; the rest of the row stays here. Raw intrinsics in a file of
+// their own: Highway 1.0.3 (Debian 12) has no two-table permute (TwoTablesLookupLanes) and
+// compiles no AVX3_DL target by default, and with its single 16-lane TableLookupLanes a
+// 256-entry table takes 16 lookups and 15 selects per vector and table, more than a gather.
+// One thread's CPU time on the benchmark, medians of six interleaved runs at load 4-5:
+// 4.60 -> 3.42 ms (docs/hdr.md). It now waits on reading the brackets (its prefetches and
+// first loads are where its samples are); streaming stores of the output did not help.
 //
 // Bit-identical to the scalar loop: every lane does the scalar loop's operations in its order
 // (level = int(min(z * scale + 0.5, levels - 1)) after zeroing non-positive and NaN values;
@@ -176,7 +182,16 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
   HWY_ALIGN int32_t lane_code[3 * hn::MaxLanes(df)];
   const size_t groups = in.width / N;
   MergeRowResult result;
-  for (size_t g = 0; g < groups; ++g) {
+  size_t first_group = 0;
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  // 256 levels on a CPU with VBMI: table reads as byte permutes (merge_kernel_vbmi.cpp) for
+  // the row's blocks of 64 pixels, the gathers below for the rest.
+  if (merge_vbmi_usable(in)) {
+    result = merge_row_vbmi(in, out, flags, redo);
+    first_group = result.done / N;
+  }
+#endif
+  for (size_t g = first_group; g < groups; ++g) {
     const size_t first_float = 3 * N * g;
     FrameSums<decltype(df)> sums[3] = {FrameSums<decltype(df)>(df), FrameSums<decltype(df)>(df),
                                        FrameSums<decltype(df)>(df)};

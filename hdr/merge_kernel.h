@@ -35,6 +35,10 @@ struct MergeRowInput {
   size_t shortest = 0, longest = 0;
   const float* bound_short = nullptr;
   const float* bound_long = nullptr;
+  // For 256 levels: w, wx, bound_short and bound_long as byte planes, table-major, then
+  // channel, then byte p of the float (little-endian) at [level]: ((t * 3 + c) * 4 + p) * 256
+  // + level. merge_row_vbmi reads these; null without them.
+  const uint8_t* planes = nullptr;
 };
 
 // Writes out[3x + c] = Σ_k wx(z) s_k/t_k / Σ_k w(z) s_k, summed over frames in order, with
@@ -53,6 +57,17 @@ struct MergeRowResult {
   size_t flagged = 0;    // pixels with either (the rest of done minus redone are well exposed)
 };
 MergeRowResult merge_row_simd(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo);
+
+// The same for CPUs with AVX-512 VBMI and 256-level tables (merge_kernel_vbmi.cpp): the
+// table reads are byte permutes of `planes` instead of gathers. Writes pixels x < done (a
+// multiple of 64), the rest are the caller's (the Highway kernel's AVX-512 target calls it
+// first and goes on from `done`). Only when merge_vbmi_usable(in).
+constexpr size_t kMergeVbmiMaxFrames = 16;  // the levels of every frame of a block stay on the stack
+bool merge_vbmi_usable(const MergeRowInput& in);
+bool merge_vbmi_supported();  // the CPU has what merge_row_vbmi needs
+MergeRowResult merge_row_vbmi(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo);
+// Tests: false makes merge_vbmi_usable false, to test the AVX-512 gathers on a VBMI CPU too.
+void set_merge_vbmi_for_test(bool allowed);
 
 // The Highway target merge_row_simd dispatches to on this CPU (for logs and benchmarks).
 const char* merge_simd_target();

@@ -74,16 +74,31 @@ TEST(MergeKernel, EveryTargetEqualsTheScalarLoopBitForBit) {
   // On x86-64 at least the scalar fallback and SSSE3: a list of one would test nothing.
   ASSERT_GE(targets.size(), 2u);
   for (const int64_t t : targets) std::printf("[ merge kernel ] target %s\n", hwy::TargetName(t));
+  // Every target, and AVX3 also without its VBMI path where the CPU takes that path.
+  std::vector<std::pair<int64_t, bool>> variants;
+  for (const int64_t t : targets) {
+    variants.emplace_back(t, true);
+    if ((t == HWY_AVX3 || t == HWY_AVX3_DL) && detail::merge_vbmi_supported()) variants.emplace_back(t, false);
+  }
+  std::printf("[ merge kernel ] VBMI byte permutes on AVX3: %s\n", detail::merge_vbmi_supported() ? "yes, tested too" : "no");
   CameraResponse s_curve = test::true_response(test::film_curve());
-  const CameraResponse responses[] = {linear_response(256), s_curve, linear_response(1024)};
+  // Three different channels (the tables are per channel; a kernel that read another
+  // channel's table would pass with three equal ones).
+  CameraResponse per_channel = s_curve;
+  for (size_t z = 0; z < 256; ++z) {
+    per_channel.log_exposure[1][z] = 1.3f * s_curve.log_exposure[1][z];
+    per_channel.log_exposure[2][z] = 0.7f * s_curve.log_exposure[2][z] + 0.01f * float(z % 5);
+  }
+  const CameraResponse responses[] = {linear_response(256), s_curve, per_channel, linear_response(1024)};
   const MergeOptions::Weighting weightings[] = {MergeOptions::Weighting::Hat, MergeOptions::Weighting::HatTimesExposure,
                                                 MergeOptions::Weighting::NoiseAware};
   // Widths around every vector length (4, 8, 16 floats per vector; 1 for the scalar target):
   // full groups, tails, and rows shorter than one group.
-  const int widths[] = {1, 3, 5, 16, 17, 31, 67, 160};
+  // 64 pixels per block of the VBMI kernel: blocks, blocks with a tail of vectors and of pixels.
+  const int widths[] = {1, 3, 5, 16, 17, 31, 64, 67, 160, 211};
   size_t cases = 0, redone = 0;
   for (const int width : widths)
-    for (size_t r = 0; r < 3; ++r)
+    for (size_t r = 0; r < 4; ++r)
       for (const auto weighting : weightings) {
         const Bracket b = random_bracket(width, 5, 2 + (cases % 3), rng);
         MergeOptions o;
@@ -96,13 +111,15 @@ TEST(MergeKernel, EveryTargetEqualsTheScalarLoopBitForBit) {
         const RgbImage scalar = merge_bracket(b, responses[r], o, &scalar_report);
         redone += scalar_report.saturated_everywhere + scalar_report.black_everywhere;
         o.simd = true;
-        for (const int64_t target : targets) {
+        for (const auto& [target, vbmi] : variants) {
           hwy::SetSupportedTargetsForTest(target);
+          detail::set_merge_vbmi_for_test(vbmi);
           // The dispatch really took this target.
           ASSERT_STREQ(detail::merge_simd_target(), hwy::TargetName(target));
           MergeReport report;
           const RgbImage vec = merge_bracket(b, responses[r], o, &report);
-          const std::string where = std::string(hwy::TargetName(target)) + ", width " + std::to_string(width) +
+          detail::set_merge_vbmi_for_test(true);
+          const std::string where = std::string(hwy::TargetName(target)) + (vbmi ? "" : " without VBMI") + ", width " + std::to_string(width) +
                                     ", response " + std::to_string(r) + ", weighting " +
                                     std::to_string(int(weighting));
           EXPECT_TRUE(same_bits(vec.rgb, scalar.rgb)) << where << ": " << first_difference(vec.rgb, scalar.rgb);
@@ -145,15 +162,18 @@ TEST(MergeKernel, SkyRampOnEveryTargetEqualsTheScalarLoop) {
   o.simd = true;
   // Every target: whole vectors of codes black or clipped in a frame, whose table reads the
   // kernel skips, are common here (the ramp's ends in each frame).
-  for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
-    hwy::SetSupportedTargetsForTest(target);
-    MergeReport report;
-    const RgbImage vec = merge_bracket(b, response, o, &report);
-    EXPECT_TRUE(same_bits(vec.rgb, scalar.rgb)) << hwy::TargetName(target) << ": " << first_difference(vec.rgb, scalar.rgb);
-    EXPECT_EQ(report.well_exposed, scalar_report.well_exposed);
-    EXPECT_EQ(report.saturated_everywhere, scalar_report.saturated_everywhere);
-    EXPECT_EQ(report.black_everywhere, scalar_report.black_everywhere);
-  }
+  for (const int64_t target : hwy::SupportedAndGeneratedTargets())
+    for (const bool vbmi : {true, false}) {
+      hwy::SetSupportedTargetsForTest(target);
+      detail::set_merge_vbmi_for_test(vbmi);
+      MergeReport report;
+      const RgbImage vec = merge_bracket(b, response, o, &report);
+      detail::set_merge_vbmi_for_test(true);
+      EXPECT_TRUE(same_bits(vec.rgb, scalar.rgb)) << hwy::TargetName(target) << (vbmi ? "" : " without VBMI") << ": " << first_difference(vec.rgb, scalar.rgb);
+      EXPECT_EQ(report.well_exposed, scalar_report.well_exposed);
+      EXPECT_EQ(report.saturated_everywhere, scalar_report.saturated_everywhere);
+      EXPECT_EQ(report.black_everywhere, scalar_report.black_everywhere);
+    }
   hwy::SetSupportedTargetsForTest(0);
   EXPECT_EQ(scalar_report.well_exposed, 8818u);  // of 13 320: the fallback's pixels are many
 }

@@ -39,22 +39,36 @@
 
 namespace lp {
 
-void HemigonWarp::build(const EnvMap& map) {
+void HemigonWarp::build(const EnvMap& map, bool borrow) {
   if (map.layout != Layout::Hemisphere)
     throw InputError(fmt::format("hemigon: the warp needs a hemisphere map, got {}", describe_size(map)));
   std::vector<Row> rows(size_t(map.height));
   const size_t w = size_t(map.width);
   for (size_t v = 0; v < rows.size(); ++v)
     rows[v] = {map.rgb.data() + 3 * v * w, map.valid.empty() ? nullptr : map.valid.data() + v * w, false};
-  build(map.width, map.height, rows.data());
+  build(map.width, map.height, rows.data(), true, borrow);
 }
 
-void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
+const float* HemigonWarp::pixel(int v, int u) const {
+  if (borrowed_.empty()) return rgb_.data() + 3 * (size_t(v) * size_t(width_) + size_t(u));
+  const Row& row = borrowed_[size_t(v)];
+  return row.rgb + 3 * size_t(row.reversed ? width_ - 1 - u : u);
+}
+
+void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borrow) {
   width_ = W;
   height_ = H;
   dphi_ = 2 * M_PI / W;
   const size_t npix = size_t(W) * size_t(H);
-  rgb_.resize(3 * npix);
+  // Borrowed rows must give what the copy would: no pixel to zero, and, when the channels
+  // are summed from them, the pixels in the ring's order.
+  for (int v = 0; v < H && borrow; ++v) borrow = !rows[v].valid && !(rgb_power && rows[v].reversed);
+  if (borrow) {
+    borrowed_.assign(rows, rows + H);
+  } else {
+    borrowed_.clear();
+    rgb_.resize(3 * npix);
+  }
   cum_.resize(size_t(H) * size_t(W + 1));
   bounds_.resize(size_t(H) + 2);
   seg_cum_.resize(size_t(H) + 2);
@@ -81,15 +95,15 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
     double* cum[kBlock];
     for (int k = 0; k < K; ++k) {
       const int v = v0 + k;
-      float* dst = rgb_.data() + 3 * size_t(v) * size_t(W);
+      float* dst = borrow ? nullptr : rgb_.data() + 3 * size_t(v) * size_t(W);
       float* y = lum_.data() + size_t(k) * size_t(W);
-      colour[k] = dst;
+      colour[k] = borrow ? rows[v].rgb : dst;
       lum[k] = y;
       cum[k] = cum_.data() + size_t(v) * size_t(W + 1);
       if (detail::colour_and_luminance_row(rows[v].rgb, rows[v].valid, size_t(W), rows[v].reversed, dst, y)) {
         for (int u = 0; u < W; ++u) {  // name the first pixel, as the pixel-by-pixel loop did
-          const float* p = dst + 3 * u;
           const int su = rows[v].reversed ? W - 1 - u : u;
+          const float* p = rows[v].rgb + 3 * su;
           const bool ok = !rows[v].valid || rows[v].valid[su];
           if (ok && !(luminance(p[0], p[1], p[2]) >= 0))
             throw InputError(fmt::format("hemigon: pixel ({}, {}) is NaN or negative", u, v));
@@ -209,8 +223,8 @@ HemigonWarp::Sample HemigonWarp::warp(double x, double y) const {
   Sample out;
   const double ct = 1 - s, st = std::sqrt(std::max(0.0, s * (2 - s)));
   out.direction = {st * std::cos(phi), st * std::sin(phi), ct};
-  const float* plo = rgb_.data() + 3 * (size_t(rlo) * size_t(W) + size_t(u));
-  const float* phi_px = rgb_.data() + 3 * (size_t(rhi) * size_t(W) + size_t(u));
+  const float* plo = pixel(rlo, u);
+  const float* phi_px = pixel(rhi, u);
   for (int c = 0; c < 3; ++c) out.rgb[c] = wlo * double(plo[c]) + whi * double(phi_px[c]);
   out.luminance = luminance(out.rgb.data());
   return out;
@@ -378,7 +392,7 @@ class HemigonSampler final : public Sampler {
 
   void prepare(const EnvMap& map) override {
     if (map.layout == Layout::Hemisphere) {  // fast path: no full pass beyond the CDFs
-      half_[0].build(map);
+      half_[0].build(map, /*borrow=*/true);
       has_lower_ = false;
       target_ = half_[0].rgb_power();
     } else {
@@ -407,16 +421,16 @@ class HemigonSampler final : public Sampler {
             rows_[size_t(v)] = {map.rgb.data() + 3 * row * W, masked ? map.valid.data() + row * W : nullptr, half == 1};
           }
           // Both halves: the target is the map's power (above), not the halves' channel sums.
-          half_[half].build(w, h, rows_.data(), options_.upper_only);
+          half_[half].build(w, h, rows_.data(), options_.upper_only, /*borrow=*/true);
         }
       } else {
         upper_ = resample(map, Layout::Hemisphere, w, h);
-        half_[0].build(upper_);
+        half_[0].build(upper_, /*borrow=*/true);
         if (!options_.upper_only) {
           ResampleOptions ro;
           ro.world_from_source = Mat3{{1, 0, 0, 0, -1, 0, 0, 0, -1}};  // Rx(180), its own inverse
           lower_ = resample(map, Layout::Hemisphere, w, h, ro);
-          half_[1].build(lower_);
+          half_[1].build(lower_, /*borrow=*/true);
         }
       }
       has_lower_ = !options_.upper_only;

@@ -259,7 +259,8 @@ TEST(Hemigon, InvalidPixelsGetNoLights) {
 
 TEST(Hemigon, PreparingAgainReusesTheSamplerForTheNextFrame) {
   auto sampler = make_sampler(Method::Hemigon);
-  sampler->prepare(textured_hemisphere(360, 90, 1));
+  const EnvMap first = textured_hemisphere(360, 90, 1);  // place() reads it (sampler.h)
+  sampler->prepare(first);
   (void)sampler->place(100);
   const EnvMap second = textured_hemisphere(200, 50, 2);
   sampler->prepare(second);

@@ -51,8 +51,10 @@ void HemigonWarp::build(const EnvMap& map, bool borrow) {
 
 const float* HemigonWarp::pixel(int v, int u) const {
   if (borrowed_.empty()) return rgb_.data() + 3 * (size_t(v) * size_t(width_) + size_t(u));
+  static constexpr float kBlack[3] = {0, 0, 0};  // an invalid pixel, as the copy zeroes it
   const Row& row = borrowed_[size_t(v)];
-  return row.rgb + 3 * size_t(row.reversed ? width_ - 1 - u : u);
+  const size_t su = size_t(row.reversed ? width_ - 1 - u : u);
+  return row.valid && !row.valid[su] ? kBlack : row.rgb + 3 * su;
 }
 
 void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borrow) {
@@ -60,9 +62,6 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borr
   height_ = H;
   dphi_ = 2 * M_PI / W;
   const size_t npix = size_t(W) * size_t(H);
-  // Borrowed rows must give what the copy would: no pixel to zero, and, when the channels
-  // are summed from them, the pixels in the ring's order.
-  for (int v = 0; v < H && borrow; ++v) borrow = !rows[v].valid && !(rgb_power && rows[v].reversed);
   if (borrow) {
     borrowed_.assign(rows, rows + H);
   } else {
@@ -87,6 +86,9 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borr
   // pixels add an exact 0), each from a vector kernel of sampling/row_sweep.h.
   constexpr int kBlock = 8;
   lum_.resize(size_t(kBlock) * size_t(W));
+  // Borrowed rows that are masked or reversed are summed from their colours as the copy has
+  // them, written to a block-sized scratch (in cache) instead of the whole map's copy.
+  if (borrow && rgb_power) scratch_.resize(size_t(kBlock) * 3 * size_t(W));
   double s0 = 0;
   for (int v0 = 0; v0 < H; v0 += kBlock) {
     const int K = std::min(kBlock, H - v0);
@@ -95,9 +97,12 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borr
     double* cum[kBlock];
     for (int k = 0; k < K; ++k) {
       const int v = v0 + k;
-      float* dst = borrow ? nullptr : rgb_.data() + 3 * size_t(v) * size_t(W);
+      const bool as_is = !rows[v].valid && !rows[v].reversed;  // the copy would equal the row
+      float* dst = !borrow                   ? rgb_.data() + 3 * size_t(v) * size_t(W)
+                   : rgb_power && !as_is ? scratch_.data() + 3 * size_t(k) * size_t(W)
+                                         : nullptr;
       float* y = lum_.data() + size_t(k) * size_t(W);
-      colour[k] = borrow ? rows[v].rgb : dst;
+      colour[k] = dst ? dst : rows[v].rgb;
       lum[k] = y;
       cum[k] = cum_.data() + size_t(v) * size_t(W + 1);
       if (detail::colour_and_luminance_row(rows[v].rgb, rows[v].valid, size_t(W), rows[v].reversed, dst, y)) {

@@ -58,10 +58,9 @@ class HemigonWarp {
   // without resampling it. With `rgb_power` false the per-channel sums are left out
   // (rgb_power() is then zero): a pass over the colours a caller that takes the power of the
   // whole map from elsewhere does not need (a third of hemigon's prepare on a latlong map).
-  // With `borrow`, unmasked rows are not copied (the copy was a third of the sampler's
-  // prepare): warp() then reads each sample's colour from the rows' pixels, which must stay
-  // alive and unchanged as long as the warp is used (the sampler's frame). Masked rows, and
-  // reversed ones when summing channels, are copied as without it.
+  // With `borrow`, the rows are not copied (the copy was a third of the sampler's prepare):
+  // warp() then reads each sample's colour from the rows' pixels (and masks), which must
+  // stay alive and unchanged as long as the warp is used (the sampler's frame).
   struct Row {
     const float* rgb = nullptr;
     const uint8_t* valid = nullptr;
@@ -101,6 +100,7 @@ class HemigonWarp {
   double power_ = 0;
   std::array<double, 3> rgb_power_{0, 0, 0};
   std::vector<float> lum_;  // scratch: clamped luminance of the rows being swept
+  std::vector<float> scratch_;  // scratch: borrowed masked or reversed rows' colours, for their sums
 };
 
 // The first n Halton points (bases 2, 3; indices 1..n) after Lloyd relaxation on the unit

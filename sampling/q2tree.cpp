@@ -132,47 +132,10 @@ struct RowGridBinning {
 
   std::vector<float> cos_phi, sin_phi;  // per column: col's cos phi and sin phi in a row
 
-  // The coarser levels' nodes in the order prepare sums them: the map is binned in bands of
-  // kQuadBand rows, and after each band every node whose sources all lie in the bands so far
-  // is summed, the finest parents first, while its children are still in cache (summed after
-  // the whole map, the finest level's 6.3 MB at 1024 x 512 came back from memory: 17 % of
-  // prepare). quad_nodes[quad_start[b * levels + i] ...] are level finest - 1 - i's nodes of
-  // band b, ascending; nodes without sources go with band 0. The same nodes as a level-by-level
-  // pass: those below the stored pixels' parents, (stored + 3) / 4 a level.
-  static constexpr int kQuadBand = 16;
-  std::vector<uint32_t> quad_nodes;
-  std::vector<size_t> quad_start;
-
-  detail::RowSources view(int first_row = 0) const {
-    return {target.data() + size_t(first_row) * size_t(width), row.data() + 8 * size_t(first_row), col.data(),
-            cos_phi.data(), sin_phi.data()};
+  detail::RowSources view() const {
+    return {target.data(), row.data(), col.data(), cos_phi.data(), sin_phi.data()};
   }
 };
-
-// Fills b's quad_nodes and quad_start (see RowGridBinning) from its targets.
-void order_quad_nodes(RowGridBinning& b, int finest) {
-  const int bands = (b.height + RowGridBinning::kQuadBand - 1) / RowGridBinning::kQuadBand;
-  // The last row any source of a node lies in (-1: none), level by level from the finest.
-  std::vector<int> last(b.stored_pixels, -1);
-  for (size_t i = 0; i < b.target.size(); ++i) last[b.target[i] & ~detail::kQ2FirstRun] = int(i / size_t(b.width));
-  std::vector<std::vector<int>> level_last;  // [i]: level finest - 1 - i
-  for (int l = finest - 1; l >= 0; --l) {
-    std::vector<int> up((last.size() + 3) / 4, -1);
-    for (size_t c = 0; c < last.size(); ++c) up[c / 4] = std::max(up[c / 4], last[c]);
-    level_last.push_back(up);
-    last = std::move(up);
-  }
-  const size_t levels = level_last.size();
-  b.quad_start.assign(size_t(bands) * levels + 1, 0);
-  auto bucket = [&](size_t i, int row) { return size_t(std::max(row, 0) / RowGridBinning::kQuadBand) * levels + i; };
-  for (size_t i = 0; i < levels; ++i)
-    for (int row : level_last[i]) ++b.quad_start[bucket(i, row) + 1];
-  for (size_t k = 1; k < b.quad_start.size(); ++k) b.quad_start[k] += b.quad_start[k - 1];
-  b.quad_nodes.resize(b.quad_start.back());
-  std::vector<size_t> fill(b.quad_start.begin(), b.quad_start.end() - 1);
-  for (size_t i = 0; i < levels; ++i)
-    for (size_t p = 0; p < level_last[i].size(); ++p) b.quad_nodes[fill[bucket(i, level_last[i][p])]++] = uint32_t(p);
-}
 
 std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside) {
   auto b = std::make_shared<RowGridBinning>();
@@ -223,7 +186,6 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
     const bool run_start = i % size_t(w) == 0 || b->target[i - 1] % detail::kQ2FirstRun != t;
     if (run_start && !seen[t]) b->target[i] |= detail::kQ2FirstRun, seen[t] = 1;
   }
-  order_quad_nodes(*b, log2_int(nside));
   return b;
 }
 
@@ -698,17 +660,12 @@ class Q2TreeSampler final : public Sampler {
     for (int l = 0; l <= finest; ++l) levels_[size_t(l)] = pyramid_[offsets[size_t(l)]].v;
     prefix_.clear();
     const uint8_t* valid = map.valid.empty() ? nullptr : map.valid.data();
-    const size_t w = size_t(map.width), levels = size_t(finest);
-    bool negative = false;
-    for (int v0 = 0, band = 0; v0 < map.height; v0 += RowGridBinning::kQuadBand, ++band) {
-      const int rows = std::min(RowGridBinning::kQuadBand, map.height - v0);
-      negative |= detail::q2tree_bin_sums(map.rgb.data() + 3 * size_t(v0) * w, valid ? valid + size_t(v0) * w : nullptr,
-                                          w, size_t(rows), bin.view(v0), pyramid_[0].v);
-      for (size_t i = 0; i < levels; ++i) {  // level finest - 1 - i
-        const size_t* range = bin.quad_start.data() + size_t(band) * levels + i;
-        detail::q2tree_quad_sums_at(levels_[levels - i], bin.quad_nodes.data() + range[0], range[1] - range[0],
-                                    levels_[levels - 1 - i]);
-      }
+    const bool negative = detail::q2tree_bin_sums(map.rgb.data(), valid, size_t(map.width), size_t(map.height),
+                                                  bin.view(), pyramid_[0].v);
+    size_t stored = bin.stored_pixels;
+    for (int l = finest - 1; l >= 0; --l) {
+      stored = (stored + 3) / 4;
+      detail::q2tree_quad_sums(levels_[size_t(l) + 1], stored, levels_[size_t(l)]);
     }
     negative_pixels_ = negative;
   }

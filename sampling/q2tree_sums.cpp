@@ -163,19 +163,6 @@ void Q2treeQuadSums(const float* child, size_t parents, float* parent) {
   }
 }
 
-void Q2treeQuadSumsAt(const float* child, const uint32_t* parents, size_t count, float* parent) {
-  const hn::CappedTag<float, 8> d;
-  for (size_t i = 0; i < count; ++i) {
-    const size_t p = parents[i];
-    const float* c = child + 32 * p;
-    for (size_t k = 0; k < 8; k += hn::Lanes(d)) {
-      const auto a = hn::Add(hn::Load(d, c + k), hn::Load(d, c + 8 + k));
-      const auto b = hn::Add(hn::Load(d, c + 16 + k), hn::Load(d, c + 24 + k));
-      hn::Store(hn::Add(a, b), d, parent + 8 * p + k);
-    }
-  }
-}
-
 }  // namespace HWY_NAMESPACE
 }  // namespace lp::detail
 HWY_AFTER_NAMESPACE();
@@ -185,15 +172,6 @@ namespace lp::detail {
 
 HWY_EXPORT(Q2treeBinSums);
 HWY_EXPORT(Q2treeQuadSums);
-HWY_EXPORT(Q2treeQuadSumsAt);
-
-void q2tree_quad_sums_at(const float* child, const uint32_t* parents, size_t count, float* parent) {
-  HWY_DYNAMIC_DISPATCH(Q2treeQuadSumsAt)(child, parents, count, parent);
-}
-
-void q2tree_quad_sums_at_scalar(const float* child, const uint32_t* parents, size_t count, float* parent) {
-  for (size_t i = 0; i < count; ++i) q2tree_quad_sums_scalar(child + 32 * size_t(parents[i]), 1, parent + 8 * size_t(parents[i]));
-}
 
 bool q2tree_bin_sums(const float* rgb, const uint8_t* valid, size_t width, size_t height, const RowSources& sources,
                      float* bins) {

@@ -50,9 +50,4 @@ bool q2tree_bin_sums_scalar(const float* rgb, const uint8_t* valid, size_t width
 void q2tree_quad_sums(const float* child, size_t parents, float* parent);
 void q2tree_quad_sums_scalar(const float* child, size_t parents, float* parent);
 
-// The same for the listed parents only: p = parents[i] for i < count (so that a node can be
-// summed as soon as its children are, while they are in cache).
-void q2tree_quad_sums_at(const float* child, const uint32_t* parents, size_t count, float* parent);
-void q2tree_quad_sums_at_scalar(const float* child, const uint32_t* parents, size_t count, float* parent);
-
 }  // namespace lp::detail

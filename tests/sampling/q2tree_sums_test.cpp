@@ -166,15 +166,6 @@ TEST(Q2treeSums, EveryTargetEqualsThePlainLoopBitForBit) {
       auto parent_bins = aligned_bins(std::vector<float>(8 * parents, -1.0f));
       detail::q2tree_quad_sums_scalar(child_bins.get(), parents, parent_bins.get());
       EXPECT_TRUE(same_bits(parent_bins.get(), expected_parents)) << "scalar quads, " << what;
-      // Listed parents only (every other one, the last first): the others keep their -1s.
-      std::vector<uint32_t> listed;
-      for (size_t p = parents; p-- > 0;)
-        if (p % 2 == 0) listed.push_back(uint32_t(p));
-      std::vector<float> expected_listed(8 * parents, -1.0f);
-      for (uint32_t p : listed) std::copy_n(expected_parents.begin() + 8 * p, 8, expected_listed.begin() + 8 * p);
-      auto listed_bins = aligned_bins(std::vector<float>(8 * parents, -1.0f));
-      detail::q2tree_quad_sums_at_scalar(child_bins.get(), listed.data(), listed.size(), listed_bins.get());
-      EXPECT_TRUE(same_bits(listed_bins.get(), expected_listed)) << "scalar listed quads, " << what;
       for (const int64_t target : targets) {
         hwy::SetSupportedTargetsForTest(target);
         auto bins = aligned_bins(start);
@@ -184,9 +175,6 @@ TEST(Q2treeSums, EveryTargetEqualsThePlainLoopBitForBit) {
         auto parent = aligned_bins(std::vector<float>(8 * parents, -1.0f));
         detail::q2tree_quad_sums(child_bins.get(), parents, parent.get());
         EXPECT_TRUE(same_bits(parent.get(), expected_parents)) << hwy::TargetName(target) << " quads, " << what;
-        auto listed_parent = aligned_bins(std::vector<float>(8 * parents, -1.0f));
-        detail::q2tree_quad_sums_at(child_bins.get(), listed.data(), listed.size(), listed_parent.get());
-        EXPECT_TRUE(same_bits(listed_parent.get(), expected_listed)) << hwy::TargetName(target) << " listed quads, " << what;
       }
       hwy::SetSupportedTargetsForTest(0);
     }

@@ -7,9 +7,8 @@
 //
 // Cost: prepare is one pass over the pixels in blocks of eight rows (CDFs, per-channel
 // power; place() reads the colours and the mask from the caller's map, sampler.h): the
-// vector row kernels of sampling/row_sweep.h,
-// then the serial luminance sums of the eight rows in lockstep; ~1.3x one plain read of the
-// map (was 2.9x, docs/sampling.md).
+// vector row kernels of sampling/row_sweep.h, then the serial luminance sums of the eight
+// rows in lockstep; ~1.3x one plain read of the map (was 2.9x, docs/sampling.md).
 // place is two binary searches and one sincos per light. Buffers and the per-row geometry
 // are reused across frames; Halton points are cached across calls.
 #include <fmt/format.h>
@@ -117,8 +116,8 @@ class PharrSampler final : public Sampler {
 
  private:
   // Rows r .. r + K - 1: writes each row's luminance CDF (for a masked map also the block's
-  // colours, invalid pixels zeroed, to scratch_ for their sums), then adds the rows' power to `power` and `marginal` in row order. The
-  // element-wise work is the vector kernel's (sampling/row_sweep.h); each row's sums are
+  // colours, invalid pixels zeroed, to scratch_ for their sums), then adds the rows' power
+  // to `power` and `marginal` in row order. The element-wise work is the vector kernel's (sampling/row_sweep.h); each row's sums are
   // the same chains of additions in the same order as before (two partial sums per
   // channel, one running luminance sum), swept K rows at a time so that the CPU overlaps
   // K independent chains instead of waiting on each addition (one row alone runs at the

@@ -64,11 +64,12 @@ HWY_INLINE bool ColourAndLuminanceRowT(const float* rgb, const uint8_t* valid, s
     }
     const VF y = hn::Add(hn::Add(hn::Mul(kr, r), hn::Mul(kg, g)), hn::Mul(kb, b));
     bad = hn::Or(bad, hn::VecFromMask(df, hn::Not(hn::Ge(y, zero))));
-    if (!kCopy) {
-    } else if (valid || reversed) {
-      hn::StoreInterleaved3(r, g, b, df, colour + 3 * x);
-    } else {  // a plain copy: three loads and stores instead of re-interleaving
-      for (size_t v = 0; v < 3; ++v) hn::StoreU(hn::LoadU(df, rgb + 3 * s + v * N), df, colour + 3 * x + v * N);
+    if (kCopy) {
+      if (valid || reversed) {
+        hn::StoreInterleaved3(r, g, b, df, colour + 3 * x);
+      } else {  // a plain copy: three loads and stores instead of re-interleaving
+        for (size_t v = 0; v < 3; ++v) hn::StoreU(hn::LoadU(df, rgb + 3 * s + v * N), df, colour + 3 * x + v * N);
+      }
     }
     hn::StoreU(hn::IfThenElseZero(hn::Gt(y, zero), y), df, lum + x);
   }

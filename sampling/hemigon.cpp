@@ -39,22 +39,35 @@
 
 namespace lp {
 
-void HemigonWarp::build(const EnvMap& map) {
+void HemigonWarp::build(const EnvMap& map, bool borrow) {
   if (map.layout != Layout::Hemisphere)
     throw InputError(fmt::format("hemigon: the warp needs a hemisphere map, got {}", describe_size(map)));
   std::vector<Row> rows(size_t(map.height));
   const size_t w = size_t(map.width);
   for (size_t v = 0; v < rows.size(); ++v)
     rows[v] = {map.rgb.data() + 3 * v * w, map.valid.empty() ? nullptr : map.valid.data() + v * w, false};
-  build(map.width, map.height, rows.data());
+  build(map.width, map.height, rows.data(), true, borrow);
 }
 
-void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
+const float* HemigonWarp::pixel(int v, int u) const {
+  if (borrowed_.empty()) return rgb_.data() + 3 * (size_t(v) * size_t(width_) + size_t(u));
+  static constexpr float kBlack[3] = {0, 0, 0};  // an invalid pixel, as the copy zeroes it
+  const Row& row = borrowed_[size_t(v)];
+  const size_t su = size_t(row.reversed ? width_ - 1 - u : u);
+  return row.valid && !row.valid[su] ? kBlack : row.rgb + 3 * su;
+}
+
+void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borrow) {
   width_ = W;
   height_ = H;
   dphi_ = 2 * M_PI / W;
   const size_t npix = size_t(W) * size_t(H);
-  rgb_.resize(3 * npix);
+  if (borrow) {
+    borrowed_.assign(rows, rows + H);
+  } else {
+    borrowed_.clear();
+    rgb_.resize(3 * npix);
+  }
   cum_.resize(size_t(H) * size_t(W + 1));
   bounds_.resize(size_t(H) + 2);
   seg_cum_.resize(size_t(H) + 2);
@@ -73,6 +86,9 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
   // pixels add an exact 0), each from a vector kernel of sampling/row_sweep.h.
   constexpr int kBlock = 8;
   lum_.resize(size_t(kBlock) * size_t(W));
+  // Borrowed rows that are masked or reversed are summed from their colours as the copy has
+  // them, written to a block-sized scratch (in cache) instead of the whole map's copy.
+  if (borrow && rgb_power) scratch_.resize(size_t(kBlock) * 3 * size_t(W));
   double s0 = 0;
   for (int v0 = 0; v0 < H; v0 += kBlock) {
     const int K = std::min(kBlock, H - v0);
@@ -81,15 +97,18 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power) {
     double* cum[kBlock];
     for (int k = 0; k < K; ++k) {
       const int v = v0 + k;
-      float* dst = rgb_.data() + 3 * size_t(v) * size_t(W);
+      const bool as_is = !rows[v].valid && !rows[v].reversed;  // the copy would equal the row
+      float* dst = !borrow                   ? rgb_.data() + 3 * size_t(v) * size_t(W)
+                   : rgb_power && !as_is ? scratch_.data() + 3 * size_t(k) * size_t(W)
+                                         : nullptr;
       float* y = lum_.data() + size_t(k) * size_t(W);
-      colour[k] = dst;
+      colour[k] = dst ? dst : rows[v].rgb;
       lum[k] = y;
       cum[k] = cum_.data() + size_t(v) * size_t(W + 1);
       if (detail::colour_and_luminance_row(rows[v].rgb, rows[v].valid, size_t(W), rows[v].reversed, dst, y)) {
         for (int u = 0; u < W; ++u) {  // name the first pixel, as the pixel-by-pixel loop did
-          const float* p = dst + 3 * u;
           const int su = rows[v].reversed ? W - 1 - u : u;
+          const float* p = rows[v].rgb + 3 * su;
           const bool ok = !rows[v].valid || rows[v].valid[su];
           if (ok && !(luminance(p[0], p[1], p[2]) >= 0))
             throw InputError(fmt::format("hemigon: pixel ({}, {}) is NaN or negative", u, v));
@@ -209,8 +228,8 @@ HemigonWarp::Sample HemigonWarp::warp(double x, double y) const {
   Sample out;
   const double ct = 1 - s, st = std::sqrt(std::max(0.0, s * (2 - s)));
   out.direction = {st * std::cos(phi), st * std::sin(phi), ct};
-  const float* plo = rgb_.data() + 3 * (size_t(rlo) * size_t(W) + size_t(u));
-  const float* phi_px = rgb_.data() + 3 * (size_t(rhi) * size_t(W) + size_t(u));
+  const float* plo = pixel(rlo, u);
+  const float* phi_px = pixel(rhi, u);
   for (int c = 0; c < 3; ++c) out.rgb[c] = wlo * double(plo[c]) + whi * double(phi_px[c]);
   out.luminance = luminance(out.rgb.data());
   return out;
@@ -378,7 +397,7 @@ class HemigonSampler final : public Sampler {
 
   void prepare(const EnvMap& map) override {
     if (map.layout == Layout::Hemisphere) {  // fast path: no full pass beyond the CDFs
-      half_[0].build(map);
+      half_[0].build(map, /*borrow=*/true);
       has_lower_ = false;
       target_ = half_[0].rgb_power();
     } else {
@@ -407,16 +426,16 @@ class HemigonSampler final : public Sampler {
             rows_[size_t(v)] = {map.rgb.data() + 3 * row * W, masked ? map.valid.data() + row * W : nullptr, half == 1};
           }
           // Both halves: the target is the map's power (above), not the halves' channel sums.
-          half_[half].build(w, h, rows_.data(), options_.upper_only);
+          half_[half].build(w, h, rows_.data(), options_.upper_only, /*borrow=*/true);
         }
       } else {
         upper_ = resample(map, Layout::Hemisphere, w, h);
-        half_[0].build(upper_);
+        half_[0].build(upper_, /*borrow=*/true);
         if (!options_.upper_only) {
           ResampleOptions ro;
           ro.world_from_source = Mat3{{1, 0, 0, 0, -1, 0, 0, 0, -1}};  // Rx(180), its own inverse
           lower_ = resample(map, Layout::Hemisphere, w, h, ro);
-          half_[1].build(lower_);
+          half_[1].build(lower_, /*borrow=*/true);
         }
       }
       has_lower_ = !options_.upper_only;

@@ -49,8 +49,8 @@ class HemigonWarp {
   // Builds the CDFs of a `hemisphere` layout map. Throws InputError for other layouts and
   // for NaN or negative pixels.
   // Buffers are reused across calls. A black map builds, with power() == 0; warping it is
-  // then undefined.
-  void build(const EnvMap& hemisphere_map);
+  // then undefined. With `borrow` see below.
+  void build(const EnvMap& hemisphere_map, bool borrow = false);
 
   // The same from the map's rows given one by one: row v of a width x height hemisphere map
   // is rows[v] (packed RGB, read right to left when `reversed`; valid null: all valid). Lets
@@ -58,12 +58,15 @@ class HemigonWarp {
   // without resampling it. With `rgb_power` false the per-channel sums are left out
   // (rgb_power() is then zero): a pass over the colours a caller that takes the power of the
   // whole map from elsewhere does not need (a third of hemigon's prepare on a latlong map).
+  // With `borrow`, the rows are not copied (the copy was a third of the sampler's prepare):
+  // warp() then reads each sample's colour from the rows' pixels (and masks), which must
+  // stay alive and unchanged as long as the warp is used (the sampler's frame).
   struct Row {
     const float* rgb = nullptr;
     const uint8_t* valid = nullptr;
     bool reversed = false;
   };
-  void build(int width, int height, const Row* rows, bool rgb_power = true);
+  void build(int width, int height, const Row* rows, bool rgb_power = true, bool borrow = false);
 
   struct Sample {
     Vec3 direction;                // unit, z >= 0
@@ -83,7 +86,11 @@ class HemigonWarp {
  private:
   int width_ = 0, height_ = 0;
   double dphi_ = 0;
-  std::vector<float> rgb_;        // valid pixels' radiance, 0 for invalid
+  // Pixel u of ring v's colour: in rgb_, or in the borrowed rows.
+  const float* pixel(int v, int u) const;
+
+  std::vector<float> rgb_;        // valid pixels' radiance, 0 for invalid (unless borrowed)
+  std::vector<Row> borrowed_;     // the rows warp() reads, when not copied to rgb_
   std::vector<double> cum_;       // height x (width + 1): running sums of Y along each row
   std::vector<double> bounds_;    // height + 2 segment bounds in s: 0, c_0 .. c_{H-1}, 1
   std::vector<double> seg_cum_;   // height + 2: marginal mass before each segment bound
@@ -93,6 +100,7 @@ class HemigonWarp {
   double power_ = 0;
   std::array<double, 3> rgb_power_{0, 0, 0};
   std::vector<float> lum_;  // scratch: clamped luminance of the rows being swept
+  std::vector<float> scratch_;  // scratch: borrowed masked or reversed rows' colours, for their sums
 };
 
 // The first n Halton points (bases 2, 3; indices 1..n) after Lloyd relaxation on the unit

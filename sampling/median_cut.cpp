@@ -6,9 +6,11 @@
 // centroid of its pixel directions, rgb = integral of radiance over it, solid_angle = its
 // area, id = split-path code (root 1, children 2k and 2k + 1).
 //
-// Cost: prepare is one pass (a summed-area table of luminance * solid angle in double and a
-// copy of the colours, so that place() does not depend on the caller's map staying alive),
-// in blocks of eight rows, each step a vector row kernel of sampling/row_sweep.h.
+// Cost: prepare is one pass (a summed-area table of luminance * solid angle in double, the
+// clamped luminances and the power), in blocks of eight rows, each step a vector row kernel
+// of sampling/row_sweep.h. place() reads the colours from the caller's map (sampler.h: it
+// must outlive the frame's place() calls); only a masked map's are copied, invalid pixels
+// zeroed.
 // place is n heap steps with O(log size) table look-ups each, then one pass over the
 // colours to integrate each final region (the regions partition the map).
 #include <fmt/format.h>
@@ -77,7 +79,9 @@ class MedianCutSampler final : public Sampler {
     const size_t count = map->pixel_count();
     if (map->rgb.size() < 3 * count) throw InputError("mediancut: the map has fewer pixels than its size says");
     allocate_table(w, h);
-    colour_ = line_aligned(colour_storage_, 3 * count);
+    // An unmasked map's colours are read where they are: copying them was ~40 % of prepare.
+    copy_ = map->valid.empty() ? nullptr : line_aligned(colour_storage_, 3 * count);
+    colour_ = copy_ ? copy_ : map->rgb.data();
     lum_ = line_aligned(lum_storage_, count);
     std::array<double, 3> power{0, 0, 0};
     // Rows in blocks (see sweep_rows); the sums across rows stay in row order.
@@ -129,10 +133,10 @@ class MedianCutSampler final : public Sampler {
   }
 
  private:
-  // Rows r .. r + count - 1 (count <= kBlock): copies the colours (invalid pixels zeroed)
-  // and the clamped luminances, writes the rows of the summed-area table and adds the rows'
-  // power to `power` in row order, each step a vector kernel of sampling/row_sweep.h whose
-  // results equal the plain loops' bit for bit.
+  // Rows r .. r + count - 1 (count <= kBlock): writes the clamped luminances (for a masked
+  // map also copies the colours, invalid pixels zeroed) and the rows of the summed-area
+  // table, and adds the rows' power to `power` in row order, each step a vector kernel of
+  // sampling/row_sweep.h whose results equal the plain loops' bit for bit.
   void sweep_rows(const EnvMap& map, int r, int count, std::array<double, 3>& power) {
     const size_t w = size_t(map.width), stride = sat_stride_;
     const bool masked = !map.valid.empty();
@@ -147,7 +151,7 @@ class MedianCutSampler final : public Sampler {
       out[k] = sat_ + (size_t(r + k) + 1) * stride;
       dw[k] = row_solid_angle_[size_t(r + k)];
       detail::colour_and_luminance_row(map.rgb.data() + 3 * base, masked ? map.valid.data() + base : nullptr, w,
-                                       false, colour_ + 3 * base, lum_ + base);
+                                       false, copy_ ? copy_ + 3 * base : nullptr, lum_ + base);
     }
     double s[kBlock][6] = {};  // per row: r, g, b sums (the last three unused)
     detail::add_channel_sums(colour, size_t(count), w, false, &s[0][0]);
@@ -345,7 +349,8 @@ class MedianCutSampler final : public Sampler {
   double* sat_ = nullptr;
   size_t sat_stride_ = 0;
   std::vector<float> colour_storage_, lum_storage_;
-  float* colour_ = nullptr;  // the map's rgb, invalid pixels zeroed
+  float* copy_ = nullptr;          // a masked map's colours, invalid pixels zeroed
+  const float* colour_ = nullptr;  // the map's rgb, or copy_
   float* lum_ = nullptr;     // clamped luminance per pixel (0 where invalid)
   std::array<double, 3> power_{0, 0, 0};
   int width_ = 0, height_ = 0;

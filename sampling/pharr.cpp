@@ -6,9 +6,9 @@
 // then matched per channel to the map's power.
 //
 // Cost: prepare is one pass over the pixels in blocks of eight rows (CDFs, per-channel
-// power, a copy of the colours so that place() does not depend on the caller's map staying
-// alive): the vector row kernels of sampling/row_sweep.h, then the serial luminance sums of
-// the eight rows in lockstep; 1.3-1.45x one plain read of the map (was 2.9x, docs/sampling.md).
+// power; place() reads the colours and the mask from the caller's map, sampler.h): the
+// vector row kernels of sampling/row_sweep.h, then the serial luminance sums of the eight
+// rows in lockstep; ~1.3x one plain read of the map (was 2.9x, docs/sampling.md).
 // place is two binary searches and one sincos per light. Buffers and the per-row geometry
 // are reused across frames; Halton points are cached across calls.
 #include <fmt/format.h>
@@ -42,7 +42,9 @@ class PharrSampler final : public Sampler {
     const size_t count = map->pixel_count();
     if (map->rgb.size() < 3 * count) throw InputError("pharr: the map has fewer pixels than its size says");
     cdf_.resize(count);
-    colour_.resize(3 * count);
+    colour_ = map->rgb.data();
+    valid_ = map->valid.empty() ? nullptr : map->valid.data();
+    if (valid_) scratch_.resize(3 * 8 * size_t(w));
     row_cdf_.resize(size_t(h));
     std::array<double, 3> power{0, 0, 0};
     double marginal = 0;
@@ -95,7 +97,9 @@ class PharrSampler final : public Sampler {
       Light& l = lights[size_t(i)];
       l.id = uint64_t(i) + 1;
       l.direction = {s * std::cos(phi), s * std::sin(phi), z};
-      const float* p = colour_.data() + 3 * (size_t(r) * size_t(width_) + size_t(c));
+      static constexpr float kBlack[3] = {0, 0, 0};  // an invalid pixel
+      const size_t at = size_t(r) * size_t(width_) + size_t(c);
+      const float* p = valid_ && !valid_[at] ? kBlack : colour_ + 3 * at;
       const double lum = std::max(0.0, double(luminance(p[0], p[1], p[2])));
       if (lum > 0) {
         const double k = share / lum;
@@ -111,9 +115,9 @@ class PharrSampler final : public Sampler {
   }
 
  private:
-  // Rows r .. r + K - 1: copies the colours (invalid pixels zeroed) and writes each row's
-  // luminance CDF, then adds the rows' power to `power` and `marginal` in row order. The
-  // element-wise work is the vector kernel's (sampling/row_sweep.h); each row's sums are
+  // Rows r .. r + K - 1: writes each row's luminance CDF (for a masked map also the block's
+  // colours, invalid pixels zeroed, to scratch_ for their sums), then adds the rows' power
+  // to `power` and `marginal` in row order. The element-wise work is the vector kernel's (sampling/row_sweep.h); each row's sums are
   // the same chains of additions in the same order as before (two partial sums per
   // channel, one running luminance sum), swept K rows at a time so that the CPU overlaps
   // K independent chains instead of waiting on each addition (one row alone runs at the
@@ -126,10 +130,11 @@ class PharrSampler final : public Sampler {
     float* cdf[K];
     for (int k = 0; k < K; ++k) {
       const size_t base = size_t(r + k) * w;
-      colour[k] = colour_.data() + 3 * base;
+      float* zeroed = masked ? scratch_.data() + 3 * size_t(k) * w : nullptr;
+      colour[k] = zeroed ? zeroed : colour_ + 3 * base;
       cdf[k] = cdf_.data() + base;
       detail::colour_and_luminance_row(map.rgb.data() + 3 * base, masked ? map.valid.data() + base : nullptr, w,
-                                       false, colour_.data() + 3 * base, cdf[k]);
+                                       false, zeroed, cdf[k]);
     }
     // Per-channel sums: even pixels into s[k][0..2], odd into s[k][3..5].
     double s[K][6] = {};
@@ -186,7 +191,9 @@ class PharrSampler final : public Sampler {
 
   EnvMap grid_;                         // healpix input resampled to latlong
   std::vector<float> cdf_;              // per row: inclusive prefix sums of luminance
-  std::vector<float> colour_;           // the map's rgb, invalid pixels zeroed
+  const float* colour_ = nullptr;       // the map's rgb
+  const uint8_t* valid_ = nullptr;      // its mask (null: all valid)
+  std::vector<float> scratch_;          // a masked block's colours, invalid pixels zeroed
   std::vector<double> row_cdf_;         // inclusive prefix of row luminance * solid angle
   std::array<double, 3> power_{0, 0, 0};
   double luminance_power_ = 0;

@@ -18,7 +18,8 @@ namespace lp::detail {
 //   colour[3x + c] = ok ? p[c] : 0
 //   lum[x] = y > 0 ? y : 0 with y = (0.2126f r + 0.7152f g) + 0.0722f b of colour (std::max(0.0f, y))
 // Returns true when a valid pixel's unclamped y is negative or NaN (hemigon rejects those).
-// `valid` may be null (every pixel valid); it is indexed like rgb (reversed too).
+// `valid` may be null (every pixel valid); it is indexed like rgb (reversed too). `colour`
+// may be null: the luminances only, for a caller that reads the colours from rgb itself.
 bool colour_and_luminance_row(const float* rgb, const uint8_t* valid, size_t width, bool reversed, float* colour,
                               float* lum);
 

@@ -57,7 +57,9 @@ class Sampler {
   virtual ~Sampler() = default;
   virtual Method method() const = 0;
   // Pre-processing of one frame. Throws InputError on maps it cannot sample (all zero,
-  // NaN, wrong layout for the method).
+  // NaN, wrong layout for the method). The map must stay alive and unchanged until the
+  // frame's last place(): pharr, mediancut and hemigon read its colours there rather
+  // than copy them (the copy was a third of their prepare).
   virtual void prepare(const EnvMap& map) = 0;
   // Places n > 0 lights on the prepared frame.
   virtual std::vector<Light> place(int n) = 0;

@@ -259,7 +259,8 @@ TEST(Hemigon, InvalidPixelsGetNoLights) {
 
 TEST(Hemigon, PreparingAgainReusesTheSamplerForTheNextFrame) {
   auto sampler = make_sampler(Method::Hemigon);
-  sampler->prepare(textured_hemisphere(360, 90, 1));
+  const EnvMap first = textured_hemisphere(360, 90, 1);  // place() reads it (sampler.h)
+  sampler->prepare(first);
   (void)sampler->place(100);
   const EnvMap second = textured_hemisphere(200, 50, 2);
   sampler->prepare(second);
@@ -481,6 +482,52 @@ TEST(HemigonWarp, RowsOfALatlongHalfWarpLikeTheResampledHalf) {
     EXPECT_LT(worst_rgb, 1e-10) << "half " << half;
     if (half == 1) {
       EXPECT_GT(worst_direction, 0.0) << "the lower half no longer differs: make it bit-exact above";
+    }
+  }
+}
+
+// Rows warped where they are (`borrow`, what the sampler does) give the copy's warp bit for
+// bit: rows forwards and reversed, with and without a mask (holes and a masked band), with and
+// without the channel sums; the same map's rows, so any difference is the borrowing's. The
+// masked pixels are 1e6 bright: a lookup that missed the mask would show them (a sample's
+// colour blends two rings' pixels, so holes next to valid pixels are looked up).
+TEST(HemigonWarp, BorrowedRowsWarpLikeCopiedOnes) {
+  EnvMap map = textured_hemisphere(360, 90, 5, 3.0f);
+  std::vector<uint8_t> valid(map.pixel_count(), 1);
+  for (size_t i = 0; i < valid.size(); i += 5) valid[i] = 0;
+  for (size_t i = 360 * 20; i < 360 * 23; ++i) valid[i] = 0;
+  for (size_t i = 0; i < valid.size(); ++i)
+    if (!valid[i]) map.rgb[3 * i] = map.rgb[3 * i + 1] = map.rgb[3 * i + 2] = 1e6f;
+  for (int variant = 0; variant < 8; ++variant) {
+    const bool reversed = variant & 1, masked = variant & 2, rgb_power = variant & 4;
+    std::vector<HemigonWarp::Row> rows(90);
+    for (size_t v = 0; v < rows.size(); ++v)
+      rows[v] = {map.rgb.data() + 3 * 360 * v, masked ? valid.data() + 360 * v : nullptr, reversed};
+    HemigonWarp copied, borrowed;
+    copied.build(360, 90, rows.data(), rgb_power, false);
+    borrowed.build(360, 90, rows.data(), rgb_power, true);
+    const std::string what = "variant " + std::to_string(variant);
+    EXPECT_EQ(borrowed.power(), copied.power()) << what;
+    EXPECT_EQ(borrowed.rgb_power(), copied.rgb_power()) << what;
+    if (rgb_power) {
+      EXPECT_GT(copied.rgb_power()[1], 0.0) << what;
+    }
+    double brightest = 0;
+    for (int i = 0; i < 4096; ++i) {
+      double x, y;
+      halton2(uint64_t(i) + 1, &x, &y);
+      const auto a = borrowed.warp(x, y), b = copied.warp(x, y);
+      ASSERT_EQ(a.direction.x, b.direction.x) << what << ", point " << i;
+      ASSERT_EQ(a.direction.y, b.direction.y) << what << ", point " << i;
+      ASSERT_EQ(a.rgb, b.rgb) << what << ", point " << i;
+      ASSERT_EQ(a.luminance, b.luminance) << what << ", point " << i;
+      brightest = std::max(brightest, a.rgb[1]);
+    }
+    // Unmasked, the warp does reach the bright pixels: the masked case looked them up too.
+    if (!masked) {
+      EXPECT_GT(brightest, 1e5) << what;
+    } else {
+      EXPECT_LT(brightest, 1e4) << what;  // the map's own pixels reach ~2e3
     }
   }
 }

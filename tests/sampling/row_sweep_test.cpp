@@ -1,8 +1,8 @@
 // sampling/row_sweep.h: the row kernels of the samplers' prepare give the scalar loops' bits
-// on every compiled Highway target (colours, clamped luminance, the bad-pixel flag, the
-// channel sums in both orders, the summed-area table rows), forwards and reversed, with and
-// without a mask, on widths around every vector length, with negative, NaN, -0 and huge
-// values among the pixels.
+// on every compiled Highway target (colours, clamped luminance with and without the colours,
+// the bad-pixel flag, the channel sums in both orders, the summed-area table rows), forwards
+// and reversed, with and without a mask, on widths around every vector length, with
+// negative, NaN, -0 and huge values among the pixels.
 #include <gtest/gtest.h>
 
 #include <hwy/targets.h>
@@ -76,6 +76,11 @@ TEST(RowSweep, EveryTargetEqualsTheScalarLoopsBitForBit) {
         EXPECT_EQ(bad, bad0) << where;
         EXPECT_TRUE(same_bits(colour, colour0)) << where;
         EXPECT_TRUE(same_bits(lum, lum0)) << where;
+        // Without a colour buffer (the luminances only): the same luminances and flag.
+        std::vector<float> lum_only(w, -1.0f);
+        EXPECT_EQ(detail::colour_and_luminance_row(rgb.data(), mask, w, reversed, nullptr, lum_only.data()), bad0)
+            << where;
+        EXPECT_TRUE(same_bits(lum_only, lum0)) << where;
         std::vector<double> single(6 * kRows, 0.5), pairs(6 * kRows, 0.25);
         detail::add_channel_sums(row_ptr, kRows, w, false, single.data());
         detail::add_channel_sums(row_ptr, kRows, w, true, pairs.data());

@@ -195,6 +195,22 @@ TEST(BallPrecision, TheSilhouetteIsTheOuterEdgeOfABandAtTheRim) {
   expect_found_within(o, 4, 0.2);
 }
 
+// Large circles half outside the image collect edges of texture along their visible half
+// and outscored the ball wholly in view (agreement x radius), then find_ball threw: "ball
+// cut by the image border" on renders whose ball is wholly in view (night at night, sunrise
+// on the photo, R 60). A rim fit that would be rejected as cut loses to one that would not:
+// found now, centre / radius 0.04 / -0.17 px (night) and 0.04 / -0.15 (sunrise).
+TEST(BallPrecision, ABallWhollyInViewBeatsACircleCutByTheBorder) {
+  EvalBallOptions o;
+  o.maps = every_shared_map();
+  o.photo = kPhoto;
+  o.include = [](const std::string& map, double radius, BallBackground bg) {
+    return radius == 60 && ((map == "night" && bg == BallBackground::Night) ||
+                            (map == "sunrise" && bg == BallBackground::Photo));
+  };
+  expect_found_within(o, 2, 0.25);
+}
+
 // Where the dark arc has no step at all (a uniform ball whose lower rim reflects black, in
 // front of black) the circle rests on the bright arc: still right, and flagged, the rim
 // agreeing along only half its length. In front of the dim photo the dark arc has its step,

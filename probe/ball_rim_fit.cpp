@@ -339,6 +339,14 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
   return out;
 }
 
+namespace {
+
+// The wide first pass (refine_rim_by_coverage): the search reach and both pixel bands grow
+// by this, so that the edge search covers 2 px either side of the rim fit's circle.
+constexpr double kWideStartPx = 1.25;
+
+}  // namespace
+
 RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise) {
   if (!rim.ok) return rim;
   const BallInImage& c = rim.ball;
@@ -368,14 +376,22 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
     BallInImage c;
     FitResult f;
     double support = -1;
+    int seen = 0;  // arcs with an edge in the last pass
   };
-  auto refine = [&](bool use_bands) {
-    Refined out{rim.ball, {}, -1};
+  std::vector<CoverageArc> first_arcs[2];  // per start: both circles' first pass is the same
+  auto refine = [&](bool use_bands, bool wide_start) {
+    Refined out{rim.ball, {}, -1, 0};
     // A pass may move the circle by 1 px; with bands by up to half the widest band more
-    // (a band along half the rim moves it by about half its width).
-    const double max_move = use_bands ? 1 + 0.5 * o.band_px : 1.0;
-    for (int pass = 0; pass < 3; ++pass) {
-      const std::vector<CoverageArc> arcs = coverage_arcs(linear, valid8, out.c, o);
+    // (a band along half the rim moves it by about half its width); from the wide start by
+    // kWideStartPx more.
+    const double wide = wide_start ? kWideStartPx : 0.0;
+    const double max_move = (use_bands ? 1 + 0.5 * o.band_px : 1.0) + wide;
+    for (int pass = 0; pass < 3 + (wide_start ? 1 : 0); ++pass) {
+      CoverageEdgeOptions po = o;
+      if (pass == 0 && wide_start) po.reach_px += wide, po.inner_band_px += wide, po.outer_band_px += wide;
+      auto& first = first_arcs[wide_start];
+      if (pass == 0 && first.empty()) first = coverage_arcs(linear, valid8, out.c, po);
+      const std::vector<CoverageArc> arcs = pass == 0 ? first : coverage_arcs(linear, valid8, out.c, po);
       std::vector<RimEdge> edges;
       for (const CoverageArc& a : arcs)
         if (use_bands && a.band.strength >= 0) edges.push_back(a.band);
@@ -394,8 +410,9 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
         break;
       const bool settled =
           std::hypot(g.c.cx - out.c.cx, g.c.cy - out.c.cy) < 0.01 && std::abs(g.c.radius_px - out.c.radius_px) < 0.01;
-      out.f = g, out.c = g.c, out.support = 0;
+      out.f = g, out.c = g.c, out.support = 0, out.seen = 0;
       for (const CoverageArc& a : arcs) {
+        out.seen += a.step.strength >= 0 || a.band.strength >= 0;
         double w = 0;
         for (const RimEdge* e : {&a.step, &a.band}) {
           const double u = residual(*e, g.c) / 0.5;
@@ -407,10 +424,36 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
     }
     return out;
   };
-  Refined best_fit = refine(false);
-  if (o.band_px > 0) {
-    const Refined banded = refine(true);
-    if (banded.support > best_fit.support) best_fit = banded;
+  // From one start, the winner of the two circles and the other one. The silhouette is the
+  // ball's outer boundary: a banded circle that encloses the one-step circle by half a pixel
+  // all round and agrees with half of its arcs wins even with less support (the one-step
+  // circle sits on the inner border of a band along part of the rim, the banded one on its
+  // outer edge where the band test passed: sunset, dark, R 60).
+  auto choose = [&](bool wide_start) {
+    Refined winner = refine(false, wide_start), other;
+    if (o.band_px > 0) {
+      other = refine(true, wide_start);
+      const double margin = other.c.radius_px - winner.c.radius_px - std::hypot(other.c.cx - winner.c.cx, other.c.cy - winner.c.cy);
+      const bool encloses = other.f.inliers > 0 && margin >= 0.5 && other.support >= 0.5 * other.seen;
+      if (other.support > winner.support || encloses) std::swap(winner, other);
+    }
+    return std::pair<Refined, Refined>{winner, other};
+  };
+  auto [best_fit, other] = choose(false);
+  // A winner that agrees with fewer than half of its arcs may be trapped: the rim fit's
+  // circle can be off by more than the edge search's reach (0.75 px) where its outermost
+  // edges were a background edge just outside the silhouette on one side and the inner
+  // border of a band on the other (studio, dark, R 60: 2.2 px). The arcs around such a
+  // circle find whatever lies within reach and hold it there. So the refinement is started
+  // once more with a wide first pass (reach and pixel bands 1.25 px wider, then the narrow
+  // passes), and its winner replaces the first where the arcs agree with it by a clear
+  // margin: 2 sqrt(n) arcs, four standard deviations of the number of n arcs agreeing by
+  // chance with probability one half. The wide pass's deeper pixels bias it by tenths of a
+  // pixel (their own structure), so it does not replace a circle that holds.
+  if (best_fit.support < 0.5 * best_fit.seen) {
+    auto [wide_best, wide_other] = choose(true);
+    if (wide_best.support - best_fit.support > 2 * std::sqrt(double(std::max(wide_best.seen, best_fit.seen))))
+      best_fit = wide_best, other = wide_other;
   }
   const FitResult f = best_fit.f;
   const BallInImage fitted = best_fit.c;

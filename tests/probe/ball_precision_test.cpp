@@ -195,6 +195,22 @@ TEST(BallPrecision, TheSilhouetteIsTheOuterEdgeOfABandAtTheRim) {
   expect_found_within(o, 4, 0.2);
 }
 
+// A rim fit off by more than the coverage search's reach (studio, dark, R 60: the rim fit's
+// outermost edges are a texture edge of the photo 1-1.5 px outside the silhouette at the
+// top and the inner border of the dark band 2 px inside it at the bottom, so its circle
+// sits 2.2 px high): within +-0.75 px of that circle the arcs at the top find the photo's
+// texture and hold the circle there. Before the wide first pass (+-2 px): centre / radius
+// 2.41 / -1.34 px; measured after: 0.15 / +0.01.
+TEST(BallPrecision, TheFirstCoveragePassReachesASilhouetteTheRimFitMissedByPixels) {
+  EvalBallOptions o;
+  o.maps = every_shared_map();
+  o.photo = kPhoto;
+  o.include = [](const std::string& map, double radius, BallBackground bg) {
+    return map == "studio" && radius == 60 && bg == BallBackground::Dark;
+  };
+  expect_found_within(o, 1, 0.2);
+}
+
 // Large circles half outside the image collect edges of texture along their visible half
 // and outscored the ball wholly in view (agreement x radius), then find_ball threw: "ball
 // cut by the image border" on renders whose ball is wholly in view (night at night, sunrise

@@ -329,8 +329,8 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
   cv::Vec2d ev;
   cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);
   out.ball = c;
-  out.sigma_centre_px = std::sqrt(std::max(0.0, ev[0]) * inflate);
-  out.sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)) * inflate);
+  out.sigma_centre_px = out.noise_sigma_centre_px = std::sqrt(std::max(0.0, ev[0]) * inflate);
+  out.sigma_radius_px = out.noise_sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)) * inflate);
   out.rms_px = f.rms;
   out.inliers = f.inliers;
   out.agreement = ag;
@@ -340,6 +340,42 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
 }
 
 namespace {
+
+// The circle's spread over the rim's sectors: the delete-a-sector jackknife over eight
+// sectors of 45 deg (centre: the larger axis of its covariance; radius). Neighbouring arcs
+// see neighbouring directions of the same scene, so their edges' errors are correlated
+// along the rim (a stretch of it reflecting the border of a dark object sits off together),
+// which the fit's covariance, built as if each arc's error were independent, does not see;
+// leaving out a sector at a time does. {0, 0} when a sector's refit fails.
+std::pair<double, double> sector_jackknife(const std::vector<Weighted>& pts, const BallInImage& c) {
+  constexpr int kSectors = 8;
+  std::vector<BallInImage> fits;
+  for (int s = 0; s < kSectors; ++s) {
+    std::vector<Weighted> sub;
+    for (const Weighted& p : pts) {
+      double a = std::atan2(p.e.y - c.cy, p.e.x - c.cx);
+      if (a < 0) a += 2 * M_PI;
+      if (std::min(kSectors - 1, int(a / (2 * M_PI / kSectors))) != s) sub.push_back(p);
+    }
+    if (sub.size() < 12) return {0.0, 0.0};
+    const FitResult f = robust_circle(sub, c);
+    if (f.inliers == 0) return {0.0, 0.0};
+    fits.push_back(f.c);
+  }
+  double mx = 0, my = 0, mr = 0;
+  for (const BallInImage& b : fits) mx += b.cx / kSectors, my += b.cy / kSectors, mr += b.radius_px / kSectors;
+  cv::Matx22d cov;
+  double vr = 0;
+  const double k = double(kSectors - 1) / kSectors;
+  for (const BallInImage& b : fits) {
+    const cv::Vec2d d(b.cx - mx, b.cy - my);
+    cov += k * d * d.t();
+    vr += k * (b.radius_px - mr) * (b.radius_px - mr);
+  }
+  cv::Vec2d ev;
+  cv::eigen(cv::Mat(cov), ev);
+  return {std::sqrt(std::max(0.0, ev[0])), std::sqrt(vr)};
+}
 
 // The wide first pass (refine_rim_by_coverage): the search reach and both pixel bands grow
 // by this, so that the edge search covers 2 px either side of the rim fit's circle.
@@ -376,11 +412,12 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
     BallInImage c;
     FitResult f;
     double support = -1;
-    int seen = 0;  // arcs with an edge in the last pass
+    int seen = 0;               // arcs with an edge in the last pass
+    std::vector<Weighted> pts;  // the edges of the last pass
   };
   std::vector<CoverageArc> first_arcs[2];  // per start: both circles' first pass is the same
   auto refine = [&](bool use_bands, bool wide_start) {
-    Refined out{rim.ball, {}, -1, 0};
+    Refined out{rim.ball, {}, -1, 0, {}};
     // A pass may move the circle by 1 px; with bands by up to half the widest band more
     // (a band along half the rim moves it by about half its width); from the wide start by
     // kWideStartPx more.
@@ -410,7 +447,7 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
         break;
       const bool settled =
           std::hypot(g.c.cx - out.c.cx, g.c.cy - out.c.cy) < 0.01 && std::abs(g.c.radius_px - out.c.radius_px) < 0.01;
-      out.f = g, out.c = g.c, out.support = 0, out.seen = 0;
+      out.f = g, out.c = g.c, out.support = 0, out.seen = 0, out.pts = pts;
       for (const CoverageArc& a : arcs) {
         out.seen += a.step.strength >= 0 || a.band.strength >= 0;
         double w = 0;
@@ -462,8 +499,18 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
   cv::Vec2d ev;
   cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);
   out.ball = fitted;
-  out.sigma_centre_px = std::sqrt(std::max(0.0, ev[0]));
-  out.sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)));
+  out.noise_sigma_centre_px = std::sqrt(std::max(0.0, ev[0]));
+  out.noise_sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)));
+  // The sigmas cover more than the noise: the sectors' spread (the jackknife, where it
+  // exceeds the covariance) and the choice between the two circles (their difference).
+  const auto [jack_c, jack_r] = sector_jackknife(best_fit.pts, fitted);
+  double model_c = 0, model_r = 0;
+  if (other.f.inliers > 0) {
+    model_c = std::hypot(other.c.cx - fitted.cx, other.c.cy - fitted.cy);
+    model_r = std::abs(other.c.radius_px - fitted.radius_px);
+  }
+  out.sigma_centre_px = std::hypot(std::max(out.noise_sigma_centre_px, jack_c), model_c);
+  out.sigma_radius_px = std::hypot(std::max(out.noise_sigma_radius_px, jack_r), model_r);
   out.rms_px = f.rms;
   out.inliers = f.inliers;
   return out;

@@ -497,6 +497,7 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
     result = {rim.ball.cx, rim.ball.cy, rim.ball.radius_px};
     rep.rms_residual_px = rim.rms_px, rep.edge_points = rim.inliers;
     rep.sigma_centre_px = rim.sigma_centre_px, rep.sigma_radius_px = rim.sigma_radius_px;
+    rep.noise_sigma_centre_px = rim.noise_sigma_centre_px, rep.noise_sigma_radius_px = rim.noise_sigma_radius_px;
     rep.rim_agreement = rim.agreement, rep.inner_rim_dropped = rim.inner_rim_dropped;
   }
   rep.confidence = confidence;

@@ -114,7 +114,9 @@ nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions
     }
     if (const auto& b = f.ball_fit)  // how the ball was found: sub-pixel or not, the fit's standard errors
       fj["ball_fit"] = {{"subpixel", b->subpixel}, {"sigma_centre_px", b->sigma_centre_px}, {"sigma_radius_px", b->sigma_radius_px},
-                        {"rim_agreement", b->rim_agreement}, {"warning", ball_fit_warning(*b)}};
+                        {"noise_sigma_centre_px", b->noise_sigma_centre_px},
+                        {"noise_sigma_radius_px", b->noise_sigma_radius_px}, {"rim_agreement", b->rim_agreement},
+                        {"warning", ball_fit_warning(*b)}};
     fj["valid_fraction"] = f.valid_fraction;
     if (f.circle) fj["circle"] = {f.circle->cx, f.circle->cy, f.circle->r};
     per_frame.push_back(fj);

@@ -209,11 +209,12 @@ EvalBallReport evaluate_ball_detection(const EvalBallOptions& options, const Eva
   make_output_directory(options.output_dir);
   std::string csv =
       "map,background,radius_px,found,centre_error_px,radius_error_px,sigma_centre_px,sigma_radius_px,"
-      "confidence,subpixel,rim_agreement,inner_rim_dropped,ms,unwrap_ms,error\n";
+      "noise_sigma_centre_px,noise_sigma_radius_px,confidence,subpixel,rim_agreement,inner_rim_dropped,ms,unwrap_ms,error\n";
   for (const BallRow& r : report.rows)
-    csv += fmt::format("{},{},{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.3f},{},{:.2f},{:.2f},\"{}\"\n", r.map,
+    csv += fmt::format("{},{},{:.2f},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.3f},{},{:.3f},{},{:.2f},{:.2f},\"{}\"\n", r.map,
                        r.background, r.radius_px, r.found ? 1 : 0, r.centre_error_px, r.radius_error_px,
-                       r.report.sigma_centre_px, r.report.sigma_radius_px, r.report.confidence,
+                       r.report.sigma_centre_px, r.report.sigma_radius_px, r.report.noise_sigma_centre_px,
+                       r.report.noise_sigma_radius_px, r.report.confidence,
                        r.report.subpixel ? 1 : 0, r.report.rim_agreement, r.report.inner_rim_dropped ? 1 : 0, r.ms,
                        r.unwrap_ms, r.error);
   report.csv_path = (fs::path(options.output_dir) / "ball.csv").string();

@@ -329,8 +329,8 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
   cv::Vec2d ev;
   cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);
   out.ball = c;
-  out.sigma_centre_px = std::sqrt(std::max(0.0, ev[0]) * inflate);
-  out.sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)) * inflate);
+  out.sigma_centre_px = out.noise_sigma_centre_px = std::sqrt(std::max(0.0, ev[0]) * inflate);
+  out.sigma_radius_px = out.noise_sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)) * inflate);
   out.rms_px = f.rms;
   out.inliers = f.inliers;
   out.agreement = ag;
@@ -338,6 +338,50 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
   out.ok = true;
   return out;
 }
+
+namespace {
+
+// The circle's spread over the rim's sectors: the delete-a-sector jackknife over eight
+// sectors of 45 deg (centre: the larger axis of its covariance; radius). Neighbouring arcs
+// see neighbouring directions of the same scene, so their edges' errors are correlated
+// along the rim (a stretch of it reflecting the border of a dark object sits off together),
+// which the fit's covariance, built as if each arc's error were independent, does not see;
+// leaving out a sector at a time does. {0, 0} when a sector's refit fails.
+std::pair<double, double> sector_jackknife(const std::vector<Weighted>& pts, const BallInImage& c) {
+  constexpr int kSectors = 8;
+  std::vector<BallInImage> fits;
+  for (int s = 0; s < kSectors; ++s) {
+    std::vector<Weighted> sub;
+    for (const Weighted& p : pts) {
+      double a = std::atan2(p.e.y - c.cy, p.e.x - c.cx);
+      if (a < 0) a += 2 * M_PI;
+      if (std::min(kSectors - 1, int(a / (2 * M_PI / kSectors))) != s) sub.push_back(p);
+    }
+    if (sub.size() < 12) return {0.0, 0.0};
+    const FitResult f = robust_circle(sub, c);
+    if (f.inliers == 0) return {0.0, 0.0};
+    fits.push_back(f.c);
+  }
+  double mx = 0, my = 0, mr = 0;
+  for (const BallInImage& b : fits) mx += b.cx / kSectors, my += b.cy / kSectors, mr += b.radius_px / kSectors;
+  cv::Matx22d cov;
+  double vr = 0;
+  const double k = double(kSectors - 1) / kSectors;
+  for (const BallInImage& b : fits) {
+    const cv::Vec2d d(b.cx - mx, b.cy - my);
+    cov += k * d * d.t();
+    vr += k * (b.radius_px - mr) * (b.radius_px - mr);
+  }
+  cv::Vec2d ev;
+  cv::eigen(cv::Mat(cov), ev);
+  return {std::sqrt(std::max(0.0, ev[0])), std::sqrt(vr)};
+}
+
+// The wide first pass (refine_rim_by_coverage): the search reach and both pixel bands grow
+// by this, so that the edge search covers 2 px either side of the rim fit's circle.
+constexpr double kWideStartPx = 1.25;
+
+}  // namespace
 
 RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise) {
   if (!rim.ok) return rim;
@@ -368,14 +412,23 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
     BallInImage c;
     FitResult f;
     double support = -1;
+    int seen = 0;               // arcs with an edge in the last pass
+    std::vector<Weighted> pts;  // the edges of the last pass
   };
-  auto refine = [&](bool use_bands) {
-    Refined out{rim.ball, {}, -1};
+  std::vector<CoverageArc> first_arcs[2];  // per start: both circles' first pass is the same
+  auto refine = [&](bool use_bands, bool wide_start) {
+    Refined out{rim.ball, {}, -1, 0, {}};
     // A pass may move the circle by 1 px; with bands by up to half the widest band more
-    // (a band along half the rim moves it by about half its width).
-    const double max_move = use_bands ? 1 + 0.5 * o.band_px : 1.0;
-    for (int pass = 0; pass < 3; ++pass) {
-      const std::vector<CoverageArc> arcs = coverage_arcs(linear, valid8, out.c, o);
+    // (a band along half the rim moves it by about half its width); from the wide start by
+    // kWideStartPx more.
+    const double wide = wide_start ? kWideStartPx : 0.0;
+    const double max_move = (use_bands ? 1 + 0.5 * o.band_px : 1.0) + wide;
+    for (int pass = 0; pass < 3 + (wide_start ? 1 : 0); ++pass) {
+      CoverageEdgeOptions po = o;
+      if (pass == 0 && wide_start) po.reach_px += wide, po.inner_band_px += wide, po.outer_band_px += wide;
+      auto& first = first_arcs[wide_start];
+      if (pass == 0 && first.empty()) first = coverage_arcs(linear, valid8, out.c, po);
+      const std::vector<CoverageArc> arcs = pass == 0 ? first : coverage_arcs(linear, valid8, out.c, po);
       std::vector<RimEdge> edges;
       for (const CoverageArc& a : arcs)
         if (use_bands && a.band.strength >= 0) edges.push_back(a.band);
@@ -394,8 +447,9 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
         break;
       const bool settled =
           std::hypot(g.c.cx - out.c.cx, g.c.cy - out.c.cy) < 0.01 && std::abs(g.c.radius_px - out.c.radius_px) < 0.01;
-      out.f = g, out.c = g.c, out.support = 0;
+      out.f = g, out.c = g.c, out.support = 0, out.seen = 0, out.pts = pts;
       for (const CoverageArc& a : arcs) {
+        out.seen += a.step.strength >= 0 || a.band.strength >= 0;
         double w = 0;
         for (const RimEdge* e : {&a.step, &a.band}) {
           const double u = residual(*e, g.c) / 0.5;
@@ -407,10 +461,36 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
     }
     return out;
   };
-  Refined best_fit = refine(false);
-  if (o.band_px > 0) {
-    const Refined banded = refine(true);
-    if (banded.support > best_fit.support) best_fit = banded;
+  // From one start, the winner of the two circles and the other one. The silhouette is the
+  // ball's outer boundary: a banded circle that encloses the one-step circle by half a pixel
+  // all round and agrees with half of its arcs wins even with less support (the one-step
+  // circle sits on the inner border of a band along part of the rim, the banded one on its
+  // outer edge where the band test passed: sunset, dark, R 60).
+  auto choose = [&](bool wide_start) {
+    Refined winner = refine(false, wide_start), other;
+    if (o.band_px > 0) {
+      other = refine(true, wide_start);
+      const double margin = other.c.radius_px - winner.c.radius_px - std::hypot(other.c.cx - winner.c.cx, other.c.cy - winner.c.cy);
+      const bool encloses = other.f.inliers > 0 && margin >= 0.5 && other.support >= 0.5 * other.seen;
+      if (other.support > winner.support || encloses) std::swap(winner, other);
+    }
+    return std::pair<Refined, Refined>{winner, other};
+  };
+  auto [best_fit, other] = choose(false);
+  // A winner that agrees with fewer than half of its arcs may be trapped: the rim fit's
+  // circle can be off by more than the edge search's reach (0.75 px) where its outermost
+  // edges were a background edge just outside the silhouette on one side and the inner
+  // border of a band on the other (studio, dark, R 60: 2.2 px). The arcs around such a
+  // circle find whatever lies within reach and hold it there. So the refinement is started
+  // once more with a wide first pass (reach and pixel bands 1.25 px wider, then the narrow
+  // passes), and its winner replaces the first where the arcs agree with it by a clear
+  // margin: 2 sqrt(n) arcs, four standard deviations of the number of n arcs agreeing by
+  // chance with probability one half. The wide pass's deeper pixels bias it by tenths of a
+  // pixel (their own structure), so it does not replace a circle that holds.
+  if (best_fit.support < 0.5 * best_fit.seen) {
+    auto [wide_best, wide_other] = choose(true);
+    if (wide_best.support - best_fit.support > 2 * std::sqrt(double(std::max(wide_best.seen, best_fit.seen))))
+      best_fit = wide_best, other = wide_other;
   }
   const FitResult f = best_fit.f;
   const BallInImage fitted = best_fit.c;
@@ -419,8 +499,18 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
   cv::Vec2d ev;
   cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);
   out.ball = fitted;
-  out.sigma_centre_px = std::sqrt(std::max(0.0, ev[0]));
-  out.sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)));
+  out.noise_sigma_centre_px = std::sqrt(std::max(0.0, ev[0]));
+  out.noise_sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)));
+  // The sigmas cover more than the noise: the sectors' spread (the jackknife, where it
+  // exceeds the covariance) and the choice between the two circles (their difference).
+  const auto [jack_c, jack_r] = sector_jackknife(best_fit.pts, fitted);
+  double model_c = 0, model_r = 0;
+  if (other.f.inliers > 0) {
+    model_c = std::hypot(other.c.cx - fitted.cx, other.c.cy - fitted.cy);
+    model_r = std::abs(other.c.radius_px - fitted.radius_px);
+  }
+  out.sigma_centre_px = std::hypot(std::max(out.noise_sigma_centre_px, jack_c), model_c);
+  out.sigma_radius_px = std::hypot(std::max(out.noise_sigma_radius_px, jack_r), model_r);
   out.rms_px = f.rms;
   out.inliers = f.inliers;
   return out;

@@ -46,6 +46,7 @@ std::vector<RimEdge> radial_edges(const cv::Mat& img, double cx, double cy, doub
 struct RimFit {
   BallInImage ball;
   double sigma_centre_px = 0, sigma_radius_px = 0;  // as find_ball reports them
+  double noise_sigma_centre_px = 0, noise_sigma_radius_px = 0;  // the fit's covariance alone
   double rms_px = 0;    // weighted RMS residual of the inliers
   int inliers = 0;      // rays whose edge has a non-zero final weight
   // Share of the rays in view (inside the image, on valid pixels) whose outermost edge
@@ -72,8 +73,14 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
 // the least residual at the start). A second circle takes, on the arcs that show one, the
 // outer edge of a band of the rim's reflection up to 3 px wide instead (passes may move it
 // 2.5 px); the circle that more arcs agree with (one of their edges within 0.5 px) wins,
-// the first on a tie. `rim` unchanged when it is not ok or fewer than 12 arcs
-// give an edge. The sigmas are those of this fit (the arcs share no pixels).
+// the first on a tie, unless the banded circle encloses the other by 0.5 px and agrees with
+// half its arcs (the silhouette is the outer boundary). Where the winner agrees with fewer
+// than half its arcs (trapped: the rim fit off by more than the 0.75 px reach) both are
+// refined again from a first pass of 2 px reach, and that winner replaces it when more arcs
+// agree with it by 2 sqrt(arcs). `rim` unchanged when it is not ok or fewer than 12 arcs
+// give an edge. noise_sigma_*: this fit's covariance (the arcs share no pixels); sigma_*
+// also cover the spread over the rim's eight sectors (a delete-a-sector jackknife, where
+// larger) and the difference between the two circles, added in quadrature.
 RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise);
 
 // The edge strength noise alone reaches in `smooth` (CV_32FC3): 7 x the 5th percentile of

@@ -456,6 +456,7 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
     Circle c;
     RegionScore s;
     RimFit rim;
+    bool in_view = true;  // its rim fit is cut by the border no more than max_cut_fraction
   };
   std::optional<Pick> best;
   auto arc = [](const Pick& p) {
@@ -473,7 +474,15 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
     const bool near = std::hypot(p.rim.ball.cx - c.cx, p.rim.ball.cy - c.cy) <= 8 + 0.02 * c.r &&
                       std::abs(p.rim.ball.radius_px - c.r) <= 8 + 0.02 * c.r;
     if (!near) p.rim.ok = false;
-    if (!best || arc(p) > arc(*best) || (arc(p) == arc(*best) && p.s.score > best->s.score)) best = p;
+    // A rim fit that would be rejected as cut by the border loses to any that would not:
+    // large circles half outside the image collect arcs of texture along their visible
+    // half and outscored (agreement x radius) the ball wholly in view, then find_ball
+    // threw. Without a rim fit held in view the order is as before.
+    p.in_view = cut_fraction({p.rim.ball.cx, p.rim.ball.cy, p.rim.ball.radius_px}, w, h) <= options.max_cut_fraction;
+    auto held = [&](const Pick& q) { return arc(q) > 0 && q.in_view; };
+    if (!best || (held(p) != held(*best) ? held(p)
+                  : arc(p) > arc(*best) || (arc(p) == arc(*best) && p.s.score > best->s.score)))
+      best = p;
   }
   const double confidence = best && best->s.visible >= 0.25 ? best->s.support : 0.0;
   if (!best || confidence < options.min_confidence)
@@ -488,6 +497,7 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
     result = {rim.ball.cx, rim.ball.cy, rim.ball.radius_px};
     rep.rms_residual_px = rim.rms_px, rep.edge_points = rim.inliers;
     rep.sigma_centre_px = rim.sigma_centre_px, rep.sigma_radius_px = rim.sigma_radius_px;
+    rep.noise_sigma_centre_px = rim.noise_sigma_centre_px, rep.noise_sigma_radius_px = rim.noise_sigma_radius_px;
     rep.rim_agreement = rim.agreement, rep.inner_rim_dropped = rim.inner_rim_dropped;
   }
   rep.confidence = confidence;

@@ -158,9 +158,13 @@ struct FindBallReport {
   // Whether the silhouette fit was kept (else the region answer stands, good to a few
   // pixels, and the three numbers above and below are 0).
   bool subpixel = false;
-  // The fit's own standard errors (px): of the centre (the larger axis of its 1-sigma
-  // ellipse) and of the radius (probe/ball_rim_fit.h).
+  // The fit's standard errors (px): of the centre (the larger axis of its 1-sigma ellipse)
+  // and of the radius (probe/ball_rim_fit.h). sigma_* cover more than the noise: the larger
+  // of the fit's covariance and the spread over the rim's sectors, with the difference
+  // between the two competing circles of the last step (the one-step silhouette, the outer
+  // edge of a band at the rim) in quadrature; noise_sigma_* are the covariance alone.
   double sigma_centre_px = 0, sigma_radius_px = 0;
+  double noise_sigma_centre_px = 0, noise_sigma_radius_px = 0;
   // Share of the rim in view along which the fitted circle has an edge (within 0.5 px):
   // clean renders 0.7-1; about 0.5 where half the rim is dark on a dark background.
   double rim_agreement = 0;

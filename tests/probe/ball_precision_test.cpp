@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -145,9 +146,14 @@ TEST(BallPrecision, ARimDarkAgainstADarkBackgroundIsFound) {
   }
 }
 
-// Runs the harness on the cases `o` includes: `cases` of them, each found with sub-pixel
-// refinement, centre and radius within `limit_px` of the truth.
-void expect_found_within(const EvalBallOptions& o, size_t cases, double limit_px) {
+// Runs the harness on the renders of every shared map that `include` picks: `cases` of
+// them, each found with sub-pixel refinement, centre and radius within `limit_px` of the truth.
+void expect_found_within(const std::function<bool(const std::string&, double, BallBackground)>& include,
+                         size_t cases, double limit_px) {
+  EvalBallOptions o;
+  o.maps = every_shared_map();
+  o.photo = kPhoto;
+  o.include = include;
   const EvalBallReport rep = evaluate_ball_detection(o);
   std::printf("%s", rep.summary().c_str());
   ASSERT_EQ(rep.rows.size(), cases);
@@ -166,14 +172,12 @@ void expect_found_within(const EvalBallOptions& o, size_t cases, double limit_px
 // R 150), 0.16 / -0.08 (pisa, black, R 400), 0.27 / +0.18 (uffizi, black, R 400); measured
 // with the coverage model: 0.01 / -0.00, 0.01 / +0.00, 0.00 / -0.00, 0.01 / -0.06.
 TEST(BallPrecision, TheSilhouetteByPixelCoverageHasNoBiasFromTheRimsReflection) {
-  EvalBallOptions o;
-  o.maps = every_shared_map();
-  o.photo = kPhoto;
-  o.include = [](const std::string& map, double radius, BallBackground bg) {
-    return (map == "pisa" && radius == 150 && (bg == BallBackground::Black || bg == BallBackground::Photo)) ||
-           ((map == "pisa" || map == "uffizi") && radius == 400 && bg == BallBackground::Black);
-  };
-  expect_found_within(o, 4, 0.1);
+  expect_found_within(
+      [](const std::string& map, double radius, BallBackground bg) {
+        return (map == "pisa" && radius == 150 && (bg == BallBackground::Black || bg == BallBackground::Photo)) ||
+               ((map == "pisa" || map == "uffizi") && radius == 400 && bg == BallBackground::Black);
+      },
+      4, 0.1);
 }
 
 // A band of the rim's reflection outside the edge the coverage model picks (probe/
@@ -185,14 +189,12 @@ TEST(BallPrecision, TheSilhouetteByPixelCoverageHasNoBiasFromTheRimsReflection) 
 // 1.22 / -1.08 (pisa), all dark at R 60, and 1.27 / -1.34 (wells, black, R 400); measured
 // with the band's outer edge: 0.04 / +0.13, 0.10 / -0.06, 0.10 / -0.04, 0.11 / -0.06.
 TEST(BallPrecision, TheSilhouetteIsTheOuterEdgeOfABandAtTheRim) {
-  EvalBallOptions o;
-  o.maps = every_shared_map();
-  o.photo = kPhoto;
-  o.include = [](const std::string& map, double radius, BallBackground bg) {
-    return ((map == "uffizi" || map == "sunrise" || map == "pisa") && radius == 60 && bg == BallBackground::Dark) ||
-           (map == "wells" && radius == 400 && bg == BallBackground::Black);
-  };
-  expect_found_within(o, 4, 0.2);
+  expect_found_within(
+      [](const std::string& map, double radius, BallBackground bg) {
+        return ((map == "uffizi" || map == "sunrise" || map == "pisa") && radius == 60 && bg == BallBackground::Dark) ||
+               (map == "wells" && radius == 400 && bg == BallBackground::Black);
+      },
+      4, 0.2);
 }
 
 // A rim fit off by more than the coverage search's reach (studio, dark, R 60: the rim fit's
@@ -202,13 +204,11 @@ TEST(BallPrecision, TheSilhouetteIsTheOuterEdgeOfABandAtTheRim) {
 // texture and hold the circle there. Before the wide first pass (+-2 px): centre / radius
 // 2.41 / -1.34 px; measured after: 0.15 / +0.01.
 TEST(BallPrecision, TheFirstCoveragePassReachesASilhouetteTheRimFitMissedByPixels) {
-  EvalBallOptions o;
-  o.maps = every_shared_map();
-  o.photo = kPhoto;
-  o.include = [](const std::string& map, double radius, BallBackground bg) {
-    return map == "studio" && radius == 60 && bg == BallBackground::Dark;
-  };
-  expect_found_within(o, 1, 0.2);
+  expect_found_within(
+      [](const std::string& map, double radius, BallBackground bg) {
+        return map == "studio" && radius == 60 && bg == BallBackground::Dark;
+      },
+      1, 0.2);
 }
 
 // Large circles half outside the image collect edges of texture along their visible half
@@ -217,14 +217,12 @@ TEST(BallPrecision, TheFirstCoveragePassReachesASilhouetteTheRimFitMissedByPixel
 // on the photo, R 60). A rim fit that would be rejected as cut loses to one that would not:
 // found now, centre / radius 0.04 / -0.17 px (night) and 0.04 / -0.15 (sunrise).
 TEST(BallPrecision, ABallWhollyInViewBeatsACircleCutByTheBorder) {
-  EvalBallOptions o;
-  o.maps = every_shared_map();
-  o.photo = kPhoto;
-  o.include = [](const std::string& map, double radius, BallBackground bg) {
-    return radius == 60 && ((map == "night" && bg == BallBackground::Night) ||
-                            (map == "sunrise" && bg == BallBackground::Photo));
-  };
-  expect_found_within(o, 2, 0.25);
+  expect_found_within(
+      [](const std::string& map, double radius, BallBackground bg) {
+        return radius == 60 && ((map == "night" && bg == BallBackground::Night) ||
+                                (map == "sunrise" && bg == BallBackground::Photo));
+      },
+      2, 0.25);
 }
 
 // Where the dark arc has no step at all (a uniform ball whose lower rim reflects black, in

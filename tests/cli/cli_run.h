@@ -31,13 +31,19 @@ inline std::string slurp(const fs::path& p) {
   return s.str();
 }
 
-// A scratch directory per test process (ctest runs tests in parallel processes).
+// A scratch directory per test process (ctest runs tests in parallel processes) and, inside
+// it, one per test: a whole binary run must not find another test's "lights.json" where a
+// test checks that nothing was written.
 inline fs::path scratch() {
-  static const fs::path dir = [] {
+  static const fs::path process_dir = [] {
     fs::path d = fs::path(::testing::TempDir()) / ("lightprobe_cli_" + std::to_string(::getpid()));
     fs::create_directories(d);
     return d;
   }();
+  const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+  if (!test) return process_dir;
+  const fs::path dir = process_dir / (std::string(test->test_suite_name()) + "." + test->name());
+  fs::create_directories(dir);
   return dir;
 }
 

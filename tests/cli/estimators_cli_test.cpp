@@ -47,7 +47,7 @@ TEST(EstimatorsCli, QuickRunWritesCsvChartAndJson) {
 }
 
 TEST(EstimatorsCli, SweepAndASequenceDirectory) {
-  const fs::path seq = scratch() / "estimators_seq";  // own name: scratch() is per process
+  const fs::path seq = scratch() / "estimators_seq";
   fs::remove_all(seq);
   ASSERT_EQ(lightprobe("synth sequence --scenario flicker --frames 3 --size 64x32 -o " + seq.string()).code, 0);
   const fs::path dir = scratch() / "sweep";

@@ -147,9 +147,12 @@ struct FrameSums {
 };
 #endif
 
-MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
+// kCodes: the levels are in.codes' bytes (256 levels), else computed from in.rows' floats.
+template <bool kCodes>
+HWY_NOINLINE MergeRowResult MergeRowOf(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
+  const hn::Rebind<uint8_t, decltype(di)> du8;  // N bytes
   using VF = hn::Vec<decltype(df)>;
   using VI = hn::Vec<decltype(di)>;
   const size_t N = hn::Lanes(df);
@@ -176,6 +179,13 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
   const VI zero_through = hn::Set(di, in.zero_through), zero_from = hn::Set(di, in.zero_from);
   const VI below_sat = hn::Set(di, in.sat_level - 1);
   const VI above_black = hn::Set(di, in.black_level + 1);
+  // The levels of frame k's N channel codes from code `at` of the row on.
+  auto levels_at = [&](size_t k, size_t at) HWY_ATTR -> VI {
+    if constexpr (kCodes)
+      return hn::PromoteTo(di, hn::LoadU(du8, in.codes[k] + at));
+    else
+      return LevelOf(df, di, hn::LoadU(df, in.rows[k] + at), scale, half, top);
+  };
   // Per lane of a group with a channel no frame weighs: 1 saturated, 2 black, 4 neither.
   constexpr int32_t kMixed = 4;
   static_assert(kSaturatedEverywhere == 1 && kBlackEverywhere == 2, "lane codes are the flag bits");
@@ -196,12 +206,11 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
     FrameSums<decltype(df)> sums[3] = {FrameSums<decltype(df)>(df), FrameSums<decltype(df)>(df),
                                        FrameSums<decltype(df)>(df)};
     for (size_t k = 0; k < in.frames; ++k) {
-      const float* z = in.rows[k] + first_float;
       const VF fw = hn::Set(df, in.frame_w[k]);
       const VF fx = hn::Set(df, in.frame_wx[k]);
       const VF fwx = FrameSums<decltype(df)>::Pair(df, fw, fx);
       for (size_t v = 0; v < 3; ++v) {
-        const VI level = LevelOf(df, di, hn::LoadU(df, z + v * N), scale, half, top);
+        const VI level = levels_at(k, first_float + v * N);
         // Every lane black or clipped in this frame: it adds +0 to both sums, so skip the reads.
         if (hn::AllFalse(di, hn::And(hn::Gt(level, zero_through), hn::Lt(level, zero_from)))) continue;
         sums[v].Add(df, in, hn::Add(level, offset[v]), fw, fx, fwx);
@@ -222,7 +231,7 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
         VI lowest = hn::Set(di, in.levels), highest = hn::Set(di, -1);
         VI at_shortest = hn::Zero(di), at_longest = hn::Zero(di);
         for (size_t k = 0; k < in.frames; ++k) {
-          const VI level = LevelOf(df, di, hn::LoadU(df, in.rows[k] + first_float + v * N), scale, half, top);
+          const VI level = levels_at(k, first_float + v * N);
           lowest = hn::Min(lowest, level);
           highest = hn::Max(highest, level);
           if (k == in.shortest) at_shortest = hn::Add(level, offset[v]);
@@ -280,6 +289,10 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
   }
   result.done = groups * N;
   return result;
+}
+
+MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
+  return in.codes ? MergeRowOf<true>(in, out, flags, redo) : MergeRowOf<false>(in, out, flags, redo);
 }
 
 const char* MergeTargetName() { return hwy::TargetName(HWY_TARGET); }

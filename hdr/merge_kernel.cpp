@@ -38,6 +38,17 @@
 // One thread's CPU time on the benchmark, medians of six interleaved runs at load 4-5:
 // 4.60 -> 3.42 ms (docs/hdr.md). It now waits on reading the brackets (its prefetches and
 // first loads are where its samples are); streaming stores of the output did not help.
+// Then (issue 23, 8-bit input): an 8-bit bracket keeps its codes (Bracket::codes), which are
+// the levels at 256 levels, and both kernels read them (MergeRowInput::codes: 1 byte per
+// channel code instead of a float and its conversion; 11 instead of 44 MB per merge of the
+// benchmark's bracket). One thread's CPU time, medians of 5, six interleaved runs at load
+// 4-4.7: 3.67 ms (float frames, before) -> 1.98 ms (8-bit frames); float frames unchanged.
+// Against the floor that reads three 8-bit frames (the honest one for this path, issue 23's
+// "read 3 brackets"), 2 threads: 3.6x, so the 3x aim is not met; against the float floor
+// 1.65x. perf then puts ~12 % of the VBMI kernel's samples on the code loads and prefetches
+// (was ~40 % on the floats'), the rest on its own work: the byte permutes, unpacks and blends
+// of the table reads, the divisions, the spills of its per-block arrays. 16-bit, RAW and float
+// brackets keep reading floats.
 //
 // Bit-identical to the scalar loop: every lane does the scalar loop's operations in its order
 // (level = int(min(z * scale + 0.5, levels - 1)) after zeroing non-positive and NaN values;

@@ -13,7 +13,11 @@
 // level_of), packed to bytes and permuted into one vector of 64 levels per channel. Their
 // byte order is chosen so that the unpacks give pixels in order (pi below); the sums, the
 // division and the bounds are then per channel and pixel, and the three channels are
-// interleaved again for the store.
+// interleaved again for the store. With 8-bit codes (MergeRowInput::codes, an 8-bit bracket)
+// the 192 codes of a block are loaded as 3 vectors of bytes, already levels, and split into
+// channel planes by another pair of permute indices (the codes' own byte order): no float
+// loads, no conversion, a quarter of the bytes (what that gained and where the time goes
+// then: merge_kernel.cpp's head comment, docs/hdr.md).
 //
 // Bit-identical to the scalar loop as the Highway kernel is: the same level, sums from +0 of
 // table[level] * factor frame after frame (a frame whose 64 levels of a channel all have

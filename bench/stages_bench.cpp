@@ -62,6 +62,16 @@ const Bracket& bracket() {
   return b;
 }
 
+// The same bracket as read_bracket keeps an 8-bit one: with its codes (Bracket::codes).
+const Bracket& bracket_8bit() {
+  static const Bracket b = [] {
+    Bracket out = bracket();
+    keep_8bit_codes(out);
+    return out;
+  }();
+  return b;
+}
+
 void set_pixels(benchmark::State& state) {
   state.counters["MPix_s"] = benchmark::Counter(double(kW) * kH / 1e6, benchmark::Counter::kIsIterationInvariantRate);
 }
@@ -71,13 +81,14 @@ void set_pixels(benchmark::State& state) {
 // merges so); kFreshOutput: a new image each call (merge_bracket's returning form).
 // kThreads 1: the whole merge on the calling thread, whose CPU time is little disturbed by
 // other processes on a shared machine (the 2-thread real time waits for a core).
-template <bool kSimd, bool kFreshOutput = false, int kThreads = 2>
+// k8Bit: the frames' 8-bit codes are read instead of their floats (an 8-bit bracket).
+template <bool kSimd, bool kFreshOutput = false, int kThreads = 2, bool k8Bit = false>
 void BM_MergeOurs(benchmark::State& state) {
   const CameraResponse response = linear_response(256);
   MergeOptions o;
   o.threads = kThreads;
   o.simd = kSimd;
-  const BracketView b = bracket_view(bracket());  // made once, outside the timing
+  const BracketView b = bracket_view(k8Bit ? bracket_8bit() : bracket());  // made once, outside the timing
   RgbImage out;
   for (auto _ : state) {
     if (kFreshOutput)
@@ -103,6 +114,27 @@ void BM_MergeFloor(benchmark::State& state) {
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) out[i] = f0[i] + f1[i] + f2[i];
+      });
+    });
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  set_pixels(state);
+}
+
+// The same with the three frames' 8-bit codes (3.7 MB each instead of 14.7): the floor of a
+// merge of an 8-bit bracket, which is what issue 23's aim reads.
+void BM_MergeFloor8Bit(benchmark::State& state) {
+  const Bracket& b = bracket_8bit();
+  std::vector<float> out(b.frames[0].rgb.size());
+  const uint8_t* f0 = b.codes[0].data();
+  const uint8_t* f1 = b.codes[1].data();
+  const uint8_t* f2 = b.codes[2].data();
+  tbb::task_arena arena(2);
+  for (auto _ : state) {
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) out[i] = float(int(f0[i]) + int(f1[i]) + int(f2[i]));
       });
     });
     benchmark::DoNotOptimize(out.data());
@@ -182,7 +214,10 @@ BENCHMARK(BM_MergeOurs<true>)->Name("hdr/merge_3x1280x960/ours")->Unit(benchmark
 BENCHMARK(BM_MergeOurs<true, true>)->Name("hdr/merge_3x1280x960/ours:new output image per call")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeOurs<true, false, 1>)->Name("hdr/merge_3x1280x960/ours:1 thread")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeOurs<false>)->Name("hdr/merge_3x1280x960/ours:scalar loop")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeOurs<true, false, 2, true>)->Name("hdr/merge_3x1280x960/ours:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeOurs<true, false, 1, true>)->Name("hdr/merge_3x1280x960/ours:8-bit frames, 1 thread")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeFloor)->Name("hdr/merge_3x1280x960/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeFloor8Bit)->Name("hdr/merge_3x1280x960/floor:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeOpenCv)->Name("hdr/merge_3x1280x960/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();
 BENCHMARK(BM_StartOurs)->Name("startup/version/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StartFloor)->Name("startup/version/floor")->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -125,6 +125,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
       else throw InputError(fmt::format("--align must be none, mtb or ecc, got '{}'", args.align));
       AlignReport ar;
       bracket.frames = align_frames(bracket.frames, bracket.exposure_seconds, ao, &ar);
+      bracket.codes.clear();  // the file's 8-bit codes are not the shifted frames': merge the floats
       nlohmann::json shifts = nlohmann::json::array();
       for (const auto& s : ar.shift_per_frame) shifts.push_back({s[0], s[1], s[2]});
       report["alignment"] = shifts;

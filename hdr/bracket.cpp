@@ -89,6 +89,12 @@ void check_bracket(const Bracket& b) {
         throw InputError(fmt::format("{} and {}: the same exposure time {} s; each frame of a bracket needs its own",
                                      frame_name(b, j), frame_name(b, k), t));
   }
+  if (!b.codes.empty() && b.codes.size() != b.frames.size())
+    throw InputError(fmt::format("{}: 8-bit codes of {} frames for {} images", who, b.codes.size(), b.frames.size()));
+  for (size_t k = 0; k < b.codes.size(); ++k)
+    if (b.codes[k].size() != b.frames[k].rgb.size())
+      throw InputError(fmt::format("{}: {} 8-bit codes for {} code values", frame_name(b, k), b.codes[k].size(),
+                                   b.frames[k].rgb.size()));
 }
 
 std::optional<double> read_exif_exposure_seconds(const std::string& path) {
@@ -148,7 +154,21 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     }
   }
   check_bracket(b);
+  if (b.bit_depth == 8 && !b.linear) keep_8bit_codes(b);
   return b;
+}
+
+void keep_8bit_codes(Bracket& b) {
+  b.codes.resize(b.frames.size());
+  for (size_t k = 0; k < b.frames.size(); ++k) {
+    const std::vector<float>& v = b.frames[k].rgb;
+    std::vector<uint8_t>& out = b.codes[k];
+    out.resize(v.size());
+    for (size_t i = 0; i < v.size(); ++i) {
+      const float s = v[i] * 255.0f + 0.5f;  // as merge.cpp's level_of
+      out[i] = s > 0.0f ? uint8_t(std::min(s, 255.0f)) : uint8_t(0);
+    }
+  }
 }
 
 std::vector<double> read_exposure_list(const std::string& path) {

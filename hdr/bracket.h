@@ -7,6 +7,7 @@
 // sorted by exposure.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +22,11 @@ struct Bracket {
   int bit_depth = 8;                     // 8 or 16 (of the files read)
   std::vector<std::string> paths;        // one per frame, or empty for brackets made in memory
   bool linear = false;                   // camera RAW frames: linear sensor values, no response curve
+  // Optional (keep_8bit_codes): per frame, the level merge_bracket takes of each code value of
+  // frames[k] at 256 levels, packed RGB (3 * width * height bytes). A merge through a 256-level
+  // response then reads these instead of the floats (a quarter of the bytes) and gives the same
+  // image bit for bit. Empty: the floats. Whoever changes frames (align_frames) must clear it.
+  std::vector<std::vector<uint8_t>> codes;
 
   int width() const { return frames.empty() ? 0 : frames[0].width; }
   int height() const { return frames.empty() ? 0 : frames[0].height; }
@@ -32,10 +38,16 @@ struct Bracket {
 // a time that is not positive and finite, two frames with the same time (both named).
 void check_bracket(const Bracket& bracket);
 
+// Fills bracket.codes from its frames: per code value v, int(min(v * 255 + 0.5, 255)), 0 for
+// v <= 0 and NaN (merge_bracket's level at 256 levels, so k / 255 gives back k for every 8-bit
+// code k; tests/hdr/merge_codes_test.cpp).
+void keep_8bit_codes(Bracket& bracket);
+
 // Reads every image (read_camera_image) and its exposure time: from `exposure_seconds`
 // when given (one per path, same order), else from each file's EXIF ExposureTime, else
 // InputError("<file>: no exposure time in EXIF; give --exposure-times"). All files must
-// have the same bit depth. The result passes check_bracket.
+// have the same bit depth. The result passes check_bracket; a bracket of 8-bit files keeps
+// their codes too (keep_8bit_codes).
 Bracket read_bracket(const std::vector<std::string>& paths,
                      const std::optional<std::vector<double>>& exposure_seconds = std::nullopt);
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
+#include <type_traits>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -45,8 +46,9 @@ inline int level_of(float v, float scale, int levels) {
 }
 
 // kIgnore: ignore_colour is set. kMask: some frame has a keep mask (frame_masks) or a valid
-// mask; both are chosen once per call, so the plain merge carries neither test.
-template <bool kIgnore, bool kMask>
+// mask; kCodes: the levels come from BracketView::codes (256 levels) instead of the floats.
+// All are chosen once per call, so the plain merge carries none of the tests.
+template <bool kIgnore, bool kMask, bool kCodes>
 void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& T, int y0, int y1, RgbImage& out,
                 uint8_t* flags, std::atomic<size_t>& n_sat, std::atomic<size_t>& n_black,
                 std::atomic<size_t>& n_ignored, std::atomic<size_t>& n_no_frame, std::atomic<size_t>& n_well) {
@@ -67,6 +69,13 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
   const float* x0 = T.wx[0].data();
   const float* x1 = T.wx[1].data();
   const float* x2 = T.wx[2].data();
+  // The level of channel c of frame k at pixel (x, y).
+  auto level_at = [&](size_t k, int x, int y, int c) -> int {
+    if constexpr (kCodes)
+      return b.codes[k][3 * (size_t(y) * size_t(W) + size_t(x)) + size_t(c)];
+    else
+      return level_of(b.frames[k].pixel(x, y)[c], scale, L);
+  };
   // Frame k does not take part at pixel (x, y).
   auto dropped = [&](size_t k, int x, int y) {
     if constexpr (kMask) {
@@ -75,9 +84,8 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
         return true;
     }
     if constexpr (kIgnore) {
-      const float* q = b.frames[k].pixel(x, y);
-      if (level_of(q[0], scale, L) == T.colour_level[0] && level_of(q[1], scale, L) == T.colour_level[1] &&
-          level_of(q[2], scale, L) == T.colour_level[2])
+      if (level_at(k, x, y, 0) == T.colour_level[0] && level_at(k, x, y, 1) == T.colour_level[1] &&
+          level_at(k, x, y, 2) == T.colour_level[2])
         return true;
     }
     return false;
@@ -86,13 +94,15 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
   // The unmasked merge runs the vector kernel over most of a row (merge_kernel.h) and the
   // loops below over the rest: the tail of the row and the pixels it hands back.
   [[maybe_unused]] std::vector<const float*> frame_rows(nf);
+  [[maybe_unused]] std::vector<const uint8_t*> code_rows(nf);
   [[maybe_unused]] std::vector<uint32_t> redo;
   [[maybe_unused]] detail::MergeRowInput kernel;
   if constexpr (!kTrack) {
     redo.resize(size_t(W));
-    kernel = {frame_rows.data(), T.frame_w.data(), T.frame_wx.data(), nf, size_t(W), T.w3.data(), T.wx3.data(),
-              T.w_wx3.data(), L, T.zero_through, T.zero_from, T.sat_level, T.black_level, T.by_time.front(), T.by_time.back(),
-              T.bound_short.data(), T.bound_long.data(), T.planes.empty() ? nullptr : T.planes.data()};
+    kernel = {frame_rows.data(), kCodes ? code_rows.data() : nullptr, T.frame_w.data(), T.frame_wx.data(), nf,
+              size_t(W), T.w3.data(), T.wx3.data(), T.w_wx3.data(), L, T.zero_through, T.zero_from, T.sat_level,
+              T.black_level, T.by_time.front(), T.by_time.back(), T.bound_short.data(), T.bound_long.data(),
+              T.planes.empty() ? nullptr : T.planes.data()};
   }
   for (int y = y0; y < y1; ++y) {
     const size_t row = size_t(y) * size_t(W);
@@ -104,7 +114,12 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
       std::fill(swx.begin() + 3 * begin, swx.begin() + 3 * end, 0.0f);
       if constexpr (kTrack) std::fill(used.begin() + begin, used.begin() + end, uint8_t(0));
       for (size_t k = 0; k < nf; ++k) {
-        const float* z = b.frames[k].row(y);
+        [[maybe_unused]] const float* z = nullptr;
+        [[maybe_unused]] const uint8_t* zc = nullptr;
+        if constexpr (kCodes)
+          zc = b.codes[k] + 3 * row;
+        else
+          z = b.frames[k].row(y);
         const float fw = T.frame_w[k], fx = T.frame_wx[k];
         [[maybe_unused]] const uint8_t* km = nullptr;
         [[maybe_unused]] const uint8_t* vm = nullptr;
@@ -116,9 +131,12 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
           if constexpr (kMask) {
             if ((km && !km[x]) || (vm && !vm[x])) continue;
           }
-          const int l0 = level_of(z[3 * x], scale, L);
-          const int l1 = level_of(z[3 * x + 1], scale, L);
-          const int l2 = level_of(z[3 * x + 2], scale, L);
+          int l0, l1, l2;
+          if constexpr (kCodes) {
+            l0 = zc[3 * x], l1 = zc[3 * x + 1], l2 = zc[3 * x + 2];
+          } else {
+            l0 = level_of(z[3 * x], scale, L), l1 = level_of(z[3 * x + 1], scale, L), l2 = level_of(z[3 * x + 2], scale, L);
+          }
           if constexpr (kIgnore) {
             if (l0 == T.colour_level[0] && l1 == T.colour_level[1] && l2 == T.colour_level[2]) {
               used[size_t(x)] |= 1;
@@ -167,8 +185,7 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
             if constexpr (kTrack) {
               if (dropped(k, x, y)) continue;
             }
-            const float* p = b.frames[k].pixel(x, y);
-            const int l = level_of(p[c], scale, L);
+            const int l = level_at(k, x, y, c);
             all_sat = all_sat && l >= T.sat_level;
             all_black = all_black && l <= T.black_level;
             const int d = std::abs(2 * l - (L - 1));
@@ -186,7 +203,7 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
             }
             flag |= all_sat ? kSaturatedEverywhere : kBlackEverywhere;
           }
-          const int l = level_of(b.frames[pick].pixel(x, y)[c], scale, L);
+          const int l = level_at(pick, x, y, c);
           o[i] = float(std::exp(double(resp.log_exposure[size_t(c)][size_t(l)])) / b.exposure_seconds[pick]);
         }
         if (flag & kSaturatedEverywhere) ++sat;
@@ -198,7 +215,12 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
     int done = 0;
     if constexpr (!kTrack) {
       if (T.simd) {
-        for (size_t k = 0; k < nf; ++k) frame_rows[k] = b.frames[k].row(y);
+        for (size_t k = 0; k < nf; ++k) {
+          if constexpr (kCodes)
+            code_rows[k] = b.codes[k] + 3 * row;
+          else
+            frame_rows[k] = b.frames[k].row(y);
+        }
         // Flags go straight into the report's image (zeroed by the caller), or nowhere.
         const detail::MergeRowResult r = detail::merge_row_simd(kernel, o, flags ? flags + row : nullptr, redo.data());
         done = int(r.done);
@@ -282,6 +304,8 @@ MergeWeights merge_weights(const CameraResponse& resp, int bit_depth, const std:
 BracketView bracket_view(const Bracket& b) {
   BracketView v;
   for (const RgbImage& f : b.frames) v.frames.push_back(image_view(f));
+  if (b.codes.size() == b.frames.size())
+    for (const std::vector<uint8_t>& c : b.codes) v.codes.push_back(c.data());
   v.exposure_seconds = b.exposure_seconds;
   v.bit_depth = b.bit_depth;
   if (!b.paths.empty()) v.label = b.paths.front() + " .. " + b.paths.back();
@@ -320,6 +344,8 @@ void merge_bracket(const BracketView& b, const CameraResponse& resp, const Merge
     throw InputError(fmt::format("merge thresholds: need 0 <= black ({}) < saturation ({}) <= 1", o.black_threshold,
                                  o.saturation_threshold));
   if (o.threads < 0) throw InputError(fmt::format("merge threads {} is negative", o.threads));
+  if (!b.codes.empty() && (b.codes.size() != b.frames.size() || std::count(b.codes.begin(), b.codes.end(), nullptr)))
+    throw InputError(fmt::format("{}: 8-bit codes of {} frames for {} frames", b.label, b.codes.size(), b.frames.size()));
   const size_t nf = b.frames.size();
   const size_t npix = size_t(b.frames[0].width) * size_t(b.frames[0].height);
   if (!o.frame_masks.empty() && o.frame_masks.size() != nf)
@@ -418,18 +444,27 @@ void merge_bracket(const BracketView& b, const CameraResponse& resp, const Merge
   const bool want_flags = report && o.flag_image;
   if (want_flags) flags.assign(size_t(out.width) * size_t(out.height), 0);
   std::atomic<size_t> n_sat{0}, n_black{0}, n_ignored{0}, n_no_frame{0}, n_well{0};
+  // The 8-bit codes are the levels themselves only at 256 levels; other responses read the floats.
+  const bool codes = !b.codes.empty() && L == 256;
   auto run = [&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, out.height, 8), [&](const tbb::blocked_range<int>& r) {
       uint8_t* f = want_flags ? flags.data() : nullptr;
       const int y0 = r.begin(), y1 = r.end();
-      if (o.ignore_colour && masked)
-        merge_rows<true, true>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
-      else if (o.ignore_colour)
-        merge_rows<true, false>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
-      else if (masked)
-        merge_rows<false, true>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
+      auto rows = [&](auto with_codes) {
+        constexpr bool kCodes = decltype(with_codes)::value;
+        if (o.ignore_colour && masked)
+          merge_rows<true, true, kCodes>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
+        else if (o.ignore_colour)
+          merge_rows<true, false, kCodes>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
+        else if (masked)
+          merge_rows<false, true, kCodes>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
+        else
+          merge_rows<false, false, kCodes>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
+      };
+      if (codes)
+        rows(std::true_type{});
       else
-        merge_rows<false, false>(b, resp, T, y0, y1, out, f, n_sat, n_black, n_ignored, n_no_frame, n_well);
+        rows(std::false_type{});
     });
   };
   if (o.threads > 0) {

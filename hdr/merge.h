@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/image_io.h"
@@ -121,12 +122,18 @@ RgbImage merge_bracket(const Bracket& bracket, const CameraResponse& response, c
                        MergeReport* report = nullptr);
 // The same over frames someone else owns (camera buffers, a live ring): non-owning RGB views
 // of one size (any row stride), with their exposure times. bracket_view(b) makes one of a
-// Bracket (valid while it lives); merging it gives the same image bit for bit.
+// Bracket (valid while it lives, with its 8-bit codes when it has them); merging it gives the
+// same image bit for bit.
 struct BracketView {
   std::vector<ImageView> frames;
   std::vector<double> exposure_seconds;
   int bit_depth = 8;
   std::string label = "bracket";  // names the bracket in errors
+  // Optional, per frame: packed RGB bytes (3 * width per row, rows in order), the level of
+  // every code value of frames[k] at 256 levels (Bracket::codes, keep_8bit_codes). With a
+  // 256-level response the merge reads these instead of the floats (their valid masks still
+  // count): 11 MB instead of 44 for 3 frames of 1280x960, the same image, flags and counts.
+  std::vector<const uint8_t*> codes;
 };
 BracketView bracket_view(const Bracket& bracket);
 RgbImage merge_bracket(const BracketView& bracket, const CameraResponse& response, const MergeOptions& options = {},

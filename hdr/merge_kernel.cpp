@@ -38,6 +38,17 @@
 // One thread's CPU time on the benchmark, medians of six interleaved runs at load 4-5:
 // 4.60 -> 3.42 ms (docs/hdr.md). It now waits on reading the brackets (its prefetches and
 // first loads are where its samples are); streaming stores of the output did not help.
+// Then (issue 23, 8-bit input): an 8-bit bracket keeps its codes (Bracket::codes), which are
+// the levels at 256 levels, and both kernels read them (MergeRowInput::codes: 1 byte per
+// channel code instead of a float and its conversion; 11 instead of 44 MB per merge of the
+// benchmark's bracket). One thread's CPU time, medians of 5, six interleaved runs at load
+// 4-4.7: 3.67 ms (float frames, before) -> 1.98 ms (8-bit frames); float frames unchanged.
+// Against the floor that reads three 8-bit frames (the honest one for this path, issue 23's
+// "read 3 brackets"), 2 threads: 3.6x, so the 3x aim is not met; against the float floor
+// 1.65x. perf then puts ~12 % of the VBMI kernel's samples on the code loads and prefetches
+// (was ~40 % on the floats'), the rest on its own work: the byte permutes, unpacks and blends
+// of the table reads, the divisions, the spills of its per-block arrays. 16-bit, RAW and float
+// brackets keep reading floats.
 //
 // Bit-identical to the scalar loop: every lane does the scalar loop's operations in its order
 // (level = int(min(z * scale + 0.5, levels - 1)) after zeroing non-positive and NaN values;
@@ -147,9 +158,12 @@ struct FrameSums {
 };
 #endif
 
-MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
+// kCodes: the levels are in.codes' bytes (256 levels), else computed from in.rows' floats.
+template <bool kCodes>
+HWY_NOINLINE MergeRowResult MergeRowOf(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
   const hn::ScalableTag<float> df;
   const hn::RebindToSigned<decltype(df)> di;
+  const hn::Rebind<uint8_t, decltype(di)> du8;  // N bytes
   using VF = hn::Vec<decltype(df)>;
   using VI = hn::Vec<decltype(di)>;
   const size_t N = hn::Lanes(df);
@@ -176,6 +190,13 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
   const VI zero_through = hn::Set(di, in.zero_through), zero_from = hn::Set(di, in.zero_from);
   const VI below_sat = hn::Set(di, in.sat_level - 1);
   const VI above_black = hn::Set(di, in.black_level + 1);
+  // The levels of frame k's N channel codes from code `at` of the row on.
+  auto levels_at = [&](size_t k, size_t at) HWY_ATTR -> VI {
+    if constexpr (kCodes)
+      return hn::PromoteTo(di, hn::LoadU(du8, in.codes[k] + at));
+    else
+      return LevelOf(df, di, hn::LoadU(df, in.rows[k] + at), scale, half, top);
+  };
   // Per lane of a group with a channel no frame weighs: 1 saturated, 2 black, 4 neither.
   constexpr int32_t kMixed = 4;
   static_assert(kSaturatedEverywhere == 1 && kBlackEverywhere == 2, "lane codes are the flag bits");
@@ -196,12 +217,11 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
     FrameSums<decltype(df)> sums[3] = {FrameSums<decltype(df)>(df), FrameSums<decltype(df)>(df),
                                        FrameSums<decltype(df)>(df)};
     for (size_t k = 0; k < in.frames; ++k) {
-      const float* z = in.rows[k] + first_float;
       const VF fw = hn::Set(df, in.frame_w[k]);
       const VF fx = hn::Set(df, in.frame_wx[k]);
       const VF fwx = FrameSums<decltype(df)>::Pair(df, fw, fx);
       for (size_t v = 0; v < 3; ++v) {
-        const VI level = LevelOf(df, di, hn::LoadU(df, z + v * N), scale, half, top);
+        const VI level = levels_at(k, first_float + v * N);
         // Every lane black or clipped in this frame: it adds +0 to both sums, so skip the reads.
         if (hn::AllFalse(di, hn::And(hn::Gt(level, zero_through), hn::Lt(level, zero_from)))) continue;
         sums[v].Add(df, in, hn::Add(level, offset[v]), fw, fx, fwx);
@@ -222,7 +242,7 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
         VI lowest = hn::Set(di, in.levels), highest = hn::Set(di, -1);
         VI at_shortest = hn::Zero(di), at_longest = hn::Zero(di);
         for (size_t k = 0; k < in.frames; ++k) {
-          const VI level = LevelOf(df, di, hn::LoadU(df, in.rows[k] + first_float + v * N), scale, half, top);
+          const VI level = levels_at(k, first_float + v * N);
           lowest = hn::Min(lowest, level);
           highest = hn::Max(highest, level);
           if (k == in.shortest) at_shortest = hn::Add(level, offset[v]);
@@ -280,6 +300,10 @@ MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uin
   }
   result.done = groups * N;
   return result;
+}
+
+MergeRowResult MergeRow(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
+  return in.codes ? MergeRowOf<true>(in, out, flags, redo) : MergeRowOf<false>(in, out, flags, redo);
 }
 
 const char* MergeTargetName() { return hwy::TargetName(HWY_TARGET); }

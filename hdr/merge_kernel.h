@@ -13,6 +13,9 @@ namespace lp::detail {
 
 struct MergeRowInput {
   const float* const* rows;  // per frame: one row of packed RGB code values in [0, 1]
+  // Or, with 256 levels: per frame, the row's levels as packed RGB bytes (BracketView::codes),
+  // read instead of `rows` when not null.
+  const uint8_t* const* codes = nullptr;
   const float* frame_w;      // per frame: s_k (the weighting's frame factor)
   const float* frame_wx;     // per frame: s_k / t_k
   size_t frames = 0;

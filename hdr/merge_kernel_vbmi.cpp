@@ -13,7 +13,11 @@
 // level_of), packed to bytes and permuted into one vector of 64 levels per channel. Their
 // byte order is chosen so that the unpacks give pixels in order (pi below); the sums, the
 // division and the bounds are then per channel and pixel, and the three channels are
-// interleaved again for the store.
+// interleaved again for the store. With 8-bit codes (MergeRowInput::codes, an 8-bit bracket)
+// the 192 codes of a block are loaded as 3 vectors of bytes, already levels, and split into
+// channel planes by another pair of permute indices (the codes' own byte order): no float
+// loads, no conversion, a quarter of the bytes (what that gained and where the time goes
+// then: merge_kernel.cpp's head comment, docs/hdr.md).
 //
 // Bit-identical to the scalar loop as the Highway kernel is: the same level, sums from +0 of
 // table[level] * factor frame after frame (a frame whose 64 levels of a channel all have
@@ -62,6 +66,10 @@ struct Indices {
   alignas(64) uint8_t first_two[3][64] = {};
   alignas(64) uint8_t third[3][64] = {};
   uint64_t from_third[3] = {};
+  // The same for 8-bit codes (MergeRowInput::codes), loaded as they are: code f at byte f.
+  alignas(64) uint8_t codes_first_two[3][64] = {};
+  alignas(64) uint8_t codes_third[3][64] = {};
+  uint64_t codes_from_third[3] = {};
   alignas(64) uint8_t to_pixel_order[64] = {};  // permutexvar: a plane in pixel order
   // Output vector u of 16 pixels' interleaved RGB from the three channels' vectors of them:
   // permutex2var of R and G (a 5-bit index), then B where `from_blue`.
@@ -77,6 +85,13 @@ struct Indices {
         } else {
           third[c][j] = uint8_t(s - 128);
           from_third[c] |= uint64_t(1) << j;
+        }
+        const int f = 3 * pi(j) + c;
+        if (f < 128) {
+          codes_first_two[c][j] = uint8_t(f);
+        } else {
+          codes_third[c][j] = uint8_t(f - 128);
+          codes_from_third[c] |= uint64_t(1) << j;
         }
       }
     for (int j = 0; j < 64; ++j) to_pixel_order[j] = uint8_t(pi(j));
@@ -95,7 +110,7 @@ struct Indices {
 constexpr Indices kIdx;
 
 constexpr size_t kPlaneBytes = 4 * 256;  // one table of one channel
-constexpr size_t kPrefetchFloats = 2 * 192;  // two blocks ahead
+constexpr size_t kPrefetchFloats = 2 * 192;  // two blocks ahead (of floats or codes)
 
 }  // namespace
 
@@ -160,9 +175,9 @@ inline __mmask64 at_or_above(__m512i level, int from) {
 
 inline __mmask16 part(__mmask64 m, int q) { return __mmask16(m >> (16 * q)); }
 
-}  // namespace
-
-MergeRowResult merge_row_vbmi(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
+// kCodes: the levels are in.codes' bytes, else computed from in.rows' floats.
+template <bool kCodes>
+MergeRowResult vbmi_row(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
   const __m512 scale = _mm512_set1_ps(float(in.levels - 1)), half = _mm512_set1_ps(0.5f);
   const __m512 top = _mm512_set1_ps(float(in.levels - 1)), zero = _mm512_setzero_ps();
   // Levels in [zero_through + 1, zero_from) have weight: (level - first) mod 256 < span.
@@ -170,9 +185,11 @@ MergeRowResult merge_row_vbmi(const MergeRowInput& in, float* out, uint8_t* flag
   const __m512i first_weighted = _mm512_set1_epi8(char(in.zero_through + 1));
   const __m512i weighted_span = _mm512_set1_epi8(char(span));
   __m512i first_two[3], third[3];
+  __mmask64 from_third[3];
   for (int c = 0; c < 3; ++c) {
-    first_two[c] = _mm512_load_si512(kIdx.first_two[c]);
-    third[c] = _mm512_load_si512(kIdx.third[c]);
+    first_two[c] = _mm512_load_si512(kCodes ? kIdx.codes_first_two[c] : kIdx.first_two[c]);
+    third[c] = _mm512_load_si512(kCodes ? kIdx.codes_third[c] : kIdx.third[c]);
+    from_third[c] = kCodes ? kIdx.codes_from_third[c] : kIdx.from_third[c];
   }
   const __m512i to_pixel_order = _mm512_load_si512(kIdx.to_pixel_order);
   const uint8_t* w_planes = in.planes;
@@ -189,25 +206,31 @@ MergeRowResult merge_row_vbmi(const MergeRowInput& in, float* out, uint8_t* flag
     __m512i level[kMergeVbmiMaxFrames][3];
     uint64_t weighted_plane = 0;
     for (size_t k = 0; k < in.frames; ++k) {
-      const float* z = in.rows[k] + first_float;
-      // The next blocks' codes: each block's arithmetic is longer than the out-of-order window,
-      // so without a hint its loads start only when the block before is done.
-      for (int line = 0; line < 12; ++line) _mm_prefetch(reinterpret_cast<const char*>(z + kPrefetchFloats + 16 * line), _MM_HINT_T0);
       __m512i packed[3];
-      for (int g = 0; g < 3; ++g) {
-        __m512i l[4];
-        for (int m = 0; m < 4; ++m) {
-          // The scalar loop's level_of without its max(s, 0): min returns its second operand
-          // when either is NaN, so s = NaN stays NaN; the conversion makes NaN and every s <= -1
-          // INT_MIN and s in (-1, 0] 0, and the packs below saturate negative levels to 0.
-          const __m512 s = _mm512_add_ps(_mm512_mul_ps(_mm512_loadu_ps(z + 64 * g + 16 * m), scale), half);
-          l[m] = _mm512_cvttps_epi32(_mm512_min_ps(top, s));  // in [INT_MIN, 255]
+      if constexpr (kCodes) {  // the 192 codes as they are: 3 lines, loaded and prefetched as the floats below
+        const uint8_t* z = in.codes[k] + first_float;
+        for (int line = 0; line < 3; ++line) _mm_prefetch(reinterpret_cast<const char*>(z + kPrefetchFloats + 64 * line), _MM_HINT_T0);
+        for (int g = 0; g < 3; ++g) packed[g] = _mm512_loadu_si512(z + 64 * g);
+      } else {
+        const float* z = in.rows[k] + first_float;
+        // The next blocks' codes: each block's arithmetic is longer than the out-of-order window,
+        // so without a hint its loads start only when the block before is done.
+        for (int line = 0; line < 12; ++line) _mm_prefetch(reinterpret_cast<const char*>(z + kPrefetchFloats + 16 * line), _MM_HINT_T0);
+        for (int g = 0; g < 3; ++g) {
+          __m512i l[4];
+          for (int m = 0; m < 4; ++m) {
+            // The scalar loop's level_of without its max(s, 0): min returns its second operand
+            // when either is NaN, so s = NaN stays NaN; the conversion makes NaN and every s <= -1
+            // INT_MIN and s in (-1, 0] 0, and the packs below saturate negative levels to 0.
+            const __m512 s = _mm512_add_ps(_mm512_mul_ps(_mm512_loadu_ps(z + 64 * g + 16 * m), scale), half);
+            l[m] = _mm512_cvttps_epi32(_mm512_min_ps(top, s));  // in [INT_MIN, 255]
+          }
+          packed[g] = _mm512_packus_epi16(_mm512_packus_epi32(l[0], l[1]), _mm512_packus_epi32(l[2], l[3]));
         }
-        packed[g] = _mm512_packus_epi16(_mm512_packus_epi32(l[0], l[1]), _mm512_packus_epi32(l[2], l[3]));
       }
       for (int c = 0; c < 3; ++c) {
         const __m512i two = _mm512_permutex2var_epi8(packed[0], first_two[c], packed[1]);
-        level[k][c] = _mm512_mask_permutexvar_epi8(two, kIdx.from_third[c], third[c], packed[2]);
+        level[k][c] = _mm512_mask_permutexvar_epi8(two, from_third[c], third[c], packed[2]);
         const bool some = span >= 256 ||
                           _mm512_cmplt_epu8_mask(_mm512_sub_epi8(level[k][c], first_weighted), weighted_span) != 0;
         weighted_plane |= uint64_t(some) << (3 * k + size_t(c));
@@ -301,6 +324,12 @@ MergeRowResult merge_row_vbmi(const MergeRowInput& in, float* out, uint8_t* flag
   }
   result.done = blocks * 64;
   return result;
+}
+
+}  // namespace
+
+MergeRowResult merge_row_vbmi(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
+  return in.codes ? vbmi_row<true>(in, out, flags, redo) : vbmi_row<false>(in, out, flags, redo);
 }
 
 }  // namespace lp::detail

@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Google Benchmark JSON (the stage groups of bench/stages_bench.cpp) -> docs/performance.md.
 
-Names are <stage>/<figure>/<role>[/<arg>...]: role `ours[:variant]`, `floor` or
+Names are <stage>/<figure>/<role>[/<arg>...]: role `ours[:variant]`, `floor[:variant]` or
 `peer:<name>`. One row per figure, argument and variant of ours, beside the figure's floor
-and peers measured in the same run (same arguments). Medians of the repetitions when the
+and peers measured in the same run (same arguments). A variant with a floor of its own
+(`floor:8-bit frames` for `ours:8-bit frames`, and for `ours:8-bit frames, 1 thread`) is
+shown against it, and on a second line against the figure's floor. Medians of the repetitions when the
 run has them. Standard library only (the system Python, see DEPENDENCIES.md).
 
     performance_table.py RESULTS.json HEADER.md > docs/performance.md
@@ -71,14 +73,22 @@ def main():
         for figure in figures:
             roles = {r: t for (s, f, r), t in times.items() if s == stage and f == figure}
             floor = roles.get("floor")
+            own_floors = {r[6:]: t for r, t in roles.items() if r.startswith("floor:")}
             peers = sorted((r[5:], t) for r, t in roles.items() if r.startswith("peer:"))
             ours = sorted((r, t) for r, t in roles.items() if r == "ours" or r.startswith("ours:"))
             for role, t in ours:
                 variant = "lightprobe" if role == "ours" else role[5:]
+                # The longest floor variant that starts the ours variant ("8-bit frames" for
+                # "8-bit frames, 1 thread"), else the figure's floor.
+                own = max((v for v in own_floors if variant.startswith(v)), key=len, default=None)
+                first_floor = own_floors[own] if own else floor
+                floor_cell = fmt_ms(first_floor) + (f" ({own})" if own else "")
                 peer_name, peer_t = peers[0] if peers else ("–", None)
-                print(f"| {figure} | {variant} | {fmt_ms(t)} | {fmt_ms(floor)} | "
-                      f"{'–' if floor is None else f'{t / floor:.1f}'} | {peer_name} | {fmt_ms(peer_t)} | "
+                print(f"| {figure} | {variant} | {fmt_ms(t)} | {floor_cell} | "
+                      f"{'–' if first_floor is None else f'{t / first_floor:.1f}'} | {peer_name} | {fmt_ms(peer_t)} | "
                       f"{'–' if peer_t is None else f'{peer_t / t:.2f}'} |")
+                if own and floor is not None:
+                    print(f"| | | | {fmt_ms(floor)} (floor) | {t / floor:.1f} | | | |")
                 for name, pt in peers[1:]:
                     print(f"| | | | | | {name} | {fmt_ms(pt)} | {pt / t:.2f} |")
         print()

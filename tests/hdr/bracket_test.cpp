@@ -1,5 +1,7 @@
 #include "hdr/bracket.h"
 
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -7,6 +9,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "hdr/merge.h"
 #include "tests/hdr/synthetic_bracket.h"
 
 namespace lp {
@@ -101,6 +104,51 @@ TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   EXPECT_EQ(ok.exposure_seconds, (std::vector<double>{0.5, 0.25}));
   EXPECT_EQ(ok.width(), 8);
   EXPECT_EQ(ok.height(), 6);
+}
+
+// An 8-bit bracket keeps its codes (Bracket::codes): each the file's code, as its float
+// k / 255 says, and merging through them is merging the floats, bit for bit. 16-bit files keep none.
+TEST(ReadBracket, Keeps8BitCodesThatMergeAsTheFloats) {
+  const std::string dir = kData + "/hdr-memorial-debevec/";
+  const Bracket b = read_bracket({dir + "memorial0064.png", dir + "memorial0066.png", dir + "memorial0068.png"},
+                                 std::vector<double>{4.0, 1.0, 0.25});
+  ASSERT_EQ(b.bit_depth, 8);
+  ASSERT_EQ(b.codes.size(), 3u);
+  size_t ends = 0;
+  for (size_t k = 0; k < 3; ++k) {
+    ASSERT_EQ(b.codes[k].size(), b.frames[k].rgb.size());
+    for (size_t i = 0; i < b.codes[k].size(); ++i) {
+      const float v = b.frames[k].rgb[i];
+      ASSERT_EQ(long(b.codes[k][i]), std::lround(double(v) * 255.0)) << "frame " << k << ", value " << i;
+      ASSERT_EQ(v, float(b.codes[k][i]) * (1.0f / 255.0f));  // an 8-bit code exactly
+      ends += b.codes[k][i] == 0 || b.codes[k][i] == 255;
+    }
+  }
+  EXPECT_GT(ends, 1000u);  // the codes' ends are there (Memorial's black border, clipped windows)
+  Bracket floats = b;
+  floats.codes.clear();
+  for (const bool simd : {true, false}) {
+    MergeOptions o;
+    o.simd = simd;
+    o.flag_image = true;
+    MergeReport with, without;
+    const RgbImage x = merge_bracket(b, linear_response(256), o, &with);
+    const RgbImage y = merge_bracket(floats, linear_response(256), o, &without);
+    EXPECT_EQ(0, std::memcmp(x.rgb.data(), y.rgb.data(), x.rgb.size() * sizeof(float))) << "simd " << simd;
+    EXPECT_EQ(with.flags, without.flags);
+    EXPECT_EQ(with.well_exposed, without.well_exposed);
+  }
+  TempDir tmp;
+  RgbImage deep;
+  deep.width = 4;
+  deep.height = 3;
+  deep.rgb.assign(36, 0.3f);
+  const std::string a = (tmp.path / "a16.png").string(), c = (tmp.path / "c16.png").string();
+  write_code_image(a, deep, 16);
+  write_code_image(c, deep, 16);
+  const Bracket sixteen = read_bracket({a, c}, std::vector<double>{1.0, 2.0});
+  EXPECT_EQ(sixteen.bit_depth, 16);
+  EXPECT_TRUE(sixteen.codes.empty());
 }
 
 TEST(CheckBracket, NamesInMemoryFramesByIndex) {

@@ -5,6 +5,7 @@
 #include <hwy/targets.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "hdr/merge.h"
 #include "hdr/merge_kernel.h"
 #include "tests/hdr/synthetic_bracket.h"
@@ -214,6 +216,169 @@ TEST(MergeKernel, IntoAReusedImageEqualsANewOne) {
       out.valid.assign(out.rgb.size() / 3, 0);
     }
   }
+}
+
+// 8-bit brackets as read_bracket makes them: random codes (0 and 255 common: whole pixels and
+// single channels clipped or black in every frame, black in the short frame and clipped in the
+// long ones), the frames code * (1 / 255.f) as read_camera_image converts them, and the codes
+// kept in Bracket::codes straight from the bytes (not through keep_8bit_codes).
+Bracket random_8bit_bracket(int width, int height, size_t frames, std::mt19937& rng) {
+  Bracket b;
+  std::uniform_int_distribution<int> code(0, 255), kind(0, 99), channel(0, 2);
+  const size_t n = 3 * size_t(width) * size_t(height);
+  for (size_t k = 0; k < frames; ++k) {
+    RgbImage f;
+    f.width = width;
+    f.height = height;
+    f.rgb.resize(n);
+    b.frames.push_back(std::move(f));
+    b.codes.emplace_back(n);
+    b.exposure_seconds.push_back(std::pow(3.7, double(k)) / 60.0);
+  }
+  for (size_t p = 0; p < size_t(width) * size_t(height); ++p) {
+    const int what = kind(rng);
+    const int c = channel(rng);
+    for (size_t k = 0; k < frames; ++k)
+      for (int ch = 0; ch < 3; ++ch) {
+        int v = code(rng);
+        if (what < 4) v = 255;
+        else if (what < 8) v = 0;
+        else if (what < 12 && ch == c) v = 255;
+        else if (what < 16 && ch == c) v = 0;
+        else if (what < 20 && ch == c) v = k == 0 ? 0 : 255;
+        else if (what < 24 && ch == c) v = code(rng) % 2 ? 1 : 254;  // next to the ends
+        b.codes[k][3 * p + size_t(ch)] = uint8_t(v);
+        b.frames[k].rgb[3 * p + size_t(ch)] = float(v) * (1.0f / 255.0f);
+      }
+  }
+  return b;
+}
+
+// The float path's level of code k / 255 is k (how read_camera_image divides, and the plain
+// division), so the codes can stand in for the floats; odd values get the scalar loop's ends.
+TEST(MergeCodes, KeepsEvery8BitCodeAsItsOwnLevel) {
+  Bracket b;
+  for (int k = 0; k < 2; ++k) {
+    RgbImage f;
+    f.width = 256 + 4;
+    f.height = 1;
+    for (int code = 0; code < 256; ++code) {
+      f.rgb.push_back(float(code) * (1.0f / 255.0f));
+      f.rgb.push_back(float(code) / 255.0f);
+      f.rgb.push_back(float(double(code) / 255.0));
+    }
+    for (float odd : {-0.25f, 1.5f, std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN(),
+                      -std::numeric_limits<float>::infinity(), 0.4999f / 255.0f, 254.5001f / 255.0f, -0.0f,
+                      0.5001f / 255.0f, 1.0f / 510.0f - 1e-9f, 100.0f, std::numeric_limits<float>::max()})
+      f.rgb.push_back(odd);
+    b.frames.push_back(std::move(f));
+  }
+  keep_8bit_codes(b);
+  ASSERT_EQ(b.codes.size(), 2u);
+  ASSERT_EQ(b.codes[0].size(), 3u * 260u);
+  for (int code = 0; code < 256; ++code)
+    for (int form = 0; form < 3; ++form) EXPECT_EQ(b.codes[0][size_t(3 * code + form)], code) << "form " << form;
+  const std::vector<uint8_t> odd(b.codes[0].begin() + 768, b.codes[0].end());
+  EXPECT_EQ(odd, (std::vector<uint8_t>{0, 255, 255, 0, 0, 0, 255, 0, 1, 0, 255, 255}));
+}
+
+// The merge reading 8-bit codes (BracketView::codes) gives the float path's image, flags and
+// counts bit for bit: the scalar loop, every Highway target, AVX3 with and without VBMI; row
+// widths that are no multiple of 64 (the VBMI blocks), 16 or 8 (the vectors).
+TEST(MergeCodes, EveryTargetGivesTheFloatPathsImageBitForBit) {
+  std::mt19937 rng(2023);
+  std::vector<std::pair<int64_t, bool>> variants;
+  for (const int64_t t : hwy::SupportedAndGeneratedTargets()) {
+    variants.emplace_back(t, true);
+    if ((t == HWY_AVX3 || t == HWY_AVX3_DL) && detail::merge_vbmi_supported()) variants.emplace_back(t, false);
+  }
+  ASSERT_GE(variants.size(), 2u);
+  CameraResponse per_channel = test::true_response(test::film_curve());
+  for (size_t z = 0; z < 256; ++z) {
+    per_channel.log_exposure[1][z] = 1.3f * per_channel.log_exposure[1][z];
+    per_channel.log_exposure[2][z] = 0.7f * per_channel.log_exposure[2][z] + 0.01f * float(z % 5);
+  }
+  const CameraResponse responses[] = {linear_response(256), per_channel};
+  const int widths[] = {1, 7, 17, 63, 65, 131, 200, 333};
+  size_t cases = 0, flagged = 0;
+  for (const int width : widths)
+    for (const CameraResponse& response : responses) {
+      Bracket with_codes = random_8bit_bracket(width, 6, 2 + cases % 3, rng);
+      Bracket floats = with_codes;
+      floats.codes.clear();
+      // NaN floats (level 0) beside the codes: the same image only if every pixel's codes are read.
+      for (RgbImage& f : with_codes.frames) std::fill(f.rgb.begin(), f.rgb.end(), std::numeric_limits<float>::quiet_NaN());
+      MergeOptions o;
+      o.flag_image = cases % 2 == 0;
+      o.threads = 1 + int(cases % 2);
+      o.weighting = cases % 3 == 0 ? MergeOptions::Weighting::Hat : MergeOptions::Weighting::NoiseAware;
+      o.simd = false;
+      MergeReport ref_report;
+      const RgbImage ref = merge_bracket(floats, response, o, &ref_report);
+      flagged += ref_report.saturated_everywhere + ref_report.black_everywhere;
+      auto expect_same = [&](const std::string& where, const MergeOptions& options) {
+        MergeReport report;
+        const RgbImage img = merge_bracket(with_codes, response, options, &report);
+        EXPECT_TRUE(same_bits(img.rgb, ref.rgb)) << where << ", width " << width << ": " << first_difference(img.rgb, ref.rgb);
+        EXPECT_EQ(report.flags, ref_report.flags) << where << ", width " << width;
+        EXPECT_EQ(report.saturated_everywhere, ref_report.saturated_everywhere) << where;
+        EXPECT_EQ(report.black_everywhere, ref_report.black_everywhere) << where;
+        EXPECT_EQ(report.well_exposed, ref_report.well_exposed) << where;
+      };
+      expect_same("scalar loop", o);
+      o.simd = true;
+      for (const auto& [target, vbmi] : variants) {
+        hwy::SetSupportedTargetsForTest(target);
+        detail::set_merge_vbmi_for_test(vbmi);
+        ASSERT_STREQ(detail::merge_simd_target(), hwy::TargetName(target));
+        expect_same(std::string(hwy::TargetName(target)) + (vbmi ? "" : " without VBMI"), o);
+        detail::set_merge_vbmi_for_test(true);
+      }
+      hwy::SetSupportedTargetsForTest(0);
+      ++cases;
+    }
+  EXPECT_GT(flagged, 100u);  // the unweighted channels' bounds and flags were exercised
+}
+
+// The scalar loop's other paths read the codes too (ignore_colour, frame masks, valid masks),
+// and a response of another size reads the floats: the same image as without codes.
+TEST(MergeCodes, MaskedIgnoredAndOtherLevelCountsGiveTheFloatPathsImage) {
+  std::mt19937 rng(5);
+  Bracket with_codes = random_8bit_bracket(67, 9, 3, rng);
+  Bracket floats = with_codes;
+  floats.codes.clear();
+  // NaN floats beside the codes at 256 levels: the same image only if the codes are read.
+  Bracket nan_floats = with_codes;
+  for (RgbImage& f : nan_floats.frames) std::fill(f.rgb.begin(), f.rgb.end(), std::numeric_limits<float>::quiet_NaN());
+  MergeOptions o;
+  o.ignore_colour = std::array<uint8_t, 3>{255, 255, 255};
+  o.frame_masks.assign(3, std::vector<uint8_t>(67 * 9, 1));
+  for (size_t i = 0; i < o.frame_masks[1].size(); i += 3) o.frame_masks[1][i] = 0;
+  o.flag_image = true;
+  for (const int levels : {256, 1024}) {
+    for (const bool masks : {false, true}) {
+      MergeOptions m = o;
+      if (!masks) m.frame_masks.clear();
+      MergeReport a, b;
+      const RgbImage x = merge_bracket(levels == 256 ? nan_floats : with_codes, linear_response(levels), m, &a);
+      const RgbImage y = merge_bracket(floats, linear_response(levels), m, &b);
+      EXPECT_TRUE(same_bits(x.rgb, y.rgb)) << levels << " levels, masks " << masks << ": " << first_difference(x.rgb, y.rgb);
+      EXPECT_EQ(x.valid, y.valid);
+      EXPECT_EQ(a.flags, b.flags);
+      EXPECT_GT(a.ignored, 0u);  // white in every frame: the clipped pixels
+      EXPECT_EQ(a.ignored, b.ignored);
+      EXPECT_EQ(a.no_frame, b.no_frame);
+      EXPECT_EQ(a.well_exposed, b.well_exposed);
+    }
+  }
+  // A view whose codes do not match its frames in number is refused.
+  BracketView v = bracket_view(with_codes);
+  ASSERT_EQ(v.codes.size(), 3u);
+  v.codes.pop_back();
+  EXPECT_THROW(merge_bracket(v, linear_response(256)), InputError);
+  Bracket short_codes = with_codes;
+  short_codes.codes[2].pop_back();
+  EXPECT_THROW(merge_bracket(short_codes, linear_response(256)), InputError);
 }
 
 }  // namespace

@@ -269,15 +269,27 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
 #endif
 }
 
-void Q2treeQuadSums(const float* child, size_t parents, float* parent) {
+HWY_INLINE void QuadSum(const float* c, float* parent) {
   const hn::CappedTag<float, 8> d;
-  for (size_t p = 0; p < parents; ++p) {
-    const float* c = child + 32 * p;
-    for (size_t k = 0; k < 8; k += hn::Lanes(d)) {  // 8 floats: one vector from AVX2 on
-      const auto a = hn::Add(hn::Load(d, c + k), hn::Load(d, c + 8 + k));
-      const auto b = hn::Add(hn::Load(d, c + 16 + k), hn::Load(d, c + 24 + k));
-      hn::Store(hn::Add(a, b), d, parent + 8 * p + k);
-    }
+  for (size_t k = 0; k < 8; k += hn::Lanes(d)) {  // 8 floats: one vector from AVX2 on
+    const auto a = hn::Add(hn::Load(d, c + k), hn::Load(d, c + 8 + k));
+    const auto b = hn::Add(hn::Load(d, c + 16 + k), hn::Load(d, c + 24 + k));
+    hn::Store(hn::Add(a, b), d, parent + k);
+  }
+}
+
+void Q2treeQuadSums(const float* child, size_t parents, float* parent) {
+  for (size_t p = 0; p < parents; ++p) QuadSum(child + 32 * p, parent + 8 * p);
+}
+
+// Three levels in one pass: each group of 64 children gives 16 parents, 4 grandparents and
+// 1 great-grandparent, the last two summed from the ones just written (in L1) instead of in
+// a pass of their own over the level below.
+void Q2treeQuadSums3(const float* child, size_t groups, float* level1, float* level2, float* level3) {
+  for (size_t g = 0; g < groups; ++g) {
+    for (size_t p = 0; p < 16; ++p) QuadSum(child + 8 * (64 * g + 4 * p), level1 + 8 * (16 * g + p));
+    for (size_t p = 0; p < 4; ++p) QuadSum(level1 + 8 * (16 * g + 4 * p), level2 + 8 * (4 * g + p));
+    QuadSum(level2 + 8 * (4 * g), level3 + 8 * g);
   }
 }
 
@@ -290,6 +302,7 @@ namespace lp::detail {
 
 HWY_EXPORT(Q2treeBinSums);
 HWY_EXPORT(Q2treeQuadSums);
+HWY_EXPORT(Q2treeQuadSums3);
 
 bool q2tree_bin_sums(const float* rgb, const uint8_t* valid, size_t width, size_t height, const RowSources& sources,
                      float* bins) {
@@ -298,6 +311,10 @@ bool q2tree_bin_sums(const float* rgb, const uint8_t* valid, size_t width, size_
 
 void q2tree_quad_sums(const float* child, size_t parents, float* parent) {
   HWY_DYNAMIC_DISPATCH(Q2treeQuadSums)(child, parents, parent);
+}
+
+void q2tree_quad_sums3(const float* child, size_t groups, float* level1, float* level2, float* level3) {
+  HWY_DYNAMIC_DISPATCH(Q2treeQuadSums3)(child, groups, level1, level2, level3);
 }
 
 bool q2tree_bin_sums_scalar(const float* rgb, const uint8_t* valid, size_t width, size_t height, const RowSources& s,

@@ -22,7 +22,8 @@
 // run loop unrolled over the sixteen (rolled, its pixel vectors went through the stack:
 // 2.5x). A row's last width % 8 pixels take that per-pixel form
 // (its 16-byte load cleared by a bitwise and: a masked load measured 3.6x against 3.2x).
-// The coarser levels are plain vector additions of four children.
+// The coarser levels are plain vector additions of four children, the three finest steps in
+// one pass over 64-bin groups (the levels read back from L1, not from a pass of their own).
 //
 // Bit-identical to the scalar loops: the same operations on the same values in the same
 // order (no fused multiply-add: -ffp-contract=off, and Highway's Mul/Add are separate

@@ -663,7 +663,14 @@ class Q2TreeSampler final : public Sampler {
     const bool negative = detail::q2tree_bin_sums(map.rgb.data(), valid, size_t(map.width), size_t(map.height),
                                                   bin.view(), pyramid_[0].v);
     size_t stored = bin.stored_pixels;
-    for (int l = finest - 1; l >= 0; --l) {
+    int l = finest - 1;
+    if (finest >= 3) {  // the three finest steps in one pass (whole groups: the rest is zeros)
+      stored = (stored + 63) / 64;
+      detail::q2tree_quad_sums3(levels_[size_t(finest)], stored, levels_[size_t(finest) - 1],
+                                levels_[size_t(finest) - 2], levels_[size_t(finest) - 3]);
+      l = finest - 4;
+    }
+    for (; l >= 0; --l) {
       stored = (stored + 3) / 4;
       detail::q2tree_quad_sums(levels_[size_t(l) + 1], stored, levels_[size_t(l)]);
     }

@@ -48,6 +48,10 @@ bool q2tree_bin_sums_scalar(const float* rgb, const uint8_t* valid, size_t width
 // One quadtree level up: parent[8 p + k] = (child[32 p + k] + child[32 p + 8 + k]) +
 // (child[32 p + 16 + k] + child[32 p + 24 + k]) for p < parents, k < 8 (both 32-byte aligned).
 void q2tree_quad_sums(const float* child, size_t parents, float* parent);
+// Three levels up at once, the same sums: for g < groups, q2tree_quad_sums over the 64
+// children from child + 512 g into level1's 16 parents from 128 g, those into level2's 4 from
+// 32 g, and those into level3[8 g..8 g + 8).
+void q2tree_quad_sums3(const float* child, size_t groups, float* level1, float* level2, float* level3);
 void q2tree_quad_sums_scalar(const float* child, size_t parents, float* parent);
 
 }  // namespace lp::detail

@@ -181,6 +181,36 @@ TEST(Q2treeSums, EveryTargetEqualsThePlainLoopBitForBit) {
   EXPECT_GT(negative_cases, 4u);  // the hostile maps did reach the flag
 }
 
+// Three levels in one pass equal three passes of the plain quad sums, on every target.
+TEST(Q2treeSums, ThreeLevelsAtOnceEqualThreePlainPasses) {
+  std::mt19937 rng(5);
+  std::lognormal_distribution<float> value(0.0f, 4.0f);
+  const size_t groups = 5;
+  std::vector<float> children(8 * 64 * groups);
+  for (size_t k = 0; k < children.size(); ++k) children[k] = k % 17 == 0 ? -0.0f : k % 5 ? value(rng) : -value(rng);
+  std::vector<float> level1(8 * 16 * groups), level2(8 * 4 * groups), level3(8 * groups);
+  auto child_bins = aligned_bins(children);
+  auto l1 = aligned_bins(level1), l2 = aligned_bins(level2), l3 = aligned_bins(level3);
+  detail::q2tree_quad_sums_scalar(child_bins.get(), 16 * groups, l1.get());
+  detail::q2tree_quad_sums_scalar(l1.get(), 4 * groups, l2.get());
+  detail::q2tree_quad_sums_scalar(l2.get(), groups, l3.get());
+  std::copy(l1.get(), l1.get() + level1.size(), level1.begin());
+  std::copy(l2.get(), l2.get() + level2.size(), level2.begin());
+  std::copy(l3.get(), l3.get() + level3.size(), level3.begin());
+  EXPECT_NE(level3[0], 0.0f);
+  for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    auto a = aligned_bins(std::vector<float>(level1.size(), -1.0f));
+    auto b = aligned_bins(std::vector<float>(level2.size(), -1.0f));
+    auto c = aligned_bins(std::vector<float>(level3.size(), -1.0f));
+    detail::q2tree_quad_sums3(child_bins.get(), groups, a.get(), b.get(), c.get());
+    EXPECT_TRUE(same_bits(a.get(), level1)) << hwy::TargetName(target);
+    EXPECT_TRUE(same_bits(b.get(), level2)) << hwy::TargetName(target);
+    EXPECT_TRUE(same_bits(c.get(), level3)) << hwy::TargetName(target);
+  }
+  hwy::SetSupportedTargetsForTest(0);
+}
+
 // The plain loop itself against numbers worked out by hand: two pixels, one invalid, both
 // in bin 1 (its first run, so the 7s there go); bin 0 untouched.
 TEST(Q2treeSums, ScalarLoopFollowsItsDefinition) {

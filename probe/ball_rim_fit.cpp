@@ -377,6 +377,31 @@ std::pair<double, double> sector_jackknife(const std::vector<Weighted>& pts, con
   return {std::sqrt(std::max(0.0, ev[0])), std::sqrt(vr)};
 }
 
+// The silhouette is the ball's outer boundary: an arc whose edge lies more than the
+// support's 0.5 px inside the circle holds a border in the reflection (the inner border of
+// a band that matches the background, the ball's own texture), not the silhouette, while
+// an edge outside it can only be an edge of the background, which the biweights handle.
+// Those arcs are dropped and the circle refitted on the rest until no more drop out (at
+// most 8 rounds). The Tukey scale comes from the residuals' MAD, which on a rim split into
+// two groups spans both and averages them; the trimmed fit keeps to the outer one. The
+// fit `f` unchanged when the trim would move it by a pass's 1 px or fewer than 12 arcs are left.
+FitResult trim_inner_edges(const std::vector<Weighted>& pts, const FitResult& f) {
+  FitResult out = f;
+  for (int round = 0; round < 8; ++round) {
+    std::vector<Weighted> kept;
+    for (const Weighted& p : pts)
+      if (residual(p.e, out.c) >= -0.5) kept.push_back(p);
+    if (kept.size() < 12) return f;
+    const FitResult g = robust_circle(kept, out.c);
+    if (g.inliers == 0) return f;
+    const double move = std::hypot(g.c.cx - out.c.cx, g.c.cy - out.c.cy) + std::abs(g.c.radius_px - out.c.radius_px);
+    out = g;
+    if (move < 0.01) break;
+  }
+  if (std::hypot(out.c.cx - f.c.cx, out.c.cy - f.c.cy) > 1 || std::abs(out.c.radius_px - f.c.radius_px) > 1) return f;
+  return out;
+}
+
 // The wide first pass (refine_rim_by_coverage): the search reach and both pixel bands grow
 // by this, so that the edge search covers 2 px either side of the rim fit's circle.
 constexpr double kWideStartPx = 1.25;
@@ -492,9 +517,9 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
     if (wide_best.support - best_fit.support > 2 * std::sqrt(double(std::max(wide_best.seen, best_fit.seen))))
       best_fit = wide_best, other = wide_other;
   }
-  const FitResult f = best_fit.f;
-  const BallInImage fitted = best_fit.c;
-  if (f.inliers == 0) return rim;
+  if (best_fit.f.inliers == 0) return rim;
+  const FitResult f = trim_inner_edges(best_fit.pts, best_fit.f);
+  const BallInImage fitted = f.c;
   RimFit out = rim;
   cv::Vec2d ev;
   cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);

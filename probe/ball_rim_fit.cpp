@@ -377,6 +377,29 @@ std::pair<double, double> sector_jackknife(const std::vector<Weighted>& pts, con
   return {std::sqrt(std::max(0.0, ev[0])), std::sqrt(vr)};
 }
 
+// The circle's dependence on which half of the rim it trusts: refitted on each half (eight
+// halves, 45 deg apart), the RMS of the centre's and the radius's differences from `c`.
+// Where part of the rim has no contrast at the silhouette, its arcs hold the strongest step
+// within reach instead (the inner border of a band of the reflection that matches the
+// background, or an edge of the background beyond it), coherently along that stretch; the
+// circle is then a compromise that moves whole, which leaving out one 45 deg sector does
+// not show. {0, 0} when a half's refit fails.
+std::pair<double, double> half_rim_spread(const std::vector<Weighted>& pts, const BallInImage& c) {
+  constexpr int kHalves = 8;
+  double var_c = 0, var_r = 0;
+  for (int h = 0; h < kHalves; ++h) {
+    std::vector<Weighted> sub;
+    for (const Weighted& p : pts)
+      if (std::cos(std::atan2(p.e.y - c.cy, p.e.x - c.cx) - h * 2 * M_PI / kHalves) > 0) sub.push_back(p);
+    if (sub.size() < 12) return {0.0, 0.0};
+    const FitResult f = robust_circle(sub, c);
+    if (f.inliers == 0) return {0.0, 0.0};
+    var_c += (std::pow(f.c.cx - c.cx, 2) + std::pow(f.c.cy - c.cy, 2)) / kHalves;
+    var_r += std::pow(f.c.radius_px - c.radius_px, 2) / kHalves;
+  }
+  return {std::sqrt(var_c), std::sqrt(var_r)};
+}
+
 // The silhouette is the ball's outer boundary: an arc whose edge lies more than the
 // support's 0.5 px inside the circle holds a border in the reflection (the inner border of
 // a band that matches the background, the ball's own texture), not the silhouette, while
@@ -526,16 +549,19 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
   out.ball = fitted;
   out.noise_sigma_centre_px = std::sqrt(std::max(0.0, ev[0]));
   out.noise_sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)));
-  // The sigmas cover more than the noise: the sectors' spread (the jackknife, where it
-  // exceeds the covariance) and the choice between the two circles (their difference).
+  // The sigmas cover more than the noise: the sectors' spread (the jackknife, or the halves'
+  // spread, where it exceeds the covariance) and the choice between the two circles (their
+  // difference). On all the edges, the trimmed ones included: they are the evidence that
+  // the rim allows another circle.
   const auto [jack_c, jack_r] = sector_jackknife(best_fit.pts, fitted);
+  const auto [half_c, half_r] = half_rim_spread(best_fit.pts, fitted);
   double model_c = 0, model_r = 0;
   if (other.f.inliers > 0) {
     model_c = std::hypot(other.c.cx - fitted.cx, other.c.cy - fitted.cy);
     model_r = std::abs(other.c.radius_px - fitted.radius_px);
   }
-  out.sigma_centre_px = std::hypot(std::max(out.noise_sigma_centre_px, jack_c), model_c);
-  out.sigma_radius_px = std::hypot(std::max(out.noise_sigma_radius_px, jack_r), model_r);
+  out.sigma_centre_px = std::hypot(std::max({out.noise_sigma_centre_px, jack_c, half_c}), model_c);
+  out.sigma_radius_px = std::hypot(std::max({out.noise_sigma_radius_px, jack_r, half_r}), model_r);
   out.rms_px = f.rms;
   out.inliers = f.inliers;
   return out;

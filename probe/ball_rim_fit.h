@@ -83,8 +83,8 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
 // further in, which the Tukey scale from the MAD averaged in). `rim` unchanged when it is
 // not ok or fewer than 12 arcs give an edge. noise_sigma_*: this fit's covariance (the arcs
 // share no pixels); sigma_* also cover the spread over the rim's eight sectors (a
-// delete-a-sector jackknife, where larger) and the difference between the two circles,
-// added in quadrature.
+// delete-a-sector jackknife) or over its eight halves (each refitted alone), where larger,
+// and the difference between the two circles, added in quadrature.
 RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise);
 
 // The edge strength noise alone reaches in `smooth` (CV_32FC3): 7 x the 5th percentile of

@@ -377,25 +377,34 @@ std::pair<double, double> sector_jackknife(const std::vector<Weighted>& pts, con
   return {std::sqrt(std::max(0.0, ev[0])), std::sqrt(vr)};
 }
 
-// The circle's dependence on which half of the rim it trusts: refitted on each half (eight
-// halves, 45 deg apart), the RMS of the centre's and the radius's differences from `c`.
-// Where part of the rim has no contrast at the silhouette, its arcs hold the strongest step
-// within reach instead (the inner border of a band of the reflection that matches the
-// background, or an edge of the background beyond it), coherently along that stretch; the
-// circle is then a compromise that moves whole, which leaving out one 45 deg sector does
-// not show. {0, 0} when a half's refit fails.
+// The circle's dependence on which half of the rim it trusts, beyond noise: refitted on
+// each half (eight halves, 45 deg apart), the RMS over the halves of the centre's and the
+// radius's differences from the fit to all of `pts`, less what noise alone gives them (for
+// nested least-squares fits the difference has the variance of the half's fit less the
+// whole's: a half-circle pins its centre poorly, so noise alone moves it several times the
+// whole's sigma), both covariances at the whole fit's residual scale. Where part of the rim
+// has no contrast at the silhouette, its arcs hold the strongest step within reach instead
+// (the inner border of a band of the reflection that matches the background, or an edge of
+// the background beyond it), coherently along that stretch; the circle is then a compromise
+// that moves whole, which leaving out one 45 deg sector does not show. {0, 0} when a refit
+// fails.
 std::pair<double, double> half_rim_spread(const std::vector<Weighted>& pts, const BallInImage& c) {
   constexpr int kHalves = 8;
+  const FitResult all = robust_circle(pts, c);
+  if (all.inliers == 0 || !(all.rms > 0)) return {0.0, 0.0};
   double var_c = 0, var_r = 0;
   for (int h = 0; h < kHalves; ++h) {
     std::vector<Weighted> sub;
     for (const Weighted& p : pts)
       if (std::cos(std::atan2(p.e.y - c.cy, p.e.x - c.cx) - h * 2 * M_PI / kHalves) > 0) sub.push_back(p);
     if (sub.size() < 12) return {0.0, 0.0};
-    const FitResult f = robust_circle(sub, c);
-    if (f.inliers == 0) return {0.0, 0.0};
-    var_c += (std::pow(f.c.cx - c.cx, 2) + std::pow(f.c.cy - c.cy, 2)) / kHalves;
-    var_r += std::pow(f.c.radius_px - c.radius_px, 2) / kHalves;
+    const FitResult f = robust_circle(sub, all.c);
+    if (f.inliers == 0 || !(f.rms > 0)) return {0.0, 0.0};
+    const double scale = (all.rms * all.rms) / (f.rms * f.rms);
+    const double noise_c = scale * (f.cov(0, 0) + f.cov(1, 1)) - (all.cov(0, 0) + all.cov(1, 1));
+    const double noise_r = scale * f.cov(2, 2) - all.cov(2, 2);
+    var_c += std::max(0.0, std::pow(f.c.cx - all.c.cx, 2) + std::pow(f.c.cy - all.c.cy, 2) - std::max(0.0, noise_c)) / kHalves;
+    var_r += std::max(0.0, std::pow(f.c.radius_px - all.c.radius_px, 2) - std::max(0.0, noise_r)) / kHalves;
   }
   return {std::sqrt(var_c), std::sqrt(var_r)};
 }

@@ -337,23 +337,23 @@ TEST(BallPrecision, TheReportedSigmaCoversTheChoiceOfModel) {
 }
 
 // The sigmas cover a circle that rests on part of the rim: where a stretch of the rim has
-// no contrast at the silhouette, the fit depends on which half of the rim it trusts, which
-// the spread of the fits to each half of the rim shows and one 45 deg sector's removal did
-// not. On these renders (harness seeds, all 0.5-0.6 px off) the error was 2.4 / 4.3 sigma
-// (centre / radius; forest, photo, R 60), 1.6 / 3.9 (forest, night, R 60), 1.9 / 2.3
-// (sunset, photo, R 150), 4.9 / 5.4 (sunset, night, R 150); measured after: 0.6 / 1.6,
-// 0.8 / 1.7, 0.9 / 1.2, 1.1 / 1.0.
+// no contrast at the silhouette, the circle depends on which half of the rim it trusts,
+// which the spread of the fits to each half of the rim (beyond what noise gives them) shows
+// and one 45 deg sector's removal did not. On these renders (harness seeds, 0.5-1.1 px off)
+// the error was 1.9 / 2.3 sigma (centre / radius; sunset, photo, R 150), 4.9 / 5.4 (sunset,
+// night, R 150), 4.3 / 6.7 (night, night, R 400); measured after: 0.9 / 1.2, 1.2 / 1.1,
+// 1.4 / 1.5.
 TEST(BallPrecision, TheReportedSigmaCoversACircleThatRestsOnPartOfTheRim) {
   EvalBallOptions o;
   o.maps = every_shared_map();
   o.photo = kPhoto;
   o.include = [](const std::string& map, double radius, BallBackground bg) {
-    return (map == "forest" && radius == 60 && (bg == BallBackground::Photo || bg == BallBackground::Night)) ||
-           (map == "sunset" && radius == 150 && (bg == BallBackground::Photo || bg == BallBackground::Night));
+    return (map == "sunset" && radius == 150 && (bg == BallBackground::Photo || bg == BallBackground::Night)) ||
+           (map == "night" && radius == 400 && bg == BallBackground::Night);
   };
   const EvalBallReport rep = evaluate_ball_detection(o);
   std::printf("%s", rep.summary().c_str());
-  ASSERT_EQ(rep.rows.size(), 4u);
+  ASSERT_EQ(rep.rows.size(), 3u);
   for (const BallRow& r : rep.rows) {
     ASSERT_TRUE(r.found) << r.map << " " << r.background << ": " << r.error;
     ASSERT_TRUE(r.report.subpixel) << r.map << " " << r.background;

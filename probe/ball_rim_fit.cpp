@@ -377,6 +377,63 @@ std::pair<double, double> sector_jackknife(const std::vector<Weighted>& pts, con
   return {std::sqrt(std::max(0.0, ev[0])), std::sqrt(vr)};
 }
 
+// The circle's dependence on which half of the rim it trusts, beyond noise: refitted on
+// each half (eight halves, 45 deg apart), the RMS over the halves of the centre's and the
+// radius's differences from the fit to all of `pts`, less what noise alone gives them (for
+// nested least-squares fits the difference has the variance of the half's fit less the
+// whole's: a half-circle pins its centre poorly, so noise alone moves it several times the
+// whole's sigma), both covariances at the whole fit's residual scale. Where part of the rim
+// has no contrast at the silhouette, its arcs hold the strongest step within reach instead
+// (the inner border of a band of the reflection that matches the background, or an edge of
+// the background beyond it), coherently along that stretch; the circle is then a compromise
+// that moves whole, which leaving out one 45 deg sector does not show. {0, 0} when a refit
+// fails.
+std::pair<double, double> half_rim_spread(const std::vector<Weighted>& pts, const BallInImage& c) {
+  constexpr int kHalves = 8;
+  const FitResult all = robust_circle(pts, c);
+  if (all.inliers == 0 || !(all.rms > 0)) return {0.0, 0.0};
+  double var_c = 0, var_r = 0;
+  for (int h = 0; h < kHalves; ++h) {
+    std::vector<Weighted> sub;
+    for (const Weighted& p : pts)
+      if (std::cos(std::atan2(p.e.y - c.cy, p.e.x - c.cx) - h * 2 * M_PI / kHalves) > 0) sub.push_back(p);
+    if (sub.size() < 12) return {0.0, 0.0};
+    const FitResult f = robust_circle(sub, all.c);
+    if (f.inliers == 0 || !(f.rms > 0)) return {0.0, 0.0};
+    const double scale = (all.rms * all.rms) / (f.rms * f.rms);
+    const double noise_c = scale * (f.cov(0, 0) + f.cov(1, 1)) - (all.cov(0, 0) + all.cov(1, 1));
+    const double noise_r = scale * f.cov(2, 2) - all.cov(2, 2);
+    var_c += std::max(0.0, std::pow(f.c.cx - all.c.cx, 2) + std::pow(f.c.cy - all.c.cy, 2) - std::max(0.0, noise_c)) / kHalves;
+    var_r += std::max(0.0, std::pow(f.c.radius_px - all.c.radius_px, 2) - std::max(0.0, noise_r)) / kHalves;
+  }
+  return {std::sqrt(var_c), std::sqrt(var_r)};
+}
+
+// The silhouette is the ball's outer boundary: an arc whose edge lies more than the
+// support's 0.5 px inside the circle holds a border in the reflection (the inner border of
+// a band that matches the background, the ball's own texture), not the silhouette, while
+// an edge outside it can only be an edge of the background, which the biweights handle.
+// Those arcs are dropped and the circle refitted on the rest until no more drop out (at
+// most 8 rounds). The Tukey scale comes from the residuals' MAD, which on a rim split into
+// two groups spans both and averages them; the trimmed fit keeps to the outer one. The
+// fit `f` unchanged when the trim would move it by a pass's 1 px or fewer than 12 arcs are left.
+FitResult trim_inner_edges(const std::vector<Weighted>& pts, const FitResult& f) {
+  FitResult out = f;
+  for (int round = 0; round < 8; ++round) {
+    std::vector<Weighted> kept;
+    for (const Weighted& p : pts)
+      if (residual(p.e, out.c) >= -0.5) kept.push_back(p);
+    if (kept.size() < 12) return f;
+    const FitResult g = robust_circle(kept, out.c);
+    if (g.inliers == 0) return f;
+    const double move = std::hypot(g.c.cx - out.c.cx, g.c.cy - out.c.cy) + std::abs(g.c.radius_px - out.c.radius_px);
+    out = g;
+    if (move < 0.01) break;
+  }
+  if (std::hypot(out.c.cx - f.c.cx, out.c.cy - f.c.cy) > 1 || std::abs(out.c.radius_px - f.c.radius_px) > 1) return f;
+  return out;
+}
+
 // The wide first pass (refine_rim_by_coverage): the search reach and both pixel bands grow
 // by this, so that the edge search covers 2 px either side of the rim fit's circle.
 constexpr double kWideStartPx = 1.25;
@@ -492,25 +549,28 @@ RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, cons
     if (wide_best.support - best_fit.support > 2 * std::sqrt(double(std::max(wide_best.seen, best_fit.seen))))
       best_fit = wide_best, other = wide_other;
   }
-  const FitResult f = best_fit.f;
-  const BallInImage fitted = best_fit.c;
-  if (f.inliers == 0) return rim;
+  if (best_fit.f.inliers == 0) return rim;
+  const FitResult f = trim_inner_edges(best_fit.pts, best_fit.f);
+  const BallInImage fitted = f.c;
   RimFit out = rim;
   cv::Vec2d ev;
   cv::eigen(cv::Mat(cv::Matx22d(f.cov(0, 0), f.cov(0, 1), f.cov(1, 0), f.cov(1, 1))), ev);
   out.ball = fitted;
   out.noise_sigma_centre_px = std::sqrt(std::max(0.0, ev[0]));
   out.noise_sigma_radius_px = std::sqrt(std::max(0.0, f.cov(2, 2)));
-  // The sigmas cover more than the noise: the sectors' spread (the jackknife, where it
-  // exceeds the covariance) and the choice between the two circles (their difference).
+  // The sigmas cover more than the noise: the sectors' spread (the jackknife, or the halves'
+  // spread, where it exceeds the covariance) and the choice between the two circles (their
+  // difference). On all the edges, the trimmed ones included: they are the evidence that
+  // the rim allows another circle.
   const auto [jack_c, jack_r] = sector_jackknife(best_fit.pts, fitted);
+  const auto [half_c, half_r] = half_rim_spread(best_fit.pts, fitted);
   double model_c = 0, model_r = 0;
   if (other.f.inliers > 0) {
     model_c = std::hypot(other.c.cx - fitted.cx, other.c.cy - fitted.cy);
     model_r = std::abs(other.c.radius_px - fitted.radius_px);
   }
-  out.sigma_centre_px = std::hypot(std::max(out.noise_sigma_centre_px, jack_c), model_c);
-  out.sigma_radius_px = std::hypot(std::max(out.noise_sigma_radius_px, jack_r), model_r);
+  out.sigma_centre_px = std::hypot(std::max({out.noise_sigma_centre_px, jack_c, half_c}), model_c);
+  out.sigma_radius_px = std::hypot(std::max({out.noise_sigma_radius_px, jack_r, half_r}), model_r);
   out.rms_px = f.rms;
   out.inliers = f.inliers;
   return out;

@@ -77,10 +77,14 @@ RimFit fit_rim(const cv::Mat& smooth, const cv::Mat& linear, const cv::Mat& vali
 // half its arcs (the silhouette is the outer boundary). Where the winner agrees with fewer
 // than half its arcs (trapped: the rim fit off by more than the 0.75 px reach) both are
 // refined again from a first pass of 2 px reach, and that winner replaces it when more arcs
-// agree with it by 2 sqrt(arcs). `rim` unchanged when it is not ok or fewer than 12 arcs
-// give an edge. noise_sigma_*: this fit's covariance (the arcs share no pixels); sigma_*
-// also cover the spread over the rim's eight sectors (a delete-a-sector jackknife, where
-// larger) and the difference between the two circles, added in quadrature.
+// agree with it by 2 sqrt(arcs). Last, arcs whose edge lies more than 0.5 px inside the
+// winner are dropped and it is refitted on the rest until none drop out (the silhouette is
+// the outer boundary; a stretch of the rim without contrast at the silhouette holds a border
+// further in, which the Tukey scale from the MAD averaged in). `rim` unchanged when it is
+// not ok or fewer than 12 arcs give an edge. noise_sigma_*: this fit's covariance (the arcs
+// share no pixels); sigma_* also cover the spread over the rim's eight sectors (a
+// delete-a-sector jackknife) or over its eight halves (each refitted alone), where larger,
+// and the difference between the two circles, added in quadrature.
 RimFit refine_rim_by_coverage(const cv::Mat& linear, const cv::Mat& valid8, const RimFit& rim, double edge_noise);
 
 // The edge strength noise alone reaches in `smooth` (CV_32FC3): 7 x the 5th percentile of

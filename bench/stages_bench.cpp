@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "hdr/bracket.h"
 #include "hdr/merge.h"
 #include "hdr/opencv_peer.h"
 #include "hdr/response.h"
@@ -99,6 +100,34 @@ void BM_MergeOurs(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
   set_pixels(state);
+}
+
+// A real scene's 8-bit bracket (Debevec's Memorial, 3 of its 16 frames, 512x768 with a black
+// border and clipped windows), one thread: how the kernel fares where a block's codes are not a
+// smooth ramp. Skipped without the shared data (LIGHTPROBE_SHARED_DATA or ../shared/data).
+void BM_MergeMemorial(benchmark::State& state) {
+  std::string dir;
+  if (const char* env = std::getenv("LIGHTPROBE_SHARED_DATA")) dir = env;
+  for (const char* candidate : {"../shared/data", "../../shared/data", "/work/shared/data"})
+    if (dir.empty() && std::filesystem::exists(candidate)) dir = candidate;
+  dir += "/hdr-memorial-debevec/";
+  if (!std::filesystem::exists(dir + "memorial0064.png")) {
+    state.SkipWithError(("no Memorial bracket in " + dir).c_str());
+    return;
+  }
+  const Bracket b = read_bracket({dir + "memorial0064.png", dir + "memorial0066.png", dir + "memorial0068.png"},
+                                 std::vector<double>{4.0, 1.0, 0.25});
+  const BracketView view = bracket_view(b);
+  const CameraResponse response = linear_response(256);
+  MergeOptions o;
+  o.threads = 1;
+  RgbImage out;
+  for (auto _ : state) {
+    merge_bracket(view, response, o, &out);
+    benchmark::DoNotOptimize(out.rgb.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["MPix_s"] = benchmark::Counter(double(b.width()) * b.height() / 1e6, benchmark::Counter::kIsIterationInvariantRate);
 }
 
 // Read the three frames once and write one float RGB image, on the merge's two threads:
@@ -216,6 +245,7 @@ BENCHMARK(BM_MergeOurs<true, false, 1>)->Name("hdr/merge_3x1280x960/ours:1 threa
 BENCHMARK(BM_MergeOurs<false>)->Name("hdr/merge_3x1280x960/ours:scalar loop")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeOurs<true, false, 2, true>)->Name("hdr/merge_3x1280x960/ours:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeOurs<true, false, 1, true>)->Name("hdr/merge_3x1280x960/ours:8-bit frames, 1 thread")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeMemorial)->Name("hdr/merge_memorial_3x512x768/ours:8-bit frames, 1 thread")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeFloor)->Name("hdr/merge_3x1280x960/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeFloor8Bit)->Name("hdr/merge_3x1280x960/floor:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeOpenCv)->Name("hdr/merge_3x1280x960/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();

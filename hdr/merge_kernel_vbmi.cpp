@@ -27,6 +27,7 @@
 // code); merge_kernel.cpp's AVX-512 target calls it when the CPU has VBMI.
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 #include "hdr/merge.h"
 #include "hdr/merge_kernel.h"
@@ -146,15 +147,27 @@ bool merge_vbmi_usable(const MergeRowInput& in) {
 namespace lp::detail {
 namespace {
 
+// Which halves of a 256-entry table the 64 levels of a lookup fall in.
+enum class Halves { kLow, kHigh, kBoth };
+
 // 64 entries of one channel's 256-entry float table (4 byte planes at `planes`) at the levels
 // `index` (in pi order, `high`: levels >= 128), as 4 vectors of 16 floats in pixel order.
+// kHalves other than kBoth: every level is in that half (high is 0 or all ones), so one
+// permute per plane reads it and there is nothing to blend.
+template <Halves kHalves = Halves::kBoth>
 inline void lookup(const uint8_t* planes, __m512i index, __mmask64 high, __m512 value[4]) {
   __m512i b[4];
   for (int p = 0; p < 4; ++p) {
     const uint8_t* t = planes + 256 * p;
-    const __m512i lo = _mm512_permutex2var_epi8(_mm512_loadu_si512(t), index, _mm512_loadu_si512(t + 64));
-    const __m512i hi = _mm512_permutex2var_epi8(_mm512_loadu_si512(t + 128), index, _mm512_loadu_si512(t + 192));
-    b[p] = _mm512_mask_blend_epi8(high, lo, hi);
+    if constexpr (kHalves == Halves::kLow) {
+      b[p] = _mm512_permutex2var_epi8(_mm512_loadu_si512(t), index, _mm512_loadu_si512(t + 64));
+    } else if constexpr (kHalves == Halves::kHigh) {
+      b[p] = _mm512_permutex2var_epi8(_mm512_loadu_si512(t + 128), index, _mm512_loadu_si512(t + 192));
+    } else {
+      const __m512i lo = _mm512_permutex2var_epi8(_mm512_loadu_si512(t), index, _mm512_loadu_si512(t + 64));
+      const __m512i hi = _mm512_permutex2var_epi8(_mm512_loadu_si512(t + 128), index, _mm512_loadu_si512(t + 192));
+      b[p] = _mm512_mask_blend_epi8(high, lo, hi);
+    }
   }
   // Little-endian floats from their bytes; per 128-bit lane i, bytes 16 i + 4 q .. + 3 end up
   // in vector q (pi put pixels 16 q + 4 i .. there).
@@ -245,11 +258,24 @@ MergeRowResult vbmi_row(const MergeRowInput& in, float* out, uint8_t* flags, uin
         const __m512i index = level[k][c];
         const __mmask64 high = _mm512_movepi8_mask(index);
         const __m512 fw = _mm512_set1_ps(in.frame_w[k]), fx = _mm512_set1_ps(in.frame_wx[k]);
-        __m512 t[4];
-        lookup(w_planes + size_t(c) * kPlaneBytes, index, high, t);
-        for (int q = 0; q < 4; ++q) sw[q] = _mm512_add_ps(sw[q], _mm512_mul_ps(t[q], fw));
-        lookup(wx_planes + size_t(c) * kPlaneBytes, index, high, t);
-        for (int q = 0; q < 4; ++q) swx[q] = _mm512_add_ps(swx[q], _mm512_mul_ps(t[q], fx));
+        const uint8_t* w_at = w_planes + size_t(c) * kPlaneBytes;
+        const uint8_t* wx_at = wx_planes + size_t(c) * kPlaneBytes;
+        auto add = [&](auto halves) {
+          __m512 t[4];
+          lookup<halves.value>(w_at, index, high, t);
+          for (int q = 0; q < 4; ++q) sw[q] = _mm512_add_ps(sw[q], _mm512_mul_ps(t[q], fw));
+          lookup<halves.value>(wx_at, index, high, t);
+          for (int q = 0; q < 4; ++q) swx[q] = _mm512_add_ps(swx[q], _mm512_mul_ps(t[q], fx));
+        };
+        // 64 levels in one half of the table (a dark or a bright stretch of a frame) take half
+        // the permutes and no blends.
+        if (high == 0) {
+          add(std::integral_constant<Halves, Halves::kLow>{});
+        } else if (high == ~__mmask64(0)) {
+          add(std::integral_constant<Halves, Halves::kHigh>{});
+        } else {
+          add(std::integral_constant<Halves, Halves::kBoth>{});
+        }
       }
       uint64_t weighed = 0;
       for (int q = 0; q < 4; ++q) {

@@ -179,6 +179,18 @@ inline void lookup(const uint8_t* planes, __m512i index, __mmask64 high, __m512 
   value[3] = _mm512_castsi512_ps(_mm512_unpackhi_epi16(hi01, hi23));
 }
 
+// lookup() of levels that may fall in one half of the table, as the sums' lookups below.
+inline void lookup_by_halves(const uint8_t* planes, __m512i index, __m512 value[4]) {
+  const __mmask64 high = _mm512_movepi8_mask(index);
+  if (high == 0) {
+    lookup<Halves::kLow>(planes, index, high, value);
+  } else if (high == ~__mmask64(0)) {
+    lookup<Halves::kHigh>(planes, index, high, value);
+  } else {
+    lookup(planes, index, high, value);
+  }
+}
+
 // Levels >= `from` (a level in int, clamped to what a byte can say).
 inline __mmask64 at_or_above(__m512i level, int from) {
   if (from <= 0) return ~__mmask64(0);
@@ -251,6 +263,9 @@ MergeRowResult vbmi_row(const MergeRowInput& in, float* out, uint8_t* flags, uin
     }
     __m512 value[3][4];
     uint64_t saturated = 0, black = 0, mixed = 0;  // per pixel: a channel of zero weight, and which
+    // Unrolled: with c a constant the values' array is registers and constant stack slots, not
+    // an indexed array written and read back for the interleave below (docs/hdr.md).
+#pragma GCC unroll 3
     for (int c = 0; c < 3; ++c) {
       __m512 sw[4] = {zero, zero, zero, zero}, swx[4] = {zero, zero, zero, zero};
       for (size_t k = 0; k < in.frames; ++k) {
@@ -298,7 +313,7 @@ MergeRowResult vbmi_row(const MergeRowInput& in, float* out, uint8_t* flags, uin
         const __m512i at = level[in.shortest][c];
         __m512 bound[4];
         if (take_short & _mm512_cmpneq_epi8_mask(_mm512_permutexvar_epi8(to_pixel_order, at), level_top)) {
-          lookup(short_planes + size_t(c) * kPlaneBytes, at, _mm512_movepi8_mask(at), bound);
+          lookup_by_halves(short_planes + size_t(c) * kPlaneBytes, at, bound);
         } else {  // all at the top level: no lookup
           for (__m512& b : bound) b = _mm512_set1_ps(in.bound_short[size_t(c) * 256 + 255]);
         }
@@ -308,7 +323,7 @@ MergeRowResult vbmi_row(const MergeRowInput& in, float* out, uint8_t* flags, uin
         const __m512i at = level[in.longest][c];
         __m512 bound[4];
         if (take_long & _mm512_cmpneq_epi8_mask(_mm512_permutexvar_epi8(to_pixel_order, at), level_zero)) {
-          lookup(long_planes + size_t(c) * kPlaneBytes, at, _mm512_movepi8_mask(at), bound);
+          lookup_by_halves(long_planes + size_t(c) * kPlaneBytes, at, bound);
         } else {  // all at level 0
           for (__m512& b : bound) b = _mm512_set1_ps(in.bound_long[size_t(c) * 256]);
         }

@@ -340,6 +340,52 @@ TEST(MergeCodes, EveryTargetGivesTheFloatPathsImageBitForBit) {
   EXPECT_GT(flagged, 100u);  // the unweighted channels' bounds and flags were exercised
 }
 
+// Rows whose codes in a frame all fall in one half of the 256-entry tables (a dark or a bright
+// stretch of a scene), which the VBMI kernel reads with half its permutes (its sums' tables
+// and the bounds' tables), and rows in both halves: every target gives the scalar loop's
+// image and report bit for bit.
+TEST(MergeCodes, RowsInOneHalfOfTheTablesOnEveryTargetEqualTheScalarLoop) {
+  std::mt19937 rng(77);
+  const CameraResponse response = test::true_response(test::film_curve());
+  size_t cases = 0;
+  for (const int width : {64, 128, 200}) {
+    const int height = 12;
+    const size_t frames = 2 + size_t(width) % 3;
+    Bracket b = random_8bit_bracket(width, height, frames, rng);
+    for (size_t k = 0; k < frames; ++k)
+      for (int y = 0; y < height; ++y) {
+        const int half = int(rng() % 3);  // 0: levels 0-127, 1: 128-255, 2: as drawn
+        for (size_t i = 3 * size_t(y) * size_t(width); i < 3 * size_t(y + 1) * size_t(width); ++i) {
+          const int v = b.codes[k][i];
+          b.codes[k][i] = uint8_t(half == 0 ? v / 2 : half == 1 ? 128 + v / 2 : v);
+        }
+      }
+    for (const auto weighting : {MergeOptions::Weighting::Hat, MergeOptions::Weighting::NoiseAware}) {
+      MergeOptions o;
+      o.weighting = weighting;
+      o.flag_image = true;
+      o.simd = false;
+      MergeReport ref_report;
+      const RgbImage ref = merge_bracket(b, response, o, &ref_report);
+      o.simd = true;
+      for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
+        hwy::SetSupportedTargetsForTest(target);
+        MergeReport report;
+        const RgbImage img = merge_bracket(b, response, o, &report);
+        EXPECT_TRUE(same_bits(img.rgb, ref.rgb)) << hwy::TargetName(target) << ", width " << width << ": " << first_difference(img.rgb, ref.rgb);
+        EXPECT_EQ(report.flags, ref_report.flags) << hwy::TargetName(target);
+        EXPECT_EQ(report.saturated_everywhere, ref_report.saturated_everywhere);
+        EXPECT_EQ(report.black_everywhere, ref_report.black_everywhere);
+        EXPECT_EQ(report.well_exposed, ref_report.well_exposed);
+      }
+      hwy::SetSupportedTargetsForTest(0);
+      ++cases;
+      EXPECT_GT(ref_report.saturated_everywhere + ref_report.black_everywhere, 0u);  // bounds were read
+    }
+  }
+  EXPECT_EQ(cases, 6u);
+}
+
 // The scalar loop's other paths read the codes too (ignore_colour, frame masks, valid masks),
 // and a response of another size reads the floats: the same image as without codes.
 TEST(MergeCodes, MaskedIgnoredAndOtherLevelCountsGiveTheFloatPathsImage) {

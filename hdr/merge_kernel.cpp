@@ -49,6 +49,11 @@
 // (was ~40 % on the floats'), the rest on its own work: the byte permutes, unpacks and blends
 // of the table reads, the divisions, the spills of its per-block arrays. 16-bit, RAW and float
 // brackets keep reading floats.
+// Then (issue 23, a fifth pass, the VBMI kernel's own work): 64 levels in one half of a table
+// read it with half the permutes and no blends, and its channel loop is unrolled (no indexed
+// stack array of values). One thread's CPU time, 8-bit, medians of 8 interleaved runs at load
+// 1.4-2.9: ramp 2.10 -> 1.36 ms, Memorial 512x768 1.05 -> 0.76 ms; 2 threads against the 8-bit
+// floor 4.6x -> 3.2x (runs 2.6-4.4x), so the 3x aim is still not met (docs/hdr.md).
 //
 // Bit-identical to the scalar loop: every lane does the scalar loop's operations in its order
 // (level = int(min(z * scale + 0.5, levels - 1)) after zeroing non-positive and NaN values;

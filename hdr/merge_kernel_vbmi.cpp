@@ -19,6 +19,12 @@
 // loads, no conversion, a quarter of the bytes (what that gained and where the time goes
 // then: merge_kernel.cpp's head comment, docs/hdr.md).
 //
+// Most of the work is then the table reads' shuffles (per read of 64 levels: 8 permutes, 4
+// blends, 8 unpacks). 64 levels all in one half of a table, [0, 128) or [128, 256) (one
+// channel of a 64-pixel run of a frame, dark or bright: common in real scenes, where a frame's
+// runs are rarely spread over the whole code range), take one permute per plane and no blend:
+// a branch on the index's top bits, taken for the sums' two tables together and for a bound's.
+//
 // Bit-identical to the scalar loop as the Highway kernel is: the same level, sums from +0 of
 // table[level] * factor frame after frame (a frame whose 64 levels of a channel all have
 // w = wx = 0 is skipped: it adds +0), one IEEE division; no FMA (-ffp-contract=off, and the

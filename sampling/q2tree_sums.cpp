@@ -172,6 +172,14 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
     };
     auto run = hn::Zero(f8);
     uint32_t current = width ? target[0] : 0;  // the run's tagged target
+    // The next pixel's tagged target: where it is another healpix pixel, the run ends.
+    const auto next_target = [&](uint32_t tagged) {
+      if ((tagged ^ current) & ~kQ2FirstRun) {
+        add_run(current, run);
+        run = hn::Zero(f8);
+        current = tagged;
+      }
+    };
     // Eight pixels at a time: their values computed with a lane a pixel, then transposed to
     // eight vectors laid out as the bins, (r, g, b, lx, ly, lz, 0 l, 0 l) (24 shuffles).
     size_t u = 0;
@@ -184,11 +192,7 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
       sixteen(px + 3 * u, ok ? ok + u : nullptr, s.cos_phi + u, s.sin_phi + u, p, low16);
 #pragma GCC unroll 16
       for (size_t j = 0; j < 16; ++j) {
-        if ((target[u + j] ^ current) & ~kQ2FirstRun) {
-          add_run(current, run);
-          run = hn::Zero(f8);
-          current = target[u + j];
-        }
+        next_target(target[u + j]);
         run = hn::Add(run, p[j]);
       }
     }
@@ -225,20 +229,12 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
                                  hn::ConcatUpperUpper(f8, v0, u0), hn::ConcatUpperUpper(f8, v1, u1),
                                  hn::ConcatUpperUpper(f8, v2, u2), hn::ConcatUpperUpper(f8, v3, u3)};
       for (size_t j = 0; j < 8; ++j) {
-        if ((target[u + j] ^ current) & ~kQ2FirstRun) {
-          add_run(current, run);
-          run = hn::Zero(f8);
-          current = target[u + j];
-        }
+        next_target(target[u + j]);
         run = hn::Add(run, p[j]);
       }
     }
     for (; u < width; ++u) {
-      if ((target[u] ^ current) & ~kQ2FirstRun) {
-        add_run(current, run);
-        run = hn::Zero(f8);
-        current = target[u];
-      }
+      next_target(target[u]);
       if (ok && !ok[u]) continue;
       // (r, g, b, next pixel's r): the fourth float is read only where it exists, and cleared.
       hn::Vec<decltype(f4)> p4;

@@ -11,9 +11,9 @@
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include "core/error.h"
+#include "core/thread_arena.h"
 #include "hdr/merge_kernel.h"
 
 namespace lp {
@@ -467,12 +467,7 @@ void merge_bracket(const BracketView& b, const CameraResponse& resp, const Merge
         rows(std::false_type{});
     });
   };
-  if (o.threads > 0) {
-    tbb::task_arena arena(o.threads);
-    arena.execute(run);
-  } else {
-    run();
-  }
+  run_in_thread_arena(o.threads, run);
   if (n_well == 0)  // all black or all saturated: a uniform bound, not a measurement
     throw InputError(fmt::format("{}: no pixel is well exposed in any of the {} frames (every one is black or saturated "
                                  "in all of them)",

@@ -2,13 +2,13 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "core/error.h"
+#include "core/thread_arena.h"
 #include "probe/remap_kernel.h"
 
 namespace lp {
@@ -44,11 +44,8 @@ void run_rows(int rows, const RemapOptions& options, F&& body) {
   };
   if (options.threads == 1) {
     body(0, rows);
-  } else if (options.threads > 1) {
-    tbb::task_arena arena(options.threads);
-    arena.execute(loop);
   } else {
-    loop();
+    run_in_thread_arena(options.threads, loop);
   }
 }
 

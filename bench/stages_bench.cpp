@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/evict_caches.h"
 #include "hdr/bracket.h"
 #include "hdr/merge.h"
 #include "hdr/opencv_peer.h"
@@ -73,6 +74,26 @@ const Bracket& bracket_8bit() {
   return b;
 }
 
+// kCold: before each timed call, the frames' floats, their 8-bit codes and the output leave
+// every cache (bench/evict_caches.h), as issue 23 measures.
+void evict_bracket(const Bracket& b, const void* out, size_t out_bytes) {
+  for (size_t k = 0; k < b.frames.size(); ++k) {
+    lp::bench::evict_caches({{b.frames[k].rgb.data(), b.frames[k].rgb.size() * sizeof(float)}});
+    if (k < b.codes.size()) lp::bench::evict_caches({{b.codes[k].data(), b.codes[k].size()}});
+  }
+  lp::bench::evict_caches({{out, out_bytes}});
+}
+
+// The caches emptied between timed calls, or the row skipped where that cannot be done.
+template <bool kCold>
+bool cold_supported(benchmark::State& state) {
+  if (kCold && !lp::bench::kCanEvictCaches) {
+    state.SkipWithError("no cache eviction on this CPU");
+    return false;
+  }
+  return true;
+}
+
 void set_pixels(benchmark::State& state) {
   state.counters["MPix_s"] = benchmark::Counter(double(kW) * kH / 1e6, benchmark::Counter::kIsIterationInvariantRate);
 }
@@ -83,15 +104,23 @@ void set_pixels(benchmark::State& state) {
 // kThreads 1: the whole merge on the calling thread, whose CPU time is little disturbed by
 // other processes on a shared machine (the 2-thread real time waits for a core).
 // k8Bit: the frames' 8-bit codes are read instead of their floats (an 8-bit bracket).
-template <bool kSimd, bool kFreshOutput = false, int kThreads = 2, bool k8Bit = false>
+template <bool kSimd, bool kFreshOutput = false, int kThreads = 2, bool k8Bit = false, bool kCold = false>
 void BM_MergeOurs(benchmark::State& state) {
+  if (!cold_supported<kCold>(state)) return;
   const CameraResponse response = linear_response(256);
   MergeOptions o;
   o.threads = kThreads;
   o.simd = kSimd;
-  const BracketView b = bracket_view(k8Bit ? bracket_8bit() : bracket());  // made once, outside the timing
+  const Bracket& source = k8Bit ? bracket_8bit() : bracket();
+  const BracketView b = bracket_view(source);  // made once, outside the timing
   RgbImage out;
+  if (kCold) merge_bracket(b, response, o, &out);  // the output exists before the first eviction
   for (auto _ : state) {
+    if (kCold) {
+      state.PauseTiming();
+      evict_bracket(source, out.rgb.data(), out.rgb.size() * sizeof(float));
+      state.ResumeTiming();
+    }
     if (kFreshOutput)
       benchmark::DoNotOptimize(merge_bracket(b, response, o).rgb.data());
     else
@@ -132,7 +161,9 @@ void BM_MergeMemorial(benchmark::State& state) {
 
 // Read the three frames once and write one float RGB image, on the merge's two threads:
 // the bytes a merge must move.
+template <bool kCold = false>
 void BM_MergeFloor(benchmark::State& state) {
+  if (!cold_supported<kCold>(state)) return;
   const Bracket& b = bracket();
   std::vector<float> out(b.frames[0].rgb.size());
   const float* f0 = b.frames[0].rgb.data();
@@ -140,6 +171,11 @@ void BM_MergeFloor(benchmark::State& state) {
   const float* f2 = b.frames[2].rgb.data();
   tbb::task_arena arena(2);
   for (auto _ : state) {
+    if (kCold) {
+      state.PauseTiming();
+      evict_bracket(b, out.data(), out.size() * sizeof(float));
+      state.ResumeTiming();
+    }
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) out[i] = f0[i] + f1[i] + f2[i];
@@ -153,7 +189,9 @@ void BM_MergeFloor(benchmark::State& state) {
 
 // The same with the three frames' 8-bit codes (3.7 MB each instead of 14.7): the floor of a
 // merge of an 8-bit bracket, which is what issue 23's aim reads.
+template <bool kCold = false>
 void BM_MergeFloor8Bit(benchmark::State& state) {
+  if (!cold_supported<kCold>(state)) return;
   const Bracket& b = bracket_8bit();
   std::vector<float> out(b.frames[0].rgb.size());
   const uint8_t* f0 = b.codes[0].data();
@@ -161,6 +199,11 @@ void BM_MergeFloor8Bit(benchmark::State& state) {
   const uint8_t* f2 = b.codes[2].data();
   tbb::task_arena arena(2);
   for (auto _ : state) {
+    if (kCold) {
+      state.PauseTiming();
+      evict_bracket(b, out.data(), out.size() * sizeof(float));
+      state.ResumeTiming();
+    }
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i < r.end(); ++i) out[i] = float(int(f0[i]) + int(f1[i]) + int(f2[i]));
@@ -173,9 +216,12 @@ void BM_MergeFloor8Bit(benchmark::State& state) {
 }
 
 // cv::MergeDebevec on the same bracket (as 8-bit frames; the conversion is not timed).
+template <bool kCold = false>
 void BM_MergeOpenCv(benchmark::State& state) {
+  if (!cold_supported<kCold>(state)) return;
   const Bracket& b = bracket();
   for (auto _ : state) {
+    if (kCold) evict_bracket(b, nullptr, 0);  // manual time: only opencv_merge's own seconds count
     double seconds = 0;
     benchmark::DoNotOptimize(opencv_merge(b, OpenCvHdrMethod::Debevec, nullptr, &seconds).rgb.data());
     state.SetIterationTime(seconds);
@@ -246,9 +292,16 @@ BENCHMARK(BM_MergeOurs<false>)->Name("hdr/merge_3x1280x960/ours:scalar loop")->U
 BENCHMARK(BM_MergeOurs<true, false, 2, true>)->Name("hdr/merge_3x1280x960/ours:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeOurs<true, false, 1, true>)->Name("hdr/merge_3x1280x960/ours:8-bit frames, 1 thread")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MergeMemorial)->Name("hdr/merge_memorial_3x512x768/ours:8-bit frames, 1 thread")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_MergeFloor)->Name("hdr/merge_3x1280x960/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_MergeFloor8Bit)->Name("hdr/merge_3x1280x960/floor:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_MergeOpenCv)->Name("hdr/merge_3x1280x960/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();
+BENCHMARK(BM_MergeFloor<>)->Name("hdr/merge_3x1280x960/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeFloor8Bit<>)->Name("hdr/merge_3x1280x960/floor:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
+// The same with the caches evicted before each call (issue 23's method; evict_caches.h).
+BENCHMARK(BM_MergeOurs<true, false, 2, false, true>)->Name("hdr/merge_3x1280x960_caches_evicted/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeOurs<true, false, 2, true, true>)->Name("hdr/merge_3x1280x960_caches_evicted/ours:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeOurs<true, false, 1, true, true>)->Name("hdr/merge_3x1280x960_caches_evicted/ours:8-bit frames, 1 thread")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeFloor<true>)->Name("hdr/merge_3x1280x960_caches_evicted/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeFloor8Bit<true>)->Name("hdr/merge_3x1280x960_caches_evicted/floor:8-bit frames")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_MergeOpenCv<true>)->Name("hdr/merge_3x1280x960_caches_evicted/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();
+BENCHMARK(BM_MergeOpenCv<>)->Name("hdr/merge_3x1280x960/peer:cv::MergeDebevec")->Unit(benchmark::kMillisecond)->UseManualTime();
 BENCHMARK(BM_StartOurs)->Name("startup/version/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StartFloor)->Name("startup/version/floor")->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SampleCommand<false>)->Name("sampling/sample_command_n256/ours")->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -43,6 +43,12 @@ faster. Aims (issue 23): merge ≤ 3× floor and ≥ 40× faster than MergeDebev
 pixel per frame, `sample` 0.40–0.49 s; see docs/sampling.md, "The accuracy reference").
 Where a row misses its aim, the table says so by its numbers; nothing here is asserted by
 a test (speed lives in benchmarks, never in timed tests).
+Issue 23 measures "with caches evicted": figures named `…_caches_evicted` flush every
+buffer the call reads or writes (frames, codes, tables or maps, output; for the samplers the
+map) out of every cache before each timed call (`bench/evict_caches.h`), for ours, its floor
+and its peer alike, as a live frame arrives from memory. The other figures repeat the call on
+the same buffers, which (26–59 MB for the merge) stay in this machine's L3: a stricter floor
+than memory, reported beside it.
 Times are wall-clock medians; calib rows detect every image of a shared set once. The
 `calib/select_<set>` rows time the whole `calib geometric --corners-in` command with the
 automatic model choice; their floor is the same command with the chosen model forced

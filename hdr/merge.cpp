@@ -27,6 +27,7 @@ struct Tables {
   std::vector<uint64_t> w_wx3;                  // w3 and wx3 paired (merge_kernel.h)
   std::vector<float> bound_short, bound_long;   // float(exp(g_c(l)) / t_k) of the shortest / longest frame
   std::vector<uint8_t> planes;                  // 256 levels: w3, wx3 and the bounds as byte planes (merge_kernel.h)
+  bool one_table = false;                       // w3 and wx3 the same for the three channels (merge_kernel.h)
   bool simd = false;                            // MergeOptions::simd
   std::vector<float> frame_w, frame_wx;         // per frame: s_k and s_k / t_k
   std::vector<size_t> by_time;                  // frame indices, shortest exposure first
@@ -102,7 +103,7 @@ void merge_rows(const BracketView& b, const CameraResponse& resp, const Tables& 
     kernel = {frame_rows.data(), kCodes ? code_rows.data() : nullptr, T.frame_w.data(), T.frame_wx.data(), nf,
               size_t(W), T.w3.data(), T.wx3.data(), T.w_wx3.data(), L, T.zero_through, T.zero_from, T.sat_level,
               T.black_level, T.by_time.front(), T.by_time.back(), T.bound_short.data(), T.bound_long.data(),
-              T.planes.empty() ? nullptr : T.planes.data()};
+              T.planes.empty() ? nullptr : T.planes.data(), T.one_table};
   }
   for (int y = y0; y < y1; ++y) {
     const size_t row = size_t(y) * size_t(W);
@@ -406,6 +407,11 @@ void merge_bracket(const BracketView& b, const CameraResponse& resp, const Merge
       T.bound_short.push_back(float(e / b.exposure_seconds[T.by_time.front()]));
       T.bound_long.push_back(float(e / b.exposure_seconds[T.by_time.back()]));
     }
+  auto same_channels = [&](const std::vector<float>& t) {  // bit for bit
+    return std::memcmp(t.data(), t.data() + L, sizeof(float) * size_t(L)) == 0 &&
+           std::memcmp(t.data(), t.data() + 2 * L, sizeof(float) * size_t(L)) == 0;
+  };
+  T.one_table = same_channels(T.w3) && same_channels(T.wx3);
   if (L == 256) {  // the VBMI kernel's tables: byte p of every float, per table and channel
     const std::vector<float>* tables[] = {&T.w3, &T.wx3, &T.bound_short, &T.bound_long};
     T.planes.resize(4 * 3 * 4 * 256);

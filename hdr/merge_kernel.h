@@ -42,6 +42,10 @@ struct MergeRowInput {
   // channel, then byte p of the float (little-endian) at [level]: ((t * 3 + c) * 4 + p) * 256
   // + level. merge_row_vbmi reads these; null without them.
   const uint8_t* planes = nullptr;
+  // The three channels' w tables are one table, and so are their wx tables (a response
+  // that is the same curve for R, G and B: the linear default, sRGB). merge_row_vbmi then
+  // reads 8-bit codes as they lie, interleaved, without splitting them into channel planes.
+  bool one_table = false;
 };
 
 // Writes out[3x + c] = Σ_k wx(z) s_k/t_k / Σ_k w(z) s_k, summed over frames in order, with

@@ -206,6 +206,53 @@ inline __mmask64 at_or_above(__m512i level, int from) {
 
 inline __mmask16 part(__mmask64 m, int q) { return __mmask16(m >> (16 * q)); }
 
+// One block of 64 pixels of 8-bit codes whose three channels share their tables
+// (MergeRowInput::one_table: the linear default, sRGB): the 192 interleaved codes are read as
+// 3 vectors of 64 levels, with no split into channel planes, and their sums come out
+// interleaved, so the output needs no interleave either (per block 18 + 24 shuffles fewer, 9
+// more). Lane i of vector g is the block's code 64 g + i, whatever its channel: the same table
+// reads, products, sums in frame order (a frame whose 64 lanes all weigh 0 adds +0, as
+// there) and division as the channel planes' path, so bit-identical to it. False when some
+// lane has no weight in any frame: the caller's path then does the whole block again, with
+// the bounds and flags of such channels (it overwrites what was stored here).
+inline bool one_table_block(const MergeRowInput& in, size_t first_float, float* out, __m512i to_pixel_order,
+                            __m512i first_weighted, __m512i weighted_span, int span) {
+  const __m512 zero = _mm512_setzero_ps();
+  const uint8_t* w_at = in.planes;  // channel 0's tables are every channel's
+  const uint8_t* wx_at = in.planes + 3 * kPlaneBytes;
+  for (int g = 0; g < 3; ++g) {
+    __m512 sw[4] = {zero, zero, zero, zero}, swx[4] = {zero, zero, zero, zero};
+    for (size_t k = 0; k < in.frames; ++k) {
+      const uint8_t* z = in.codes[k] + first_float + 64 * size_t(g);
+      _mm_prefetch(reinterpret_cast<const char*>(z + kPrefetchFloats), _MM_HINT_T0);
+      const __m512i codes = _mm512_loadu_si512(z);
+      if (span < 256 && _mm512_cmplt_epu8_mask(_mm512_sub_epi8(codes, first_weighted), weighted_span) == 0) continue;
+      const __m512i index = _mm512_permutexvar_epi8(to_pixel_order, codes);  // byte j: code pi(j), as lookup() reads
+      const __mmask64 high = _mm512_movepi8_mask(index);
+      const __m512 fw = _mm512_set1_ps(in.frame_w[k]), fx = _mm512_set1_ps(in.frame_wx[k]);
+      auto add = [&](auto halves) {
+        __m512 t[4];
+        lookup<halves.value>(w_at, index, high, t);
+        for (int q = 0; q < 4; ++q) sw[q] = _mm512_add_ps(sw[q], _mm512_mul_ps(t[q], fw));
+        lookup<halves.value>(wx_at, index, high, t);
+        for (int q = 0; q < 4; ++q) swx[q] = _mm512_add_ps(swx[q], _mm512_mul_ps(t[q], fx));
+      };
+      if (high == 0) {
+        add(std::integral_constant<Halves, Halves::kLow>{});
+      } else if (high == ~__mmask64(0)) {
+        add(std::integral_constant<Halves, Halves::kHigh>{});
+      } else {
+        add(std::integral_constant<Halves, Halves::kBoth>{});
+      }
+    }
+    for (int q = 0; q < 4; ++q) {
+      if (_mm512_cmp_ps_mask(sw[q], zero, _CMP_GT_OQ) != 0xFFFF) return false;
+      _mm512_storeu_ps(out + 64 * g + 16 * q, _mm512_div_ps(swx[q], sw[q]));
+    }
+  }
+  return true;
+}
+
 // kCodes: the levels are in.codes' bytes, else computed from in.rows' floats.
 template <bool kCodes>
 MergeRowResult vbmi_row(const MergeRowInput& in, float* out, uint8_t* flags, uint32_t* redo) {
@@ -232,6 +279,11 @@ MergeRowResult vbmi_row(const MergeRowInput& in, float* out, uint8_t* flags, uin
   const size_t blocks = in.width / 64;
   for (size_t blk = 0; blk < blocks; ++blk) {
     const size_t first_float = 192 * blk;
+    if constexpr (kCodes) {
+      if (in.one_table &&
+          one_table_block(in, first_float, out + first_float, to_pixel_order, first_weighted, weighted_span, span))
+        continue;
+    }
     // The levels of every frame, one plane per channel (pi order), and which of them have
     // some weighted level (bit 3 k + c).
     __m512i level[kMergeVbmiMaxFrames][3];

@@ -127,6 +127,11 @@ struct RowGridBinning {
   // Healpix pixels up to the last one a source falls in: the nodes after them (a hemisphere
   // map's four southern base quads, a third of its pixels) are zero, never summed.
   size_t stored_pixels = 0;
+  // Groups of 64 healpix pixels (g: pixels [64 g, 64 g + 64)) holding a source, as ranges
+  // [first, end) of groups: the pyramid's three finest steps skip the others, whose nodes
+  // stay zero (a hemisphere map's equatorial quads below the horizon, 22 % of the groups
+  // at 360 x 90).
+  std::vector<std::pair<size_t, size_t>> group_ranges;
   std::vector<float> row;  // 8 per row: 1, 1, 1, sin theta, sin theta, cos theta, exact pixel solid angle, 0
   std::vector<float> col;  // 8 per column: 1, 1, 1, cos phi, sin phi, 1, 0, 0
 
@@ -185,6 +190,14 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
     const uint32_t t = b->target[i];
     const bool run_start = i % size_t(w) == 0 || b->target[i - 1] % detail::kQ2FirstRun != t;
     if (run_start && !seen[t]) b->target[i] |= detail::kQ2FirstRun, seen[t] = 1;
+  }
+  for (size_t g = 0; 64 * g < b->stored_pixels; ++g) {
+    const auto first = seen.begin() + std::ptrdiff_t(64 * g);
+    if (std::find(first, first + std::ptrdiff_t(std::min<size_t>(64, seen.size() - 64 * g)), 1) - first == 64) continue;
+    if (!b->group_ranges.empty() && b->group_ranges.back().second == g)
+      ++b->group_ranges.back().second;
+    else
+      b->group_ranges.emplace_back(g, g + 1);
   }
   return b;
 }
@@ -666,8 +679,10 @@ class Q2TreeSampler final : public Sampler {
     int l = finest - 1;
     if (finest >= 3) {  // the three finest steps in one pass (whole groups: the rest is zeros)
       stored = (stored + 63) / 64;
-      detail::q2tree_quad_sums3(levels_[size_t(finest)], stored, levels_[size_t(finest) - 1],
-                                levels_[size_t(finest) - 2], levels_[size_t(finest) - 3]);
+      for (const auto& [first, end] : bin.group_ranges)
+        detail::q2tree_quad_sums3(levels_[size_t(finest)] + 512 * first, end - first,
+                                  levels_[size_t(finest) - 1] + 128 * first, levels_[size_t(finest) - 2] + 32 * first,
+                                  levels_[size_t(finest) - 3] + 8 * first);
       l = finest - 4;
     }
     for (; l >= 0; --l) {

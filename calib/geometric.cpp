@@ -64,6 +64,7 @@ SelectionOptions selection_options(const CalibrateOptions& o) {
   out.rule = o.selection_rule;
   out.min_rule_splits = o.selection_min_rule_splits;
   out.perspective_field_deg = o.selection_perspective_field_deg;
+  out.outfit_factor = o.selection_outfit_factor;
   out.measure_noise = o.model.empty();
   out.parallel = o.parallel;
   return out;

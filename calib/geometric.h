@@ -70,11 +70,12 @@ struct CalibrateOptions {
   int cv_splits = SelectionOptions{}.cv_splits;
   double selection_screen_factor = SelectionOptions{}.screen_factor;
   bool selection_noise_from_splits = SelectionOptions{}.noise_from_splits;
-  // SelectionOptions::rule, min_rule_splits, perspective_field_deg: the simplest unless beaten beyond the splits'
+  // SelectionOptions::rule, min_rule_splits, perspective_field_deg, outfit_factor: the simplest unless beaten beyond the splits'
   // noise (default), or the fewest parameters within the noise of the best.
   SelectionRule selection_rule = SelectionOptions{}.rule;
   int selection_min_rule_splits = SelectionOptions{}.min_rule_splits;
   double selection_perspective_field_deg = SelectionOptions{}.perspective_field_deg;
+  double selection_outfit_factor = SelectionOptions{}.outfit_factor;
   // Jackknife leverage of each view for the chosen model (one extra fit per view);
   // LeverageOptions (view_diagnostics.h).
   bool leverage = true;

@@ -267,9 +267,29 @@ size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char
   }
   for (auto& c : table) {
     c.split_wins = 0;
+    c.outfitted = false;
     c.challenge_gain_px = c.challenge_se_px = c.challenge_cv_gain_px = c.challenge_cv_se_px = kNaN;
   }
   if (order.empty()) return table.size();
+  // Systematically outfitted candidates leave (see SelectionOptions::outfit_factor). A
+  // candidate with the lowest held-out RMS of every split would be outfitted only by one
+  // with a lower one, so some candidate always stays.
+  if (o.outfit_factor >= 1) {
+    const auto outfits = [&](const ModelCandidate& d, const ModelCandidate& c) {
+      int cv_not_worse = 0;
+      for (size_t k = 0; k < splits; ++k) {
+        if (!(o.outfit_factor * d.heldout_splits_px[k] < c.heldout_splits_px[k])) return false;
+        cv_not_worse += d.cross_validation_splits_px[k] <= c.cross_validation_splits_px[k];
+      }
+      return 2 * cv_not_worse >= int(splits);
+    };
+    std::vector<size_t> kept;
+    for (size_t i : order) {
+      table[i].outfitted = std::any_of(order.begin(), order.end(), [&](size_t d) { return d != i && outfits(table[d], table[i]); });
+      if (!table[i].outfitted) kept.push_back(i);
+    }
+    order = std::move(kept);
+  }
   // The vote: who fits the held-out corners best on each split (reported; the rule below
   // asks for a majority of the splits against the incumbent, not of all candidates).
   for (size_t k = 0; k < splits; ++k) {

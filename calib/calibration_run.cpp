@@ -68,7 +68,9 @@ std::string table_text(const CalibrationResult& r) {
       s += fmt::format("{:<44} {:>6} {:>9.3f} {}\n", c.name, c.params, c.rms_px, c.error);
     else
       s += fmt::format("{:<44} failed: {}\n", c.name, c.error);
-  if (r.table.size() == 1 || !std::isfinite(r.cv_noise_px))  // a forced model: no selection, no noise estimate
+  // A forced model: one candidate, no selection. (Not "no noise estimate": with 4 views the
+  // halves of 2 have no jackknife, yet the model was chosen.)
+  if (r.table.size() == 1)
     s += fmt::format("model {} as requested; {} of {} corners rejected as outliers\n", r.selected, r.corners_rejected,
                      r.corners_total);
   else if (incumbent)

@@ -178,6 +178,22 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   EXPECT_TRUE(nlohmann::json::parse(flat.to_json())["board_warp"].is_null());
 }
 
+// Four views: halves of two have no jackknife noise, yet the model is chosen, and the summary
+// says how (it said "as requested" when nothing was requested).
+TEST(CalibrationRun, FourViewsSayTheModelWasChosenNotRequested) {
+  const CameraModel truth = kb190();
+  const auto corners = project_board_views(truth, kBoard, 4, 70, 600, 0.1, 3, 93);
+  GeometricCalibrationOptions o;
+  o.calibrate.leverage = false;
+  o.calibrate.uncertainty = false;
+  const GeometricCalibration run = calibrate_detections(detections_of(corners, truth), kBoard, o);
+  ASSERT_GT(run.result.table.size(), 1u);
+  const std::string text = run.summary();
+  EXPECT_TRUE(std::isnan(run.result.cv_noise_px)) << run.result.cv_noise_px << " with " << corners.size() << " views";
+  EXPECT_EQ(text.find("as requested"), std::string::npos) << text;
+  EXPECT_NE(text.find("chosen: " + run.result.selected + ", "), std::string::npos) << text;
+}
+
 TEST(CalibrationRun, DropsTheMostInfluentialViewAndReportsBothAnswers) {
   const CameraModel truth = kb190();
   auto corners = project_board_views(truth, kBoard, 9, 40, 600, 0.1, 11, 93);

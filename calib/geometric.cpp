@@ -65,6 +65,8 @@ SelectionOptions selection_options(const CalibrateOptions& o) {
   out.min_rule_splits = o.selection_min_rule_splits;
   out.perspective_field_deg = o.selection_perspective_field_deg;
   out.outfit_factor = o.selection_outfit_factor;
+  out.small_set_views = o.selection_small_set_views;
+  out.small_set_cv_splits = o.selection_small_set_cv_splits;
   out.measure_noise = o.model.empty();
   out.parallel = o.parallel;
   return out;

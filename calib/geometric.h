@@ -76,6 +76,8 @@ struct CalibrateOptions {
   int selection_min_rule_splits = SelectionOptions{}.min_rule_splits;
   double selection_perspective_field_deg = SelectionOptions{}.perspective_field_deg;
   double selection_outfit_factor = SelectionOptions{}.outfit_factor;
+  int selection_small_set_views = SelectionOptions{}.small_set_views;  // and small_set_cv_splits
+  int selection_small_set_cv_splits = SelectionOptions{}.small_set_cv_splits;
   // Jackknife leverage of each view for the chosen model (one extra fit per view);
   // LeverageOptions (view_diagnostics.h).
   bool leverage = true;

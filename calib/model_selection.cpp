@@ -437,7 +437,10 @@ SelectionReport select_model(const CalibrationProblem& pr, CandidateFits& fits, 
     for (const auto& c : table) why += (why.empty() ? "" : "; ") + c.name + ": " + c.error;
     throw InputError("calibrate: no candidate model could be fitted (" + why + ")");
   }
-  rep.splits = balanced_view_splits(int(fits.used.size()), std::max(1, o.cv_splits));
+  const int splits = o.cv_splits > 1 && int(fits.used.size()) <= o.small_set_views
+                         ? std::max(o.cv_splits, o.small_set_cv_splits)
+                         : o.cv_splits;
+  rep.splits = balanced_view_splits(int(fits.used.size()), std::max(1, splits));
   const bool repeated =
       repeat_over_splits(pr, fits, table, rep.splits, best_odd_even->cross_validation_px, o, progress);
   rep.selected_on = repeated ? "repeated" : "odd/even";

@@ -271,9 +271,8 @@ size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char
     c.challenge_gain_px = c.challenge_se_px = c.challenge_cv_gain_px = c.challenge_cv_se_px = kNaN;
   }
   if (order.empty()) return table.size();
-  // Systematically outfitted candidates leave (see SelectionOptions::outfit_factor). A
-  // candidate with the lowest held-out RMS of every split would be outfitted only by one
-  // with a lower one, so some candidate always stays.
+  // Systematically outfitted candidates leave (see SelectionOptions::outfit_factor). With a
+  // factor >= 1 "outfits" is a strict order (no cycle), so some candidate always stays.
   if (o.outfit_factor >= 1) {
     const auto outfits = [&](const ModelCandidate& d, const ModelCandidate& c) {
       int cv_not_worse = 0;

@@ -467,6 +467,18 @@ TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
   }
 }
 
+// A fitted candidate with measured per-split held-out RMS and cross-validation (the tables
+// of the incumbent rule's tests).
+ModelCandidate measured_candidate(const char* name, int params, std::vector<double> heldout, std::vector<double> cv) {
+  ModelCandidate c;
+  c.name = name;
+  c.params = params;
+  c.ok = true;
+  c.heldout_splits_px = std::move(heldout);
+  c.cross_validation_splits_px = std::move(cv);
+  return c;
+}
+
 // The incumbent rule picks the first candidate (family, then parameters) that no later one
 // beats, whatever the order of the challenges. The table is the one measured on the first
 // half (4 views, 3 splits) of the shared Fisheye190deg set: Mei beats the stereographic model
@@ -475,20 +487,11 @@ TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
 // Kannala-Brandt. A chain of challenges picked Mei (the other half picked Kannala-Brandt:
 // 2.0 px apart, against 0.15 px for Kannala-Brandt on both).
 TEST(ModelSelection, ThePickIsTheSimplestCandidateNoLaterOneBeats) {
-  const auto candidate = [](const char* name, int params, std::vector<double> heldout, std::vector<double> cv) {
-    ModelCandidate c;
-    c.name = name;
-    c.params = params;
-    c.ok = true;
-    c.heldout_splits_px = std::move(heldout);
-    c.cross_validation_splits_px = std::move(cv);
-    return c;
-  };
   std::vector<ModelCandidate> table = {
-      candidate("LENSMODEL_STEREOGRAPHIC", 4, {2.075, 1.539, 1.872}, {3.695, 9.455, 6.326}),
-      candidate("LENSMODEL_KANNALA_BRANDT", 8, {237356.332, 1.045, 1.181}, {2.686, 1.845, 1.631}),
-      candidate("LENSMODEL_OPENCV8", 12, {0.610, 2.681, 0.599}, {0.857, 5.803, 0.655}),
-      candidate("LENSMODEL_OMNIDIR_MEI", 9, {0.476, 0.436, 0.374}, {0.611, 7.305, 3.568})};
+      measured_candidate("LENSMODEL_STEREOGRAPHIC", 4, {2.075, 1.539, 1.872}, {3.695, 9.455, 6.326}),
+      measured_candidate("LENSMODEL_KANNALA_BRANDT", 8, {237356.332, 1.045, 1.181}, {2.686, 1.845, 1.631}),
+      measured_candidate("LENSMODEL_OPENCV8", 12, {0.610, 2.681, 0.599}, {0.857, 5.803, 0.655}),
+      measured_candidate("LENSMODEL_OMNIDIR_MEI", 9, {0.476, 0.436, 0.374}, {0.611, 7.305, 3.568})};
   const std::vector<char> eligible(table.size(), 1);
   const size_t pick = incumbent_pick(table, eligible, false);
   ASSERT_LT(pick, table.size());
@@ -517,21 +520,12 @@ TEST(ModelSelection, ThePickIsTheSimplestCandidateNoLaterOneBeats) {
 // with one candidate outfitted it, and Kannala-Brandt, 0.38 px from the other half's
 // plumb_bob, became the pick.
 TEST(ModelSelection, ACandidateOutfittedOnEverySplitIsNotThePick) {
-  const auto candidate = [](const char* name, int params, std::vector<double> heldout, std::vector<double> cv) {
-    ModelCandidate c;
-    c.name = name;
-    c.params = params;
-    c.ok = true;
-    c.heldout_splits_px = std::move(heldout);
-    c.cross_validation_splits_px = std::move(cv);
-    return c;
-  };
   std::vector<ModelCandidate> fisheye = {
-      candidate("LENSMODEL_STEREOGRAPHIC", 4, {1.326, 1.308, 1.788}, {2.936, 0.654, 5.035}),
-      candidate("plumb_bob", 9, {7.564, 7.525, 19.839}, {1.441, 4.535, 90.729}),
-      candidate("LENSMODEL_KANNALA_BRANDT", 8, {1.178, 0.922, 302571.142}, {1.728, 1.025, 3.680}),
-      candidate("LENSMODEL_OPENCV8", 12, {1.089, 1.068, 0.800}, {2.805, 2.683, 1.114}),
-      candidate("LENSMODEL_SPLINED_STEREOGRAPHIC", 100, {0.843, 1.099, 1.110}, {2.165, 1.561, 9.757})};
+      measured_candidate("LENSMODEL_STEREOGRAPHIC", 4, {1.326, 1.308, 1.788}, {2.936, 0.654, 5.035}),
+      measured_candidate("plumb_bob", 9, {7.564, 7.525, 19.839}, {1.441, 4.535, 90.729}),
+      measured_candidate("LENSMODEL_KANNALA_BRANDT", 8, {1.178, 0.922, 302571.142}, {1.728, 1.025, 3.680}),
+      measured_candidate("LENSMODEL_OPENCV8", 12, {1.089, 1.068, 0.800}, {2.805, 2.683, 1.114}),
+      measured_candidate("LENSMODEL_SPLINED_STEREOGRAPHIC", 100, {0.843, 1.099, 1.110}, {2.165, 1.561, 9.757})};
   const std::vector<char> all5(fisheye.size(), 1);
   EXPECT_EQ(fisheye[incumbent_pick(fisheye, all5, false)].name, "LENSMODEL_KANNALA_BRANDT");
   EXPECT_TRUE(fisheye[0].outfitted);   // OpenCV8 fits it 1.22-2.2x better, repeats better on 2 of 3
@@ -549,12 +543,12 @@ TEST(ModelSelection, ACandidateOutfittedOnEverySplitIsNotThePick) {
   EXPECT_EQ(fisheye[incumbent_pick(fisheye, all5, false, strict)].name, "LENSMODEL_STEREOGRAPHIC");
 
   std::vector<ModelCandidate> stereo = {
-      candidate("LENSMODEL_STEREOGRAPHIC", 4, {0.437, 0.437, 0.652, 0.553}, {1.351, 0.486, 5.617, 3.210}),
-      candidate("plumb_bob", 9, {0.285, 0.290, 0.330, 0.441}, {0.641, 1.621, 1.575, 1.328}),
-      candidate("LENSMODEL_KANNALA_BRANDT", 8, {0.216, 0.237, 0.464, 0.369}, {0.178, 0.536, 1.842, 0.498}),
-      candidate("LENSMODEL_OPENCV8", 12, {0.277, 0.510, 0.461, 0.414}, {0.781, 1.580, 1.650, 1.603}),
-      candidate("LENSMODEL_SPLINED_STEREOGRAPHIC", 100, {0.281, 0.319, 0.558, 0.379}, {1.146, 0.427, 2.084, 2.573}),
-      candidate("LENSMODEL_OMNIDIR_MEI", 9, {0.252, 0.260, 0.250, 0.253}, {0.630, 1.765, 1.169, 1.346})};
+      measured_candidate("LENSMODEL_STEREOGRAPHIC", 4, {0.437, 0.437, 0.652, 0.553}, {1.351, 0.486, 5.617, 3.210}),
+      measured_candidate("plumb_bob", 9, {0.285, 0.290, 0.330, 0.441}, {0.641, 1.621, 1.575, 1.328}),
+      measured_candidate("LENSMODEL_KANNALA_BRANDT", 8, {0.216, 0.237, 0.464, 0.369}, {0.178, 0.536, 1.842, 0.498}),
+      measured_candidate("LENSMODEL_OPENCV8", 12, {0.277, 0.510, 0.461, 0.414}, {0.781, 1.580, 1.650, 1.603}),
+      measured_candidate("LENSMODEL_SPLINED_STEREOGRAPHIC", 100, {0.281, 0.319, 0.558, 0.379}, {1.146, 0.427, 2.084, 2.573}),
+      measured_candidate("LENSMODEL_OMNIDIR_MEI", 9, {0.252, 0.260, 0.250, 0.253}, {0.630, 1.765, 1.169, 1.346})};
   const std::vector<char> all6(stereo.size(), 1);
   EXPECT_EQ(stereo[incumbent_pick(stereo, all6, true)].name, "plumb_bob");
   EXPECT_FALSE(stereo[1].outfitted);  // Mei fits it 1.13-1.74x better: not 1.2x on every split

@@ -438,6 +438,7 @@ TEST(Cli, GeometricCalibrationRecoversASyntheticFisheyeAndRefusesBadSets) {
     if (row["model"] == j["selected"]) {
       chosen_row = true;
       ASSERT_EQ(row["cross_validation_splits_px"].size(), 8u);
+      EXPECT_FALSE(row["outfitted"].get<bool>());  // the pick is never one that another outfits
       EXPECT_EQ(row["cross_validation_splits_px"][0].get<double>(), row["cross_validation_px"].get<double>());
       EXPECT_EQ(row["cross_validation_repeated_px"].get<double>(), j["cross_validation_repeated_px"].get<double>());
     }

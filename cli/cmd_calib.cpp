@@ -57,7 +57,7 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   const BoardSpec board = board_from(args.board, args.square_mm);
   if (args.drop_influential < 0) throw InputError("--drop-influential must be 0 or more");
   check_calibration_output(args.output, args.model);
-  keep_heap_top_for_solvers();
+  keep_heap_for_reuse();
   GeometricCalibrationOptions o;
   o.calibrate.model = args.model;
   o.calibrate.use_mrcal = !args.no_mrcal;

@@ -228,7 +228,7 @@ std::vector<Command> eval_commands() {
            EvalCalibOptions o = a->o;
            parse_size(a->board, "--board", &o.board.cols, &o.board.rows);
            o.board.square_mm = a->square_mm;
-           keep_heap_top_for_solvers();
+           keep_heap_for_reuse();
            return evaluate_and_report("eval calib", out, evaluate_calib, o);
          };
        }},

@@ -17,7 +17,7 @@ namespace {
 // The calibration tests run the solvers as the commands do, with their heap settings
 // (core/heap_tuning.h): without them the selection tests spend much of their time in page
 // faults.
-[[maybe_unused]] const bool solver_heap = (keep_heap_top_for_solvers(), true);
+[[maybe_unused]] const bool solver_heap = (keep_heap_for_reuse(), true);
 
 using calib_test::kb190;
 

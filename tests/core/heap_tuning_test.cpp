@@ -29,8 +29,8 @@ namespace {
 // freed its pages stay with the process (64 MB kept at the top) instead of going back to
 // the kernel to be faulted in and zeroed again by the next solve.
 TEST(HeapTuning, ASolversLargeBlockComesFromTheHeapAndStaysAfterItsFree) {
-  keep_heap_top_for_solvers();
-  keep_heap_top_for_solvers();  // idempotent
+  keep_heap_for_reuse();
+  keep_heap_for_reuse();  // idempotent
   const struct mallinfo2 before = mallinfo2();
   void* volatile block = std::malloc(std::size_t(16) << 20);  // volatile: not elided
   ASSERT_NE(block, nullptr);
@@ -44,6 +44,24 @@ TEST(HeapTuning, ASolversLargeBlockComesFromTheHeapAndStaysAfterItsFree) {
   // block came from, and then the top never moved.
   EXPECT_GE(after.arena, std::min(during.arena, std::size_t(64) << 20)) << "the heap's top went back to the kernel";
   EXPECT_GE(after.fordblks, std::size_t(16) << 20);
+}
+
+// A probe frame's images: ten 24 MB blocks freed together stay with the process (the trim
+// threshold of 512 MB), where the top pad alone gave all but 64 MB of them back.
+TEST(HeapTuning, AFramesWorthOfFreedImagesStaysWithTheProcess) {
+  keep_heap_for_reuse();
+  constexpr std::size_t kBlock = std::size_t(24) << 20;
+  void* blocks[10];
+  for (void*& b : blocks) {
+    b = std::malloc(kBlock);
+    ASSERT_NE(b, nullptr);
+    std::memset(b, 1, kBlock);
+  }
+  const struct mallinfo2 during = mallinfo2();
+  for (void* b : blocks) std::free(b);
+  const struct mallinfo2 after = mallinfo2();
+  EXPECT_GE(after.arena, during.arena) << "the heap's top went back to the kernel";
+  EXPECT_GE(after.fordblks, 10 * kBlock);
 }
 #endif
 

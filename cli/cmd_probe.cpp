@@ -12,6 +12,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/heap_tuning.h"
 #include "core/limits.h"
 #include "core/image_io.h"
 #include "core/map_sequence.h"
@@ -116,7 +117,7 @@ nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions
       fj["ball_fit"] = {{"subpixel", b->subpixel}, {"sigma_centre_px", b->sigma_centre_px}, {"sigma_radius_px", b->sigma_radius_px},
                         {"noise_sigma_centre_px", b->noise_sigma_centre_px},
                         {"noise_sigma_radius_px", b->noise_sigma_radius_px}, {"rim_agreement", b->rim_agreement},
-                        {"warning", ball_fit_warning(*b)}};
+                        {"searched_from_previous", f.ball_seeded}, {"warning", ball_fit_warning(*b)}};
     fj["valid_fraction"] = f.valid_fraction;
     if (f.circle) fj["circle"] = {f.circle->cx, f.circle->cy, f.circle->r};
     per_frame.push_back(fj);
@@ -143,6 +144,7 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   const UnwrapSequenceOptions o = unwrap_options(args);
   const bool sequence = files.size() > 1;
   if (sequence) make_output_directory(args.output);
+  if (sequence) keep_heap_for_reuse();  // each frame allocates and frees the same large buffers
   Progress progress("probe unwrap", 2 * files.size(), out.progress && sequence);
   const UnwrapSequenceReport r = unwrap_probe_sequence(
       files, o,

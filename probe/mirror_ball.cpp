@@ -466,9 +466,11 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   // covers the difference, and the winner's region answer is refined on level 0 below.
   const int last_level = levels.size() > 1 ? 1 : 0;
   const double edge_noise = edge_noise_level(fine, valid8);
+  const bool near_guess = options.initial_guess && options.initial_guess_reach_px > 0;
   for (auto [c, whole] : seeds) {
     for (int li = int(levels.size()) - 1; li >= last_level; --li)
-      c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction, whole);
+      if (!near_guess || 2 * factors[size_t(li)] <= options.initial_guess_reach_px)
+        c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction, whole);
     Pick p{c, region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction), {}};
     p.rim = fit_rim(fine, lin, valid8, {c.cx, c.cy, c.r}, options.rays, edge_noise);
     const bool near = std::hypot(p.rim.ball.cx - c.cx, p.rim.ball.cy - c.cy) <= 8 + 0.02 * c.r &&

@@ -148,6 +148,11 @@ struct FindBallOptions {
   double min_confidence = 0.5;
   // Skips the Hough search and refines this guess (and the inscribed circle).
   std::optional<BallInImage> initial_guess;
+  // With initial_guess: how far (px) the ball may be from it. The guess is refined only on
+  // the pyramid levels whose local search (+-2 of their pixels) reaches no further than
+  // this, so that a good guess is not carried off to a circle that scores better on the
+  // coarse levels (a 400 px city ball moved to a circle 15 px larger). 0: every level.
+  double initial_guess_reach_px = 0;
 };
 
 struct FindBallReport {

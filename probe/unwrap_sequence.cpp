@@ -14,26 +14,75 @@ namespace lp {
 
 namespace {
 
-// Pass 1: the frames and their raw geometry.
-std::vector<RgbImage> read_frames(const std::vector<std::string>& files, const UnwrapSequenceOptions& o,
-                                  CircleTrack& raw, std::vector<std::optional<FindBallReport>>& fits,
-                                  const std::function<void()>& step) {
-  std::vector<RgbImage> frames;
-  for (const std::string& f : files) {
-    RgbImage img = read_rgb_image(f);
-    if (!frames.empty() && (img.width != frames[0].width || img.height != frames[0].height))
-      throw InputError(fmt::format("{}: {}x{} differs from the sequence's {}x{}", f, img.width, img.height,
-                                   frames[0].width, frames[0].height));
+// A seeded fit stands when its rim agrees with the edges along at least this share of
+// the arc the last frame's did (the ball moves, the rim's content with it a little).
+constexpr double kSeededAgreement = 0.9;
+// How far the seeded search looks for the ball around the last frame's (px).
+constexpr double kSeededReachPx = 8;
+
+// One frame's ball. After a frame whose silhouette fit held along most of the rim, the
+// search starts from that frame's ball alone (FindBallOptions::initial_guess: each level's
+// local search reaches +-2 of its pixels, +-64 px at 1280 x 960), which skips the
+// exhaustive search of the coarsest level and the refinement of a dozen seeds; where that
+// seeded fit does not hold as well (the ball jumped, a cut, a dark rim), the frame gets the
+// full search. docs/probes.md "Sequences" has the cost and the agreement with the full search.
+BallInImage track_ball(const RgbImage& img, const std::optional<FindBallReport>& previous_fit, const CircleTrack& raw,
+                       FindBallReport& fit, bool& seeded_fit) {
+  seeded_fit = false;
+  if (previous_fit && previous_fit->subpixel && !raw.cx.empty()) {
+    FindBallOptions seeded;
+    seeded.initial_guess = BallInImage{raw.cx.back(), raw.cy.back(), raw.r.back()};
+    seeded.initial_guess_reach_px = kSeededReachPx;
+    try {
+      const BallInImage ball = find_ball(img, seeded, &fit);
+      seeded_fit = fit.subpixel && fit.rim_agreement >= kSeededAgreement * previous_fit->rim_agreement;
+      if (seeded_fit) return ball;
+    } catch (const InputError&) {
+      // not near the last ball: the full search below
+    }
+  }
+  return find_ball(img, {}, &fit);
+}
+
+// Pass 1: each frame's raw geometry, and the frames themselves while they fit in
+// options.kept_frames_bytes (pass 2 reads the others again: a long sequence must not hold
+// every frame, 25 MB each at 1920 x 1080).
+struct FirstPass {
+  std::vector<RgbImage> kept;  // frames [0, kept.size())
+  int width = 0, height = 0;
+  std::vector<std::optional<FindBallReport>> fits;
+  std::vector<char> seeded;
+};
+
+RgbImage read_frame(const std::string& f, const FirstPass& pass) {
+  RgbImage img = read_rgb_image(f);
+  if (pass.width && (img.width != pass.width || img.height != pass.height))
+    throw InputError(fmt::format("{}: {}x{} differs from the sequence's {}x{}", f, img.width, img.height, pass.width,
+                                 pass.height));
+  return img;
+}
+
+FirstPass first_pass(const std::vector<std::string>& files, const UnwrapSequenceOptions& o, CircleTrack& raw,
+                     const std::function<void()>& step) {
+  FirstPass pass;
+  for (size_t i = 0; i < files.size(); ++i) {
+    const std::string& f = files[i];
+    RgbImage img = read_frame(f, pass);
+    pass.width = img.width, pass.height = img.height;
     if (o.type == ProbeType::MirrorBall) {
       BallInImage ball;
-      fits.emplace_back();
+      pass.fits.emplace_back();
+      pass.seeded.push_back(0);
       if (o.ball) {
         ball = *o.ball;
       } else {
         try {
           FindBallReport fit;
-          ball = find_ball(img, {}, &fit);
-          fits.back() = fit;
+          bool from_previous = false;
+          ball = track_ball(img, i == 0 || !o.seed_from_previous ? std::nullopt : pass.fits[i - 1], raw, fit,
+                            from_previous);
+          pass.fits.back() = fit;
+          pass.seeded.back() = from_previous;
         } catch (const InputError& e) {
           throw InputError(fmt::format("{}: {}", f, e.what()));
         }
@@ -43,10 +92,11 @@ std::vector<RgbImage> read_frames(const std::vector<std::string>& files, const U
       const ImageCircle c = find_image_circle(img);
       raw.cx.push_back(c.cx), raw.cy.push_back(c.cy), raw.r.push_back(c.r);
     }
-    frames.push_back(std::move(img));
+    const double bytes = double(img.rgb.size()) * sizeof(float) + double(img.valid.size());
+    if (pass.kept.size() == i && double(i + 1) * bytes <= o.kept_frames_bytes) pass.kept.push_back(std::move(img));
     if (step) step();
   }
-  return frames;
+  return pass;
 }
 
 CircleTrack track_to_use(const CircleTrack& raw, const UnwrapSequenceOptions& o) {
@@ -90,14 +140,15 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
                                            const std::function<void(size_t frame, EnvMap& map)>& emit,
                                            const std::function<void()>& step) {
   UnwrapSequenceReport report;
-  std::vector<std::optional<FindBallReport>> fits;
-  const std::vector<RgbImage> frames = read_frames(files, o, report.detected, fits, step);
+  FirstPass pass = first_pass(files, o, report.detected, step);
   report.used = track_to_use(report.detected, o);
   const CircleTrack& track = report.used;
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<CameraModel> base_model;
   std::vector<Vec3> centroids;
-  for (size_t i = 0; i < frames.size(); ++i) {
+  for (size_t i = 0; i < files.size(); ++i) {
+    RgbImage read_again;
+    const RgbImage& frame = i < pass.kept.size() ? pass.kept[i] : (read_again = read_frame(files[i], pass));
     EnvMap map;
     UnwrapSequenceReport::Frame fr;
     fr.file = files[i];
@@ -112,17 +163,18 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
         UnwrapReport ur;
         MirrorBallCamera cam = o.ball_camera;
         cam.world_from_probe = o.world_from_probe;
-        map = unwrap_mirror_ball(frames[i], ball, cam, o.layout, o.width, o.height, uo, &ur);
+        map = unwrap_mirror_ball(frame, ball, cam, o.layout, o.width, o.height, uo, &ur);
         report.fill_power_share = ur.fill_power_share;
         fr.ball = ball;
         fr.ball_detected = BallInImage{report.detected.cx[i], report.detected.cy[i], report.detected.r[i]};
-        fr.ball_fit = fits[i];
+        fr.ball_fit = pass.fits[i];
+        fr.ball_seeded = pass.seeded[i];
         fr.valid_fraction = ur.valid_solid_angle_fraction;  // before any fill
       } else {
         if (!base_model)
           base_model = o.camera ? *o.camera
                                 : camera_model_from_fisheye(equidistant_fisheye(
-                                      frames[0].width, frames[0].height, o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg : 180));
+                                      pass.width, pass.height, o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg : 180));
         CameraModel m = *base_model;
         if (!track.cx.empty()) {
           // Move the optical centre with the image circle, relative to the track's first frame.
@@ -134,7 +186,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
         co.max_field_deg = o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg / 2 : (o.camera ? 0 : 90);
         if (o.fill) co.fill.method = FillMethod::PushPull;
         FillReport fill;
-        map = unwrap_with_camera(frames[i], m, o.world_from_probe * upward_camera_world_from_camera(), o.layout, o.width,
+        map = unwrap_with_camera(frame, m, o.world_from_probe * upward_camera_world_from_camera(), o.layout, o.width,
                                  o.height, co, &fill);
         report.fill_power_share = fill.filled_power_share;
       }
@@ -147,7 +199,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
     if (!(fr.valid_fraction > 0))
       throw InputError(files[i] + ": the unwrapped map holds no valid pixel (is the " +
                        (o.type == ProbeType::MirrorBall ? "ball" : "image circle") + " inside the image?)");
-    map.units = frames[i].units;
+    map.units = frame.units;
     if (o.colour) apply_colour_match(map, *o.colour);
     if (auto c = centroid(map)) centroids.push_back(*c);
     emit(i, map);

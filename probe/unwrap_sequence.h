@@ -47,6 +47,13 @@ struct UnwrapSequenceOptions {
   bool smooth_track = false;          // smooth the per-frame ball / image-circle track
   bool static_probe = false;          // with smooth_track: one median position for all
   bool fixed_geometry = false;        // frame 0's geometry for every frame
+  // Mirror ball: each frame's search starts from the last frame's ball when that one's
+  // silhouette fit held (the full search where the seeded one does not hold as well);
+  // false: every frame searched from scratch.
+  bool seed_from_previous = true;
+  // Frames are kept in memory between the two passes while all of them so far fit in this
+  // many bytes; the rest are read again in pass 2.
+  double kept_frames_bytes = 512e6;
   std::optional<ColourMatch> colour;  // 3x3 transform to the backplate camera
 };
 
@@ -57,6 +64,7 @@ struct UnwrapSequenceReport {
     // How it was found (confidence, whether sub-pixel, the fit's standard errors); nullopt
     // when the ball was given.
     std::optional<FindBallReport> ball_fit;
+    bool ball_seeded = false;  // found by the search from the last frame's ball (else the full search)
     std::optional<ImageCircle> circle;               // fisheye sequence
     double valid_fraction = 0;                       // share of the map's solid angle that is valid
   };

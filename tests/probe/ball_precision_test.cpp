@@ -14,6 +14,7 @@
 #include "core/image_io.h"
 #include "eval/ball_eval.h"
 #include "probe/mirror_ball.h"
+#include "probe/synthetic_probe.h"
 #include "probe/unwrap_sequence.h"
 
 namespace lp {
@@ -381,6 +382,55 @@ TEST(BallPrecision, TheUnwrapReportCarriesTheFitsUncertainty) {
   const auto given = unwrap_probe_sequence({path}, o, [](size_t, EnvMap&) {});
   EXPECT_FALSE(given.frames[0].ball_fit.has_value());
   std::filesystem::remove(path);
+}
+
+// A sequence's frames after the first are searched from the last frame's ball
+// (UnwrapSequenceOptions::seed_from_previous). On a jittered sequence of one map at two
+// sizes the seeded answers must be the full search's (each frame also searched from
+// scratch here), and a ball that jumps beyond the seeded search's reach must still be found.
+// And frames the memory budget does not keep between the passes give the same maps.
+TEST(BallSequence, SeededFramesAgreeWithTheFullSearch) {
+  const EnvMap world = read_envmap(kData + "/probes-blender-studiolights/city.exr");
+  for (const double radius : {150.0, 400.0}) {
+    const int w = int(2.9 * radius), h = int(2.5 * radius);
+    // At R 400 two frames (the search from the first frame's ball used to move 15 px off
+    // it); at R 150 three, and a jump.
+    auto track = jittered_track({0.5 * w, 0.5 * h, radius}, radius > 200 ? 2 : 3, 1.5, 3);
+    if (radius < 200) track.push_back({0.5 * w + 0.3 * radius, 0.5 * h - 0.2 * radius, radius});
+    const std::string dir = (std::filesystem::temp_directory_path() / "lp_ball_seeded").string();
+    std::filesystem::create_directories(dir);
+    std::vector<std::string> files;
+    for (size_t f = 0; f < track.size(); ++f) {
+      RenderBallOptions ro;
+      ro.noise_relative = 0.01;
+      ro.seed = 10 + f;
+      files.push_back(dir + "/frame_" + std::to_string(f) + ".exr");
+      write_rgb_image(files.back(), render_mirror_ball(world, track[f], MirrorBallCamera{}, w, h, ro));
+    }
+    UnwrapSequenceOptions o;
+    o.width = 64, o.height = 32;
+    std::vector<std::vector<float>> maps, maps_read_again;
+    const auto seeded = unwrap_probe_sequence(files, o, [&](size_t, EnvMap& m) { maps.push_back(m.rgb); });
+    if (radius < 200) {  // frames beyond the memory budget are read again in pass 2, to the same maps
+      o.kept_frames_bytes = 2.5 * 12.0 * w * h;
+      unwrap_probe_sequence(files, o, [&](size_t, EnvMap& m) { maps_read_again.push_back(m.rgb); });
+      EXPECT_EQ(maps_read_again, maps);
+      o.kept_frames_bytes = UnwrapSequenceOptions{}.kept_frames_bytes;
+    }
+    o.seed_from_previous = false;
+    const auto full = unwrap_probe_sequence(files, o, [](size_t, EnvMap&) {});
+    for (size_t f = 0; f < track.size(); ++f) {
+      const BallInImage a = *seeded.frames[f].ball_detected, b = *full.frames[f].ball_detected;
+      std::printf("R %.0f frame %zu: seeded - full (%+.4f, %+.4f, %+.4f) px, truth off %.3f px, agreement %.3f / %.3f%s\n",
+                  radius, f, a.cx - b.cx, a.cy - b.cy, a.radius_px - b.radius_px,
+                  std::hypot(a.cx - track[f].cx, a.cy - track[f].cy), seeded.frames[f].ball_fit->rim_agreement,
+                  full.frames[f].ball_fit->rim_agreement, seeded.frames[f].ball_seeded ? ", seeded" : "");
+      EXPECT_LT(std::hypot(a.cx - b.cx, a.cy - b.cy), 0.05) << "R " << radius << " frame " << f;
+      EXPECT_LT(std::abs(a.radius_px - b.radius_px), 0.05) << "R " << radius << " frame " << f;
+      EXPECT_EQ(seeded.frames[f].ball_seeded, f > 0 && (radius > 200 || f + 1 < track.size())) << "R " << radius << " frame " << f;
+    }
+    std::filesystem::remove_all(dir);
+  }
 }
 
 }  // namespace

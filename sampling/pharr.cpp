@@ -139,10 +139,20 @@ class PharrSampler final : public Sampler {
     // Per-channel sums: even pixels into s[k][0..2], odd into s[k][3..5].
     double s[K][6] = {};
     detail::add_channel_sums(colour, K, w, true, &s[0][0]);
-    // The luminance CDF, in place over the luminances.
+    // The luminance CDF, in place over the luminances. Its K chains run at the adder's
+    // latency and leave the memory idle, so they carry the prefetch of the next block's
+    // radiance (K rows, contiguous): two lines an iteration, spread over the loop, cover
+    // 96 bytes a column, the block's 12 K bytes a row of floats.
+    const char* next = r + 2 * K <= map.height ? reinterpret_cast<const char*>(map.rgb.data() + 3 * size_t(r + K) * w) : nullptr;
+    const size_t stride = 12 * K;  // bytes of the next block per column of this one
     float run[K] = {};
-    for (size_t c = 0; c < w; ++c)
+    for (size_t c = 0; c < w; ++c) {
+      if (next) {
+        __builtin_prefetch(next + c * stride, 0, 2);
+        __builtin_prefetch(next + c * stride + 64, 0, 2);
+      }
       for (int k = 0; k < K; ++k) cdf[k][c] = run[k] += cdf[k][c];
+    }
     for (int k = 0; k < K; ++k) {
       const double dw = row_solid_angle_[size_t(r + k)];
       for (int j = 0; j < 3; ++j) power[j] += dw * (s[k][j] + s[k][3 + j]);

@@ -57,7 +57,7 @@ const float* HemigonWarp::pixel(int v, int u) const {
   return row.valid && !row.valid[su] ? kBlack : row.rgb + 3 * su;
 }
 
-void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borrow) {
+void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borrow, double* row_sums) {
   width_ = W;
   height_ = H;
   dphi_ = 2 * M_PI / W;
@@ -117,6 +117,14 @@ void HemigonWarp::build(int W, int H, const Row* rows, bool rgb_power, bool borr
     }
     double sums[kBlock][6] = {};
     if (rgb_power) detail::add_channel_sums(colour, size_t(K), size_t(W), false, &sums[0][0]);
+    if (row_sums) {
+      const float* stored[kBlock];
+      for (int k = 0; k < K; ++k) stored[k] = rows[v0 + k].rgb;
+      double own[kBlock][6] = {};
+      detail::add_channel_sums(stored, size_t(K), size_t(W), false, &own[0][0]);
+      for (int k = 0; k < K; ++k)
+        for (int c = 0; c < 3; ++c) row_sums[3 * size_t(v0 + k) + size_t(c)] = own[k][c];
+    }
     detail::running_sums_rows(lum, size_t(K), size_t(W), cum);
     for (int k = 0; k < K; ++k) {
       const int v = v0 + k;
@@ -366,6 +374,22 @@ std::array<double, 3> samplable_total_power(const EnvMap& map) {
   return total;
 }
 
+// samplable_total_power of an unmasked latlong map from its halves' row sums (HemigonWarp::build's
+// row_sums: the upper half's rows 0 .. h - 1, then the lower half's, whose row v is the map's
+// row height - 1 - v): the same additions in the same order as row_grid_total_power.
+std::array<double, 3> power_from_halves_rows(const EnvMap& map, const std::vector<double>& sums) {
+  const size_t w = size_t(map.width), h = size_t(map.height) / 2;
+  std::array<double, 3> total{0, 0, 0};
+  for (size_t r = 0; r < size_t(map.height); ++r) {
+    const double* s = sums.data() + 3 * (r < h ? r : h + (size_t(map.height) - 1 - r));
+    const double dw = pixel_solid_angle(map, r * w);
+    for (int c = 0; c < 3; ++c) total[size_t(c)] += dw * s[c];
+  }
+  const double p = luminance(total.data());
+  if (!std::isfinite(p) || !(p > 0)) require_samplable(map, "hemigon");  // throws its message
+  return total;
+}
+
 // True when the hemisphere grid w x h is the latlong's own grid cut at the horizon, so that
 // the exact path of resample(latlong, hemisphere, w, h) copies each of the top h rows (and,
 // turned by Rx(180), each bottom row upside down and right to left): same width, half the
@@ -401,7 +425,6 @@ class HemigonSampler final : public Sampler {
       has_lower_ = false;
       target_ = half_[0].rgb_power();
     } else {
-      const std::array<double, 3> total = samplable_total_power(map);
       int w = 0, h = 0;
       if (map.layout == Layout::LatLong) {
         w = map.width;
@@ -413,21 +436,39 @@ class HemigonSampler final : public Sampler {
       }
       w = std::clamp(w, 360, 8192);
       h = std::clamp(h, 90, 2048);
-      if (rows_are_halves(map, w, h)) {
+      // An unmasked latlong map taken as its halves' rows gives its power from those rows'
+      // sums, taken as the builds read them (the same sums as total_power's, in the same
+      // order): no pass of its own over the map (a third of this prepare with caches evicted).
+      const bool halves = rows_are_halves(map, w, h);
+      const bool power_from_rows = halves && map.valid.empty() && !options_.upper_only &&
+                                   map.rgb.size() == 3 * map.pixel_count();
+      std::array<double, 3> total{0, 0, 0};
+      if (!power_from_rows) total = samplable_total_power(map);
+      if (halves) {
         // The resample below would copy each pixel (the grids coincide): take the rows as
         // they are, the lower half upside down and right to left (Rx(180): theta -> pi -
         // theta, phi -> -phi), without the two resampled maps.
         const size_t W = size_t(map.width);
         const bool masked = !map.valid.empty();
         rows_.resize(size_t(h));
-        for (int half = 0; half < (options_.upper_only ? 1 : 2); ++half) {
-          for (int v = 0; v < h; ++v) {
-            const size_t row = half == 0 ? size_t(v) : size_t(map.height - 1 - v);
-            rows_[size_t(v)] = {map.rgb.data() + 3 * row * W, masked ? map.valid.data() + row * W : nullptr, half == 1};
+        if (power_from_rows) row_sums_.resize(3 * size_t(map.height));
+        try {
+          for (int half = 0; half < (options_.upper_only ? 1 : 2); ++half) {
+            for (int v = 0; v < h; ++v) {
+              const size_t row = half == 0 ? size_t(v) : size_t(map.height - 1 - v);
+              rows_[size_t(v)] = {map.rgb.data() + 3 * row * W, masked ? map.valid.data() + row * W : nullptr, half == 1};
+            }
+            // Both halves: the target is the map's power, not the halves' channel sums.
+            // The lower half's row v is the map's row height - 1 - v: its sums go there.
+            double* sums = nullptr;
+            if (power_from_rows) sums = half == 0 ? row_sums_.data() : row_sums_.data() + 3 * size_t(h);
+            half_[half].build(w, h, rows_.data(), options_.upper_only, /*borrow=*/true, sums);
           }
-          // Both halves: the target is the map's power (above), not the halves' channel sums.
-          half_[half].build(w, h, rows_.data(), options_.upper_only, /*borrow=*/true);
+        } catch (const InputError&) {
+          if (power_from_rows) require_samplable(map, "hemigon");  // the message a map that fails its checks gets
+          throw;
         }
+        if (power_from_rows) total = power_from_halves_rows(map, row_sums_);
       } else {
         upper_ = resample(map, Layout::Hemisphere, w, h);
         half_[0].build(upper_, /*borrow=*/true);
@@ -495,6 +536,7 @@ class HemigonSampler final : public Sampler {
   HemigonWarp half_[2];
   EnvMap upper_, lower_;                 // resampled halves, when the rows are not the halves
   std::vector<HemigonWarp::Row> rows_;   // the halves' rows, when they are
+  std::vector<double> row_sums_;          // their channel sums (power_from_halves_rows)
   bool has_lower_ = false;
   bool prepared_ = false;
   double power_ = 0, upper_share_ = 1;

@@ -66,7 +66,11 @@ class HemigonWarp {
     const uint8_t* valid = nullptr;
     bool reversed = false;
   };
-  void build(int width, int height, const Row* rows, bool rgb_power = true, bool borrow = false);
+  // With `row_sums` (3 per row), each row's channel sums as the row is stored (left to right,
+  // its mask ignored), taken while the row is in cache: for an unmasked map, the per-row sums
+  // core/envmap.h's total_power adds (the sampler's target power without a pass of its own).
+  void build(int width, int height, const Row* rows, bool rgb_power = true, bool borrow = false,
+             double* row_sums = nullptr);
 
   struct Sample {
     Vec3 direction;                // unit, z >= 0

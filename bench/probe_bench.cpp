@@ -21,8 +21,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench/evict_caches.h"
+#include "eval/synthetic_scene.h"
 #include "probe/fisheye.h"
+#include "probe/mirror_ball.h"
 #include "probe/remap.h"
+#include "probe/synthetic_probe.h"
 
 namespace {
 
@@ -191,5 +194,33 @@ void BM_Remap_Compile(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(compile_remap(table(), kInW, kInH).taps.data());
 }
 BENCHMARK(BM_Remap_Compile)->Name("probe/unwrap_table_compile/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Finding the ball in one 1920 x 1080 frame (R 250, the synthetic scene, 1 % noise): the
+// whole search, and the search a sequence's next frame gets, from the last frame's ball 1.5 px
+// away (UnwrapSequenceOptions::seed_from_previous; docs/probes.md "Sequences"). No floor or
+// peer: OpenCV has no mirror-ball finder (HoughCircles finds the ball's reflections too).
+// glibc's default heap, as any library caller has it (`probe unwrap` keeps the heap between a
+// sequence's frames, core/heap_tuning.h, which would change every later benchmark's process).
+const RgbImage& ball_frame() {
+  static RgbImage im = [] {
+    const EnvMap world = render_scene(describe_scene(), Layout::LatLong, 512, 256);
+    RenderBallOptions o;
+    o.noise_relative = 0.01;
+    return render_mirror_ball(world, {960.3, 540.6, 250}, MirrorBallCamera{}, 1920, 1080, o);
+  }();
+  return im;
+}
+
+template <bool kSeeded>
+void BM_FindBall(benchmark::State& state) {
+  FindBallOptions o;
+  if (kSeeded) {
+    o.initial_guess = BallInImage{961.4, 539.5, 250.2};
+    o.initial_guess_reach_px = 8;
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(find_ball(ball_frame(), o).cx);
+}
+BENCHMARK(BM_FindBall<false>)->Name("probe/find_ball_1920x1080/ours")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_FindBall<true>)->Name("probe/find_ball_1920x1080/ours:seeded from the last frame")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

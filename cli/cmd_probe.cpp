@@ -182,6 +182,7 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   // untouched, ready for `hdr fuse`.
   if (args.images.size() < 2) throw InputError("probe register needs at least two photos of the ball");
   if (args.size < 32) throw InputError("--size must be at least 32 px");
+  keep_heap_for_reuse();  // find_ball's images, freed and allocated again for each photo
   std::vector<RgbImage> frames;
   std::vector<BallInImage> balls;
   nlohmann::json found = nlohmann::json::array();

@@ -238,7 +238,10 @@ std::vector<Command> eval_commands() {
          auto o = std::make_shared<EvalUnwrapOptions>();
          f.arg("MAP", o->maps, "Latlong maps ('scene' for the procedural scene)").required();
          f.output(o->output_dir, "Directory for unwrap.csv");
-         return [o](const Output& out) { return evaluate_and_report("eval unwrap", out, evaluate_unwrap, *o); };
+         return [o](const Output& out) {
+           keep_heap_for_reuse();  // a ball found in every probe: the images reused
+           return evaluate_and_report("eval unwrap", out, evaluate_unwrap, *o);
+         };
        }},
       {"eval merge", "Merging four displaced cameras: position weights against equal ones at a camera placed at the target",
        "lightprobe eval merge -o eval/merge",

@@ -20,12 +20,12 @@ constexpr double kSeededAgreement = 0.9;
 // How far the seeded search looks for the ball around the last frame's (px).
 constexpr double kSeededReachPx = 8;
 
-// One frame's ball. After a frame whose silhouette fit held along most of the rim, the
-// search starts from that frame's ball alone (FindBallOptions::initial_guess: each level's
-// local search reaches +-2 of its pixels, +-64 px at 1280 x 960), which skips the
-// exhaustive search of the coarsest level and the refinement of a dozen seeds; where that
-// seeded fit does not hold as well (the ball jumped, a cut, a dark rim), the frame gets the
-// full search. docs/probes.md "Sequences" has the cost and the agreement with the full search.
+// One frame's ball. After a frame whose silhouette fit held, the search starts from that
+// frame's ball alone (FindBallOptions::initial_guess, refined on the pyramid levels that
+// reach at most kSeededReachPx), which skips the exhaustive search of the coarsest level and
+// the refinement of a dozen seeds; where that seeded fit does not hold as well (the ball
+// jumped, a cut, a dark rim), the frame gets the full search. docs/probes.md "Sequences" has
+// the cost and the agreement with the full search.
 BallInImage track_ball(const RgbImage& img, const std::optional<FindBallReport>& previous_fit, const CircleTrack& raw,
                        FindBallReport& fit, bool& seeded_fit) {
   seeded_fit = false;

@@ -438,7 +438,7 @@ class HemigonSampler final : public Sampler {
       h = std::clamp(h, 90, 2048);
       // An unmasked latlong map taken as its halves' rows gives its power from those rows'
       // sums, taken as the builds read them (the same sums as total_power's, in the same
-      // order): no pass of its own over the map (a third of this prepare with caches evicted).
+      // order): no pass of its own over the map (a tenth of this prepare with caches evicted).
       const bool halves = rows_are_halves(map, w, h);
       const bool power_from_rows = halves && map.valid.empty() && !options_.upper_only &&
                                    map.rgb.size() == 3 * map.pixel_count();

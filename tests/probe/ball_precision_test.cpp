@@ -14,6 +14,7 @@
 #include "core/heap_tuning.h"
 #include "core/image_io.h"
 #include "eval/ball_eval.h"
+#include "eval/synthetic_scene.h"
 #include "probe/mirror_ball.h"
 #include "probe/synthetic_probe.h"
 #include "probe/unwrap_sequence.h"
@@ -437,6 +438,35 @@ TEST(BallSequence, SeededFramesAgreeWithTheFullSearch) {
     }
     std::filesystem::remove_all(dir);
   }
+}
+
+// A fisheye sequence's frames beyond the memory budget are read again in pass 2 too (its
+// image circle tracked per frame, the camera model sized from the first frame).
+TEST(BallSequence, FisheyeFramesReadAgainGiveTheSameMaps) {
+  const EnvMap world = render_scene(describe_scene(), Layout::LatLong, 128, 64);
+  SyntheticProbeOptions so;
+  so.type = "fisheye";
+  so.width = so.height = 160;
+  const std::string dir = (std::filesystem::temp_directory_path() / "lp_fisheye_read_again").string();
+  std::filesystem::create_directories(dir);
+  std::vector<std::string> files;
+  for (int f = 0; f < 3; ++f) {  // each frame brighter than the last, so that no frame passes for another
+    EnvMap lit = world;
+    for (float& v : lit.rgb) v *= float(f + 1);
+    files.push_back(dir + "/frame_" + std::to_string(f) + ".exr");
+    write_synthetic_probe(lit, "scene", so, files.back());
+  }
+  UnwrapSequenceOptions o;
+  o.type = ProbeType::Fisheye;
+  o.width = 64, o.height = 32;
+  std::vector<std::vector<float>> kept, read_again;
+  unwrap_probe_sequence(files, o, [&](size_t, EnvMap& m) { kept.push_back(m.rgb); });
+  o.kept_frames_bytes = 1.5 * 12.0 * so.width * so.height;  // the first frame only
+  unwrap_probe_sequence(files, o, [&](size_t, EnvMap& m) { read_again.push_back(m.rgb); });
+  ASSERT_EQ(kept.size(), 3u);
+  EXPECT_NE(kept[1], kept[2]);
+  EXPECT_EQ(read_again, kept);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -2,7 +2,8 @@
 // Process-wide heap settings for programs that allocate and free the same large buffers over
 // and over: the calibration solvers, and a probe sequence's frames. Opt-in: a library must
 // not change its host program's allocator, so calib/ and probe/ never call this; the
-// `lightprobe` commands that calibrate or unwrap a sequence do, and so do the calibration tests.
+// `lightprobe` commands that calibrate, unwrap a sequence, register photos or run `eval
+// calib` / `eval unwrap` do, and so do the calibration and probe tests.
 
 namespace lp {
 

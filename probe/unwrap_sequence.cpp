@@ -14,8 +14,10 @@ namespace lp {
 
 namespace {
 
-// A seeded fit stands when its rim agrees with the edges along at least this share of
-// the arc the last frame's did (the ball moves, the rim's content with it a little).
+// A seeded fit stands when its rim agrees with the edges along at least this share of the
+// arc that the last full search's fit did (the ball moves, the rim's content with it a
+// little). Against the last full search, not the last frame: a chain of seeded frames each
+// 0.9x the one before could otherwise drift to a fit that agrees along ever less of the rim.
 constexpr double kSeededAgreement = 0.9;
 // How far the seeded search looks for the ball around the last frame's (px).
 constexpr double kSeededReachPx = 8;
@@ -24,18 +26,20 @@ constexpr double kSeededReachPx = 8;
 // frame's ball alone (FindBallOptions::initial_guess, refined on the pyramid levels that
 // reach at most kSeededReachPx), which skips the exhaustive search of the coarsest level and
 // the refinement of a dozen seeds; where that seeded fit does not hold as well (the ball
-// jumped, a cut, a dark rim), the frame gets the full search. docs/probes.md "Sequences" has
+// jumped, a cut, a dark rim), the frame gets the full search. `reference_agreement`: the rim
+// agreement of the last frame found by the full search with a sub-pixel fit (0: none, or
+// the last frame's fit did not hold; then the full search). docs/probes.md "Sequences" has
 // the cost and the agreement with the full search.
-BallInImage track_ball(const RgbImage& img, const std::optional<FindBallReport>& previous_fit, const CircleTrack& raw,
-                       FindBallReport& fit, bool& seeded_fit) {
+BallInImage track_ball(const RgbImage& img, double reference_agreement, const CircleTrack& raw, FindBallReport& fit,
+                       bool& seeded_fit) {
   seeded_fit = false;
-  if (previous_fit && previous_fit->subpixel && !raw.cx.empty()) {
+  if (reference_agreement > 0 && !raw.cx.empty()) {
     FindBallOptions seeded;
     seeded.initial_guess = BallInImage{raw.cx.back(), raw.cy.back(), raw.r.back()};
     seeded.initial_guess_reach_px = kSeededReachPx;
     try {
       const BallInImage ball = find_ball(img, seeded, &fit);
-      seeded_fit = fit.subpixel && fit.rim_agreement >= kSeededAgreement * previous_fit->rim_agreement;
+      seeded_fit = fit.subpixel && fit.rim_agreement >= kSeededAgreement * reference_agreement;
       if (seeded_fit) return ball;
     } catch (const InputError&) {
       // not near the last ball: the full search below
@@ -65,6 +69,7 @@ RgbImage read_frame(const std::string& f, const FirstPass& pass) {
 FirstPass first_pass(const std::vector<std::string>& files, const UnwrapSequenceOptions& o, CircleTrack& raw,
                      const std::function<void()>& step) {
   FirstPass pass;
+  double reference_agreement = 0;  // track_ball's: of the last full search's sub-pixel fit
   for (size_t i = 0; i < files.size(); ++i) {
     const std::string& f = files[i];
     RgbImage img = read_frame(f, pass);
@@ -79,10 +84,11 @@ FirstPass first_pass(const std::vector<std::string>& files, const UnwrapSequence
         try {
           FindBallReport fit;
           bool from_previous = false;
-          ball = track_ball(img, i == 0 || !o.seed_from_previous ? std::nullopt : pass.fits[i - 1], raw, fit,
-                            from_previous);
+          ball = track_ball(img, o.seed_from_previous ? reference_agreement : 0.0, raw, fit, from_previous);
           pass.fits.back() = fit;
           pass.seeded.back() = from_previous;
+          if (!fit.subpixel) reference_agreement = 0;  // the next frame searches from scratch
+          else if (!from_previous) reference_agreement = fit.rim_agreement;
         } catch (const InputError& e) {
           throw InputError(fmt::format("{}: {}", f, e.what()));
         }

@@ -48,8 +48,8 @@ struct UnwrapSequenceOptions {
   bool static_probe = false;          // with smooth_track: one median position for all
   bool fixed_geometry = false;        // frame 0's geometry for every frame
   // Mirror ball: each frame's search starts from the last frame's ball when that one's
-  // silhouette fit held (the full search where the seeded one does not hold as well);
-  // false: every frame searched from scratch.
+  // silhouette fit held (the full search where the seeded fit agrees with the rim along
+  // less than 0.9x the arc of the last full search's); false: every frame from scratch.
   bool seed_from_previous = true;
   // Frames are kept in memory between the two passes while all of them so far fit in this
   // many bytes; the rest are read again in pass 2.

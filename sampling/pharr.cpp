@@ -141,8 +141,8 @@ class PharrSampler final : public Sampler {
     detail::add_channel_sums(colour, K, w, true, &s[0][0]);
     // The luminance CDF, in place over the luminances. Its K chains run at the adder's
     // latency and leave the memory idle, so they carry the prefetch of the next block's
-    // radiance (K rows, contiguous): two lines an iteration, spread over the loop, cover
-    // 96 bytes a column, the block's 12 K bytes a row of floats.
+    // radiance (K rows, contiguous: 12 K bytes for each column of this block, 96 at K = 8),
+    // two lines an iteration, spread over the loop.
     const char* next = r + 2 * K <= map.height ? reinterpret_cast<const char*>(map.rgb.data() + 3 * size_t(r + K) * w) : nullptr;
     const size_t stride = 12 * K;  // bytes of the next block per column of this one
     float run[K] = {};

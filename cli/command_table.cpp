@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/interrupt.h"
 #include "core/limits.h"
+#include "core/warnings.h"
 
 namespace lp::cli {
 
@@ -164,6 +165,7 @@ int parse_command_line(int argc, char** argv, bool run) {
 
 int run_command_line(int argc, char** argv) {
   install_interrupt_handlers();  // SIGINT/SIGTERM: temp files removed, exit 130/143
+  set_warning_sink([](const std::string& line) { std::fprintf(stderr, "lightprobe: warning: %s\n", line.c_str()); });
   const int code = parse_command_line(argc, argv, true);
   end_if_interrupted();  // a signal that landed as the command finished still ends it with 128 + signal
   return code;

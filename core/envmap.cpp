@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <cmath>
+#include <limits>
 
 #include "core/error.h"
 
@@ -187,6 +189,37 @@ std::string find_bad_pixel(const EnvMap& map, std::string_view source) {
     }
   }
   return {};
+}
+
+NegativeValues find_negative_values(const EnvMap& map) {
+  NegativeValues r;
+  std::array<double, 3> positive{0, 0, 0}, negative{0, 0, 0};
+  for (size_t i = 0, n = map.pixel_count(); i < n; ++i) {
+    const float* p = map.pixel(i);
+    if (!(p[0] < 0 || p[1] < 0 || p[2] < 0) && !map.is_valid(i)) continue;
+    const double dw = pixel_solid_angle(map, i);
+    r.count += (p[0] < 0 || p[1] < 0 || p[2] < 0) ? 1 : 0;
+    for (int c = 0; c < 3; ++c) {
+      const float v = p[c];
+      if (!std::isfinite(v)) continue;
+      if (v < 0) {
+        r.lowest = std::min(r.lowest, v);
+        if (map.is_valid(i)) negative[size_t(c)] -= dw * v;
+      } else if (map.is_valid(i)) {
+        positive[size_t(c)] += dw * v;
+      }
+    }
+  }
+  for (int c = 0; c < 3; ++c)
+    if (negative[size_t(c)] > 0)
+      r.share = std::max(r.share, positive[size_t(c)] > 0 ? negative[size_t(c)] / positive[size_t(c)]
+                                                            : std::numeric_limits<double>::infinity());
+  return r;
+}
+
+void clamp_negative_values(EnvMap& map) {
+  for (float& v : map.rgb)
+    if (v < 0) v = 0.0f;
 }
 
 std::string describe_size(const EnvMap& map) {

@@ -83,6 +83,18 @@ double total_luminance_power(const EnvMap& map);
 // `source` ("file.exr: pixel (u, v) is NaN"); empty when the map is clean.
 std::string find_bad_pixel(const EnvMap& map, std::string_view source);
 
+// The negative values of a map (NaN and Inf aside, which find_bad_pixel names): how many
+// pixels have one, the lowest, and the largest share over the three channels of a channel's negative power
+// (sum |v| dw over valid pixels) in its positive power (infinite when that is zero).
+struct NegativeValues {
+  size_t count = 0;  // pixels
+  float lowest = 0;
+  double share = 0;
+};
+NegativeValues find_negative_values(const EnvMap& map);
+// Sets every negative value to +0 (valid pixels or not; NaN and Inf stay).
+void clamp_negative_values(EnvMap& map);
+
 // Human-readable "latlong 1024x512" / "healpix nside 64".
 std::string describe_size(const EnvMap& map);
 

@@ -41,6 +41,7 @@
 #include "core/limits.h"
 #include "core/interrupt.h"
 #include "core/lazy_libs.h"
+#include "core/warnings.h"
 
 namespace lp {
 
@@ -167,6 +168,27 @@ Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMa
   return layout;
 }
 
+// Slight negative values are read as 0 with a warning: out-of-gamut colours of a wide-gamut
+// capture converted to Rec. 709, a raw converter's noise below black, a lossless copy of a
+// lossy codec's ringing (Blender's DWA studio lights rewritten as ZIP). Refusing them refused
+// real probes whole. More negative power than kSlightNegativeShare of a channel's positive
+// power is not radiance (a difference of images, a signed texture) and is refused, and so is
+// every negative value where no warning sink can tell anyone (core/warnings.h).
+constexpr double kSlightNegativeShare = 0.01;
+
+void accept_slight_negatives(const std::string& path, EnvMap& map, const std::string& bad) {
+  const NegativeValues negative = find_negative_values(map);
+  if (negative.count == 0 || !has_warning_sink()) throw InputError(bad);
+  if (!(negative.share <= kSlightNegativeShare))
+    fail(path, fmt::format("{} pixels with negative values (lowest {:.3g}) hold {:.3g} % of a channel's power: not "
+                           "radiance",
+                           negative.count, negative.lowest, 100 * negative.share));
+  clamp_negative_values(map);
+  if (const std::string still = find_bad_pixel(map, path); !still.empty()) throw InputError(still);
+  warn(fmt::format("{}: {} pixels with negative values (lowest {:.3g}, {:.2g} % of a channel's power) read as 0", path,
+                   negative.count, negative.lowest, 100 * negative.share));
+}
+
 EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions& options) {
   const Layout layout = resolve_layout(path, raw, options);
   EnvMap map;
@@ -199,7 +221,7 @@ EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions&
   }
   if (options.reject_bad_pixels) {
     const std::string bad = find_bad_pixel(map, path);
-    if (!bad.empty()) throw InputError(bad);
+    if (!bad.empty()) accept_slight_negatives(path, map, bad);
   }
   return map;
 }
@@ -312,7 +334,7 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   if (!rgb && !luma) {
     std::string names;
     for (auto it = channels.begin(); it != channels.end(); ++it) names += (names.empty() ? "" : ", ") + std::string(it.name());
-    fail(path, fmt::format("no R, G, B or Y channels (channels: {})", one_line(names.empty() ? "none" : names, 80)));
+    fail(path, fmt::format("needs R, G and B channels, or Y (channels: {})", one_line(names.empty() ? "none" : names, 80)));
   }
   if (!file.isComplete()) fail(path, "truncated file (pixel data incomplete)");
 

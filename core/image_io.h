@@ -41,7 +41,9 @@ namespace lp {
 struct ReadMapOptions {
   // Overrides the layout recorded in (or inferred from) the file.
   std::optional<Layout> layout;
-  // Reject NaN, Inf and negative pixels (the default): maps are radiance.
+  // Reject NaN, Inf and negative pixels (the default): maps are radiance. Slight negatives
+  // (at most 1 % of a channel's power: out-of-gamut colours, noise below black) are read as 0
+  // instead, with a warning, where a warning sink is installed (core/warnings.h).
   bool reject_bad_pixels = true;
 };
 EnvMap read_envmap(const std::string& path, const ReadMapOptions& options = {});

@@ -3,6 +3,7 @@
 // written), and SIGINT / SIGTERM end a command with 130 / 143 and no temp file left.
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <chrono>
 #include <csignal>
 #include <string>
@@ -10,6 +11,7 @@
 
 #include <fcntl.h>
 
+#include "core/envmap.h"
 #include "core/image_io.h"
 #include "tests/cli/cli_run.h"
 
@@ -188,6 +190,47 @@ std::vector<fs::path> temp_files_in(const fs::path& dir) {
   for (const auto& e : fs::directory_iterator(dir))
     if (e.path().filename().string().find(".tmp-") != std::string::npos) found.push_back(e.path());
   return found;
+}
+
+// A probe with a few slightly negative pixels (out-of-gamut colour, noise below black) is
+// sampled with one warning line and the negatives read as 0: the lights carry the power of
+// the map so clamped. Negatives holding more than 1 % of a channel's power are refused.
+TEST(GarbageCli, SlightNegativesAreSampledWithAWarningAndStrongOnesRefused) {
+  const fs::path dir = fresh_dir("negatives");
+  EnvMap map = make_latlong(64, 32);
+  for (size_t i = 0; i < map.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c) map.pixel(i)[c] = 1.0f + 0.01f * float((i * 7 + size_t(c)) % 13);
+  EnvMap slight = map, strong = map;
+  slight.pixel(10 * 64 + 20)[0] = -1e-3f;
+  slight.pixel(11 * 64 + 21)[2] = -2e-6f;
+  for (size_t i = 0; i < 64; ++i) strong.pixel(16 * 64 + i)[1] = -2.0f;
+  write_envmap((dir / "slight.exr").string(), slight);
+  write_envmap((dir / "strong.exr").string(), strong);
+
+  const fs::path lights = dir / "lights.json";
+  const CliRun ok = lightprobe("sample " + (dir / "slight.exr").string() + " --method q2tree --n 16 -o " +
+                               lights.string() + " --json");
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  EXPECT_EQ(line_count(ok.err), 1) << ok.err;
+  EXPECT_NE(ok.err.find("lightprobe: warning: " + (dir / "slight.exr").string() +
+                        ": 2 pixels with negative values (lowest -0.001"),
+            std::string::npos)
+      << ok.err;
+  EnvMap clamped = slight;
+  clamp_negative_values(clamped);
+  const auto power = total_power(clamped);
+  std::array<double, 3> sum{0, 0, 0};
+  const nlohmann::json list = nlohmann::json::parse(slurp(lights));
+  ASSERT_EQ(list["lights"].size(), 15u);
+  for (const auto& l : list["lights"])
+    for (int c = 0; c < 3; ++c) sum[size_t(c)] += l["rgb"][size_t(c)].get<double>();
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[size_t(c)], power[size_t(c)], 1e-5 * power[size_t(c)]) << c;
+
+  const fs::path out = dir / "strong.json";
+  const CliRun refused = lightprobe("sample " + (dir / "strong.exr").string() + " --method q2tree --n 16 -o " + out.string());
+  expect_one_line_error(refused, (dir / "strong.exr").string() + ": 64 pixels with negative values (lowest -2)");
+  EXPECT_NE(refused.err.find("not radiance"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(GarbageCli, SigintEndsALongSampleWith130EvenWhenStartedWithSigintIgnored) {

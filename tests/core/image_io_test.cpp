@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/warnings.h"
 #include "tests/core/test_files.h"
 
 extern "C" {
@@ -641,6 +642,54 @@ TEST(ImageIo, NanInfiniteAndNegativePixelsAreRefusedNamingThePixel) {
   // RGBE cannot hold them at all.
   expect_input_error([&] { write_envmap(dir + "neg.hdr", neg); }, {dir + "neg.hdr", "negative"});
   EXPECT_FALSE(fs::exists(dir + "neg.hdr"));
+}
+
+// Real probes carry slight negatives (out-of-gamut colours, noise below black, a lossy
+// codec's ringing copied into a lossless file): with someone to warn they are read as 0 and
+// said so in one line; a map whose negatives hold more than 1 % of a channel's power is not
+// radiance and stays refused, as does any negative where nobody would hear of it.
+TEST(ImageIo, SlightNegativesAreReadAsZeroWithOneWarningWhereSomeoneHearsIt) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(64, 32);
+  for (float& v : map.rgb) v = 1.0f;
+  EnvMap slight = map, strong = map, with_nan = map;
+  slight.pixel(3 * 64 + 5)[0] = -0.25f;  // one pixel of 2048, near the pole: ~1e-4 of R's power
+  slight.pixel(16 * 64 + 9)[1] = -1e-6f;
+  slight.pixel(16 * 64 + 9)[2] = -2e-6f;
+  for (size_t i = 0; i < 40; ++i) strong.pixel(16 * 64 + i)[2] = -1.0f;  // ~2 % of B's power
+  with_nan.pixel(3 * 64 + 5)[0] = -0.25f;
+  with_nan.pixel(20 * 64 + 1)[2] = std::numeric_limits<float>::quiet_NaN();
+  write_envmap(dir + "slight.exr", slight);
+  write_envmap(dir + "strong.exr", strong);
+  write_envmap(dir + "nan.pfm", with_nan);
+
+  // Nobody to tell: refused, as before.
+  expect_input_error([&] { read_envmap(dir + "slight.exr"); }, {dir + "slight.exr: pixel (5, 3) is negative"});
+
+  std::vector<std::string> warnings;
+  const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const EnvMap read = read_envmap(dir + "slight.exr");
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find(dir + "slight.exr: 2 pixels with negative values (lowest -0.25"), std::string::npos)
+      << warnings[0];
+  EXPECT_EQ(read.pixel(3 * 64 + 5)[0], 0.0f);
+  EXPECT_EQ(read.pixel(16 * 64 + 9)[1], 0.0f);
+  EXPECT_EQ(read.pixel(16 * 64 + 9)[2], 0.0f);
+  EXPECT_EQ(read.pixel(3 * 64 + 5)[1], 1.0f);  // the rest untouched
+  const NegativeValues measured = find_negative_values(slight);
+  EXPECT_EQ(measured.count, 2u);
+  EXPECT_EQ(measured.lowest, -0.25f);
+  // R: 0.25 dw(row 3) against 4 pi - dw(row 3) of ones (the pixel itself holds none).
+  const double dw3 = pixel_solid_angle(slight, 3 * 64 + 5);
+  EXPECT_NEAR(measured.share, 0.25 * dw3 / (4 * M_PI - dw3), 1e-9);
+
+  warnings.clear();
+  expect_input_error([&] { read_envmap(dir + "strong.exr"); },
+                     {dir + "strong.exr: 40 pixels with negative values (lowest -1) hold", "not radiance"});
+  // A NaN is named even when the negatives before it would pass.
+  expect_input_error([&] { read_envmap(dir + "nan.pfm"); }, {dir + "nan.pfm: pixel (1, 20) is NaN"});
+  EXPECT_TRUE(warnings.empty());
+  set_warning_sink(before);
 }
 
 TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {

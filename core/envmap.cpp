@@ -194,21 +194,26 @@ std::string find_bad_pixel(const EnvMap& map, std::string_view source) {
 NegativeValues find_negative_values(const EnvMap& map) {
   NegativeValues r;
   std::array<double, 3> positive{0, 0, 0}, negative{0, 0, 0};
-  for (size_t i = 0, n = map.pixel_count(); i < n; ++i) {
-    const float* p = map.pixel(i);
-    if (!(p[0] < 0 || p[1] < 0 || p[2] < 0) && !map.is_valid(i)) continue;
-    const double dw = pixel_solid_angle(map, i);
-    r.count += (p[0] < 0 || p[1] < 0 || p[2] < 0) ? 1 : 0;
-    for (int c = 0; c < 3; ++c) {
-      const float v = p[c];
-      if (!std::isfinite(v)) continue;
-      if (v < 0) {
-        r.lowest = std::min(r.lowest, v);
-        if (map.is_valid(i)) negative[size_t(c)] -= dw * v;
-      } else if (map.is_valid(i)) {
-        positive[size_t(c)] += dw * v;
+  // Row by row: a row-grid pixel's solid angle depends on its row only (healpix: on nothing).
+  const size_t width = map.layout == Layout::Healpix ? map.pixel_count() : size_t(map.width);
+  for (size_t start = 0, n = map.pixel_count(); start < n; start += width) {
+    const double dw = pixel_solid_angle(map, start);
+    std::array<double, 3> row_positive{0, 0, 0}, row_negative{0, 0, 0};
+    for (size_t i = start; i < start + width; ++i) {
+      const float* p = map.pixel(i);
+      const bool has_negative = p[0] < 0 || p[1] < 0 || p[2] < 0;
+      r.count += has_negative ? 1 : 0;
+      if (has_negative) r.lowest = std::min({r.lowest, p[0], p[1], p[2]});
+      if (!map.is_valid(i)) continue;
+      for (int c = 0; c < 3; ++c) {
+        const float v = p[c];
+        if (v < 0)
+          row_negative[size_t(c)] -= v;
+        else if (v < std::numeric_limits<float>::infinity())  // NaN and Inf are find_bad_pixel's
+          row_positive[size_t(c)] += v;
       }
     }
+    for (int c = 0; c < 3; ++c) positive[size_t(c)] += dw * row_positive[size_t(c)], negative[size_t(c)] += dw * row_negative[size_t(c)];
   }
   for (int c = 0; c < 3; ++c)
     if (negative[size_t(c)] > 0)

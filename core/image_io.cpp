@@ -317,6 +317,42 @@ RawImage read_exr(const std::string& path) {
   }
 }
 
+// An OpenEXR image is its display window. The data window holds the pixels stored: the same,
+// or smaller (a compositor's crop to the box that is not empty), offset, or larger (overscan).
+// Taking the data window as the image shifted or cropped a map silently; now the display
+// window is the image, its pixels outside the data window have no data and are masked as
+// invalid (never read as black: CONVENTIONS.md), and data outside it is dropped.
+void fit_to_display_window(const std::string& path, RawImage& raw, const Imath::Box2i& data,
+                           const Imath::Box2i& display) {
+  if (data == display) return;
+  const long long W = (long long)display.max.x - display.min.x + 1, H = (long long)display.max.y - display.min.y + 1;
+  check_image_size(path, W, H);
+  const int x0 = std::max(data.min.x, display.min.x), x1 = std::min(data.max.x, display.max.x);
+  const int y0 = std::max(data.min.y, display.min.y), y1 = std::min(data.max.y, display.max.y);
+  if (x0 > x1 || y0 > y1)
+    fail(path, fmt::format("the data window ({}, {})-({}, {}) lies outside the display window ({}, {})-({}, {})",
+                           data.min.x, data.min.y, data.max.x, data.max.y, display.min.x, display.min.y,
+                           display.max.x, display.max.y));
+  std::vector<float> rgb(3 * size_t(W) * size_t(H), 0.0f);
+  std::vector<uint8_t> valid(size_t(W) * size_t(H), 0);
+  for (int y = y0; y <= y1; ++y) {
+    for (int x = x0; x <= x1; ++x) {
+      const size_t src = size_t(y - data.min.y) * size_t(raw.width) + size_t(x - data.min.x);
+      const size_t dst = size_t(y - display.min.y) * size_t(W) + size_t(x - display.min.x);
+      std::copy_n(&raw.rgb[3 * src], 3, &rgb[3 * dst]);
+      valid[dst] = raw.valid.empty() ? 1 : raw.valid[src];
+    }
+  }
+  const bool all_valid = std::all_of(valid.begin(), valid.end(), [](uint8_t v) { return v != 0; });
+  raw.width = int(W);
+  raw.height = int(H);
+  raw.rgb = std::move(rgb);
+  if (all_valid && raw.valid.empty())
+    raw.valid.clear();
+  else
+    raw.valid = std::move(valid);
+}
+
 RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryIStream& stream) {
   Imf::InputFile file(stream);
   const Imf::Header& header = file.header();
@@ -392,6 +428,7 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
     raw.valid.resize(n);
     for (size_t i = 0; i < n; ++i) raw.valid[i] = alpha[i] > 0.5f ? 1 : 0;
   }
+  fit_to_display_window(path, raw, dw, header.displayWindow());
   return raw;
 }
 

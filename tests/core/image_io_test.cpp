@@ -1,5 +1,9 @@
 #include "core/image_io.h"
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,6 +19,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/envmap.h"
 #include "core/warnings.h"
 #include "tests/core/test_files.h"
 
@@ -690,6 +695,60 @@ TEST(ImageIo, SlightNegativesAreReadAsZeroWithOneWarningWhereSomeoneHearsIt) {
   expect_input_error([&] { read_envmap(dir + "nan.pfm"); }, {dir + "nan.pfm: pixel (1, 20) is NaN"});
   EXPECT_TRUE(warnings.empty());
   set_warning_sink(before);
+}
+
+// An EXR's image is its display window (OpenEXR, OpenImageIO, Nuke): a data window that is
+// offset, cropped or larger than it places the stored pixels inside it. Pixels of the display
+// window without data are masked, not black; data outside it is dropped.
+void write_windowed_exr(const std::string& path, Imath::Box2i display, Imath::Box2i data) {
+  Imf::Header header(display, data);
+  for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+  const int w = data.max.x - data.min.x + 1, h = data.max.y - data.min.y + 1;
+  std::vector<float> rgb(3 * size_t(w) * size_t(h));
+  for (int y = 0; y < h; ++y)  // each pixel holds its own display coordinates: x + 1, y + 1, 7
+    for (int x = 0; x < w; ++x) {
+      float* p = &rgb[3 * (size_t(y) * size_t(w) + size_t(x))];
+      p[0] = float(x + data.min.x + 1), p[1] = float(y + data.min.y + 1), p[2] = 7;
+    }
+  Imf::FrameBuffer fb;
+  const size_t xs = 3 * sizeof(float), ys = xs * size_t(w);
+  for (int c = 0; c < 3; ++c)
+    fb.insert(std::string(1, "RGB"[c]), Imf::Slice::Make(Imf::FLOAT, &rgb[size_t(c)], data, xs, ys));
+  Imf::OutputFile file(path.c_str(), header);
+  file.setFrameBuffer(fb);
+  file.writePixels(h);
+}
+
+TEST(ImageIo, AnExrIsItsDisplayWindowWithPixelsWithoutDataMasked) {
+  const std::string dir = temp_dir();
+  const Imath::Box2i display({0, 0}, {31, 15});
+  // Offset and cropped: rows 4..15 and columns 3..33 stored (two beyond the right edge).
+  write_windowed_exr(dir + "crop.exr", display, Imath::Box2i({3, 4}, {33, 15}));
+  const EnvMap crop = read_envmap(dir + "crop.exr");
+  ASSERT_EQ(crop.layout, Layout::LatLong);
+  ASSERT_EQ(crop.width, 32);
+  ASSERT_EQ(crop.height, 16);
+  ASSERT_EQ(crop.valid.size(), crop.pixel_count());
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const size_t i = size_t(y) * 32 + size_t(x);
+      const bool stored = x >= 3 && y >= 4;
+      EXPECT_EQ(crop.is_valid(i), stored) << x << ", " << y;
+      if (stored) {
+        EXPECT_EQ(crop.pixel(i)[0], float(x + 1));
+        EXPECT_EQ(crop.pixel(i)[1], float(y + 1));
+      }
+    }
+  // Overscan: every pixel of the display window stored, the rest dropped; nothing masked.
+  write_windowed_exr(dir + "over.exr", display, Imath::Box2i({-2, -1}, {35, 17}));
+  const EnvMap over = read_envmap(dir + "over.exr");
+  ASSERT_EQ(over.width, 32);
+  EXPECT_TRUE(over.valid.empty());
+  EXPECT_EQ(over.pixel(0)[0], 1.0f);
+  EXPECT_EQ(over.pixel(31 + 15 * 32)[1], 16.0f);
+  // Nothing inside the display window: refused.
+  write_windowed_exr(dir + "out.exr", display, Imath::Box2i({40, 0}, {45, 15}));
+  expect_input_error([&] { read_envmap(dir + "out.exr"); }, {dir + "out.exr", "lies outside the display window"});
 }
 
 TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {

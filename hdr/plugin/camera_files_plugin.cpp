@@ -80,6 +80,12 @@ ExifExposure exif_exposure(const std::string& path) {
     for (const char* key : {"Exif.Photo.ExposureTime", "Exif.Image.ExposureTime"}) {
       const auto it = exif.findKey(Exiv2::ExifKey(key));
       if (it == exif.end() || it->count() == 0) continue;
+      if (it->count() != 1) {  // a writer's mistake: taking the first value read 1/8 s as 1 s
+        out.status = ExifExposure::Status::Failed;
+        out.message = std::string("EXIF ") + key + " holds " + std::to_string(it->count()) + " values (" +
+                      trim(it->value().toString()) + "), not one exposure time";
+        return out;
+      }
       const Exiv2::Rational r = it->toRational(0);
       if (r.second != 0 && r.first > 0) {
         out.status = ExifExposure::Status::Found;

@@ -1,9 +1,11 @@
 #include "hdr/bracket.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -57,6 +59,39 @@ TEST(ReadExifExposure, GivesTheKartikMirrorBallPhotosTimesAndReadBracketRefusesT
   });
   EXPECT_EQ(msg, dir + "ball_1-40s.jpg: size 484x468 differs from the first image's 480x472");
   EXPECT_FALSE(read_exif_exposure_seconds(kData + "/hdr-memorial-debevec/memorial0061.png").has_value());
+}
+
+// A JPEG whose EXIF holds one ExposureTime entry of the given TIFF type and values (little
+// endian, in an Exif IFD), spliced in after the JPEG's start-of-image marker.
+std::string jpeg_with_exposure_entry(const TempDir& tmp, const std::string& name, uint16_t type,
+                                     std::vector<uint32_t> values) {
+  const std::string plain = tmp.png(name + ".plain.jpg", 8, 6);
+  std::ifstream in(plain, std::ios::binary);
+  const std::string jpeg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string tiff;
+  auto u16 = [&](uint32_t v) { tiff += char(v & 0xff), tiff += char((v >> 8) & 0xff); };
+  auto u32 = [&](uint32_t v) { u16(v & 0xffff), u16(v >> 16); };
+  tiff += "II", u16(42), u32(8);
+  u16(1), u16(0x8769), u16(4), u32(1), u32(26), u32(0);  // IFD0: the Exif IFD's offset
+  const uint32_t count = type == 5 ? uint32_t(values.size() / 2) : uint32_t(values.size());
+  u16(1), u16(0x829A), u16(type), u32(count), u32(44), u32(0);  // Exif IFD: ExposureTime
+  for (uint32_t v : values) u32(v);
+  const std::string app1 = std::string("Exif\0\0", 6) + tiff;
+  const size_t length = app1.size() + 2;
+  const std::string path = (tmp.path / name).string();
+  std::ofstream(path, std::ios::binary) << jpeg.substr(0, 2) << char(0xFF) << char(0xE1) << char(length >> 8)
+                                        << char(length & 0xff) << app1 << jpeg.substr(2);
+  return path;
+}
+
+TEST(ReadExifExposure, AnExposureTimeOfTwoValuesIsRefusedNotReadAsItsFirst) {
+  TempDir tmp;
+  // One rational 1/8: 0.125 s.
+  EXPECT_DOUBLE_EQ(read_exif_exposure_seconds(jpeg_with_exposure_entry(tmp, "good.jpg", 5, {1, 8})).value(), 0.125);
+  // Two LONGs 1 and 8 (a writer that meant 1/8): the first alone would be 1 s.
+  const std::string bad = jpeg_with_exposure_entry(tmp, "bad.jpg", 4, {1, 8});
+  const std::string msg = message_of([&] { read_exif_exposure_seconds(bad); });
+  EXPECT_EQ(msg.rfind(bad + ": EXIF Exif.Photo.ExposureTime holds 2 values (1 8)", 0), 0u) << msg;
 }
 
 TEST(ReadExposureList, ReadsTheSharedCsvsDebevecsListAndPlainLines) {

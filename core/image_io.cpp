@@ -9,6 +9,7 @@
 #include <ImfIntAttribute.h>
 #include <ImfOutputFile.h>
 #include <ImfRgbaFile.h>
+#include <ImfStandardAttributes.h>
 #include <ImfStdIO.h>
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
@@ -34,6 +35,7 @@
 #include <thread>
 #include <sstream>
 
+#include "core/chromaticities.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/exr_header.h"
@@ -317,6 +319,26 @@ RawImage read_exr(const std::string& path) {
   }
 }
 
+// A file in other primaries (an ACES2065-1 EXR, a Radiance file with a PRIMARIES line) is
+// converted to Rec. 709, the maps' colour space (core/chromaticities.h). Read as Rec. 709 its
+// colours were wrong without a word, and so was every luminance weighted from them.
+void convert_to_rec709(const std::string& path, std::vector<float>& rgb, const Chromaticities& file) {
+  if (same_chromaticities(file, kRec709)) return;
+  const std::array<double, 9> m = to_rec709_matrix(file, path.c_str());
+  // Rec. 709 by another name: Blender's studio lights state its primaries adapted to D50, as an
+  // ICC profile does, which adapt back to within 1e-4 of the identity. Mixing channels by
+  // that much only made negatives of zeros.
+  double off = 0;
+  for (int i = 0; i < 9; ++i) off = std::max(off, std::fabs(m[size_t(i)] - (i % 4 == 0 ? 1.0 : 0.0)));
+  if (off <= 1e-3) return;
+  for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
+    const double r = rgb[i], g = rgb[i + 1], b = rgb[i + 2];
+    rgb[i] = float(m[0] * r + m[1] * g + m[2] * b);
+    rgb[i + 1] = float(m[3] * r + m[4] * g + m[5] * b);
+    rgb[i + 2] = float(m[6] * r + m[7] * g + m[8] * b);
+  }
+}
+
 // An OpenEXR image is its display window. The data window holds the pixels stored: the same,
 // or smaller (a compositor's crop to the box that is not empty), offset, or larger (overscan).
 // Taking the data window as the image shifted or cropped a map silently; now the display
@@ -375,6 +397,7 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   }
   const bool rgb = has("R") && has("G") && has("B");
   const bool luma = has("Y");
+  const bool luma_only = !rgb && !(has("RY") || has("BY"));  // grey: Y is Y in any primaries
   if (!rgb && !luma) {
     std::string names;
     for (auto it = channels.begin(); it != channels.end(); ++it) names += (names.empty() ? "" : ", ") + std::string(it.name());
@@ -423,6 +446,13 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
       comp == Imf::B44A_COMPRESSION) {
     for (float& v : raw.rgb)
       if (v < 0.0f) v = 0.0f;
+  }
+  // After that clamp: colours outside Rec. 709's gamut come out negative, and those are the
+  // scene's, for accept_slight_negatives to weigh and report.
+  if (!luma_only && Imf::hasChromaticities(header)) {
+    const Imf::Chromaticities& c = Imf::chromaticities(header);
+    convert_to_rec709(path, raw.rgb, Chromaticities{{c.red.x, c.red.y}, {c.green.x, c.green.y}, {c.blue.x, c.blue.y},
+                                                    {c.white.x, c.white.y}});
   }
   if (want_mask) {
     raw.valid.resize(n);
@@ -513,6 +543,7 @@ double parse_positive(const std::string& path, const std::string& what, const st
 struct HdrHeader {
   RawImage raw;  // width, height, layout, units, nside; no pixels yet
   double scale[3] = {1.0, 1.0, 1.0};  // 1 / (EXPOSURE x COLORCORR) per channel
+  Chromaticities primaries;           // Rec. 709 unless a PRIMARIES line says otherwise
   size_t data_start = 0;
 };
 
@@ -569,6 +600,12 @@ HdrHeader read_hdr_header(const std::string& path, const std::string& bytes) {
       if (!(in >> c[0] >> c[1] >> c[2]) || !(c[0] > 0 && c[1] > 0 && c[2] > 0))
         fail(path, fmt::format("bad COLORCORR value '{}'", one_line(value, 40)));
       for (int k = 0; k < 3; ++k) colorcorr[k] *= c[k];
+    } else if (key == "PRIMARIES") {
+      std::istringstream in(value);
+      double v[8];
+      for (double& x : v)
+        if (!(in >> x)) fail(path, fmt::format("bad PRIMARIES value '{}' (expected 8 numbers)", one_line(value, 60)));
+      header.primaries = Chromaticities{{v[0], v[1]}, {v[2], v[3]}, {v[4], v[5]}, {v[6], v[7]}};
     } else if (key == "LIGHTPROBE_LAYOUT") {
       raw.layout = value;
     } else if (key == "LIGHTPROBE_UNITS") {
@@ -692,6 +729,7 @@ RawImage read_hdr(const std::string& path) {
       for (int c = 0; c < 3; ++c) out[3 * x + c] = float(p[c] * f * header.scale[c]);
     }
   }
+  convert_to_rec709(path, raw.rgb, header.primaries);
   return raw;
 }
 

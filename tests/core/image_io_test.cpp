@@ -4,6 +4,7 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/chromaticities.h"
 #include "core/envmap.h"
 #include "core/warnings.h"
 #include "tests/core/test_files.h"
@@ -749,6 +751,64 @@ TEST(ImageIo, AnExrIsItsDisplayWindowWithPixelsWithoutDataMasked) {
   // Nothing inside the display window: refused.
   write_windowed_exr(dir + "out.exr", display, Imath::Box2i({40, 0}, {45, 15}));
   expect_input_error([&] { read_envmap(dir + "out.exr"); }, {dir + "out.exr", "lies outside the display window"});
+}
+
+// Files in other primaries are converted to Rec. 709 (core/chromaticities.h): an EXR whose
+// chromaticities attribute is ACES AP0, a Radiance file with a PRIMARIES line. The ACES white
+// stays white, a pure AP0 red becomes the first column of the published matrix.
+TEST(ImageIo, FilesInOtherPrimariesAreConvertedToRec709) {
+  const std::string dir = temp_dir();
+  const Imf::Chromaticities ap0({0.7347f, 0.2653f}, {0.0f, 1.0f}, {0.0001f, -0.0770f}, {0.32168f, 0.33767f});
+  Imf::Header header(4, 2);
+  for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+  Imf::addChromaticities(header, ap0);
+  std::vector<float> rgb{1, 1, 1, 1, 0, 0, 0.5f, 0.5f, 0.5f, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+  Imf::FrameBuffer fb;
+  for (int c = 0; c < 3; ++c)
+    fb.insert(std::string(1, "RGB"[c]), Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&rgb[size_t(c)]), 12, 48));
+  {
+    Imf::OutputFile file((dir + "aces.exr").c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(2);
+  }
+  // Read without the negative check: AP0's red lies far outside Rec. 709's gamut.
+  const EnvMap aces = read_envmap(dir + "aces.exr", {.layout = Layout::LatLong, .reject_bad_pixels = false});
+  const auto m = to_rec709_matrix(Chromaticities{{0.7347, 0.2653}, {0.0, 1.0}, {0.0001, -0.0770}, {0.32168, 0.33767}}, "");
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(aces.pixel(0)[c], 1.0f, 1e-5) << c;  // white stays white
+  EXPECT_NEAR(aces.pixel(1)[0], 2.52168619f, 1e-5);                              // AP0 red: the first column
+  EXPECT_NEAR(aces.pixel(1)[1], m[3], 1e-6);
+  EXPECT_NEAR(aces.pixel(1)[2], m[6], 1e-6);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(aces.pixel(2)[c], 0.5f, 1e-5) << c;
+  // With the negative check, that red is more than 1 % of a channel's power: refused.
+  expect_input_error([&] { read_envmap(dir + "aces.exr", {.layout = Layout::LatLong}); },
+                     {dir + "aces.exr: pixel (1, 0) is negative"});
+  // A Radiance file with the same primaries: the same conversion; with Rec. 709's, none.
+  EnvMap grey = make_latlong(4, 2);
+  for (float& v : grey.rgb) v = 0.25f;
+  grey.pixel(5)[0] = 1.0f, grey.pixel(5)[1] = 0.0f, grey.pixel(5)[2] = 0.0f;
+  write_envmap(dir + "plain.hdr", grey);
+  std::string bytes = read_bytes(dir + "plain.hdr");
+  const std::string marker = "FORMAT=32-bit_rle_rgbe\n";
+  ASSERT_NE(bytes.find(marker), std::string::npos);
+  std::string with709 = bytes, withAp0 = bytes;
+  with709.insert(bytes.find(marker), "PRIMARIES= 0.640 0.330 0.300 0.600 0.150 0.060 0.3127 0.3290\n");
+  withAp0.insert(bytes.find(marker), "PRIMARIES= 0.7347 0.2653 0.0 1.0 0.0001 -0.0770 0.32168 0.33767\n");
+  write_bytes(dir + "p709.hdr", with709);
+  write_bytes(dir + "pap0.hdr", withAp0);
+  EXPECT_EQ(read_envmap(dir + "p709.hdr").rgb, read_envmap(dir + "plain.hdr").rgb);
+  const EnvMap hdr_ap0 = read_envmap(dir + "pap0.hdr", {.layout = std::nullopt, .reject_bad_pixels = false});
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(hdr_ap0.pixel(0)[c], 0.25f, 1e-5) << c;
+  EXPECT_NEAR(hdr_ap0.pixel(5)[0], m[0], 1e-5);
+  EXPECT_NEAR(hdr_ap0.pixel(5)[1], m[3], 1e-5);
+  EXPECT_NEAR(hdr_ap0.pixel(5)[2], m[6], 1e-5);
+  // Rec. 709 adapted to D50 (how Blender's studio lights state theirs, as ICC profiles do) is
+  // Rec. 709: nothing converted.
+  std::string with_d50 = bytes;
+  with_d50.insert(bytes.find(marker), "PRIMARIES= 0.648447 0.330877 0.321187 0.597894 0.155901 0.0660563 0.345708 0.358541\n");
+  write_bytes(dir + "pd50.hdr", with_d50);
+  EXPECT_EQ(read_envmap(dir + "pd50.hdr").rgb, read_envmap(dir + "plain.hdr").rgb);
+  write_bytes(dir + "bad.hdr", bytes.substr(0, bytes.find(marker)) + "PRIMARIES= 0.64 0.33\n" + bytes.substr(bytes.find(marker)));
+  expect_input_error([&] { read_envmap(dir + "bad.hdr"); }, {dir + "bad.hdr", "bad PRIMARIES value"});
 }
 
 TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {

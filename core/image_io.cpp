@@ -349,6 +349,13 @@ void fit_to_display_window(const std::string& path, RawImage& raw, const Imath::
   if (data == display) return;
   const long long W = (long long)display.max.x - display.min.x + 1, H = (long long)display.max.y - display.min.y + 1;
   check_image_size(path, W, H);
+  // The data window's size is bounded by the file's (core/exr_header.h); the display window's
+  // is not, so a few bytes could claim a 2^27-pixel image. Room for any crop of a map up to
+  // 4096x4096, or a quarter of the display window stored.
+  const long long stored = (long long)raw.width * raw.height, kFreePixels = 1ll << 24;
+  if (W * H > std::max(4 * stored, kFreePixels))
+    fail(path, fmt::format("the display window {}x{} is more than 4 times the {}x{} of data stored (and over {} pixels)",
+                           W, H, raw.width, raw.height, kFreePixels));
   const int x0 = std::max(data.min.x, display.min.x), x1 = std::min(data.max.x, display.max.x);
   const int y0 = std::max(data.min.y, display.min.y), y1 = std::min(data.max.y, display.max.y);
   if (x0 > x1 || y0 > y1)

@@ -748,6 +748,10 @@ TEST(ImageIo, AnExrIsItsDisplayWindowWithPixelsWithoutDataMasked) {
   EXPECT_TRUE(over.valid.empty());
   EXPECT_EQ(over.pixel(0)[0], 1.0f);
   EXPECT_EQ(over.pixel(31 + 15 * 32)[1], 16.0f);
+  // A display window far larger than the data stored (a few bytes claiming a huge image) is
+  // refused before anything of its size is allocated.
+  write_windowed_exr(dir + "huge.exr", Imath::Box2i({0, 0}, {8191, 4095}), Imath::Box2i({0, 0}, {1, 0}));
+  expect_input_error([&] { read_envmap(dir + "huge.exr"); }, {dir + "huge.exr: the display window 8192x4096 is more than 4 times"});
   // Nothing inside the display window: refused.
   write_windowed_exr(dir + "out.exr", display, Imath::Box2i({40, 0}, {45, 15}));
   expect_input_error([&] { read_envmap(dir + "out.exr"); }, {dir + "out.exr", "lies outside the display window"});

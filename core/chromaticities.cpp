@@ -81,7 +81,10 @@ bool same_chromaticities(const Chromaticities& a, const Chromaticities& b, doubl
 std::array<double, 9> to_rec709_matrix(const Chromaticities& file, const char* source) {
   const M3 to_xyz = rgb_to_xyz(file, source);
   const M3 from_xyz = inverse(rgb_to_xyz(kRec709, source));
-  return multiply(from_xyz, multiply(bradford(file.white, kRec709.white), to_xyz));
+  const M3 m = multiply(from_xyz, multiply(bradford(file.white, kRec709.white), to_xyz));
+  for (double v : m)
+    if (!std::isfinite(v)) throw InputError(fmt::format("{}: chromaticities that give no finite conversion", source));
+  return m;
 }
 
 }  // namespace lp

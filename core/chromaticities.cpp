@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "core/error.h"
 
@@ -85,6 +86,74 @@ std::array<double, 9> to_rec709_matrix(const Chromaticities& file, const char* s
   for (double v : m)
     if (!std::isfinite(v)) throw InputError(fmt::format("{}: chromaticities that give no finite conversion", source));
   return m;
+}
+
+namespace {
+
+uint32_t be32(std::string_view b, size_t at) {
+  return uint32_t(uint8_t(b[at])) << 24 | uint32_t(uint8_t(b[at + 1])) << 16 | uint32_t(uint8_t(b[at + 2])) << 8 |
+         uint32_t(uint8_t(b[at + 3]));
+}
+
+// The tag's bytes, or empty when absent or outside the profile.
+std::string_view icc_tag(std::string_view icc, const char signature[5]) {
+  const uint32_t count = be32(icc, 128);
+  for (uint32_t i = 0; i < count && 132 + 12 * size_t(i) + 12 <= icc.size(); ++i) {
+    const size_t entry = 132 + 12 * size_t(i);
+    if (icc.substr(entry, 4) != std::string_view(signature, 4)) continue;
+    const size_t offset = be32(icc, entry + 4), size = be32(icc, entry + 8);
+    if (offset > icc.size() || size > icc.size() - offset) return {};
+    return icc.substr(offset, size);
+  }
+  return {};
+}
+
+std::optional<std::array<double, 3>> icc_xyz(std::string_view icc, const char signature[5]) {
+  const std::string_view t = icc_tag(icc, signature);
+  if (t.size() < 20 || t.substr(0, 4) != "XYZ ") return std::nullopt;
+  std::array<double, 3> v{};
+  for (size_t k = 0; k < 3; ++k) v[k] = double(int32_t(be32(t, 8 + 4 * k))) / 65536.0;
+  return v;
+}
+
+std::string icc_description(std::string_view icc) {
+  const std::string_view t = icc_tag(icc, "desc");
+  std::string out;
+  auto keep = [&](uint32_t c) {
+    if (c >= 32 && c < 127 && out.size() < 80) out += char(c);
+  };
+  if (t.size() >= 12 && t.substr(0, 4) == "desc") {  // v2 textDescriptionType: ASCII
+    const size_t n = be32(t, 8);
+    for (size_t i = 0; i < n && 12 + i < t.size(); ++i) keep(uint8_t(t[12 + i]));
+  } else if (t.size() >= 28 && t.substr(0, 4) == "mluc") {  // v4: the first record, UTF-16BE
+    const size_t length = be32(t, 20), offset = be32(t, 24);
+    for (size_t i = 0; i + 1 < length && offset + i + 1 < t.size(); i += 2)
+      keep(uint32_t(uint8_t(t[offset + i])) << 8 | uint8_t(t[offset + i + 1]));
+  }
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  return out;
+}
+
+}  // namespace
+
+std::optional<IccSummary> summarize_icc_profile(std::string_view icc) {
+  if (icc.size() < 132 || icc.substr(36, 4) != "acsp") return std::nullopt;
+  IccSummary s;
+  s.description = icc_description(icc);
+  const auto r = icc_xyz(icc, "rXYZ"), g = icc_xyz(icc, "gXYZ"), b = icc_xyz(icc, "bXYZ");
+  if (r && g && b) {
+    s.has_colorants = true;
+    // sRGB's colorants as ICC profiles store them (IEC 61966-2-1, Bradford-adapted to D50).
+    const std::array<std::array<double, 3>, 3> srgb{{{0.4361, 0.2225, 0.0139}, {0.3851, 0.7169, 0.0971},
+                                                     {0.1431, 0.0606, 0.7141}}};
+    const std::array<std::array<double, 3>, 3> file{*r, *g, *b};
+    s.srgb = true;
+    for (size_t i = 0; i < 3; ++i)
+      for (size_t k = 0; k < 3; ++k) s.srgb = s.srgb && std::fabs(file[i][k] - srgb[i][k]) <= 3e-3;
+  } else {
+    s.srgb = s.description.find("sRGB") != std::string::npos;
+  }
+  return s;
 }
 
 }  // namespace lp

@@ -5,6 +5,9 @@
 #pragma once
 
 #include <array>
+#include <optional>
+#include <string>
+#include <string_view>
 
 namespace lp {
 
@@ -24,5 +27,17 @@ bool same_chromaticities(const Chromaticities& a, const Chromaticities& b, doubl
 // InputError naming `source` for primaries that span no colour space (collinear, y = 0) or a
 // white with y <= 0.
 std::array<double, 9> to_rec709_matrix(const Chromaticities& file, const char* source);
+
+// What an embedded ICC profile (of a camera JPEG, PNG or TIFF) says about its colours: its
+// description, and whether it is sRGB, by its colorants (rXYZ, gXYZ, bXYZ within 3e-3 of
+// sRGB's, adapted to D50 as ICC stores them) or, for a profile without colorants (a LUT
+// profile), by its description naming sRGB. nullopt for bytes that are not an ICC profile
+// with a tag table (nothing is read beyond them).
+struct IccSummary {
+  std::string description;  // ASCII of the 'desc' tag (v2 text or v4 mluc); empty when none
+  bool srgb = false;
+  bool has_colorants = false;
+};
+std::optional<IccSummary> summarize_icc_profile(std::string_view icc);
 
 }  // namespace lp

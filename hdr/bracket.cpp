@@ -2,14 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <mutex>
+#include <set>
 #include <sstream>
 
 #include <fmt/format.h>
 
+#include "core/chromaticities.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
 #include "core/picture_io.h"
+#include "core/warnings.h"
 #include "hdr/camera_files_plugin.h"
 #include "hdr/raw_input.h"
 
@@ -105,6 +110,43 @@ std::optional<double> read_exif_exposure_seconds(const std::string& path) {
   return e.seconds;
 }
 
+namespace {
+
+// The codes of a camera file are taken as sRGB. Where the file's embedded ICC profile says
+// otherwise (Display P3 or Apple's wide-colour LUT profile from an iPhone, Adobe RGB or
+// ProPhoto from a raw converter) the fused colours are off, so say so, once per profile and
+// process. Converting is not built: the common iPhone profile is a LUT one (A2B tags).
+// Whether a camera file may carry an ICC profile, from its first 256 KB, without Exiv2 (whose
+// load costs every bracket ~5 ms): a JPEG's APP2 "ICC_PROFILE" segments and a PNG's iCCP
+// chunk come before the pixels; a TIFF may hold one anywhere.
+bool may_have_icc_profile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(256 * 1024, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
+  return head.find("ICC_PROFILE") != std::string::npos || head.find("iCCP") != std::string::npos;
+}
+
+void warn_of_colour_profile(const std::string& path) {
+  if (!has_warning_sink() || !may_have_icc_profile(path)) return;
+  const std::string icc = detail::camera_files_plugin().icc_profile(path);
+  if (icc.empty()) return;
+  const auto summary = summarize_icc_profile(icc);
+  if (summary && summary->srgb) return;
+  const std::string name = summary ? summary->description : std::string("unreadable");
+  static std::mutex mutex;
+  static std::set<std::string> warned;
+  {
+    std::lock_guard lock(mutex);
+    if (!warned.insert(name).second) return;
+  }
+  warn(fmt::format("{}: its ICC profile ('{}') is not applied: its colours are taken as sRGB", path,
+                   name.empty() ? "no description" : name));
+}
+
+}  // namespace
+
 Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<std::vector<double>>& times) {
   Bracket b;
   if (times && times->size() != paths.size())
@@ -154,6 +196,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     }
   }
   check_bracket(b);
+  if (!b.linear) warn_of_colour_profile(paths[0]);  // after the checks: a refused bracket says one line
   if (b.bit_depth == 8 && !b.linear) keep_8bit_codes(b);
   return b;
 }

@@ -9,6 +9,7 @@
 // them into InputErrors naming the file, as they did.
 //
 // Internal to hdr/: only raw_input.cpp, bracket.cpp and the plugin include it.
+// Exiv2 also reads embedded ICC profiles (bracket.cpp warns about the ones it cannot apply).
 #pragma once
 
 #include <cstdint>
@@ -46,8 +47,11 @@ struct CameraFilesPluginTable {
   // SensorTooLarge otherwise, before anything is allocated for it.
   DevelopedRaw (*develop_raw)(const std::string& path, bool (*sensor_fits)(int width, int height));
   ExifExposure (*exif_exposure)(const std::string& path);
+  // The file's embedded ICC profile (JPEG, PNG, TIFF), empty when it has none or Exiv2
+  // cannot read the file (the image reader reports that).
+  std::string (*icc_profile)(const std::string& path);
 };
-inline constexpr int kCameraFilesPluginVersion = 1;
+inline constexpr int kCameraFilesPluginVersion = 2;
 inline constexpr const char* kCameraFilesPluginFile = "liblightprobe_camera_files.so";
 
 // The plugin's table, loaded once; throws std::runtime_error when it cannot be loaded.

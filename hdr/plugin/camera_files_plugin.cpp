@@ -109,7 +109,25 @@ ExifExposure exif_exposure(const std::string& path) {
   }
 }
 
-constexpr CameraFilesPluginTable kTable{kCameraFilesPluginVersion, &develop_raw, &exif_exposure};
+std::string icc_profile(const std::string& path) {
+  try {
+    static const bool muted = [] {
+      Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
+      return true;
+    }();
+    (void)muted;
+    auto image = Exiv2::ImageFactory::open(path);
+    if (image.get() == nullptr) return {};
+    image->readMetadata();
+    if (!image->iccProfileDefined()) return {};
+    const Exiv2::DataBuf* icc = image->iccProfile();
+    return std::string(reinterpret_cast<const char*>(icc->pData_), size_t(icc->size_));
+  } catch (const Exiv2::AnyError&) {
+    return {};
+  }
+}
+
+constexpr CameraFilesPluginTable kTable{kCameraFilesPluginVersion, &develop_raw, &exif_exposure, &icc_profile};
 
 }  // namespace
 }  // namespace lp::detail

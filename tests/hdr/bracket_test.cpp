@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "core/error.h"
+#include "core/warnings.h"
 #include "hdr/merge.h"
 #include "tests/hdr/synthetic_bracket.h"
 
@@ -92,6 +93,26 @@ TEST(ReadExifExposure, AnExposureTimeOfTwoValuesIsRefusedNotReadAsItsFirst) {
   const std::string bad = jpeg_with_exposure_entry(tmp, "bad.jpg", 4, {1, 8});
   const std::string msg = message_of([&] { read_exif_exposure_seconds(bad); });
   EXPECT_EQ(msg.rfind(bad + ": EXIF Exif.Photo.ExposureTime holds 2 values (1 8)", 0), 0u) << msg;
+}
+
+// Camera codes are taken as sRGB; a bracket whose files carry another ICC profile (the
+// Kartik iPhone photos: Apple's wide-colour LUT profile) says so in one warning, once; an
+// sRGB or profile-less bracket says nothing.
+TEST(ReadBracket, AnIccProfileThatIsNotSrgbIsWarnedAboutOnce) {
+  std::vector<std::string> warnings;
+  const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const std::string photo = kData + "/hdr-mirrorball-kartik/ball_1-10s.jpg";
+  const Bracket b = read_bracket({photo, photo}, std::vector<double>{0.1, 0.025});
+  EXPECT_EQ(b.frames.size(), 2u);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], photo + ": its ICC profile ('Apple Wide Color Sharing Profile') is not applied: its colours are "
+                                 "taken as sRGB");
+  warnings.clear();
+  read_bracket({photo, photo}, std::vector<double>{0.1, 0.025});  // the same profile again: said once
+  const std::string m = kData + "/hdr-memorial-debevec/";
+  read_bracket({m + "memorial0066.png", m + "memorial0068.png"}, std::vector<double>{0.125, 0.03125});
+  EXPECT_TRUE(warnings.empty());
+  set_warning_sink(before);
 }
 
 TEST(ReadExposureList, ReadsTheSharedCsvsDebevecsListAndPlainLines) {

@@ -60,22 +60,28 @@ DevelopedRaw develop_raw(const std::string& path, bool (*sensor_fits)(int, int))
   return out;
 }
 
+// The file opened by Exiv2 with its metadata read, or null. Exiv2 writes warnings to stderr
+// by default; library code prints nothing, so it is muted first.
+Exiv2::Image::AutoPtr open_with_metadata(const std::string& path) {
+  static const bool muted = [] {
+    Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
+    return true;
+  }();
+  (void)muted;
+  auto image = Exiv2::ImageFactory::open(path);
+  if (image.get() != nullptr) image->readMetadata();
+  return image;
+}
+
 ExifExposure exif_exposure(const std::string& path) {
   ExifExposure out;
   try {
-    // Exiv2 writes warnings to stderr by default; library code prints nothing.
-    static const bool muted = [] {
-      Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
-      return true;
-    }();
-    (void)muted;
-    auto image = Exiv2::ImageFactory::open(path);
+    auto image = open_with_metadata(path);
     if (image.get() == nullptr) {
       out.status = ExifExposure::Status::Failed;
       out.message = "cannot open to read EXIF";
       return out;
     }
-    image->readMetadata();
     const Exiv2::ExifData& exif = image->exifData();
     for (const char* key : {"Exif.Photo.ExposureTime", "Exif.Image.ExposureTime"}) {
       const auto it = exif.findKey(Exiv2::ExifKey(key));
@@ -111,15 +117,8 @@ ExifExposure exif_exposure(const std::string& path) {
 
 std::string icc_profile(const std::string& path) {
   try {
-    static const bool muted = [] {
-      Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute);
-      return true;
-    }();
-    (void)muted;
-    auto image = Exiv2::ImageFactory::open(path);
-    if (image.get() == nullptr) return {};
-    image->readMetadata();
-    if (!image->iccProfileDefined()) return {};
+    auto image = open_with_metadata(path);
+    if (image.get() == nullptr || !image->iccProfileDefined()) return {};
     const Exiv2::DataBuf* icc = image->iccProfile();
     return std::string(reinterpret_cast<const char*>(icc->pData_), size_t(icc->size_));
   } catch (const Exiv2::AnyError&) {

@@ -339,6 +339,29 @@ void convert_to_rec709(const std::string& path, std::vector<float>& rgb, const C
   }
 }
 
+// A pixel whose alpha is below 0.5 holds no data: masked as invalid, never read as black
+// (CONVENTIONS.md). lightprobe writes its maps' masks so. Other tools' files were read with
+// alpha ignored, which made a render's transparent background (Blender's "film transparent":
+// alpha and RGB 0) a black part of the scene; now it is masked too, said in one warning. An
+// alpha that is 0 everywhere (some writers' placeholder) means nothing: ignored, with a warning.
+void alpha_to_mask(const std::string& path, RawImage& raw, const std::vector<float>& alpha) {
+  const size_t transparent = size_t(std::count_if(alpha.begin(), alpha.end(), [](float a) { return !(a > 0.5f); }));
+  if (raw.layout) {
+    raw.valid.resize(alpha.size());
+    for (size_t i = 0; i < alpha.size(); ++i) raw.valid[i] = alpha[i] > 0.5f ? 1 : 0;
+    return;
+  }
+  if (transparent == 0) return;
+  if (transparent == alpha.size()) {
+    warn(fmt::format("{}: its alpha channel is 0 everywhere: ignored", path));
+    return;
+  }
+  raw.valid.resize(alpha.size());
+  for (size_t i = 0; i < alpha.size(); ++i) raw.valid[i] = alpha[i] > 0.5f ? 1 : 0;
+  warn(fmt::format("{}: {} pixels ({:.3g} %) have alpha below 0.5: read as no data (masked), not as black", path,
+                   transparent, 100.0 * double(transparent) / double(alpha.size())));
+}
+
 // An OpenEXR image is its display window. The data window holds the pixels stored: the same,
 // or smaller (a compositor's crop to the box that is not empty), offset, or larger (overscan).
 // Taking the data window as the image shifted or cropped a map silently; now the display
@@ -414,7 +437,9 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
 
   const size_t n = size_t(w) * size_t(h);
   raw.rgb.assign(3 * n, 0.0f);
-  const bool want_mask = raw.layout.has_value() && has("A");
+  // Alpha is the validity mask of lightprobe's own maps; in other files it is read too, see
+  // alpha_to_mask.
+  const bool want_mask = has("A");
   std::vector<float> alpha(want_mask ? n : 0, 1.0f);
   std::vector<float> y;
   if (!rgb && (has("RY") || has("BY"))) {
@@ -461,10 +486,7 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
     convert_to_rec709(path, raw.rgb, Chromaticities{{c.red.x, c.red.y}, {c.green.x, c.green.y}, {c.blue.x, c.blue.y},
                                                     {c.white.x, c.white.y}});
   }
-  if (want_mask) {
-    raw.valid.resize(n);
-    for (size_t i = 0; i < n; ++i) raw.valid[i] = alpha[i] > 0.5f ? 1 : 0;
-  }
+  if (want_mask) alpha_to_mask(path, raw, alpha);
   fit_to_display_window(path, raw, dw, header.displayWindow());
   return raw;
 }

@@ -209,7 +209,7 @@ TEST(ImageIo, ExrHalfRefusesValuesBeyondTheHalfRangeInsteadOfWritingInfinity) {
   EXPECT_EQ(count_temp_files(dir), 0u);
 }
 
-TEST(ImageIo, ExrWithoutMaskHasNoAlphaAndAForeignAlphaIsNotAMask) {
+TEST(ImageIo, ExrWithoutMaskHasNoAlphaAndAForeignAlphaMasksToo) {
   const std::string dir = temp_dir();
   EnvMap map = make_latlong(16, 8);
   fill_random(map, 3);
@@ -223,7 +223,7 @@ TEST(ImageIo, ExrWithoutMaskHasNoAlphaAndAForeignAlphaIsNotAMask) {
   strip_layout_attribute(dir + "foreign.exr");
   const EnvMap back = read_envmap(dir + "foreign.exr");
   EXPECT_EQ(back.layout, Layout::LatLong);  // inferred from 16x8
-  EXPECT_TRUE(back.valid.empty());
+  EXPECT_EQ(back.valid, map.valid);           // since stop 35: alpha below 0.5 is no data in any file
   EXPECT_EQ(back.rgb, map.rgb);
 }
 
@@ -237,7 +237,7 @@ TEST(ImageIo, HandmadeExrFilesReadToTheirKnownValues) {
   write_bytes(dir + "half.exr", half);
   const EnvMap h = read_envmap(dir + "half.exr");
   EXPECT_EQ(h.layout, Layout::LatLong);
-  EXPECT_TRUE(h.valid.empty());  // a foreign alpha is not a mask
+  EXPECT_TRUE(h.valid.empty());  // a foreign alpha of 0 everywhere is no mask
   EXPECT_EQ(h.pixel(0)[0], 1.0f);
   EXPECT_EQ(h.pixel(0)[1], 0.5f);
   EXPECT_EQ(h.pixel(0)[2], 2.0f);
@@ -254,6 +254,33 @@ TEST(ImageIo, HandmadeExrFilesReadToTheirKnownValues) {
   // Neither RGB nor Y: refused, listing what is there.
   write_bytes(dir + "z.exr", handmade_exr(2, 1, {{"Z", 2, [](int, int) { return 0u; }}}));
   expect_input_error([&] { read_envmap(dir + "z.exr"); }, {dir + "z.exr", "channels: Z"});
+}
+
+// Another tool's RGBA map: pixels with alpha below 0.5 hold no data (a render's transparent
+// background) and are masked, with one warning; an alpha of 0 everywhere means nothing.
+TEST(ImageIo, TransparentPixelsOfOtherToolsMapsAreMaskedNotBlack) {
+  const std::string dir = temp_dir();
+  const auto rgba = handmade_exr(4, 2, {{"A", 1, [](int x, int) { return x < 3 ? 0x3c00u : 0u; }},
+                                        {"B", 1, [](int, int) { return 0x3c00u; }},
+                                        {"G", 1, [](int, int) { return 0x3c00u; }},
+                                        {"R", 1, [](int x, int) { return x < 3 ? 0x3c00u : 0u; }}});
+  write_bytes(dir + "rgba.exr", rgba);
+  std::vector<std::string> warnings;
+  const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const EnvMap m = read_envmap(dir + "rgba.exr");
+  ASSERT_EQ(m.valid.size(), 8u);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(m.is_valid(size_t(i)), i % 4 < 3) << i;
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], dir + "rgba.exr: 2 pixels (25 %) have alpha below 0.5: read as no data (masked), not as black");
+  warnings.clear();
+  write_bytes(dir + "zero.exr", handmade_exr(4, 2, {{"A", 1, [](int, int) { return 0u; }},
+                                                    {"B", 1, [](int, int) { return 0x3c00u; }},
+                                                    {"G", 1, [](int, int) { return 0x3c00u; }},
+                                                    {"R", 1, [](int, int) { return 0x3c00u; }}}));
+  EXPECT_TRUE(read_envmap(dir + "zero.exr").valid.empty());
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], dir + "zero.exr: its alpha channel is 0 everywhere: ignored");
+  set_warning_sink(before);
 }
 
 TEST(ImageIo, ExrWithAnUnknownLayoutAttributeIsRefused) {

@@ -9,6 +9,7 @@
 #include "calib/photometric.h"
 #include "cli/commands.h"
 #include "cli/report.h"
+#include "core/chromaticities.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "hdr/align.h"
@@ -140,6 +141,12 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     }
     MergeReport mr;
     radiance = merge_bracket(bracket, response, mo, &mr);
+    if (bracket.to_rec709) {  // the frames' ICC profile, a matrix one other than sRGB
+      apply_colour_matrix(radiance.rgb, *bracket.to_rec709);
+      report["colour_profile"] = bracket.colour_profile;
+      say(out, "{}: colours converted from the frames' ICC profile ('{}') to Rec. 709\n", args.output,
+          bracket.colour_profile);
+    }
     report["saturated_everywhere"] = mr.saturated_everywhere;
     report["black_everywhere"] = mr.black_everywhere;
     report["frames"] = bracket.frames.size();

@@ -70,6 +70,15 @@ M3 bradford(const std::array<double, 2>& from, const std::array<double, 2>& to) 
 
 }  // namespace
 
+void apply_colour_matrix(std::vector<float>& rgb, const std::array<double, 9>& m) {
+  for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
+    const double r = rgb[i], g = rgb[i + 1], b = rgb[i + 2];
+    rgb[i] = float(m[0] * r + m[1] * g + m[2] * b);
+    rgb[i + 1] = float(m[3] * r + m[4] * g + m[5] * b);
+    rgb[i + 2] = float(m[6] * r + m[7] * g + m[8] * b);
+  }
+}
+
 bool same_chromaticities(const Chromaticities& a, const Chromaticities& b, double tolerance) {
   const std::array<const std::array<double, 2>*, 4> pa{&a.red, &a.green, &a.blue, &a.white},
       pb{&b.red, &b.green, &b.blue, &b.white};
@@ -147,6 +156,7 @@ std::optional<IccSummary> summarize_icc_profile(std::string_view icc) {
     const std::array<std::array<double, 3>, 3> srgb{{{0.4361, 0.2225, 0.0139}, {0.3851, 0.7169, 0.0971},
                                                      {0.1431, 0.0606, 0.7141}}};
     const std::array<std::array<double, 3>, 3> file{*r, *g, *b};
+    s.colorants = file;
     s.srgb = true;
     for (size_t i = 0; i < 3; ++i)
       for (size_t k = 0; k < 3; ++k) s.srgb = s.srgb && std::fabs(file[i][k] - srgb[i][k]) <= 3e-3;
@@ -154,6 +164,18 @@ std::optional<IccSummary> summarize_icc_profile(std::string_view icc) {
     s.srgb = s.description.find("sRGB") != std::string::npos;
   }
   return s;
+}
+
+std::array<double, 9> icc_colorants_to_rec709(const IccSummary& profile, const char* source) {
+  if (!profile.has_colorants) throw InputError(fmt::format("{}: an ICC profile without colorants", source));
+  auto xy = [&](const std::array<double, 3>& xyz) {
+    const double sum = xyz[0] + xyz[1] + xyz[2];
+    if (!(std::fabs(sum) > 1e-9)) throw InputError(fmt::format("{}: an ICC colorant of zero", source));
+    return std::array<double, 2>{xyz[0] / sum, xyz[1] / sum};
+  };
+  const auto& c = profile.colorants;
+  const std::array<double, 3> white{c[0][0] + c[1][0] + c[2][0], c[0][1] + c[1][1] + c[2][1], c[0][2] + c[1][2] + c[2][2]};
+  return to_rec709_matrix(Chromaticities{xy(c[0]), xy(c[1]), xy(c[2]), xy(white)}, source);
 }
 
 }  // namespace lp

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace lp {
 
@@ -17,6 +18,9 @@ struct Chromaticities {
 };
 
 inline constexpr Chromaticities kRec709{};
+
+// rgb = M rgb for every pixel of an interleaved RGB buffer (M row-major, in double).
+void apply_colour_matrix(std::vector<float>& rgb, const std::array<double, 9>& m);
 
 // Whether two sets agree to `tolerance` in every coordinate.
 bool same_chromaticities(const Chromaticities& a, const Chromaticities& b, double tolerance = 1e-4);
@@ -37,7 +41,12 @@ struct IccSummary {
   std::string description;  // ASCII of the 'desc' tag (v2 text or v4 mluc); empty when none
   bool srgb = false;
   bool has_colorants = false;
+  std::array<std::array<double, 3>, 3> colorants{};  // rXYZ, gXYZ, bXYZ (D50), when has_colorants
 };
 std::optional<IccSummary> summarize_icc_profile(std::string_view icc);
+
+// Row-major M with rgb_709 = M rgb_linear for a matrix profile's colorants: their
+// chromaticities, the white their sum (D50, as ICC stores it), through to_rec709_matrix.
+std::array<double, 9> icc_colorants_to_rec709(const IccSummary& profile, const char* source);
 
 }  // namespace lp

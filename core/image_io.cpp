@@ -331,12 +331,7 @@ void convert_to_rec709(const std::string& path, std::vector<float>& rgb, const C
   double off = 0;
   for (int i = 0; i < 9; ++i) off = std::max(off, std::fabs(m[size_t(i)] - (i % 4 == 0 ? 1.0 : 0.0)));
   if (off <= 1e-3) return;
-  for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
-    const double r = rgb[i], g = rgb[i + 1], b = rgb[i + 2];
-    rgb[i] = float(m[0] * r + m[1] * g + m[2] * b);
-    rgb[i + 1] = float(m[3] * r + m[4] * g + m[5] * b);
-    rgb[i + 2] = float(m[6] * r + m[7] * g + m[8] * b);
-  }
+  apply_colour_matrix(rgb, m);
 }
 
 // A pixel whose alpha is below 0.5 holds no data: masked as invalid, never read as black

@@ -112,10 +112,6 @@ std::optional<double> read_exif_exposure_seconds(const std::string& path) {
 
 namespace {
 
-// The codes of a camera file are taken as sRGB. Where the file's embedded ICC profile says
-// otherwise (Display P3 or Apple's wide-colour LUT profile from an iPhone, Adobe RGB or
-// ProPhoto from a raw converter) the fused colours are off, so say so, once per profile and
-// process. Converting is not built: the common iPhone profile is a LUT one (A2B tags).
 // Whether a camera file may carry an ICC profile, from its first 256 KB, without Exiv2 (whose
 // load costs every bracket ~5 ms): a JPEG's APP2 "ICC_PROFILE" segments and a PNG's iCCP
 // chunk come before the pixels; a TIFF may hold one anywhere.
@@ -128,21 +124,30 @@ bool may_have_icc_profile(const std::string& path) {
   return head.find("ICC_PROFILE") != std::string::npos || head.find("iCCP") != std::string::npos;
 }
 
-void warn_of_colour_profile(const std::string& path) {
-  if (!has_warning_sink() || !may_have_icc_profile(path)) return;
+// Camera codes are sRGB unless the first file's ICC profile says otherwise. A matrix profile
+// is applied (Bracket::to_rec709); a LUT profile (Apple's wide-colour one in iPhone photos) is
+// not, and that is said in one warning, once per profile and process.
+void read_colour_profile(const std::string& path, Bracket& b) {
+  if (!may_have_icc_profile(path)) return;
   const std::string icc = detail::camera_files_plugin().icc_profile(path);
   if (icc.empty()) return;
   const auto summary = summarize_icc_profile(icc);
   if (summary && summary->srgb) return;
-  const std::string name = summary ? summary->description : std::string("unreadable");
+  const std::string name = summary && !summary->description.empty() ? summary->description
+                           : summary                                ? "no description"
+                                                                    : "unreadable";
+  if (summary && summary->has_colorants) {
+    b.to_rec709 = icc_colorants_to_rec709(*summary, path.c_str());
+    b.colour_profile = name;
+    return;
+  }
   static std::mutex mutex;
   static std::set<std::string> warned;
   {
     std::lock_guard lock(mutex);
     if (!warned.insert(name).second) return;
   }
-  warn(fmt::format("{}: its ICC profile ('{}') is not applied: its colours are taken as sRGB", path,
-                   name.empty() ? "no description" : name));
+  warn(fmt::format("{}: its ICC profile ('{}') is not applied: its colours are taken as sRGB", path, name));
 }
 
 }  // namespace
@@ -196,7 +201,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     }
   }
   check_bracket(b);
-  if (!b.linear) warn_of_colour_profile(paths[0]);  // after the checks: a refused bracket says one line
+  if (!b.linear) read_colour_profile(paths[0], b);  // after the checks: a refused bracket says one line
   if (b.bit_depth == 8 && !b.linear) keep_8bit_codes(b);
   return b;
 }

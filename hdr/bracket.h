@@ -7,6 +7,7 @@
 // sorted by exposure.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -27,6 +28,12 @@ struct Bracket {
   // response then reads these instead of the floats (a quarter of the bytes) and gives the same
   // image bit for bit. Empty: the floats. Whoever changes frames (align_frames) must clear it.
   std::vector<std::vector<uint8_t>> codes;
+  // The frames' colours, when the first file's ICC profile is a matrix one other than sRGB
+  // (Adobe RGB, Display P3, ProPhoto from a raw converter): row-major, linear values in it to
+  // Rec. 709, for whoever makes radiance of them (hdr fuse). Empty: sRGB, no profile, or a
+  // profile that cannot be applied (a LUT one, warned about).
+  std::optional<std::array<double, 9>> to_rec709;
+  std::string colour_profile;  // that profile's description
 
   int width() const { return frames.empty() ? 0 : frames[0].width; }
   int height() const { return frames.empty() ? 0 : frames[0].height; }

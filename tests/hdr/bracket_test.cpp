@@ -10,9 +10,11 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "core/chromaticities.h"
 #include "core/error.h"
 #include "core/warnings.h"
 #include "hdr/merge.h"
+#include "tests/core/icc_blob.h"
 #include "tests/hdr/synthetic_bracket.h"
 
 namespace lp {
@@ -113,6 +115,39 @@ TEST(ReadBracket, AnIccProfileThatIsNotSrgbIsWarnedAboutOnce) {
   read_bracket({m + "memorial0066.png", m + "memorial0068.png"}, std::vector<double>{0.125, 0.03125});
   EXPECT_TRUE(warnings.empty());
   set_warning_sink(before);
+}
+
+// A bracket whose JPEGs carry a matrix ICC profile other than sRGB (Display P3, as in an
+// APP2 ICC_PROFILE segment) gets the matrix to Rec. 709 for hdr fuse to apply, and no warning;
+// its white (the colorants' sum, D50) stays white.
+TEST(ReadBracket, AMatrixIccProfileIsAppliedNotWarnedAbout) {
+  TempDir tmp;
+  const std::string icc = icc_blob("Display P3", &kP3Colorants);
+  auto with_icc = [&](const std::string& name) {
+    const std::string plain = tmp.png(name + ".plain.jpg", 8, 6);
+    std::ifstream in(plain, std::ios::binary);
+    const std::string jpeg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string app2 = std::string("ICC_PROFILE\0", 12) + char(1) + char(1) + icc;
+    const size_t length = app2.size() + 2;
+    const std::string path = (tmp.path / name).string();
+    std::ofstream(path, std::ios::binary) << jpeg.substr(0, 2) << char(0xFF) << char(0xE2) << char(length >> 8)
+                                          << char(length & 0xff) << app2 << jpeg.substr(2);
+    return path;
+  };
+  std::vector<std::string> warnings;
+  const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const Bracket b = read_bracket({with_icc("a.jpg"), with_icc("b.jpg")}, std::vector<double>{0.5, 0.125});
+  set_warning_sink(before);
+  EXPECT_TRUE(warnings.empty()) << warnings[0];
+  ASSERT_TRUE(b.to_rec709.has_value());
+  EXPECT_EQ(b.colour_profile, "Display P3");
+  const auto expected = icc_colorants_to_rec709(*summarize_icc_profile(icc), "test");
+  for (int i = 0; i < 9; ++i) EXPECT_DOUBLE_EQ((*b.to_rec709)[size_t(i)], expected[size_t(i)]);
+  const auto& m = *b.to_rec709;
+  for (int r = 0; r < 3; ++r) EXPECT_NEAR(m[size_t(3 * r)] + m[size_t(3 * r + 1)] + m[size_t(3 * r + 2)], 1.0, 2e-4);
+  // P3's red is more saturated than Rec. 709's: out of its gamut, with negative green and blue.
+  EXPECT_GT(m[0], 1.1);
+  EXPECT_LT(m[3], 0.0);
 }
 
 TEST(ReadExposureList, ReadsTheSharedCsvsDebevecsListAndPlainLines) {

@@ -296,20 +296,32 @@ DfgTable compute_dfg_table(int size, int samples) {
   DfgTable t;
   t.size = size;
   t.ab.assign(size_t(size) * size_t(size) * 2, 0.0f);
+  // The samples' half vectors depend on the row's roughness only, their azimuths on nothing:
+  // computed once a row (as ggx_half_vector does) instead of once an entry. The sin, cos and
+  // pow of every sample of every entry were 7.4 s of `prefilter --lut` (128 x 128 entries,
+  // 16384 samples) on two cores; (1 - v.h)^5 is multiplied out.
+  // (v has no y, so the half vectors' y, sin phi, is never needed.)
+  std::vector<double> cos_phi(static_cast<size_t>(samples));
+  for (int i = 0; i < samples; ++i) cos_phi[size_t(i)] = std::cos(2 * kPi * radical_inverse(uint64_t(i), 2));
   tbb::parallel_for(0, size, [&](int row) {
     const double roughness = (row + 0.5) / size, alpha = roughness * roughness;
+    std::vector<double> hx(static_cast<size_t>(samples)), hz(static_cast<size_t>(samples));
+    for (int i = 0; i < samples; ++i) {
+      const double u1 = (i + 0.5) / samples;
+      const double cos_t = std::sqrt((1 - u1) / (1 + (alpha * alpha - 1) * u1));
+      const double sin_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t));
+      hx[size_t(i)] = sin_t * cos_phi[size_t(i)], hz[size_t(i)] = cos_t;
+    }
     for (int col = 0; col < size; ++col) {
-      const double n_dot_v = (col + 0.5) / size;
-      const Vec3 v{std::sqrt(1 - n_dot_v * n_dot_v), 0, n_dot_v};
+      const double n_dot_v = (col + 0.5) / size, v_x = std::sqrt(1 - n_dot_v * n_dot_v);
       double a = 0, b = 0;
-      for (int i = 0; i < samples; ++i) {
-        const Vec3 h = ggx_half_vector((i + 0.5) / samples, radical_inverse(uint64_t(i), 2), alpha);
-        const double v_dot_h = dot(v, h);
-        const Vec3 l = 2 * v_dot_h * h - v;
-        if (l.z <= 0 || v_dot_h <= 0) continue;
+      for (size_t i = 0; i < size_t(samples); ++i) {
+        const double v_dot_h = v_x * hx[i] + n_dot_v * hz[i];  // v = (v_x, 0, n.v)
+        const double l_z = 2 * v_dot_h * hz[i] - n_dot_v;      // l = 2 (v.h) h - v
+        if (l_z <= 0 || v_dot_h <= 0) continue;
         // f n.l / pdf with pdf = D n.h / (4 v.h): the D cancels.
-        const double w = 4 * smith_ggx_visibility(n_dot_v, l.z, alpha) * l.z * v_dot_h / h.z;
-        const double fc = std::pow(1 - v_dot_h, 5);
+        const double w = 4 * smith_ggx_visibility(n_dot_v, l_z, alpha) * l_z * v_dot_h / hz[i];
+        const double x = 1 - v_dot_h, x2 = x * x, fc = x2 * x2 * x;
         a += (1 - fc) * w;
         b += fc * w;
       }

@@ -60,6 +60,20 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
     EXPECT_FALSE(loaded(r, heavy)) << heavy << " is loaded by `lightprobe --version`";
 }
 
+// A PNG is written with libpng in-process: a preview or an overlay does not load OpenCV's
+// codecs plugin (265 libraries, ~0.35 s). A JPEG still goes through it.
+TEST(Startup, WritingAPngLoadsNoCodecPlugin) {
+  const std::string map = shared("probes-blender-studiolights") + "/studio.exr";
+  const fs::path png = scratch() / "preview.png", jpg = scratch() / "preview.jpg";
+  const CliRun r = traced("preview " + map + " -o " + png.string());
+  ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+  EXPECT_FALSE(loaded(r, "libopencv_imgcodecs"));
+  EXPECT_GT(fs::file_size(png), 100000u);
+  const CliRun j = traced("preview " + map + " -o " + jpg.string());
+  ASSERT_EQ(j.code, 0);
+  EXPECT_TRUE(loaded(j, "libopencv_imgcodecs"));
+}
+
 TEST(Startup, ReadingACameraImageLoadsThePluginAndDecodes) {
   const std::string dir = shared("hdr-memorial-debevec") + "/";
   const fs::path out = scratch() / "fused.exr";

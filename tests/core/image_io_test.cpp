@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/picture_io.h"
 #include "core/chromaticities.h"
 #include "core/envmap.h"
 #include "core/warnings.h"
@@ -840,6 +841,27 @@ TEST(ImageIo, FilesInOtherPrimariesAreConvertedToRec709) {
   EXPECT_EQ(read_envmap(dir + "pd50.hdr").rgb, read_envmap(dir + "plain.hdr").rgb);
   write_bytes(dir + "bad.hdr", bytes.substr(0, bytes.find(marker)) + "PRIMARIES= 0.64 0.33\n" + bytes.substr(bytes.find(marker)));
   expect_input_error([&] { read_envmap(dir + "bad.hdr"); }, {dir + "bad.hdr", "bad PRIMARIES value"});
+}
+
+// PNGs are written by libpng in-process (core/picture_io.cpp) and read by OpenCV's decoder,
+// a peer: every 8- and 16-bit code comes back exactly, channels in order (16-bit PNG is big
+// endian, OpenCV is BGR: either mix-up fails here).
+TEST(ImageIo, PngCodeImagesRoundTripThroughAnotherDecoderExactly) {
+  const std::string dir = temp_dir();
+  for (const int depth : {8, 16}) {
+    RgbImage img;
+    img.width = 37, img.height = 5;
+    const double max = depth == 8 ? 255.0 : 65535.0;
+    for (int i = 0; i < 3 * 37 * 5; ++i) img.rgb.push_back(float(((i * 7919) % int(max + 1)) / max));
+    const std::string path = dir + "codes" + std::to_string(depth) + ".png";
+    write_code_image(path, img, depth);
+    const CameraImage back = read_camera_image(path);
+    ASSERT_EQ(back.bit_depth, depth);
+    ASSERT_EQ(back.width, 37);
+    ASSERT_EQ(back.height, 5);
+    for (size_t i = 0; i < img.rgb.size(); ++i)
+      ASSERT_EQ(std::lround(back.rgb[i] * max), std::lround(img.rgb[i] * max)) << depth << " bit, value " << i;
+  }
 }
 
 TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {

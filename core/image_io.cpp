@@ -1,6 +1,9 @@
 #include "core/image_io.h"
 
 #include <png.h>
+// libjpeg needs FILE and size_t declared first
+#include <cstdio>
+#include <jpeglib.h>
 
 #include <ImfChannelList.h>
 #include <ImfCompression.h>
@@ -1097,6 +1100,71 @@ CameraImage decode_png_image(const std::string& path, const std::string& bytes) 
   return out;
 }
 
+// JPEGs likewise by libjpeg-turbo in-process, as OpenCV's decoder does with the same library
+// (IMREAD_UNCHANGED: no EXIF rotation; grey stays one channel): the common ones, 8-bit grey
+// or YCbCr. CMYK, YCCK and 12-bit files are left to the plugin (nullopt). libjpeg reports
+// fatal errors through error_exit, here a longjmp out of the decode.
+struct JpegError {
+  jpeg_error_mgr mgr;
+  std::jmp_buf jump;
+};
+
+void jpeg_error_exit(j_common_ptr cinfo) { std::longjmp(reinterpret_cast<JpegError*>(cinfo->err)->jump, 1); }
+void jpeg_quiet(j_common_ptr, int) {}  // corrupt-data warnings: decoded on, as OpenCV does
+
+// 0: decoded into `pixels` (width * height * 3 bytes, `channels` 1 or 3); 1: damaged;
+// 2: a kind left to the plugin.
+int decode_jpeg_rows(const std::string& bytes, uint32_t width, uint32_t height, uint8_t* pixels, int* channels) {
+  jpeg_decompress_struct cinfo;
+  JpegError err;
+  cinfo.err = jpeg_std_error(&err.mgr);
+  err.mgr.error_exit = jpeg_error_exit;
+  err.mgr.emit_message = jpeg_quiet;
+  if (setjmp(err.jump)) {
+    jpeg_destroy_decompress(&cinfo);
+    return 1;
+  }
+  jpeg_create_decompress(&cinfo);
+  jpeg_mem_src(&cinfo, reinterpret_cast<const unsigned char*>(bytes.data()), static_cast<unsigned long>(bytes.size()));
+  jpeg_read_header(&cinfo, TRUE);
+  const bool grey = cinfo.jpeg_color_space == JCS_GRAYSCALE && cinfo.num_components == 1;
+  const bool colour = cinfo.jpeg_color_space == JCS_YCbCr || cinfo.jpeg_color_space == JCS_RGB;
+  if ((!grey && !colour) || cinfo.data_precision != 8 || cinfo.image_width != width || cinfo.image_height != height) {
+    jpeg_destroy_decompress(&cinfo);
+    return 2;
+  }
+  cinfo.out_color_space = grey ? JCS_GRAYSCALE : JCS_RGB;
+  jpeg_start_decompress(&cinfo);
+  *channels = cinfo.output_components;
+  const size_t stride = size_t(width) * size_t(*channels);
+  while (cinfo.output_scanline < cinfo.output_height) {
+    JSAMPROW row = pixels + size_t(cinfo.output_scanline) * stride;
+    jpeg_read_scanlines(&cinfo, &row, 1);
+  }
+  jpeg_finish_decompress(&cinfo);
+  jpeg_destroy_decompress(&cinfo);
+  return 0;
+}
+
+std::optional<CameraImage> decode_jpeg_image(const std::string& path, const std::string& bytes) {
+  const auto header = read_image_header(path, bytes);
+  const uint32_t width = uint32_t(header->width), height = uint32_t(header->height);
+  std::vector<uint8_t> pixels(size_t(width) * size_t(height) * 3);
+  int channels = 0;
+  const int result = decode_jpeg_rows(bytes, width, height, pixels.data(), &channels);
+  if (result == 2) return std::nullopt;
+  if (result == 1 || (channels != 1 && channels != 3)) fail(path, "cannot decode image (damaged file)");
+  CameraImage out;
+  out.width = int(width);
+  out.height = int(height);
+  out.bit_depth = 8;
+  const size_t n = size_t(width) * size_t(height);
+  out.rgb.resize(3 * n);
+  for (size_t i = 0; i < n; ++i)
+    for (size_t c = 0; c < 3; ++c) out.rgb[3 * i + c] = float(pixels[channels == 1 ? i : 3 * i + c]) * (1.0f / 255.0f);
+  return out;
+}
+
 }  // namespace
 
 CameraImage read_camera_image(const std::string& path) {
@@ -1114,6 +1182,8 @@ CameraImage read_camera_image(const std::string& path) {
                              header->min_file_bytes));
     if (bytes.size() > size_t(std::numeric_limits<int>::max())) fail(path, "file over 2 GiB: not a camera image");
     if (header->format == ImageFormat::Png) return decode_png_image(path, bytes);
+    if (header->format == ImageFormat::Jpeg)
+      if (auto decoded = decode_jpeg_image(path, bytes)) return std::move(*decoded);
     const cv::Mat img = lazy::decode_image(bytes);
     if (img.empty()) fail(path, "cannot decode image (damaged file)");
     const int depth = img.depth();

@@ -13,9 +13,9 @@ packages=(
   # zlib (the .npz inside a .cameramodel); mrcal's command-line tools, which a consumer test
   # runs on the models calib geometric writes (ctest consumers.mrcal)
   zlib1g-dev mrcal
-  # libpng: previews, overlays and code images written without loading OpenCV's codecs plugin
-  # (core/picture_io.cpp)
-  libpng-dev
+  # libpng and libjpeg-turbo: PNG and JPEG camera images read (PNG also written) without
+  # loading OpenCV's codecs plugin (core/image_io.cpp, core/picture_io.cpp)
+  libpng-dev libjpeg62-turbo-dev
   # Google Highway: the vector kernels of the merge and the unwrap (hdr/merge_kernel.cpp,
   # probe/remap_kernel.cpp), compiled for SSE4/AVX2/AVX-512 and chosen at run time, so that
   # one portable binary runs them at the speed of the CPU it finds

@@ -1,6 +1,7 @@
 #include "core/image_io.h"
 
 #include <png.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -19,6 +20,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/error.h"
@@ -930,6 +932,40 @@ TEST(ImageIo, PngsReadAndWriteAsOpenCvsCodecsDo) {
   const std::string cut = files[3].second.substr(0, files[3].second.size() - 40);
   write_bytes(dir + "cut.png", cut);
   expect_input_error([&] { read_camera_image(dir + "cut.png"); }, {dir + "cut.png"});
+}
+
+// JPEGs are decoded by libjpeg-turbo in-process too: the same pixels as OpenCV's decoder
+// gives (IMREAD_UNCHANGED) on files OpenCV encodes (colour, grey, progressive) and on real
+// camera files of the shared sets (an iPhone photo, calibration shots). CMYK is left to it.
+TEST(ImageIo, JpegsReadAsOpenCvsDecoderReadsThem) {
+  const std::string dir = temp_dir();
+  std::vector<std::pair<std::string, std::string>> files;
+  cv::Mat colour(48, 64, CV_8UC3), grey(31, 17, CV_8UC1);
+  cv::randu(colour, 0, 256);
+  cv::randu(grey, 0, 256);
+  for (const auto& [name, mat, params] :
+       std::vector<std::tuple<std::string, cv::Mat, std::vector<int>>>{
+           {"colour.jpg", colour, {}},
+           {"grey.jpg", grey, {}},
+           {"progressive.jpg", colour, {cv::IMWRITE_JPEG_PROGRESSIVE, 1}},
+           {"q100.jpg", colour, {cv::IMWRITE_JPEG_QUALITY, 100}}}) {
+    std::vector<uint8_t> bytes;
+    ASSERT_TRUE(lazy::encode_image(".jpg", mat, params, bytes));
+    files.push_back({name, std::string(bytes.begin(), bytes.end())});
+  }
+  for (const std::string real : {"/hdr-mirrorball-kartik/ball_1-40s.jpg", "/calib-opencv-stereo-9x6/left01.jpg",
+                                 "/calib-ocamcalib-fisheye1/Fisheye1_1.jpg"})
+    if (fs::exists(kData + real)) files.push_back({fs::path(real).filename().string(), read_bytes(kData + real)});
+  ASSERT_GE(files.size(), 5u);
+  for (const auto& [name, bytes] : files) {
+    SCOPED_TRACE(name);
+    write_bytes(dir + name, bytes);
+    const CameraImage ours = read_camera_image(dir + name), peer = camera_image_by_opencv(bytes);
+    EXPECT_EQ(ours.bit_depth, 8);
+    EXPECT_EQ(ours.width, peer.width);
+    EXPECT_EQ(ours.height, peer.height);
+    EXPECT_TRUE(ours.rgb == peer.rgb);
+  }
 }
 
 TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {

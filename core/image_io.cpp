@@ -134,6 +134,8 @@ struct RawImage {
   std::optional<std::string> units;
   std::optional<int> nside;
   std::string layout_key = "layout";  // how the file names the field, for messages
+  // Said once the file is accepted (finish_map), so that a file refused after all says one line.
+  std::vector<std::string> warnings;
 };
 
 Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMapOptions& options) {
@@ -231,6 +233,7 @@ EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions&
     const std::string bad = find_bad_pixel(map, path);
     if (!bad.empty()) accept_slight_negatives(path, map, bad);
   }
+  for (const std::string& line : raw.warnings) warn(line);
   return map;
 }
 
@@ -354,12 +357,12 @@ void alpha_to_mask(const std::string& path, RawImage& raw, const std::vector<flo
   }
   if (transparent == 0) return;
   if (transparent == alpha.size()) {
-    warn(fmt::format("{}: its alpha channel is 0 everywhere: ignored", path));
+    raw.warnings.push_back(fmt::format("{}: its alpha channel is 0 everywhere: ignored", path));
     return;
   }
   raw.valid.resize(alpha.size());
   for (size_t i = 0; i < alpha.size(); ++i) raw.valid[i] = alpha[i] > 0.5f ? 1 : 0;
-  warn(fmt::format("{}: {} pixels ({:.3g} %) have alpha below 0.5: read as no data (masked), not as black", path,
+  raw.warnings.push_back(fmt::format("{}: {} pixels ({:.3g} %) have alpha below 0.5: read as no data (masked), not as black", path,
                    transparent, 100.0 * double(transparent) / double(alpha.size())));
 }
 
@@ -1068,9 +1071,33 @@ bool decode_png_rows(PngSource* src, uint32_t width, uint32_t height, png_bytep*
   return true;
 }
 
-CameraImage decode_png_image(const std::string& path, const std::string& bytes) {
-  const auto header = read_image_header(path, bytes);
-  const uint32_t width = uint32_t(header->width), height = uint32_t(header->height);
+// Decoded samples (8-bit, or 16-bit in host order; `channels` 1, 3 or 4, in RGB(A) order or
+// BGR(A) when `bgr`; rows `stride` bytes apart) as a CameraImage: codes / (2^depth - 1), grey
+// repeated, alpha dropped. One conversion for libpng's, libjpeg's and OpenCV's pixels.
+CameraImage camera_image_from_samples(int width, int height, int depth, int channels, bool bgr, const uint8_t* data,
+                                      size_t stride) {
+  CameraImage out;
+  out.width = width;
+  out.height = height;
+  out.bit_depth = depth;
+  const float s = depth == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
+  out.rgb.resize(3 * size_t(width) * size_t(height));
+  for (size_t y = 0; y < size_t(height); ++y) {
+    const uint8_t* row = data + y * stride;
+    float* o = &out.rgb[3 * y * size_t(width)];
+    for (size_t x = 0; x < size_t(width); ++x)
+      for (size_t c = 0; c < 3; ++c) {
+        const size_t k = size_t(channels) * x + (channels == 1 ? 0 : bgr ? 2 - c : c);
+        uint16_t v = 0;
+        if (depth == 8) v = row[k];
+        else std::memcpy(&v, &row[2 * k], 2);
+        o[3 * x + c] = float(v) * s;
+      }
+  }
+  return out;
+}
+
+CameraImage decode_png_image(const std::string& path, const std::string& bytes, uint32_t width, uint32_t height) {
   const size_t stride = size_t(width) * 6;
   std::vector<uint8_t> pixels(stride * size_t(height));
   std::vector<png_bytep> rows(static_cast<size_t>(height));
@@ -1079,25 +1106,7 @@ CameraImage decode_png_image(const std::string& path, const std::string& bytes) 
   int channels = 0, depth = 0;
   if (!decode_png_rows(&src, width, height, rows.data(), &channels, &depth))
     fail(path, "cannot decode image (damaged file)");
-  CameraImage out;
-  out.width = int(width);
-  out.height = int(height);
-  out.bit_depth = depth;
-  const float s = depth == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
-  out.rgb.resize(3 * size_t(width) * size_t(height));
-  for (uint32_t y = 0; y < height; ++y) {
-    const uint8_t* row = rows[y];
-    float* o = &out.rgb[3 * size_t(y) * size_t(width)];
-    for (size_t x = 0; x < width; ++x)
-      for (int c = 0; c < 3; ++c) {
-        const size_t k = size_t(channels) * x + size_t(channels == 1 ? 0 : c);
-        uint16_t v = 0;
-        if (depth == 8) v = row[k];
-        else std::memcpy(&v, &row[2 * k], 2);
-        o[3 * x + size_t(c)] = float(v) * s;
-      }
-  }
-  return out;
+  return camera_image_from_samples(int(width), int(height), depth, channels, false, pixels.data(), stride);
 }
 
 // JPEGs likewise by libjpeg-turbo in-process, as OpenCV's decoder does with the same library
@@ -1146,23 +1155,15 @@ int decode_jpeg_rows(const std::string& bytes, uint32_t width, uint32_t height, 
   return 0;
 }
 
-std::optional<CameraImage> decode_jpeg_image(const std::string& path, const std::string& bytes) {
-  const auto header = read_image_header(path, bytes);
-  const uint32_t width = uint32_t(header->width), height = uint32_t(header->height);
+std::optional<CameraImage> decode_jpeg_image(const std::string& path, const std::string& bytes, uint32_t width,
+                                             uint32_t height) {
   std::vector<uint8_t> pixels(size_t(width) * size_t(height) * 3);
   int channels = 0;
   const int result = decode_jpeg_rows(bytes, width, height, pixels.data(), &channels);
   if (result == 2) return std::nullopt;
   if (result == 1 || (channels != 1 && channels != 3)) fail(path, "cannot decode image (damaged file)");
-  CameraImage out;
-  out.width = int(width);
-  out.height = int(height);
-  out.bit_depth = 8;
-  const size_t n = size_t(width) * size_t(height);
-  out.rgb.resize(3 * n);
-  for (size_t i = 0; i < n; ++i)
-    for (size_t c = 0; c < 3; ++c) out.rgb[3 * i + c] = float(pixels[channels == 1 ? i : 3 * i + c]) * (1.0f / 255.0f);
-  return out;
+  return camera_image_from_samples(int(width), int(height), 8, channels, false, pixels.data(),
+                                   size_t(width) * size_t(channels));
 }
 
 }  // namespace
@@ -1181,9 +1182,10 @@ CameraImage read_camera_image(const std::string& path) {
                              bytes.size(), header->width, header->height, to_string(header->format),
                              header->min_file_bytes));
     if (bytes.size() > size_t(std::numeric_limits<int>::max())) fail(path, "file over 2 GiB: not a camera image");
-    if (header->format == ImageFormat::Png) return decode_png_image(path, bytes);
+    const uint32_t width = uint32_t(header->width), height = uint32_t(header->height);
+    if (header->format == ImageFormat::Png) return decode_png_image(path, bytes, width, height);
     if (header->format == ImageFormat::Jpeg)
-      if (auto decoded = decode_jpeg_image(path, bytes)) return std::move(*decoded);
+      if (auto decoded = decode_jpeg_image(path, bytes, width, height)) return std::move(*decoded);
     const cv::Mat img = lazy::decode_image(bytes);
     if (img.empty()) fail(path, "cannot decode image (damaged file)");
     const int depth = img.depth();
@@ -1191,28 +1193,8 @@ CameraImage read_camera_image(const std::string& path) {
       fail(path, "unsupported sample type (camera images must be 8- or 16-bit)");
     const int ch = img.channels();
     if (ch != 1 && ch != 3 && ch != 4) fail(path, fmt::format("unsupported channel count {}", ch));
-    CameraImage out;
-    out.width = img.cols;
-    out.height = img.rows;
-    out.bit_depth = depth == CV_8U ? 8 : 16;
-    const float s = depth == CV_8U ? 1.0f / 255.0f : 1.0f / 65535.0f;
-    out.rgb.resize(3 * size_t(img.cols) * size_t(img.rows));
-    for (int y = 0; y < img.rows; ++y) {
-      for (int x = 0; x < img.cols; ++x) {
-        float* o = &out.rgb[3 * (size_t(y) * size_t(img.cols) + size_t(x))];
-        float v[4];
-        for (int c = 0; c < ch; ++c)
-          v[c] = depth == CV_8U ? float(img.ptr<uint8_t>(y)[x * ch + c]) : float(img.ptr<uint16_t>(y)[x * ch + c]);
-        if (ch == 1) {
-          o[0] = o[1] = o[2] = v[0] * s;
-        } else {  // BGR(A) -> RGB
-          o[0] = v[2] * s;
-          o[1] = v[1] * s;
-          o[2] = v[0] * s;
-        }
-      }
-    }
-    return out;
+    return camera_image_from_samples(img.cols, img.rows, depth == CV_8U ? 8 : 16, ch, true, img.ptr<uint8_t>(0),
+                                     img.step[0]);
   });
 }
 

@@ -1,7 +1,9 @@
 // Warnings from library code, one line each, to whoever the program installed: the CLI
-// prints "lightprobe: warning: ..." on stderr. Library code prints nothing itself, and where
-// no sink is installed, code that would warn and go on refuses instead (read_envmap's slight
-// negatives), so that no input is changed without someone being told.
+// prints "lightprobe: warning: ..." on stderr. Library code prints nothing itself. Where no
+// sink is installed, code that would change an input's values and go on refuses instead
+// (read_envmap's slight negatives), so that no value is changed without someone being told;
+// notices that change no value (transparent pixels read as a mask, a colour profile not
+// applied) are then simply not heard.
 #pragma once
 
 #include <functional>

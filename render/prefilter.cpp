@@ -297,7 +297,7 @@ DfgTable compute_dfg_table(int size, int samples) {
   t.size = size;
   t.ab.assign(size_t(size) * size_t(size) * 2, 0.0f);
   // The samples' half vectors depend on the row's roughness only, their azimuths on nothing:
-  // computed once a row (as ggx_half_vector does) instead of once an entry. The sin, cos and
+  // computed once a row instead of once an entry. The sin, cos and
   // pow of every sample of every entry were 7.4 s of `prefilter --lut` (128 x 128 entries,
   // 16384 samples) on two cores; (1 - v.h)^5 is multiplied out.
   // (v has no y, so the half vectors' y, sin phi, is never needed.)
@@ -307,10 +307,8 @@ DfgTable compute_dfg_table(int size, int samples) {
     const double roughness = (row + 0.5) / size, alpha = roughness * roughness;
     std::vector<double> hx(static_cast<size_t>(samples)), hz(static_cast<size_t>(samples));
     for (int i = 0; i < samples; ++i) {
-      const double u1 = (i + 0.5) / samples;
-      const double cos_t = std::sqrt((1 - u1) / (1 + (alpha * alpha - 1) * u1));
-      const double sin_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t));
-      hx[size_t(i)] = sin_t * cos_phi[size_t(i)], hz[size_t(i)] = cos_t;
+      const Vec3 h = ggx_half_vector((i + 0.5) / samples, 0.0, alpha);  // phi = 0: (sin t, 0, cos t)
+      hx[size_t(i)] = h.x * cos_phi[size_t(i)], hz[size_t(i)] = h.z;
     }
     for (int col = 0; col < size; ++col) {
       const double n_dot_v = (col + 0.5) / size, v_x = std::sqrt(1 - n_dot_v * n_dot_v);

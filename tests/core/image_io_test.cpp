@@ -286,6 +286,14 @@ TEST(ImageIo, TransparentPixelsOfOtherToolsMapsAreMaskedNotBlack) {
   EXPECT_TRUE(read_envmap(dir + "zero.exr").valid.empty());
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_EQ(warnings[0], dir + "zero.exr: its alpha channel is 0 everywhere: ignored");
+  // A file refused after all (no layout recorded, not a map's shape) says one line: no warning first.
+  warnings.clear();
+  write_bytes(dir + "odd.exr", handmade_exr(3, 3, {{"A", 1, [](int x, int) { return x < 2 ? 0x3c00u : 0u; }},
+                                                   {"B", 1, [](int, int) { return 0x3c00u; }},
+                                                   {"G", 1, [](int, int) { return 0x3c00u; }},
+                                                   {"R", 1, [](int, int) { return 0x3c00u; }}}));
+  expect_input_error([&] { read_envmap(dir + "odd.exr"); }, {dir + "odd.exr", "no layout recorded"});
+  EXPECT_TRUE(warnings.empty());
   set_warning_sink(before);
 }
 

@@ -492,7 +492,8 @@ BoardDetections detect_boards(const std::vector<std::string>& images, const Boar
     } else if (sizes[i][0] != out.width || sizes[i][1] != out.height) {
       throw InputError(images[i] + ": " + std::to_string(sizes[i][0]) + "x" + std::to_string(sizes[i][1]) +
                        " differs from the first image's " + std::to_string(out.width) + "x" +
-                       std::to_string(out.height) + " (one camera, one resolution)");
+                       std::to_string(out.height) + " (one camera, one resolution)" +
+                       turned_size_hint(sizes[i][0], sizes[i][1], out.width, out.height));
     }
     if (out.per_image[i].found) {
       out.corners[i] = out.per_image[i].corners;

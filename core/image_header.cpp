@@ -31,6 +31,26 @@ uint32_t be32(std::string_view b, size_t i) { return be16(b, i) << 16 | be16(b, 
 uint32_t le16(std::string_view b, size_t i) { return uint32_t(u8(b, i + 1)) << 8 | u8(b, i); }
 uint32_t le32(std::string_view b, size_t i) { return le16(b, i + 2) << 16 | le16(b, i); }
 
+// The Orientation (tag 274, SHORT) of a TIFF structure's first IFD (a TIFF file, or the
+// block after a JPEG APP1's "Exif\0\0"); 1 when absent, out of 1-8, or anything is out of
+// bounds. Never throws: a damaged EXIF block does not make the pixels unreadable.
+int tiff_orientation(std::string_view t) {
+  if (t.size() < 8) return 1;
+  const bool little = t.substr(0, 4) == std::string_view("II*\0", 4);
+  if (!little && t.substr(0, 4) != std::string_view("MM\0*", 4)) return 1;
+  auto r16 = [&](size_t i) { return little ? le16(t, i) : be16(t, i); };
+  const size_t ifd = little ? le32(t, 4) : be32(t, 4);
+  if (ifd < 8 || ifd > t.size() - 2) return 1;
+  const size_t entries = r16(ifd);
+  for (size_t k = 0; k < entries && ifd + 2 + 12 * (k + 1) <= t.size(); ++k) {
+    const size_t e = ifd + 2 + 12 * k;
+    if (r16(e) != 274) continue;
+    const uint32_t v = r16(e + 2) == 3 ? r16(e + 8) : 0;  // SHORT, its value in the entry
+    return v >= 1 && v <= 8 ? int(v) : 1;
+  }
+  return 1;
+}
+
 ImageHeader png_header(const std::string& path, std::string_view b) {
   if (b.size() < 33 || b.substr(12, 4) != "IHDR") fail(path, "PNG", "no IHDR chunk first");
   ImageHeader h{ImageFormat::Png, be32(b, 16), be32(b, 20)};
@@ -54,9 +74,11 @@ ImageHeader png_header(const std::string& path, std::string_view b) {
   return h;
 }
 
-// Markers, segment lengths and the first frame header (SOF0-SOF15 but DHT, JPG, DAC).
+// Markers, segment lengths and the first frame header (SOF0-SOF15 but DHT, JPG, DAC); the
+// orientation from the first APP1 "Exif" segment before it (where EXIF requires it).
 ImageHeader jpeg_header(const std::string& path, std::string_view b) {
   size_t i = 2;
+  int orientation = 0;  // 0: no Exif segment seen yet
   while (i + 3 < b.size()) {
     if (u8(b, i) != 0xFF) fail(path, "JPEG", fmt::format("no marker at byte {}", i));
     const uint8_t m = u8(b, i + 1);
@@ -72,12 +94,15 @@ ImageHeader jpeg_header(const std::string& path, std::string_view b) {
     const size_t length = be16(b, i + 2);
     if (length < 2) fail(path, "JPEG", fmt::format("segment length {} at byte {}", length, i));
     const bool frame = m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC;
+    if (m == 0xE1 && orientation == 0 && length >= 8 && b.substr(i + 4, 6) == std::string_view("Exif\0\0", 6))
+      orientation = tiff_orientation(b.substr(i + 10, length - 8));  // substr stops at the file's end
     if (frame) {
       if (length < 8 || i + 8 >= b.size()) fail(path, "JPEG", "frame header cut short");
       ImageHeader h{ImageFormat::Jpeg, be16(b, i + 7), be16(b, i + 5)};
       if (h.height == 0) fail(path, "JPEG", "height 0: a DNL-defined height is not supported");
       // Huffman-coded frames (SOF0-SOF3): at least one bit per full-resolution block.
       if (m <= 0xC3) h.min_file_bytes = uint64_t((h.width + 7) / 8) * uint64_t((h.height + 7) / 8) / 8;
+      h.orientation = orientation == 0 ? 1 : orientation;
       return h;
     }
     i += 2 + length;
@@ -103,7 +128,9 @@ ImageHeader tiff_header(const std::string& path, std::string_view b) {
     (tag == 256 ? width : height) = v;
   }
   if (width < 0 || height < 0) fail(path, "TIFF", "no ImageWidth or ImageLength in the first IFD");
-  return ImageHeader{ImageFormat::Tiff, width, height};
+  ImageHeader h{ImageFormat::Tiff, width, height};
+  h.orientation = tiff_orientation(b);
+  return h;
 }
 
 // P1-P6: magic, width, height (and maxval but for P1/P4), separated by white space and

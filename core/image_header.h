@@ -5,7 +5,7 @@
 //
 // Formats: PNG (IHDR), JPEG (the first SOFn frame header), TIFF (the first IFD's
 // ImageWidth and ImageLength; classic TIFF, not BigTIFF), binary and ASCII PNM (P1-P6)
-// and BMP.
+// and BMP. Also the EXIF Orientation a JPEG (APP1 "Exif") or a TIFF (its first IFD) states.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +26,11 @@ struct ImageHeader {
   // JPEG: every 8x8 block of the full-resolution component costs at least one bit;
   // binary PNM: every sample is stored. Arithmetic-coded JPEG, TIFF and BMP get none.
   uint64_t min_file_bytes = 0;
+  // EXIF Orientation (TIFF tag 274): how viewers turn the stored pixels for display, 1-8 as
+  // in the EXIF 2.3 specification (1 as stored, 6 rotated 90 degrees clockwise, ...). 1
+  // when the file states none, or a value outside 1-8 or in a damaged EXIF block (viewers
+  // then show the pixels as stored too). `width` and `height` are the stored size.
+  int orientation = 1;
 };
 
 // nullopt when `bytes` is none of the formats above. Throws InputError naming `path` when

@@ -1166,7 +1166,59 @@ std::optional<CameraImage> decode_jpeg_image(const std::string& path, const std:
                                    size_t(width) * size_t(channels));
 }
 
+// The stored pixels turned as EXIF `orientation` (1-8) tells viewers to show them: the
+// image a user sees, and what OpenCV's imread (without IMREAD_UNCHANGED) and LibRaw (RAW
+// brackets, hdr/raw_input.h) give. For displayed pixel (x, y) of the turned size, the stored
+// one it shows.
+CameraImage turned_for_display(CameraImage in, int orientation) {
+  if (orientation <= 1 || orientation > 8) return in;
+  const size_t w = size_t(in.width), h = size_t(in.height);
+  const bool swap = orientation >= 5;  // 5-8 exchange rows and columns
+  CameraImage out;
+  out.width = int(swap ? h : w), out.height = int(swap ? w : h), out.bit_depth = in.bit_depth;
+  out.rgb.resize(in.rgb.size());
+  const size_t ow = size_t(out.width), oh = size_t(out.height);
+  for (size_t y = 0; y < oh; ++y)
+    for (size_t x = 0; x < ow; ++x) {
+      size_t sx = x, sy = y;
+      switch (orientation) {
+        case 2: sx = w - 1 - x; break;                  // mirrored left to right
+        case 3: sx = w - 1 - x, sy = h - 1 - y; break;  // turned 180 degrees
+        case 4: sy = h - 1 - y; break;                  // mirrored top to bottom
+        case 5: sx = y, sy = x; break;                  // transposed
+        case 6: sx = y, sy = h - 1 - x; break;          // turned 90 degrees clockwise
+        case 7: sx = w - 1 - y, sy = h - 1 - x; break;  // transversed
+        case 8: sx = w - 1 - y, sy = x; break;          // turned 90 degrees counter-clockwise
+      }
+      const float* p = &in.rgb[3 * (sy * w + sx)];
+      float* q = &out.rgb[3 * (y * ow + x)];
+      q[0] = p[0], q[1] = p[1], q[2] = p[2];
+    }
+  return out;
+}
+
+CameraImage decode_camera_image(const std::string& path, const std::string& bytes, const ImageHeader& header) {
+  const uint32_t width = uint32_t(header.width), height = uint32_t(header.height);
+  if (header.format == ImageFormat::Png) return decode_png_image(path, bytes, width, height);
+  if (header.format == ImageFormat::Jpeg)
+    if (auto decoded = decode_jpeg_image(path, bytes, width, height)) return std::move(*decoded);
+  const cv::Mat img = lazy::decode_image(bytes);
+  if (img.empty()) fail(path, "cannot decode image (damaged file)");
+  const int depth = img.depth();
+  if (depth != CV_8U && depth != CV_16U) fail(path, "unsupported sample type (camera images must be 8- or 16-bit)");
+  const int ch = img.channels();
+  if (ch != 1 && ch != 3 && ch != 4) fail(path, fmt::format("unsupported channel count {}", ch));
+  return camera_image_from_samples(img.cols, img.rows, depth == CV_8U ? 8 : 16, ch, true, img.ptr<uint8_t>(0),
+                                   img.step[0]);
+}
+
 }  // namespace
+
+std::string turned_size_hint(int width, int height, int other_width, int other_height) {
+  if (width == height || width != other_height || height != other_width) return {};
+  return " (the same size turned 90 degrees: images are read as their EXIF Orientation shows them, and one set needs "
+         "one orientation)";
+}
 
 CameraImage read_camera_image(const std::string& path) {
   return guarded(path, "read", [&] {
@@ -1182,19 +1234,10 @@ CameraImage read_camera_image(const std::string& path) {
                              bytes.size(), header->width, header->height, to_string(header->format),
                              header->min_file_bytes));
     if (bytes.size() > size_t(std::numeric_limits<int>::max())) fail(path, "file over 2 GiB: not a camera image");
-    const uint32_t width = uint32_t(header->width), height = uint32_t(header->height);
-    if (header->format == ImageFormat::Png) return decode_png_image(path, bytes, width, height);
-    if (header->format == ImageFormat::Jpeg)
-      if (auto decoded = decode_jpeg_image(path, bytes, width, height)) return std::move(*decoded);
-    const cv::Mat img = lazy::decode_image(bytes);
-    if (img.empty()) fail(path, "cannot decode image (damaged file)");
-    const int depth = img.depth();
-    if (depth != CV_8U && depth != CV_16U)
-      fail(path, "unsupported sample type (camera images must be 8- or 16-bit)");
-    const int ch = img.channels();
-    if (ch != 1 && ch != 3 && ch != 4) fail(path, fmt::format("unsupported channel count {}", ch));
-    return camera_image_from_samples(img.cols, img.rows, depth == CV_8U ? 8 : 16, ch, true, img.ptr<uint8_t>(0),
-                                     img.step[0]);
+    // OpenCV's TIFF decoder turns TIFFs itself, even under IMREAD_UNCHANGED (8- and 16-bit,
+    // grey and RGB, measured with OpenCV 4.6); JPEGs come from every decoder as stored.
+    const int turn = header->format == ImageFormat::Tiff ? 1 : header->orientation;
+    return turned_for_display(decode_camera_image(path, bytes, *header), turn);
   });
 }
 

@@ -60,13 +60,20 @@ void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOpti
 std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options = {});
 
 // Camera images (8/16-bit PNG, JPEG, TIFF via OpenCV) as linear-in-code float RGB in
-// [0, 1] (no response curve applied), row-major, 3 floats per pixel.
+// [0, 1] (no response curve applied), row-major, 3 floats per pixel, turned as the file's
+// EXIF Orientation says (JPEG and TIFF): the picture as viewers, OpenCV's imread and LibRaw
+// show it, so that a phone held upright gives an upright mirror ball and `width` and
+// `height` are the turned size.
 struct CameraImage {
   int width = 0, height = 0;
   int bit_depth = 8;
   std::vector<float> rgb;
 };
 CameraImage read_camera_image(const std::string& path);
+// For a message about camera images of different sizes: when one is the other turned 90
+// degrees, " (...)" saying that images are read as their EXIF Orientation says and that one
+// set needs one orientation; else empty.
+std::string turned_size_hint(int width, int height, int other_width, int other_height);
 // Radiance images that are not maps yet (a fused bracket, a mirror-ball or fisheye photo):
 // float RGB, top row first, 3 floats per pixel, optional validity mask, units.
 struct RgbImage {

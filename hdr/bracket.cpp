@@ -78,11 +78,13 @@ void check_bracket(const Bracket& b) {
   for (size_t k = 0; k < b.frames.size(); ++k) {
     const RgbImage& f = b.frames[k];
     if (f.width != usual.width || f.height != usual.height)
-      throw InputError(common_count > 1
-                           ? fmt::format("{}: size {}x{} differs from the {}x{} of {} of the {} images", frame_name(b, k),
-                                         f.width, f.height, usual.width, usual.height, common_count, b.frames.size())
-                           : fmt::format("{}: size {}x{} differs from the first image's {}x{}", frame_name(b, k),
-                                         f.width, f.height, usual.width, usual.height));
+      throw InputError(
+          (common_count > 1
+               ? fmt::format("{}: size {}x{} differs from the {}x{} of {} of the {} images", frame_name(b, k), f.width,
+                             f.height, usual.width, usual.height, common_count, b.frames.size())
+               : fmt::format("{}: size {}x{} differs from the first image's {}x{}", frame_name(b, k), f.width,
+                             f.height, usual.width, usual.height)) +
+          turned_size_hint(f.width, f.height, usual.width, usual.height));
     if (f.width <= 0 || f.height <= 0 || f.rgb.size() != 3 * size_t(f.width) * size_t(f.height))
       throw InputError(fmt::format("{}: empty or malformed image", frame_name(b, k)));
     const double t = b.exposure_seconds[k];

@@ -976,6 +976,55 @@ TEST(ImageIo, JpegsReadAsOpenCvsDecoderReadsThem) {
   }
 }
 
+// A TIFF's own Orientation tag turns it as a JPEG's EXIF does: an uncompressed 3x2 RGB
+// TIFF with distinct pixels, shown in each of the eight orientations. Expected: where each
+// of the stored image's four corners is shown (the EXIF specification's table), and the
+// turned size. Without a tag, or with an invalid one (0, 9), the pixels are read as stored.
+TEST(ImageIo, TiffsAreTurnedAsTheirOrientationTagSays) {
+  const std::string dir = temp_dir();
+  auto tiff = [](int orientation) {
+    std::string t;
+    auto u16 = [&](uint32_t v) { t += char(v & 0xff), t += char(v >> 8); };
+    auto u32 = [&](uint32_t v) { u16(v & 0xffff), u16(v >> 16); };
+    const int entries = orientation < 0 ? 9 : 10;
+    const uint32_t bits = 8 + 2 + 12 * uint32_t(entries) + 4, strip = bits + 6;
+    t += "II", u16(42), u32(8), u16(uint32_t(entries));
+    auto entry = [&](uint32_t tag, uint32_t type, uint32_t count, uint32_t value) {
+      u16(tag), u16(type), u32(count);
+      type == 3 && count == 1 ? (u16(value), u16(0)) : u32(value);
+    };
+    entry(256, 3, 1, 3), entry(257, 3, 1, 2), entry(258, 3, 3, bits), entry(259, 3, 1, 1), entry(262, 3, 1, 2);
+    entry(273, 4, 1, strip);
+    if (orientation >= 0) entry(274, 3, 1, uint32_t(orientation));
+    entry(277, 3, 1, 3), entry(278, 3, 1, 2), entry(279, 4, 1, 18);
+    u32(0), u16(8), u16(8), u16(8);
+    for (int i = 0; i < 6; ++i) t += char(40 * i + 1), t += char(40 * i + 2), t += char(40 * i + 3);  // pixel i: 40 i + 1..3
+    return t;
+  };
+  // Stored: pixel i of row-major order, its red code 40 i + 1. Corners (x, y) of the 3x2 image.
+  auto red = [](int x, int y) { return float(40 * (3 * y + x) + 1) / 255.0f; };
+  const int shown_top_left[9][2] = {{0, 0}, {0, 0}, {2, 0}, {2, 1}, {0, 1}, {0, 0}, {0, 1}, {2, 1}, {2, 0}};
+  for (int o = -1; o <= 9; ++o) {
+    SCOPED_TRACE(o);
+    write_bytes(dir + "t.tif", tiff(o));
+    const CameraImage img = read_camera_image(dir + "t.tif");
+    const int turned = o >= 5 && o <= 8 ? o : 0;
+    ASSERT_EQ(img.width, turned ? 2 : 3);
+    ASSERT_EQ(img.height, turned ? 3 : 2);
+    const int k = o >= 1 && o <= 8 ? o : 1;
+    const int x0 = shown_top_left[k][0], y0 = shown_top_left[k][1];
+    EXPECT_FLOAT_EQ(img.rgb[0], red(x0, y0));
+    // The shown bottom right is the stored corner opposite the shown top left.
+    EXPECT_FLOAT_EQ(img.rgb[3 * size_t(img.width * img.height - 1)], red(2 - x0, 1 - y0));
+    // The shown top right: along the stored row for 1-4, along the stored column for 5-8.
+    const float top_right = img.rgb[3 * size_t(img.width - 1)];
+    if (k <= 4)
+      EXPECT_FLOAT_EQ(top_right, red(2 - x0, y0));
+    else
+      EXPECT_FLOAT_EQ(top_right, red(x0, 1 - y0));
+  }
+}
+
 TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {
   const std::string dir = temp_dir();
   EnvMap map = make_latlong(16, 8);

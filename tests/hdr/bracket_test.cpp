@@ -8,10 +8,13 @@
 #include <iterator>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <unistd.h>
 
 #include "core/chromaticities.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/warnings.h"
 #include "hdr/merge.h"
 #include "tests/core/icc_blob.h"
@@ -95,6 +98,77 @@ TEST(ReadExifExposure, AnExposureTimeOfTwoValuesIsRefusedNotReadAsItsFirst) {
   const std::string bad = jpeg_with_exposure_entry(tmp, "bad.jpg", 4, {1, 8});
   const std::string msg = message_of([&] { read_exif_exposure_seconds(bad); });
   EXPECT_EQ(msg.rfind(bad + ": EXIF Exif.Photo.ExposureTime holds 2 values (1 8)", 0), 0u) << msg;
+}
+
+// `jpeg` with an APP1 Exif segment stating EXIF Orientation `orientation`, in the byte
+// order a camera chose, spliced in after the start-of-image marker.
+std::string jpeg_with_orientation(const std::string& jpeg, int orientation, bool little_endian) {
+  std::string tiff;
+  auto u16 = [&](uint32_t v) {
+    if (little_endian)
+      tiff += char(v & 0xff), tiff += char((v >> 8) & 0xff);
+    else
+      tiff += char((v >> 8) & 0xff), tiff += char(v & 0xff);
+  };
+  auto u32 = [&](uint32_t v) {
+    if (little_endian)
+      u16(v & 0xffff), u16(v >> 16);
+    else
+      u16(v >> 16), u16(v & 0xffff);
+  };
+  tiff += little_endian ? "II" : "MM", u16(42), u32(8);
+  u16(2), u16(0x010F), u16(2), u32(4), tiff += std::string("Foo\0", 4);  // Make, then Orientation
+  u16(0x0112), u16(3), u32(1), u16(uint32_t(orientation)), u16(0), u32(0);
+  const std::string app1 = std::string("Exif\0\0", 6) + tiff;
+  const size_t length = app1.size() + 2;
+  return jpeg.substr(0, 2) + char(0xFF) + char(0xE1) + char(length >> 8) + char(length & 0xff) + app1 + jpeg.substr(2);
+}
+
+// A phone held upright stores its pixels sideways and says so in EXIF Orientation: the
+// frames are read as viewers show them, as OpenCV's imread (the peer) and LibRaw do, in all
+// eight orientations and both byte orders; a bracket of them is upright (portrait).
+TEST(ReadCameraImage, TurnsJpegsAsTheirExifOrientationSays) {
+  TempDir tmp;
+  cv::Mat stored(5, 7, CV_8UC3);
+  cv::randu(stored, 0, 256);
+  std::vector<uint8_t> encoded;
+  ASSERT_TRUE(cv::imencode(".jpg", stored, encoded, {cv::IMWRITE_JPEG_QUALITY, 100}));
+  const std::string jpeg(encoded.begin(), encoded.end());
+  const std::string plain = (tmp.path / "plain.jpg").string();
+  std::ofstream(plain, std::ios::binary) << jpeg;
+  const CameraImage as_stored = read_camera_image(plain);
+  ASSERT_EQ(as_stored.width, 7);
+  auto stored_at = [&](int x, int y, int c) { return as_stored.rgb[3 * size_t(y * 7 + x) + size_t(c)]; };
+  for (const bool little : {true, false})
+    for (int o = 1; o <= 8; ++o) {
+      SCOPED_TRACE(testing::Message() << "orientation " << o << (little ? " II" : " MM"));
+      const std::string path = (tmp.path / ("o" + std::to_string(o) + ".jpg")).string();
+      std::ofstream(path, std::ios::binary) << jpeg_with_orientation(jpeg, o, little);
+      const CameraImage ours = read_camera_image(path);
+      const cv::Mat peer = cv::imread(path, cv::IMREAD_COLOR);
+      ASSERT_EQ(ours.width, peer.cols);
+      ASSERT_EQ(ours.height, peer.rows);
+      EXPECT_EQ(ours.width, o >= 5 ? 5 : 7);
+      for (int y = 0; y < peer.rows; ++y)
+        for (int x = 0; x < peer.cols; ++x)
+          for (int c = 0; c < 3; ++c)
+            ASSERT_EQ(ours.rgb[3 * size_t(y * ours.width + x) + size_t(c)],
+                      float(peer.at<cv::Vec3b>(y, x)[2 - c]) * (1.0f / 255.0f))
+                << x << "," << y;
+      // The corner a viewer shows top left, from the EXIF specification's table.
+      const int corner[9][2] = {{0, 0}, {0, 0}, {6, 0}, {6, 4}, {0, 4}, {0, 0}, {0, 4}, {6, 4}, {6, 0}};
+      EXPECT_EQ(ours.rgb[0], stored_at(corner[o][0], corner[o][1], 0));
+    }
+  // A portrait bracket: two frames stored 7x5, shown and fused 5x7.
+  const std::string a = (tmp.path / "o6.jpg").string(), b = (tmp.path / "o6b.jpg").string();
+  fs::copy_file(a, b);
+  const Bracket bracket = read_bracket({a, b}, std::vector<double>{0.5, 0.125});
+  EXPECT_EQ(bracket.frames[0].width, 5);
+  EXPECT_EQ(bracket.frames[0].height, 7);
+  // One frame shot the other way round is refused, and the message says why its size differs.
+  const std::string msg = message_of([&] { read_bracket({a, b, plain}, std::vector<double>{0.5, 0.125, 1}); });
+  EXPECT_EQ(msg, plain + ": size 7x5 differs from the 5x7 of 2 of the 3 images (the same size turned 90 degrees: "
+                         "images are read as their EXIF Orientation shows them, and one set needs one orientation)");
 }
 
 // Camera codes are taken as sRGB; a bracket whose files carry another ICC profile (the

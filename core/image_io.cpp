@@ -157,9 +157,14 @@ Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMa
     layout = Layout::Hemisphere;
   } else {
     // A photo or a fused bracket is not a map: sampling it as a hemisphere would be silently wrong.
+    // A square one is most likely a probe photo: a mirror ball, or an angular map (Debevec's
+    // light probe format, the equidistant 360-degree fisheye).
     fail(path, fmt::format("no layout recorded and {}x{} is not the shape of one (latlong 2:1, hemisphere 4:1, "
-                           "healpix 1:12); give the layout with --layout",
-                           w, h));
+                           "healpix 1:12); give the layout with --layout{}",
+                           w, h,
+                           w == h ? ", or unwrap the probe first: `lightprobe probe unwrap` with --type mirrorball for a "
+                                    "mirror ball, --type fisheye --fov 360 for an angular map"
+                                  : ""));
   }
   switch (layout) {
     case Layout::LatLong:

@@ -132,6 +132,9 @@ TEST(LimitsCli, AnImageOfNoMapShapeIsNotSampledUnlessItsLayoutIsGiven) {
   ASSERT_EQ(lightprobe("synth probe scene --type mirrorball --size 300x300 -o " + photo.string()).code, 0);
   const CliRun r = lightprobe("sample " + photo.string() + " --method pharr --n 16 -o " + out.string());
   expect_refused(r, photo.string(), "no layout recorded and 300x300 is not the shape of one", out);
+  EXPECT_NE(r.err.find("--type mirrorball for a mirror ball, --type fisheye --fov 360 for an angular map"),
+            std::string::npos)
+      << r.err;
   const CliRun given = lightprobe("sample " + photo.string() + " --layout hemisphere --method pharr --n 16 -o " + out.string());
   EXPECT_EQ(given.code, 0) << given.err;
 }

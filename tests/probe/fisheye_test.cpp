@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -119,20 +120,59 @@ TEST(Fisheye, DefaultOrientationPutsZenithAtTheCentreXUpAndYRight) {
   EXPECT_FALSE(fisheye_project(m, {0.1, 0, -1}));  // below the horizon
 }
 
-// A smooth sky with a soft sun: luminance spans 2.5 decades.
+// A smooth sky with a soft sun: luminance spans 2.5 decades. Its radiance in direction d.
+std::array<float, 3> sky_radiance(const Vec3& d) {
+  const Vec3 sun = direction_from_angles(40 * M_PI / 180, 60 * M_PI / 180);
+  const double a = angle_between(d, sun);
+  const double sky = 0.2 + 0.8 * std::max(0.0, d.z) + 0.1 * std::cos(azimuth_of(d));
+  const double s = 50.0 * std::exp(-a * a / (2 * 0.12 * 0.12));
+  return {float(sky + s), float(0.9 * sky + s), float(1.3 * sky + 0.8 * s)};
+}
+
 EnvMap test_sky() {
   EnvMap map = make_latlong(256, 128);
-  const Vec3 sun = direction_from_angles(40 * M_PI / 180, 60 * M_PI / 180);
   for (size_t i = 0; i < map.pixel_count(); ++i) {
-    const Vec3 d = pixel_direction(map, i);
-    const double a = angle_between(d, sun);
-    const double sky = 0.2 + 0.8 * std::max(0.0, d.z) + 0.1 * std::cos(azimuth_of(d));
-    const double s = 50.0 * std::exp(-a * a / (2 * 0.12 * 0.12));
-    map.rgb[3 * i] = float(sky + s);
-    map.rgb[3 * i + 1] = float(0.9 * sky + s);
-    map.rgb[3 * i + 2] = float(1.3 * sky + 0.8 * s);
+    const auto c = sky_radiance(pixel_direction(map, i));
+    map.rgb[3 * i] = c[0], map.rgb[3 * i + 1] = c[1], map.rgb[3 * i + 2] = c[2];
   }
   return map;
+}
+
+// Debevec's angular map (the light probe format of his gallery) is the equidistant fisheye
+// over 360 degrees: the distance from the centre is the angle from the view direction, the
+// rim the direction behind. Rendered here from its definition (radius r = R theta / pi, image
+// up +X and right +Y as CONVENTIONS.md's fisheye), it unwraps to the whole sphere with
+// `equidistant_fisheye(N, N, 360)`, what `probe unwrap --type fisheye --fov 360` uses.
+TEST(Fisheye, AnAngularMapIsTheEquidistantFisheyeOf360Degrees) {
+  const int n = 800;
+  const double r = n / 2.0;
+  RgbImage photo;
+  photo.width = photo.height = n;
+  photo.rgb.assign(3 * size_t(n) * size_t(n), 0.0f);
+  for (int v = 0; v < n; ++v)
+    for (int u = 0; u < n; ++u) {
+      const double dx = (u + 0.5 - r) / r, dy = (v + 0.5 - r) / r, rho = std::hypot(dx, dy);
+      if (rho >= 1 || rho == 0) continue;
+      const double theta = rho * M_PI;
+      const Vec3 d{std::sin(theta) * -dy / rho, std::sin(theta) * dx / rho, std::cos(theta)};
+      const auto c = sky_radiance(d);
+      std::copy(c.begin(), c.end(), photo.rgb.begin() + 3 * (size_t(v) * n + u));
+    }
+  const EnvMap map = unwrap_fisheye(photo, equidistant_fisheye(n, n, 360), Layout::LatLong, 256, 128);
+  double sum = 0;
+  int count = 0;
+  for (size_t i = 0; i < map.pixel_count(); ++i) {
+    const Vec3 d = pixel_direction(map, i);
+    if (zenith_of(d) > 170 * M_PI / 180) continue;  // the last 10 degrees: a thin, stretched ring
+    ASSERT_TRUE(map.is_valid(i)) << i;
+    const float* a = map.pixel(i);
+    const auto b = sky_radiance(d);
+    sum += std::abs(std::log10(luminance(a[0], a[1], a[2]) / luminance(b[0], b[1], b[2])));
+    ++count;
+  }
+  const double mean_abs_log10 = sum / count;
+  std::printf("angular map: mean abs log10 luminance error %.5f over %d pixels\n", mean_abs_log10, count);
+  EXPECT_LT(mean_abs_log10, 0.002);
 }
 
 TEST(Fisheye, UnwrappingARenderedFisheyeRecoversTheUpperHemisphere) {

@@ -241,7 +241,7 @@ TEST(ReadExposureList, ReadsTheSharedCsvsDebevecsListAndPlainLines) {
 
 TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   TempDir tmp;
-  const std::string a = tmp.png("a.png", 8, 6), b = tmp.png("b.png", 8, 6), odd = tmp.png("odd.png", 6, 8);
+  const std::string a = tmp.png("a.png", 8, 6), b = tmp.png("b.png", 8, 6), odd = tmp.png("odd.png", 7, 8);
   // One exposure.
   EXPECT_THROW(read_bracket({a}, std::vector<double>{1.0}), InputError);
   // Different sizes: the odd file is named.
@@ -249,7 +249,7 @@ TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   EXPECT_NE(size_msg.find("odd.png"), std::string::npos) << size_msg;
   // The odd size is named when it is the first frame, too.
   const std::string first_msg = message_of([&] { read_bracket({odd, a, b}, std::vector<double>{1.0, 2.0, 4.0}); });
-  EXPECT_EQ(first_msg, odd + ": size 6x8 differs from the 8x6 of 2 of the 3 images");
+  EXPECT_EQ(first_msg, odd + ": size 7x8 differs from the 8x6 of 2 of the 3 images");
   // Two frames at one exposure time: both named.
   const std::string same_msg = message_of([&] { read_bracket({a, b}, std::vector<double>{0.5, 0.5}); });
   EXPECT_EQ(same_msg, a + " and " + b + ": the same exposure time 0.5 s; each frame of a bracket needs its own");

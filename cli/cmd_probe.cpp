@@ -19,6 +19,7 @@
 #include "core/progress.h"
 #include "calib/colour_match.h"
 #include "hdr/bracket.h"
+#include "hdr/response.h"
 #include "probe/ball_register.h"
 #include "probe/camera_unwrap.h"
 #include "probe/fill.h"
@@ -44,6 +45,7 @@ struct ProbeUnwrapArgs {
   bool static_probe = false;        // with stabilise: one median position for all frames
   bool fixed_ball = false;          // use frame 0's geometry for every frame (no tracking)
   std::string colour_match;         // 3x3 transform to the backplate camera (calib colour)
+  std::string codes;                // camera images: srgb, linear, or a response.json (hdr response)
   std::string rotation;
   std::string layout = "latlong";
   std::string size;
@@ -78,6 +80,24 @@ void target_size(const std::string& layout_name, const std::string& size, int ns
   }
 }
 
+// --codes: a curve's name, or a camera response from `hdr response` (exp g(z) per level).
+CodeCurve code_curve(const std::string& codes) {
+  CodeCurve c;
+  c.name = codes;
+  if (codes == "srgb") return c;
+  if (codes == "linear") {
+    c.kind = CodeCurve::Kind::Linear;
+    return c;
+  }
+  if (!fs::exists(codes))
+    throw InputError(fmt::format("--codes: '{}' is neither srgb, linear nor a response file", codes));
+  const CameraResponse r = load_response(codes);
+  c.kind = CodeCurve::Kind::Table;
+  for (size_t ch = 0; ch < 3; ++ch)
+    for (float g : r.log_exposure[ch]) c.table[ch].push_back(std::exp(double(g)));
+  return c;
+}
+
 UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   UnwrapSequenceOptions o;
   if (a.type == "mirrorball") o.type = ProbeType::MirrorBall;
@@ -102,6 +122,7 @@ UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   o.static_probe = a.static_probe;
   o.fixed_geometry = a.fixed_ball;
   if (!a.colour_match.empty()) o.colour = load_colour_match(a.colour_match);
+  if (!a.codes.empty()) o.codes = code_curve(a.codes);
   return o;
 }
 
@@ -119,6 +140,7 @@ nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions
                         {"noise_sigma_radius_px", b->noise_sigma_radius_px}, {"rim_agreement", b->rim_agreement},
                         {"searched_from_previous", f.ball_seeded}, {"warning", ball_fit_warning(*b)}};
     fj["valid_fraction"] = f.valid_fraction;
+    if (!f.codes.empty()) fj["codes"] = f.codes, fj["clipped_fraction"] = f.clipped_fraction;
     if (f.circle) fj["circle"] = {f.circle->cx, f.circle->cy, f.circle->r};
     per_frame.push_back(fj);
   }
@@ -156,6 +178,14 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   for (const auto& f : r.frames) {  // a sliver of a probe: a map, but mostly holes
     if (f.ball_fit && !ball_fit_warning(*f.ball_fit).empty())
       std::fprintf(stderr, "lightprobe: warning: %s: %s\n", f.file.c_str(), ball_fit_warning(*f.ball_fit).c_str());
+    if (f.clipped_fraction > 0)  // an LDR photo: its lights are where it clips
+      std::fprintf(stderr,
+                   "lightprobe: warning: %s: %.3g %% of its pixels are at the top code: their light is clipped (at "
+                   "least that bright); fuse a bracket (hdr fuse) to measure it\n",
+                   f.file.c_str(), 100 * f.clipped_fraction);
+    if (!args.codes.empty() && f.codes.empty())
+      std::fprintf(stderr, "lightprobe: warning: %s: radiance already; --codes applies to camera images and is not used\n",
+                   f.file.c_str());
     if (f.valid_fraction < kFewValidWarning)
       std::fprintf(stderr, "lightprobe: warning: %s: only %.1f %% of the map is valid (is the probe cut by the image edge?)\n",
                    f.file.c_str(), 100 * f.valid_fraction);
@@ -230,6 +260,7 @@ std::vector<Command> probe_commands() {
          f.flag("--static-probe", a->static_probe, "With --smooth-track: one median position for every frame");
          f.flag("--fixed-ball", a->fixed_ball, "Sequences: no tracking, frame 0's geometry for all (for comparison)");
          f.opt("--colour-match", a->colour_match, "3x3 colour transform to the backplate (calib colour)");
+         f.opt("--codes", a->codes, "Camera images (PNG, JPEG, TIFF): how codes encode light, made linear before unwrapping: srgb (8-bit default), linear, or a response.json from hdr response; 16-bit images need it");
          f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers");
          f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
          f.opt("--size", a->size, "WxH");

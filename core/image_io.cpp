@@ -1010,6 +1010,7 @@ RgbImage read_rgb_image(const std::string& path) {
   img.width = c.width;
   img.height = c.height;
   img.rgb = std::move(c.rgb);
+  img.code_bits = c.bit_depth;
   return img;
 }
 

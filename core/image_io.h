@@ -81,6 +81,9 @@ struct RgbImage {
   std::vector<float> rgb;
   std::vector<uint8_t> valid;  // empty: every pixel valid
   Units units = Units::Relative;
+  // > 0: `rgb` holds a camera image's code values in [0, 1] at this bit depth (8 or 16),
+  // not radiance; whoever makes a map of it linearises them (probe/camera_codes.h).
+  int code_bits = 0;
 };
 // .exr/.hdr/.pfm as stored (NaN/Inf/negative refused); 8/16-bit formats as code values
 // in [0, 1] (read_camera_image).

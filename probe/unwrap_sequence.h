@@ -4,8 +4,9 @@
 //           ball given), or a fisheye sequence's image circle (probe/stabilise.h); the
 //           track is smoothed when asked (a fixed probe whose detection is noisy), or
 //           frame 0's geometry used for all (no stabilisation, for comparison)
-//   pass 2  each frame unwrapped with its own geometry, so that the map stays put when
-//           the camera shakes; the optional colour match to a backplate camera applied.
+//   pass 2  each frame (a camera image's codes made linear first) unwrapped with its own
+//           geometry, so that the map stays put when the camera shakes; the optional
+//           colour match to a backplate camera applied.
 // Reports the map's stability: the power-weighted mean direction of each map, which a
 // static world must keep still, and the detected and used tracks' jitter.
 #pragma once
@@ -20,6 +21,7 @@
 #include "calib/camera_model.h"
 #include "calib/colour_match.h"
 #include "core/envmap.h"
+#include "probe/camera_codes.h"
 #include "probe/camera_unwrap.h"
 #include "probe/mirror_ball.h"
 #include "probe/stabilise.h"
@@ -55,6 +57,11 @@ struct UnwrapSequenceOptions {
   // many bytes; the rest are read again in pass 2.
   double kept_frames_bytes = 512e6;
   std::optional<ColourMatch> colour;  // 3x3 transform to the backplate camera
+  // How camera images' codes encode light (probe/camera_codes.h), linearised before the
+  // unwrap (the ball is found on the codes as read). nullopt: sRGB for 8-bit images, as JPEG
+  // and PNG define them; 16-bit ones are refused, their encoding being a converter's choice
+  // (linear from a raw developer, a gamma curve from an editor).
+  std::optional<CodeCurve> codes;
 };
 
 struct UnwrapSequenceReport {
@@ -67,6 +74,8 @@ struct UnwrapSequenceReport {
     bool ball_seeded = false;  // found by the search from the last frame's ball (else the full search)
     std::optional<ImageCircle> circle;               // fisheye sequence
     double valid_fraction = 0;                       // share of the map's solid angle that is valid
+    std::string codes;             // the curve a camera image's codes went through; empty for radiance
+    double clipped_fraction = 0;   // camera image: share of its pixels at the top code
   };
   std::vector<Frame> frames;
   CircleTrack detected, used;         // empty for a single fisheye image

@@ -377,6 +377,36 @@ TEST(Cli, ASynthesisedMirrorBallUnwrapsToTheMapItCameFrom) {
   expect_one_line_error(lightprobe("probe unwrap " + flat.string() + " --type mirrorball -o " + map.string()), "flat.pfm");
 }
 
+// A photo's codes are made linear before they become a map (maps are radiance): an 8-bit
+// PNG of code 128 unwraps to 0.2158605, sRGB's decoding, not 0.502; a 16-bit one says how
+// its codes encode light (--codes) or is refused, and nothing is written.
+TEST(Cli, APhotosCodesAreMadeLinearBeforeTheyBecomeAMap) {
+  const fs::path png8 = scratch() / "grey8.png", png16 = scratch() / "grey16.png", map = scratch() / "grey.exr";
+  lp::RgbImage grey;
+  grey.width = grey.height = 120;
+  grey.rgb.assign(3 * 120 * 120, 128.0f / 255.0f);
+  lp::write_code_image(png8.string(), grey, 8);
+  grey.rgb.assign(3 * 120 * 120, 30000.0f / 65535.0f);
+  lp::write_code_image(png16.string(), grey, 16);
+  const std::string ball = " --type mirrorball --ball 60,60,50 --layout latlong --size 64x32 -o " + map.string();
+  CliRun r = lightprobe("probe unwrap --json " + png8.string() + ball);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto frame = nlohmann::json::parse(r.out)["per_frame"][0];
+  EXPECT_EQ(frame["codes"], "srgb");
+  EXPECT_EQ(frame["clipped_fraction"].get<double>(), 0.0);
+  lp::EnvMap m = lp::read_envmap(map.string());
+  EXPECT_NEAR(m.rgb[3 * (16 * 64 + 10)], 0.2158605, 1e-6);
+  fs::remove(map);
+  const CliRun refused = lightprobe("probe unwrap " + png16.string() + ball);
+  expect_one_line_error(refused, png16.string());
+  EXPECT_NE(refused.err.find("16-bit camera codes may be linear"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(map));
+  r = lightprobe("probe unwrap " + png16.string() + ball + " --codes linear");
+  ASSERT_EQ(r.code, 0) << r.err;
+  m = lp::read_envmap(map.string());
+  EXPECT_NEAR(m.rgb[3 * (16 * 64 + 10)], 30000.0 / 65535.0, 1e-6);
+}
+
 TEST(Cli, TrackingTheBallFrameByFrameKeepsTheUnwrappedMapStillWhenTheCameraShakes) {
   const fs::path world = scratch() / "nosun.exr", seq = scratch() / "ballseq", out = scratch() / "ballseq_maps";
   ASSERT_EQ(lightprobe("synth scene --no-sun --size 512x256 -o " + world.string()).code, 0);

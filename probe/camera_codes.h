@@ -1,0 +1,38 @@
+// The code values of a probe photo (an 8- or 16-bit camera image, core/image_io.h
+// read_rgb_image) as relative linear radiance. Maps are linear (CONVENTIONS.md); a JPEG's
+// codes are not: unwrapped as they were, code 128 became 0.50 where its light is 0.22 of
+// the top code's, and every gradient of the map was bent.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/image_io.h"
+
+namespace lp {
+
+// How codes encode light.
+struct CodeCurve {
+  enum class Kind { Srgb, Linear, Table };
+  Kind kind = Kind::Srgb;
+  // Table: per channel (R, G, B), the relative radiance of every code level, such as a
+  // camera response recovered by `hdr response` (exp g(z)); its size is the number of levels
+  // and must be 2^bits of the images it is applied to.
+  std::array<std::vector<double>, 3> table;
+  std::string name = "srgb";  // for reports and messages: "srgb", "linear", or the response file
+};
+
+struct CodesReport {
+  bool linearised = false;       // the image held codes (code_bits > 0) and now holds radiance
+  double clipped_fraction = 0;   // share of pixels with a channel at the top code
+};
+
+// `image`'s codes as relative linear radiance, in place (sRGB: IEC 61966-2-1's decoding; a
+// table: the entry of each code's level); code_bits is then 0. An image that is radiance
+// already (code_bits 0) is left alone. Pixels at the top code in any channel are clipped:
+// their light is at least that, and their share is reported. Throws InputError naming
+// `file` when a table's levels are not the image's 2^bits.
+CodesReport linearise_codes(RgbImage& image, const CodeCurve& curve, const std::string& file);
+
+}  // namespace lp

@@ -414,6 +414,27 @@ void fit_to_display_window(const std::string& path, RawImage& raw, const Imath::
     raw.valid = std::move(valid);
 }
 
+// The layer prefix decode_exr reads ("" for the file's own channels, else "name."), see there.
+std::string exr_rgb_layer(const std::string& path, const Imf::ChannelList& channels) {
+  for (const char* name : {"R", "G", "B", "Y"})
+    if (channels.findChannel(name)) return {};
+  std::set<std::string> layers;
+  channels.layers(layers);
+  std::vector<std::string> rgb;
+  for (const std::string& l : layers) {
+    const std::string p = l + ".";
+    if (channels.findChannel(p + "R") && channels.findChannel(p + "G") && channels.findChannel(p + "B")) rgb.push_back(p);
+  }
+  if (rgb.size() > 1) {
+    std::string names;
+    for (const std::string& l : rgb) names += (names.empty() ? "'" : ", '") + l.substr(0, l.size() - 1) + "'";
+    fail(path, fmt::format("{} layers hold R, G and B ({}): which is the light is ambiguous; keep one (oiiotool "
+                           "--ch) and read that",
+                           rgb.size(), one_line(names, 80)));
+  }
+  return rgb.empty() ? std::string() : rgb[0];
+}
+
 RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryIStream& stream) {
   Imf::InputFile file(stream);
   const Imf::Header& header = file.header();
@@ -429,10 +450,16 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   if (auto* a = header.findTypedAttribute<Imf::IntAttribute>("lightprobe.nside")) raw.nside = a->value();
 
   const Imf::ChannelList& channels = header.channels();
-  auto has = [&](const char* name) { return channels.findChannel(name) != nullptr; };
+  // Channels of the layer read: the file's own R, G, B (A, Y, RY, BY), or, when it has none,
+  // its one layer that has R, G and B (a render's "ViewLayer.Combined.R", ...: Blender's
+  // multilayer files). More than one such layer is refused: which is the light is not ours
+  // to guess.
+  const std::string layer = exr_rgb_layer(path, channels);
+  auto channel = [&](const char* name) { return channels.findChannel(layer + name); };
+  auto has = [&](const char* name) { return channel(name) != nullptr; };
   for (const char* name : {"R", "G", "B", "A", "Y"}) {
-    const Imf::Channel* c = channels.findChannel(name);
-    if (c && (c->xSampling != 1 || c->ySampling != 1)) fail(path, fmt::format("channel {} is subsampled", name));
+    const Imf::Channel* c = channel(name);
+    if (c && (c->xSampling != 1 || c->ySampling != 1)) fail(path, fmt::format("channel {}{} is subsampled", layer, name));
   }
   const bool rgb = has("R") && has("G") && has("B");
   const bool luma = has("Y");
@@ -454,7 +481,8 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   if (!rgb && (has("RY") || has("BY"))) {
     // Luminance/chroma file: let the RGBA interface convert it.
     MemoryIStream stream2(bytes, path);
-    Imf::RgbaInputFile rgba(stream2);
+    Imf::RgbaInputFile rgba(stream2, layer.empty() ? std::string() : layer.substr(0, layer.size() - 1),
+                            Imf::globalThreadCount());
     std::vector<Imf::Rgba> px(n);
     rgba.setFrameBuffer(px.data() - dw.min.x - size_t(dw.min.y) * size_t(w), 1, size_t(w));
     rgba.readPixels(dw.min.y, dw.max.y);
@@ -468,15 +496,15 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
     Imf::FrameBuffer fb;
     const size_t xs = 3 * sizeof(float), ys = xs * size_t(w);
     if (rgb) {
-      fb.insert("R", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[0], dw, xs, ys));
-      fb.insert("G", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[1], dw, xs, ys));
-      fb.insert("B", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[2], dw, xs, ys));
+      fb.insert(layer + "R", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[0], dw, xs, ys));
+      fb.insert(layer + "G", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[1], dw, xs, ys));
+      fb.insert(layer + "B", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[2], dw, xs, ys));
     } else {
       y.assign(n, 0.0f);
-      fb.insert("Y", Imf::Slice::Make(Imf::FLOAT, y.data(), dw, sizeof(float), sizeof(float) * size_t(w)));
+      fb.insert(layer + "Y", Imf::Slice::Make(Imf::FLOAT, y.data(), dw, sizeof(float), sizeof(float) * size_t(w)));
     }
     if (want_mask)
-      fb.insert("A", Imf::Slice::Make(Imf::FLOAT, alpha.data(), dw, sizeof(float), sizeof(float) * size_t(w)));
+      fb.insert(layer + "A", Imf::Slice::Make(Imf::FLOAT, alpha.data(), dw, sizeof(float), sizeof(float) * size_t(w)));
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     for (size_t i = 0; i < y.size(); ++i) raw.rgb[3 * i] = raw.rgb[3 * i + 1] = raw.rgb[3 * i + 2] = y[i];

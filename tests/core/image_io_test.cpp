@@ -262,6 +262,33 @@ TEST(ImageIo, HandmadeExrFilesReadToTheirKnownValues) {
   expect_input_error([&] { read_envmap(dir + "z.exr"); }, {dir + "z.exr", "channels: Z"});
 }
 
+// A render's multilayer EXR (Blender names its beauty pass "ViewLayer.Combined.R", ...,
+// beside passes without colour such as depth): with no R, G, B of its own, the file's one
+// layer that has them is read. Two such layers are refused, named: which is the light is
+// not the reader's to guess.
+TEST(ImageIo, TheOneColourLayerOfAMultilayerExrIsRead) {
+  const std::string dir = temp_dir();
+  write_bytes(dir + "layers.exr",
+              handmade_exr(4, 2, {{"ViewLayer.Combined.A", 1, [](int, int) { return 0x3c00u; }},
+                                  {"ViewLayer.Combined.B", 1, [](int, int) { return 0x4000u; }},
+                                  {"ViewLayer.Combined.G", 1, [](int, int) { return 0x3800u; }},
+                                  {"ViewLayer.Combined.R", 1, [](int x, int) { return x == 2 ? 0x3800u : 0x3c00u; }},
+                                  {"ViewLayer.Depth.Z", 2, [](int, int) { return float_bits(7.0f); }}}));
+  const EnvMap m = read_envmap(dir + "layers.exr");
+  EXPECT_TRUE(m.valid.empty());  // the layer's alpha of 1: every pixel holds data
+  EXPECT_EQ(m.pixel(0)[0], 1.0f);
+  EXPECT_EQ(m.pixel(0)[1], 0.5f);
+  EXPECT_EQ(m.pixel(0)[2], 2.0f);
+  EXPECT_EQ(m.pixel(2)[0], 0.5f);
+  write_bytes(dir + "two.exr", handmade_exr(2, 1, {{"diffuse.B", 1, [](int, int) { return 0x3c00u; }},
+                                                   {"diffuse.G", 1, [](int, int) { return 0x3c00u; }},
+                                                   {"diffuse.R", 1, [](int, int) { return 0x3c00u; }},
+                                                   {"glossy.B", 1, [](int, int) { return 0x3c00u; }},
+                                                   {"glossy.G", 1, [](int, int) { return 0x3c00u; }},
+                                                   {"glossy.R", 1, [](int, int) { return 0x3c00u; }}}));
+  expect_input_error([&] { read_envmap(dir + "two.exr"); }, {dir + "two.exr", "2 layers hold R, G and B ('diffuse', 'glossy')"});
+}
+
 // Another tool's RGBA map: pixels with alpha below 0.5 hold no data (a render's transparent
 // background) and are masked, with one warning; an alpha of 0 everywhere means nothing.
 TEST(ImageIo, TransparentPixelsOfOtherToolsMapsAreMaskedNotBlack) {

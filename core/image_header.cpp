@@ -130,6 +130,16 @@ ImageHeader tiff_header(const std::string& path, std::string_view b) {
   if (width < 0 || height < 0) fail(path, "TIFF", "no ImageWidth or ImageLength in the first IFD");
   ImageHeader h{ImageFormat::Tiff, width, height};
   h.orientation = tiff_orientation(b);
+  for (size_t k = 0; k < entries; ++k) {
+    const size_t e = ifd + 2 + 12 * k;
+    const uint32_t tag = r16(e);
+    if (r16(e + 2) != 3) continue;  // SHORTs
+    if (tag == 259 && (r16(e + 8) == 34676 || r16(e + 8) == 34677)) h.float_samples = true;  // LogLuv
+    if (tag == 339) {  // SampleFormat: its first value, inline or at an offset past two SHORTs
+      const size_t count = r32(e + 4), at = count <= 2 ? e + 8 : r32(e + 8);
+      if (at + 2 <= b.size() && r16(at) == 3) h.float_samples = true;
+    }
+  }
   return h;
 }
 

@@ -31,6 +31,10 @@ struct ImageHeader {
   // when the file states none, or a value outside 1-8 or in a damaged EXIF block (viewers
   // then show the pixels as stored too). `width` and `height` are the stored size.
   int orientation = 1;
+  // TIFF: its samples decode to floating point, radiance rather than camera codes: IEEE
+  // floats (SampleFormat 3), or Greg Ward's LogLuv (compression SGILOG or SGILOG24, what
+  // OpenCV writes for 3-channel float images).
+  bool float_samples = false;
 };
 
 // nullopt when `bytes` is none of the formats above. Throws InputError naming `path` when

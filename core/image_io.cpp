@@ -964,7 +964,50 @@ std::string encode_pfm(const std::string& path, const EnvMap& map) {
 
 std::string unsupported_map_extension(const std::string& path) {
   const std::string ext = lower_extension(path);
-  return fmt::format("unsupported map format '{}' (expected .exr, .hdr or .pfm)", ext.empty() ? "(none)" : ext);
+  return fmt::format("unsupported map format '{}' (expected .exr, .hdr, .pfm or a floating-point .tif)",
+                     ext.empty() ? "(none)" : ext);
+}
+
+bool is_tiff_extension(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  return ext == ".tif" || ext == ".tiff";
+}
+
+// A floating-point TIFF (SampleFormat 3): the HDR output of panorama stitchers (PTGui, Hugin)
+// beside EXR and Radiance, decoded by OpenCV's TIFF reader (the codecs plugin), which also
+// turns it as its Orientation tag says. An integer TIFF holds camera codes, not radiance, and
+// is refused as a map.
+RawImage read_float_tiff(const std::string& path) {
+  const std::string bytes = read_whole_file(path);
+  if (bytes.empty()) fail(path, "cannot read: empty file");
+  const auto header = read_image_header(path, bytes);
+  if (!header || header->format != ImageFormat::Tiff) fail(path, "not a TIFF file (bad magic number)");
+  check_image_size(path, header->width, header->height);
+  if (!header->float_samples)
+    fail(path, "integer samples are camera codes, not radiance: fuse a bracket (hdr fuse) or unwrap the photo "
+               "(probe unwrap) to make a map of it");
+  const cv::Mat img = lazy::decode_image(bytes);
+  if (img.empty()) fail(path, "cannot decode image (damaged file, or a floating-point TIFF OpenCV cannot read)");
+  if (img.depth() != CV_32F)
+    fail(path, "floating-point samples other than 32-bit are not supported (write 32-bit float, or EXR)");
+  const int ch = img.channels();
+  if (ch != 1 && ch != 3 && ch != 4) fail(path, fmt::format("unsupported channel count {}", ch));
+  RawImage raw;
+  raw.width = img.cols, raw.height = img.rows;
+  const size_t n = size_t(img.cols) * size_t(img.rows);
+  raw.rgb.resize(3 * n);
+  std::vector<float> alpha(ch == 4 ? n : 0);
+  for (int y = 0; y < img.rows; ++y) {
+    const float* row = img.ptr<float>(y);
+    for (int x = 0; x < img.cols; ++x) {
+      const size_t i = size_t(y) * size_t(img.cols) + size_t(x);
+      const float* p = row + size_t(x) * size_t(ch);
+      for (int c = 0; c < 3; ++c) raw.rgb[3 * i + size_t(c)] = ch == 1 ? p[0] : p[2 - c];  // OpenCV's BGR(A)
+      if (ch == 4) alpha[i] = p[3];
+    }
+  }
+  if (ch == 4) alpha_to_mask(path, raw, alpha);
+  return raw;
 }
 
 // Runs `body`, turning any foreign exception (Iex, OpenCV, std) into one InputError line.
@@ -999,6 +1042,8 @@ EnvMap read_envmap(const std::string& path, const ReadMapOptions& options) {
       raw = read_hdr(path);
     else if (ext == ".pfm")
       raw = read_pfm(path);
+    else if (is_tiff_extension(path))
+      raw = read_float_tiff(path);
     else
       fail(path, unsupported_map_extension(path));
     return finish_map(path, std::move(raw), options);
@@ -1021,9 +1066,17 @@ std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options)
   return guarded(name, "write", [&] { return encode_exr(name, map, options); });
 }
 
+// A .tif holding floating-point samples (radiance, read as a map is) rather than codes.
+static bool is_float_tiff_file(const std::string& path) {
+  if (!is_tiff_extension(path)) return false;
+  const std::string bytes = read_whole_file(path);
+  const auto header = read_image_header(path, bytes);
+  return header && header->format == ImageFormat::Tiff && header->float_samples;
+}
+
 RgbImage read_rgb_image(const std::string& path) {
   RgbImage img;
-  if (is_radiance_file(path)) {
+  if (is_radiance_file(path) || is_float_tiff_file(path)) {
     ReadMapOptions ro;
     ro.layout = Layout::Hemisphere;  // any W x H; the layout is not used
     EnvMap m = read_envmap(path, ro);

@@ -1052,6 +1052,46 @@ TEST(ImageIo, TiffsAreTurnedAsTheirOrientationTagSays) {
   }
 }
 
+// Panorama stitchers (PTGui, Hugin) write HDR panoramas as floating-point TIFFs: 32-bit IEEE
+// floats are read exactly (RGBA: alpha is the mask, as in an EXR); LogLuv (what OpenCV
+// writes for 3-channel floats, and Radiance's tools) to its 0.3 % steps in luminance. An
+// integer TIFF holds camera codes and is refused as a map; as a probe photo it stays codes.
+TEST(ImageIo, FloatingPointTiffsAreMapsAndIntegerOnesAreNot) {
+  const std::string dir = temp_dir();
+  cv::Mat rgba(8, 16, CV_32FC4), rgb(8, 16, CV_32FC3), codes(8, 16, CV_16UC3);
+  cv::randu(rgba, 0.1f, 4.0f);
+  cv::randu(rgb, 0.1f, 4.0f);
+  cv::randu(codes, 0, 65535);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 16; ++x) rgba.at<cv::Vec4f>(y, x)[3] = y == 0 ? 0.0f : 1.0f;  // the top row transparent
+  for (const auto& [name, mat] : std::vector<std::pair<std::string, cv::Mat>>{{"rgba.tif", rgba}, {"rgb.tif", rgb},
+                                                                              {"codes.tif", codes}}) {
+    std::vector<uint8_t> bytes;
+    ASSERT_TRUE(lazy::encode_image(".tif", mat, {}, bytes));
+    write_bytes(dir + name, std::string(bytes.begin(), bytes.end()));
+  }
+  const EnvMap a = read_envmap(dir + "rgba.tif");
+  ASSERT_EQ(a.width, 16);
+  ASSERT_EQ(a.valid.size(), 128u);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 16; ++x) {
+      const size_t i = size_t(y * 16 + x);
+      EXPECT_EQ(a.is_valid(i), y > 0);
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(a.rgb[3 * i + size_t(c)], rgba.at<cv::Vec4f>(y, x)[2 - c]);
+    }
+  const EnvMap b = read_envmap(dir + "rgb.tif");  // LogLuv: through XYZ, 16-bit log luminance
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 16; ++x) {
+      const float* p = b.pixel(size_t(y * 16 + x));
+      const cv::Vec3f q = rgb.at<cv::Vec3f>(y, x);
+      const double ours = luminance(p[0], p[1], p[2]), truth = luminance(q[2], q[1], q[0]);
+      ASSERT_NEAR(ours / truth, 1.0, 0.01) << x << "," << y;
+    }
+  expect_input_error([&] { read_envmap(dir + "codes.tif"); }, {dir + "codes.tif", "integer samples are camera codes"});
+  EXPECT_EQ(read_rgb_image(dir + "rgba.tif").code_bits, 0);
+  EXPECT_EQ(read_rgb_image(dir + "codes.tif").code_bits, 16);
+}
+
 TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {
   const std::string dir = temp_dir();
   EnvMap map = make_latlong(16, 8);

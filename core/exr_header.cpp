@@ -99,7 +99,7 @@ Part scan_header(const std::string& path, std::string_view b, size_t& pos, size_
 
 }  // namespace
 
-void check_exr_header(const std::string& path, std::string_view b) {
+int check_exr_header(const std::string& path, std::string_view b) {
   if (b.size() < 8) fail(path, "truncated file (no version field)");
   const int32_t version = le32(b, 4);
   const bool long_names = version & 0x400, multipart = version & 0x1000;
@@ -122,6 +122,7 @@ void check_exr_header(const std::string& path, std::string_view b) {
     fail(path, fmt::format("truncated file ({} bytes after the header cannot hold the offset table of {} chunks its "
                            "data window needs)",
                            b.size() - pos, chunks));
+  return int(parts.size());
 }
 
 }  // namespace lp

@@ -13,7 +13,7 @@ namespace lp {
 
 // Throws InputError naming `path` when an attribute claims more bytes than the file has
 // left, a part's data window is beyond core/limits.h, or the file is shorter than the
-// offset table its data windows need (8 bytes a chunk).
-void check_exr_header(const std::string& path, std::string_view bytes);
+// offset table its data windows need (8 bytes a chunk). Returns the number of parts.
+int check_exr_header(const std::string& path, std::string_view bytes);
 
 }  // namespace lp

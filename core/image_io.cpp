@@ -320,11 +320,15 @@ void use_exr_threads() {
 RawImage read_exr(const std::string& path) {
   const std::string bytes = read_whole_file(path);
   if (bytes.size() < 4 || !Imf::isImfMagic(bytes.data())) fail(path, "not an OpenEXR file (bad magic number)");
-  check_exr_header(path, bytes);  // OpenEXR allocates what attribute sizes and data windows claim
+  // OpenEXR allocates what attribute sizes and data windows claim.
+  const int parts = check_exr_header(path, bytes);
   MemoryIStream stream(bytes, path);
   use_exr_threads();
   try {
-    return decode_exr(path, bytes, stream);
+    RawImage raw = decode_exr(path, bytes, stream);
+    if (parts > 1)  // a stereo pair's views, a render's subimages: Imf::InputFile reads the first
+      raw.warnings.push_back(fmt::format("{}: {} parts (images); the first is read", path, parts));
+    return raw;
   } catch (const InputError&) {
     throw;
   } catch (const std::exception& e) {

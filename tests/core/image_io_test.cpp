@@ -6,7 +6,10 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfMultiPartOutputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfOutputPart.h>
+#include <ImfPartType.h>
 #include <ImfStandardAttributes.h>
 #include <gtest/gtest.h>
 
@@ -287,6 +290,38 @@ TEST(ImageIo, TheOneColourLayerOfAMultilayerExrIsRead) {
                                                    {"glossy.G", 1, [](int, int) { return 0x3c00u; }},
                                                    {"glossy.R", 1, [](int, int) { return 0x3c00u; }}}));
   expect_input_error([&] { read_envmap(dir + "two.exr"); }, {dir + "two.exr", "2 layers hold R, G and B ('diffuse', 'glossy')"});
+}
+
+// A multi-part EXR (a stereo pair's views, oiiotool's subimages): OpenEXR's InputFile reads
+// the first part, and the reader says so in one warning rather than silently.
+TEST(ImageIo, AMultiPartExrIsReadThroughItsFirstPartWithAWarning) {
+  const std::string dir = temp_dir(), path = dir + "parts.exr";
+  std::vector<float> first(3 * 8, 1.0f), second(3 * 8, 2.0f);
+  std::vector<Imf::Header> headers(2, Imf::Header(4, 2));
+  for (int p = 0; p < 2; ++p) {
+    headers[size_t(p)].setName(p == 0 ? "left" : "right");
+    headers[size_t(p)].setType(Imf::SCANLINEIMAGE);
+    for (const char* c : {"R", "G", "B"}) headers[size_t(p)].channels().insert(c, Imf::Channel(Imf::FLOAT));
+  }
+  {
+    Imf::MultiPartOutputFile file(path.c_str(), headers.data(), 2);
+    for (int p = 0; p < 2; ++p) {
+      Imf::OutputPart part(file, p);
+      float* base = p == 0 ? first.data() : second.data();
+      Imf::FrameBuffer fb;
+      for (int c = 0; c < 3; ++c)
+        fb.insert(std::string(1, "RGB"[c]), Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base + c), 12, 48));
+      part.setFrameBuffer(fb);
+      part.writePixels(2);
+    }
+  }
+  std::vector<std::string> warnings;
+  const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const EnvMap m = read_envmap(path);
+  set_warning_sink(before);
+  EXPECT_EQ(m.pixel(5)[1], 1.0f);  // the first part's
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], path + ": 2 parts (images); the first is read");
 }
 
 // Another tool's RGBA map: pixels with alpha below 0.5 hold no data (a render's transparent

@@ -977,7 +977,7 @@ bool is_tiff_extension(const std::string& path) {
   return ext == ".tif" || ext == ".tiff";
 }
 
-// A floating-point TIFF (SampleFormat 3): the HDR output of panorama stitchers (PTGui, Hugin)
+// A floating-point TIFF (SampleFormat 3, or LogLuv): the HDR output of panorama stitchers (PTGui, Hugin)
 // beside EXR and Radiance, decoded by OpenCV's TIFF reader (the codecs plugin), which also
 // turns it as its Orientation tag says. An integer TIFF holds camera codes, not radiance, and
 // is refused as a map.

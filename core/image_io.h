@@ -5,7 +5,10 @@
 // Map formats, chosen by file extension:
 //   .exr  OpenEXR, float or half RGB(A); attributes "lightprobe.layout",
 //         "lightprobe.units" and "lightprobe.nside" carry the metadata.
-//         Reads R,G,B or Y (grey, or Y/RY/BY luminance-chroma) channels of any pixel type.
+//         Reads R,G,B or Y (grey, or Y/RY/BY luminance-chroma) channels of any pixel type,
+//         or, in a file without them, its one layer that has R,G,B ("ViewLayer.Combined.R"
+//         of a Blender render; two such layers are refused); a multi-part file's first part,
+//         with a warning.
 //         The validity mask is channel "A" (1 valid, 0 invalid): written only when the
 //         map's mask is non-empty, read as the mask only when the file also carries
 //         "lightprobe.layout" (a foreign RGBA file's alpha is coverage, not a mask).
@@ -19,6 +22,8 @@
 //   .pfm  Portable float map (colour "PF" and grey "Pf", either byte order; the scale's
 //         magnitude is ignored, as most readers do). PFM carries no metadata: the layout
 //         is inferred from the size on read and the units read back as relative.
+//   .tif  Read only: floating-point TIFFs (32-bit IEEE or LogLuv, panorama stitchers' HDR
+//         output) through OpenCV; alpha as an EXR's. Integer TIFFs are camera codes: refused.
 // .hdr and .pfm cannot hold a mask: writing a map with invalid pixels to them throws.
 // A healpix map is stored as an image nside wide and 12 nside tall: face f occupies rows
 // [f nside, (f+1) nside), and the pixel at (column ix, row iy) of a face is NESTED index

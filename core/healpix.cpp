@@ -79,9 +79,13 @@ Vec3 healpix_direction(int64_t nside, int64_t pixel) {
 int64_t healpix_pixel(int64_t nside, Vec3 d) {
   const double length = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
   const double z = d.z / length;
-  const double sin_theta = std::fabs(z) > kPolarZ ? std::sqrt(d.x * d.x + d.y * d.y) / length : -5;
+  const double sin_theta = std::fabs(z) > kPolarZ ? std::sqrt(d.x * d.x + d.y * d.y) / length : 0.0;  // unread
+  return healpix_pixel_at(nside, z, sin_theta, wrap_longitude(std::atan2(d.y, d.x)));
+}
+
+int64_t healpix_pixel_at(int64_t nside, double z, double sin_theta, double phi) {
   const double za = std::fabs(z);
-  const double tt = wrap_longitude(std::atan2(d.y, d.x)) * kInvHalfPi;  // [0, 4)
+  const double tt = phi * kInvHalfPi;  // [0, 4)
   const double n = double(nside);
   int face;
   int64_t ix, iy;
@@ -95,7 +99,7 @@ int64_t healpix_pixel(int64_t nside, Vec3 d) {
   } else {  // polar caps
     const int quarter = std::min(int(tt), 3);
     const double tp = tt - quarter;
-    const double t = sin_theta > -2. ? n * sin_theta / std::sqrt((1. + za) / 3.) : n * std::sqrt(3 * (1 - za));
+    const double t = za > kPolarZ ? n * sin_theta / std::sqrt((1. + za) / 3.) : n * std::sqrt(3 * (1 - za));
     const int64_t ascending = std::min(int64_t(tp * t), nside - 1);
     const int64_t descending = std::min(int64_t((1.0 - tp) * t), nside - 1);
     if (z >= 0) {

@@ -20,6 +20,11 @@ namespace lp {
 Vec3 healpix_direction(int64_t nside, int64_t pixel);
 // The pixel holding `direction` (any non-zero length).
 int64_t healpix_pixel(int64_t nside, Vec3 direction);
+// The same from the direction's z = cos theta, sin theta and azimuth phi in [0, 2 pi): what
+// healpix_pixel computes from a vector (sin theta is read only where |z| > 0.99), for callers
+// that know them exactly, a latlong grid's rows and columns, without a square root and an
+// arc tangent per pixel.
+int64_t healpix_pixel_at(int64_t nside, double z, double sin_theta, double phi);
 // A point inside `pixel` at (u1, u2) in [0, 1]^2 of its face coordinates (0.5, 0.5: the
 // centre), through the inverse HEALPix projection (HEALPix C++'s xyf2loc; Calabretta &
 // Roukema 2007): uniform (u1, u2) give points uniform in solid angle over the pixel, as

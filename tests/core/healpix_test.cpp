@@ -100,3 +100,35 @@ TEST(Healpix, PointsInsideAPixelFallInIt) {
 
 }  // namespace
 }  // namespace lp
+
+namespace lp {
+namespace {
+
+// q2tree bins a latlong or hemisphere map's pixels by healpix_pixel_at from each row's cos
+// and sin theta and each column's phi: every pixel of the grids it bins (the shared maps'
+// sizes, odd sizes, the default hemisphere) falls in the pixel of its direction vector, as
+// healpix_pixel (chealpix's vec2pix_nest64, above) puts it.
+TEST(Healpix, APixelFromAGridsAnglesIsThePixelOfItsDirection) {
+  struct Grid {
+    int w, h;
+    double span;  // theta of the last row's far edge: pi (latlong) or pi / 2 (hemisphere)
+    int nside;
+  };
+  for (const Grid g : {Grid{1024, 512, M_PI, 128}, Grid{2048, 1024, M_PI, 256}, Grid{256, 128, M_PI, 32},
+                       Grid{202, 101, M_PI, 16}, Grid{360, 90, M_PI / 2, 64}, Grid{4096, 2048, M_PI, 512}}) {
+    SCOPED_TRACE(testing::Message() << g.w << "x" << g.h << " nside " << g.nside);
+    size_t differ = 0;
+    for (int v = 0; v < g.h; ++v) {
+      const double t = g.span * (v + 0.5) / g.h, st = std::sin(t), ct = std::cos(t);
+      for (int u = 0; u < g.w; ++u) {
+        const double p = 2 * M_PI * (u + 0.5) / g.w;
+        const Vec3 d{st * std::cos(p), st * std::sin(p), ct};
+        differ += healpix_pixel_at(g.nside, ct, st, p) != healpix_pixel(g.nside, d);
+      }
+    }
+    EXPECT_EQ(differ, 0u);
+  }
+}
+
+}  // namespace
+}  // namespace lp

@@ -58,7 +58,10 @@ int run_stream(const StreamArgs& args, const Output& out) {
   else if (!args.exposures.empty()) lo.exposure_cycle = parse_numbers(args.exposures, "--exposures");
   for (double t : lo.exposure_cycle)
     if (!(t > 0)) throw InputError("--exposures must be positive seconds");
-  if (!args.response.empty()) lo.response = load_response(args.response);
+  if (args.response == "srgb")
+    lo.response = srgb_response(256);
+  else if (!args.response.empty())
+    lo.response = load_response(args.response);
   if (!args.photometric.empty()) lo.photometric = load_photometric(args.photometric), lo.photometric_file = args.photometric;
   if (!args.camera.empty()) lo.camera = read_camera_model(args.camera), lo.camera_file = args.camera;
   lo.fov_deg = args.fov;
@@ -135,7 +138,7 @@ std::vector<Command> live_commands() {
          f.opt("--token", a->token, "Bearer token required on every route (needed beyond localhost)");
          f.opt("--exposures", a->exposures, "Bracketing: exposure times cycled by the camera, seconds; or 'auto': the fewest that cover the scene, re-planned as it changes");
          f.opt("--bracketing", a->bracketing, "auto: the camera's sequencer when it has one, else per-frame writes; sequencer; writes").one_of({"auto", "sequencer", "writes"});
-         f.opt("--response", a->response, "Camera response (hdr response); default linear");
+         f.opt("--response", a->response, "Camera response: a response.json (hdr response), or srgb for codes written as sRGB (a phone's JPEGs); default linear");
          f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");
          f.opt("--camera", a->camera, "Calibrated camera model (default: equidistant fisheye)");
          f.opt("--fov", a->fov, "Fisheye field of view / image circle, deg");

@@ -58,6 +58,22 @@ double radical_inverse(uint64_t i, uint64_t base) {
 
 }  // namespace
 
+CameraResponse srgb_response(int levels) {
+  if (levels < 2 || levels > 65536) throw InputError(fmt::format("response levels {} outside [2, 65536]", levels));
+  auto decode = [&](double z) {
+    const double v = z / double(levels - 1);
+    return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+  };
+  CameraResponse r;
+  r.levels = levels;
+  const double mid = decode(levels / 2);
+  for (auto& g : r.log_exposure) {
+    g.resize(size_t(levels));
+    for (int z = 0; z < levels; ++z) g[size_t(z)] = float(std::log(decode(std::max(double(z), 0.5)) / mid));
+  }
+  return r;
+}
+
 CameraResponse linear_response(int levels) {
   if (levels < 2 || levels > 65536) throw InputError(fmt::format("response levels {} outside [2, 65536]", levels));
   CameraResponse r;

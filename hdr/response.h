@@ -27,6 +27,10 @@ struct CameraResponse {
 // g(z) = ln(z / (levels/2)), so that g(levels/2) = 0; level 0 (ln 0) is given half a level,
 // ln(0.5 / (levels/2)), a finite upper bound.
 CameraResponse linear_response(int levels = 256);
+// The sRGB curve (IEC 61966-2-1's decoding) as a response, for codes a camera wrote as sRGB
+// (a phone's JPEGs): g(z) = ln(srgb(z / (levels - 1)) / srgb(mid)), mid = levels/2 so that
+// g(mid) = 0, level 0 given half a level as in linear_response.
+CameraResponse srgb_response(int levels = 256);
 
 struct DebevecOptions {
   double lambda = 50.0;  // smoothness weight (Debevec–Malik's λ, for 256 levels)

@@ -2,6 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <vector>
+
 #include "core/error.h"
 #include "hdr/log_sensor.h"
 
@@ -34,12 +40,36 @@ std::optional<std::string> undecodable_frame(const CameraFrame& frame, FrameDeco
   return std::nullopt;
 }
 
-void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric) {
+int pixel_format_bits(const std::string& pixel_format) {
+  size_t i = pixel_format.size();
+  while (i > 0 && std::isdigit(static_cast<unsigned char>(pixel_format[i - 1]))) --i;
+  if (i == pixel_format.size() || pixel_format.size() - i > 2) return 0;
+  const int bits = std::stoi(pixel_format.substr(i));
+  return bits >= 1 && bits <= 16 ? bits : 0;
+}
+
+void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric,
+                         const CameraResponse* response) {
   if (decode != FrameDecode::Relative && !photometric) throw InputError("decode_single_frame: no photometric calibration");
   if (decode == FrameDecode::LogSensor) {
     if (auto why = undecodable_frame(frame, decode)) throw InputError(*why);
     frame.image = decode_log_sensor(frame.image, *photometric);
     return;
+  }
+  const int bits = pixel_format_bits(frame.pixel_format);
+  if (response && bits > 0) {
+    const size_t levels = size_t(1) << bits;
+    if (size_t(response->levels) != levels)
+      throw InputError(fmt::format("--response: its {} levels do not fit frame {}'s {}-bit codes ({}, {} levels)",
+                                   response->levels, frame.sequence, bits, frame.pixel_format, levels));
+    const double top = double(levels - 1);
+    std::array<std::vector<float>, 3> linear;
+    for (size_t c = 0; c < 3; ++c)
+      for (float g : response->log_exposure[c]) linear[c].push_back(float(std::exp(double(g))));
+    for (size_t i = 0; i < frame.image.rgb.size(); ++i) {
+      const auto level = size_t(std::lround(double(frame.image.rgb[i]) * top));
+      frame.image.rgb[i] = linear[i % 3][std::min(level, levels - 1)];
+    }
   }
   if (frame.exposure_s > 0)
     for (float& v : frame.image.rgb) v = float(v / frame.exposure_s);

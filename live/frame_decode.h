@@ -18,6 +18,7 @@
 
 #include "calib/photometric.h"
 #include "core/image_io.h"
+#include "hdr/response.h"
 #include "probe/camera_source.h"
 
 namespace lp {
@@ -43,8 +44,16 @@ FrameDecode plan_frame_decode(const FrameDecodeSetup& setup);
 // float frame (RGBFloat: radiance replayed from .exr/.hdr/.pfm) has none.
 std::optional<std::string> undecodable_frame(const CameraFrame& frame, FrameDecode decode);
 
+// The bit depth of a frame's codes from its pixel format's name (Mono8 8, Mono12 12,
+// BayerRG16 16, RGB8 8), 0 for float frames (RGBFloat) or a name without a trailing depth.
+int pixel_format_bits(const std::string& pixel_format);
+
 // A single frame (no bracket) to radiance, in place, as described above; `photometric` is
-// required for Linear and LogSensor.
-void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric);
+// required for Linear and LogSensor. With `response` (stream --response, from hdr response)
+// a linear decode first maps each code through the camera's curve (exp g(z)), as the bracket
+// fusion does; its levels must be the frame's 2^bits, else InputError. Without it the codes
+// are taken as linear. (Until stop 36 a single-exposure stream ignored --response.)
+void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric,
+                         const CameraResponse* response = nullptr);
 
 }  // namespace lp

@@ -415,7 +415,8 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     map->units = radiance.units;
     timings.stage[2] = seconds_since(t0);  // fusion and unwrap in one pass
   } else {
-    decode_single_frame(b.frames[0], decode_, options_.photometric ? &*options_.photometric : nullptr);
+    decode_single_frame(b.frames[0], decode_, options_.photometric ? &*options_.photometric : nullptr,
+                        options_.response ? &*options_.response : nullptr);
     RgbImage radiance = std::move(b.frames[0].image);
     fuse_s = seconds_since(t0);
     t0 = Clock::now();

@@ -164,3 +164,23 @@ TEST(ResponseFile, LevelsThatAreNotAnIntegerCountAreRefusedByName) {
 
 }  // namespace
 }  // namespace lp
+
+namespace lp {
+namespace {
+
+// The sRGB response: relative exposures in the ratios IEC 61966-2-1's decoding gives, worked
+// out by hand: the top code is 1 / 0.2158605 = 4.6326 times the middle one (128), code 10
+// on the linear toe (10/255) / 12.92.
+TEST(SrgbResponse, HoldsTheSrgbDecodingRelativeToTheMiddleCode) {
+  const CameraResponse r = srgb_response(256);
+  for (const auto& g : r.log_exposure) {
+    ASSERT_EQ(g.size(), 256u);
+    EXPECT_NEAR(g[128], 0.0, 1e-7);
+    EXPECT_NEAR(std::exp(double(g[255])), 1 / 0.2158605, 1e-4);
+    EXPECT_NEAR(std::exp(double(g[10])), 10.0 / 255 / 12.92 / 0.2158605, 1e-6);
+  }
+  EXPECT_FALSE(r.linear);
+}
+
+}  // namespace
+}  // namespace lp

@@ -1,0 +1,62 @@
+#include "live/frame_decode.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "core/error.h"
+
+namespace lp {
+namespace {
+
+TEST(FrameDecode, ThePixelFormatsNameGivesTheCodesBitDepth) {
+  EXPECT_EQ(pixel_format_bits("RGB8"), 8);
+  EXPECT_EQ(pixel_format_bits("Mono12"), 12);
+  EXPECT_EQ(pixel_format_bits("BayerRG16"), 16);
+  EXPECT_EQ(pixel_format_bits("RGBFloat"), 0);
+  EXPECT_EQ(pixel_format_bits("Mono123"), 0);
+  EXPECT_EQ(pixel_format_bits(""), 0);
+}
+
+// A single-exposure stream given --response maps each code through the camera's curve
+// before dividing by the exposure, as the bracket fusion does (it used to ignore the
+// response and take the codes as linear); a response of other levels than the frame's codes
+// is refused; float frames and streams without a response are unchanged.
+TEST(FrameDecode, ASingleFrameGoesThroughTheGivenResponse) {
+  CameraResponse response;
+  response.levels = 256;
+  for (int c = 0; c < 3; ++c)
+    for (int z = 0; z < 256; ++z) response.log_exposure[size_t(c)].push_back(float(std::log((c + 1) * (z + 1.0))));
+  CameraFrame frame;
+  frame.pixel_format = "RGB8";
+  frame.exposure_s = 0.5;
+  frame.image.width = frame.image.height = 1;
+  frame.image.rgb = {10.0f / 255, 20.0f / 255, 255.0f / 255};
+  CameraFrame plain = frame;
+  decode_single_frame(frame, FrameDecode::Relative, nullptr, &response);
+  EXPECT_NEAR(frame.image.rgb[0], 1 * 11.0 / 0.5, 1e-4);
+  EXPECT_NEAR(frame.image.rgb[1], 2 * 21.0 / 0.5, 1e-4);
+  EXPECT_NEAR(frame.image.rgb[2], 3 * 256.0 / 0.5, 1e-3);
+  decode_single_frame(plain, FrameDecode::Relative, nullptr);  // no response: codes / exposure
+  EXPECT_FLOAT_EQ(plain.image.rgb[0], float(10.0f / 255 / 0.5));
+  CameraFrame deep = frame;
+  deep.pixel_format = "Mono12";
+  try {
+    decode_single_frame(deep, FrameDecode::Relative, nullptr, &response);
+    FAIL() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("its 256 levels do not fit frame 0's 12-bit codes (Mono12, 4096 levels)"),
+              std::string::npos)
+        << e.what();
+  }
+  CameraFrame radiance = plain;
+  radiance.pixel_format = "RGBFloat";
+  radiance.exposure_s = 0;
+  const auto before = radiance.image.rgb;
+  decode_single_frame(radiance, FrameDecode::Relative, nullptr, &response);
+  EXPECT_EQ(radiance.image.rgb, before);
+}
+
+}  // namespace
+}  // namespace lp

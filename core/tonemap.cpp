@@ -59,6 +59,8 @@ uint8_t srgb_code(float v) {
   return uint8_t(std::clamp(std::lround(s * 255.0), 0L, 255L));
 }
 
+double srgb_to_linear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
+
 std::vector<float> tone_map(ImageView image, const ToneMapOptions& options) {
   if (image.channels != 3) throw std::invalid_argument("tone_map: the image is not RGB");
   const int width = image.width, height = image.height;

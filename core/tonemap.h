@@ -29,6 +29,8 @@ struct ToneMapOptions {
 // The sRGB transfer of one linear display value in [0, 1] to an 8-bit code (NaN and values
 // <= 0 give 0, values >= 1 give 255): the one used by every picture (write_display_image).
 uint8_t srgb_code(float linear);
+// The inverse: IEC 61966-2-1's decoding of an sRGB-encoded value in [0, 1] to linear light.
+double srgb_to_linear(double encoded);
 
 // An RGB view (its mask, if any, marks the invalid pixels) -> packed display RGB, row-major.
 std::vector<float> tone_map(ImageView image, const ToneMapOptions& options = {});

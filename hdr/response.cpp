@@ -16,6 +16,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/tonemap.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/json_file.h"
@@ -60,10 +61,7 @@ double radical_inverse(uint64_t i, uint64_t base) {
 
 CameraResponse srgb_response(int levels) {
   if (levels < 2 || levels > 65536) throw InputError(fmt::format("response levels {} outside [2, 65536]", levels));
-  auto decode = [&](double z) {
-    const double v = z / double(levels - 1);
-    return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
-  };
+  auto decode = [&](double z) { return srgb_to_linear(z / double(levels - 1)); };
   CameraResponse r;
   r.levels = levels;
   const double mid = decode(levels / 2);

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/tonemap.h"
 
 namespace lp {
 
@@ -26,7 +27,7 @@ CodesReport linearise_codes(RgbImage& image, const CodeCurve& curve, const std::
       const double v = double(z) / top;
       double linear = v;
       if (curve.kind == CodeCurve::Kind::Srgb)
-        linear = v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+        linear = srgb_to_linear(v);
       else if (curve.kind == CodeCurve::Kind::Table)
         linear = curve.table[size_t(c)][z];
       lut[size_t(c)][z] = float(linear);

@@ -175,17 +175,28 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
       },
       [&] { progress.advance(); });
   progress.finish();
+  // An LDR photo's lights are where it clips: said once, for the frame that clips most.
+  const UnwrapSequenceReport::Frame* most_clipped = nullptr;
+  size_t clipped_frames = 0, radiance_frames = 0;
+  for (const auto& f : r.frames) {
+    radiance_frames += f.codes.empty();
+    if (!(f.clipped_fraction > 0)) continue;
+    ++clipped_frames;
+    if (!most_clipped || f.clipped_fraction > most_clipped->clipped_fraction) most_clipped = &f;
+  }
+  if (most_clipped)
+    std::fprintf(stderr,
+                 "lightprobe: warning: %s: %.3g %% of its pixels are at the top code%s: their light is clipped (at "
+                 "least that bright); fuse a bracket (hdr fuse) to measure it\n",
+                 most_clipped->file.c_str(), 100 * most_clipped->clipped_fraction,
+                 clipped_frames > 1 ? fmt::format(" (the most of {} clipped frames)", clipped_frames).c_str() : "");
+  if (!args.codes.empty() && radiance_frames > 0)
+    std::fprintf(stderr, "lightprobe: warning: %s: radiance already; --codes applies to camera images and is not used\n",
+                 radiance_frames == r.frames.size() ? args.inputs[0].c_str()
+                                                    : fmt::format("{} of the frames", radiance_frames).c_str());
   for (const auto& f : r.frames) {  // a sliver of a probe: a map, but mostly holes
     if (f.ball_fit && !ball_fit_warning(*f.ball_fit).empty())
       std::fprintf(stderr, "lightprobe: warning: %s: %s\n", f.file.c_str(), ball_fit_warning(*f.ball_fit).c_str());
-    if (f.clipped_fraction > 0)  // an LDR photo: its lights are where it clips
-      std::fprintf(stderr,
-                   "lightprobe: warning: %s: %.3g %% of its pixels are at the top code: their light is clipped (at "
-                   "least that bright); fuse a bracket (hdr fuse) to measure it\n",
-                   f.file.c_str(), 100 * f.clipped_fraction);
-    if (!args.codes.empty() && f.codes.empty())
-      std::fprintf(stderr, "lightprobe: warning: %s: radiance already; --codes applies to camera images and is not used\n",
-                   f.file.c_str());
     if (f.valid_fraction < kFewValidWarning)
       std::fprintf(stderr, "lightprobe: warning: %s: only %.1f %% of the map is valid (is the probe cut by the image edge?)\n",
                    f.file.c_str(), 100 * f.valid_fraction);

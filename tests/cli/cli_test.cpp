@@ -397,6 +397,17 @@ TEST(Cli, APhotosCodesAreMadeLinearBeforeTheyBecomeAMap) {
   lp::EnvMap m = lp::read_envmap(map.string());
   EXPECT_NEAR(m.rgb[3 * (16 * 64 + 10)], 0.2158605, 1e-6);
   fs::remove(map);
+  // A photo with a clipped light (36 of 14,400 pixels at the top code) says so once.
+  const fs::path lamp = scratch() / "lamp8.png";
+  grey.rgb.assign(3 * 120 * 120, 128.0f / 255.0f);
+  for (int y = 57; y < 63; ++y)
+    for (int x = 57; x < 63; ++x) grey.rgb[3 * size_t(y * 120 + x)] = 1.0f;
+  lp::write_code_image(lamp.string(), grey, 8);
+  r = lightprobe("probe unwrap --json " + lamp.string() + ball);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["per_frame"][0]["clipped_fraction"].get<double>(), 36.0 / 14400, 1e-12);
+  EXPECT_NE(r.err.find(lamp.string() + ": 0.25 % of its pixels are at the top code"), std::string::npos) << r.err;
+  fs::remove(map);
   const CliRun refused = lightprobe("probe unwrap " + png16.string() + ball);
   expect_one_line_error(refused, png16.string());
   EXPECT_NE(refused.err.find("16-bit camera codes may be linear"), std::string::npos) << refused.err;

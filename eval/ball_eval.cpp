@@ -4,13 +4,18 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <random>
 
 #include "core/error.h"
+#include "core/image_io.h"
+#include "core/image_view.h"
+#include "core/tonemap.h"
 #include "probe/cube_map.h"
 #include "probe/synthetic_probe.h"
 
@@ -155,7 +160,39 @@ double lit_share(const BallCase& c) {
   return all ? double(lit) / all : 0;
 }
 
-BallRow measure(const std::string& label, const BallCase& c, BallBackground bg) {
+// The render around the ball, tone-mapped, the true rim green and the found one red, so
+// that a miss can be looked at: crop of 1.6 radii around the truth, scaled up to at least
+// 480 px (nearest, so that the rims' pixels show).
+void write_case_picture(const std::string& path, const BallCase& c, const std::optional<BallInImage>& found) {
+  const double r = c.truth.radius_px;
+  const int x0 = std::max(0, int(std::floor(c.truth.cx - 1.6 * r))), y0 = std::max(0, int(std::floor(c.truth.cy - 1.6 * r)));
+  const int x1 = std::min(c.image.width, int(std::ceil(c.truth.cx + 1.6 * r))),
+            y1 = std::min(c.image.height, int(std::ceil(c.truth.cy + 1.6 * r)));
+  const int scale = std::max(1, int(std::ceil(480.0 / std::max(1, x1 - x0))));
+  const std::vector<float> shown = tone_map(image_view(c.image), {});
+  const int w = (x1 - x0) * scale, h = (y1 - y0) * scale;
+  std::vector<float> out(3 * size_t(w) * size_t(h));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t src = 3 * (size_t(y0 + y / scale) * size_t(c.image.width) + size_t(x0 + x / scale));
+      std::copy_n(&shown[src], 3, &out[3 * (size_t(y) * size_t(w) + size_t(x))]);
+    }
+  auto rim = [&](const BallInImage& b, std::array<float, 3> colour) {
+    const int steps = int(8 * M_PI * b.radius_px * scale);
+    for (int k = 0; k < steps; ++k) {
+      const double a = 2 * M_PI * k / steps;
+      // Pixel centres are at integer + 0.5 in the ball's coordinates.
+      const int x = int(std::floor((b.cx + b.radius_px * std::cos(a) - x0) * scale)),
+                y = int(std::floor((b.cy + b.radius_px * std::sin(a) - y0) * scale));
+      if (x >= 0 && y >= 0 && x < w && y < h) std::copy(colour.begin(), colour.end(), &out[3 * (size_t(y) * size_t(w) + size_t(x))]);
+    }
+  };
+  rim(c.truth, {0.0f, 1.0f, 0.0f});
+  if (found) rim(*found, {1.0f, 0.0f, 0.0f});
+  write_display_image(path, w, h, out);
+}
+
+BallRow measure(const std::string& label, const BallCase& c, BallBackground bg, const EvalBallOptions& options) {
   BallRow row;
   row.map = label, row.background = background_name(bg), row.radius_px = c.truth.radius_px;
   if (bg == BallBackground::Black && lit_share(c) < 0.01) {
@@ -163,14 +200,23 @@ BallRow measure(const std::string& label, const BallCase& c, BallBackground bg) 
     return row;
   }
   const auto t0 = std::chrono::steady_clock::now();
+  std::optional<BallInImage> found;
   try {
-    const BallInImage found = find_ball(c.image, {}, &row.report);
+    found = find_ball(c.image, {}, &row.report);
     row.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     row.found = true;
-    row.centre_error_px = std::hypot(found.cx - c.truth.cx, found.cy - c.truth.cy);
-    row.radius_error_px = found.radius_px - c.truth.radius_px;
+    row.centre_error_px = std::hypot(found->cx - c.truth.cx, found->cy - c.truth.cy);
+    row.radius_error_px = found->radius_px - c.truth.radius_px;
   } catch (const InputError& e) {
     row.error = e.what();
+  }
+  if (!options.output_dir.empty() && options.picture_beyond_px >= 0 &&
+      (!row.found || std::max(row.centre_error_px, std::fabs(row.radius_error_px)) > options.picture_beyond_px)) {
+    make_output_directory(options.output_dir);
+    write_case_picture((fs::path(options.output_dir) /
+                        fmt::format("ball_{}_{}_R{:.0f}.png", label, row.background, c.truth.radius_px))
+                           .string(),
+                       c, found);
   }
   // What detection is weighed against: unwrapping the same photo (latlong 1024 x 512).
   const auto t1 = std::chrono::steady_clock::now();
@@ -201,7 +247,7 @@ EvalBallReport evaluate_ball_detection(const EvalBallOptions& options, const Eva
       for (BallBackground bg : options.backgrounds) {
         const uint64_t case_seed = seed++;
         if (!options.include || options.include(label, r, bg))
-          report.rows.push_back(measure(label, render_ball_case(world, bg, r, photo, case_seed), bg));
+          report.rows.push_back(measure(label, render_ball_case(world, bg, r, photo, case_seed), bg, options));
       }
     steps.advance();
   }

@@ -52,6 +52,11 @@ struct EvalBallOptions {
   std::vector<double> radii{60, 150, 400};
   std::vector<BallBackground> backgrounds = all_ball_backgrounds();
   std::string output_dir;  // created; receives ball.csv (empty: no file)
+  // With output_dir: a picture of every case found beyond `picture_beyond_px` (centre or
+  // radius error), ball_<map>_<background>_R<r>.png, the render tone-mapped around the ball
+  // with the true rim in green and the found one in red (a case missed: the true rim
+  // alone). Negative: no pictures.
+  double picture_beyond_px = -1;
   // A subset of the grid (empty: all): cases for which it returns false are skipped, and
   // the others keep the seeds, hence the renders, they have in the whole grid.
   std::function<bool(const std::string& map_label, double radius_px, BallBackground)> include;

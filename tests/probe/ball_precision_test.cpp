@@ -85,6 +85,8 @@ TEST(BallPrecision, EveryMapSizeAndBackgroundOnDemand) {
     };
   o.photo = kPhoto;
   o.output_dir = dir;
+  // LIGHTPROBE_BALL_EVAL_PICTURES=0.2: a picture of every case beyond 0.2 px (EvalBallOptions).
+  if (const char* v = std::getenv("LIGHTPROBE_BALL_EVAL_PICTURES")) o.picture_beyond_px = std::atof(v);
   const EvalBallReport rep = evaluate_ball_detection(o, [](size_t d, size_t t) { std::fprintf(stderr, "%zu/%zu\n", d, t); });
   std::printf("%s", rep.summary().c_str());
 }

@@ -71,6 +71,18 @@ ImageHeader png_header(const std::string& path, std::string_view b) {
     fail(path, "PNG", fmt::format("size {}x{}", h.width, h.height));
   const double pixel_bytes = double(h.width) * double(h.height) * channels * depth / 8;
   h.min_file_bytes = uint64_t(pixel_bytes / 1032);
+  // An eXIf chunk before the image data (PNG 1.5's place for EXIF; browsers honour its
+  // Orientation): its TIFF structure's orientation.
+  for (size_t i = 8; i + 8 <= b.size();) {
+    const size_t length = be32(b, i);
+    const std::string_view type = b.substr(i + 4, 4);
+    if (type == "IDAT" || type == "IEND" || length > b.size() - i - 8) break;
+    if (type == "eXIf") {
+      h.orientation = tiff_orientation(b.substr(i + 8, length));
+      break;
+    }
+    i += 12 + length;
+  }
   return h;
 }
 

@@ -5,7 +5,8 @@
 //
 // Formats: PNG (IHDR), JPEG (the first SOFn frame header), TIFF (the first IFD's
 // ImageWidth and ImageLength; classic TIFF, not BigTIFF), binary and ASCII PNM (P1-P6)
-// and BMP. Also the EXIF Orientation a JPEG (APP1 "Exif") or a TIFF (its first IFD) states.
+// and BMP. Also the EXIF Orientation a JPEG (APP1 "Exif"), a PNG (eXIf) or a TIFF (its first
+// IFD) states.
 #pragma once
 
 #include <cstdint>

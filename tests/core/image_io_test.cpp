@@ -12,6 +12,7 @@
 #include <ImfPartType.h>
 #include <ImfStandardAttributes.h>
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -1125,6 +1126,31 @@ TEST(ImageIo, FloatingPointTiffsAreMapsAndIntegerOnesAreNot) {
   expect_input_error([&] { read_envmap(dir + "codes.tif"); }, {dir + "codes.tif", "integer samples are camera codes"});
   EXPECT_EQ(read_rgb_image(dir + "rgba.tif").code_bits, 0);
   EXPECT_EQ(read_rgb_image(dir + "codes.tif").code_bits, 16);
+}
+
+// A PNG's eXIf chunk (before the image data) turns it as a JPEG's EXIF does, as browsers
+// show it: a 3x2 PNG with Orientation 6 reads 2x3, the stored bottom-left pixel top left.
+TEST(ImageIo, APngsExifChunkTurnsItToo) {
+  const std::string dir = temp_dir();
+  RgbImage img;
+  img.width = 3, img.height = 2;
+  for (int i = 0; i < 6; ++i)
+    for (int c = 0; c < 3; ++c) img.rgb.push_back(float(40 * i + 1) / 255.0f);
+  write_code_image(dir + "plain.png", img, 8);
+  const std::string png = read_bytes(dir + "plain.png");
+  std::string tiff = std::string("MM\0*\0\0\0\x08", 8) + std::string("\0\x01", 2) +
+                     std::string("\x01\x12\0\x03\0\0\0\x01\0\x06\0\0", 12) + std::string(4, '\0');
+  const std::string type_and_data = "eXIf" + tiff;
+  const uint32_t crc = uint32_t(crc32(0, reinterpret_cast<const Bytef*>(type_and_data.data()), uInt(type_and_data.size())));
+  auto be32 = [](uint32_t v) { return std::string{char(v >> 24), char((v >> 16) & 0xff), char((v >> 8) & 0xff), char(v & 0xff)}; };
+  const std::string chunk = be32(uint32_t(tiff.size())) + type_and_data + be32(crc);
+  write_bytes(dir + "turned.png", png.substr(0, 33) + chunk + png.substr(33));  // after IHDR (8 + 25 bytes)
+  const CameraImage turned = read_camera_image(dir + "turned.png");
+  ASSERT_EQ(turned.width, 2);
+  ASSERT_EQ(turned.height, 3);
+  EXPECT_FLOAT_EQ(turned.rgb[0], float(40 * 3 + 1) / 255.0f);  // stored (0, 1)
+  EXPECT_FLOAT_EQ(turned.rgb[3], float(40 * 0 + 1) / 255.0f);  // stored (0, 0)
+  EXPECT_EQ(read_camera_image(dir + "plain.png").width, 3);
 }
 
 TEST(ImageIo, MasksCannotBeWrittenToFormatsWithoutAlpha) {

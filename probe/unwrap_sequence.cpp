@@ -58,11 +58,17 @@ struct FirstPass {
   std::vector<char> seeded;
 };
 
-RgbImage read_frame(const std::string& f, const FirstPass& pass) {
+// Frames are read in both passes: a frame whose codes cannot be made linear is refused as
+// it is first read, before any ball is searched for.
+RgbImage read_frame(const std::string& f, const FirstPass& pass, const UnwrapSequenceOptions& o) {
   RgbImage img = read_rgb_image(f);
   if (pass.width && (img.width != pass.width || img.height != pass.height))
     throw InputError(fmt::format("{}: {}x{} differs from the sequence's {}x{}", f, img.width, img.height, pass.width,
                                  pass.height));
+  if (img.code_bits > 8 && !o.codes)
+    throw InputError(fmt::format("{}: {}-bit camera codes may be linear (a raw developer's) or gamma-encoded (an "
+                                 "editor's): say which with --codes linear, --codes srgb or --codes RESPONSE.json",
+                                 f, img.code_bits));
   return img;
 }
 
@@ -72,7 +78,7 @@ FirstPass first_pass(const std::vector<std::string>& files, const UnwrapSequence
   double reference_agreement = 0;  // track_ball's: of the last full search's sub-pixel fit
   for (size_t i = 0; i < files.size(); ++i) {
     const std::string& f = files[i];
-    RgbImage img = read_frame(f, pass);
+    RgbImage img = read_frame(f, pass, o);
     pass.width = img.width, pass.height = img.height;
     if (o.type == ProbeType::MirrorBall) {
       BallInImage ball;
@@ -154,16 +160,12 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
   std::vector<Vec3> centroids;
   for (size_t i = 0; i < files.size(); ++i) {
     RgbImage read_again;
-    const RgbImage& as_read = i < pass.kept.size() ? pass.kept[i] : (read_again = read_frame(files[i], pass));
+    const RgbImage& as_read = i < pass.kept.size() ? pass.kept[i] : (read_again = read_frame(files[i], pass, o));
     EnvMap map;
     UnwrapSequenceReport::Frame fr;
     fr.file = files[i];
     RgbImage linear;
     if (as_read.code_bits > 0) {  // camera codes: to radiance first (the ball was found on the codes)
-      if (!o.codes && as_read.code_bits != 8)
-        throw InputError(fmt::format("{}: {}-bit camera codes may be linear (a raw developer's) or gamma-encoded (an "
-                                     "editor's): say which with --codes linear, --codes srgb or --codes RESPONSE.json",
-                                     files[i], as_read.code_bits));
       const CodeCurve curve = o.codes.value_or(CodeCurve{});
       linear = as_read;
       const CodesReport codes = linearise_codes(linear, curve, files[i]);

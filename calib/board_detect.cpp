@@ -473,11 +473,13 @@ BoardDetections detect_boards(const std::vector<std::string>& images, const Boar
   out.per_image.resize(n);
   out.corners.resize(n);
   std::vector<std::array<int, 2>> sizes(n);
+  std::vector<char> turned(n, 0);
   std::vector<std::string> errors(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     try {
       const CameraImage img = read_camera_image(images[i]);
       sizes[i] = {img.width, img.height};
+      turned[i] = img.orientation != 1;
       out.per_image[i] = detect_board(img, board, options);
     } catch (const InputError& e) {
       errors[i] = e.what();
@@ -495,6 +497,7 @@ BoardDetections detect_boards(const std::vector<std::string>& images, const Boar
                        std::to_string(out.height) + " (one camera, one resolution)" +
                        turned_size_hint(sizes[i][0], sizes[i][1], out.width, out.height));
     }
+    out.turned += turned[i];
     if (out.per_image[i].found) {
       out.corners[i] = out.per_image[i].corners;
       ++out.found;

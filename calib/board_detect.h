@@ -117,6 +117,7 @@ struct BoardDetections {
   std::vector<std::vector<std::array<double, 2>>> corners;  // per image; empty: no board
   int width = 0, height = 0;  // the images' size
   int found = 0;              // images with the board
+  int turned = 0;             // images turned by their EXIF Orientation (read as shown)
   double seconds = 0;         // wall time of the whole stage
 };
 BoardDetections detect_boards(const std::vector<std::string>& images, const BoardSpec& board,

@@ -15,6 +15,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/warnings.h"
 #include "core/heap_tuning.h"
 #include "core/progress.h"
 
@@ -70,7 +71,13 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   CornersFile corners = !args.corners_in.empty() ? read_corners_vnl(args.corners_in, board, size[0], size[1])
                                                  : CornersFile{detect_boards(args.images, board, o.detect, [&] { detected.advance(); }), {}};
   detected.finish();
-  if (!args.corners_out.empty()) write_corners_vnl(args.corners_out, corners.detections);
+  if (!args.corners_out.empty()) {
+    write_corners_vnl(args.corners_out, corners.detections);
+    if (corners.detections.turned > 0)  // right for lightprobe and mrcal's solves; not for drawing on the files
+      warn(fmt::format("{}: {} of the {} images were turned by their EXIF Orientation: the corners are in the images "
+                       "as shown, and mrcal's tools that draw on the image files load them as stored",
+                       args.corners_out, corners.detections.turned, corners.detections.images.size()));
+  }
   GeometricCalibration run = calibrate_detections(std::move(corners.detections), board, o);
   run.notes.insert(run.notes.begin(), corners.notes.begin(), corners.notes.end());
   write_calibration_files(run, args.output, args.report_dir);

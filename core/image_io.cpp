@@ -1328,7 +1328,9 @@ CameraImage read_camera_image(const std::string& path) {
     // OpenCV's TIFF decoder turns TIFFs itself, even under IMREAD_UNCHANGED (8- and 16-bit,
     // grey and RGB, measured with OpenCV 4.6); JPEGs come from every decoder as stored.
     const int turn = header->format == ImageFormat::Tiff ? 1 : header->orientation;
-    return turned_for_display(decode_camera_image(path, bytes, *header), turn);
+    CameraImage image = turned_for_display(decode_camera_image(path, bytes, *header), turn);
+    image.orientation = header->orientation;
+    return image;
   });
 }
 

@@ -73,6 +73,7 @@ struct CameraImage {
   int width = 0, height = 0;
   int bit_depth = 8;
   std::vector<float> rgb;
+  int orientation = 1;  // the EXIF Orientation the pixels were turned by (1: read as stored)
 };
 CameraImage read_camera_image(const std::string& path);
 // For a message about camera images of different sizes: when one is the other turned 90

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <fstream>
 #include <string>
 
 #include "tests/cli/cli_run.h"
@@ -30,6 +31,7 @@ TEST(CalibCornersCli, CornersOutThenInGivesTheModelOfTheImages) {
   const CliRun detected = lightprobe("calib geometric" + images + common + " --corners-out " + vnl + " -o " +
                                      (dir / "a.yaml").string());
   ASSERT_EQ(detected.code, 0) << detected.err;
+  EXPECT_EQ(detected.err.find("EXIF Orientation"), std::string::npos) << detected.err;
   const std::string text = slurp(vnl);
   EXPECT_EQ(text.rfind("# filename x y level\n", 0), 0u);
   EXPECT_EQ(line_count(text), 1 + 6 * 54);
@@ -49,6 +51,29 @@ TEST(CalibCornersCli, CornersOutThenInGivesTheModelOfTheImages) {
                                   (dir / "c.yaml").string());
   ASSERT_EQ(sized.code, 0) << sized.err;
   expect_same_model(intrinsics_of(detected), intrinsics_of(sized));
+}
+
+// Photos turned by their EXIF Orientation (here 180 degrees, the stereo set's left views with
+// an APP1 Exif segment spliced in) are detected as shown; corners.vnl then holds corners in
+// the turned pixels, which mrcal's tools that draw on the files would misplace: said once.
+TEST(CalibCornersCli, CornersOfTurnedPhotosAreWrittenWithAWarning) {
+  const fs::path dir = scratch() / "corners_turned";
+  fs::create_directories(dir);
+  const std::string exif = std::string("Exif\0\0MM\0*\0\0\0\x08\0\x01", 16) +
+                           std::string("\x01\x12\0\x03\0\0\0\x01\0\x03\0\0", 12) + std::string(4, '\0');
+  const std::string app1 = std::string("\xFF\xE1", 2) + char((exif.size() + 2) >> 8) + char((exif.size() + 2) & 0xff) + exif;
+  std::string images;
+  for (int i = 1; i <= 6; ++i) {
+    const std::string name = "left0" + std::to_string(i) + ".jpg";
+    const std::string jpeg = slurp(shared("calib-opencv-stereo-9x6/" + name));
+    std::ofstream((dir / name).string(), std::ios::binary) << jpeg.substr(0, 2) + app1 + jpeg.substr(2);
+    images += " " + (dir / name).string();
+  }
+  const std::string vnl = (dir / "corners.vnl").string();
+  const CliRun r = lightprobe("calib geometric" + images + " --board 9x6 --square 25 --model plumb_bob --corners-out " +
+                              vnl + " -o " + (dir / "a.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find(vnl + ": 6 of the 6 images were turned by their EXIF Orientation"), std::string::npos) << r.err;
 }
 
 TEST(CalibCornersCli, BadCornerFilesAndMissingInputsAreUsageErrors) {

@@ -1070,17 +1070,20 @@ std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options)
   return guarded(name, "write", [&] { return encode_exr(name, map, options); });
 }
 
-// A .tif holding floating-point samples (radiance, read as a map is) rather than codes.
-static bool is_float_tiff_file(const std::string& path) {
-  if (!is_tiff_extension(path)) return false;
-  const std::string bytes = read_whole_file(path);
-  const auto header = read_image_header(path, bytes);
-  return header && header->format == ImageFormat::Tiff && header->float_samples;
-}
+static CameraImage camera_image_from_bytes(const std::string& path, const std::string& bytes);
 
 RgbImage read_rgb_image(const std::string& path) {
   RgbImage img;
-  if (is_radiance_file(path) || is_float_tiff_file(path)) {
+  // A .tif holds radiance (floating-point samples: read as a map is) or camera codes: its
+  // header says which, from the bytes read once for either.
+  std::string tiff;
+  bool float_tiff = false;
+  if (is_tiff_extension(path)) {
+    tiff = guarded(path, "read", [&] { return read_whole_file(path); });
+    const auto header = guarded(path, "read", [&] { return read_image_header(path, tiff); });
+    float_tiff = header && header->format == ImageFormat::Tiff && header->float_samples;
+  }
+  if (is_radiance_file(path) || float_tiff) {
     ReadMapOptions ro;
     ro.layout = Layout::Hemisphere;  // any W x H; the layout is not used
     EnvMap m = read_envmap(path, ro);
@@ -1091,7 +1094,7 @@ RgbImage read_rgb_image(const std::string& path) {
     img.units = m.units;
     return img;
   }
-  CameraImage c = read_camera_image(path);
+  CameraImage c = tiff.empty() ? read_camera_image(path) : camera_image_from_bytes(path, tiff);
   img.width = c.width;
   img.height = c.height;
   img.rgb = std::move(c.rgb);
@@ -1311,9 +1314,9 @@ std::string turned_size_hint(int width, int height, int other_width, int other_h
          "one orientation)";
 }
 
-CameraImage read_camera_image(const std::string& path) {
+// read_camera_image on the file's bytes, already read.
+static CameraImage camera_image_from_bytes(const std::string& path, const std::string& bytes) {
   return guarded(path, "read", [&] {
-    const std::string bytes = read_whole_file(path);
     if (bytes.empty()) fail(path, "cannot read: empty file");
     // The decoder allocates what the header claims: check the claim first.
     const auto header = read_image_header(path, bytes);
@@ -1332,6 +1335,10 @@ CameraImage read_camera_image(const std::string& path) {
     image.orientation = header->orientation;
     return image;
   });
+}
+
+CameraImage read_camera_image(const std::string& path) {
+  return camera_image_from_bytes(path, guarded(path, "read", [&] { return read_whole_file(path); }));
 }
 
 void make_output_directory(const std::string& dir) {

@@ -101,11 +101,14 @@ void write_uncertainty_plot(const std::string& path, const CalibrationResult& re
     if (std::isfinite(v)) hi = std::max(hi, v);
   hi = std::min(hi, 1000.0);
   const double lo = 0.01;
+  // The turbo table once: applyColorMap builds its 256 colours on every call (about 0.5 ms),
+  // which per cell and legend column was half of a forced-model calib command.
+  cv::Mat ramp(1, 256, CV_8U), turbo;
+  for (int i = 0; i < 256; ++i) ramp.at<uint8_t>(0, i) = uint8_t(i);
+  cv::applyColorMap(ramp, turbo, cv::COLORMAP_TURBO);
   auto colour = [&](double v) {
     const double t = std::clamp(std::log(std::max(v, lo) / lo) / std::log(hi / lo), 0.0, 1.0);
-    cv::Mat one(1, 1, CV_8U, cv::Scalar(int(std::lround(255 * t)))), c;
-    cv::applyColorMap(one, c, cv::COLORMAP_TURBO);
-    const auto b = c.at<cv::Vec3b>(0, 0);
+    const auto b = turbo.at<cv::Vec3b>(0, int(std::lround(255 * t)));
     return cv::Scalar(b[0], b[1], b[2]);
   };
   for (int j = 0; j < g.ny; ++j)

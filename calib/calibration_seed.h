@@ -69,7 +69,10 @@ ModelFit opencv_fisheye(const CalibrationProblem& problem, const ViewSubset& vie
 // cv::calibrateCamera with the flags of pinhole, OpenCV5 (plumb_bob) or OpenCV8 (rational).
 ModelFit opencv_calibrate_camera(const CalibrationProblem& problem, const ViewSubset& views, LensType type);
 // cv::omnidir::calibrate (Mei); views it drops have has_pose[i] = 0.
-ModelFit opencv_omnidir(const CalibrationProblem& problem, const ViewSubset& views, std::vector<char>* has_pose);
+// max_iterations: cv::omnidir's own Levenberg-Marquardt; a seed needs few (seed_mei: 30),
+// OpenCV run alone as the peer of `eval calib` runs to convergence (300).
+ModelFit opencv_omnidir(const CalibrationProblem& problem, const ViewSubset& views, std::vector<char>* has_pose,
+                        int max_iterations = 300);
 
 // The seed rounded to well above cv::calibrateCamera's run-to-run noise (1e-3 px core,
 // 1e-5 per distortion coefficient, 1e-6 rad, 1e-3 mm): what mrcal's polish starts from, so

@@ -19,6 +19,8 @@
 
 #include "live/pipeline.h"
 #include "live/bracket_unwrap.h"
+#include "live/frame_decode.h"
+#include "probe/camera_codes.h"
 #include "probe/camera_unwrap.h"
 #include "probe/fisheye.h"
 #include "probe/remap.h"
@@ -201,6 +203,34 @@ const int registered = [] {
   benchmark::RegisterBenchmark((figure + "ours").c_str(), BM_Live_FuseUnwrapBracket, true)->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark((figure + "ours:merge every pixel, then unwrap").c_str(), BM_Live_FuseUnwrapBracket, false)
       ->Unit(benchmark::kMillisecond);
+  return 0;
+}();
+}  // namespace
+
+namespace {
+// One single-exposure frame of 8-bit codes to radiance (stream --response with no bracket,
+// live/frame_decode.h): each code through the camera's response, then divided by the
+// exposure time. The floor is that division alone, one read and write of the frame.
+void BM_Live_DecodeSingleFrame(benchmark::State& state, bool with_response) {
+  const CameraResponse response = linear_response(256);
+  CameraFrame frame;
+  frame.image = bracket_frames()[1];
+  frame.pixel_format = "RGB8";
+  frame.exposure_s = kExposures[1];
+  const std::vector<float> codes = frame.image.rgb;
+  CodeTable table;  // as the stream keeps it (live/pipeline.cpp)
+  for (auto _ : state) {
+    state.PauseTiming();
+    frame.image.rgb = codes;
+    state.ResumeTiming();
+    decode_single_frame(frame, FrameDecode::Relative, nullptr, with_response ? &response : nullptr, &table);
+    benchmark::DoNotOptimize(frame.image.rgb.data());
+  }
+}
+const int registered_decode = [] {
+  const std::string figure = "live/decode_single_frame_1280x960/";
+  benchmark::RegisterBenchmark((figure + "ours").c_str(), BM_Live_DecodeSingleFrame, true)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark((figure + "floor").c_str(), BM_Live_DecodeSingleFrame, false)->Unit(benchmark::kMillisecond);
   return 0;
 }();
 }  // namespace

@@ -1,5 +1,7 @@
 #include "live/frame_decode.h"
 
+#include "probe/camera_codes.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -49,7 +51,7 @@ int pixel_format_bits(const std::string& pixel_format) {
 }
 
 void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric,
-                         const CameraResponse* response) {
+                         const CameraResponse* response, CodeTable* table) {
   if (decode != FrameDecode::Relative && !photometric) throw InputError("decode_single_frame: no photometric calibration");
   if (decode == FrameDecode::LogSensor) {
     if (auto why = undecodable_frame(frame, decode)) throw InputError(*why);
@@ -62,14 +64,29 @@ void decode_single_frame(CameraFrame& frame, FrameDecode decode, const Photometr
     if (size_t(response->levels) != levels)
       throw InputError(fmt::format("--response: its {} levels do not fit frame {}'s {}-bit codes ({}, {} levels)",
                                    response->levels, frame.sequence, bits, frame.pixel_format, levels));
-    const double top = double(levels - 1);
-    std::array<std::vector<float>, 3> linear;
-    for (size_t c = 0; c < 3; ++c)
-      for (float g : response->log_exposure[c]) linear[c].push_back(float(std::exp(double(g))));
-    for (size_t i = 0; i < frame.image.rgb.size(); ++i) {
-      const auto level = size_t(std::lround(double(frame.image.rgb[i]) * top));
-      frame.image.rgb[i] = linear[i % 3][std::min(level, levels - 1)];
+    CodeTable own;
+    if (!table || table->bits != bits) {
+      CodeCurve curve;
+      curve.kind = CodeCurve::Kind::Table;
+      curve.name = "--response";
+      for (size_t c = 0; c < 3; ++c)
+        for (float g : response->log_exposure[c]) curve.table[c].push_back(std::exp(double(g)));
+      (table ? *table : own) = make_code_table(curve, bits, "--response");
     }
+    const CodeTable& levels_table = table ? *table : own;
+    if (frame.exposure_s > 0) {
+      // The division by the exposure time folded into this frame's copy of the table: one
+      // pass over the frame instead of two, the same floats (each entry divided as a code's
+      // value would be).
+      CodeTable scaled = levels_table;
+      for (auto& channel : scaled.linear)
+        for (float& v : channel) v = float(v / frame.exposure_s);
+      apply_code_table(frame.image.rgb.data(), frame.image.rgb.size() / 3, scaled);
+    } else {
+      apply_code_table(frame.image.rgb.data(), frame.image.rgb.size() / 3, levels_table);
+    }
+    if (decode == FrameDecode::Linear) apply_photometric(frame.image, *photometric);
+    return;
   }
   if (frame.exposure_s > 0)
     for (float& v : frame.image.rgb) v = float(v / frame.exposure_s);

@@ -23,6 +23,8 @@
 
 namespace lp {
 
+struct CodeTable;  // probe/camera_codes.h
+
 enum class FrameDecode { Relative, Linear, LogSensor };
 // "relative" (no calibration: codes / exposure, relative units), "linear", "log-sensor".
 const char* to_string(FrameDecode decode);
@@ -53,7 +55,9 @@ int pixel_format_bits(const std::string& pixel_format);
 // a linear decode first maps each code through the camera's curve (exp g(z)), as the bracket
 // fusion does; its levels must be the frame's 2^bits, else InputError. Without it the codes
 // are taken as linear. (Until stop 36 a single-exposure stream ignored --response.)
+// `table`, when given, keeps the response's per-level table between frames: built at the
+// first frame (or when the bit depth changes), then reused (probe/camera_codes.h).
 void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric,
-                         const CameraResponse* response = nullptr);
+                         const CameraResponse* response = nullptr, CodeTable* table = nullptr);
 
 }  // namespace lp

@@ -1,5 +1,7 @@
 #include "live/pipeline.h"
 
+#include "probe/camera_codes.h"
+
 #include "live/bracket_unwrap.h"
 
 #include <fmt/format.h>
@@ -415,8 +417,9 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     map->units = radiance.units;
     timings.stage[2] = seconds_since(t0);  // fusion and unwrap in one pass
   } else {
+    if (!response_table_) response_table_ = std::make_unique<CodeTable>();
     decode_single_frame(b.frames[0], decode_, options_.photometric ? &*options_.photometric : nullptr,
-                        options_.response ? &*options_.response : nullptr);
+                        options_.response ? &*options_.response : nullptr, response_table_.get());
     RgbImage radiance = std::move(b.frames[0].image);
     fuse_s = seconds_since(t0);
     t0 = Clock::now();

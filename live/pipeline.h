@@ -146,6 +146,7 @@ class LivePipeline {
   // Unwrapping cache: rebuilt when the image size changes.
   struct RemapCache;
   std::unique_ptr<RemapCache> remap_;
+  std::unique_ptr<CodeTable> response_table_;  // --response on single frames, per level (built once)
   int64_t published_ = 0;
   // Auto-bracketing: the planner lives on the process thread; a new plan waits in
   // pending_cycle_ (under mutex_) until the capture thread gives it to the source.

@@ -28,11 +28,28 @@ struct CodesReport {
   double clipped_fraction = 0;   // share of pixels with a channel at the top code
 };
 
+// A curve's relative radiance for every level of `bits`-bit codes, per channel, in float:
+// built once for a sequence or a stream and applied to every frame (for 16-bit codes it is
+// 65,536 powers or exponentials a channel, milliseconds next to one frame's lookups).
+struct CodeTable {
+  int bits = 0;
+  std::array<std::vector<float>, 3> linear;  // [channel][level]
+};
+// Throws InputError naming `file` when a table curve's levels are not 2^bits.
+CodeTable make_code_table(const CodeCurve& curve, int bits, const std::string& file);
+
+// `rgb` (pixels x 3 floats, each a code / (2^bits - 1)) through `table`, in place; returns
+// how many pixels had a channel at the top code. A value outside [0, 1] takes the nearest
+// level's entry (a NaN the lowest).
+size_t apply_code_table(float* rgb, size_t pixels, const CodeTable& table);
+
 // `image`'s codes as relative linear radiance, in place (sRGB: IEC 61966-2-1's decoding; a
 // table: the entry of each code's level); code_bits is then 0. An image that is radiance
 // already (code_bits 0) is left alone. Pixels at the top code in any channel are clipped:
 // their light is at least that, and their share is reported. Throws InputError naming
 // `file` when a table's levels are not the image's 2^bits.
 CodesReport linearise_codes(RgbImage& image, const CodeCurve& curve, const std::string& file);
+// The same with a table built once (its bits must be the image's, else InputError naming `file`).
+CodesReport linearise_codes(RgbImage& image, const CodeTable& table, const std::string& file);
 
 }  // namespace lp

@@ -158,6 +158,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<CameraModel> base_model;
   std::vector<Vec3> centroids;
+  CodeTable code_table;  // built at the first frame of codes, for their bit depth
   for (size_t i = 0; i < files.size(); ++i) {
     // A kept frame is needed only here: taken, not copied (25 MB at 1920 x 1080).
     RgbImage frame = i < pass.kept.size() ? std::move(pass.kept[i]) : read_frame(files[i], pass, o);
@@ -166,7 +167,8 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
     fr.file = files[i];
     if (frame.code_bits > 0) {  // camera codes: to radiance, in place (the ball was found on the codes)
       const CodeCurve curve = o.codes.value_or(CodeCurve{});
-      const CodesReport codes = linearise_codes(frame, curve, files[i]);
+      if (code_table.bits != frame.code_bits) code_table = make_code_table(curve, frame.code_bits, files[i]);
+      const CodesReport codes = linearise_codes(frame, code_table, files[i]);
       fr.codes = curve.name;
       fr.clipped_fraction = codes.clipped_fraction;
     }

@@ -1,5 +1,7 @@
 #include "live/frame_decode.h"
 
+#include "probe/camera_codes.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -56,6 +58,50 @@ TEST(FrameDecode, ASingleFrameGoesThroughTheGivenResponse) {
   const auto before = radiance.image.rgb;
   decode_single_frame(radiance, FrameDecode::Relative, nullptr, &response);
   EXPECT_EQ(radiance.image.rgb, before);
+}
+
+// The stream keeps the response's per-level table between frames (live/pipeline.cpp): every
+// frame decodes to the same floats as with a table built for it alone, and as the plain
+// per-sample formula (exp g(z) / exposure, in double, then float); a frame of another bit
+// depth rebuilds it rather than reading a table of the wrong size.
+TEST(FrameDecode, AKeptResponseTableGivesTheFloatsOfOneBuiltPerFrame) {
+  CameraResponse response8;
+  response8.levels = 256;
+  for (int c = 0; c < 3; ++c)
+    for (int z = 0; z < 256; ++z) response8.log_exposure[size_t(c)].push_back(float(0.02 * z - 0.3 * c));
+  CodeTable kept;
+  for (const double exposure : {0.01, 1.0 / 3, 0.0}) {
+    CameraFrame frame;
+    frame.pixel_format = "BayerRG8";
+    frame.exposure_s = exposure;
+    frame.image.width = 256, frame.image.height = 1;
+    for (int z = 0; z < 256; ++z)
+      for (int c = 0; c < 3; ++c) frame.image.rgb.push_back(float((z + 37 * c) % 256) / 255.0f);
+    const std::vector<float> codes = frame.image.rgb;
+    CameraFrame alone = frame;
+    decode_single_frame(frame, FrameDecode::Relative, nullptr, &response8, &kept);
+    decode_single_frame(alone, FrameDecode::Relative, nullptr, &response8);
+    EXPECT_EQ(kept.bits, 8);
+    ASSERT_EQ(frame.image.rgb, alone.image.rgb);
+    for (size_t i = 0; i < codes.size(); ++i) {
+      const int z = int(std::lround(codes[i] * 255.0));
+      float want = float(std::exp(double(response8.log_exposure[i % 3][size_t(z)])));
+      if (exposure > 0) want = float(want / exposure);
+      ASSERT_EQ(frame.image.rgb[i], want) << "sample " << i << ", exposure " << exposure;
+    }
+  }
+  CameraResponse response12;
+  response12.levels = 4096;
+  for (int c = 0; c < 3; ++c)
+    for (int z = 0; z < 4096; ++z) response12.log_exposure[size_t(c)].push_back(float(0.001 * z));
+  CameraFrame deep;
+  deep.pixel_format = "Mono12";
+  deep.image.width = deep.image.height = 1;
+  deep.image.rgb = {4095.0f / 4095, 2048.0f / 4095, 1.0f / 4095};
+  decode_single_frame(deep, FrameDecode::Relative, nullptr, &response12, &kept);
+  EXPECT_EQ(kept.bits, 12);
+  EXPECT_EQ(deep.image.rgb[0], float(std::exp(double(response12.log_exposure[0][4095]))));
+  EXPECT_EQ(deep.image.rgb[1], float(std::exp(double(response12.log_exposure[1][2048]))));
 }
 
 }  // namespace

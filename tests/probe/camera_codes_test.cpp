@@ -65,5 +65,37 @@ TEST(CameraCodes, LinearCodesAndAResponseTableAreAppliedPerLevel) {
   }
 }
 
+// A table built once gives the floats of the curve applied frame by frame; values outside
+// [0, 1] take the nearest end of the table (a NaN the lowest level) instead of wrapping
+// round to the top code; the clipped count is of pixels with any channel at the top code.
+TEST(CameraCodes, ATableBuiltOnceGivesTheCurvesFloatsAndClampsStrayValues) {
+  const CodeTable table = make_code_table(CodeCurve{}, 8, "a.jpg");
+  ASSERT_EQ(table.bits, 8);
+  RgbImage a = codes(8, {0, 1, 17, 128, 200, 254, 255});
+  RgbImage b = a;
+  linearise_codes(a, CodeCurve{}, "a.jpg");
+  const CodesReport r = linearise_codes(b, table, "a.jpg");
+  EXPECT_EQ(a.rgb, b.rgb);
+  EXPECT_NEAR(r.clipped_fraction, 1.0 / 7, 1e-12);
+  float stray[9] = {-0.25f, 1.5f, std::nanf(""), 0.5f / 255, 0.49f / 255, 254.6f / 255, 0, 0, 0};
+  EXPECT_EQ(apply_code_table(stray, 3, table), 2u);  // 1.5 and 254.6 / 255 round to the top
+  EXPECT_EQ(stray[0], 0.0f);                         // below 0: level 0
+  EXPECT_EQ(stray[1], 1.0f);                         // above 1: the top level
+  EXPECT_EQ(stray[2], 0.0f);                         // NaN: level 0
+  EXPECT_EQ(stray[3], table.linear[0][1]);           // half a level rounds up, as std::lround
+  EXPECT_EQ(stray[4], 0.0f);
+  EXPECT_EQ(stray[5], 1.0f);
+  // A table for other bit depths is refused, naming the file.
+  RgbImage deep = codes(16, {1000});
+  try {
+    linearise_codes(deep, table, "deep.png");
+    FAIL() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("deep.png: 16-bit codes, but its code table is for 8-bit ones"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace lp

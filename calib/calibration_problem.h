@@ -59,6 +59,11 @@ struct SolveOptions {
   // board model otherwise ends as outliers on the boards' outer rows (docs/calibration.md,
   // "Board warp"). OpenCV's closed-form seeds are flat.
   bool board_warp = true;
+  // Mei's seed (calibration_seed.h): from the Kannala-Brandt fit of the same views where that
+  // fits them within 1 px, else cv::omnidir. calibrate() decides it once, from Kannala-Brandt
+  // on the outlier stage's sample (reject_outliers), so that every Mei fit of one calibration
+  // is seeded alike; false (cv::omnidir only) for any other caller.
+  bool mei_from_kannala_brandt = false;
 };
 
 struct CalibrationProblem {

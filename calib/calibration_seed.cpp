@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/ccalib/omnidir.hpp>  // the CALIB_ numbers; the call is core/lazy_libs.h
 
@@ -55,8 +56,88 @@ SeedReport seed_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& v
   return s;
 }
 
-SeedReport seed_mei(const CalibrationProblem& pr, const ViewSubset& views) {
+// Mei from a solved Kannala-Brandt fit of the same views, without cv::omnidir: the same
+// core and poses, and the xi, focal length and k1, k2 whose radial profile is closest to
+// Kannala-Brandt's over the angles the corners are seen at. Under Kannala-Brandt a ray at
+// theta lands at radius fx d(theta), d = theta (1 + k1 theta^2 + ... + k4 theta^8); under Mei
+// at fx' (m + k1' m^3 + k2' m^5), m = sin theta / (cos theta + xi). For each xi of a grid the
+// rest is linear: d = a m + b m^3 + c m^5, fx' = a fx, k1' = b / a, k2' = c / a. nullopt when
+// the corners' angles cannot pin the three down.
+std::optional<ModelFit> mei_from_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& views,
+                                                const ModelFit& kb) {
+  const auto& in = kb.model.intrinsics;
+  if (in.size() != 8 || kb.poses.size() != views.size()) return std::nullopt;
+  std::vector<double> thetas;
+  for (size_t i = 0; i < views.size(); ++i) {
+    cv::Matx33d R;
+    cv::Rodrigues(cv::Vec3d(kb.poses[i][0], kb.poses[i][1], kb.poses[i][2]), R);
+    const cv::Vec3d t(kb.poses[i][3], kb.poses[i][4], kb.poses[i][5]);
+    const BoardView& v = *views[i];
+    for (size_t k = 0; k < v.px.size(); ++k)
+      if (v.inlier[k]) {
+        const auto b = board_point(pr.board, int(k), kb.warp);
+        const cv::Vec3d c = R * cv::Vec3d(b[0], b[1], b[2]) + t;
+        thetas.push_back(std::atan2(std::hypot(c[0], c[1]), c[2]));
+      }
+  }
+  if (thetas.size() < 12) return std::nullopt;
+  std::vector<double> d(thetas.size());
+  for (size_t j = 0; j < thetas.size(); ++j) {
+    const double th = thetas[j], t2 = th * th;
+    d[j] = th * (1 + t2 * (in[4] + t2 * (in[5] + t2 * (in[6] + t2 * in[7]))));
+  }
+  double best_residual = HUGE_VAL;
+  std::array<double, 4> best{};  // xi, a, b, c
+  for (int step = 0; step <= 60; ++step) {  // xi 0 ... 3 by 0.05: catadioptric ~1, fisheyes 1-2
+    const double xi = 0.05 * step;
+    cv::Matx33d A = cv::Matx33d::zeros();
+    cv::Vec3d y(0, 0, 0);
+    for (size_t j = 0; j < thetas.size(); ++j) {
+      const double w = std::cos(thetas[j]) + xi;
+      if (!(w > 1e-6)) continue;  // beyond what this xi can image
+      const double m = std::sin(thetas[j]) / w, m2 = m * m;
+      const cv::Vec3d f(m, m * m2, m * m2 * m2);
+      A += f * f.t();
+      y += d[j] * f;
+    }
+    cv::Vec3d x;
+    if (!cv::solve(A, y, x, cv::DECOMP_CHOLESKY) || !(x[0] > 0)) continue;
+    double residual = 0;
+    for (size_t j = 0; j < thetas.size(); ++j) {
+      const double w = std::cos(thetas[j]) + xi;
+      const double m = w > 1e-6 ? std::sin(thetas[j]) / w : 1e6, m2 = m * m;
+      const double e = d[j] - (x[0] * m + x[1] * m * m2 + x[2] * m * m2 * m2);
+      residual += e * e;
+    }
+    if (residual < best_residual) best_residual = residual, best = {xi, x[0], x[1], x[2]};
+  }
+  if (!(best[1] > 0) || !std::isfinite(best_residual)) return std::nullopt;
+  ModelFit f;
+  f.model = make_model(pr, lens_type_name(LensType::OmnidirMei),
+                       {best[1] * in[0], best[1] * in[1], in[2], in[3], best[0], best[2] / best[1], best[3] / best[1], 0, 0});
+  f.poses = kb.poses;
+  f.warp = kb.warp;
+  f.params = 9;
+  f.solver = "Kannala-Brandt fit";
+  f.ok = true;
+  return f;
+}
+
+SeedReport seed_mei(const CalibrationProblem& pr, const ViewSubset& views, const SolvedFit& solved) {
   SeedReport s;
+  // From the Kannala-Brandt fit where it describes the lens (SolveOptions::
+  // mei_from_kannala_brandt): no cv::omnidir, whose plugin alone loads 160 libraries (its
+  // highgui's Qt among them: 0.15-0.4 s) and whose own solver walks xi's valley on narrow
+  // lenses. Catadioptric lenses, which Kannala-Brandt fits poorly (its poses then mislead),
+  // keep cv::omnidir.
+  if (pr.solve.mei_from_kannala_brandt) {
+    const ModelFit& kb = solved(LensType::KannalaBrandt);
+    if (kb.ok && fit_rms(pr, kb, views) <= kMeiFromKannalaBrandtRmsPx)
+      if (auto f = mei_from_kannala_brandt(pr, views, kb)) {
+        s.fit = *f;
+        return s;
+      }
+  }
   std::vector<char> has_pose;
   // 30 iterations of cv::omnidir's own solver, not 300: this is a seed, which the Ceres
   // refinement (refine_joint) takes to convergence. On narrow lenses (stereo, Ladybug) xi is
@@ -306,7 +387,7 @@ SeedReport seed_candidate(const CalibrationProblem& pr, const ViewSubset& views,
     case LensType::KannalaBrandt:
       return seed_kannala_brandt(pr, views, options);
     case LensType::OmnidirMei:
-      return seed_mei(pr, views);
+      return seed_mei(pr, views, solved);
     case LensType::Pinhole:
     case LensType::OpenCV5:
     case LensType::OpenCV8:

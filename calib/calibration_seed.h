@@ -7,8 +7,12 @@
 //                    corners near the image centre (cv::fisheye cannot image rays near 90
 //                    deg); then every view re-posed under the seed (PnP on the rays + pixel
 //                    refinement), keeping whichever pose fits the view better.
-//   Mei              cv::omnidir::calibrate (it drops views its initialisation cannot use:
-//                    those are posed by PnP), then re-posed as Kannala-Brandt.
+//   Mei              with SolveOptions::mei_from_kannala_brandt, where the Kannala-Brandt fit
+//                    of the same views is within kMeiFromKannalaBrandtRmsPx: its core and
+//                    poses, and the xi, focal length and k1 k2 closest to its radial profile
+//                    over the corners' angles; else cv::omnidir::calibrate (it drops views its
+//                    initialisation cannot use: those are posed by PnP), then re-posed as
+//                    Kannala-Brandt.
 //   pinhole, plumb_bob, rational (OpenCV5, OpenCV8)
 //                    cv::calibrateCamera with the model's flags.
 //   stereographic    the core (fx fy cx cy) and poses of a Kannala-Brandt fit (any field
@@ -26,6 +30,16 @@
 #include "calib/lens_model.h"
 
 namespace lp {
+
+// Mei's seed comes from Kannala-Brandt (SolveOptions::mei_from_kannala_brandt) where that fits
+// the corners within this RMS (px) and sees them all within this angle of the axis (deg):
+// on such a narrow field xi is barely observable and cv::omnidir walks its valley (300
+// iterations and a 160-library plugin on the stereo set). On wider lenses the fits from the
+// two seeds end at different points of Mei's flat minimum, and cv::omnidir's repeat better
+// between halves (six pairs of halves of fisheye1: Mei fixed 0.741 px against 0.780 from
+// Kannala-Brandt), so they keep it.
+inline constexpr double kMeiFromKannalaBrandtRmsPx = 1.0;
+inline constexpr double kMeiFromKannalaBrandtFieldDeg = 45;
 
 struct SeedOptions {
   // Kannala-Brandt fallback: corners within this fraction of the image's short side from

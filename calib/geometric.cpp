@@ -181,13 +181,14 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   if (!(board.square_mm > 0)) throw InputError("calibrate: board square size must be positive");
   if (width <= 0 || height <= 0) throw InputError("calibrate: image size must be positive");
   const std::vector<LensType> candidates = candidate_types(options);
-  const CalibrationProblem pr = problem_of(board, width, height, options);
+  CalibrationProblem pr = problem_of(board, width, height, options);
   std::vector<BoardView> views = make_board_views(corners_per_view, pr, "calibrate", true);
   CalibrationResult res;
   res.views = initial_view_reports(corners_per_view);
 
   // Outliers, with one reference model.
   const OutlierReport outliers = reject_outliers(pr, views, outlier_options(options), options.progress);
+  pr.solve.mei_from_kannala_brandt = outliers.mei_from_kannala_brandt;  // every Mei fit seeded alike
   res.outlier_rounds = outliers.rounds;
   res.outlier_reference = lens_type_name(outliers.reference);
   for (size_t i = 0; i < views.size(); ++i)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "calib/calibration_seed.h"
 #include "calib/calibration_solve.h"
 #include "calib/parallel_jobs.h"
 #include "core/error.h"
@@ -11,10 +12,21 @@
 namespace lp {
 namespace {
 
+// The largest angle from the axis of an inlier corner's ray under `model` (deg).
+double corner_field_deg(const CameraModel& model, const ViewSubset& views) {
+  double field = 0;
+  for (const BoardView* v : views)
+    for (size_t k = 0; k < v->px.size(); ++k)
+      if (v->inlier[k])
+        if (const auto ray = unproject(model, Pixel{v->px[k][0], v->px[k][1]}))
+          field = std::max(field, std::acos(std::clamp(ray->z / length(*ray), -1.0, 1.0)) * 180 / M_PI);
+  return field;
+}
+
 // The requested model (rational, then pinhole, when it cannot be fitted); else the best of
 // options.references on a sample of the views (see the header).
 std::optional<LensType> choose_reference(const CalibrationProblem& pr, CandidateSolver& fitter,
-                                         const OutlierOptions& options) {
+                                         const OutlierOptions& options, const std::optional<ModelFit>& kb_on_sample) {
   if (options.model) {
     for (LensType r : {*options.model, LensType::OpenCV8, LensType::Pinhole})
       if (fitter.get(r).ok) return r;
@@ -23,6 +35,7 @@ std::optional<LensType> choose_reference(const CalibrationProblem& pr, Candidate
   const ViewSubset sample = evenly_spaced(fitter.views(), size_t(std::max(4, options.reference_views)));
   CandidateSolver sampled(pr, sample);
   CandidateSolver& chooser = sample.size() == fitter.views().size() ? fitter : sampled;
+  if (kb_on_sample) chooser.adopt(LensType::KannalaBrandt, *kb_on_sample);  // fitted on this sample already
   // The references' fits on every core (they are independent); the choice below reads them.
   run_jobs(options.references.size(), [&](size_t i) { chooser.get(options.references[i]); },
            options.parallel ? 0 : 1);
@@ -111,11 +124,28 @@ ViewSubset used_views(const std::vector<BoardView>& views, const std::vector<cha
   return s;
 }
 
-OutlierReport reject_outliers(const CalibrationProblem& pr, std::vector<BoardView>& views,
+OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<BoardView>& views,
                               const OutlierOptions& options, const StageProgress& progress) {
   OutlierReport rep;
   rep.view_used.assign(views.size(), 1);
   rep.why.assign(views.size(), "");
+  // How Mei is seeded in this calibration (SolveOptions::mei_from_kannala_brandt), decided
+  // once from Kannala-Brandt on the reference sample, before any Mei fit.
+  CalibrationProblem pr = problem;
+  std::optional<ModelFit> kb_on_sample;
+  const auto& refs = options.references;
+  const bool mei_may_be_fitted = options.model ? *options.model == LensType::OmnidirMei
+                                               : std::find(refs.begin(), refs.end(), LensType::OmnidirMei) != refs.end();
+  if (mei_may_be_fitted) {
+    const ViewSubset sample = evenly_spaced(used_views(views, rep.view_used), size_t(std::max(4, options.reference_views)));
+    CandidateSolver kb(problem, sample);
+    kb_on_sample = kb.get(LensType::KannalaBrandt);
+    pr.solve.mei_from_kannala_brandt = kb_on_sample->ok &&
+                                       fit_rms(problem, *kb_on_sample, sample) <= kMeiFromKannalaBrandtRmsPx &&
+                                       corner_field_deg(kb_on_sample->model, sample) <= kMeiFromKannalaBrandtFieldDeg;
+    if (options.model || !kb_on_sample->ok) kb_on_sample.reset();  // adopted only by choose_reference
+  }
+  rep.mei_from_kannala_brandt = pr.solve.mei_from_kannala_brandt;
   std::optional<LensType> ref;
   const int rounds = std::max(1, options.rounds);
   for (int round = 0; round < rounds; ++round) {
@@ -123,7 +153,7 @@ OutlierReport reject_outliers(const CalibrationProblem& pr, std::vector<BoardVie
     CandidateSolver fitter(pr, used_views(views, rep.view_used));
     if (rep.last_fit && rep.last_fit->ok && ref == LensType::KannalaBrandt)
       fitter.adopt(*ref, warm_from_last(pr, rep, fitter.views()));
-    if (!ref) ref = choose_reference(pr, fitter, options);
+    if (!ref) ref = choose_reference(pr, fitter, options, kb_on_sample);
     if (!ref || !fitter.get(*ref).ok) throw InputError("calibrate: no model could be fitted to the corners");
     rep.reference = *ref;
     const ModelFit& f = fitter.get(*ref);

@@ -67,6 +67,10 @@ struct OutlierReport {
   std::optional<ModelFit> last_fit;
   ViewSubset last_views;
   bool refit_needed = false;
+  // How every Mei fit of this calibration is seeded (SolveOptions::mei_from_kannala_brandt):
+  // decided here, from Kannala-Brandt's fit of the reference sample; the stages after this
+  // one solve with it too (calibrate()).
+  bool mei_from_kannala_brandt = false;
 };
 
 // Updates the inlier flags of `views` (every view with a board, as make_board_views gives

@@ -37,7 +37,9 @@ namespace lp {
 // iterations and a 160-library plugin on the stereo set). On wider lenses the fits from the
 // two seeds end at different points of Mei's flat minimum, and cv::omnidir's repeat better
 // between halves (six pairs of halves of fisheye1: Mei fixed 0.741 px against 0.780 from
-// Kannala-Brandt), so they keep it.
+// Kannala-Brandt), so they keep it. 45 deg, not the selection's 60: a half of the shared
+// 190-degree set seen to 58 deg took the Kannala-Brandt seed at 60 and its pick changed
+// (docs/calibration.md, "Mei's seed on a narrow lens"); the narrow shared sets reach 30-41.
 inline constexpr double kMeiFromKannalaBrandtRmsPx = 1.0;
 inline constexpr double kMeiFromKannalaBrandtFieldDeg = 45;
 

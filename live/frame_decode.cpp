@@ -1,7 +1,5 @@
 #include "live/frame_decode.h"
 
-#include "probe/camera_codes.h"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -12,6 +10,7 @@
 
 #include "core/error.h"
 #include "hdr/log_sensor.h"
+#include "probe/camera_codes.h"
 
 namespace lp {
 

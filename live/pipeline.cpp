@@ -1,7 +1,5 @@
 #include "live/pipeline.h"
 
-#include "probe/camera_codes.h"
-
 #include "live/bracket_unwrap.h"
 
 #include <fmt/format.h>
@@ -16,6 +14,7 @@
 #include "core/error.h"
 #include "hdr/bracket.h"
 #include "hdr/merge.h"
+#include "probe/camera_codes.h"
 #include "probe/camera_unwrap.h"
 #include "probe/fisheye.h"
 #include "probe/remap.h"

@@ -56,7 +56,8 @@ int pixel_format_bits(const std::string& pixel_format);
 // fusion does; its levels must be the frame's 2^bits, else InputError. Without it the codes
 // are taken as linear. (Until stop 36 a single-exposure stream ignored --response.)
 // `table`, when given, keeps the response's per-level table between frames: built at the
-// first frame (or when the bit depth changes), then reused (probe/camera_codes.h).
+// first frame (or when the bit depth changes), then reused (probe/camera_codes.h). It belongs
+// to one response: a caller that changes the response starts a new table.
 void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric,
                          const CameraResponse* response = nullptr, CodeTable* table = nullptr);
 

@@ -192,7 +192,7 @@ nlohmann::json uncertainty_json(const GeometricCalibration& run) {
 nlohmann::json table_json(const CalibrationResult& r) {
   nlohmann::json table = nlohmann::json::array();
   for (const ModelCandidate& c : r.table)
-    table.push_back({{"model", c.name}, {"lensmodel", c.lensmodel}, {"params", c.params}, {"ok", c.ok},
+    table.push_back({{"model", c.name}, {"lensmodel", c.lensmodel}, {"solver", c.solver}, {"params", c.params}, {"ok", c.ok},
                      {"error", c.error}, {"screened", c.screened}, {"rms_px", c.rms_px}, {"heldout_rms_px", c.heldout_rms_px},
                      {"cross_validation_px", c.cross_validation_px},
                      {"cross_validation_splits_px", c.cross_validation_splits_px},

@@ -69,6 +69,7 @@ ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensT
     return c;
   }
   c.lensmodel = f.model.lensmodel;
+  c.solver = f.solver;
   c.params = f.params;
   c.rms_px = fit_rms(pr, f, fits.used);
   c.model = f.model;
@@ -390,6 +391,7 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
         ModelCandidate& c = on_sample[type];
         c.name = candidate_name(type);
         c.lensmodel = f.model.lensmodel;
+        c.solver = f.solver;
         c.params = f.params;
         c.rms_px = rms;
         c.screened = true;

@@ -39,6 +39,7 @@ namespace lp {
 struct ModelCandidate {
   std::string name;       // candidate name as in CalibrateOptions::candidates (lens_model.h)
   std::string lensmodel;  // camera_model.h name of the fitted model
+  std::string solver;     // how its full fit was obtained (ModelFit::solver: the seed, then the refinement)
   int params = 0;         // free intrinsics
   bool ok = false;
   std::string error;      // why the fit failed (when !ok)

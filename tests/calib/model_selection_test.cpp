@@ -665,6 +665,12 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
     EXPECT_EQ(r.selected, expected.at(set.name)) << set.name;
     EXPECT_EQ(r.selection_rule, "incumbent") << set.name;
     EXPECT_EQ(r.outlier_reference, reference.at(set.name)) << set.name;
+    // Mei's seed: from Kannala-Brandt on the narrow sets (their corners within 45 deg:
+    // SolveOptions::mei_from_kannala_brandt), cv::omnidir on the wider ones.
+    const bool narrow = std::string(set.name) == "stereo left" || std::string(set.name) == "Ladybug";
+    for (const ModelCandidate& c : r.table)
+      if (c.name == "LENSMODEL_OMNIDIR_MEI" && !c.solver.empty())
+        EXPECT_EQ(c.solver.rfind(narrow ? "Kannala-Brandt fit" : "cv::omnidir", 0), 0u) << set.name << ": " << c.solver;
     std::string screened;
     for (const ModelCandidate& c : r.table)
       if (c.screened) {

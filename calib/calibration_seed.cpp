@@ -4,9 +4,9 @@
 #include <cmath>
 #include <optional>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/ccalib/omnidir.hpp>  // the CALIB_ numbers; the call is core/lazy_libs.h
+#include <opencv2/ccalib/omnidir.hpp>  // the CALIB_ numbers; the call is calib/omnidir_plugin.h
 
-#include "core/lazy_libs.h"
+#include "calib/omnidir_plugin.h"
 
 namespace lp {
 
@@ -327,7 +327,7 @@ ModelFit opencv_omnidir(const CalibrationProblem& pr, const ViewSubset& views, s
   cv::Mat K, xi, D, idx;
   std::vector<cv::Mat> rv, tv;
   try {
-    lazy::omnidir_calibrate(obj, img, cv::Size(pr.width, pr.height), K, xi, D, rv, tv, cv::omnidir::CALIB_FIX_SKEW,
+    detail::omnidir_calibrate(obj, img, cv::Size(pr.width, pr.height), K, xi, D, rv, tv, cv::omnidir::CALIB_FIX_SKEW,
                            cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, max_iterations, 1e-10), idx);
   } catch (const cv::Exception&) {
     f.error = "cv::omnidir::calibrate failed";

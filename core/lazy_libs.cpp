@@ -35,7 +35,7 @@ constexpr const char* kBuildPath = nullptr;
 
 const PluginTable* load() {
   return static_cast<const PluginTable*>(open_plugin(
-      kPluginFile, "lightprobe_lazy_libs", "OpenCV's image and video codecs, omnidir, mrgingham, ECC", kBuildPath,
+      kPluginFile, "lightprobe_lazy_libs", "OpenCV's image and video codecs, mrgingham, ECC", kBuildPath,
       [](const void* t) { return static_cast<const PluginTable*>(t)->version == kPluginVersion; }));
 }
 
@@ -94,12 +94,6 @@ bool encode_image(const std::string& ext, const cv::Mat& image, const std::vecto
 }
 
 std::unique_ptr<VideoCapture> make_video_capture() { return std::unique_ptr<VideoCapture>(table().new_video_capture()); }
-
-double omnidir_calibrate(const std::vector<cv::Mat>& object_points, const std::vector<cv::Mat>& image_points,
-                         cv::Size size, cv::Mat& K, cv::Mat& xi, cv::Mat& D, std::vector<cv::Mat>& rvecs,
-                         std::vector<cv::Mat>& tvecs, int flags, cv::TermCriteria criteria, cv::Mat& used) {
-  return table().omnidir_calibrate(object_points, image_points, size, K, xi, D, rvecs, tvecs, flags, criteria, used);
-}
 
 int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, const cv::Mat& image, int pyramid_level) {
   return table().find_chessboard_mrgingham(corners, gridn, image, pyramid_level);

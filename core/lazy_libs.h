@@ -1,11 +1,12 @@
 // The heavy libraries, loaded on first use: OpenCV's image codecs and video I/O,
-// cv::omnidir's calibration (contrib ccalib), mrgingham's chessboard finder and OpenCV's
-// ECC alignment (video module). Linked
-// into the executable they pull about 270 shared libraries (GDAL through imgcodecs, FFmpeg
-// and GStreamer through videoio, Qt through ccalib's highgui, and mrgingham links
-// imgcodecs), and every command, even `--version`, paid 0.2 s and 96 MB to load them. They
-// live in a plugin instead (liblightprobe_lazy_libs.so, core/plugin/), which the first call
-// here loads: a command that reads no camera image, video or chessboard loads none of them.
+// mrgingham's chessboard finder and OpenCV's ECC alignment (video module). Linked into the
+// executable they, with cv::omnidir's ccalib, pulled about 270 shared libraries (GDAL through
+// imgcodecs, FFmpeg and GStreamer through videoio, Qt through ccalib's highgui, and mrgingham
+// links imgcodecs), and every command, even `--version`, paid 0.2 s and 96 MB to load them.
+// They live in a plugin instead (liblightprobe_lazy_libs.so, core/plugin/), which the first
+// call here loads: a command that reads no camera image, video or chessboard loads none of
+// them. cv::omnidir has a plugin of its own (calib/omnidir_plugin.h, since stop 37), so that
+// a calibration needing only it does not load the codecs too.
 //
 // The plugin is looked for in $LIGHTPROBE_PLUGIN_DIR, beside the executable, in ../lib
 // from it, then where the build wrote it. When it cannot be loaded, the first call throws
@@ -41,11 +42,6 @@ class VideoCapture {
 };
 std::unique_ptr<VideoCapture> make_video_capture();
 
-// cv::omnidir::calibrate, the same arguments; throws cv::Exception as it does.
-double omnidir_calibrate(const std::vector<cv::Mat>& object_points, const std::vector<cv::Mat>& image_points,
-                         cv::Size size, cv::Mat& K, cv::Mat& xi, cv::Mat& D, std::vector<cv::Mat>& rvecs,
-                         std::vector<cv::Mat>& tvecs, int flags, cv::TermCriteria criteria, cv::Mat& used);
-
 // mrgingham::find_chessboard_from_image_array(corners, nullptr, gridn, image, level):
 // the pyramid level used, or < 0 when no board was found.
 int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, const cv::Mat& image, int pyramid_level);
@@ -64,12 +60,10 @@ struct PluginTable {
   cv::Mat (*decode_image)(const std::string&);
   bool (*encode_image)(const std::string&, const cv::Mat&, const std::vector<int>&, std::vector<uint8_t>&);
   VideoCapture* (*new_video_capture)();
-  double (*omnidir_calibrate)(const std::vector<cv::Mat>&, const std::vector<cv::Mat>&, cv::Size, cv::Mat&, cv::Mat&,
-                              cv::Mat&, std::vector<cv::Mat>&, std::vector<cv::Mat>&, int, cv::TermCriteria, cv::Mat&);
   int (*find_chessboard_mrgingham)(std::vector<cv::Point2d>&, int, const cv::Mat&, int);
   double (*find_transform_ecc)(const cv::Mat&, const cv::Mat&, cv::Mat&, int, cv::TermCriteria, int);
 };
-inline constexpr int kPluginVersion = 2;
+inline constexpr int kPluginVersion = 3;
 inline constexpr const char* kPluginFile = "liblightprobe_lazy_libs.so";
 
 // Loads the plugin now (idempotent): commands may call it up front to fail before work.

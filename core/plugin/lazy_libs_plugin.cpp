@@ -1,7 +1,6 @@
 // The plugin of core/lazy_libs.h: the only code linked with OpenCV's imgcodecs, videoio and
-// ccalib and video and with mrgingham. Each entry is the library call and nothing else.
+// video and with mrgingham. Each entry is the library call and nothing else.
 #include <mrgingham.hh>
-#include <opencv2/ccalib/omnidir.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/video/tracking.hpp>
 #include <opencv2/videoio.hpp>
@@ -42,12 +41,6 @@ class Capture final : public VideoCapture {
 
 VideoCapture* new_video_capture() { return new Capture; }
 
-double omnidir_calibrate(const std::vector<cv::Mat>& object_points, const std::vector<cv::Mat>& image_points,
-                         cv::Size size, cv::Mat& K, cv::Mat& xi, cv::Mat& D, std::vector<cv::Mat>& rvecs,
-                         std::vector<cv::Mat>& tvecs, int flags, cv::TermCriteria criteria, cv::Mat& used) {
-  return cv::omnidir::calibrate(object_points, image_points, size, K, xi, D, rvecs, tvecs, flags, criteria, used);
-}
-
 int find_chessboard_mrgingham(std::vector<cv::Point2d>& corners, int gridn, const cv::Mat& image, int pyramid_level) {
   std::vector<mrgingham::PointDouble> found;
   const int level = mrgingham::find_chessboard_from_image_array(found, nullptr, gridn, image, pyramid_level);
@@ -63,8 +56,8 @@ double find_transform_ecc(const cv::Mat& templ, const cv::Mat& input, cv::Mat& w
   return cv::findTransformECC(templ, input, warp, motion, criteria, cv::noArray(), gauss_filt_size);
 }
 
-const PluginTable kTable{kPluginVersion,    decode_image,           encode_image,      new_video_capture,
-                         omnidir_calibrate, find_chessboard_mrgingham, find_transform_ecc};
+const PluginTable kTable{kPluginVersion,    decode_image, encode_image, new_video_capture, find_chessboard_mrgingham,
+                         find_transform_ecc};
 
 }  // namespace
 

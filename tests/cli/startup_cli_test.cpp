@@ -48,6 +48,8 @@ TEST(Startup, VersionLoadsNoCodecVideoOrGuiLibrary) {
                             "libopencv_video", "libopencv_dnn", "libprotobuf",
                             // Ceres (static in Debian, in the plugin of calib/ceres_plugin.h) and its solver chain
                             "liblightprobe_ceres", "libglog", "libgflags", "libspqr", "libcholmod",
+                            // cv::omnidir (calib/omnidir_plugin.h)
+                            "liblightprobe_omnidir",
                             "libcxsparse", "libmetis",
                             // LibRaw and Exiv2 (hdr/camera_files_plugin.h)
                             "liblightprobe_camera_files", "libraw_r", "libexiv2", "liblcms2", "libexpat",
@@ -140,6 +142,28 @@ TEST(Startup, OpeningACameraLoadsTheCameraPlugin) {
   ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
   EXPECT_NE(r.err.find("liblightprobe_cameras.so [0];  dynamically loaded"), std::string::npos);
   EXPECT_TRUE(loaded(r, "libaravis"));
+}
+
+// cv::omnidir (Mei's seed) has its own plugin: a calibration that needs it loads ccalib (with
+// highgui's chain, imgcodecs and GDAL among it), not the video libraries of the codecs plugin
+// it shared until stop 37.
+TEST(Startup, ASeedFromOmnidirLoadsItsOwnPluginOnly) {
+  const fs::path dir = scratch() / "startup_omnidir";
+  fs::create_directories(dir);
+  ASSERT_EQ(lightprobe("synth boards --views 6 --board 9x6 --square 30 -o " + (dir / "boards").string()).code, 0);
+  std::string images;
+  for (int i = 0; i < 6; ++i) images += " " + (dir / "boards" / ("board_0" + std::to_string(i) + ".png")).string();
+  const std::string vnl = (dir / "corners.vnl").string();
+  const std::string common = " --board 9x6 --square 30 --no-progress --model LENSMODEL_OMNIDIR_MEI";
+  ASSERT_EQ(lightprobe("calib geometric" + images + common + " --corners-out " + vnl + " -o " +
+                       (dir / "a.yaml").string()).code, 0);
+  const CliRun r = traced("calib geometric --corners-in " + vnl + " --imagersize 1280,960" + common + " -o " +
+                          (dir / "b.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.err.substr(r.err.size() > 2000 ? r.err.size() - 2000 : 0);
+  EXPECT_TRUE(loaded(r, "liblightprobe_omnidir.so"));
+  EXPECT_TRUE(loaded(r, "libopencv_ccalib"));
+  for (const char* other : {"liblightprobe_lazy_libs", "libopencv_videoio", "libavcodec", "libgstreamer", "libmrgingham"})
+    EXPECT_FALSE(loaded(r, other)) << other;
 }
 
 }  // namespace

@@ -193,6 +193,16 @@ double rms_of(const std::vector<double>& sq) {
   return std::sqrt(std::accumulate(sq.begin(), sq.end(), 0.0) / double(sq.size()));
 }
 
+double corner_field_deg(const CameraModel& model, const ViewSubset& views) {
+  double field = 0;
+  for (const BoardView* v : views)
+    for (size_t k = 0; k < v->px.size(); ++k)
+      if (v->inlier[k])
+        if (const auto ray = unproject(model, Pixel{v->px[k][0], v->px[k][1]}))
+          field = std::max(field, std::acos(std::clamp(ray->z / length(*ray), -1.0, 1.0)) * 180 / M_PI);
+  return field;
+}
+
 double fit_rms(const CalibrationProblem& pr, const ModelFit& f, const ViewSubset& views) {
   std::vector<double> sq;
   for (size_t i = 0; i < views.size(); ++i) {

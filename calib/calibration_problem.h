@@ -100,6 +100,9 @@ std::vector<std::array<double, 2>> view_residuals(const CalibrationProblem& prob
 // Sum of squared inlier residuals of a view; a corner the model cannot image counts 1e12.
 double view_squared_error(const CalibrationProblem& problem, const CameraModel& model, const BoardWarp& warp,
                           const BoardView& view, const BoardPose& pose);
+// How far off the axis the boards were seen under `model`: the largest angle (deg) of an
+// inlier corner's unprojected ray; 0 when none unprojects.
+double corner_field_deg(const CameraModel& model, const ViewSubset& views);
 // RMS (2-D) of a fit over the inliers of its subset; 1e6 px per corner it cannot image.
 double fit_rms(const CalibrationProblem& problem, const ModelFit& fit, const ViewSubset& views);
 

@@ -39,7 +39,8 @@ namespace lp {
 // between halves (six pairs of halves of fisheye1: Mei fixed 0.741 px against 0.780 from
 // Kannala-Brandt), so they keep it. 45 deg, not the selection's 60: a half of the shared
 // 190-degree set seen to 58 deg took the Kannala-Brandt seed at 60 and its pick changed
-// (docs/calibration.md, "Mei's seed on a narrow lens"); the narrow shared sets reach 30-41.
+// (docs/calibration.md, "Stop 37: the floor was half a colour map"); the narrow shared sets
+// reach 30-41.
 inline constexpr double kMeiFromKannalaBrandtRmsPx = 1.0;
 inline constexpr double kMeiFromKannalaBrandtFieldDeg = 45;
 

@@ -242,13 +242,7 @@ double observed_field_deg(const CandidateFits& fits, const std::vector<ModelCand
   for (size_t i = 0; i < table.size(); ++i)
     if (eligible[i] && (!ref || table[i].heldout_rms_px < ref->heldout_rms_px)) ref = &table[i];
   if (!ref) return kNaN;
-  double field = 0;
-  for (const BoardView* v : fits.used)
-    for (size_t k = 0; k < v->px.size(); ++k)
-      if (v->inlier[k])
-        if (const auto ray = unproject(ref->model, Pixel{v->px[k][0], v->px[k][1]}))
-          field = std::max(field, std::acos(std::clamp(ray->z / length(*ray), -1.0, 1.0)) * 180 / M_PI);
-  return field;
+  return corner_field_deg(ref->model, fits.used);
 }
 
 }  // namespace

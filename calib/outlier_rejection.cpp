@@ -12,17 +12,6 @@
 namespace lp {
 namespace {
 
-// The largest angle from the axis of an inlier corner's ray under `model` (deg).
-double corner_field_deg(const CameraModel& model, const ViewSubset& views) {
-  double field = 0;
-  for (const BoardView* v : views)
-    for (size_t k = 0; k < v->px.size(); ++k)
-      if (v->inlier[k])
-        if (const auto ray = unproject(model, Pixel{v->px[k][0], v->px[k][1]}))
-          field = std::max(field, std::acos(std::clamp(ray->z / length(*ray), -1.0, 1.0)) * 180 / M_PI);
-  return field;
-}
-
 // The requested model (rational, then pinhole, when it cannot be fitted); else the best of
 // options.references on a sample of the views (see the header).
 std::optional<LensType> choose_reference(const CalibrationProblem& pr, CandidateSolver& fitter,

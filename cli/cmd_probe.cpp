@@ -91,11 +91,7 @@ CodeCurve code_curve(const std::string& codes) {
   }
   if (!fs::exists(codes))
     throw InputError(fmt::format("--codes: '{}' is neither srgb, linear nor a response file", codes));
-  const CameraResponse r = load_response(codes);
-  c.kind = CodeCurve::Kind::Table;
-  for (size_t ch = 0; ch < 3; ++ch)
-    for (float g : r.log_exposure[ch]) c.table[ch].push_back(std::exp(double(g)));
-  return c;
+  return response_code_curve(load_response(codes).log_exposure, codes);
 }
 
 UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {

@@ -64,14 +64,9 @@ void decode_single_frame(CameraFrame& frame, FrameDecode decode, const Photometr
       throw InputError(fmt::format("--response: its {} levels do not fit frame {}'s {}-bit codes ({}, {} levels)",
                                    response->levels, frame.sequence, bits, frame.pixel_format, levels));
     CodeTable own;
-    if (!table || table->bits != bits) {
-      CodeCurve curve;
-      curve.kind = CodeCurve::Kind::Table;
-      curve.name = "--response";
-      for (size_t c = 0; c < 3; ++c)
-        for (float g : response->log_exposure[c]) curve.table[c].push_back(std::exp(double(g)));
-      (table ? *table : own) = make_code_table(curve, bits, "--response");
-    }
+    if (!table || table->bits != bits)
+      (table ? *table : own) =
+          make_code_table(response_code_curve(response->log_exposure, "--response"), bits, "--response");
     const CodeTable& levels_table = table ? *table : own;
     if (frame.exposure_s > 0) {
       // The division by the exposure time folded into this frame's copy of the table: one

@@ -10,6 +10,15 @@
 
 namespace lp {
 
+CodeCurve response_code_curve(const std::array<std::vector<float>, 3>& log_exposure, const std::string& name) {
+  CodeCurve c;
+  c.kind = CodeCurve::Kind::Table;
+  c.name = name;
+  for (size_t ch = 0; ch < 3; ++ch)
+    for (float g : log_exposure[ch]) c.table[ch].push_back(std::exp(double(g)));
+  return c;
+}
+
 CodeTable make_code_table(const CodeCurve& curve, int bits, const std::string& file) {
   if (bits < 1 || bits > 16) throw InputError(fmt::format("{}: {}-bit codes are not supported", file, bits));
   CodeTable t;

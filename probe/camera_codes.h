@@ -23,6 +23,10 @@ struct CodeCurve {
   std::string name = "srgb";  // for reports and messages: "srgb", "linear", or the response file
 };
 
+// A camera response recovered by `hdr response` (hdr/response.h: g(z) = ln E per level and
+// channel) as a table curve of exp g(z), named `name` in reports and messages.
+CodeCurve response_code_curve(const std::array<std::vector<float>, 3>& log_exposure, const std::string& name);
+
 struct CodesReport {
   bool linearised = false;       // the image held codes (code_bits > 0) and now holds radiance
   double clipped_fraction = 0;   // share of pixels with a channel at the top code

@@ -416,6 +416,25 @@ TEST(Cli, APhotosCodesAreMadeLinearBeforeTheyBecomeAMap) {
   ASSERT_EQ(r.code, 0) << r.err;
   m = lp::read_envmap(map.string());
   EXPECT_NEAR(m.rgb[3 * (16 * 64 + 10)], 30000.0 / 65535.0, 1e-6);
+  // A response from `hdr response` (g(z) = ln E per level): code 128 of channel c is worth
+  // exp g(128) = (c + 1) (128 + 1) / 256 here, per channel.
+  const fs::path response = scratch() / "grey_response.json";
+  {
+    nlohmann::json g;
+    const char* names[] = {"r", "g", "b"};
+    for (int c = 0; c < 3; ++c) {
+      std::vector<double> levels;
+      for (int z = 0; z < 256; ++z) levels.push_back(std::log((c + 1) * (z + 1.0) / 256));
+      g[names[c]] = levels;
+    }
+    std::ofstream(response) << nlohmann::json{{"format", "lightprobe.response/1"}, {"levels", 256}, {"linear", false},
+                                              {"log_exposure", g}}.dump();
+  }
+  r = lightprobe("probe unwrap --json " + png8.string() + ball + " --codes " + response.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["per_frame"][0]["codes"], response.string());
+  m = lp::read_envmap(map.string());
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(m.rgb[3 * (16 * 64 + 10) + c], (c + 1) * 129.0 / 256, 1e-5) << c;
 }
 
 TEST(Cli, TrackingTheBallFrameByFrameKeepsTheUnwrappedMapStillWhenTheCameraShakes) {

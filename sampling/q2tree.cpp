@@ -28,8 +28,8 @@
 // nside = q2_nside, or, when 0, the largest power of two (1..256) whose pixels are no
 // smaller than the input's mean pixel (4 pi or 2 pi / pixel count). The binning
 // geometry (which healpix pixel each source pixel's centre falls in) depends only on layout
-// and size and is cached, so a frame costs one pass over the map in row order and the
-// pyramid's levels. Each source pixel gives its rgb * (its solid angle, in float) to exactly
+// and size and is cached, so a frame costs one pass over the map in row order (in bands of
+// rows on all cores, the same bits as one pass) and the pyramid's levels. Each source pixel gives its rgb * (its solid angle, in float) to exactly
 // one healpix pixel, so power is preserved up to float rounding; invalid pixels give nothing. Leaves never split
 // below the binned nside: a finest-level leaf is retired and the next leaf is split.
 //
@@ -71,6 +71,7 @@
 // argument needs a >= 0, b >= 0 and non-negative pixels: otherwise, and on any change
 // of layout, size or nside, place() rebuilds.
 #include <fmt/format.h>
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -97,6 +98,10 @@ namespace lp {
 namespace {
 
 constexpr int kMaxAutoNside = 256;
+// Maps with fewer pixels are binned on one core (sampling/q2tree_sums.h's bands).
+constexpr size_t kMinPixelsForBands = size_t(1) << 17;
+// Groups of 64 healpix pixels per piece of the pyramid's three finest steps: 128 KB of bins.
+constexpr size_t kGroupsPerChunk = 64;
 
 bool is_power_of_two(int n) { return n > 0 && (n & (n - 1)) == 0; }
 int log2_int(int n) {
@@ -132,13 +137,20 @@ struct RowGridBinning {
   // stay zero (a hemisphere map's equatorial quads below the horizon, 22 % of the groups
   // at 360 x 90).
   std::vector<std::pair<size_t, size_t>> group_ranges;
+  // The same cut into pieces of at most kGroupsPerChunk groups, for the cores.
+  std::vector<std::pair<size_t, size_t>> group_chunks;
   std::vector<float> row;  // 8 per row: 1, 1, 1, sin theta, sin theta, cos theta, exact pixel solid angle, 0
   std::vector<float> col;  // 8 per column: 1, 1, 1, cos phi, sin phi, 1, 0, 0
 
   std::vector<float> cos_phi, sin_phi;  // per column: col's cos phi and sin phi in a row
 
+  detail::RunTags tags;  // target's bands of rows
+
   detail::RowSources view() const {
-    return {target.data(), row.data(), col.data(), cos_phi.data(), sin_phi.data()};
+    return {target.data(),          row.data(),
+            col.data(),             cos_phi.data(),
+            sin_phi.data(),         tags.band_rows.data(),
+            tags.band_later_runs.data(), tags.band_later_runs.size()};
   }
 };
 
@@ -187,11 +199,11 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
   });
   b->stored_pixels = size_t(*std::max_element(b->target.begin(), b->target.end())) + 1;
   std::vector<uint8_t> seen(12 * size_t(nside) * size_t(nside), 0);
-  for (size_t i = 0; i < b->target.size(); ++i) {
-    const uint32_t t = b->target[i];
-    const bool run_start = i % size_t(w) == 0 || b->target[i - 1] % detail::kQ2FirstRun != t;
-    if (run_start && !seen[t]) b->target[i] |= detail::kQ2FirstRun, seen[t] = 1;
-  }
+  for (const uint32_t t : b->target) seen[t] = 1;
+  // Bands of rows for the cores, on maps large enough to repay the threads' start (a 360 x 90
+  // hemisphere's prepare is 40 us).
+  const size_t bands = map.pixel_count() >= kMinPixelsForBands ? size_t(std::clamp(tbb::info::default_concurrency(), 1, 8)) : 1;
+  b->tags = detail::q2tree_tag_runs(b->target.data(), size_t(w), size_t(h), bands);
   for (size_t g = 0; 64 * g < b->stored_pixels; ++g) {
     const auto first = seen.begin() + std::ptrdiff_t(64 * g);
     if (std::find(first, first + std::ptrdiff_t(std::min<size_t>(64, seen.size() - 64 * g)), 1) - first == 64) continue;
@@ -200,6 +212,8 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
     else
       b->group_ranges.emplace_back(g, g + 1);
   }
+  for (const auto& [first, end] : b->group_ranges)
+    for (size_t g = first; g < end; g += kGroupsPerChunk) b->group_chunks.emplace_back(g, std::min(end, g + kGroupsPerChunk));
   return b;
 }
 
@@ -680,10 +694,16 @@ class Q2TreeSampler final : public Sampler {
     int l = finest - 1;
     if (finest >= 3) {  // the three finest steps in one pass (whole groups: the rest is zeros)
       stored = (stored + 63) / 64;
-      for (const auto& [first, end] : bin.group_ranges)
+      const auto quads = [&](size_t c) {
+        const auto [first, end] = bin.group_chunks[c];
         detail::q2tree_quad_sums3(levels_[size_t(finest)] + 512 * first, end - first,
                                   levels_[size_t(finest) - 1] + 128 * first, levels_[size_t(finest) - 2] + 32 * first,
                                   levels_[size_t(finest) - 3] + 8 * first);
+      };
+      if (bin.tags.band_later_runs.size() > 1)
+        tbb::parallel_for(size_t(0), bin.group_chunks.size(), quads);
+      else
+        for (size_t c = 0; c < bin.group_chunks.size(); ++c) quads(c);
       l = finest - 4;
     }
     for (; l >= 0; --l) {

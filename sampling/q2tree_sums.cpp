@@ -24,6 +24,11 @@
 // (its 16-byte load cleared by a bitwise and: a masked load measured 3.6x against 3.2x).
 // The coarser levels are plain vector additions of four children, the three finest steps in
 // one pass over 64-bin groups (the levels read back from L1, not from a pass of their own).
+// On one core the whole prepare stayed at 1.9-2.0x a read at 1024 x 512 (73 % of it this
+// pass). In bands of rows on both cores, each band's runs into bins it shares with an earlier
+// band joined afterwards (the runs along the seam, a few hundred of some 240 000), and the
+// finest steps' groups split between the cores too: 1.3-1.4x a read, 1.35x with the map out
+// of cache (the floor is one core's read).
 //
 // Bit-identical to the scalar loops: the same operations on the same values in the same
 // order (no fused multiply-add: -ffp-contract=off, and Highway's Mul/Add are separate
@@ -37,8 +42,16 @@
 #include <hwy/highway.h>
 
 #include <algorithm>
+#include <vector>
 
 #include "sampling/q2tree_sums.h"
+
+namespace lp::detail {
+// The plain loop over rows [first_row, end_row); with `later`, runs tagged kQ2LaterBand go there
+// (without, they are added to their bins at once: the same chain when the map is one pass).
+bool bin_sums_scalar(const float* rgb, const uint8_t* valid, size_t width, size_t first_row, size_t end_row,
+                     const RowSources& s, float* bins, LaterRun* later);
+}  // namespace lp::detail
 
 HWY_BEFORE_NAMESPACE();
 namespace lp::detail {
@@ -138,8 +151,9 @@ class Sixteen {
 };
 #endif
 
-bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t height, const RowSources& s,
-                   float* bins) {
+// Rows [first_row, end_row) of the map's `height`; runs tagged kQ2LaterBand go to `later`.
+bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t height, size_t first_row,
+                   size_t end_row, const RowSources& s, float* bins, LaterRun* later) {
 #if HWY_TARGET <= HWY_AVX2
   const hn::Full256<float> f8;
   const hn::Full128<float> f4;
@@ -154,7 +168,7 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
 #if HWY_TARGET <= HWY_AVX3
   auto low16 = hn::Zero(hn::Full512<float>());
 #endif
-  for (size_t v = 0; v < height; ++v) {
+  for (size_t v = first_row; v < end_row; ++v) {
     const float* row = s.row + 8 * v;
     const auto row8 = hn::LoadU(f8, row);
     const auto dw = hn::Set(f4, row[6]);
@@ -166,7 +180,12 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
     // A bin's first run reads zeros from kZeros instead of the bin (last frame's sums, likely
     // out of cache), so that only the store goes to the bin.
     const auto add_run = [&](uint32_t tagged, decltype(hn::Zero(f8)) sum) {
-      float* bin = bins + 8 * size_t(tagged & ~kQ2FirstRun);
+      if (HWY_UNLIKELY(tagged & kQ2LaterBand)) {  // an earlier band's runs come first
+        hn::Store(sum, f8, later->sum);
+        (later++)->pixel = tagged & kQ2Pixel;
+        return;
+      }
+      float* bin = bins + 8 * size_t(tagged & kQ2Pixel);
       const float* from = (tagged & kQ2FirstRun) ? kZeros : bin;
       hn::Store(hn::Add(hn::Load(f8, from), sum), f8, bin);
     };
@@ -174,7 +193,7 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
     uint32_t current = width ? target[0] : 0;  // the run's tagged target
     // The next pixel's tagged target: where it is another healpix pixel, the run ends.
     const auto next_target = [&](uint32_t tagged) {
-      if ((tagged ^ current) & ~kQ2FirstRun) {
+      if ((tagged ^ current) & kQ2Pixel) {
         add_run(current, run);
         run = hn::Zero(f8);
         current = tagged;
@@ -262,7 +281,7 @@ bool Q2treeBinSums(const float* rgb, const uint8_t* valid, size_t width, size_t 
 #endif
   return flags[0] < 0 || flags[1] < 0 || flags[2] < 0 || !hn::AllFalse(f8, hn::Lt(low8, hn::Zero(f8)));
 #else  // 128-bit vectors would split every pixel in two: the plain loop
-  return q2tree_bin_sums_scalar(rgb, valid, width, height, s, bins);
+  return bin_sums_scalar(rgb, valid, width, first_row, end_row, s, bins, later);
 #endif
 }
 
@@ -295,6 +314,8 @@ void Q2treeQuadSums3(const float* child, size_t groups, float* level1, float* le
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <tbb/parallel_for.h>
+
 namespace lp::detail {
 
 HWY_EXPORT(Q2treeBinSums);
@@ -303,7 +324,47 @@ HWY_EXPORT(Q2treeQuadSums3);
 
 bool q2tree_bin_sums(const float* rgb, const uint8_t* valid, size_t width, size_t height, const RowSources& sources,
                      float* bins) {
-  return HWY_DYNAMIC_DISPATCH(Q2treeBinSums)(rgb, valid, width, height, sources, bins);
+  if (sources.bands <= 1)
+    return HWY_DYNAMIC_DISPATCH(Q2treeBinSums)(rgb, valid, width, height, 0, height, sources, bins, nullptr);
+  // Each band's runs into bins an earlier band also fills wait in `later`, then join their bins
+  // in band order: every bin's chain of additions is the one-pass loop's.
+  std::vector<size_t> first_later(sources.bands + 1, 0);
+  for (size_t b = 0; b < sources.bands; ++b) first_later[b + 1] = first_later[b] + sources.band_later_runs[b];
+  std::vector<LaterRun> later(first_later.back());
+  std::vector<uint8_t> negative(sources.bands, 0);
+  tbb::parallel_for(size_t(0), sources.bands, [&](size_t b) {
+    negative[b] = HWY_DYNAMIC_DISPATCH(Q2treeBinSums)(rgb, valid, width, height, sources.band_rows[b],
+                                                      sources.band_rows[b + 1], sources, bins,
+                                                      later.data() + first_later[b]);
+  });
+  for (const LaterRun& run : later) {
+    float* bin = bins + 8 * size_t(run.pixel);
+    for (int k = 0; k < 8; ++k) bin[k] = bin[k] + run.sum[k];
+  }
+  return std::find(negative.begin(), negative.end(), 1) != negative.end();
+}
+
+RunTags q2tree_tag_runs(uint32_t* target, size_t width, size_t height, size_t bands) {
+  bands = std::clamp<size_t>(bands, 1, std::max<size_t>(1, height));
+  RunTags tags;
+  for (size_t b = 0; b <= bands; ++b) tags.band_rows.push_back(uint32_t(height * b / bands));
+  tags.band_later_runs.assign(bands, 0);
+  const uint32_t pixels = width != 0 && height != 0 ? *std::max_element(target, target + width * height) + 1 : 0;
+  std::vector<uint32_t> first_band(pixels, UINT32_MAX);  // the band of each healpix pixel's first run
+  for (size_t b = 0; b < bands; ++b)
+    for (size_t v = tags.band_rows[b]; v < tags.band_rows[b + 1]; ++v)
+      for (size_t u = 0; u < width; ++u) {
+        uint32_t& t = target[v * width + u];
+        if (u > 0 && (target[v * width + u - 1] & kQ2Pixel) == t) continue;  // not a run's first pixel
+        if (first_band[t] == UINT32_MAX) {
+          first_band[t] = uint32_t(b);
+          t |= kQ2FirstRun;
+        } else if (first_band[t] < b) {
+          t |= kQ2LaterBand;
+          ++tags.band_later_runs[b];
+        }
+      }
+  return tags;
 }
 
 void q2tree_quad_sums(const float* child, size_t parents, float* parent) {
@@ -316,18 +377,28 @@ void q2tree_quad_sums3(const float* child, size_t groups, float* level1, float* 
 
 bool q2tree_bin_sums_scalar(const float* rgb, const uint8_t* valid, size_t width, size_t height, const RowSources& s,
                             float* bins) {
+  return bin_sums_scalar(rgb, valid, width, 0, height, s, bins, nullptr);
+}
+
+bool bin_sums_scalar(const float* rgb, const uint8_t* valid, size_t width, size_t first_row, size_t end_row,
+                     const RowSources& s, float* bins, LaterRun* later) {
   bool negative = false;
-  for (size_t v = 0; v < height; ++v) {
+  for (size_t v = first_row; v < end_row; ++v) {
     const float* row = s.row + 8 * v;
     float run[8] = {0, 0, 0, 0, 0, 0, 0, 0};
     auto add_run = [&](uint32_t tagged) {
-      float* bin = bins + 8 * size_t(tagged & ~kQ2FirstRun);
+      if (later && (tagged & kQ2LaterBand)) {
+        for (int k = 0; k < 8; ++k) later->sum[k] = run[k], run[k] = 0.0f;
+        (later++)->pixel = tagged & kQ2Pixel;
+        return;
+      }
+      float* bin = bins + 8 * size_t(tagged & kQ2Pixel);
       for (int k = 0; k < 8; ++k) bin[k] = ((tagged & kQ2FirstRun) ? 0.0f : bin[k]) + run[k], run[k] = 0.0f;
     };
     uint32_t current = width ? s.target[v * width] : 0;
     for (size_t u = 0; u < width; ++u) {
       const size_t i = v * width + u;
-      if ((s.target[i] ^ current) & ~kQ2FirstRun) {
+      if ((s.target[i] ^ current) & kQ2Pixel) {
         add_run(current);
         current = s.target[i];
       }

@@ -29,8 +29,14 @@ struct Case {
   std::vector<uint8_t> valid;
   std::vector<uint32_t> target;
   std::vector<float> row, col, cos_phi, sin_phi;
+  detail::RunTags tags;  // bands, when tagged by the library (tag_bands)
 
-  detail::RowSources view() const { return {target.data(), row.data(), col.data(), cos_phi.data(), sin_phi.data()}; }
+  detail::RowSources view() const {
+    return {target.data(),          row.data(),
+            col.data(),             cos_phi.data(),
+            sin_phi.data(),         tags.band_rows.data(),
+            tags.band_later_runs.data(), tags.band_later_runs.size()};
+  }
 };
 
 Case make_case(size_t width, size_t height, bool hostile, std::mt19937& rng) {
@@ -62,7 +68,7 @@ Case make_case(size_t width, size_t height, bool hostile, std::mt19937& rng) {
   std::vector<uint8_t> seen(c.bins, 0);
   for (size_t i = 0; i < pixels; ++i) {
     const uint32_t t = c.target[i];
-    if ((i % width == 0 || c.target[i - 1] % detail::kQ2FirstRun != t) && !seen[t])
+    if ((i % width == 0 || (c.target[i - 1] & detail::kQ2Pixel) != t) && !seen[t])
       c.target[i] |= detail::kQ2FirstRun, seen[t] = 1;
   }
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
@@ -86,15 +92,44 @@ Case make_case(size_t width, size_t height, bool hostile, std::mt19937& rng) {
   return c;
 }
 
+// The case's targets tagged by the library in `bands` bands of rows instead, after checking the
+// tags against their definition: kQ2FirstRun where the test's own rule put it, kQ2LaterBand on
+// exactly the runs whose bin an earlier band meets, and each band's count of them.
+void tag_bands(Case& c, size_t bands) {
+  std::vector<uint32_t> untagged(c.target.size());
+  for (size_t i = 0; i < c.target.size(); ++i) untagged[i] = c.target[i] & detail::kQ2Pixel;
+  std::vector<uint32_t> tagged = untagged;
+  c.tags = detail::q2tree_tag_runs(tagged.data(), c.width, c.height, bands);
+  bands = std::min(bands, c.height);  // no empty bands
+  ASSERT_EQ(c.tags.band_rows.size(), bands + 1);
+  ASSERT_EQ(c.tags.band_rows.front(), 0u);
+  ASSERT_EQ(c.tags.band_rows.back(), c.height);
+  std::vector<size_t> band_of_row(c.height);
+  for (size_t b = 0; b < bands; ++b)
+    for (size_t v = c.tags.band_rows[b]; v < c.tags.band_rows[b + 1]; ++v) band_of_row[v] = b;
+  std::vector<size_t> first_band(c.bins, SIZE_MAX), later(bands, 0);
+  for (size_t i = 0; i < untagged.size(); ++i) {
+    const uint32_t t = untagged[i];
+    const size_t band = band_of_row[i / c.width];
+    const bool run_start = i % c.width == 0 || untagged[i - 1] != t;
+    EXPECT_EQ(tagged[i] & detail::kQ2FirstRun, c.target[i] & detail::kQ2FirstRun) << "pixel " << i;
+    EXPECT_EQ(bool(tagged[i] & detail::kQ2LaterBand), run_start && first_band[t] < band) << "pixel " << i;
+    if (run_start && first_band[t] < band) ++later[band];
+    first_band[t] = std::min(first_band[t], band);
+  }
+  for (size_t b = 0; b < bands; ++b) EXPECT_EQ(c.tags.band_later_runs[b], later[b]) << "band " << b;
+  c.target = tagged;
+}
+
 // The definition written out plainly: each run's sum over its valid pixels, then added to
-// its bin, or replacing it on the bin's first run.
+// its bin, or replacing it on the bin's first run. Row order, one pass: bands do not enter.
 bool plain_bins(const Case& c, std::vector<float>& bins) {
   bool negative = false;
   for (size_t v = 0; v < c.height; ++v)
     for (size_t u = 0; u < c.width;) {
-      const uint32_t tagged = c.target[v * c.width + u], t = tagged % detail::kQ2FirstRun;
+      const uint32_t tagged = c.target[v * c.width + u], t = tagged & detail::kQ2Pixel;
       float run[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-      for (; u < c.width && c.target[v * c.width + u] % detail::kQ2FirstRun == t; ++u) {
+      for (; u < c.width && (c.target[v * c.width + u] & detail::kQ2Pixel) == t; ++u) {
         const size_t i = v * c.width + u;
         if (!c.valid.empty() && !c.valid[i]) continue;
         const float* row = c.row.data() + 8 * v;
@@ -179,6 +214,43 @@ TEST(Q2treeSums, EveryTargetEqualsThePlainLoopBitForBit) {
       hwy::SetSupportedTargetsForTest(0);
     }
   EXPECT_GT(negative_cases, 4u);  // the hostile maps did reach the flag
+}
+
+// Bands of rows summed in parallel, with the runs into an earlier band's bins joined after,
+// give the one-pass loop's bits on every target (in particular where bins straddle bands, a
+// band holds a single row, or there are more bands than rows).
+TEST(Q2treeSums, BandsOfRowsGiveTheOnePassBitsOnEveryTarget) {
+  std::mt19937 rng(31);
+  const size_t sizes[][2] = {{1, 1}, {7, 3}, {37, 19}, {202, 101}};
+  size_t later_runs = 0;
+  for (const auto& size : sizes)
+    for (const size_t bands : {2, 3, 8})
+      for (int variant = 0; variant < 2; ++variant) {
+        const bool hostile = variant == 1;
+        Case c = make_case(size[0], size[1], hostile, rng);
+        tag_bands(c, bands);
+        for (const uint32_t n : c.tags.band_later_runs) later_runs += n;
+        std::vector<float> start(8 * c.bins);
+        for (size_t k = 0; k < start.size(); ++k) start[k] = 0.25f + float(k % 7);
+        std::vector<float> expected = start;
+        const bool negative = plain_bins(c, expected);
+        const std::string what = std::to_string(size[0]) + "x" + std::to_string(size[1]) + ", " +
+                                 std::to_string(bands) + " bands" + (hostile ? ", hostile" : "");
+        for (const int64_t target : hwy::SupportedAndGeneratedTargets()) {
+          hwy::SetSupportedTargetsForTest(target);
+          auto bins = aligned_bins(start);
+          EXPECT_EQ(detail::q2tree_bin_sums(c.rgb.data(), c.valid.data(), c.width, c.height, c.view(), bins.get()),
+                    negative)
+              << hwy::TargetName(target) << ", " << what;
+          EXPECT_TRUE(same_bits(bins.get(), expected)) << hwy::TargetName(target) << ", " << what;
+        }
+        hwy::SetSupportedTargetsForTest(0);
+        // The plain loop reads the tagged targets too, in one pass.
+        auto scalar = aligned_bins(start);
+        detail::q2tree_bin_sums_scalar(c.rgb.data(), c.valid.data(), c.width, c.height, c.view(), scalar.get());
+        EXPECT_TRUE(same_bits(scalar.get(), expected)) << "scalar, " << what;
+      }
+  EXPECT_GT(later_runs, 1000u);  // the joins were exercised
 }
 
 // Three levels in one pass equal three passes of the plain quad sums, on every target.

@@ -3,6 +3,7 @@
 // multiple of one plain pass over the same map's memory (x_read), the floor no method
 // can beat:  build/bench/lightprobe_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -84,6 +85,17 @@ void BM_Prepare(benchmark::State& state, Method method, Layout layout) {
   sampler->prepare(map);  // first frame builds the geometry caches
   RatioTimer ratio(state, map);
   for (auto _ : state) sampler->prepare(map);
+}
+
+// q2tree's prepare bins the map on every core (sampling/q2tree_sums.h); the floor is one
+// core's read, so its figure on one core is reported beside it.
+void BM_PrepareOneThread(benchmark::State& state, Method method, Layout layout) {
+  const EnvMap& map = scene_map(layout);
+  auto sampler = make_sampler(method);
+  tbb::task_arena one(1);
+  one.execute([&] { sampler->prepare(map); });
+  RatioTimer ratio(state, map);
+  for (auto _ : state) one.execute([&] { sampler->prepare(map); });
 }
 
 // The same two with the map out of every cache before each call (issue 23's method, for a
@@ -192,6 +204,10 @@ int register_all() {
           ->Unit(benchmark::kMicrosecond);
       benchmark::RegisterBenchmark((prepare_cold + "ours:" + method).c_str(), BM_PrepareCold, m, layout)
           ->Unit(benchmark::kMicrosecond);
+      if (m == Method::Q2Tree)
+        benchmark::RegisterBenchmark((prepare + "ours:" + method + ", 1 thread").c_str(), BM_PrepareOneThread, m,
+                                     layout)
+            ->Unit(benchmark::kMicrosecond);
       benchmark::RegisterBenchmark(("sampling/place_" + size + "/ours:" + method).c_str(), BM_Place, m, layout)
           ->Arg(300)->Arg(1000)->Unit(benchmark::kMicrosecond);
       benchmark::RegisterBenchmark(("sampling/prepare_and_place_" + size + "/ours:" + method).c_str(),

@@ -155,7 +155,8 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
       fits[1] = mei.get(LensType::OmnidirMei);
     }, options.parallel ? 0 : 1);
     const LensType order[2] = {LensType::KannalaBrandt, LensType::OmnidirMei};
-    for (size_t i = 0; i < fits.size(); ++i) on_sample.emplace_back(i < 2 ? order[i] : others[i - 2], std::move(*fits[i]));
+    for (size_t i = 0; i < fits.size(); ++i)
+      on_sample.emplace_back(i < 2 ? order[i] : others[i - 2], std::move(*fits[i]));
   }
   rep.mei_from_kannala_brandt = pr.solve.mei_from_kannala_brandt;
   std::optional<LensType> ref;

@@ -29,8 +29,8 @@
 // smaller than the input's mean pixel (4 pi or 2 pi / pixel count). The binning
 // geometry (which healpix pixel each source pixel's centre falls in) depends only on layout
 // and size and is cached, so a frame costs one pass over the map in row order (in bands of
-// rows on all cores, the same bits as one pass) and the pyramid's levels. Each source pixel gives its rgb * (its solid angle, in float) to exactly
-// one healpix pixel, so power is preserved up to float rounding; invalid pixels give nothing. Leaves never split
+// rows on all cores, the same bits as one pass) and the pyramid's levels. Each source pixel
+// gives its rgb * (its solid angle, in float) to exactly one healpix pixel, so power is preserved up to float rounding; invalid pixels give nothing. Leaves never split
 // below the binned nside: a finest-level leaf is retired and the next leaf is split.
 //
 // Light count: the count goes 12, 15, 18, ... (12 + 3k). We stop at the first count
@@ -147,9 +147,8 @@ struct RowGridBinning {
   detail::RunTags tags;  // target's bands of rows
 
   detail::RowSources view() const {
-    return {target.data(),          row.data(),
-            col.data(),             cos_phi.data(),
-            sin_phi.data(),         tags.band_rows.data(),
+    return {target.data(),         row.data(),          col.data(),
+            cos_phi.data(),        sin_phi.data(),      tags.band_rows.data(),
             tags.band_later_runs.data(), tags.band_later_runs.size()};
   }
 };
@@ -202,7 +201,8 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
   for (const uint32_t t : b->target) seen[t] = 1;
   // Bands of rows for the cores, on maps large enough to repay the threads' start (a 360 x 90
   // hemisphere's prepare is 40 us).
-  const size_t bands = map.pixel_count() >= kMinPixelsForBands ? size_t(std::clamp(tbb::info::default_concurrency(), 1, 8)) : 1;
+  const size_t bands =
+      map.pixel_count() >= kMinPixelsForBands ? size_t(std::clamp(tbb::info::default_concurrency(), 1, 8)) : 1;
   b->tags = detail::q2tree_tag_runs(b->target.data(), size_t(w), size_t(h), bands);
   for (size_t g = 0; 64 * g < b->stored_pixels; ++g) {
     const auto first = seen.begin() + std::ptrdiff_t(64 * g);
@@ -213,7 +213,8 @@ std::shared_ptr<const RowGridBinning> build_binning(const EnvMap& map, int nside
       b->group_ranges.emplace_back(g, g + 1);
   }
   for (const auto& [first, end] : b->group_ranges)
-    for (size_t g = first; g < end; g += kGroupsPerChunk) b->group_chunks.emplace_back(g, std::min(end, g + kGroupsPerChunk));
+    for (size_t g = first; g < end; g += kGroupsPerChunk)
+      b->group_chunks.emplace_back(g, std::min(end, g + kGroupsPerChunk));
   return b;
 }
 

@@ -3,9 +3,9 @@
 // direction), the map read in row order; then the sums of every coarser quadtree node, four
 // children at a time. All in float. The first pass runs in bands of rows on all cores, each
 // band's runs into bins an earlier band also fills kept aside and added after, in band order,
-// so that every bin's chain of additions is the row-order one whatever the thread count. Google Highway, compiled for every x86 target Highway
-// knows and dispatched at run time (as sampling/row_sweep.h). Every sum is the plain loop's
-// chain of operations in its order (bit-identical: no fused multiply-add,
+// so that every bin's chain of additions is the row-order one whatever the thread count.
+// Google Highway, compiled for every x86 target Highway knows and dispatched at run time (as
+// sampling/row_sweep.h). Every sum is the plain loop's chain of operations in its order (bit-identical: no fused multiply-add,
 // sampling/CMakeLists.txt compiles the file with -ffp-contract=off). Internal to sampling/;
 // tests/sampling/q2tree_sums_test.cpp compares every compiled target with a plain loop.
 #pragma once

@@ -1,27 +1,38 @@
 #!/usr/bin/env bash
 # Regenerates docs/performance.md: every stage group of the benchmarks (hdr, probe,
-# sampling, calib, live, eval, startup; names in bench/stages_bench.cpp) run once, each figure
-# printed beside its floor and its peer from the same run. Takes ~10 minutes on 2 cores;
-# run it on a quiet machine (the load average at the start is printed in the table).
+# sampling, calib, live, eval, startup; names in bench/stages_bench.cpp) run once, each group
+# in a process of its own, each figure printed beside its floor and its peer from the same
+# run. Takes ~10 minutes on 2 cores; run it on a quiet machine (the load average at the start
+# is printed in the table). One process per group: on this VM the hdr and probe groups' large
+# buffers, freed, left later groups' memory-bound figures 30-60 % slower in the same process
+# (q2tree's prepare 1.25x a read alone, 1.8-2.0x after them; mediancut 1.2x against 1.6x).
 #
 #   PERF_REPETITIONS=3   repetitions per benchmark (the table shows their median)
-#   PERF_FILTER=REGEX    only these benchmarks (default: all stage groups)
+#   PERF_FILTER=REGEX    only these benchmarks, in one process (default: every stage group)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=build
 repetitions=${PERF_REPETITIONS:-3}
-filter=${PERF_FILTER:-'^(hdr|probe|sampling|calib|live|eval|startup)/'}
+if [[ -n "${PERF_FILTER:-}" ]]; then
+  filters=("$PERF_FILTER")
+else
+  filters=('^hdr/' '^probe/' '^sampling/' '^calib/' '^live/' '^eval/' '^startup/')
+fi
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" --target lightprobe_bench lightprobe
-results=$(mktemp)
+results_dir=$(mktemp -d)
 header=$(mktemp)
 table=$(mktemp docs/.performance.md.XXXXXX)
-trap 'rm -f "$results" "$header" "$table"' EXIT
-LIGHTPROBE_SHARED_DATA=${LIGHTPROBE_SHARED_DATA:-$(cd .. && pwd)/shared/data} \
-  "$build/bench/lightprobe_bench" --benchmark_filter="$filter" --benchmark_repetitions="$repetitions" \
-  --benchmark_report_aggregates_only=true --benchmark_format=json --benchmark_out="$results" \
-  --benchmark_out_format=json >/dev/null
+trap 'rm -rf "$results_dir" "$header" "$table"' EXIT
+results=()
+for i in "${!filters[@]}"; do
+  results+=("$results_dir/$i.json")
+  LIGHTPROBE_SHARED_DATA=${LIGHTPROBE_SHARED_DATA:-$(cd .. && pwd)/shared/data} \
+    "$build/bench/lightprobe_bench" --benchmark_filter="${filters[$i]}" --benchmark_repetitions="$repetitions" \
+    --benchmark_report_aggregates_only=true --benchmark_format=json --benchmark_out="${results[$i]}" \
+    --benchmark_out_format=json >/dev/null
+done
 
 cat >"$header" <<'MD'
 # Performance, stage by stage
@@ -54,7 +65,7 @@ Times are wall-clock medians; calib rows detect every image of a shared set once
 automatic model choice; their floor is the same command with the chosen model forced
 (`--model`), aim ≤ 3× floor (docs/calibration.md, "Selection at the cost of one solve").
 MD
-python3 scripts/performance_table.py "$results" "$header" >"$table"
+python3 scripts/performance_table.py "${results[@]}" "$header" >"$table"
 mv "$table" docs/performance.md
-trap 'rm -f "$results" "$header"' EXIT
+trap 'rm -rf "$results_dir" "$header"' EXIT
 echo "performance: wrote docs/performance.md"

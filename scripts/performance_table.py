@@ -8,7 +8,10 @@ and peers measured in the same run (same arguments). A variant with a floor of i
 shown against it, and on a second line against the figure's floor. Medians of the repetitions when the
 run has them. Standard library only (the system Python, see DEPENDENCIES.md).
 
-    performance_table.py RESULTS.json HEADER.md > docs/performance.md
+    performance_table.py RESULTS.json [RESULTS.json ...] HEADER.md > docs/performance.md
+
+Several results files (one process per stage group) are read as one run; the first one's
+context (date, machine, load) heads the table.
 """
 import json
 import re
@@ -55,8 +58,12 @@ def fmt_ms(ms):
 
 
 def main():
+    if len(sys.argv) < 3:
+        sys.exit("usage: performance_table.py RESULTS.json [RESULTS.json ...] HEADER.md")
     context, times = load(sys.argv[1])
-    with open(sys.argv[2]) as f:
+    for path in sys.argv[2:-1]:
+        times.update(load(path)[1])
+    with open(sys.argv[-1]) as f:
         sys.stdout.write(f.read())
     cpu = f"{context.get('num_cpus', '?')} CPUs at {context.get('mhz_per_cpu', '?')} MHz"
     load_avg = context.get("load_avg", [])

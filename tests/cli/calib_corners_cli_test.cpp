@@ -23,9 +23,8 @@ void expect_same_model(const std::vector<double>& a, const std::vector<double>& 
 TEST(CalibCornersCli, CornersOutThenInGivesTheModelOfTheImages) {
   const fs::path dir = scratch() / "corners_roundtrip";
   fs::create_directories(dir);
-  ASSERT_EQ(lightprobe("synth boards --views 6 --board 9x6 --square 30 -o " + (dir / "boards").string()).code, 0);
-  std::string images;
-  for (int i = 0; i < 6; ++i) images += " " + (dir / "boards" / ("board_0" + std::to_string(i) + ".png")).string();
+  const std::string images = six_board_images(dir);
+  ASSERT_FALSE(images.empty());
   const std::string common = " --json --board 9x6 --square 30 --model LENSMODEL_KANNALA_BRANDT";
   const std::string vnl = (dir / "corners.vnl").string();
   const CliRun detected = lightprobe("calib geometric" + images + common + " --corners-out " + vnl + " -o " +

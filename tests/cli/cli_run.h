@@ -66,6 +66,15 @@ inline int line_count(const std::string& s) {
   return n;
 }
 
+// Six synthetic views of a 9x6 board of 30 mm squares (`synth boards`) in dir/boards: the
+// images as arguments (" a.png b.png ..."); an empty string when synth boards failed.
+inline std::string six_board_images(const fs::path& dir) {
+  if (lightprobe("synth boards --views 6 --board 9x6 --square 30 -o " + (dir / "boards").string()).code != 0) return "";
+  std::string images;
+  for (int i = 0; i < 6; ++i) images += " " + (dir / "boards" / ("board_0" + std::to_string(i) + ".png")).string();
+  return images;
+}
+
 // A bad input: exit 2, exactly one line on stderr, naming `needle` (the file or option).
 inline void expect_one_line_error(const CliRun& r, const std::string& needle) {
   EXPECT_EQ(r.code, 2) << r.err;

@@ -150,9 +150,8 @@ TEST(Startup, OpeningACameraLoadsTheCameraPlugin) {
 TEST(Startup, ASeedFromOmnidirLoadsItsOwnPluginOnly) {
   const fs::path dir = scratch() / "startup_omnidir";
   fs::create_directories(dir);
-  ASSERT_EQ(lightprobe("synth boards --views 6 --board 9x6 --square 30 -o " + (dir / "boards").string()).code, 0);
-  std::string images;
-  for (int i = 0; i < 6; ++i) images += " " + (dir / "boards" / ("board_0" + std::to_string(i) + ".png")).string();
+  const std::string images = six_board_images(dir);
+  ASSERT_FALSE(images.empty());
   const std::string vnl = (dir / "corners.vnl").string();
   const std::string common = " --board 9x6 --square 30 --no-progress --model LENSMODEL_OMNIDIR_MEI";
   ASSERT_EQ(lightprobe("calib geometric" + images + common + " --corners-out " + vnl + " -o " +

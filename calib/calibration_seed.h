@@ -14,7 +14,8 @@
 //                    initialisation cannot use: those are posed by PnP), then re-posed as
 //                    Kannala-Brandt.
 //   pinhole, plumb_bob, rational (OpenCV5, OpenCV8)
-//                    cv::calibrateCamera with the model's flags.
+//                    cv::calibrateCamera with the model's flags, each step solved by LU
+//                    (CALIB_USE_LU: 3-5x faster than its default SVD, and reproducible).
 //   stereographic    the core (fx fy cx cy) and poses of a Kannala-Brandt fit (any field
 //                    of view), else of a pinhole fit.
 //   splined          a zero spline over a stereographic fit (exactly that model), its field

@@ -83,8 +83,9 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
 ViewSubset used_views(const std::vector<BoardView>& views, const std::vector<char>& used, int skip = -1);
 
 // The reference's fit on `used` (the views left) where the last round's can stand for it:
-// that fit when nothing changed after it, a warm re-solve for Kannala-Brandt; nullopt
-// otherwise (the candidate stage solves it cold).
+// that fit when nothing changed after it, a warm re-solve for Kannala-Brandt and for Mei
+// seeded from it (SolveOptions::mei_from_kannala_brandt); nullopt otherwise (the candidate
+// stage solves it cold).
 std::optional<ModelFit> reference_fit(const CalibrationProblem& problem, const OutlierReport& report,
                                       const ViewSubset& used);
 

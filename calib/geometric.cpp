@@ -197,6 +197,9 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   // Candidates on the views left and their halves; the selection.
   CandidateFits fits(pr, used_views(views, outliers.view_used));
   if (std::optional<ModelFit> f = reference_fit(pr, outliers, fits.used)) fits.full.adopt(outliers.reference, *f);
+  if (outliers.reference != LensType::KannalaBrandt)
+    if (std::optional<ModelFit> f = kannala_brandt_from_sample(pr, outliers, fits.used, options.fit_max_rms_px))
+      fits.full.adopt(LensType::KannalaBrandt, *f);
   CandidateOptions co;
   co.screen_rms_px = options.model.empty() ? options.fit_max_rms_px : std::numeric_limits<double>::infinity();
   co.parallel = options.parallel;

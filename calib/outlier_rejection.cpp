@@ -154,6 +154,11 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
       fits[0] = f;
       fits[1] = mei.get(LensType::OmnidirMei);
     }, options.parallel ? 0 : 1);
+    if (fits[0] && fits[0]->ok) {
+      rep.sample_kannala_brandt = *fits[0];
+      rep.sample_views = sample;
+      rep.sample_rms_px = fit_rms(problem, *fits[0], sample);
+    }
     const LensType order[2] = {LensType::KannalaBrandt, LensType::OmnidirMei};
     for (size_t i = 0; i < fits.size(); ++i)
       on_sample.emplace_back(i < 2 ? order[i] : others[i - 2], std::move(*fits[i]));
@@ -201,6 +206,14 @@ std::optional<ModelFit> reference_fit(const CalibrationProblem& pr, const Outlie
       (rep.reference == LensType::OmnidirMei && rep.mei_from_kannala_brandt))
     return warm_from_last(pr, rep, used);
   return std::nullopt;
+}
+
+std::optional<ModelFit> kannala_brandt_from_sample(const CalibrationProblem& pr, const OutlierReport& rep,
+                                                   const ViewSubset& used, double max_rms_px) {
+  if (!rep.sample_kannala_brandt || rep.sample_views != used || !(rep.sample_rms_px <= max_rms_px)) return std::nullopt;
+  ModelFit f = warm_refit(pr, used, LensType::KannalaBrandt, *rep.sample_kannala_brandt, rep.sample_kannala_brandt->poses);
+  if (!f.ok) return std::nullopt;
+  return f;
 }
 
 }  // namespace lp

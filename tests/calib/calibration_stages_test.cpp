@@ -385,6 +385,42 @@ TEST(CandidateSolver, MeiOnANarrowLensIsSeededFromKannalaBrandt) {
   EXPECT_FALSE(reject_outliers(wide_pr, wide_views, OutlierOptions{}).mei_from_kannala_brandt);
 }
 
+// The candidate stage starts Kannala-Brandt warm from the outlier stage's fit of the
+// reference sample when that sample held every view left and Kannala-Brandt is not the
+// reference (calibrate(); here it is, which the function does not read): the same minimum
+// as the cold solve (cv::fisheye seed), on the inlier corners, not the sample fit's
+// (outliers included).
+TEST(OutlierRejection, KannalaBrandtFromTheSampleIsTheColdFitOnTheInliers) {
+  const CameraModel lens{"LENSMODEL_OPENCV5", {600, 601, 639.2, 481.7, -0.28, 0.09, 4e-4, -3e-4, -0.012}, 1280, 960};
+  Corners corners = project_board_views(lens, kBoard, 12, 30, 800, 0.2, 6);
+  ASSERT_GE(corners.size(), 10u);
+  corners[3][17][0] += 5;
+  corners[8][40][1] -= 6;
+  const CalibrationProblem pr = problem_for(lens);
+  auto views = make_board_views(corners, pr, "test", true);
+  const OutlierReport rep = reject_outliers(pr, views, OutlierOptions{});
+  ASSERT_GE(rep.corners_rejected, 2);
+  ASSERT_TRUE(rep.sample_kannala_brandt.has_value());
+  const ViewSubset used = used_views(views, rep.view_used);
+  ASSERT_EQ(used.size(), views.size());
+  const auto warm = kannala_brandt_from_sample(pr, rep, used, 1.5);
+  ASSERT_TRUE(warm.has_value());
+  CandidateSolver cold(pr, used);
+  const ModelFit& c = cold.get(LensType::KannalaBrandt);
+  ASSERT_TRUE(c.ok) << c.error;
+  const std::vector<uint8_t> covered = coverage_mask(pr, used);
+  const double to_cold = projection_difference(warm->model, c.model, covered, 4, false).rms_px;
+  const double sample_to_cold = projection_difference(rep.sample_kannala_brandt->model, c.model, covered, 4, false).rms_px;
+  std::printf("  warm vs cold %.2e px; the sample's fit (outliers in) vs cold %.2e px\n", to_cold, sample_to_cold);
+  EXPECT_LT(to_cold, 1e-3);
+  EXPECT_GT(sample_to_cold, 10 * to_cold);  // the refit on the inliers is what makes it the cold fit
+  EXPECT_NEAR(fit_rms(pr, *warm, used), fit_rms(pr, c, used), 1e-6);
+  // Other views than the sample's, or a sample fit above the bound: the cold solve.
+  const ViewSubset fewer(used.begin() + 1, used.end());
+  EXPECT_FALSE(kannala_brandt_from_sample(pr, rep, fewer, 1.5).has_value());
+  EXPECT_FALSE(kannala_brandt_from_sample(pr, rep, used, 0.5 * rep.sample_rms_px).has_value());
+}
+
 TEST(ViewDiagnostics, CoverageCountsTheUsedInliersAndLeverageFlagsTheRimView) {
   const CameraModel truth = kb190();
   Corners corners = project_board_views(truth, kBoard, 10, 40, 600, 0.1, 11, 93);

@@ -250,7 +250,7 @@ ModelFit opencv_fisheye(const CalibrationProblem& pr, const ViewSubset& views,
   return f;
 }
 
-ModelFit opencv_calibrate_camera(const CalibrationProblem& pr, const ViewSubset& views, LensType type) {
+ModelFit opencv_calibrate_camera(const CalibrationProblem& pr, const ViewSubset& views, LensType type, bool lu_steps) {
   // Flags and the number of OpenCV coefficients kept (k1 k2 p1 p2 k3 [k4 k5 k6]).
   int flags = 0, ndist = 0;
   if (type == LensType::Pinhole) {
@@ -286,7 +286,7 @@ ModelFit opencv_calibrate_camera(const CalibrationProblem& pr, const ViewSubset&
   // 15 views) was a third of the automatic choice's CPU. fisheye1's rational seed 0.42 ->
   // 0.09 s, and it no longer lands on another point of its flat valley in one run of five
   // when the solves share the cores; every choice is unchanged (docs/calibration.md, stop 39).
-  flags |= cv::CALIB_USE_LU;
+  if (lu_steps) flags |= cv::CALIB_USE_LU;
   try {
     cv::calibrateCamera(obj, img, cv::Size(pr.width, pr.height), K, D, rv, tv, flags,
                         cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));

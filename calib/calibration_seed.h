@@ -85,7 +85,11 @@ SeedReport seed_candidate(const CalibrationProblem& problem, const ViewSubset& v
 ModelFit opencv_fisheye(const CalibrationProblem& problem, const ViewSubset& views,
                         const std::function<bool(const std::array<double, 2>&)>& use, std::vector<char>* has_pose);
 // cv::calibrateCamera with the flags of pinhole, OpenCV5 (plumb_bob) or OpenCV8 (rational).
-ModelFit opencv_calibrate_camera(const CalibrationProblem& problem, const ViewSubset& views, LensType type);
+// lu_steps: each Levenberg-Marquardt step solved by LU (the seeds); false keeps OpenCV's own
+// default, SVD, for the peer calibration that stands for OpenCV as a user runs it
+// (calibrate_opencv_alone).
+ModelFit opencv_calibrate_camera(const CalibrationProblem& problem, const ViewSubset& views, LensType type,
+                                 bool lu_steps = true);
 // cv::omnidir::calibrate (Mei); views it drops have has_pose[i] = 0.
 // max_iterations: cv::omnidir's own Levenberg-Marquardt; a seed needs few (seed_mei: 30),
 // OpenCV run alone as the peer of `eval calib` runs to convergence (300).

@@ -268,8 +268,9 @@ ModelFit opencv_alone(const CalibrationProblem& pr, const std::string& name, con
   posed.assign(s.size(), 1);
   if (name == "cv::fisheye") return opencv_fisheye(pr, s, [](const std::array<double, 2>&) { return true; }, &posed);
   if (name == "cv::omnidir") return opencv_omnidir(pr, s, &posed);
-  if (name == "cv::calibrateCamera plumb_bob") return opencv_calibrate_camera(pr, s, LensType::OpenCV5);
-  return opencv_calibrate_camera(pr, s, LensType::OpenCV8);
+  // OpenCV's defaults, as a user runs it: its steps by SVD, not the seeds' LU.
+  if (name == "cv::calibrateCamera plumb_bob") return opencv_calibrate_camera(pr, s, LensType::OpenCV5, false);
+  return opencv_calibrate_camera(pr, s, LensType::OpenCV8, false);
 }
 
 }  // namespace

@@ -198,14 +198,18 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
 
 std::optional<ModelFit> reference_fit(const CalibrationProblem& pr, const OutlierReport& rep, const ViewSubset& used) {
   if (!rep.last_fit || !rep.last_fit->ok) return std::nullopt;
-  if (!rep.refit_needed) return *rep.last_fit;
-  // Warm where the rounds were (see reject_outliers): Kannala-Brandt, and Mei seeded from it.
-  // On Ladybug the warm Mei is the cold one's to 1e-6 px in every split and the command
-  // 0.94x; a Mei seeded by cv::omnidir is solved cold by the candidate stage.
-  if (rep.reference == LensType::KannalaBrandt ||
-      (rep.reference == LensType::OmnidirMei && rep.mei_from_kannala_brandt))
-    return warm_from_last(pr, rep, used);
-  return std::nullopt;
+  std::optional<ModelFit> f;
+  if (!rep.refit_needed) {
+    f = *rep.last_fit;
+  } else if (rep.reference == LensType::KannalaBrandt ||
+             (rep.reference == LensType::OmnidirMei && rep.mei_from_kannala_brandt)) {
+    // Warm where the rounds were (see reject_outliers): Kannala-Brandt, and Mei seeded from
+    // it. On Ladybug the warm Mei is the cold one's to 1e-6 px in every split and the command
+    // 0.94x; a Mei seeded by cv::omnidir is solved cold by the candidate stage.
+    f = warm_from_last(pr, rep, used);
+  }
+  if (f) f->solver += ", carried from the outlier stage";  // what --json's table[].solver says
+  return f;
 }
 
 std::optional<ModelFit> kannala_brandt_from_sample(const CalibrationProblem& pr, const OutlierReport& rep,
@@ -213,6 +217,7 @@ std::optional<ModelFit> kannala_brandt_from_sample(const CalibrationProblem& pr,
   if (!rep.sample_kannala_brandt || rep.sample_views != used || !(rep.sample_rms_px <= max_rms_px)) return std::nullopt;
   ModelFit f = warm_refit(pr, used, LensType::KannalaBrandt, *rep.sample_kannala_brandt, rep.sample_kannala_brandt->poses);
   if (!f.ok) return std::nullopt;
+  f.solver += ", refined warm from the outlier stage's sample";
   return f;
 }
 

@@ -415,6 +415,7 @@ TEST(OutlierRejection, KannalaBrandtFromTheSampleIsTheColdFitOnTheInliers) {
   EXPECT_LT(to_cold, 1e-3);
   EXPECT_GT(sample_to_cold, 10 * to_cold);  // the refit on the inliers is what makes it the cold fit
   EXPECT_NEAR(fit_rms(pr, *warm, used), fit_rms(pr, c, used), 1e-6);
+  EXPECT_NE(warm->solver.find("warm from the outlier stage"), std::string::npos) << warm->solver;
   // Other views than the sample's, or a sample fit above the bound: the cold solve.
   const ViewSubset fewer(used.begin() + 1, used.end());
   EXPECT_FALSE(kannala_brandt_from_sample(pr, rep, fewer, 1.5).has_value());

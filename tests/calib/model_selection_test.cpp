@@ -668,9 +668,11 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
     // Mei's seed: from Kannala-Brandt on the narrow sets (their corners within 45 deg:
     // SolveOptions::mei_from_kannala_brandt), cv::omnidir on the wider ones.
     const bool narrow = std::string(set.name) == "stereo left" || std::string(set.name) == "Ladybug";
-    for (const ModelCandidate& c : r.table)
-      if (c.name == "LENSMODEL_OMNIDIR_MEI" && !c.solver.empty())
+    for (const ModelCandidate& c : r.table) {
+      if (c.name == "LENSMODEL_OMNIDIR_MEI" && !c.solver.empty()) {
         EXPECT_EQ(c.solver.rfind(narrow ? "Kannala-Brandt fit" : "cv::omnidir", 0), 0u) << set.name << ": " << c.solver;
+      }
+    }
     std::string screened;
     for (const ModelCandidate& c : r.table)
       if (c.screened) {

@@ -14,10 +14,11 @@
 // |residual| > max(k * sigma, floor_px), sigma = 1.4826 * MAD of the residual components.
 // Rounds stop when nothing changes. With Kannala-Brandt as the reference, later rounds
 // re-solve warm from the previous round's fit: no OpenCV seed, no re-posing, the same minimum
-// (within 1.5e-4 px of cold solves on the three KB real sets). Not the others: Mei's
-// xi/focal valley and the rational model's free extrapolation make where a solve stops
-// depend on its start (on Ladybug warm rounds moved Mei by 0.17 px RMS and rejected other
-// corners); those re-solve from scratch.
+// (within 1.5e-4 px of cold solves on the three KB real sets). So do Mei's rounds where Mei is
+// seeded from Kannala-Brandt (a narrow lens: the same corners flagged on every shared set).
+// Not the others: a Mei seeded by cv::omnidir (its xi/focal valley: on Ladybug, when it was
+// seeded so, warm rounds moved Mei by 0.17 px RMS and rejected other corners) and the
+// rational model (its free extrapolation) re-solve from scratch.
 #pragma once
 
 #include <optional>

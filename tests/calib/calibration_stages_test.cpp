@@ -81,6 +81,13 @@ TEST(CalibrationSeed, CalibrateCameraSeedOfANarrowLensAndTheMrcalSeedsBuiltOnFit
   EXPECT_EQ(plumb.model.lensmodel, "LENSMODEL_OPENCV5");
   EXPECT_EQ(plumb.params, 9);
   EXPECT_LT(error_within(plumb.model, truth, 34), 0.2);
+  // Its steps by LU (the seeds) reach OpenCV's own SVD steps' answer (the peer's): the damped
+  // normal equations are well posed; a step solver that went wrong would leave this fit.
+  const ModelFit svd = opencv_calibrate_camera(pr, all, LensType::OpenCV5, false);
+  ASSERT_TRUE(svd.ok) << svd.error;
+  const double lu_vs_svd = projection_difference(plumb.model, svd.model, coverage_mask(pr, all), 4, false).rms_px;
+  std::printf("  plumb_bob seed, LU steps against SVD steps: %.2e px\n", lu_vs_svd);
+  EXPECT_LT(lu_vs_svd, 1e-4);
   // Rounded to the documented quanta.
   const ModelFit r = rounded_seed(plumb);
   EXPECT_NEAR(r.model.intrinsics[0], plumb.model.intrinsics[0], 0.5e-3 + 1e-12);

@@ -239,19 +239,11 @@ TEST(GeometricCalibration, TwoRunsGiveBitIdenticalIntrinsics) {
   for (size_t i = 0; i < a.table.size(); ++i) {
     const ModelCandidate &x = a.table[i], &y = b.table[i];
     EXPECT_EQ(x.ok, y.ok) << x.name;
-    if (x.name == "LENSMODEL_OPENCV8") {
-      // Seeded by cv::calibrateCamera's rational model, which is not repeatable in one
-      // process (its RMS moved by 1e-5 relative between identical calls) and further than
-      // the rounding before mrcal's polish absorbs (pinhole and plumb_bob are now
-      // bit-identical). Not bit-identical, but to 1e-6 relative.
-      ASSERT_EQ(x.model.intrinsics.size(), y.model.intrinsics.size());
-      for (size_t k = 0; k < x.model.intrinsics.size(); ++k)
-        EXPECT_NEAR(x.model.intrinsics[k], y.model.intrinsics[k], 1e-6 * (1 + std::abs(x.model.intrinsics[k]))) << x.name;
-      EXPECT_NEAR(x.cross_validation_px, y.cross_validation_px, 1e-6 * (1 + x.cross_validation_px)) << x.name;
-    } else {
-      EXPECT_EQ(x.model.intrinsics, y.model.intrinsics) << x.name;
-      EXPECT_EQ(x.cross_validation_px, y.cross_validation_px) << x.name;
-    }
+    // Every one bit for bit, OpenCV8 included since its seed's steps are solved by LU
+    // (before, cv::calibrateCamera's SVD steps moved its RMS by 1e-5 relative between
+    // identical calls; CalibrationSeed.TheRationalSeedIsTheSameOnEveryCall).
+    EXPECT_EQ(x.model.intrinsics, y.model.intrinsics) << x.name;
+    EXPECT_EQ(x.cross_validation_px, y.cross_validation_px) << x.name;
   }
   EXPECT_EQ(a.selected, b.selected);
   EXPECT_EQ(a.model.intrinsics, b.model.intrinsics);

@@ -673,6 +673,27 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
         EXPECT_EQ(c.solver.rfind(narrow ? "Kannala-Brandt fit" : "cv::omnidir", 0), 0u) << set.name << ": " << c.solver;
       }
     }
+    // The fits the candidate stage took over from the outlier stage instead of solving them
+    // again (outlier_rejection.h: reference_fit, kannala_brandt_from_sample), per set: the
+    // reference's where its fit can stand, Kannala-Brandt's from the reference sample where it
+    // is not the reference. A path that silently stopped applying (e.g. the sample's views no
+    // longer matched) would still choose the same models, only slower: this pins it.
+    const std::map<std::string, std::string> carried = {
+        {"stereo left", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
+        {"fisheye1", "LENSMODEL_KANNALA_BRANDT carried"},
+        {"Ladybug", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
+        {"VMRImage", "LENSMODEL_OMNIDIR_MEI carried"},
+        {"KaidanOmni", ""},
+        {"MiniOmni", ""},
+        {"Fisheye190deg", "LENSMODEL_KANNALA_BRANDT carried"}};
+    std::string took_over;
+    for (const ModelCandidate& c : r.table) {
+      const char* how = c.solver.find(", carried from the outlier stage") != std::string::npos ? "carried"
+                        : c.solver.find(", refined warm from the outlier stage's sample") != std::string::npos ? "sample"
+                                                                                                                : nullptr;
+      if (how) took_over += (took_over.empty() ? "" : ", ") + c.name + " " + how;
+    }
+    EXPECT_EQ(took_over, carried.at(set.name)) << set.name;
     std::string screened;
     for (const ModelCandidate& c : r.table)
       if (c.screened) {

@@ -30,8 +30,9 @@
 // geometry (which healpix pixel each source pixel's centre falls in) depends only on layout
 // and size and is cached, so a frame costs one pass over the map in row order (in bands of
 // rows on all cores, the same bits as one pass) and the pyramid's levels. Each source pixel
-// gives its rgb * (its solid angle, in float) to exactly one healpix pixel, so power is preserved up to float rounding; invalid pixels give nothing. Leaves never split
-// below the binned nside: a finest-level leaf is retired and the next leaf is split.
+// gives its rgb * (its solid angle, in float) to exactly one healpix pixel, so power is
+// preserved up to float rounding; invalid pixels give nothing. Leaves never split below the
+// binned nside: a finest-level leaf is retired and the next leaf is split.
 //
 // Light count: the count goes 12, 15, 18, ... (12 + 3k). We stop at the first count
 // >= n - 2, i.e. the largest count <= n, so n - 2 <= count <= n. n < 12 cannot be met

@@ -5,9 +5,10 @@
 // band's runs into bins an earlier band also fills kept aside and added after, in band order,
 // so that every bin's chain of additions is the row-order one whatever the thread count.
 // Google Highway, compiled for every x86 target Highway knows and dispatched at run time (as
-// sampling/row_sweep.h). Every sum is the plain loop's chain of operations in its order (bit-identical: no fused multiply-add,
-// sampling/CMakeLists.txt compiles the file with -ffp-contract=off). Internal to sampling/;
-// tests/sampling/q2tree_sums_test.cpp compares every compiled target with a plain loop.
+// sampling/row_sweep.h). Every sum is the plain loop's chain of operations in its order
+// (bit-identical: no fused multiply-add, sampling/CMakeLists.txt compiles the file with
+// -ffp-contract=off). Internal to sampling/; tests/sampling/q2tree_sums_test.cpp compares
+// every compiled target with a plain loop.
 #pragma once
 
 #include <cstddef>

@@ -145,6 +145,12 @@ double cross_validation_noise(const CalibrationProblem& pr, CandidateFits& fits,
   report_progress(progress, "noise jackknife", 0, 1);
   // One warm refit per view, on every core; NaN where it failed.
   std::vector<double> cv(fits.used.size(), kNaN);
+  // Each half's rays, unprojected once for the other half's refits (projection_difference.h).
+  GridRays half_rays[2];
+  const bool both_ok = fits.halves[0].get(best).ok && fits.halves[1].get(best).ok;
+  if (both_ok)
+    run_jobs(2, [&](size_t h) { half_rays[h] = grid_rays(fits.halves[h].get(best).model, fits.mask, fits.step); },
+             parallel ? 0 : 1);
   run_jobs(fits.used.size(), [&](size_t i) {
     const int h = int(i % 2), pos = int(i / 2);
     ViewSubset rest;
@@ -156,7 +162,9 @@ double cross_validation_noise(const CalibrationProblem& pr, CandidateFits& fits,
       if (int(j) != pos) poses.push_back(from.poses[j]);
     const ModelFit refit = warm_refit(pr, rest, best, from, poses);
     if (!refit.ok) return;
-    const ProjectionDiff d = projection_difference(refit.model, fits.halves[1 - h].get(best).model, fits.mask, fits.step);
+    const CameraModel& other = fits.halves[1 - h].get(best).model;
+    const ProjectionDiff d = both_ok ? projection_difference(refit.model, other, half_rays[1 - h])
+                                     : projection_difference(refit.model, other, fits.mask, fits.step);
     if (d.samples > 0) cv[i] = d.rms_px;
   }, parallel ? 0 : 1);
   std::vector<double> cvs[2];

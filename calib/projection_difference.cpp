@@ -8,23 +8,39 @@
 
 namespace lp {
 
-ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const std::vector<uint8_t>& mask,
-                                     int step_px, bool fit_rotation) {
-  ProjectionDiff out;
-  const int w = a.width, h = a.height, step = std::max(1, step_px);
-  std::vector<Vec3> va, vb;
-  std::vector<Pixel> qs;
+GridRays grid_rays(const CameraModel& b, const std::vector<uint8_t>& mask, int step_px) {
+  GridRays g;
+  const int w = b.width, h = b.height, step = std::max(1, step_px);
   for (int y = step / 2; y < h; y += step)
     for (int x = step / 2; x < w; x += step) {
       if (!mask.empty() && !mask[size_t(y) * w + x]) continue;
       const Pixel q{double(x), double(y)};
-      const auto da = unproject(a, q);
-      const auto db = unproject(b, q);
-      if (!da || !db) continue;
-      va.push_back(*da);
-      vb.push_back(*db);
-      qs.push_back(q);
+      g.pixels.push_back(q);
+      g.rays.push_back(unproject(b, q));
     }
+  return g;
+}
+
+ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const std::vector<uint8_t>& mask,
+                                     int step_px, bool fit_rotation) {
+  return projection_difference(a, b, grid_rays(b, mask, step_px), fit_rotation);
+}
+
+ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const GridRays& b_rays,
+                                     bool fit_rotation) {
+  ProjectionDiff out;
+  std::vector<Vec3> va, vb;
+  std::vector<Pixel> qs;
+  for (size_t i = 0; i < b_rays.pixels.size(); ++i) {
+    const auto& db = b_rays.rays[i];
+    if (!db) continue;
+    const Pixel q = b_rays.pixels[i];
+    const auto da = unproject(a, q);
+    if (!da) continue;
+    va.push_back(*da);
+    vb.push_back(*db);
+    qs.push_back(q);
+  }
   // The rotation that best aligns a's rays with b's (Kabsch).
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   if (fit_rotation && va.size() >= 3) {

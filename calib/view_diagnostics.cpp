@@ -78,7 +78,9 @@ std::vector<CameraModel> view_leverage(const CalibrationProblem& pr, const std::
   std::vector<double> moved(used.size(), std::numeric_limits<double>::infinity());
   report_progress(progress, "leverage", 0, 1);
   // The refit and its projection difference in the same job: the differences (rotation fitted
-  // out over the covered area) took as long as the refits and ran on one core after them.
+  // out over the covered area) took as long as the refits and ran on one core after them. The
+  // chosen fit's rays are unprojected once for all of them.
+  const GridRays chosen_rays = grid_rays(chosen.model, mask, step);
   run_jobs(used.size(), [&](size_t u) {
     const size_t i = used[u];
     std::vector<BoardPose> poses;
@@ -86,7 +88,7 @@ std::vector<CameraModel> view_leverage(const CalibrationProblem& pr, const std::
       if (j != u) poses.push_back(chosen.poses[j]);
     refits[u] = warm_refit(pr, used_views(views, view_used, int(i)), type, chosen, poses);
     if (refits[u].ok) {
-      const ProjectionDiff d = projection_difference(refits[u].model, chosen.model, mask, step);
+      const ProjectionDiff d = projection_difference(refits[u].model, chosen.model, chosen_rays);
       if (d.samples > 0) moved[u] = d.rms_px;
     }
   }, o.parallel ? 0 : 1);

@@ -139,6 +139,45 @@ TEST(CalibrationSeed, CalibrateCameraSeedOfANarrowLensAndTheMrcalSeedsBuiltOnFit
   EXPECT_FALSE(seed_candidate(no_mrcal, all, LensType::Stereographic, solved).fit.ok);
 }
 
+// The leverage and the noise jackknife compare many refits with one model whose rays are
+// unprojected once (grid_rays): the same numbers, bit for bit, as unprojecting it each time,
+// with a mask and a step, a ray-less part of the image included (the pinhole's rays beyond
+// the 190 deg lens' rim), and with and without the rotation fitted.
+TEST(ProjectionDifference, RaysUnprojectedOnceGiveTheSameDifferenceBitForBit) {
+  const CameraModel plumb = narrow();
+  CameraModel other = plumb;
+  other.intrinsics[0] += 0.7;
+  other.intrinsics[2] -= 0.4;
+  other.intrinsics[4] -= 0.003;
+  std::vector<uint8_t> mask(size_t(plumb.width) * plumb.height, 0);
+  for (int y = 100; y < 800; ++y)
+    for (int x = 200 + y / 4; x < 1100; ++x) mask[size_t(y) * plumb.width + x] = 1;
+  for (bool rotation : {true, false}) {
+    const ProjectionDiff plain = projection_difference(other, plumb, mask, 6, rotation);
+    const ProjectionDiff cached = projection_difference(other, plumb, grid_rays(plumb, mask, 6), rotation);
+    ASSERT_GT(plain.samples, 1000);
+    EXPECT_GT(plain.rms_px, 0.1);
+    EXPECT_EQ(cached.samples, plain.samples);
+    EXPECT_EQ(cached.rms_px, plain.rms_px);
+    EXPECT_EQ(cached.median_px, plain.median_px);
+    EXPECT_EQ(cached.max_px, plain.max_px);
+  }
+  // A model with no ray for part of the grid: those pixels drop out alike.
+  const CameraModel wide = kb190();
+  const CameraModel pin{"LENSMODEL_PINHOLE", {300, 300, wide.width / 2.0, wide.height / 2.0}, wide.width, wide.height};
+  const ProjectionDiff plain = projection_difference(pin, wide, {}, 16);
+  const ProjectionDiff cached = projection_difference(pin, wide, grid_rays(wide, {}, 16));
+  const GridRays rays = grid_rays(wide, {}, 16);
+  ASSERT_GT(plain.samples, 100);
+  EXPECT_LT(size_t(plain.samples), rays.pixels.size());  // some pixels have no ray under one of them
+  EXPECT_EQ(cached.samples, plain.samples);
+  EXPECT_EQ(cached.rms_px, plain.rms_px);
+  EXPECT_EQ(cached.max_px, plain.max_px);
+  // The cache is of b's rays: given another model's, the difference is another one.
+  EXPECT_NE(projection_difference(other, plumb, grid_rays(other, mask, 6)).rms_px,
+            projection_difference(other, plumb, mask, 6).rms_px);
+}
+
 TEST(CalibrationSolve, JointSolveReachesTheTruthFromAPerturbedSeedAndWarmEqualsCold) {
   const CameraModel truth = kb190();
   const auto corners = project_board_views(truth, kBoard, 12, 80, 600, 0.0, 7, 93);  // noise-free, to 93 deg

@@ -50,6 +50,11 @@ struct Pixel {
 std::optional<Pixel> project(const CameraModel& model, Vec3 direction_camera);
 // Unit camera-frame direction of a pixel; nullopt where the model has no ray.
 std::optional<Vec3> unproject(const CameraModel& model, Pixel pixel);
+namespace detail {
+// unproject's own path for plumb_bob (OpenCV4/5: `intrinsics` fx fy cx cy and `ndist` 4 or 5
+// coefficients), exposed for its test: nullopt where unproject falls back to mrcal's.
+std::optional<Vec3> opencv_unproject(const double* intrinsics, int ndist, Pixel pixel);
+}  // namespace detail
 
 // Files. .cameramodel is mrcal's text format (readable by mrcal's Python and C readers);
 // only mrcal models can be written to it (InputError otherwise). OpenCV FileStorage YAML

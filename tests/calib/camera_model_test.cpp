@@ -178,6 +178,58 @@ TEST(CameraModel, Opencv8AgreesWithCvProjectPointsRationalModel) {
   EXPECT_LT(max_err, 1e-6);
 }
 
+// plumb_bob is unprojected by Newton on the distortion (mrcal's is a dogleg solve per pixel):
+// every pixel of a mildly distorted lens gets a ray that projects back to within 1e-9 px and
+// equals OpenCV's undistortPoints (run to 1e-15); a strongly distorted one (94 deg, k1 -0.28)
+// whose polynomial folds inside the image keeps a ray for the pixels short of the fold, each
+// projecting back to within 1e-9 px.
+TEST(CameraModel, PlumbBobUnprojectsToTheRoundingOfTheModelAsOpenCvUndistorts) {
+  const CameraModel mild{"LENSMODEL_OPENCV5", {900, 902, 639.2, 481.7, -0.08, 0.02, 3e-4, -2e-4, 0.004}, 1280, 960};
+  const CameraModel strong{"LENSMODEL_OPENCV5", {600, 601, 640.5, 480.2, -0.28, 0.09, 0, 0, -0.012}, 1280, 960};
+  for (const bool is_mild : {true, false}) {
+    const CameraModel& m = is_mild ? mild : strong;
+    SCOPED_TRACE(m.intrinsics[4]);
+    const auto& p = m.intrinsics;
+    const cv::Matx33d K(p[0], 0, p[2], 0, p[1], p[3], 0, 0, 1);
+    const std::vector<double> D(p.begin() + 4, p.end());
+    int rays = 0, pixels = 0, own_rays = 0;
+    double worst_px = 0, worst_cv = 0;
+    for (int y = 0; y < m.height; y += 16)
+      for (int x = 0; x < m.width; x += 16) {
+        ++pixels;
+        const auto v = unproject(m, {double(x), double(y)});
+        if (!v) continue;
+        ++rays;
+        const auto q = project(m, *v);
+        ASSERT_TRUE(q.has_value());
+        worst_px = std::max(worst_px, std::hypot(q->x - x, q->y - y));
+        // The Newton path itself answered (not mrcal's fallback), with the same ray.
+        const auto own = detail::opencv_unproject(p.data(), 5, {double(x), double(y)});
+        if (is_mild) ASSERT_TRUE(own.has_value()) << x << ", " << y;
+        if (own) {
+          ++own_rays;
+          EXPECT_EQ(own->x, v->x);
+          EXPECT_EQ(own->z, v->z);
+        }
+        if (is_mild) {
+          std::vector<cv::Point2d> in{{double(x), double(y)}}, out;
+          cv::undistortPoints(in, out, K, D, cv::noArray(), cv::noArray(),
+                              cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 1000, 1e-15));
+          worst_cv = std::max(worst_cv, std::hypot(v->x / v->z - out[0].x, v->y / v->z - out[0].y));
+        }
+      }
+    EXPECT_LT(worst_px, 1e-9);
+    if (is_mild) {
+      EXPECT_EQ(rays, pixels);
+      EXPECT_LT(worst_cv, 1e-9);
+    } else {
+      EXPECT_GT(own_rays, pixels / 2);
+    }
+    std::printf("  k1 %+.2f: %d of %d pixels have a ray (%d by Newton), worst round trip %.1e px, against OpenCV %.1e\n",
+                p[4], rays, pixels, own_rays, worst_px, worst_cv);
+  }
+}
+
 TEST(CameraModel, OmnidirMeiAgreesWithCvOmnidirProjectPoints) {
   const CameraModel m = omnidir_mei();
   const auto& p = m.intrinsics;

@@ -1,6 +1,8 @@
 // The plugin of calib/ceres_plugin.h: the only code linked with Ceres. The cost functions
 // moved here from calibration_solve.cpp and photometric.cpp unchanged, and each problem is
-// built in the order those files built it, so that the solves are bit for bit the same.
+// built in the order those files built it, so that the solves are bit for bit the same;
+// since stop 40 Mei's corner cost has hand-written Jacobians (MeiCornerCost), the autodiff
+// ones to rounding.
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
@@ -74,15 +76,101 @@ struct CornerCost {
   }
 };
 
+// CornerCost<MeiProjection> with its Jacobians written out: the rotation of the lifted board
+// point by autodiff in 4 dimensions (the angle-axis r and the point's z, which the warp
+// moves), the rest of the chain (translation, Mei's lift and distortion, the warp's two
+// factors) by hand. Autodiff in all 17 (9 intrinsics, 6 pose, 2 warp) was the largest
+// cost of Mei's solves (perf, Ladybug: its derivative code 15 % of the automatic choice's
+// CPU, its warm refits walking ~80 iterations along the xi valley). The same residual and
+// derivatives to rounding (mei_jacobian_mismatch, tested against the autodiff form).
+struct MeiCornerCost final : ceres::SizedCostFunction<2, 9, 6, 2> {
+  double X, Y, dx, dy, qx, qy;
+  MeiCornerCost(double X_, double Y_, double dx_, double dy_, double qx_, double qy_)
+      : X(X_), Y(Y_), dx(dx_), dy(dy_), qx(qx_), qy(qy_) {}
+  bool Evaluate(const double* const* parameters, double* residuals, double** jacobians) const override {
+    const double* in = parameters[0];
+    const double* pose = parameters[1];
+    const double* warp = parameters[2];
+    using J4 = ceres::Jet<double, 4>;
+    const J4 r[3] = {J4(pose[0], 0), J4(pose[1], 1), J4(pose[2], 2)};
+    const J4 P[3] = {J4(X), J4(Y), J4(warp[0] * dx + warp[1] * dy, 3)};
+    J4 Cj[3];
+    ceres::AngleAxisRotatePoint(r, P, Cj);
+    const double C[3] = {Cj[0].a + pose[3], Cj[1].a + pose[4], Cj[2].a + pose[5]};
+    const double xi = in[4], k1 = in[5], k2 = in[6], p1 = in[7], p2 = in[8];
+    // Lift: xu = C0 / m, yu = C1 / m with m = C2 + xi |C| (= |C| (C2 / |C| + xi)).
+    const double n = std::sqrt(C[0] * C[0] + C[1] * C[1] + C[2] * C[2]);
+    const double m = C[2] + xi * n;
+    const double xu = C[0] / m, yu = C[1] / m;
+    const double r2 = xu * xu + yu * yu;
+    const double radial = 1 + k1 * r2 + k2 * r2 * r2;
+    const double xd = xu * radial + 2 * p1 * xu * yu + p2 * (r2 + 2 * xu * xu);
+    const double yd = yu * radial + p1 * (r2 + 2 * yu * yu) + 2 * p2 * xu * yu;
+    residuals[0] = in[0] * xd + in[2] - qx;
+    residuals[1] = in[1] * yd + in[3] - qy;
+    if (!jacobians) return true;
+    // d(xd, yd) / d(xu, yu)
+    const double dradial = 2 * k1 + 4 * k2 * r2;  // 2 d radial / d r2
+    const double j00 = radial + xu * dradial * xu + 2 * p1 * yu + 6 * p2 * xu;
+    const double j01 = xu * dradial * yu + 2 * p1 * xu + 2 * p2 * yu;
+    const double j10 = yu * dradial * xu + 2 * p1 * xu + 2 * p2 * yu;
+    const double j11 = radial + yu * dradial * yu + 6 * p1 * yu + 2 * p2 * xu;
+    // d(xu, yu) / dC and / dxi
+    const double dm[3] = {xi * C[0] / n, xi * C[1] / n, 1 + xi * C[2] / n};
+    double dxu[3], dyu[3];
+    for (int k = 0; k < 3; ++k) {
+      dxu[k] = ((k == 0 ? 1.0 : 0.0) - xu * dm[k]) / m;
+      dyu[k] = ((k == 1 ? 1.0 : 0.0) - yu * dm[k]) / m;
+    }
+    const double dxu_dxi = -xu * n / m, dyu_dxi = -yu * n / m;
+    // dq / dC
+    double dq[2][3];
+    for (int k = 0; k < 3; ++k) {
+      dq[0][k] = in[0] * (j00 * dxu[k] + j01 * dyu[k]);
+      dq[1][k] = in[1] * (j10 * dxu[k] + j11 * dyu[k]);
+    }
+    if (double* J = jacobians[0]) {  // 2 x 9: fx fy cx cy xi k1 k2 p1 p2
+      J[0] = xd, J[1] = 0, J[2] = 1, J[3] = 0;
+      J[4] = in[0] * (j00 * dxu_dxi + j01 * dyu_dxi);
+      J[5] = in[0] * xu * r2, J[6] = in[0] * xu * r2 * r2, J[7] = in[0] * 2 * xu * yu, J[8] = in[0] * (r2 + 2 * xu * xu);
+      J[9] = 0, J[10] = yd, J[11] = 0, J[12] = 1;
+      J[13] = in[1] * (j10 * dxu_dxi + j11 * dyu_dxi);
+      J[14] = in[1] * yu * r2, J[15] = in[1] * yu * r2 * r2, J[16] = in[1] * (r2 + 2 * yu * yu), J[17] = in[1] * 2 * xu * yu;
+    }
+    if (double* J = jacobians[1]) {  // 2 x 6: angle-axis r, translation t
+      for (int i = 0; i < 2; ++i) {
+        for (int k = 0; k < 3; ++k)
+          J[6 * i + k] = dq[i][0] * Cj[0].v[k] + dq[i][1] * Cj[1].v[k] + dq[i][2] * Cj[2].v[k];
+        for (int k = 0; k < 3; ++k) J[6 * i + 3 + k] = dq[i][k];
+      }
+    }
+    if (double* J = jacobians[2]) {  // 2 x 2: the warp, through the point's z
+      for (int i = 0; i < 2; ++i) {
+        const double dz = dq[i][0] * Cj[0].v[3] + dq[i][1] * Cj[1].v[3] + dq[i][2] * Cj[2].v[3];
+        J[2 * i] = dz * dx;
+        J[2 * i + 1] = dz * dy;
+      }
+    }
+    return true;
+  }
+};
+
+template <class Projection>
+ceres::CostFunction* corner_cost(const CeresCorner& k) {
+  using Cost = CornerCost<Projection>;
+  return new ceres::AutoDiffCostFunction<Cost, 2, Projection::kParams, 6, 2>(new Cost{k.X, k.Y, k.dx, k.dy, k.qx, k.qy});
+}
+template <>
+ceres::CostFunction* corner_cost<MeiProjection>(const CeresCorner& k) {
+  return new MeiCornerCost(k.X, k.Y, k.dx, k.dy, k.qx, k.qy);
+}
+
 template <class Projection>
 CeresSolveSummary solve_joint_with(const CeresJointSolve& jp) {
   ceres::Problem problem;
   for (size_t c = 0; c < jp.corner_count; ++c) {
     const CeresCorner& k = jp.corners[c];
-    using Cost = CornerCost<Projection>;
-    problem.AddResidualBlock(
-        new ceres::AutoDiffCostFunction<Cost, 2, Projection::kParams, 6, 2>(new Cost{k.X, k.Y, k.dx, k.dy, k.qx, k.qy}),
-        nullptr, jp.intrinsics, jp.poses[k.view], jp.warp);
+    problem.AddResidualBlock(corner_cost<Projection>(k), nullptr, jp.intrinsics, jp.poses[k.view], jp.warp);
   }
   if (!jp.fit_warp) problem.SetParameterBlockConstant(jp.warp);
   ceres::Solver::Options o;
@@ -175,7 +263,26 @@ CeresPhotometricSummary fit_photometric(const CeresPhotometricFit& fp) {
   return out;
 }
 
-constexpr CeresPluginTable kTable{kCeresPluginVersion, &solve_joint, &fit_photometric};
+double mei_jacobian_mismatch(const double* in, const double* pose, const double* warp, const CeresCorner& k) {
+  const MeiCornerCost analytic(k.X, k.Y, k.dx, k.dy, k.qx, k.qy);
+  const ceres::AutoDiffCostFunction<CornerCost<MeiProjection>, 2, 9, 6, 2> autodiff(
+      new CornerCost<MeiProjection>{k.X, k.Y, k.dx, k.dy, k.qx, k.qy});
+  const double* params[3] = {in, pose, warp};
+  double ra[2], rb[2], Ja[3][18], Jb[3][18];
+  double* ja[3] = {Ja[0], Ja[1], Ja[2]};
+  double* jb[3] = {Jb[0], Jb[1], Jb[2]};
+  if (!analytic.Evaluate(params, ra, ja) || !autodiff.Evaluate(params, rb, jb)) return HUGE_VAL;
+  const int sizes[3] = {18, 12, 4};
+  double scale = 1, diff = std::max(std::abs(ra[0] - rb[0]), std::abs(ra[1] - rb[1]));
+  for (int b = 0; b < 3; ++b)
+    for (int i = 0; i < sizes[b]; ++i) {
+      scale = std::max(scale, std::abs(Jb[b][i]));
+      diff = std::max(diff, std::abs(Ja[b][i] - Jb[b][i]));
+    }
+  return std::isfinite(diff) ? diff / scale : HUGE_VAL;
+}
+
+constexpr CeresPluginTable kTable{kCeresPluginVersion, &solve_joint, &fit_photometric, &mei_jacobian_mismatch};
 
 }  // namespace
 }  // namespace lp::detail

@@ -9,7 +9,8 @@
 // The interface is plain data: the plugin holds the cost functions and the solver options,
 // the callers keep the problems' meaning (seeds, fallbacks, reports). The parameters are
 // solved in place in the caller's memory, in the order the callers built the problems
-// before the split, so that the results are bit for bit what they were.
+// before the split, so that the results are bit for bit what they were (Mei's since stop 40
+// to rounding only: its corner residual's Jacobians are written out, not autodiffed).
 //
 // Internal to calib/: only calibration_solve.cpp, photometric.cpp and the plugin include it.
 #pragma once
@@ -73,7 +74,7 @@ struct CeresPluginTable {
   CeresPhotometricSummary (*fit_photometric)(const CeresPhotometricFit& problem);
   // The largest difference between the Mei corner residual's hand-written Jacobians (the
   // solver's) and Ceres' autodiff of the same expression, at one corner and parameter set,
-  // relative to 1 + the largest entry: for the plugin's test.
+  // relative to the larger of 1 and the largest autodiff entry: for the plugin's test.
   double (*mei_jacobian_mismatch)(const double* intrinsics, const double* pose, const double* warp,
                                   const CeresCorner& corner);
 };

@@ -463,7 +463,8 @@ std::optional<Vec3> unproject(const CameraModel& model, Pixel pixel) {
   // image often enough (the periphery of fisheye1's and Ladybug's fits) that two methods pick
   // different roots there, and its reports moved by up to 3 %.
   if (pl.model.type() == LensType::OpenCV4 || pl.model.type() == LensType::OpenCV5)
-    if (const auto v = detail::opencv_unproject(model.intrinsics.data(), int(model.intrinsics.size()) - 4, pixel)) return v;
+    if (const auto v = detail::opencv_unproject(model.intrinsics.data(), int(model.intrinsics.size()) - 4, pixel))
+      return v;
   const mrcal_lensmodel_t& lm = pl.mrcal;
   mrcal_point2_t q;
   q.x = pixel.x;

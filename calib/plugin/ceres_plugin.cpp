@@ -132,10 +132,12 @@ struct MeiCornerCost final : ceres::SizedCostFunction<2, 9, 6, 2> {
     if (double* J = jacobians[0]) {  // 2 x 9: fx fy cx cy xi k1 k2 p1 p2
       J[0] = xd, J[1] = 0, J[2] = 1, J[3] = 0;
       J[4] = in[0] * (j00 * dxu_dxi + j01 * dyu_dxi);
-      J[5] = in[0] * xu * r2, J[6] = in[0] * xu * r2 * r2, J[7] = in[0] * 2 * xu * yu, J[8] = in[0] * (r2 + 2 * xu * xu);
+      J[5] = in[0] * xu * r2, J[6] = in[0] * xu * r2 * r2;
+      J[7] = in[0] * 2 * xu * yu, J[8] = in[0] * (r2 + 2 * xu * xu);
       J[9] = 0, J[10] = yd, J[11] = 0, J[12] = 1;
       J[13] = in[1] * (j10 * dxu_dxi + j11 * dyu_dxi);
-      J[14] = in[1] * yu * r2, J[15] = in[1] * yu * r2 * r2, J[16] = in[1] * (r2 + 2 * yu * yu), J[17] = in[1] * 2 * xu * yu;
+      J[14] = in[1] * yu * r2, J[15] = in[1] * yu * r2 * r2;
+      J[16] = in[1] * (r2 + 2 * yu * yu), J[17] = in[1] * 2 * xu * yu;
     }
     if (double* J = jacobians[1]) {  // 2 x 6: angle-axis r, translation t
       for (int i = 0; i < 2; ++i) {
@@ -158,7 +160,8 @@ struct MeiCornerCost final : ceres::SizedCostFunction<2, 9, 6, 2> {
 template <class Projection>
 ceres::CostFunction* corner_cost(const CeresCorner& k) {
   using Cost = CornerCost<Projection>;
-  return new ceres::AutoDiffCostFunction<Cost, 2, Projection::kParams, 6, 2>(new Cost{k.X, k.Y, k.dx, k.dy, k.qx, k.qy});
+  return new ceres::AutoDiffCostFunction<Cost, 2, Projection::kParams, 6, 2>(
+      new Cost{k.X, k.Y, k.dx, k.dy, k.qx, k.qy});
 }
 template <>
 ceres::CostFunction* corner_cost<MeiProjection>(const CeresCorner& k) {

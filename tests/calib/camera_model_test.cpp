@@ -225,7 +225,8 @@ TEST(CameraModel, PlumbBobUnprojectsToTheRoundingOfTheModelAsOpenCvUndistorts) {
     } else {
       EXPECT_GT(own_rays, pixels / 2);
     }
-    std::printf("  k1 %+.2f: %d of %d pixels have a ray (%d by Newton), worst round trip %.1e px, against OpenCV %.1e\n",
+    std::printf("  k1 %+.2f: %d of %d pixels have a ray (%d by Newton), worst round trip %.1e px, "
+                "against OpenCV %.1e\n",
                 p[4], rays, pixels, own_rays, worst_px, worst_cv);
   }
 }

@@ -219,24 +219,21 @@ std::optional<Vec3> mei_unproject(const double* p, Pixel q) {
   return normalize(s);
 }
 
-// ---- OpenCV's radial-tangential models (mrcal's LENSMODEL_OPENCV4/5/8/12) ---------------
+// ---- plumb_bob: OpenCV's radial-tangential model (mrcal's LENSMODEL_OPENCV4/5) ------------
 
-// OpenCV's distortion of normalised coordinates and its Jacobian, D = k1 k2 p1 p2 k3 k4 k5 k6
-// s1 s2 s3 s4 (missing ones zero): the rational radial factor (1 + k1 r2 + k2 r4 + k3 r6) /
-// (1 + k4 r2 + k5 r4 + k6 r6), tangential p1 p2, thin prism s1..s4.
-inline void opencv_distort(const double* D, double x, double y, double* xd, double* yd, double J[4]) {
+// plumb_bob's distortion of normalised coordinates and its Jacobian, D = k1 k2 p1 p2 k3 (k3
+// zero for OpenCV4): radial 1 + k1 r2 + k2 r4 + k3 r6, tangential p1 p2. Only these two models
+// are unprojected here (see unproject), so the rational and thin-prism terms are left out.
+inline void plumb_bob_distort(const double* D, double x, double y, double* xd, double* yd, double J[4]) {
   const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
-  const double a = 1 + D[0] * r2 + D[1] * r4 + D[4] * r6, b = 1 + D[5] * r2 + D[6] * r4 + D[7] * r6;
-  const double radial = a / b;
-  const double da = D[0] + 2 * D[1] * r2 + 3 * D[4] * r4, db = D[5] + 2 * D[6] * r2 + 3 * D[7] * r4;
-  const double dradial = (da * b - a * db) / (b * b);  // d radial / d r2
-  const double sx = D[8] + 2 * D[9] * r2, sy = D[10] + 2 * D[11] * r2;  // d prism / d r2
-  *xd = x * radial + 2 * D[2] * x * y + D[3] * (r2 + 2 * x * x) + D[8] * r2 + D[9] * r4;
-  *yd = y * radial + D[2] * (r2 + 2 * y * y) + 2 * D[3] * x * y + D[10] * r2 + D[11] * r4;
-  J[0] = radial + 2 * x * x * dradial + 2 * D[2] * y + 6 * D[3] * x + 2 * x * sx;  // dxd/dx
-  J[1] = 2 * x * y * dradial + 2 * D[2] * x + 2 * D[3] * y + 2 * y * sx;           // dxd/dy
-  J[2] = 2 * x * y * dradial + 2 * D[2] * x + 2 * D[3] * y + 2 * x * sy;           // dyd/dx
-  J[3] = radial + 2 * y * y * dradial + 6 * D[2] * y + 2 * D[3] * x + 2 * y * sy;  // dyd/dy
+  const double radial = 1 + D[0] * r2 + D[1] * r4 + D[4] * r6;
+  const double dradial = D[0] + 2 * D[1] * r2 + 3 * D[4] * r4;  // d radial / d r2
+  *xd = x * radial + 2 * D[2] * x * y + D[3] * (r2 + 2 * x * x);
+  *yd = y * radial + D[2] * (r2 + 2 * y * y) + 2 * D[3] * x * y;
+  J[0] = radial + 2 * x * x * dradial + 2 * D[2] * y + 6 * D[3] * x;  // dxd/dx
+  J[1] = 2 * x * y * dradial + 2 * D[2] * x + 2 * D[3] * y;           // dxd/dy
+  J[2] = J[1];                                                        // dyd/dx
+  J[3] = radial + 2 * y * y * dradial + 6 * D[2] * y + 2 * D[3] * x;  // dyd/dy
 }
 
 // Points between the axis and an unprojected point where the distortion must not fold.
@@ -244,7 +241,7 @@ constexpr int kSheetSamples = 16;
 
 }  // namespace
 
-// The ray of pixel q under an OpenCV model with `ndist` distortion coefficients, by Newton on
+// The ray of pixel q under plumb_bob with `ndist` (4 or 5) distortion coefficients, by Newton on
 // the 2 x 2 distortion from the distorted point: converges in a few steps to the rounding of
 // the model. mrcal unprojects these models with a dogleg solve per pixel, which was a third of
 // a forced calibration's CPU (docs/calibration.md, stop 40). nullopt where Newton does not
@@ -252,14 +249,15 @@ constexpr int kSheetSamples = 16;
 // and at kSheetSamples points between it and the axis): beyond the fold the polynomial images
 // the answer is ambiguous, and the caller asks mrcal instead.
 std::optional<Vec3> detail::opencv_unproject(const double* p, int ndist, Pixel q) {
-  double D[12] = {};
+  if (ndist != 4 && ndist != 5) return std::nullopt;
+  double D[5] = {};
   std::copy(p + 4, p + 4 + ndist, D);
   const double xd = (q.x - p[2]) / p[0], yd = (q.y - p[3]) / p[1];
   if (!std::isfinite(xd) || !std::isfinite(yd)) return std::nullopt;
   double x = xd, y = yd;
   for (int it = 0; it < 50; ++it) {
     double fx, fy, J[4];
-    opencv_distort(D, x, y, &fx, &fy, J);
+    plumb_bob_distort(D, x, y, &fx, &fy, J);
     fx -= xd;
     fy -= yd;
     const double det = J[0] * J[3] - J[1] * J[2];
@@ -269,13 +267,13 @@ std::optional<Vec3> detail::opencv_unproject(const double* p, int ndist, Pixel q
     y -= dy;
     if (!std::isfinite(x) || !std::isfinite(y)) return std::nullopt;
     if (std::abs(dx) + std::abs(dy) < 1e-15 * (1 + std::abs(x) + std::abs(y))) {
-      opencv_distort(D, x, y, &fx, &fy, J);
+      plumb_bob_distort(D, x, y, &fx, &fy, J);
       if (!(std::hypot(fx - xd, fy - yd) < 1e-12 * (1 + std::hypot(xd, yd)))) return std::nullopt;
       // On the central sheet: the distortion does not fold between the axis and the point.
       for (int k = 1; k <= kSheetSamples; ++k) {
         const double t = double(k) / kSheetSamples;
         double ux, uy;
-        opencv_distort(D, t * x, t * y, &ux, &uy, J);
+        plumb_bob_distort(D, t * x, t * y, &ux, &uy, J);
         if (!(J[0] * J[3] - J[1] * J[2] > 0)) return std::nullopt;
       }
       return normalize(Vec3{x, y, 1});

@@ -6,6 +6,7 @@
 #include <functional>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <utility>
 
@@ -42,13 +43,21 @@ int start_rank(LensType t) {
   }
 }
 
+using SolveJob = std::pair<CandidateSolver*, LensType>;
+
+// Every fit in `jobs`, on every core, started in start_rank order.
+void solve_jobs(std::vector<SolveJob> jobs, bool parallel) {
+  std::stable_sort(jobs.begin(), jobs.end(),
+                   [](const SolveJob& a, const SolveJob& b) { return start_rank(a.second) < start_rank(b.second); });
+  run_jobs(jobs.size(), [&](size_t i) { jobs[i].first->get(jobs[i].second); }, parallel ? 0 : 1);
+}
+
 // Every fit of `types` in `solvers` (each solver's own views), on every core.
-void solve_all(std::vector<CandidateSolver*> solvers, std::vector<LensType> types, bool parallel) {
-  std::stable_sort(types.begin(), types.end(), [](LensType a, LensType b) { return start_rank(a) < start_rank(b); });
-  std::vector<std::pair<CandidateSolver*, LensType>> jobs;
+void solve_all(std::vector<CandidateSolver*> solvers, const std::vector<LensType>& types, bool parallel) {
+  std::vector<SolveJob> jobs;
   for (LensType t : types)
     for (CandidateSolver* s : solvers) jobs.push_back({s, t});
-  run_jobs(jobs.size(), [&](size_t i) { jobs[i].first->get(jobs[i].second); }, parallel ? 0 : 1);
+  solve_jobs(std::move(jobs), parallel);
 }
 
 ViewSubset half_of(const ViewSubset& used, int h) {
@@ -373,21 +382,30 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
   // Many views: one short solve of each candidate on a sample first; a model that misses
   // even those corners by far is not fitted on every view (see CandidateOptions).
   std::vector<LensType> fitted = candidates;
+  std::vector<LensType> fit_the_sample;  // fitted the odd half within screen_rms_px
   std::map<LensType, ModelCandidate> on_sample;
-  const ViewSubset sample = evenly_spaced(fits.used, size_t(std::max(4, o.sample_views)));
-  if (std::isfinite(o.screen_rms_px) && 2 * sample.size() <= fits.used.size()) {
-    CandidateSolver sampled(pr, sample);
-    solve_all({&sampled}, candidates, o.parallel);
+  // The sample: sample_views evenly spaced views of a large set, else the odd half, whose
+  // cold fits the halves' stage reuses (a kept candidate costs nothing more; a screened one
+  // half its full fit).
+  const bool large = fits.used.size() >= 2 * size_t(std::max(4, o.sample_views));
+  const bool on_half = !large && o.min_half_sample_views > 0 && fits.half[1].size() >= size_t(o.min_half_sample_views);
+  std::optional<CandidateSolver> own_sample;
+  if (large) own_sample.emplace(pr, evenly_spaced(fits.used, size_t(std::max(4, o.sample_views))));
+  CandidateSolver* sampled = large ? &*own_sample : on_half ? &fits.halves[1] : nullptr;
+  if (std::isfinite(o.screen_rms_px) && sampled) {
+    const ViewSubset& sample = sampled->views();
+    solve_all({sampled}, candidates, o.parallel);
     double best = kInf;
     for (LensType type : candidates)
-      if (const ModelFit& f = sampled.get(type); f.ok) best = std::min(best, fit_rms(pr, f, sample));
+      if (const ModelFit& f = sampled->get(type); f.ok) best = std::min(best, fit_rms(pr, f, sample));
     if (best <= o.screen_rms_px) {  // else nothing fits the sample: every candidate on every view
       fitted.clear();
       for (LensType type : candidates) {
-        const ModelFit& f = sampled.get(type);
+        const ModelFit& f = sampled->get(type);
         const double rms = f.ok ? fit_rms(pr, f, sample) : kInf;
         if (!f.ok || rms <= o.sample_margin * o.screen_rms_px) {
           fitted.push_back(type);
+          if (on_half && rms <= o.screen_rms_px) fit_the_sample.push_back(type);
           continue;
         }
         ModelCandidate& c = on_sample[type];
@@ -405,9 +423,14 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
       }
     }
   }
-  // The full fits, so that the screening knows which halves to fit.
+  // The full fits, so that the screening knows which halves to fit; beside them the even
+  // half of a candidate that fitted the odd one within screen_rms_px (it will hardly be
+  // screened, and the cores do not wait for the slowest full fit before the halves start).
   report_progress(progress, "candidates", 1, 3);
-  solve_all({&fits.full}, fitted, o.parallel);
+  std::vector<SolveJob> jobs;
+  for (LensType type : fitted) jobs.push_back({&fits.full, type});
+  for (LensType type : fit_the_sample) jobs.push_back({&fits.halves[0], type});
+  solve_jobs(std::move(jobs), o.parallel);
   double best_rms = kInf;
   for (LensType type : fitted)
     if (const ModelFit& f = fits.full.get(type); f.ok) best_rms = std::min(best_rms, fit_rms(pr, f, fits.used));

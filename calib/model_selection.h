@@ -120,6 +120,12 @@ struct CandidateOptions {
   // cannot be fitted on the sample is still fitted on every view.
   int sample_views = 16;
   double sample_margin = 2.0;
+  // A smaller set is screened the same way on its odd half (used[1], used[3], ...) when that
+  // half holds at least min_half_sample_views views: those cold fits are the halves' own, so
+  // a candidate that is kept costs nothing more, and one that is screened out costs the fit
+  // of half the views instead of all of them (MiniOmni, 15 views: the rational model, the
+  // spline and Kannala-Brandt, 6-8 px off). 0: only large sets are screened on a sample.
+  int min_half_sample_views = 4;
   // Solve the candidates (and their halves) on every core (calib/parallel_jobs.h); the
   // table is the same either way.
   bool parallel = true;

@@ -357,11 +357,12 @@ TEST(ModelSelection, ScreeningSkipsTheHalvesOfAModelThatMissesTheCorners) {
   const CalibrationProblem pr = problem_for(truth);
   const std::vector<LensType> types = {LensType::Pinhole, LensType::OpenCV5, LensType::KannalaBrandt};
   auto views = make_board_views(corners, pr, "test", true);
-  auto table_with = [&](double screen_rms_px, bool parallel) {
+  auto table_with = [&](double screen_rms_px, bool parallel, int min_half_sample_views = 0) {
     CandidateFits fits(pr, all_of(views));
     CandidateOptions o;
     o.screen_rms_px = screen_rms_px;
     o.parallel = parallel;
+    o.min_half_sample_views = min_half_sample_views;
     return solve_candidates(pr, fits, types, o);
   };
   const auto all = table_with(std::numeric_limits<double>::infinity(), false);
@@ -394,8 +395,25 @@ TEST(ModelSelection, ScreeningSkipsTheHalvesOfAModelThatMissesTheCorners) {
     EXPECT_FALSE(none_fit[i].screened) << all[i].name;
     EXPECT_EQ(none_fit[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
   }
-  // Screening on a sample (4 of the 10 views, limit 1 px, margin 2): the pinhole misses the
-  // sample's corners by > 2 px and is not fitted on every view; the others are, as before.
+  // Screening on the odd half (5 of the 10 views, limit 1 px, margin 2): the pinhole misses
+  // its corners by > 2 px and is not fitted on every view; the other rows are the ones of the
+  // run without screening, bit for bit (their odd halves are the sample's fits).
+  const auto on_half = table_with(1.0, true, 4);
+  std::printf("  pinhole on the odd half: %s\n", on_half[0].error.c_str());
+  EXPECT_TRUE(on_half[0].screened);
+  EXPECT_GT(on_half[0].rms_px, 2.0);
+  EXPECT_NE(on_half[0].error.find("on 5 of the 10 views"), std::string::npos);
+  for (size_t i = 1; i < 3; ++i) {
+    EXPECT_FALSE(on_half[i].screened) << all[i].name;
+    EXPECT_EQ(on_half[i].rms_px, all[i].rms_px) << all[i].name;
+    EXPECT_EQ(on_half[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
+    EXPECT_EQ(on_half[i].heldout_rms_px, all[i].heldout_rms_px) << all[i].name;
+  }
+  // A half below min_half_sample_views is no sample: the pinhole is fitted on every view.
+  EXPECT_EQ(table_with(1.0, true, 6)[0].rms_px, all[0].rms_px);
+  // Screening on a sample of a large set (4 of the 10 views here, limit 1 px, margin 2): the
+  // pinhole misses the sample's corners by > 2 px and is not fitted on every view; the others
+  // are, as before.
   CandidateFits fits(pr, all_of(views));
   CandidateOptions o;
   o.screen_rms_px = 1.0;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "calib/parallel_jobs.h"
+
 namespace lp {
 namespace {
 
@@ -37,27 +39,19 @@ double predicted_cv_linear(const CalibrationProblem& pr, CandidateFits& fits, Le
   return std::sqrt(ra * ra + rb * rb);
 }
 
-// Every candidate's own linear uncertainty over the covered area (the issue compares
-// candidates by cross-validation and by projection uncertainty side by side). Sampled more
-// coarsely than the cross-validation: a summary, not a map.
-void candidate_linear_sigmas(const CalibrationProblem& pr, CandidateFits& fits, std::vector<ModelCandidate>& table,
-                             const std::vector<std::array<double, 2>>& cv_pixels, const UncertaintyOptions& o,
-                             const StageProgress& progress) {
-  std::vector<std::array<double, 2>> coarse;
-  const size_t stride = std::max<size_t>(1, cv_pixels.size() / size_t(std::max(1, o.candidate_samples)));
-  for (size_t k = 0; k < cv_pixels.size(); k += stride) coarse.push_back(cv_pixels[k]);
-  for (ModelCandidate& c : table) {
-    report_progress(progress, "uncertainty", size_t(&c - table.data()), table.size());
-    if (!c.ok) continue;
-    const ModelFit& f = fits.full.get(candidate_lens_type(c.name));
-    if (!f.ok) continue;
-    const LinearCovariance cc = fit_covariance(pr, f, fits.used);
-    if (!cc.ok) continue;
-    const double s =
-        rms_over(linear_uncertainty_rotation_fitted(cc, f.model, fits.mask, fits.step, coarse, int(coarse.size()), 1));
-    c.linear_sigma_px = s;
-    c.linear_forecast_cv_px = 2 * s;
-  }
+// A candidate's own linear uncertainty over the covered area (the issue compares candidates
+// by cross-validation and by projection uncertainty side by side), at `coarse` pixels.
+void candidate_linear_sigma(const CalibrationProblem& pr, CandidateFits& fits, ModelCandidate& c,
+                            const std::vector<std::array<double, 2>>& coarse) {
+  if (!c.ok) return;
+  const ModelFit& f = fits.full.get(candidate_lens_type(c.name));
+  if (!f.ok) return;
+  const LinearCovariance cc = fit_covariance(pr, f, fits.used);
+  if (!cc.ok) return;
+  const double s =
+      rms_over(linear_uncertainty_rotation_fitted(cc, f.model, fits.mask, fits.step, coarse, int(coarse.size()), 1));
+  c.linear_sigma_px = s;
+  c.linear_forecast_cv_px = 2 * s;
 }
 
 }  // namespace
@@ -74,24 +68,39 @@ UncertaintyReport calibration_uncertainty(const CalibrationProblem& pr, Candidat
   const int gx = std::max(1, o.nx), gy = std::max(1, o.ny);
   const auto grid = grid_pixels(chosen.model, gx, gy);
   const auto cv_pixels = mask_pixels(fits.mask, pr.width, pr.height, fits.step);
-  // Linear: the full fit over the image; each half's own for the cross-validation forecast.
-  const auto sv = solved(fits.used, chosen);
-  const LinearCovariance cov = fit_covariance(pr, chosen, fits.used);
-  u.linear_ok = cov.ok;
-  u.linear_error = cov.error;
-  u.sigma_px = cov.sigma_px;
-  u.mean_frames = linear_uncertainty_mean_frames(cov, chosen.model, sv, grid, gx, gy);
-  u.rotation_fitted = linear_uncertainty_rotation_fitted(cov, chosen.model, fits.mask, fits.step, grid, gx, gy);
-  u.predicted_cv_linear_px = cov.ok ? predicted_cv_linear(pr, fits, type, cv_pixels) : kNaN;
-  // Jackknife.
+  // Independent jobs on every core: the jackknife (its models compared on every core too),
+  // the chosen fit's linear uncertainty, the halves' linear forecast, and every candidate's
+  // linear sigma over the covered area, sampled more coarsely than the cross-validation (a
+  // summary, not a map). Each job writes its own results: the same as one after the other.
+  report_progress(progress, "uncertainty", 0, 1);
+  std::vector<std::array<double, 2>> coarse;
+  const size_t stride = std::max<size_t>(1, cv_pixels.size() / size_t(std::max(1, o.candidate_samples)));
+  for (size_t k = 0; k < cv_pixels.size(); k += stride) coarse.push_back(cv_pixels[k]);
   u.predicted_cv_jackknife_px = kNaN;
-  if (leave_one_out.size() >= 3) {
-    u.jackknife = jackknife_uncertainty(chosen.model, leave_one_out, cv_pixels, grid, gx, gy);
-    const int n = int(cv_pixels.size());
-    u.predicted_cv_jackknife_px = 2 * rms_over(jackknife_uncertainty(chosen.model, leave_one_out, cv_pixels, cv_pixels, n, 1));
-  }
+  double predicted_cv_linear_px = kNaN;
+  run_jobs(3 + table.size(), [&](size_t j) {
+    if (j == 0) {
+      if (leave_one_out.size() < 3) return;
+      UncertaintyGrid at_covered;
+      u.jackknife = jackknife_uncertainty(chosen.model, leave_one_out, cv_pixels, grid, gx, gy, &at_covered, o.parallel);
+      u.predicted_cv_jackknife_px = 2 * rms_over(at_covered);
+    } else if (j == 1) {
+      // Linear: the full fit over the image.
+      const LinearCovariance cov = fit_covariance(pr, chosen, fits.used);
+      u.linear_ok = cov.ok;
+      u.linear_error = cov.error;
+      u.sigma_px = cov.sigma_px;
+      u.mean_frames = linear_uncertainty_mean_frames(cov, chosen.model, solved(fits.used, chosen), grid, gx, gy);
+      u.rotation_fitted = linear_uncertainty_rotation_fitted(cov, chosen.model, fits.mask, fits.step, grid, gx, gy);
+    } else if (j == 2) {
+      // Each half's own, for the cross-validation forecast (kept only where the full fit's is).
+      predicted_cv_linear_px = predicted_cv_linear(pr, fits, type, cv_pixels);
+    } else {
+      candidate_linear_sigma(pr, fits, table[j - 3], coarse);
+    }
+  }, o.parallel ? 0 : 1);
+  u.predicted_cv_linear_px = u.linear_ok ? predicted_cv_linear_px : kNaN;
   u.headline = leave_one_out.size() >= 3 ? "jackknife" : "linear";
-  candidate_linear_sigmas(pr, fits, table, cv_pixels, o, progress);
   // The cross-validation repeated over balanced splits (the selection's, when it ranked on
   // them; else over o.repeated_splits: odd/even and pseudo-random ones).
   std::vector<double> v = chosen_row.cross_validation_splits_px;

@@ -47,6 +47,8 @@ struct UncertaintyOptions {
   int candidate_samples = 400;
   // The repeated cross-validation when the selection ranked on one split: over this many.
   int repeated_splits = 4;
+  // Its independent parts on every core (calib/parallel_jobs.h); the report is the same.
+  bool parallel = true;
 };
 
 // The linearised covariance (projection_uncertainty.h) of `fit` on `views` (its poses
@@ -56,7 +58,7 @@ LinearCovariance fit_covariance(const CalibrationProblem& problem, const ModelFi
 
 // `pick`: the chosen row of `table` (its fit: fits.full); `leave_one_out`: view_leverage's
 // models (the jackknife needs at least 3). Sets every candidate's linear_sigma_px and
-// linear_forecast_cv_px. Progress stage "uncertainty", one step per candidate.
+// linear_forecast_cv_px. Progress stage "uncertainty" (one step).
 UncertaintyReport calibration_uncertainty(const CalibrationProblem& problem, CandidateFits& fits,
                                           std::vector<ModelCandidate>& table, size_t pick,
                                           const SelectionReport& selection,

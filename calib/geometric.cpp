@@ -228,6 +228,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     UncertaintyOptions uo;
     uo.nx = options.uncertainty_nx;
     uo.ny = options.uncertainty_ny;
+    uo.parallel = options.parallel;
     res.uncertainty =
         calibration_uncertainty(pr, fits, res.table, sel.selected, sel, leave_one_out, uo, options.progress);
   }

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "calib/lens_model.h"
+#include "calib/parallel_jobs.h"
 #include "core/error.h"
 
 namespace lp {
@@ -325,8 +326,7 @@ UncertaintyGrid linear_uncertainty_rotation_fitted(const LinearCovariance& cov, 
 
 namespace {
 
-// b's rays at fit_pixels (nullopt where b has none): the same for every model compared
-// with b, so the jackknife computes them once instead of once per leave-one-out model.
+// b's rays at `pixels` (nullopt where b has none).
 std::vector<std::optional<Vec3>> rays_of(const CameraModel& b, const std::vector<std::array<double, 2>>& pixels) {
   std::vector<std::optional<Vec3>> out;
   out.reserve(pixels.size());
@@ -334,35 +334,36 @@ std::vector<std::optional<Vec3>> rays_of(const CameraModel& b, const std::vector
   return out;
 }
 
-// projection_difference_vectors with b's rays at fit_pixels given (empty: not fitting the rotation).
-std::vector<std::array<double, 2>> difference_vectors(const CameraModel& a, const CameraModel& b,
-                                                      const std::vector<std::array<double, 2>>& fit_pixels,
-                                                      const std::vector<std::optional<Vec3>>& b_fit_rays,
-                                                      const std::vector<std::array<double, 2>>& pixels,
-                                                      bool fit_rotation) {
+// The rotation that best aligns a's rays with b's (identity with fewer than 3 pairs).
+Eigen::Matrix3d aligning_rotation(const std::vector<std::optional<Vec3>>& a_rays,
+                                  const std::vector<std::optional<Vec3>>& b_rays) {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  if (fit_rotation) {
-    Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-    int count = 0;
-    for (size_t i = 0; i < fit_pixels.size(); ++i) {
-      const auto& q = fit_pixels[i];
-      const auto da = unproject(a, {q[0], q[1]});
-      const auto& db = b_fit_rays[i];
-      if (!da || !db) continue;
-      H += Eigen::Vector3d(da->x, da->y, da->z) * Eigen::Vector3d(db->x, db->y, db->z).transpose();
-      ++count;
-    }
-    if (count >= 3) {
-      Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      const Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
-      Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
-      S(2, 2) = (V * U.transpose()).determinant() < 0 ? -1 : 1;
-      R = V * S * U.transpose();
-    }
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  int count = 0;
+  for (size_t i = 0; i < a_rays.size(); ++i) {
+    const auto& da = a_rays[i];
+    const auto& db = b_rays[i];
+    if (!da || !db) continue;
+    H += Eigen::Vector3d(da->x, da->y, da->z) * Eigen::Vector3d(db->x, db->y, db->z).transpose();
+    ++count;
   }
+  if (count >= 3) {
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Matrix3d U = svd.matrixU(), V = svd.matrixV();
+    Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+    S(2, 2) = (V * U.transpose()).determinant() < 0 ? -1 : 1;
+    R = V * S * U.transpose();
+  }
+  return R;
+}
+
+// a's rays (rotated by R) projected with b, minus the pixels; NaN where either has none.
+std::vector<std::array<double, 2>> rotated_differences(const std::vector<std::optional<Vec3>>& a_rays,
+                                                       const Eigen::Matrix3d& R, const CameraModel& b,
+                                                       const std::vector<std::array<double, 2>>& pixels) {
   std::vector<std::array<double, 2>> out(pixels.size(), {kNaN, kNaN});
   for (size_t i = 0; i < pixels.size(); ++i) {
-    const auto da = unproject(a, {pixels[i][0], pixels[i][1]});
+    const auto& da = a_rays[i];
     if (!da) continue;
     const Eigen::Vector3d r = R * Eigen::Vector3d(da->x, da->y, da->z);
     const auto q = project(b, {r[0], r[1], r[2]});
@@ -372,26 +373,11 @@ std::vector<std::array<double, 2>> difference_vectors(const CameraModel& a, cons
   return out;
 }
 
-}  // namespace
-
-std::vector<std::array<double, 2>> projection_difference_vectors(const CameraModel& a, const CameraModel& b,
-                                                                 const std::vector<std::array<double, 2>>& fit_pixels,
-                                                                 const std::vector<std::array<double, 2>>& pixels,
-                                                                 bool fit_rotation) {
-  return difference_vectors(a, b, fit_pixels, fit_rotation ? rays_of(b, fit_pixels) : std::vector<std::optional<Vec3>>{},
-                            pixels, fit_rotation);
-}
-
-UncertaintyGrid jackknife_uncertainty(const CameraModel& full, const std::vector<CameraModel>& leave_one_out,
-                                      const std::vector<std::array<double, 2>>& fit_pixels,
-                                      const std::vector<std::array<double, 2>>& pixels, int nx, int ny) {
-  UncertaintyGrid g = empty_grid(pixels, nx, ny);
-  const size_t n = leave_one_out.size();
-  if (n < 2) return g;
-  std::vector<std::vector<std::array<double, 2>>> d;
-  const auto full_rays = rays_of(full, fit_pixels);
-  for (const CameraModel& m : leave_one_out) d.push_back(difference_vectors(m, full, fit_pixels, full_rays, pixels, true));
-  for (size_t p = 0; p < pixels.size(); ++p) {
+// The per-pixel covariance of the leave-one-out differences d[model][pixel], scaled as a
+// jackknife's, into g.
+void jackknife_spread(const std::vector<std::vector<std::array<double, 2>>>& d, UncertaintyGrid& g) {
+  const size_t n = d.size();
+  for (size_t p = 0; p < g.rms_px.size(); ++p) {
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     bool ok = true;
     for (size_t i = 0; i < n && ok; ++i) {
@@ -407,7 +393,43 @@ UncertaintyGrid jackknife_uncertainty(const CameraModel& full, const std::vector
     }
     set_from_covariance(g, p, C * (double(n - 1) / double(n)));
   }
+}
+
+}  // namespace
+
+std::vector<std::array<double, 2>> projection_difference_vectors(const CameraModel& a, const CameraModel& b,
+                                                                 const std::vector<std::array<double, 2>>& fit_pixels,
+                                                                 const std::vector<std::array<double, 2>>& pixels,
+                                                                 bool fit_rotation) {
+  const Eigen::Matrix3d R = fit_rotation ? aligning_rotation(rays_of(a, fit_pixels), rays_of(b, fit_pixels))
+                                         : Eigen::Matrix3d::Identity();
+  return rotated_differences(rays_of(a, pixels), R, b, pixels);
+}
+
+UncertaintyGrid jackknife_uncertainty(const CameraModel& full, const std::vector<CameraModel>& leave_one_out,
+                                      const std::vector<std::array<double, 2>>& fit_pixels,
+                                      const std::vector<std::array<double, 2>>& pixels, int nx, int ny,
+                                      UncertaintyGrid* at_fit, bool parallel) {
+  UncertaintyGrid g = empty_grid(pixels, nx, ny);
+  if (at_fit) *at_fit = empty_grid(fit_pixels, int(fit_pixels.size()), 1);
+  const size_t n = leave_one_out.size();
+  if (n < 2) return g;
+  // Each model's rays at fit_pixels serve its rotation and, with at_fit, its differences there.
+  const auto full_rays = rays_of(full, fit_pixels);
+  std::vector<std::vector<std::array<double, 2>>> d(n), d_fit(at_fit ? n : 0);
+  run_jobs(n, [&](size_t i) {
+    const CameraModel& m = leave_one_out[i];
+    const auto fit_rays = rays_of(m, fit_pixels);
+    const Eigen::Matrix3d R = aligning_rotation(fit_rays, full_rays);
+    d[i] = rotated_differences(rays_of(m, pixels), R, full, pixels);
+    if (at_fit) d_fit[i] = rotated_differences(fit_rays, R, full, fit_pixels);
+  }, parallel ? 0 : 1);
+  jackknife_spread(d, g);
   summarise(full, g);
+  if (at_fit) {
+    jackknife_spread(d_fit, *at_fit);
+    summarise(full, *at_fit);
+  }
   return g;
 }
 

@@ -95,10 +95,13 @@ std::vector<std::array<double, 2>> projection_difference_vectors(const CameraMod
                                                                  bool fit_rotation = true);
 
 // Jackknife uncertainty of `full` from its leave-one-view-out refits, rotation fitted over
-// fit_pixels (the covered area).
+// fit_pixels (the covered area), at `pixels` (an nx x ny grid); with at_fit, also at
+// fit_pixels themselves (one row), from the same unprojection of each model there. The
+// models are compared on every core (`parallel`); the grids are the same either way.
 UncertaintyGrid jackknife_uncertainty(const CameraModel& full, const std::vector<CameraModel>& leave_one_out,
                                       const std::vector<std::array<double, 2>>& fit_pixels,
-                                      const std::vector<std::array<double, 2>>& pixels, int nx, int ny);
+                                      const std::vector<std::array<double, 2>>& pixels, int nx, int ny,
+                                      UncertaintyGrid* at_fit = nullptr, bool parallel = true);
 
 // sqrt(mean over finite points of rms_px^2): the RMS 2-D projection spread over the points.
 double rms_over(const UncertaintyGrid& g);

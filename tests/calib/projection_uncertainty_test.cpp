@@ -165,6 +165,67 @@ TEST(ProjectionUncertainty, PredictsTheErrorAgainstTheTrueModel) {
   EXPECT_LT(std::sqrt(pcv_jk2 / rep2), 1.5);
 }
 
+// The jackknife against its definition computed apart: each leave-one-out model's difference
+// vectors from the full model (projection_difference_vectors, rotation fitted over the covered
+// pixels), their covariance per pixel times (n - 1) / n. The grid at the covered pixels comes
+// from the same unprojection as the rotation's fit; on one core and on every core alike.
+TEST(ProjectionUncertainty, TheJackknifeIsTheSpreadOfTheLeaveOneOutDifferences) {
+  const CameraModel full = kb190();
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n01(0, 1);
+  std::vector<CameraModel> loo(9, full);
+  for (CameraModel& m : loo) {
+    m.intrinsics[0] += 0.4 * n01(rng), m.intrinsics[1] += 0.4 * n01(rng);
+    m.intrinsics[2] += 0.3 * n01(rng), m.intrinsics[3] += 0.3 * n01(rng);
+    for (size_t k = 4; k < m.intrinsics.size(); ++k) m.intrinsics[k] += 2e-3 * n01(rng);
+  }
+  const auto grid = grid_pixels(full, 16, 12);
+  std::vector<std::array<double, 2>> covered;
+  for (double y = 0.3 * full.height; y < 0.7 * full.height; y += 23)
+    for (double x = 0.3 * full.width; x < 0.7 * full.width; x += 23) covered.push_back({x, y});
+  ASSERT_GT(covered.size(), 50u);
+  // The definition, for `pixels`.
+  const auto reference = [&](const std::vector<std::array<double, 2>>& pixels) {
+    std::vector<std::vector<std::array<double, 2>>> d;
+    for (const CameraModel& m : loo) d.push_back(projection_difference_vectors(m, full, covered, pixels));
+    std::vector<double> rms(pixels.size());
+    const double n = double(loo.size());
+    for (size_t p = 0; p < pixels.size(); ++p) {
+      double mx = 0, my = 0;
+      for (const auto& v : d) mx += v[p][0] / n, my += v[p][1] / n;
+      double ss = 0;
+      for (const auto& v : d) ss += std::pow(v[p][0] - mx, 2) + std::pow(v[p][1] - my, 2);
+      rms[p] = std::sqrt(ss * (n - 1) / n);
+    }
+    return rms;
+  };
+  const auto want_grid = reference(grid), want_covered = reference(covered);
+  UncertaintyGrid at_covered, at_covered_serial;
+  const UncertaintyGrid g = jackknife_uncertainty(full, loo, covered, grid, 16, 12, &at_covered, true);
+  const UncertaintyGrid serial = jackknife_uncertainty(full, loo, covered, grid, 16, 12, &at_covered_serial, false);
+  const UncertaintyGrid alone = jackknife_uncertainty(full, loo, covered, covered, int(covered.size()), 1);
+  ASSERT_EQ(g.rms_px.size(), grid.size());
+  ASSERT_EQ(at_covered.rms_px.size(), covered.size());
+  int finite = 0;
+  for (size_t p = 0; p < grid.size(); ++p) {
+    if (!std::isfinite(want_grid[p])) continue;
+    ++finite;
+    EXPECT_NEAR(g.rms_px[p], want_grid[p], 1e-9 * (1 + want_grid[p])) << p;
+    EXPECT_EQ(serial.rms_px[p], g.rms_px[p]) << p;
+  }
+  EXPECT_GT(finite, 60);  // the 190 deg lens images a circle: the grid's corners have no ray
+  double spread = 0;
+  for (size_t p = 0; p < covered.size(); ++p) {
+    EXPECT_NEAR(at_covered.rms_px[p], want_covered[p], 1e-9 * (1 + want_covered[p])) << p;
+    EXPECT_EQ(at_covered.rms_px[p], alone.rms_px[p]) << p;  // the same as asking for it alone
+    EXPECT_EQ(at_covered_serial.rms_px[p], at_covered.rms_px[p]) << p;
+    spread += at_covered.rms_px[p] / double(covered.size());
+  }
+  std::printf("  mean jackknife over the covered pixels %.3f px, %d grid points with a ray\n", spread, finite);
+  EXPECT_GT(spread, 0.1);  // the perturbations show: a zero grid would not pass
+  EXPECT_EQ(at_covered.median_px, alone.median_px);
+}
+
 TEST(ProjectionUncertainty, NoiseFreeCornersHaveNoUncertaintyAndSplinedIsRefused) {
   const CameraModel truth = kb190();
   const Corners views = make_views(truth, kBoard, 8, 70, 600, 0.0, 3);

@@ -12,6 +12,7 @@
 
 #include "calib/calibration_report.h"
 #include "calib/lens_model.h"
+#include "calib/parallel_jobs.h"
 #include "core/error.h"
 
 namespace lp {
@@ -413,10 +414,14 @@ void write_calibration_files(GeometricCalibration& run, const std::string& outpu
   const std::string dir = report_dir.empty() ? fs::path(output).parent_path().string() : report_dir;
   if (!dir.empty()) fs::create_directories(dir);
   run.picture_stem = (fs::path(dir) / fs::path(output).stem()).string();
-  write_residual_plot(run.picture_stem + "_residuals.png", run.result, run.corners);
-  write_coverage_plot(run.picture_stem + "_coverage.png", run.result);
+  // The three pictures are independent files: drawn and encoded on every core (each PNG
+  // writer renames its own temporary file; the first error is rethrown).
   run.uncertainty_picture = has_uncertainty(run.result);
-  if (run.uncertainty_picture) write_uncertainty_plot(run.picture_stem + "_uncertainty.png", run.result);
+  run_jobs(3, [&](size_t j) {
+    if (j == 0) write_residual_plot(run.picture_stem + "_residuals.png", run.result, run.corners);
+    if (j == 1) write_coverage_plot(run.picture_stem + "_coverage.png", run.result);
+    if (j == 2 && run.uncertainty_picture) write_uncertainty_plot(run.picture_stem + "_uncertainty.png", run.result);
+  });
 }
 
 }  // namespace lp

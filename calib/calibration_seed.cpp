@@ -41,13 +41,14 @@ bool repose_views(const CalibrationProblem& pr, const ViewSubset& views, const s
 SeedReport seed_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& views, const SeedOptions& o) {
   SeedReport s;
   std::vector<char> has_pose;
-  s.fit = opencv_fisheye(pr, views, [](const std::array<double, 2>&) { return true; }, &has_pose);
+  s.fit = opencv_fisheye(pr, views, [](const std::array<double, 2>&) { return true; }, &has_pose,
+                         o.fisheye_iterations);
   if (!s.fit.ok) {
     const double cx = (pr.width - 1) / 2.0, cy = (pr.height - 1) / 2.0;
     const double rmax = o.kb_central_radius * std::min(pr.width, pr.height);
     s.fit = opencv_fisheye(
         pr, views, [&](const std::array<double, 2>& q) { return std::hypot(q[0] - cx, q[1] - cy) < rmax; },
-        &has_pose);
+        &has_pose, o.fisheye_iterations);
     s.central_corners_only = true;
     if (!s.fit.ok) return s;
     s.fit.solver += ", central corners";
@@ -202,7 +203,8 @@ SeedReport seed_splined(const CalibrationProblem& pr, const SolvedFit& solved, c
 }  // namespace
 
 ModelFit opencv_fisheye(const CalibrationProblem& pr, const ViewSubset& views,
-                        const std::function<bool(const std::array<double, 2>&)>& use, std::vector<char>* has_pose) {
+                        const std::function<bool(const std::array<double, 2>&)>& use, std::vector<char>* has_pose,
+                        int max_iterations) {
   ModelFit f;
   f.solver = "cv::fisheye";
   std::vector<cv::Mat> obj, img;
@@ -227,7 +229,7 @@ ModelFit opencv_fisheye(const CalibrationProblem& pr, const ViewSubset& views,
   try {
     cv::fisheye::calibrate(obj, img, cv::Size(pr.width, pr.height), K, D, rv, tv,
                            cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW,
-                           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-14));
+                           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, max_iterations, 1e-14));
   } catch (const cv::Exception& e) {
     f.error = "cv::fisheye::calibrate failed";
     return f;

@@ -139,18 +139,20 @@ const ModelFit& CandidateSolver::adopt(LensType type, ModelFit f) {
 
 namespace {
 
-// The models whose OpenCV seed is cubic in the views (SeedOptions::sample_views).
+// The models whose OpenCV seed grows fast with the views (SeedOptions::sample_views): cubic
+// for cv::calibrateCamera and cv::omnidir; cv::fisheye is linear but re-solves every view's
+// homography in each of its iterations (~0.5 ms a view and iteration: 1.1 s on 64 views).
 bool seeds_on_a_sample(LensType type) {
   return type == LensType::Pinhole || type == LensType::OpenCV5 || type == LensType::OpenCV8 ||
-         type == LensType::OmnidirMei;
+         type == LensType::OmnidirMei || type == LensType::KannalaBrandt;
 }
 
 }  // namespace
 
 ModelFit CandidateSolver::solve(LensType type) {
-  const bool mei = type == LensType::OmnidirMei;
+  const bool mei = type == LensType::OmnidirMei, kb = type == LensType::KannalaBrandt;
   if (seed_.sample_views >= 4 && views_.size() >= 2 * size_t(seed_.sample_views) && seeds_on_a_sample(type) &&
-      (mei || problem_.solve.use_mrcal)) {
+      (mei || kb || problem_.solve.use_mrcal)) {
     // Solved on the sample, every view posed under that fit, then refined on all of them.
     const ViewSubset sample = evenly_spaced(views_, size_t(seed_.sample_views));
     CandidateSolver on_sample(problem_, sample, seed_);
@@ -169,8 +171,9 @@ ModelFit CandidateSolver::solve(LensType type) {
         }
       }
       if (posed) {
-        ModelFit f = mei ? refine_mei(problem_, views_, seed)
-                         : solve_mrcal(problem_, views_, s.model.lensmodel, s.model.intrinsics, seed.poses, false, s.warp);
+        ModelFit f = mei  ? refine_mei(problem_, views_, seed)
+                     : kb ? refine_kannala_brandt(problem_, views_, seed)
+                          : solve_mrcal(problem_, views_, s.model.lensmodel, s.model.intrinsics, seed.poses, false, s.warp);
         if (f.ok) {
           f.solver = s.solver + " on " + std::to_string(sample.size()) + " views, refined on all";
           return f;

@@ -430,8 +430,9 @@ TEST(ModelSelection, ScreeningSkipsTheHalvesOfAModelThatMissesTheCorners) {
   }
 }
 
-// SeedOptions::sample_views: plumb_bob and Mei seeded and solved on a sample of the views,
-// the others posed under that fit, then refined on all, land on the whole solve's minimum.
+// SeedOptions::sample_views: plumb_bob, Mei and Kannala-Brandt seeded and solved on a sample
+// of the views, the others posed under that fit, then refined on all, land on the whole
+// solve's minimum.
 TEST(CandidateSolver, FitsSeededOnASampleReachTheWholeSolvesMinimum) {
   struct Case {
     CameraModel truth;
@@ -442,7 +443,8 @@ TEST(CandidateSolver, FitsSeededOnASampleReachTheWholeSolvesMinimum) {
                         {{"LENSMODEL_OMNIDIR_MEI", {540, 541, 640.5, 479.5, 1.1, -0.05, 0.01, 0, 0}, 1280, 960},
                          75,
                          600,
-                         LensType::OmnidirMei}};
+                         LensType::OmnidirMei},
+                        {kb190(), 80, 600, LensType::KannalaBrandt}};
   for (const Case& k : cases) {
     const CameraModel& truth = k.truth;
     const LensType type = k.type;

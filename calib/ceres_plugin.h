@@ -72,13 +72,14 @@ struct CeresPluginTable {
   int version;
   CeresSolveSummary (*solve_joint)(const CeresJointSolve& problem);
   CeresPhotometricSummary (*fit_photometric)(const CeresPhotometricFit& problem);
-  // The largest difference between the Mei corner residual's hand-written Jacobians (the
-  // solver's) and Ceres' autodiff of the same expression, at one corner and parameter set,
-  // relative to the larger of 1 and the largest autodiff entry: for the plugin's test.
-  double (*mei_jacobian_mismatch)(const double* intrinsics, const double* pose, const double* warp,
-                                  const CeresCorner& corner);
+  // The largest difference between a corner residual's hand-written Jacobians (the
+  // solver's, Mei or Kannala-Brandt) and Ceres' autodiff of the same expression, at one
+  // corner and parameter set (kCeresProjectionParams intrinsics), relative to the larger of
+  // 1 and the largest autodiff entry: for the plugin's tests.
+  double (*jacobian_mismatch)(CeresProjection projection, const double* intrinsics, const double* pose,
+                              const double* warp, const CeresCorner& corner);
 };
-inline constexpr int kCeresPluginVersion = 2;
+inline constexpr int kCeresPluginVersion = 3;
 inline constexpr const char* kCeresPluginFile = "liblightprobe_ceres.so";
 
 // The plugin's table, loaded once; throws std::runtime_error when it cannot be loaded.

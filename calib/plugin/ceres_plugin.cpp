@@ -76,27 +76,59 @@ struct CornerCost {
   }
 };
 
+// The board point (X, Y) lifted by the warp, rotated and translated by the pose, with the
+// rotation's derivatives by autodiff in 4 dimensions (the angle-axis and the point's z, which
+// the warp moves): what the hand-written corner costs below share.
+struct PosedPoint {
+  ceres::Jet<double, 4> Cj[3];
+  double C[3];
+  PosedPoint(double X, double Y, double dx, double dy, const double* pose, const double* warp) {
+    using J4 = ceres::Jet<double, 4>;
+    const J4 r[3] = {J4(pose[0], 0), J4(pose[1], 1), J4(pose[2], 2)};
+    const J4 P[3] = {J4(X), J4(Y), J4(warp[0] * dx + warp[1] * dy, 3)};
+    ceres::AngleAxisRotatePoint(r, P, Cj);
+    C[0] = Cj[0].a + pose[3], C[1] = Cj[1].a + pose[4], C[2] = Cj[2].a + pose[5];
+  }
+  // The pose's (2 x 6: angle-axis, translation) and the warp's (2 x 2) Jacobians from the
+  // residual's derivative dq/dC; a null block is skipped.
+  void chain(const double (&dq)[2][3], double dx, double dy, double* J_pose, double* J_warp) const {
+    if (J_pose)
+      for (int i = 0; i < 2; ++i) {
+        for (int k = 0; k < 3; ++k)
+          J_pose[6 * i + k] = dq[i][0] * Cj[0].v[k] + dq[i][1] * Cj[1].v[k] + dq[i][2] * Cj[2].v[k];
+        for (int k = 0; k < 3; ++k) J_pose[6 * i + 3 + k] = dq[i][k];
+      }
+    if (J_warp)
+      for (int i = 0; i < 2; ++i) {
+        const double dz = dq[i][0] * Cj[0].v[3] + dq[i][1] * Cj[1].v[3] + dq[i][2] * Cj[2].v[3];
+        J_warp[2 * i] = dz * dx;
+        J_warp[2 * i + 1] = dz * dy;
+      }
+  }
+};
+
+// One corner's observation for a cost with hand-written Jacobians: N intrinsics, the pose,
+// the warp (as CornerCost).
+template <int N>
+struct HandWrittenCornerCost : ceres::SizedCostFunction<2, N, 6, 2> {
+  double X, Y, dx, dy, qx, qy;
+  HandWrittenCornerCost(double X_, double Y_, double dx_, double dy_, double qx_, double qy_)
+      : X(X_), Y(Y_), dx(dx_), dy(dy_), qx(qx_), qy(qy_) {}
+};
+
 // CornerCost<MeiProjection> with its Jacobians written out: the rotation of the lifted board
 // point by autodiff in 4 dimensions (the angle-axis r and the point's z, which the warp
 // moves), the rest of the chain (translation, Mei's lift and distortion, the warp's two
 // factors) by hand. Autodiff in all 17 (9 intrinsics, 6 pose, 2 warp) was the largest
 // cost of Mei's solves (perf, Ladybug: its derivative code 15 % of the automatic choice's
 // CPU, its warm refits walking ~80 iterations along the xi valley). The same residual and
-// derivatives to rounding (mei_jacobian_mismatch, tested against the autodiff form).
-struct MeiCornerCost final : ceres::SizedCostFunction<2, 9, 6, 2> {
-  double X, Y, dx, dy, qx, qy;
-  MeiCornerCost(double X_, double Y_, double dx_, double dy_, double qx_, double qy_)
-      : X(X_), Y(Y_), dx(dx_), dy(dy_), qx(qx_), qy(qy_) {}
+// derivatives to rounding (jacobian_mismatch, tested against the autodiff form).
+struct MeiCornerCost final : HandWrittenCornerCost<9> {
+  using HandWrittenCornerCost::HandWrittenCornerCost;
   bool Evaluate(const double* const* parameters, double* residuals, double** jacobians) const override {
     const double* in = parameters[0];
-    const double* pose = parameters[1];
-    const double* warp = parameters[2];
-    using J4 = ceres::Jet<double, 4>;
-    const J4 r[3] = {J4(pose[0], 0), J4(pose[1], 1), J4(pose[2], 2)};
-    const J4 P[3] = {J4(X), J4(Y), J4(warp[0] * dx + warp[1] * dy, 3)};
-    J4 Cj[3];
-    ceres::AngleAxisRotatePoint(r, P, Cj);
-    const double C[3] = {Cj[0].a + pose[3], Cj[1].a + pose[4], Cj[2].a + pose[5]};
+    const PosedPoint posed(X, Y, dx, dy, parameters[1], parameters[2]);
+    const double* C = posed.C;
     const double xi = in[4], k1 = in[5], k2 = in[6], p1 = in[7], p2 = in[8];
     // Lift: xu = C0 / m, yu = C1 / m with m = C2 + xi |C| (= |C| (C2 / |C| + xi)).
     const double n = std::sqrt(C[0] * C[0] + C[1] * C[1] + C[2] * C[2]);
@@ -139,20 +171,7 @@ struct MeiCornerCost final : ceres::SizedCostFunction<2, 9, 6, 2> {
       J[14] = in[1] * yu * r2, J[15] = in[1] * yu * r2 * r2;
       J[16] = in[1] * (r2 + 2 * yu * yu), J[17] = in[1] * 2 * xu * yu;
     }
-    if (double* J = jacobians[1]) {  // 2 x 6: angle-axis r, translation t
-      for (int i = 0; i < 2; ++i) {
-        for (int k = 0; k < 3; ++k)
-          J[6 * i + k] = dq[i][0] * Cj[0].v[k] + dq[i][1] * Cj[1].v[k] + dq[i][2] * Cj[2].v[k];
-        for (int k = 0; k < 3; ++k) J[6 * i + 3 + k] = dq[i][k];
-      }
-    }
-    if (double* J = jacobians[2]) {  // 2 x 2: the warp, through the point's z
-      for (int i = 0; i < 2; ++i) {
-        const double dz = dq[i][0] * Cj[0].v[3] + dq[i][1] * Cj[1].v[3] + dq[i][2] * Cj[2].v[3];
-        J[2 * i] = dz * dx;
-        J[2 * i + 1] = dz * dy;
-      }
-    }
+    posed.chain(dq, dx, dy, jacobians[1], jacobians[2]);
     return true;
   }
 };
@@ -163,20 +182,12 @@ struct MeiCornerCost final : ceres::SizedCostFunction<2, 9, 6, 2> {
 // the rotation and atan2 of Jets), which is mostly Kannala-Brandt's leave-one-out refits. The
 // same residual and derivatives to rounding (jacobian_mismatch, tested against the autodiff
 // form).
-struct KannalaBrandtCornerCost final : ceres::SizedCostFunction<2, 8, 6, 2> {
-  double X, Y, dx, dy, qx, qy;
-  KannalaBrandtCornerCost(double X_, double Y_, double dx_, double dy_, double qx_, double qy_)
-      : X(X_), Y(Y_), dx(dx_), dy(dy_), qx(qx_), qy(qy_) {}
+struct KannalaBrandtCornerCost final : HandWrittenCornerCost<8> {
+  using HandWrittenCornerCost::HandWrittenCornerCost;
   bool Evaluate(const double* const* parameters, double* residuals, double** jacobians) const override {
     const double* in = parameters[0];
-    const double* pose = parameters[1];
-    const double* warp = parameters[2];
-    using J4 = ceres::Jet<double, 4>;
-    const J4 r[3] = {J4(pose[0], 0), J4(pose[1], 1), J4(pose[2], 2)};
-    const J4 P[3] = {J4(X), J4(Y), J4(warp[0] * dx + warp[1] * dy, 3)};
-    J4 Cj[3];
-    ceres::AngleAxisRotatePoint(r, P, Cj);
-    const double C[3] = {Cj[0].a + pose[3], Cj[1].a + pose[4], Cj[2].a + pose[5]};
+    const PosedPoint posed(X, Y, dx, dy, parameters[1], parameters[2]);
+    const double* C = posed.C;
     // s = d(theta) / rho, d = theta (1 + k1 t2 + ... + k4 t2^4), t2 = theta^2; q = f s C + c.
     // ds: d s / d C; dsk: d s / d k1..k4.
     const double rho2 = C[0] * C[0] + C[1] * C[1];
@@ -217,20 +228,7 @@ struct KannalaBrandtCornerCost final : ceres::SizedCostFunction<2, 8, 6, 2> {
         J[12 + i] = in[1] * C[1] * dsk[i];
       }
     }
-    if (double* J = jacobians[1]) {  // 2 x 6: angle-axis r, translation t
-      for (int i = 0; i < 2; ++i) {
-        for (int k = 0; k < 3; ++k)
-          J[6 * i + k] = dq[i][0] * Cj[0].v[k] + dq[i][1] * Cj[1].v[k] + dq[i][2] * Cj[2].v[k];
-        for (int k = 0; k < 3; ++k) J[6 * i + 3 + k] = dq[i][k];
-      }
-    }
-    if (double* J = jacobians[2]) {  // 2 x 2: the warp, through the point's z
-      for (int i = 0; i < 2; ++i) {
-        const double dz = dq[i][0] * Cj[0].v[3] + dq[i][1] * Cj[1].v[3] + dq[i][2] * Cj[2].v[3];
-        J[2 * i] = dz * dx;
-        J[2 * i + 1] = dz * dy;
-      }
-    }
+    posed.chain(dq, dx, dy, jacobians[1], jacobians[2]);
     return true;
   }
 };

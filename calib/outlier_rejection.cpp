@@ -169,17 +169,26 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
   for (int round = 0; round < rounds; ++round) {
     report_progress(progress, "outlier rejection", size_t(round), size_t(rounds));
     CandidateSolver fitter(pr, used_views(views, rep.view_used));
-    // Rounds after the first start from the last round's fit: Kannala-Brandt always, Mei where
-    // it is seeded from Kannala-Brandt (a narrow lens). Mei seeded by cv::omnidir re-solves
-    // cold: its warm rounds were measured to flag other corners on Ladybug. With the
-    // Kannala-Brandt seed the warm rounds flag the same corners on every shared set, and
-    // Ladybug's five rounds take 0.30 s instead of 0.50.
-    const bool warm = ref == LensType::KannalaBrandt || (ref == LensType::OmnidirMei && pr.solve.mei_from_kannala_brandt);
-    if (rep.last_fit && rep.last_fit->ok && warm) fitter.adopt(*ref, warm_from_last(pr, rep, fitter.views()));
+    // Rounds after the first start from the last round's fit where that is the same minimum
+    // (OutlierReport::reference_warm).
+    if (rep.last_fit && rep.last_fit->ok && rep.reference_warm)
+      fitter.adopt(*ref, warm_from_last(pr, rep, fitter.views()));
     if (!ref) ref = choose_reference(pr, fitter, options, on_sample);
     if (!ref || !fitter.get(*ref).ok) throw InputError("calibrate: no model could be fitted to the corners");
     rep.reference = *ref;
     const ModelFit& f = fitter.get(*ref);
+    // Kannala-Brandt always; Mei where its xi is pinned: seeded from Kannala-Brandt (a narrow
+    // lens), or corners seen beyond kMeiFromKannalaBrandtFieldDeg under its own fit (a mirror,
+    // a wide lens). A Mei seeded by cv::omnidir on a narrow lens walks its xi/focal valley:
+    // on Ladybug, when it was seeded so, warm rounds moved it by 0.17 px RMS and flagged
+    // other corners. On the mirrors the warm rounds flag the same corners as the cold ones
+    // did until stop 41, and a forced Mei calibration of KaidanOmni or MiniOmni takes 0.55-0.59
+    // of the time (each cold round was a cv::omnidir seed and a Ceres solve).
+    if (round == 0)
+      rep.reference_warm = *ref == LensType::KannalaBrandt ||
+                           (*ref == LensType::OmnidirMei && f.ok &&
+                            (pr.solve.mei_from_kannala_brandt ||
+                             corner_field_deg(f.model, fitter.views()) > kMeiFromKannalaBrandtFieldDeg));
     rep.rounds = round + 1;
     bool changed = update_inliers(pr, views, fitter.views(), f, options, rep);
     changed = drop_views(pr, views, options, rep) || changed;
@@ -201,11 +210,9 @@ std::optional<ModelFit> reference_fit(const CalibrationProblem& pr, const Outlie
   std::optional<ModelFit> f;
   if (!rep.refit_needed) {
     f = *rep.last_fit;
-  } else if (rep.reference == LensType::KannalaBrandt ||
-             (rep.reference == LensType::OmnidirMei && rep.mei_from_kannala_brandt)) {
-    // Warm where the rounds were (see reject_outliers): Kannala-Brandt, and Mei seeded from
-    // it. On Ladybug the warm Mei is the cold one's to 1e-6 px in every split and the command
-    // 0.94x; a Mei seeded by cv::omnidir is solved cold by the candidate stage.
+  } else if (rep.reference_warm) {
+    // Warm, as the rounds were (see reject_outliers). On Ladybug the warm Mei is the cold
+    // one's to 1e-6 px in every split and the command 0.94x.
     f = warm_from_last(pr, rep, used);
   }
   if (f) f->solver += ", carried from the outlier stage";  // what --json's table[].solver says

@@ -14,11 +14,13 @@
 // |residual| > max(k * sigma, floor_px), sigma = 1.4826 * MAD of the residual components.
 // Rounds stop when nothing changes. With Kannala-Brandt as the reference, later rounds
 // re-solve warm from the previous round's fit: no OpenCV seed, no re-posing, the same minimum
-// (within 1.5e-4 px of cold solves on the three KB real sets). So do Mei's rounds where Mei is
-// seeded from Kannala-Brandt (a narrow lens: the same corners flagged on every shared set).
-// Not the others: a Mei seeded by cv::omnidir (its xi/focal valley: on Ladybug, when it was
-// seeded so, warm rounds moved Mei by 0.17 px RMS and rejected other corners) and the
-// rational model (its free extrapolation) re-solve from scratch.
+// (within 1.5e-4 px of cold solves on the three KB real sets). So do Mei's rounds where its
+// xi is pinned: Mei seeded from Kannala-Brandt (a narrow lens), or corners seen beyond 45 deg
+// under its first fit (mirrors, wide lenses; since stop 41): the same corners flagged on every
+// shared set. Not the others: a Mei seeded by cv::omnidir on a narrow lens (its xi/focal
+// valley: on Ladybug, when it was seeded so, warm rounds moved Mei by 0.17 px RMS and
+// rejected other corners) and the rational model (its free extrapolation) re-solve from
+// scratch.
 #pragma once
 
 #include <optional>
@@ -68,6 +70,9 @@ struct OutlierReport {
   std::optional<ModelFit> last_fit;
   ViewSubset last_views;
   bool refit_needed = false;
+  // Whether the reference's rounds after the first, and its fit on the views left, re-solve
+  // warm from the last round's fit (see above; decided on the first round's fit).
+  bool reference_warm = false;
   // How every Mei fit of this calibration is seeded (SolveOptions::mei_from_kannala_brandt):
   // decided here, from Kannala-Brandt's fit of the reference sample; the stages after this
   // one solve with it too (calibrate()).

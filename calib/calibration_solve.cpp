@@ -173,7 +173,8 @@ ModelFit CandidateSolver::solve(LensType type) {
       if (posed) {
         ModelFit f = mei  ? refine_mei(problem_, views_, seed)
                      : kb ? refine_kannala_brandt(problem_, views_, seed)
-                          : solve_mrcal(problem_, views_, s.model.lensmodel, s.model.intrinsics, seed.poses, false, s.warp);
+                          : solve_mrcal(problem_, views_, s.model.lensmodel, s.model.intrinsics, seed.poses, false,
+                                        s.warp);
         if (f.ok) {
           f.solver = s.solver + " on " + std::to_string(sample.size()) + " views, refined on all";
           return f;

@@ -82,7 +82,8 @@ UncertaintyReport calibration_uncertainty(const CalibrationProblem& pr, Candidat
     if (j == 0) {
       if (leave_one_out.size() < 3) return;
       UncertaintyGrid at_covered;
-      u.jackknife = jackknife_uncertainty(chosen.model, leave_one_out, cv_pixels, grid, gx, gy, &at_covered, o.parallel);
+      u.jackknife =
+          jackknife_uncertainty(chosen.model, leave_one_out, cv_pixels, grid, gx, gy, &at_covered, o.parallel);
       u.predicted_cv_jackknife_px = 2 * rms_over(at_covered);
     } else if (j == 1) {
       // Linear: the full fit over the image.

@@ -186,7 +186,7 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
     // of the time (each cold round was a cv::omnidir seed and a Ceres solve).
     if (round == 0)
       rep.reference_warm = *ref == LensType::KannalaBrandt ||
-                           (*ref == LensType::OmnidirMei && f.ok &&
+                           (*ref == LensType::OmnidirMei &&
                             (pr.solve.mei_from_kannala_brandt ||
                              corner_field_deg(f.model, fitter.views()) > kMeiFromKannalaBrandtFieldDeg));
     rep.rounds = round + 1;

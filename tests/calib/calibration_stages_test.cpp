@@ -585,6 +585,45 @@ TEST(CandidateSolver, MeiOnANarrowLensIsSeededFromKannalaBrandt) {
   EXPECT_FALSE(reject_outliers(wide_pr, wide_views, OutlierOptions{}).mei_from_kannala_brandt);
 }
 
+// OutlierReport::reference_warm: Mei's rounds re-solve warm where its xi is pinned and cold
+// where cv::omnidir seeds it on a narrow lens (its xi/focal valley). Mei is the requested
+// model here, so cv::omnidir seeds it on both lenses (no Kannala-Brandt sample is fitted):
+// the warm rounds come from the field alone, beyond 45 deg on the wide Mei lens, within 30 on
+// the selection tests' wide plumb_bob lens seen near its axis. A gross outlier on each makes a second round run; the warm rounds
+// flag the same corner as outliers.
+TEST(OutlierRejection, MeiRoundsAreWarmOnlyWhereItsXiIsPinned) {
+  struct Case {
+    CameraModel lens;
+    double max_theta, distance;
+    bool warm;
+  };
+  const Case cases[] = {{{"LENSMODEL_OMNIDIR_MEI", {540, 541, 640.5, 479.5, 1.1, -0.05, 0.01, 0, 0}, 1280, 960}, 75, 600,
+                         true},
+                        {{"LENSMODEL_OPENCV5", {600, 601, 639.2, 481.7, -0.28, 0.09, 4e-4, -3e-4, -0.012}, 1280, 960},
+                         30,
+                         800,
+                         false}};
+  for (const Case& k : cases) {
+    Corners corners = project_board_views(k.lens, kBoard, 12, k.max_theta, k.distance, 0.2, 6);
+    ASSERT_GE(corners.size(), 10u);
+    corners[3][17][0] += 8;
+    const CalibrationProblem pr = problem_for(k.lens);
+    auto views = make_board_views(corners, pr, "test", true);
+    OutlierOptions o;
+    o.model = LensType::OmnidirMei;
+    const OutlierReport rep = reject_outliers(pr, views, o);
+    EXPECT_FALSE(rep.mei_from_kannala_brandt) << k.lens.lensmodel;
+    EXPECT_EQ(rep.reference, LensType::OmnidirMei) << k.lens.lensmodel;
+    EXPECT_EQ(rep.reference_warm, k.warm) << k.lens.lensmodel;
+    EXPECT_GE(rep.rounds, 2) << k.lens.lensmodel;
+    EXPECT_EQ(views[3].inlier[17], 0) << k.lens.lensmodel;
+    EXPECT_EQ(rep.corners_rejected, 1) << k.lens.lensmodel;
+    // The fit carried into the candidate stage is solved the way the rounds were.
+    const std::optional<ModelFit> carried = reference_fit(pr, rep, used_views(views, rep.view_used));
+    EXPECT_EQ(carried.has_value(), k.warm || !rep.refit_needed) << k.lens.lensmodel;
+  }
+}
+
 // The candidate stage starts Kannala-Brandt warm from the outlier stage's fit of the
 // reference sample when that sample held every view left and Kannala-Brandt is not the
 // reference (calibrate(); here it is, which the function does not read): the same minimum

@@ -95,7 +95,8 @@ std::string table_text(const CalibrationResult& r) {
 }
 
 // One line: the fitted board warp with its standard deviation, or that the board was taken as flat.
-std::string board_warp_text(const BoardWarpReport& w) {
+std::string board_warp_text(const BoardWarpReport& w, const BoardWarpChoice& choice) {
+  if (choice.decided && !choice.keep) return fmt::format("board taken as flat: {}\n", choice.why.substr(choice.why.find(':') + 2));
   if (!w.fitted) return "board taken as flat (no board warp fitted)\n";
   const std::string sd = std::isfinite(w.sd_mm[0]) ? fmt::format(" (+- {:.3f}, +- {:.3f})", w.sd_mm[0], w.sd_mm[1])
                                                    : fmt::format(" (no uncertainty: {})", w.sd_error);
@@ -166,6 +167,22 @@ nlohmann::json board_warp_json(const BoardWarpReport& w) {
   if (!w.fitted) return nullptr;
   return {{"x2_mm", w.mm[0]}, {"y2_mm", w.mm[1]}, {"x2_sd_mm", num(w.sd_mm[0])}, {"y2_sd_mm", num(w.sd_mm[1])},
           {"sd_error", w.sd_error}};
+}
+
+// How --board-warp auto decided; null when it was not asked or could not compare.
+nlohmann::json board_warp_choice_json(const BoardWarpChoice& c) {
+  if (!c.decided) return nullptr;
+  const SplitChallenge& r = c.challenge;
+  return {{"kept", c.keep},
+          {"model", c.model},
+          {"splits", c.warp.heldout_px.size()},
+          {"heldout_gain_px", num(r.gain_px)},
+          {"heldout_gain_se_px", num(r.se_px)},
+          {"cross_validation_gain_px", num(r.cv_gain_px)},
+          {"cross_validation_gain_se_px", num(r.cv_se_px)},
+          {"heldout_splits_px", {{"warp", c.warp.heldout_px}, {"flat", c.flat.heldout_px}}},
+          {"cross_validation_splits_px", {{"warp", c.warp.cross_validation_px}, {"flat", c.flat.cross_validation_px}}},
+          {"why", c.why}};
 }
 
 nlohmann::json grid_json(const UncertaintyGrid& g) {
@@ -250,7 +267,8 @@ std::string GeometricCalibration::summary() const {
   s += table_text(result);
   s += views_text(*this);
   s += uncertainty_text(result);
-  s += board_warp_text(result.board_warp);
+  s += board_warp_text(result.board_warp, result.board_warp_choice);
+  if (result.board_warp_choice.decided && result.board_warp_choice.keep) s += "  (" + result.board_warp_choice.why + ")\n";
   if (optimization_inputs)
     s += "the .cameramodel carries mrcal's optimization_inputs: mrcal-show-projection-uncertainty and "
          "mrcal-show-residuals-board-observation read it\n";
@@ -282,6 +300,7 @@ std::string GeometricCalibration::to_json() const {
       {"output", written}, {"optimization_inputs", optimization_inputs}, {"mrcal_stand_in", stand_in}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
       {"uncertainty", uncertainty_json(*this)}, {"intrinsics", r.model.intrinsics},
       {"board_warp", board_warp_json(r.board_warp)},
+      {"board_warp_choice", board_warp_choice_json(r.board_warp_choice)},
       {"rms_px", r.model.rms_reprojection_px}, {"cross_validation_px", r.cross_validation_px},
       {"cross_validation_noise_px", num(r.cv_noise_px)},
       {"cross_validation_repeated_px", num(r.cross_validation_repeated_px)}, {"selection", selection_json(r)},

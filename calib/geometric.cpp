@@ -196,7 +196,27 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
 
   // Candidates on the views left and their halves; the selection.
   CandidateFits fits(pr, used_views(views, outliers.view_used));
-  if (std::optional<ModelFit> f = reference_fit(pr, outliers, fits.used)) fits.full.adopt(outliers.reference, *f);
+  std::optional<ModelFit> reference = reference_fit(pr, outliers, fits.used);
+  if (pr.solve.board_warp && options.board_warp_auto) {
+    // Does the board's flex repay its parameters here? Decided on the reference model, before
+    // any candidate is solved (the fits hold `pr` by reference and solve with its setting).
+    const ModelFit warped = reference ? *reference : CandidateSolver(pr, fits.used).get(outliers.reference);
+    BoardWarpChoiceOptions wo;
+    wo.splits = options.board_warp_splits;
+    wo.selection = selection_options(options);
+    wo.parallel = options.parallel;
+    ModelFit flat;
+    res.board_warp_choice =
+        choose_board_warp(pr, fits.used, outliers.reference, warped, fits.mask, fits.step, wo, options.progress, &flat);
+    if (!res.board_warp_choice.keep) {
+      pr.solve.board_warp = false;
+      reference.reset();
+      if (flat.ok) reference = flat;
+    } else if (!reference && warped.ok) {
+      reference = warped;
+    }
+  }
+  if (reference) fits.full.adopt(outliers.reference, *reference);
   if (outliers.reference != LensType::KannalaBrandt)
     if (std::optional<ModelFit> f = kannala_brandt_from_sample(pr, outliers, fits.used, options.fit_max_rms_px))
       fits.full.adopt(LensType::KannalaBrandt, *f);

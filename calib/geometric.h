@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "calib/board_detect.h"
+#include "calib/board_warp_choice.h"
 #include "calib/calibration_problem.h"
 #include "calib/calibration_uncertainty.h"
 #include "calib/camera_model.h"
@@ -52,7 +53,15 @@ struct CalibrateOptions {
   int spline_order = SolveOptions{}.spline_order, spline_nx = SolveOptions{}.spline_nx,
       spline_ny = SolveOptions{}.spline_ny;
   // Fit the board's flex (mrcal's calobject_warp) in every solve: SolveOptions::board_warp.
+  // With board_warp_auto, only where it repays its two parameters: after the outlier stage
+  // (run with the warp, so that a flex is not taken for outliers) the stage's reference model
+  // is fitted with and without it over balanced splits (calib/board_warp_choice.h), and the
+  // calibration goes on with the warp only when it wins; CalibrationResult::board_warp_choice.
+  // Off by default: on the shared sets' six pairs of halves it helped as often as it hurt
+  // (docs/calibration.md, "Board warp: kept where it repays its parameters").
   bool board_warp = SolveOptions{}.board_warp;
+  bool board_warp_auto = false;
+  int board_warp_splits = BoardWarpChoiceOptions{}.splits;
   // SelectionOptions (model_selection.h): what "fits" means.
   double fit_max_rms_px = SelectionOptions{}.fit_max_rms_px;
   double fit_max_cross_validation_px = SelectionOptions{}.fit_max_cross_validation_px;
@@ -157,6 +166,9 @@ struct CalibrationResult {
   bool corners_poorly_covered = false;  // some side has < min_edge_observations
   UncertaintyReport uncertainty;        // empty unless options.uncertainty
   BoardWarpReport board_warp;
+  // How board_warp_auto decided (decided false: not asked, or it could not compare; the
+  // warp then stays as asked).
+  BoardWarpChoice board_warp_choice;
   // The chosen model's solve (views, corners with inlier weights, board poses): what mrcal's
   // optimization_inputs state (calib/mrcal_optimization_inputs.h).
   SolveRecord solve;

@@ -284,6 +284,43 @@ double observed_field_deg(const CandidateFits& fits, const std::vector<ModelCand
 
 }  // namespace
 
+bool outfits_over_splits(const SplitValues& better, const SplitValues& worse, double factor) {
+  const size_t splits = better.heldout_px.size();
+  if (splits == 0 || worse.heldout_px.size() != splits || better.cross_validation_px.size() != splits ||
+      worse.cross_validation_px.size() != splits)
+    return false;
+  int cv_not_worse = 0;
+  for (size_t k = 0; k < splits; ++k) {
+    if (!(factor * better.heldout_px[k] < worse.heldout_px[k])) return false;
+    cv_not_worse += better.cross_validation_px[k] <= worse.cross_validation_px[k];
+  }
+  return 2 * cv_not_worse >= int(splits);
+}
+
+SplitChallenge challenge_over_splits(const SplitValues& challenger, const SplitValues& incumbent,
+                                     const SelectionOptions& o) {
+  SplitChallenge r;
+  const size_t splits = challenger.heldout_px.size();
+  if (splits < 2 || incumbent.heldout_px.size() != splits || challenger.cross_validation_px.size() != splits ||
+      incumbent.cross_validation_px.size() != splits)
+    return r;
+  // The paired gains (the incumbent's value minus the challenger's, per split). The
+  // challenger wins when it is better on most splits and on average beyond the noise in one
+  // statistic, and not significantly worse in the other.
+  std::tie(r.gain_px, r.se_px) = paired_mean_se(incumbent.heldout_px, challenger.heldout_px);
+  std::tie(r.cv_gain_px, r.cv_se_px) = paired_mean_se(incumbent.cross_validation_px, challenger.cross_validation_px);
+  for (size_t k = 0; k < splits; ++k) {
+    r.better += challenger.heldout_px[k] < incumbent.heldout_px[k];
+    r.cv_better += challenger.cross_validation_px[k] < incumbent.cross_validation_px[k];
+  }
+  const double t = t975(int(splits) - 1);
+  const bool fits_better =
+      2 * r.better > int(splits) && r.gain_px > t * r.se_px && -r.cv_gain_px <= t * r.cv_se_px + o.floor_px;
+  const bool repeats_better = 2 * r.cv_better > int(splits) && r.cv_gain_px > t * r.cv_se_px && -r.gain_px <= t * r.se_px;
+  r.wins = fits_better || repeats_better;
+  return r;
+}
+
 size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char>& eligible, bool perspective_first,
                       const SelectionOptions& o) {
   // Who takes part: every split fitted, the same number of splits (they are the same splits).
@@ -307,12 +344,8 @@ size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char
   // factor >= 1 "outfits" is a strict order (no cycle), so some candidate always stays.
   if (o.outfit_factor >= 1) {
     const auto outfits = [&](const ModelCandidate& d, const ModelCandidate& c) {
-      int cv_not_worse = 0;
-      for (size_t k = 0; k < splits; ++k) {
-        if (!(o.outfit_factor * d.heldout_splits_px[k] < c.heldout_splits_px[k])) return false;
-        cv_not_worse += d.cross_validation_splits_px[k] <= c.cross_validation_splits_px[k];
-      }
-      return 2 * cv_not_worse >= int(splits);
+      return outfits_over_splits({d.heldout_splits_px, d.cross_validation_splits_px},
+                                 {c.heldout_splits_px, c.cross_validation_splits_px}, o.outfit_factor);
     };
     std::vector<size_t> kept;
     for (size_t i : order) {
@@ -340,27 +373,9 @@ size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char
     if (table[a].params != table[b].params) return table[a].params < table[b].params;
     return rms_over_splits(table[a].cross_validation_splits_px) < rms_over_splits(table[b].cross_validation_splits_px);
   });
-  const double t = t975(int(splits) - 1);
-  // Challenger c against a: the paired gains (a's value minus c's, per split) and whether c
-  // wins, i.e. is better on most splits and on average beyond the noise in one statistic,
-  // and not significantly worse in the other.
-  struct Challenge {
-    double gain, se, cv_gain, cv_se;
-    bool wins;
-  };
   const auto challenge = [&](const ModelCandidate& c, const ModelCandidate& a) {
-    Challenge r{};
-    std::tie(r.gain, r.se) = paired_mean_se(a.heldout_splits_px, c.heldout_splits_px);
-    std::tie(r.cv_gain, r.cv_se) = paired_mean_se(a.cross_validation_splits_px, c.cross_validation_splits_px);
-    int better = 0, cv_better = 0;
-    for (size_t k = 0; k < splits; ++k) {
-      better += c.heldout_splits_px[k] < a.heldout_splits_px[k];
-      cv_better += c.cross_validation_splits_px[k] < a.cross_validation_splits_px[k];
-    }
-    const bool fits_better = 2 * better > int(splits) && r.gain > t * r.se && -r.cv_gain <= t * r.cv_se + o.floor_px;
-    const bool repeats_better = 2 * cv_better > int(splits) && r.cv_gain > t * r.cv_se && -r.gain <= t * r.se;
-    r.wins = fits_better || repeats_better;
-    return r;
+    return challenge_over_splits({c.heldout_splits_px, c.cross_validation_splits_px},
+                                 {a.heldout_splits_px, a.cross_validation_splits_px}, o);
   };
   const auto beats = [&](size_t c, size_t a) { return challenge(table[order[c]], table[order[a]]).wins; };
   // The pick: the first candidate, in that order, that no candidate after it beats. Not the
@@ -380,9 +395,9 @@ size_t incumbent_pick(std::vector<ModelCandidate>& table, const std::vector<char
   for (size_t j = 0; j < order.size(); ++j) {
     if (j == pick) continue;
     ModelCandidate& c = table[order[j]];
-    const Challenge r = challenge(c, table[order[pick]]);
-    c.challenge_gain_px = r.gain, c.challenge_se_px = r.se;
-    c.challenge_cv_gain_px = r.cv_gain, c.challenge_cv_se_px = r.cv_se;
+    const SplitChallenge r = challenge(c, table[order[pick]]);
+    c.challenge_gain_px = r.gain_px, c.challenge_se_px = r.se_px;
+    c.challenge_cv_gain_px = r.cv_gain_px, c.challenge_cv_se_px = r.cv_se_px;
   }
   return order[pick];
 }

@@ -287,6 +287,28 @@ struct SplitValidation {
 SplitValidation split_validation(const CalibrationProblem& problem, const ViewSubset& used, const std::vector<int>& side,
                                  LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
 
+// One model (or one setting of it) challenging another over the same balanced splits: the
+// incumbent rule's comparison (SelectionOptions::min_rule_splits above). The challenger
+// wins when it is better on most splits and on average by more than t(0.975, splits - 1)
+// paired standard errors in the held-out RMS or in the cross-validation, and not
+// significantly worse in the other.
+struct SplitValues {
+  std::vector<double> heldout_px, cross_validation_px;  // per split, every value finite
+};
+struct SplitChallenge {
+  double gain_px = std::numeric_limits<double>::quiet_NaN();  // mean of incumbent - challenger, held-out RMS
+  double se_px = std::numeric_limits<double>::quiet_NaN();
+  double cv_gain_px = std::numeric_limits<double>::quiet_NaN();  // the same for the cross-validation
+  double cv_se_px = std::numeric_limits<double>::quiet_NaN();
+  int better = 0, cv_better = 0;  // splits where the challenger is lower
+  bool wins = false;              // false too with fewer than 2 splits or unequal lengths
+};
+SplitChallenge challenge_over_splits(const SplitValues& challenger, const SplitValues& incumbent,
+                                     const SelectionOptions& options = {});
+// `better` outfits `worse` (SelectionOptions::outfit_factor): a held-out RMS lower by more
+// than `factor` on every split, and a cross-validation no worse on at least half of them.
+bool outfits_over_splits(const SplitValues& better, const SplitValues& worse, double factor);
+
 // The incumbent rule on a filled table (cross_validation_splits_px and heldout_splits_px of
 // equal length): the index picked, every other candidate's challenge_* (against the pick)
 // and every candidate's split_wins filled. `eligible[i]` false: never picked nor compared.

@@ -27,7 +27,7 @@ struct CalibGeometricArgs {
   double square_mm = 0;
   std::string model;                // override the selection
   bool no_mrcal = false;
-  std::string board_warp = "on";    // fit the board's flex (mrcal's calobject_warp)
+  std::string board_warp = "on";    // fit the board's flex (mrcal's calobject_warp): on, off, auto
   std::string report_dir;           // pictures; default beside the output
   std::string output;               // camera.cameramodel or camera.yaml
   int drop_influential = 0;         // recalibrate without up to N flagged views, worst first
@@ -62,7 +62,8 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   GeometricCalibrationOptions o;
   o.calibrate.model = args.model;
   o.calibrate.use_mrcal = !args.no_mrcal;
-  o.calibrate.board_warp = args.board_warp == "on";
+  o.calibrate.board_warp = args.board_warp != "off";
+  o.calibrate.board_warp_auto = args.board_warp == "auto";
   o.calibrate.progress = stage_progress_bars("solve: ", out.progress);
   o.drop_influential = args.drop_influential;
   if (args.images.empty() == args.corners_in.empty()) throw InputError("give either IMAGE... or --corners-in");
@@ -155,7 +156,10 @@ std::vector<Command> calib_commands() {
          f.opt("--square", a->square_mm, "Square size, mm").required();
          f.opt("--model", a->model, "Use this model instead of the selection (see the printed table)");
          f.flag("--no-mrcal", a->no_mrcal, "OpenCV models only");
-         f.opt("--board-warp", a->board_warp, "Fit the board's flex (mrcal's calobject_warp): on|off").one_of({"on", "off"});
+         f.opt("--board-warp", a->board_warp,
+               "Fit the board's flex (mrcal's calobject_warp): on, off, or auto (only where it repays its two "
+               "parameters over balanced splits of the views)")
+             .one_of({"on", "off", "auto"});
          f.opt("--report", a->report_dir, "Directory for the residual and coverage pictures");
          f.opt("--drop-influential", a->drop_influential, "Recalibrate without up to N views flagged influential (highest leverage first)");
          f.output(a->output, "camera.cameramodel (and .yaml) or camera.yaml");

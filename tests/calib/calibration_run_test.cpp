@@ -176,6 +176,26 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   EXPECT_FALSE(flat.result.board_warp.fitted);
   EXPECT_NE(flat.summary().find("board taken as flat (no board warp fitted)\n"), std::string::npos);
   EXPECT_TRUE(nlohmann::json::parse(flat.to_json())["board_warp"].is_null());
+  EXPECT_TRUE(nlohmann::json::parse(flat.to_json())["board_warp_choice"].is_null());  // not asked
+  // --board-warp auto on this flat board: decided flat, said in one line with the numbers
+  // that decided, and the comparison per split in --json.
+  o.calibrate.board_warp = true;
+  o.calibrate.board_warp_auto = true;
+  const GeometricCalibration autow = calibrate_detections(detections_of(corners, truth), kBoard, o);
+  const BoardWarpChoice& c = autow.result.board_warp_choice;
+  ASSERT_TRUE(c.decided) << c.why;
+  EXPECT_FALSE(c.keep);
+  EXPECT_FALSE(autow.result.board_warp.fitted);
+  EXPECT_NE(autow.summary().find("board taken as flat: the warp does not repay its parameters over 8 splits: with it the held-out RMS is "),
+            std::string::npos)
+      << autow.summary();
+  const nlohmann::json ja = nlohmann::json::parse(autow.to_json());
+  EXPECT_TRUE(ja["board_warp"].is_null());
+  EXPECT_EQ(ja["board_warp_choice"]["kept"], false);
+  EXPECT_EQ(ja["board_warp_choice"]["model"], "LENSMODEL_KANNALA_BRANDT");
+  EXPECT_EQ(ja["board_warp_choice"]["splits"], 8);
+  EXPECT_EQ(ja["board_warp_choice"]["heldout_splits_px"]["flat"].get<std::vector<double>>(), c.flat.heldout_px);
+  EXPECT_EQ(ja["board_warp_choice"]["heldout_gain_px"].get<double>(), c.challenge.gain_px);
 }
 
 // Four views: halves of two have no jackknife noise, yet the model is chosen, and the summary

@@ -272,6 +272,47 @@ std::string fmt_px(double x) {
   return b;
 }
 
+// The chosen pairs against the fixed families over several draws (or splits of one set), two
+// ways beside the plain ratio of means. The best family on average is picked in hindsight
+// among seven noisy means, so it is biased low: (a) the paired t of chosen - that family over
+// the draws (is the gap beyond the draws' noise?), and (b) the family picked without
+// hindsight: for each draw, the family best on average over the other draws, scored on this
+// one (leave one draw out); the chosen pairs' mean against that one's.
+std::string against_fixed(const std::vector<double>& chosen, const std::vector<std::map<std::string, double>>& fixed) {
+  const size_t n = chosen.size();
+  std::map<std::string, double> sum;
+  for (const auto& f : fixed)
+    for (const auto& [name, d] : f) sum[name] += d;
+  std::string best;
+  double best_sum = std::numeric_limits<double>::infinity();
+  for (const auto& [name, v] : sum)
+    if (v < best_sum) best_sum = v, best = name;
+  double chosen_sum = 0, mean_d = 0, var_d = 0, loo_sum = 0;
+  for (double c : chosen) chosen_sum += c;
+  std::vector<double> d(n);
+  for (size_t k = 0; k < n; ++k) d[k] = chosen[k] - fixed[k].at(best), mean_d += d[k] / double(n);
+  for (size_t k = 0; k < n; ++k) var_d += (d[k] - mean_d) * (d[k] - mean_d) / double(n > 1 ? n - 1 : 1);
+  std::map<std::string, int> loo_names;
+  for (size_t k = 0; k < n; ++k) {
+    std::string pick;
+    double pick_sum = std::numeric_limits<double>::infinity();
+    for (const auto& [name, v] : sum)
+      if (const double others = v - fixed[k].at(name); others < pick_sum) pick_sum = others, pick = name;
+    loo_sum += fixed[k].at(pick);
+    ++loo_names[pick];
+  }
+  std::string names;
+  for (const auto& [name, c] : loo_names) names += (names.empty() ? "" : " ") + name + " " + std::to_string(c);
+  const double se = std::sqrt(var_d / double(n));
+  char b[400];
+  std::snprintf(b, sizeof b,
+                "mean chosen %.3f px, best fixed on average %s %.3f px: %.2f (chosen - it %+.3f +- %.3f px, t %.2f); "
+                "fixed without hindsight (%s) %.3f px: %.2f",
+                chosen_sum / double(n), best.c_str(), best_sum / double(n), chosen_sum / best_sum, mean_d, se,
+                se > 0 ? mean_d / se : 0.0, names.c_str(), loo_sum / double(n), chosen_sum / loo_sum);
+  return b;
+}
+
 // Lenses for the halves' agreement (docs/calibration.md, "A choice that holds"): a wide
 // plumb_bob-like lens (94 deg across), the 190 deg Kannala-Brandt fisheye and a Mei
 // (unified model) fisheye, with where their boards go.
@@ -333,7 +374,11 @@ HalvesOutcome calibrate_halves(const Corners& views, const BoardSpec& board, int
       std::printf("    half %d (%zu views, field %.1f deg): %s; before %s\n", h, half[h].size(),
                   r[h].selection_field_deg, r[h].selected.c_str(), r[h].simplest_within_noise.c_str());
       for (const auto& c : r[h].table) {
-        if (!c.ok || c.heldout_splits_px.empty()) continue;
+        if (!c.ok || c.heldout_splits_px.empty()) {
+          std::printf("      %-32s p%-3d rms %.3f cv %.3f%s\n", c.name.c_str(), c.params, c.rms_px,
+                      c.cross_validation_px, c.ok ? " (not cross-validated)" : (" failed: " + c.error).c_str());
+          continue;
+        }
         std::string cv, ho;
         for (double x : c.cross_validation_splits_px) cv += fmt_px(x);
         for (double x : c.heldout_splits_px) ho += fmt_px(x);
@@ -348,7 +393,7 @@ HalvesOutcome calibrate_halves(const Corners& views, const BoardSpec& board, int
 // The measurement of docs/calibration.md ("A choice that holds"): lenses x set sizes x noise
 // draws, each set calibrated in two disjoint halves; the chosen pair's agreement against the
 // best fixed family's, with the incumbent rule and the simplest-within-noise rule of before.
-//   LP_HALVES_VIEWS=8,16,32 LP_HALVES_SEEDS=4 LP_HALVES_NOISE=0.2 LP_HALVES_VERBOSE=1 (LP_HALVES_OUTFIT=0: no outfitting; LP_HALVES_SMALL_SET=0: 4 splits for small sets too)
+//   LP_HALVES_VIEWS=8,16,32 LP_HALVES_SEEDS=4 LP_HALVES_NOISE=0.2 LP_HALVES_VERBOSE=1 (LP_HALVES_OUTFIT=0: no outfitting; LP_HALVES_SMALL_SET=0: 4 splits for small sets too; LP_HALVES_WARP=on|off|auto)
 //   calib_tests --gtest_also_run_disabled_tests --gtest_filter='ModelSelection.DISABLED_HalvesAgree'
 TEST(ModelSelection, DISABLED_HalvesAgree) {
   std::vector<int> sizes;
@@ -372,6 +417,10 @@ TEST(ModelSelection, DISABLED_HalvesAgree) {
   if (const char* f = std::getenv("LP_HALVES_OUTFIT")) o.selection_outfit_factor = std::atof(f);  // 0: off
   if (const char* k = std::getenv("LP_HALVES_CV_SPLITS")) o.cv_splits = std::atoi(k);
   if (const char* k = std::getenv("LP_HALVES_SMALL_SET")) o.selection_small_set_views = std::atoi(k);  // 0: off
+  if (const char* w = std::getenv("LP_HALVES_WARP")) {  // on (default), off, auto
+    o.board_warp = std::string(w) != "off";
+    o.board_warp_auto = std::string(w) == "auto";
+  }
   std::printf("| lens | views | draws | halves differ: before / now | chosen / best fixed, median: before / now | worst: before / now |\n");
   for (const HalvesLens& lens : halves_lenses()) {
     if (only && std::string(lens.name).find(only) == std::string::npos) continue;
@@ -380,8 +429,8 @@ TEST(ModelSelection, DISABLED_HalvesAgree) {
       std::vector<double> ratio[2];
       // Over the draws: the chosen pairs' mean agreement against each fixed family's mean (the
       // best single family fixed in advance, rather than the best of each draw in hindsight).
-      double chosen_sum = 0;
-      std::map<std::string, double> fixed_sum;
+      std::vector<double> chosen;
+      std::vector<std::map<std::string, double>> fixed;
       for (int seed = 1; seed <= seeds; ++seed) {
         const Corners views = project_board_views(lens.truth, kBoard, n, lens.max_theta, lens.distance, noise, seed);
         const auto t0 = std::chrono::steady_clock::now();
@@ -391,21 +440,17 @@ TEST(ModelSelection, DISABLED_HalvesAgree) {
         flips[1] += h.pick[0] != h.pick[1];
         ratio[0].push_back(h.before_px / h.best_fixed_px);
         ratio[1].push_back(h.chosen_px / h.best_fixed_px);
-        chosen_sum += h.chosen_px;
-        for (const auto& [name, d] : h.fixed_px) fixed_sum[name] += d;
+        chosen.push_back(h.chosen_px);
+        fixed.push_back(h.fixed_px);
         std::printf("  %s, %d views (%zu placed), seed %d: before %s | %s %.3f px; now %s | %s %.3f px; best fixed %s %.3f px (%.1f s)\n",
                     lens.name, n, views.size(), seed, h.before[0].c_str(), h.before[1].c_str(), h.before_px,
                     h.pick[0].c_str(), h.pick[1].c_str(), h.chosen_px, h.best_fixed.c_str(), h.best_fixed_px, s);
       }
       auto med = [](std::vector<double> v) { return median_of(v); };
       auto worst = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
-      std::string best_name;
-      double best_sum = std::numeric_limits<double>::infinity();
-      for (const auto& [name, sum] : fixed_sum)
-        if (sum < best_sum) best_sum = sum, best_name = name;
-      std::printf("| %s | %d | %d | %d / %d | %.2f / %.2f | %.2f / %.2f | mean chosen %.3f px, best fixed on average %s %.3f px: %.2f |\n",
-                  lens.name, n, seeds, flips[0], flips[1], med(ratio[0]), med(ratio[1]), worst(ratio[0]), worst(ratio[1]),
-                  chosen_sum / seeds, best_name.c_str(), best_sum / seeds, chosen_sum / best_sum);
+      std::printf("| %s | %d | %d | %d / %d | %.2f / %.2f | %.2f / %.2f | %s |\n", lens.name, n, seeds, flips[0],
+                  flips[1], med(ratio[0]), med(ratio[1]), worst(ratio[0]), worst(ratio[1]),
+                  against_fixed(chosen, fixed).c_str());
       std::fflush(stdout);
     }
   }
@@ -422,6 +467,10 @@ TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
   if (const char* f = std::getenv("LP_HALVES_OUTFIT")) o.selection_outfit_factor = std::atof(f);  // 0: off
   if (const char* k = std::getenv("LP_HALVES_CV_SPLITS")) o.cv_splits = std::atoi(k);
   if (const char* k = std::getenv("LP_HALVES_SMALL_SET")) o.selection_small_set_views = std::atoi(k);  // 0: off
+  if (const char* w = std::getenv("LP_HALVES_WARP")) {  // on (default), off, auto
+    o.board_warp = std::string(w) != "off";
+    o.board_warp_auto = std::string(w) == "auto";
+  }
   for (const calib_test::RealSet& set : calib_test::real_sets()) {
     if (only && std::string(set.name).find(only) == std::string::npos) continue;
     const calib_test::RealSetViews rs = calib_test::real_set_views(set);
@@ -437,16 +486,17 @@ TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
     // LP_HALVES_SPLITS = K: odd / even and K - 1 balanced random splits (seeds 1 ..), and over
     // them the chosen pairs' mean agreement against each fixed family's mean.
     const int splits = std::max(1, std::getenv("LP_HALVES_SPLITS") ? std::atoi(std::getenv("LP_HALVES_SPLITS")) : 1);
-    double chosen_sum = 0;
+    std::vector<double> chosen;
+    std::vector<std::map<std::string, double>> fixed_all;
     int same = 0;
-    std::map<std::string, double> fixed_sum;
     const int first = std::getenv("LP_HALVES_FIRST_SPLIT") ? std::atoi(std::getenv("LP_HALVES_FIRST_SPLIT")) : 0;
     const bool verbose = splits == 1 || std::getenv("LP_HALVES_VERBOSE") != nullptr;
     for (int k = first; k < first + splits; ++k) {
       const HalvesOutcome h = calibrate_halves(views, set.board, rs.width, rs.height, o, verbose, unsigned(k));
       std::string fixed;
-      for (const auto& [n, d] : h.fixed_px) fixed += n + " " + fmt_px(d) + ";", fixed_sum[n] += d;
-      chosen_sum += h.chosen_px;
+      for (const auto& [n, d] : h.fixed_px) fixed += n + " " + fmt_px(d) + ";";
+      chosen.push_back(h.chosen_px);
+      fixed_all.push_back(h.fixed_px);
       same += h.pick[0] == h.pick[1];
       std::printf("| %s | %zu | split %d | %s / %s | %.3f | %s / %s | %.3f | %s %.3f | (%.1f s) fixed: %s\n", set.name,
                   views.size(), k, h.before[0].c_str(), h.before[1].c_str(), h.before_px, h.pick[0].c_str(),
@@ -455,13 +505,8 @@ TEST(ModelSelection, DISABLED_HalvesAgreeOnRealSets) {
       std::fflush(stdout);
     }
     if (splits > 1) {
-      std::string best_name;
-      double best_sum = std::numeric_limits<double>::infinity();
-      for (const auto& [name, sum] : fixed_sum)
-        if (sum < best_sum) best_sum = sum, best_name = name;
-      std::printf("| %s | %d splits | halves chose one model %d / %d | mean chosen %.3f px | best fixed on average %s %.3f px | %.2f |\n",
-                  set.name, splits, same, splits, chosen_sum / splits, best_name.c_str(), best_sum / splits,
-                  chosen_sum / best_sum);
+      std::printf("| %s | %d splits | halves chose one model %d / %d | %s |\n", set.name, splits, same, splits,
+                  against_fixed(chosen, fixed_all).c_str());
       std::fflush(stdout);
     }
   }

@@ -116,6 +116,7 @@ TEST(BoardWarp, AutoKeepsABentBoardsWarpAndDropsAFlatOnes) {
   EXPECT_TRUE(bc.keep) << bc.why;
   EXPECT_EQ(bc.challenge.better, 8) << bc.why;
   EXPECT_GT(bc.challenge.gain_px, 0.1) << bc.why;  // flat misfits by ~0.4 px RMS
+  std::printf("  bent: %s\n", bc.why.c_str());
   ASSERT_TRUE(b.board_warp.fitted);
   for (int i = 0; i < 2; ++i) EXPECT_NEAR(b.board_warp.mm[i], bent[i], 3 * b.board_warp.sd_mm[i]) << i;
   EXPECT_LT(b.model.rms_reprojection_px, 1.2 * std::sqrt(2.0) * 0.1);
@@ -126,6 +127,7 @@ TEST(BoardWarp, AutoKeepsABentBoardsWarpAndDropsAFlatOnes) {
   const BoardWarpChoice& fc = f.board_warp_choice;
   ASSERT_TRUE(fc.decided) << fc.why;
   EXPECT_FALSE(fc.keep) << fc.why;
+  std::printf("  flat: %s\n", fc.why.c_str());
   EXPECT_FALSE(fc.outfits);
   EXPECT_FALSE(f.board_warp.fitted);  // every solve after the decision is flat
   EXPECT_EQ(f.board_warp.mm[0], 0.0);

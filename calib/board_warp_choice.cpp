@@ -64,7 +64,7 @@ BoardWarpChoice choose_board_warp(const CalibrationProblem& problem, const ViewS
                 "cross-validation %+.4f +- %.4f px lower (on %d of %zu)",
                 c.keep ? (c.challenge.wins ? "the warp repays its parameters"
                                            : "the warp repays its parameters (it outfits the flat board)")
-                       : "the board is taken as flat: the warp does not repay its parameters",
+                       : "the warp does not repay its parameters",
                 splits.size(), c.challenge.gain_px, c.challenge.se_px, c.challenge.better, splits.size(),
                 c.challenge.cv_gain_px, c.challenge.cv_se_px, c.challenge.cv_better, splits.size());
   c.why = b;

@@ -42,7 +42,9 @@ struct BoardWarpChoice {
   // few noisy splits cannot make a t test say so (5 views of a board bent by 3 mm: 4 of 4
   // splits 2.5 px better, t 2.8 < 3.18).
   bool outfits = false;
-  std::string why;           // one line: what decided
+  // One line: what decided ("the warp repays its parameters over 4 splits: ..." or "the
+  // warp does not repay ..."), or why nothing was decided.
+  std::string why;
 };
 
 // `warped`: `type`'s fit of `used` with the warp (problem.solve.board_warp true). The flat

@@ -96,7 +96,7 @@ std::string table_text(const CalibrationResult& r) {
 
 // One line: the fitted board warp with its standard deviation, or that the board was taken as flat.
 std::string board_warp_text(const BoardWarpReport& w, const BoardWarpChoice& choice) {
-  if (choice.decided && !choice.keep) return fmt::format("board taken as flat: {}\n", choice.why.substr(choice.why.find(':') + 2));
+  if (choice.decided && !choice.keep) return "board taken as flat: " + choice.why + "\n";
   if (!w.fitted) return "board taken as flat (no board warp fitted)\n";
   const std::string sd = std::isfinite(w.sd_mm[0]) ? fmt::format(" (+- {:.3f}, +- {:.3f})", w.sd_mm[0], w.sd_mm[1])
                                                    : fmt::format(" (no uncertainty: {})", w.sd_error);
@@ -268,7 +268,7 @@ std::string GeometricCalibration::summary() const {
   s += views_text(*this);
   s += uncertainty_text(result);
   s += board_warp_text(result.board_warp, result.board_warp_choice);
-  if (result.board_warp_choice.decided && result.board_warp_choice.keep) s += "  (" + result.board_warp_choice.why + ")\n";
+  if (const BoardWarpChoice& c = result.board_warp_choice; c.decided && c.keep) s += "  (" + c.why + ")\n";
   if (optimization_inputs)
     s += "the .cameramodel carries mrcal's optimization_inputs: mrcal-show-projection-uncertainty and "
          "mrcal-show-residuals-board-observation read it\n";

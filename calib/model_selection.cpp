@@ -316,7 +316,8 @@ SplitChallenge challenge_over_splits(const SplitValues& challenger, const SplitV
   const double t = t975(int(splits) - 1);
   const bool fits_better =
       2 * r.better > int(splits) && r.gain_px > t * r.se_px && -r.cv_gain_px <= t * r.cv_se_px + o.floor_px;
-  const bool repeats_better = 2 * r.cv_better > int(splits) && r.cv_gain_px > t * r.cv_se_px && -r.gain_px <= t * r.se_px;
+  const bool repeats_better =
+      2 * r.cv_better > int(splits) && r.cv_gain_px > t * r.cv_se_px && -r.gain_px <= t * r.se_px;
   r.wins = fits_better || repeats_better;
   return r;
 }

@@ -176,7 +176,8 @@ void measure_warp(const std::string& name, const Corners& views, const BoardSpec
     const ProjectionDiff d = projection_difference(h[0].model, h[1].model, mask, 4);
     if (std::getenv("LP_WARP_VERBOSE"))
       for (int k = 0; k < 2; ++k)
-        std::printf("    half %d: %s; warp %s\n", k, h[k].board_warp_choice.why.c_str(), h[k].board_warp.fitted ? "fitted" : "flat");
+        std::printf("    half %d: %s; warp %s\n", k, h[k].board_warp_choice.why.c_str(),
+                    h[k].board_warp.fitted ? "fitted" : "flat");
     for (const auto& c : full.table)
       if (c.name == fixed) ho[warp ? 0 : 1] = c.heldout_splits_px, cv[warp ? 0 : 1] = c.cross_validation_splits_px;
     const BoardWarpReport& w = full.board_warp;

@@ -186,7 +186,8 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   ASSERT_TRUE(c.decided) << c.why;
   EXPECT_FALSE(c.keep);
   EXPECT_FALSE(autow.result.board_warp.fitted);
-  EXPECT_NE(autow.summary().find("board taken as flat: the warp does not repay its parameters over 8 splits: with it the held-out RMS is "),
+  EXPECT_NE(autow.summary().find("board taken as flat: the warp does not repay its parameters over 8 splits: "
+                                  "with it the held-out RMS is "),
             std::string::npos)
       << autow.summary();
   const nlohmann::json ja = nlohmann::json::parse(autow.to_json());

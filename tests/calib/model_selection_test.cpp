@@ -393,7 +393,8 @@ HalvesOutcome calibrate_halves(const Corners& views, const BoardSpec& board, int
 // The measurement of docs/calibration.md ("A choice that holds"): lenses x set sizes x noise
 // draws, each set calibrated in two disjoint halves; the chosen pair's agreement against the
 // best fixed family's, with the incumbent rule and the simplest-within-noise rule of before.
-//   LP_HALVES_VIEWS=8,16,32 LP_HALVES_SEEDS=4 LP_HALVES_NOISE=0.2 LP_HALVES_VERBOSE=1 (LP_HALVES_OUTFIT=0: no outfitting; LP_HALVES_SMALL_SET=0: 4 splits for small sets too; LP_HALVES_WARP=on|off|auto)
+//   LP_HALVES_VIEWS=8,16,32 LP_HALVES_SEEDS=4 LP_HALVES_NOISE=0.2 LP_HALVES_VERBOSE=1 (LP_HALVES_OUTFIT=0: no
+//   outfitting; LP_HALVES_SMALL_SET=0: 4 splits for small sets too; LP_HALVES_WARP=on|off|auto)
 //   calib_tests --gtest_also_run_disabled_tests --gtest_filter='ModelSelection.DISABLED_HalvesAgree'
 TEST(ModelSelection, DISABLED_HalvesAgree) {
   std::vector<int> sizes;

@@ -86,6 +86,8 @@ if w is not None:
     print(f"calobject_warp: lightprobe {lp_w} mm (sd {sd}), after mrcal.optimize {again['calobject_warp']}")
     if not np.all(moved <= 0.05 * sd):
         fail(f"mrcal's optimum moves the board warp by {moved} mm, more than 5 % of its deviation {sd}")
+elif stand_in is None and oi['do_optimize_calobject_warp']:
+    fail("the report has no board warp (a flat board) but the optimization_inputs fit one")
 
 if factor is not None:
     lp = report['uncertainty']['linear_mean_frames_px']

@@ -3,6 +3,8 @@
 # - the .cameramodel of a synthetic calibration (an OpenCV8 and a splined model) carries
 #   optimization_inputs that mrcal's Python loads, whose residuals reproduce lightprobe's RMS
 #   to 1e-3 and whose projection uncertainty agrees with lightprobe's (mrcal_check.py);
+# - with --board-warp auto on those flat boards, a flat problem (no calobject_warp) that is
+#   mrcal's optimum;
 # - mrcal-show-projection-uncertainty and mrcal-show-residuals-board-observation draw it
 #   headless (--hardcopy) when the tools (Debian package mrcal) and gnuplot are there;
 # - a fisheye whose choice is Kannala-Brandt (no mrcal model) gets a .cameramodel holding
@@ -55,6 +57,15 @@ for model in LENSMODEL_OPENCV8 LENSMODEL_SPLINED_STEREOGRAPHIC; do
   "$PY" "$HERE/mrcal_check.py" "$WORK/$model.cameramodel" "$WORK/$model.json" "${factor[@]}" ||
     fail "mrcal's Python on the $model model"
 done
+
+# --board-warp auto on these flat boards: decided flat, and the stored problem is flat too
+# (mrcal's optimum of it is the model written, with no calobject_warp).
+run calib geometric "$WORK"/boards/board_*.png --board 9x6 --square 30 --model LENSMODEL_OPENCV8 --board-warp auto \
+  --json -o "$WORK/auto.cameramodel"
+cp "$WORK/out" "$WORK/auto.json"
+"$PY" -c "import json,sys; d=json.load(open('$WORK/auto.json')); c=d['board_warp_choice']; print('--board-warp auto:', c['why']); sys.exit(0 if c['kept'] is False and d['board_warp'] is None else 1)" ||
+  fail "--board-warp auto kept a warp on flat boards: $(head -c 300 "$WORK/auto.json")"
+"$PY" "$HERE/mrcal_check.py" "$WORK/auto.cameramodel" "$WORK/auto.json" || fail "mrcal's Python on the --board-warp auto model"
 
 # A fisheye (the Kannala-Brandt camera `synth boards` renders by default): the choice is
 # Kannala-Brandt, which mrcal has no model for, so the .cameramodel holds the best mrcal

@@ -18,6 +18,11 @@ BoardWarpChoice choose_board_warp(const CalibrationProblem& problem, const ViewS
     c.why = "no fit with the warp to compare";
     return c;
   }
+  if (int(used.size()) < o.min_views) {
+    c.why = "the warp kept untested: " + std::to_string(used.size()) + " views, fewer than the " +
+            std::to_string(o.min_views) + " it takes to judge it";
+    return c;
+  }
   report_progress(progress, "board warp", 0, 1);
   CalibrationProblem flat_problem = problem;
   flat_problem.solve.board_warp = false;

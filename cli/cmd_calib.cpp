@@ -27,7 +27,7 @@ struct CalibGeometricArgs {
   double square_mm = 0;
   std::string model;                // override the selection
   bool no_mrcal = false;
-  std::string board_warp = "on";    // fit the board's flex (mrcal's calobject_warp): on, off, auto
+  std::string board_warp = "auto";  // fit the board's flex (mrcal's calobject_warp): auto, on, off
   std::string report_dir;           // pictures; default beside the output
   std::string output;               // camera.cameramodel or camera.yaml
   int drop_influential = 0;         // recalibrate without up to N flagged views, worst first
@@ -157,9 +157,9 @@ std::vector<Command> calib_commands() {
          f.opt("--model", a->model, "Use this model instead of the selection (see the printed table)");
          f.flag("--no-mrcal", a->no_mrcal, "OpenCV models only");
          f.opt("--board-warp", a->board_warp,
-               "Fit the board's flex (mrcal's calobject_warp): on, off, or auto (only where it repays its two "
-               "parameters over balanced splits of the views)")
-             .one_of({"on", "off", "auto"});
+               "Fit the board's flex (mrcal's calobject_warp): auto (where it repays its two parameters over "
+               "balanced splits of the views; always with fewer than 6 views), on, off")
+             .one_of({"auto", "on", "off"});
          f.opt("--report", a->report_dir, "Directory for the residual and coverage pictures");
          f.opt("--drop-influential", a->drop_influential, "Recalibrate without up to N views flagged influential (highest leverage first)");
          f.output(a->output, "camera.cameramodel (and .yaml) or camera.yaml");

@@ -218,8 +218,8 @@ TEST(GeometricCalibration, ReportsProgressStageByStage) {
     last_done = done;
   };
   calibrate(views, kBoard, truth.width, truth.height, opt);
-  const std::vector<std::string> expected = {"outlier rejection", "candidates", "repeated splits", "noise jackknife",
-                                             "leverage", "uncertainty", "done"};
+  const std::vector<std::string> expected = {"outlier rejection", "board warp",  "candidates", "repeated splits",
+                                             "noise jackknife",   "leverage",    "uncertainty", "done"};
   EXPECT_EQ(stages, expected);
 }
 

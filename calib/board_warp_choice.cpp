@@ -15,7 +15,7 @@ BoardWarpChoice choose_board_warp(const CalibrationProblem& problem, const ViewS
   BoardWarpChoice c;
   c.model = candidate_name(type);
   if (!warped.ok || !warped.warp_fitted) {
-    c.why = "no fit with the warp to compare";
+    c.why = "the warp kept untested: no fit with it to compare";
     return c;
   }
   if (int(used.size()) < o.min_views) {
@@ -37,8 +37,8 @@ BoardWarpChoice choose_board_warp(const CalibrationProblem& problem, const ViewS
                            : o.splits;
   const std::vector<std::vector<int>> splits = balanced_view_splits(int(used.size()), n_splits);
   if (!flat.ok || splits.size() < 2) {
-    c.why = !flat.ok ? "the flat board could not be fitted: " + flat.error
-                     : "too few views to split (" + std::to_string(used.size()) + ")";
+    c.why = !flat.ok ? "the warp kept untested: the flat board could not be fitted (" + flat.error + ")"
+                     : "the warp kept untested: too few views to split (" + std::to_string(used.size()) + ")";
     return c;
   }
   // Every (setting, split) on every core, each into its own slot.
@@ -51,7 +51,8 @@ BoardWarpChoice choose_board_warp(const CalibrationProblem& problem, const ViewS
   }, o.parallel ? 0 : 1);
   for (size_t j = 0; j < values.size(); ++j) {
     if (!std::isfinite(values[j].cross_validation_px) || !std::isfinite(values[j].heldout_rms_px)) {
-      c.why = "a split could not be fitted " + std::string(j < splits.size() ? "with" : "without") + " the warp";
+      c.why = "the warp kept untested: a split could not be fitted " +
+              std::string(j < splits.size() ? "with" : "without") + " it";
       report_progress(progress, "board warp", 1, 1);
       return c;
     }

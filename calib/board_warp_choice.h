@@ -37,7 +37,9 @@ struct BoardWarpChoiceOptions {
 };
 
 struct BoardWarpChoice {
-  bool decided = false;  // false: not enough views or a split could not be fitted (warp kept)
+  // false: not asked (why empty), or not tested: fewer than min_views views, or a fit or a
+  // split failed (why says which; the warp kept).
+  bool decided = false;
   bool keep = true;      // the warp won: fitted in every solve of the calibration
   std::string model;     // the model both were fitted with (the outlier stage's reference)
   SplitValues warp, flat;

@@ -169,11 +169,14 @@ nlohmann::json board_warp_json(const BoardWarpReport& w) {
           {"sd_error", w.sd_error}};
 }
 
-// How --board-warp auto decided; null when it was not asked or could not compare.
+// How --board-warp auto decided; null when it was not asked. "tested" false: kept untested
+// ("why" says why), without the comparison's numbers.
 nlohmann::json board_warp_choice_json(const BoardWarpChoice& c) {
-  if (!c.decided) return nullptr;
+  if (c.why.empty()) return nullptr;
+  if (!c.decided) return {{"kept", c.keep}, {"tested", false}, {"model", c.model}, {"why", c.why}};
   const SplitChallenge& r = c.challenge;
   return {{"kept", c.keep},
+          {"tested", true},
           {"model", c.model},
           {"splits", c.warp.heldout_px.size()},
           {"heldout_gain_px", num(r.gain_px)},
@@ -268,7 +271,9 @@ std::string GeometricCalibration::summary() const {
   s += views_text(*this);
   s += uncertainty_text(result);
   s += board_warp_text(result.board_warp, result.board_warp_choice);
-  if (const BoardWarpChoice& c = result.board_warp_choice; c.decided && c.keep) s += "  (" + c.why + ")\n";
+  // Kept: why (won, or untested on too few views).
+  if (const BoardWarpChoice& c = result.board_warp_choice; c.keep && result.board_warp.fitted && !c.why.empty())
+    s += "  (" + c.why + ")\n";
   if (optimization_inputs)
     s += "the .cameramodel carries mrcal's optimization_inputs: mrcal-show-projection-uncertainty and "
          "mrcal-show-residuals-board-observation read it\n";

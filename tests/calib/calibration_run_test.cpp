@@ -171,6 +171,7 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
             std::string::npos);
   EXPECT_TRUE(j["board_warp"].is_null());
   EXPECT_EQ(j["board_warp_choice"]["kept"], false);
+  EXPECT_EQ(j["board_warp_choice"]["tested"], true);
   EXPECT_EQ(j["board_warp_choice"]["model"], "LENSMODEL_KANNALA_BRANDT");
   EXPECT_EQ(j["board_warp_choice"]["splits"], 8);
   EXPECT_EQ(j["board_warp_choice"]["heldout_splits_px"]["flat"].get<std::vector<double>>(), c.flat.heldout_px);
@@ -215,6 +216,16 @@ TEST(CalibrationRun, FourViewsSayTheModelWasChosenNotRequested) {
   EXPECT_TRUE(std::isnan(run.result.cv_noise_px)) << run.result.cv_noise_px << " with " << corners.size() << " views";
   EXPECT_EQ(text.find("as requested"), std::string::npos) << text;
   EXPECT_NE(text.find("chosen: " + run.result.selected + ", "), std::string::npos) << text;
+  // Four views are too few to judge the board warp (BoardWarpChoiceOptions::min_views): kept
+  // untested, said in one line and in --json.
+  EXPECT_TRUE(run.result.board_warp.fitted);
+  EXPECT_FALSE(run.result.board_warp_choice.decided);
+  EXPECT_NE(text.find("  (the warp kept untested: 4 views, fewer than the 6 it takes to judge it)\n"), std::string::npos)
+      << text;
+  const nlohmann::json j = nlohmann::json::parse(run.to_json());
+  EXPECT_EQ(j["board_warp_choice"]["tested"], false);
+  EXPECT_EQ(j["board_warp_choice"]["kept"], true);
+  EXPECT_FALSE(j["board_warp"].is_null());
 }
 
 TEST(CalibrationRun, DropsTheMostInfluentialViewAndReportsBothAnswers) {

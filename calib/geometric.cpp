@@ -211,7 +211,10 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     if (!res.board_warp_choice.keep) {
       pr.solve.board_warp = false;
       reference.reset();
-      if (flat.ok) reference = flat;
+      if (flat.ok) {
+        reference = flat;
+        reference->solver = warped.solver + ", re-solved flat";  // what --json's table[].solver says
+      }
     } else if (!reference && warped.ok) {
       reference = warped;
     }

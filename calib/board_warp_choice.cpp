@@ -60,6 +60,7 @@ BoardWarpChoice choose_board_warp(const CalibrationProblem& problem, const ViewS
     v.heldout_px.push_back(values[j].heldout_rms_px);
     v.cross_validation_px.push_back(values[j].cross_validation_px);
   }
+  c.splits = splits;
   c.challenge = challenge_over_splits(c.warp, c.flat, o.selection);
   c.outfits = o.selection.outfit_factor >= 1 && outfits_over_splits(c.warp, c.flat, o.selection.outfit_factor);
   c.decided = true;

@@ -43,6 +43,7 @@ struct BoardWarpChoice {
   bool keep = true;      // the warp won: fitted in every solve of the calibration
   std::string model;     // the model both were fitted with (the outlier stage's reference)
   SplitValues warp, flat;
+  std::vector<std::vector<int>> splits;  // the balanced splits both were refitted on
   SplitChallenge challenge;  // the warp challenging the flat board
   // The warp outfits the flat board (SelectionOptions::outfit_factor: its held-out RMS lower
   // by more than that factor on every split): a bent board's misfit is systematic, and a

@@ -220,6 +220,15 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
     }
   }
   if (reference) fits.full.adopt(outliers.reference, *reference);
+  // The decision refitted the reference on the selection's splits from the fit just adopted:
+  // the winning side's values are the selection's (the same solves), not refitted there.
+  if (const BoardWarpChoice& c = res.board_warp_choice; c.decided && reference) {
+    const SplitValues& won = c.keep ? c.warp : c.flat;
+    KnownSplits ks{outliers.reference, c.splits, {}};
+    for (size_t k = 0; k < won.heldout_px.size(); ++k)
+      ks.values.push_back({won.cross_validation_px[k], won.heldout_px[k]});
+    fits.known_splits = std::move(ks);
+  }
   if (outliers.reference != LensType::KannalaBrandt)
     if (std::optional<ModelFit> f = kannala_brandt_from_sample(pr, outliers, fits.used, options.fit_max_rms_px))
       fits.full.adopt(LensType::KannalaBrandt, *f);

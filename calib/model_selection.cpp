@@ -135,14 +135,21 @@ bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::
   // refits start first, so that the last job to finish is a short one.
   const size_t per = splits.size() - 1;
   std::vector<SplitValidation> values(repeat.size() * per);
-  std::vector<size_t> start(values.size());
-  std::iota(start.begin(), start.end(), size_t(0));
+  // Slots the board warp's decision already filled (the same solves); the rest are refitted.
+  std::vector<char> known(values.size(), 0);
+  if (const auto& ks = fits.known_splits; ks && ks->splits == splits && ks->values.size() == splits.size())
+    for (size_t r = 0; r < repeat.size(); ++r)
+      if (candidate_lens_type(table[repeat[r]].name) == ks->type)
+        for (size_t k = 0; k < per; ++k) values[r * per + k] = ks->values[1 + k], known[r * per + k] = 1;
+  std::vector<size_t> start;
+  for (size_t j = 0; j < values.size(); ++j)
+    if (!known[j]) start.push_back(j);
   std::stable_sort(start.begin(), start.end(), [&](size_t a, size_t b) {
     return warm_refit_rank(candidate_lens_type(table[repeat[a / per]].name)) <
            warm_refit_rank(candidate_lens_type(table[repeat[b / per]].name));
   });
   report_progress(progress, "repeated splits", 0, 1);
-  run_jobs(values.size(), [&](size_t q) {
+  run_jobs(start.size(), [&](size_t q) {
     const size_t j = start[q];
     const LensType type = candidate_lens_type(table[repeat[j / per]].name);
     values[j] = split_validation(pr, fits.used, splits[1 + j % per], type, fits.full.get(type), fits.mask, fits.step);

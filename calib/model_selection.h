@@ -27,6 +27,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,23 @@ struct ModelCandidate {
   CameraModel model;
 };
 
+// A split's cross-validation and held-out RMS (split_validation below: each half's model on
+// the other half's corners, poses re-solved; RMS of both ways); both inf when the
+// cross-validation is.
+struct SplitValidation {
+  double cross_validation_px, heldout_rms_px;
+};
+
+// Split validations of one candidate already made on these fits' used views, from the full
+// fit the candidate stage holds for it: the board warp's decision (calib/board_warp_choice.h)
+// refits the reference model on the selection's own splits. repeat_over_splits takes them
+// instead of refitting where its splits are these (the same solves give the same numbers).
+struct KnownSplits {
+  LensType type = LensType::Pinhole;
+  std::vector<std::vector<int>> splits;  // as balanced_view_splits gives them
+  std::vector<SplitValidation> values;   // per split
+};
+
 // The fits the stages after outlier rejection share: every candidate solved on the used
 // views and on each odd/even half (on demand, once), and the area they are compared over.
 struct CandidateFits {
@@ -96,6 +114,7 @@ struct CandidateFits {
   std::vector<uint8_t> mask;     // coverage_mask of the used views
   int step = 2;                  // auto_step
   CandidateSolver full, halves[2];
+  std::optional<KnownSplits> known_splits;
 };
 
 // What the candidate stage solves, and how.
@@ -279,11 +298,6 @@ std::vector<std::vector<int>> balanced_view_splits(int views, int splits);
 // fitted, or the two half-models share no covered pixel.
 double split_cross_validation(const CalibrationProblem& problem, const ViewSubset& used, const std::vector<int>& side,
                               LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
-// The same split's cross-validation and held-out RMS (each half's model on the other half's
-// corners, poses re-solved; RMS of both ways); both inf when the cross-validation is.
-struct SplitValidation {
-  double cross_validation_px, heldout_rms_px;
-};
 SplitValidation split_validation(const CalibrationProblem& problem, const ViewSubset& used, const std::vector<int>& side,
                                  LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
 

@@ -122,6 +122,18 @@ TEST(BoardWarp, AutoKeepsABentBoardsWarpAndDropsAFlatOnes) {
   for (int i = 0; i < 2; ++i) EXPECT_NEAR(b.board_warp.mm[i], bent[i], 3 * b.board_warp.sd_mm[i]) << i;
   EXPECT_LT(b.model.rms_reprojection_px, 1.2 * std::sqrt(2.0) * 0.1);
   EXPECT_NE(std::find(stages.begin(), stages.end(), "board warp"), stages.end());
+  // The selection's repeated splits of the reference model are the decision's refits on the
+  // winning side (taken over, not refitted: KnownSplits), split for split after the cold
+  // odd/even one.
+  auto same_splits = [](const ModelCandidate& row, const SplitValues& won) {
+    ASSERT_EQ(row.cross_validation_splits_px.size(), won.cross_validation_px.size());
+    for (size_t k = 1; k < won.cross_validation_px.size(); ++k) {
+      EXPECT_EQ(row.cross_validation_splits_px[k], won.cross_validation_px[k]) << k;
+      EXPECT_EQ(row.heldout_splits_px[k], won.heldout_px[k]) << k;
+    }
+  };
+  ASSERT_EQ(b.table.size(), 1u);
+  same_splits(b.table[0], bc.warp);
 
   const auto flat_views = project_board_views(truth, kBoard, 12, 80, 350, 0.1, 2, 93);
   const CalibrationResult f = calibrate(flat_views, kBoard, truth.width, truth.height, o);
@@ -133,6 +145,7 @@ TEST(BoardWarp, AutoKeepsABentBoardsWarpAndDropsAFlatOnes) {
   EXPECT_FALSE(f.board_warp.fitted);  // every solve after the decision is flat
   EXPECT_EQ(f.board_warp.mm[0], 0.0);
   EXPECT_LT(f.model.rms_reprojection_px, 1.2 * std::sqrt(2.0) * 0.1);
+  same_splits(f.table[0], fc.flat);
   // The same as --board-warp off on these corners, up to the outlier stage (run with the
   // warp): the two models project within a hundredth of a pixel.
   CalibrateOptions off = o;

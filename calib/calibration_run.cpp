@@ -66,7 +66,8 @@ std::string table_text(const CalibrationResult& r) {
                        c.name == r.selected ? "   <- chosen"
                                             : (c.outfitted ? "   (outfitted)" : (c.within_noise ? "   (within noise)" : "")));
     else if (c.screened)
-      s += fmt::format("{:<44} {:>6} {:>9.3f} {}\n", c.name, c.params, c.rms_px, c.error);
+      s += fmt::format("{:<44} {:>6} {:>9} {}\n", c.name, c.params,
+                       std::isnan(c.rms_px) ? "-" : fmt::format("{:.3f}", c.rms_px), c.error);
     else
       s += fmt::format("{:<44} failed: {}\n", c.name, c.error);
   // A forced model: one candidate, no selection. (Not "no noise estimate": with 4 views the

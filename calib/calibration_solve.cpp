@@ -185,22 +185,41 @@ ModelFit CandidateSolver::solve(LensType type) {
   }
   const SeedReport seed =
       seed_candidate(problem_, views_, type, [this](LensType t) -> const ModelFit& { return get(t); }, seed_);
-  if (!seed.fit.ok) return seed.fit;
+  return refine_seed(problem_, views_, type, seed.fit);
+}
+
+ModelFit refine_seed(const CalibrationProblem& pr, const ViewSubset& views, LensType type, const ModelFit& seed) {
+  if (!seed.ok) return seed;
   switch (type) {
     case LensType::KannalaBrandt:
-      return refine_kannala_brandt(problem_, views_, seed.fit);
+      return refine_kannala_brandt(pr, views, seed);
     case LensType::OmnidirMei:
-      return refine_mei(problem_, views_, seed.fit);
+      return refine_mei(pr, views, seed);
     case LensType::Stereographic:
     case LensType::SplinedStereographic: {
-      ModelFit f = solve_mrcal(problem_, views_, seed.fit.model.lensmodel, seed.fit.model.intrinsics, seed.fit.poses,
-                               type == LensType::SplinedStereographic, seed.fit.warp);
-      if (f.ok) f.solver = seed.fit.solver + " + mrcal";
+      ModelFit f = solve_mrcal(pr, views, seed.model.lensmodel, seed.model.intrinsics, seed.poses,
+                               type == LensType::SplinedStereographic, seed.warp);
+      if (f.ok) f.solver = seed.solver + " + mrcal";
       return f;
     }
     default:
-      return polish(problem_, views_, seed.fit);
+      return polish(pr, views, seed);
   }
+}
+
+WideField wide_fit_field(const CalibrationProblem& pr, CandidateSolver& solver, double max_rms_px) {
+  WideField w;
+  double best = max_rms_px;
+  const ModelFit* by = nullptr;
+  for (LensType t : {LensType::KannalaBrandt, LensType::OmnidirMei})
+    if (const ModelFit& f = solver.get(t); f.ok)
+      if (const double rms = fit_rms(pr, f, solver.views()); rms <= best) {
+        best = rms;
+        by = &f;
+        w.seen_by = t;
+      }
+  if (by) w.deg = corner_field_deg(by->model, solver.views());
+  return w;
 }
 
 ModelFit warm_refit(const CalibrationProblem& pr, const ViewSubset& views, LensType type, const ModelFit& from,

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <condition_variable>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <set>
@@ -37,6 +38,10 @@ ModelFit refine_mei(const CalibrationProblem& problem, const ViewSubset& views, 
 ModelFit solve_mrcal(const CalibrationProblem& problem, const ViewSubset& views, const std::string& lensmodel,
                      std::vector<double> intrinsics, const std::vector<BoardPose>& poses, bool regularization,
                      const BoardWarp& warp = {});
+
+// The fit of candidate `type` from its seed (seed_candidate's fit), as CandidateSolver solves
+// it: Ceres for Kannala-Brandt and Mei, mrcal for the others (the OpenCV fit polished).
+ModelFit refine_seed(const CalibrationProblem& problem, const ViewSubset& views, LensType type, const ModelFit& seed);
 
 // Every candidate of one set of views, each solved once, on demand: a candidate's seed may
 // need another's solve (stereographic from Kannala-Brandt), which is then shared.
@@ -66,6 +71,18 @@ class CandidateSolver {
   std::set<LensType> solving_;  // being solved by some thread
   std::map<LensType, ModelFit> cache_;
 };
+
+// The selection and the outlier stage's reference choice do not fit perspective models
+// where a wide-angle fit sees the corners beyond kPerspectiveFieldLimitDeg (lens_model.h).
+
+// The widest angle off the axis at which the better of the solver's Kannala-Brandt and Mei
+// fits (the lower RMS, when it is at most max_rms_px) sees a used corner, with that fit's
+// candidate; NaN when neither fits. Solves the two fits when they are not solved yet.
+struct WideField {
+  double deg = std::numeric_limits<double>::quiet_NaN();
+  LensType seen_by = LensType::KannalaBrandt;
+};
+WideField wide_fit_field(const CalibrationProblem& problem, CandidateSolver& solver, double max_rms_px);
 
 // The fit of candidate `type` on `views` warm-started from `from`, a fit on a superset of
 // them (`poses`: from's poses of `views`, aligned): the jackknife's leave-one-out fits and

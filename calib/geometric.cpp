@@ -47,6 +47,8 @@ OutlierOptions outlier_options(const CalibrateOptions& o) {
   out.rounds = o.outlier_rounds;
   out.reference_views = o.reference_views;
   out.max_view_outlier_fraction = o.max_view_outlier_fraction;
+  out.perspective_field_limit_deg = o.perspective_field_limit_deg;
+  out.perspective_fit_rms_px = o.fit_max_rms_px;
   out.parallel = o.parallel;
   if (!o.model.empty()) out.model = candidate_lens_type(o.model);
   return out;
@@ -234,6 +236,7 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
       fits.full.adopt(LensType::KannalaBrandt, *f);
   CandidateOptions co;
   co.screen_rms_px = options.model.empty() ? options.fit_max_rms_px : std::numeric_limits<double>::infinity();
+  co.perspective_field_limit_deg = options.perspective_field_limit_deg;
   co.parallel = options.parallel;
   res.table = solve_candidates(pr, fits, candidates, co, options.progress);
   const SelectionReport sel = select_model(pr, fits, res.table, selection_options(options), options.progress);

@@ -65,6 +65,11 @@ struct CalibrateOptions {
   bool board_warp = SolveOptions{}.board_warp;
   bool board_warp_auto = true;
   int board_warp_splits = BoardWarpChoiceOptions{}.splits;
+  // Perspective candidates (and the outlier stage's perspective reference) are not fitted
+  // where a wide-angle fit sees the corners beyond this many degrees off its axis
+  // (kPerspectiveFieldLimitDeg, lens_model.h; CandidateOptions and OutlierOptions::
+  // perspective_field_limit_deg). Infinity: always fitted.
+  double perspective_field_limit_deg = kPerspectiveFieldLimitDeg;
   // SelectionOptions (model_selection.h): what "fits" means.
   double fit_max_rms_px = SelectionOptions{}.fit_max_rms_px;
   double fit_max_cross_validation_px = SelectionOptions{}.fit_max_cross_validation_px;

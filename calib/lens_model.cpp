@@ -149,4 +149,6 @@ const std::vector<std::string>& all_candidate_names() {
   return names;
 }
 
+bool is_perspective(LensType type) { return lens_type_info(type).family == LensFamily::Perspective; }
+
 }  // namespace lp

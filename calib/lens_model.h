@@ -76,6 +76,18 @@ struct LensTypeInfo {
 // The whole table, one row per LensType, in enum order.
 const std::vector<LensTypeInfo>& lens_types();
 const LensTypeInfo& lens_type_info(LensType type);
+
+// A perspective model (pinhole, plumb_bob, rational) divides by the ray's depth: it cannot
+// image a ray at or beyond 90 deg off its axis. Where a wide-angle fit of some views fits them
+// and sees a corner beyond kPerspectiveFieldLimitDeg, a perspective fit of those views can only
+// fold the boards into the half-space ahead of the camera: on the shared catadioptric sets,
+// seen to 104-120 deg, such fits missed the corners by 2.1-12.6 px, and mrcal's rational model
+// ran to its 300 iterations to get there (0.1-0.4 s of CPU a fit). The 10 deg over 90 leave
+// room for the wide fit's own error in the field. The selection and the outlier stage's
+// reference choice do not fit perspective models there (CandidateOptions, OutlierOptions,
+// with calibration_solve.h's wide_fit_field).
+constexpr double kPerspectiveFieldLimitDeg = 100;
+bool is_perspective(LensType type);
 // Canonical name of a type (configured types: the prefix).
 std::string lens_type_name(LensType type);
 

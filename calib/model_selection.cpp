@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <optional>
 #include <random>
@@ -19,6 +20,15 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string fmt_out_of_field(const WideField& field, size_t sample_views, size_t used_views, double limit_deg) {
+  char buf[240];
+  std::snprintf(buf, sizeof buf,
+                "screened out: %s's fit of %zu of the %zu views sees corners at %.0f deg, beyond a perspective "
+                "model's reach (%.0f); not fitted",
+                candidate_name(field.seen_by).c_str(), sample_views, used_views, field.deg, limit_deg);
+  return buf;
+}
 
 std::string fmt_screened(double rms_px, double limit_px) {
   char buf[160];
@@ -437,13 +447,46 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
   CandidateSolver* sampled = large ? &*own_sample : on_half ? &fits.halves[1] : nullptr;
   if (std::isfinite(o.screen_rms_px) && sampled) {
     const ViewSubset& sample = sampled->views();
-    solve_all({sampled}, candidates, o.parallel);
+    // A perspective candidate's job first asks for the wide-angle fits' field (solving them if
+    // no other job has), and fits only where it can image the corners.
+    std::vector<SolveJob> jobs;
+    for (LensType type : candidates) jobs.push_back({sampled, type});
+    std::vector<char> out_of_field(candidates.size(), 0);
+    WideField field;
+    std::mutex field_mutex;
+    std::stable_sort(jobs.begin(), jobs.end(),
+                     [](const SolveJob& a, const SolveJob& b) { return start_rank(a.second) < start_rank(b.second); });
+    run_jobs(jobs.size(), [&](size_t i) {
+      const LensType type = jobs[i].second;
+      if (is_perspective(type) && std::isfinite(o.perspective_field_limit_deg)) {
+        const WideField w = wide_fit_field(pr, *sampled, o.screen_rms_px);
+        if (w.deg > o.perspective_field_limit_deg) {
+          const std::lock_guard lock(field_mutex);
+          field = w;
+          out_of_field[size_t(std::find(candidates.begin(), candidates.end(), type) - candidates.begin())] = 1;
+          return;
+        }
+      }
+      sampled->get(type);
+    }, o.parallel ? 0 : 1);
     double best = kInf;
-    for (LensType type : candidates)
-      if (const ModelFit& f = sampled->get(type); f.ok) best = std::min(best, fit_rms(pr, f, sample));
+    for (size_t i = 0; i < candidates.size(); ++i)
+      if (!out_of_field[i])
+        if (const ModelFit& f = sampled->get(candidates[i]); f.ok) best = std::min(best, fit_rms(pr, f, sample));
     if (best <= o.screen_rms_px) {  // else nothing fits the sample: every candidate on every view
       fitted.clear();
-      for (LensType type : candidates) {
+      for (size_t i = 0; i < candidates.size(); ++i) {
+        const LensType type = candidates[i];
+        if (out_of_field[i]) {
+          ModelCandidate& c = on_sample[type];
+          c.name = candidate_name(type);
+          c.lensmodel = lens_type_name(type);
+          if (const auto lens = LensModel::try_parse(c.lensmodel)) c.params = lens->param_count();
+          c.rms_px = kNaN;
+          c.screened = true;
+          c.error = fmt_out_of_field(field, sample.size(), fits.used.size(), o.perspective_field_limit_deg);
+          continue;
+        }
         const ModelFit& f = sampled->get(type);
         const double rms = f.ok ? fit_rms(pr, f, sample) : kInf;
         if (!f.ok || rms <= o.sample_margin * o.screen_rms_px) {

@@ -145,6 +145,11 @@ struct CandidateOptions {
   // of half the views instead of all of them (MiniOmni, 15 views: the rational model, the
   // spline and Kannala-Brandt, 6-8 px off). 0: only large sets are screened on a sample.
   int min_half_sample_views = 4;
+  // On that sample, perspective candidates are not fitted at all where the better wide-angle
+  // fit of it (Kannala-Brandt or Mei, within screen_rms_px) sees a corner beyond this many
+  // degrees off its axis (kPerspectiveFieldLimitDeg, lens_model.h: they cannot image
+  // it); reported `screened` with that field, RMS NaN. Infinity: off.
+  double perspective_field_limit_deg = kPerspectiveFieldLimitDeg;
   // Solve the candidates (and their halves) on every core (calib/parallel_jobs.h); the
   // table is the same either way.
   bool parallel = true;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 #include "calib/calibration_seed.h"
 #include "calib/calibration_solve.h"
@@ -27,11 +28,26 @@ std::optional<LensType> choose_reference(const CalibrationProblem& pr, Candidate
   CandidateSolver& chooser = sample.size() == fitter.views().size() ? fitter : sampled;
   for (const auto& [type, fit] : on_sample) chooser.adopt(type, fit);  // fitted on this sample already
   // The references' fits on every core (they are independent); the choice below reads them.
-  run_jobs(options.references.size(), [&](size_t i) { chooser.get(options.references[i]); },
-           options.parallel ? 0 : 1);
+  // A perspective reference is not fitted where the wide ones see the sample's corners beyond
+  // its reach (OutlierOptions::perspective_field_limit_deg).
+  const auto& refs = options.references;
+  const bool wide_refs = std::find(refs.begin(), refs.end(), LensType::KannalaBrandt) != refs.end() &&
+                         std::find(refs.begin(), refs.end(), LensType::OmnidirMei) != refs.end();
+  std::vector<char> out_of_field(options.references.size(), 0);
+  run_jobs(options.references.size(), [&](size_t i) {
+    const LensType r = options.references[i];
+    if (wide_refs && is_perspective(r) && std::isfinite(options.perspective_field_limit_deg) &&
+        wide_fit_field(pr, chooser, options.perspective_fit_rms_px).deg > options.perspective_field_limit_deg) {
+      out_of_field[i] = 1;
+      return;
+    }
+    chooser.get(r);
+  }, options.parallel ? 0 : 1);
   std::optional<LensType> ref;
   double best_rms = std::numeric_limits<double>::infinity();
-  for (LensType r : options.references) {
+  for (size_t i = 0; i < options.references.size(); ++i) {
+    if (out_of_field[i]) continue;
+    const LensType r = options.references[i];
     const ModelFit& g = chooser.get(r);
     if (!g.ok) continue;
     const double e = fit_rms(pr, g, sample);
@@ -140,11 +156,12 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
     for (LensType r : refs)
       if (r != LensType::KannalaBrandt && r != LensType::OmnidirMei) others.push_back(r);
     std::vector<std::optional<ModelFit>> fits(2 + others.size());  // KB, Mei, others
-    run_jobs(1 + others.size(), [&](size_t j) {
-      if (j > 0) {
-        fits[1 + j] = CandidateSolver(problem, sample).get(others[j - 1]);
-        return;
-      }
+    // Kannala-Brandt, the decision, Mei, and the field they see; run once, by its own job or
+    // by a perspective reference's job that needs the field first (std::call_once: a caller
+    // waits only while another thread runs it).
+    std::once_flag wide_once;
+    WideField wide;
+    const auto wide_chain = [&] {
       CandidateSolver kb(problem, sample);
       const ModelFit& f = kb.get(LensType::KannalaBrandt);
       pr.solve.mei_from_kannala_brandt = f.ok && fit_rms(problem, f, sample) <= kMeiFromKannalaBrandtRmsPx &&
@@ -153,6 +170,26 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
       if (f.ok) mei.adopt(LensType::KannalaBrandt, f);
       fits[0] = f;
       fits[1] = mei.get(LensType::OmnidirMei);
+      wide = wide_fit_field(problem, mei, options.perspective_fit_rms_px);
+    };
+    run_jobs(1 + others.size(), [&](size_t j) {
+      if (j == 0) {
+        std::call_once(wide_once, wide_chain);
+        return;
+      }
+      const LensType type = others[j - 1];
+      CandidateSolver solver(problem, sample);
+      const ModelFit seed =
+          seed_candidate(problem, sample, type, [&](LensType t) -> const ModelFit& { return solver.get(t); }).fit;
+      // A perspective seed that misses the corners waits for the field before its refinement,
+      // which on a lens it cannot image runs mrcal to 300 iterations (OutlierOptions); a seed
+      // that fits does not wait, so narrow lenses lose no time.
+      if (seed.ok && is_perspective(type) && std::isfinite(options.perspective_field_limit_deg) &&
+          !(fit_rms(problem, seed, sample) <= options.perspective_fit_rms_px)) {
+        std::call_once(wide_once, wide_chain);
+        if (wide.deg > options.perspective_field_limit_deg) return;  // left unfitted: choose_reference skips it
+      }
+      fits[1 + j] = solver.adopt(type, refine_seed(problem, sample, type, seed));
     }, options.parallel ? 0 : 1);
     if (fits[0] && fits[0]->ok) {
       rep.sample_kannala_brandt = *fits[0];
@@ -161,7 +198,7 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
     }
     const LensType order[2] = {LensType::KannalaBrandt, LensType::OmnidirMei};
     for (size_t i = 0; i < fits.size(); ++i)
-      on_sample.emplace_back(i < 2 ? order[i] : others[i - 2], std::move(*fits[i]));
+      if (fits[i]) on_sample.emplace_back(i < 2 ? order[i] : others[i - 2], std::move(*fits[i]));
   }
   rep.mei_from_kannala_brandt = pr.solve.mei_from_kannala_brandt;
   std::optional<LensType> ref;

@@ -54,6 +54,13 @@ struct OutlierOptions {
   // residuals), and the earlier one re-solves warm: on fisheye1 Mei (0.3718 px) beat
   // Kannala-Brandt (0.3724) by 0.16 % and its cold rounds were ~40 % of the selection's CPU.
   double reference_tie = 0.01;
+  // A perspective reference (the rational model) is not fitted where the better of the wide
+  // ones fits the sample within perspective_fit_rms_px and sees a corner beyond this many
+  // degrees off its axis (kPerspectiveFieldLimitDeg, lens_model.h: it cannot image it;
+  // on the shared mirrors its fit was up to 0.5 s of CPU, the stage's slowest job, for a
+  // 2.1-4.8 px misfit). Infinity: always fitted.
+  double perspective_field_limit_deg = kPerspectiveFieldLimitDeg;
+  double perspective_fit_rms_px = 1.5;  // SelectionOptions::fit_max_rms_px
   // The references fitted on every core (calib/parallel_jobs.h); the same choice.
   bool parallel = true;
 };

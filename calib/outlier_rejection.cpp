@@ -161,12 +161,21 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
     // waits only while another thread runs it).
     std::once_flag wide_once;
     WideField wide;
+    // Mei seeded by cv::omnidir, as the chain solves it when Kannala-Brandt does not decide
+    // for its own seed; shared, so that a perspective reference's job whose seed misses the
+    // corners (a lens the chain will likely find too wide for it) can solve it ahead of the
+    // chain, on the core that would wait (MiniOmni: Kannala-Brandt's 0.18 s, then Mei's 0.12,
+    // had run one after the other). The same solve whichever thread makes it.
+    CalibrationProblem pr_omnidir = problem;
+    pr_omnidir.solve.mei_from_kannala_brandt = false;
+    CandidateSolver mei_omnidir(pr_omnidir, sample);
     const auto wide_chain = [&] {
       CandidateSolver kb(problem, sample);
       const ModelFit& f = kb.get(LensType::KannalaBrandt);
       pr.solve.mei_from_kannala_brandt = f.ok && fit_rms(problem, f, sample) <= kMeiFromKannalaBrandtRmsPx &&
                                          corner_field_deg(f.model, sample) <= kMeiFromKannalaBrandtFieldDeg;
-      CandidateSolver mei(pr, sample);
+      CandidateSolver mei_from_kb(pr, sample);
+      CandidateSolver& mei = pr.solve.mei_from_kannala_brandt ? mei_from_kb : mei_omnidir;
       if (f.ok) mei.adopt(LensType::KannalaBrandt, f);
       fits[0] = f;
       fits[1] = mei.get(LensType::OmnidirMei);
@@ -186,6 +195,7 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
       // that fits does not wait, so narrow lenses lose no time.
       if (seed.ok && is_perspective(type) && std::isfinite(options.perspective_field_limit_deg) &&
           !(fit_rms(problem, seed, sample) <= options.perspective_fit_rms_px)) {
+        mei_omnidir.get(LensType::OmnidirMei);
         std::call_once(wide_once, wide_chain);
         if (wide.deg > options.perspective_field_limit_deg) return;  // left unfitted: choose_reference skips it
       }

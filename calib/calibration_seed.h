@@ -43,8 +43,8 @@ namespace lp {
 // (docs/calibration.md, "Stop 37: the floor was half a colour map"); the narrow shared sets
 // reach 30-41.
 inline constexpr double kMeiFromKannalaBrandtRmsPx = 1.0;
-// The stereographic seed takes Kannala-Brandt's core and poses where that fit is within this
-// RMS of the views (it fits the lens), else Mei's (seed_candidate).
+// The stereographic seed takes Mei's core and poses where that fit is within this RMS of the
+// views (it fits the lens), else Kannala-Brandt's (seed_candidate).
 inline constexpr double kStereographicSeedRmsPx = 1.5;
 inline constexpr double kMeiFromKannalaBrandtFieldDeg = 45;
 

@@ -77,7 +77,8 @@ class CandidateSolver {
 
 // The widest angle off the axis at which the better of the solver's Kannala-Brandt and Mei
 // fits (the lower RMS, when it is at most max_rms_px) sees a used corner, with that fit's
-// candidate; NaN when neither fits. Solves the two fits when they are not solved yet.
+// candidate; NaN when neither fits. Solves the two fits when they are not solved yet:
+// callers ask only where they fit these models anyway.
 struct WideField {
   double deg = std::numeric_limits<double>::quiet_NaN();
   LensType seen_by = LensType::KannalaBrandt;

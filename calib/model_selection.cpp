@@ -452,13 +452,18 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
     std::vector<SolveJob> jobs;
     for (LensType type : candidates) jobs.push_back({sampled, type});
     std::vector<char> out_of_field(candidates.size(), 0);
+    // Only where the wide fits are candidates too (they are solved on this sample anyway):
+    // a list of perspective models alone fits no Mei for the question.
+    const auto has = [&](LensType t) { return std::find(candidates.begin(), candidates.end(), t) != candidates.end(); };
+    const bool gate = std::isfinite(o.perspective_field_limit_deg) && has(LensType::KannalaBrandt) &&
+                      has(LensType::OmnidirMei);
     WideField field;
     std::mutex field_mutex;
     std::stable_sort(jobs.begin(), jobs.end(),
                      [](const SolveJob& a, const SolveJob& b) { return start_rank(a.second) < start_rank(b.second); });
     run_jobs(jobs.size(), [&](size_t i) {
       const LensType type = jobs[i].second;
-      if (is_perspective(type) && std::isfinite(o.perspective_field_limit_deg)) {
+      if (gate && is_perspective(type)) {
         const WideField w = wide_fit_field(pr, *sampled, o.screen_rms_px);
         if (w.deg > o.perspective_field_limit_deg) {
           const std::lock_guard lock(field_mutex);

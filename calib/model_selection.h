@@ -148,7 +148,8 @@ struct CandidateOptions {
   // On that sample, perspective candidates are not fitted at all where the better wide-angle
   // fit of it (Kannala-Brandt or Mei, within screen_rms_px) sees a corner beyond this many
   // degrees off its axis (kPerspectiveFieldLimitDeg, lens_model.h: they cannot image
-  // it); reported `screened` with that field, RMS NaN. Infinity: off.
+  // it); reported `screened` with that field, RMS NaN. Only where Kannala-Brandt and Mei are
+  // candidates too (fitted on the sample anyway). Infinity: off.
   double perspective_field_limit_deg = kPerspectiveFieldLimitDeg;
   // Solve the candidates (and their halves) on every core (calib/parallel_jobs.h); the
   // table is the same either way.

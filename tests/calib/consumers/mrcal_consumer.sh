@@ -8,7 +8,8 @@
 # - mrcal-show-projection-uncertainty and mrcal-show-residuals-board-observation draw it
 #   headless (--hardcopy) when the tools (Debian package mrcal) and gnuplot are there;
 # - a fisheye whose choice is Kannala-Brandt (no mrcal model) gets a .cameramodel holding
-#   the best mrcal candidate of the same solve, which passes the same checks;
+#   the best mrcal candidate of the same solve, which passes the same checks; so does the
+#   shared catadioptric VMRImage set (a Mei choice, a splined stand-in) where the data is;
 # - mrgingham's own corners.vnl of 10x10 boards is solved with --corners-in and gives the
 #   true camera to 0.3 px (median over the image).
 # Usage: mrcal_consumer.sh LIGHTPROBE   (exit 77 = skipped: no python3 with mrcal)
@@ -81,6 +82,22 @@ cp "$WORK/out" "$WORK/fisheye.json"
   fail "no mrcal stand-in for the Kannala-Brandt choice: $(head -c 300 "$WORK/fisheye.json")"
 [ -s "$WORK/fisheye.yaml" ] || fail "the Kannala-Brandt choice was not written as YAML"
 "$PY" "$HERE/mrcal_check.py" "$WORK/fisheye.cameramodel" "$WORK/fisheye.json" || fail "mrcal's Python on the stand-in"
+
+# A real catadioptric camera (the shared VMRImage set, seen to 106 deg): the choice is Mei,
+# which mrcal has no model for. Since stop 43 the splined model fits it (seeded from Mei), so
+# mrcal's tools get a stand-in here too; before, no mrcal candidate fitted and only the YAML
+# was written.
+SHARED=${LIGHTPROBE_SHARED_DATA:-$HERE/../../../../shared/data}
+VMR="$SHARED/calib-ocamcalib-omni-samples/VMRImage"
+if ls "$VMR"/VMRImage*.jpg >/dev/null 2>&1; then
+  run calib geometric "$VMR"/VMRImage*.jpg --board 6x7 --square 30 --json -o "$WORK/mirror.cameramodel"
+  cp "$WORK/out" "$WORK/mirror.json"
+  "$PY" -c "import json,sys; d=json.load(open('$WORK/mirror.json')); s=d['mrcal_stand_in']; print('choice', d['lensmodel'], '; stand-in', s and s['lensmodel'], s and s['median_from_chosen_px'], 'px from it'); sys.exit(0 if d['lensmodel'] == 'LENSMODEL_OMNIDIR_MEI' and s and s['file'] == '$WORK/mirror.cameramodel' and not s['fits_poorly'] else 1)" ||
+    fail "no mrcal stand-in for the Mei choice on VMRImage: $(head -c 300 "$WORK/mirror.json")"
+  "$PY" "$HERE/mrcal_check.py" "$WORK/mirror.cameramodel" "$WORK/mirror.json" || fail "mrcal's Python on VMRImage's stand-in"
+else
+  echo "skipped the shared VMRImage set: $VMR not found (LIGHTPROBE_SHARED_DATA)"
+fi
 
 if command -v mrcal-show-projection-uncertainty >/dev/null && command -v gnuplot >/dev/null; then
   mrcal-show-projection-uncertainty --hardcopy "$WORK/uncertainty.png" --terminal 'pngcairo size 640,480' \

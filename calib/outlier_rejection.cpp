@@ -176,7 +176,9 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
                                          corner_field_deg(f.model, sample) <= kMeiFromKannalaBrandtFieldDeg;
       CandidateSolver mei_from_kb(pr, sample);
       CandidateSolver& mei = pr.solve.mei_from_kannala_brandt ? mei_from_kb : mei_omnidir;
-      if (f.ok) mei.adopt(LensType::KannalaBrandt, f);
+      // Failed too: the field below asks this solver for Kannala-Brandt, which would solve it
+      // again (KaidanOmni: cv::fisheye fails twice, 47 ms each).
+      mei.adopt(LensType::KannalaBrandt, f);
       fits[0] = f;
       fits[1] = mei.get(LensType::OmnidirMei);
       wide = wide_fit_field(problem, mei, options.perspective_fit_rms_px);
@@ -188,6 +190,12 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
       }
       const LensType type = others[j - 1];
       CandidateSolver solver(problem, sample);
+      // A sample large enough for CandidateSolver to seed on a part of it (reference_views
+      // raised to 2 x SeedOptions::sample_views or more) is solved its way, ungated.
+      if (sample.size() >= 2 * size_t(SeedOptions{}.sample_views)) {
+        fits[1 + j] = solver.get(type);
+        return;
+      }
       const ModelFit seed =
           seed_candidate(problem, sample, type, [&](LensType t) -> const ModelFit& { return solver.get(t); }).fit;
       // A perspective seed that misses the corners waits for the field before its refinement,

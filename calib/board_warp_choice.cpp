@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "calib/parallel_jobs.h"
 
 namespace lp {
 
@@ -42,13 +41,12 @@ BoardWarpChoice choose_board_warp(const CalibrationProblem& problem, const ViewS
     return c;
   }
   // Every (setting, split) on every core, each into its own slot.
-  std::vector<SplitValidation> values(2 * splits.size());
-  run_jobs(values.size(), [&](size_t j) {
+  std::vector<SplitTask> tasks;
+  for (size_t j = 0; j < 2 * splits.size(); ++j) {
     const bool with_warp = j < splits.size();
-    const std::vector<int>& side = splits[j % splits.size()];
-    values[j] = with_warp ? split_validation(problem, used, side, type, warped, mask, step)
-                          : split_validation(flat_problem, used, side, type, flat, mask, step);
-  }, o.parallel ? 0 : 1);
+    tasks.push_back({with_warp ? &problem : &flat_problem, type, with_warp ? &warped : &flat, &splits[j % splits.size()]});
+  }
+  const std::vector<SplitValidation> values = split_validations(used, tasks, mask, step, o.parallel);
   for (size_t j = 0; j < values.size(); ++j) {
     if (!std::isfinite(values[j].cross_validation_px) || !std::isfinite(values[j].heldout_rms_px)) {
       c.why = "the warp kept untested: a split could not be fitted " +

@@ -159,11 +159,13 @@ bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::
            warm_refit_rank(candidate_lens_type(table[repeat[b / per]].name));
   });
   report_progress(progress, "repeated splits", 0, 1);
-  run_jobs(start.size(), [&](size_t q) {
-    const size_t j = start[q];
+  std::vector<SplitTask> tasks;
+  for (size_t j : start) {
     const LensType type = candidate_lens_type(table[repeat[j / per]].name);
-    values[j] = split_validation(pr, fits.used, splits[1 + j % per], type, fits.full.get(type), fits.mask, fits.step);
-  }, o.parallel ? 0 : 1);
+    tasks.push_back({&pr, type, &fits.full.get(type), &splits[1 + j % per]});
+  }
+  const std::vector<SplitValidation> got = split_validations(fits.used, tasks, fits.mask, fits.step, o.parallel);
+  for (size_t q = 0; q < start.size(); ++q) values[start[q]] = got[q];
   bool repeated = false;
   for (size_t r = 0; r < repeat.size(); ++r) {
     ModelCandidate& c = table[repeat[r]];
@@ -671,15 +673,39 @@ double split_cross_validation(const CalibrationProblem& pr, const ViewSubset& us
   return d.samples > 0 ? d.rms_px : kInf;
 }
 
-SplitValidation split_validation(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side,
-                                 LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step) {
-  ViewSubset hs[2];
-  ModelFit fit[2];
-  if (!split_halves(pr, used, side, type, full, hs, fit)) return {kInf, kInf};
-  const ProjectionDiff d = projection_difference(fit[0].model, fit[1].model, mask, step);
-  if (d.samples == 0) return {kInf, kInf};
-  const double h1 = heldout_rms(pr, fit[0], hs[1]), h2 = heldout_rms(pr, fit[1], hs[0]);
-  return {d.rms_px, std::sqrt(0.5 * (h1 * h1 + h2 * h2))};
+std::vector<SplitValidation> split_validations(const ViewSubset& used, const std::vector<SplitTask>& tasks,
+                                               const std::vector<uint8_t>& mask, int step, bool parallel) {
+  struct Half {
+    ModelFit fit;
+    double heldout_px = kInf;
+    bool ok = false;
+  };
+  std::vector<Half> halves(2 * tasks.size());
+  run_jobs(halves.size(), [&](size_t q) {
+    const SplitTask& t = tasks[q / 2];
+    const int h = int(q % 2);
+    ViewSubset hs[2];
+    std::vector<BoardPose> poses;
+    for (size_t i = 0; i < used.size(); ++i) {
+      hs[(*t.side)[i]].push_back(used[i]);
+      if ((*t.side)[i] == h) poses.push_back(t.full->poses[i]);
+    }
+    if (hs[0].size() < 2 || hs[1].size() < 2) return;
+    Half& out = halves[q];
+    out.fit = warm_refit(*t.problem, hs[h], t.type, *t.full, poses);
+    out.ok = out.fit.ok;
+    if (out.ok) out.heldout_px = heldout_rms(*t.problem, out.fit, hs[1 - h]);
+  }, parallel ? 0 : 1);
+  std::vector<SplitValidation> values(tasks.size(), SplitValidation{kInf, kInf});
+  run_jobs(tasks.size(), [&](size_t k) {
+    const Half& a = halves[2 * k];
+    const Half& b = halves[2 * k + 1];
+    if (!a.ok || !b.ok) return;
+    const ProjectionDiff d = projection_difference(a.fit.model, b.fit.model, mask, step);
+    if (d.samples == 0) return;
+    values[k] = {d.rms_px, std::sqrt(0.5 * (a.heldout_px * a.heldout_px + b.heldout_px * b.heldout_px))};
+  }, parallel ? 0 : 1);
+  return values;
 }
 
 double rms_over_splits(const std::vector<double>& v) {

@@ -89,7 +89,7 @@ struct ModelCandidate {
   CameraModel model;
 };
 
-// A split's cross-validation and held-out RMS (split_validation below: each half's model on
+// A split's cross-validation and held-out RMS (split_validations below: each half's model on
 // the other half's corners, poses re-solved; RMS of both ways); both inf when the
 // cross-validation is.
 struct SplitValidation {
@@ -304,8 +304,24 @@ std::vector<std::vector<int>> balanced_view_splits(int views, int splits);
 // fitted, or the two half-models share no covered pixel.
 double split_cross_validation(const CalibrationProblem& problem, const ViewSubset& used, const std::vector<int>& side,
                               LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
-SplitValidation split_validation(const CalibrationProblem& problem, const ViewSubset& used, const std::vector<int>& side,
-                                 LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
+
+// split_validation's inputs: candidate `type` of `problem` refitted from `full` (its fit on
+// every used view) on the halves `side` gives.
+struct SplitTask {
+  const CalibrationProblem* problem;
+  LensType type;
+  const ModelFit* full;
+  const std::vector<int>* side;
+};
+
+// Each task's cross-validation and held-out RMS (each half's model on the other half's
+// corners, poses re-solved; RMS of both ways), its halves refitted as split_cross_validation
+// refits them; both inf where that gives inf. Every half is its own job (its refit and its
+// held-out RMS), then every split's comparison: a few dear refits as whole splits left a
+// core idle at the end (MiniOmni: 3 splits of the spline on 2 cores). Jobs start in task
+// order, so put the dearest tasks first. The same numbers on any number of threads.
+std::vector<SplitValidation> split_validations(const ViewSubset& used, const std::vector<SplitTask>& tasks,
+                                               const std::vector<uint8_t>& mask, int step, bool parallel);
 
 // One model (or one setting of it) challenging another over the same balanced splits: the
 // incumbent rule's comparison (SelectionOptions::min_rule_splits above). The challenger

@@ -137,6 +137,12 @@ const ModelFit& CandidateSolver::adopt(LensType type, ModelFit f) {
   return kept;
 }
 
+void CandidateSolver::reuse_sample_fits(CandidateSolver& sample_solver) {
+  std::lock_guard lock(sample_solver.mutex_);
+  sample_views_ = sample_solver.views_;
+  sample_fits_ = sample_solver.cache_;
+}
+
 namespace {
 
 // The models whose OpenCV seed grows fast with the views (SeedOptions::sample_views): cubic
@@ -156,6 +162,8 @@ ModelFit CandidateSolver::solve(LensType type) {
     // Solved on the sample, every view posed under that fit, then refined on all of them.
     const ViewSubset sample = evenly_spaced(views_, size_t(seed_.sample_views));
     CandidateSolver on_sample(problem_, sample, seed_);
+    if (const auto it = sample_fits_.find(type); it != sample_fits_.end() && sample == sample_views_)
+      on_sample.adopt(type, it->second);
     const ModelFit& s = on_sample.get(type);
     if (s.ok) {
       ModelFit seed = s;

@@ -56,6 +56,9 @@ std::optional<LensType> choose_reference(const CalibrationProblem& pr, Candidate
       ref = r;
     }
   }
+  // The sample is the one a large set's solve seeds on (SeedOptions::sample_views): its fits
+  // are those of the solve on every view below.
+  if (&chooser == &sampled) fitter.reuse_sample_fits(sampled);
   if (ref && !fitter.get(*ref).ok) ref.reset();  // fits the sample, not all views
   if (!ref) {
     std::vector<LensType> fallbacks = options.references;

@@ -517,6 +517,47 @@ TEST(CandidateSolver, FitsSeededOnASampleReachTheWholeSolvesMinimum) {
   }
 }
 
+// CandidateSolver::reuse_sample_fits: a solve that seeds on a sample takes another solver's
+// fit of exactly that sample (the outlier stage's reference choice hands its fits to the first
+// round), bit for bit what it would have solved; a fit of other views is not taken.
+TEST(CandidateSolver, ASolveOnASampleTakesTheFitsAlreadyMadeOnIt) {
+  const CameraModel truth = kb190();
+  const auto corners = project_board_views(truth, kBoard, 12, 80, 600, 0.2, 3);
+  ASSERT_GE(corners.size(), 10u);
+  const CalibrationProblem pr = problem_for(truth);
+  const auto views = make_board_views(corners, pr, "test", true);
+  const ViewSubset all = all_of(views);
+  SeedOptions sample;
+  sample.sample_views = 4;
+  const ViewSubset four = evenly_spaced(all, 4);
+  const LensType kb = LensType::KannalaBrandt;
+  // The fit the sample solver made is the one a fresh solve makes: the same bits.
+  CandidateSolver fresh(pr, all, sample), on_four(pr, four), reusing(pr, all, sample);
+  ASSERT_TRUE(on_four.get(kb).ok) << on_four.get(kb).error;
+  reusing.reuse_sample_fits(on_four);
+  const ModelFit &a = fresh.get(kb), &b = reusing.get(kb);
+  ASSERT_TRUE(a.ok && b.ok) << a.error << b.error;
+  EXPECT_EQ(a.model.intrinsics, b.model.intrinsics);
+  EXPECT_EQ(b.solver, a.solver);
+  // It is taken: a failed fit handed over sends the solve to every view at once.
+  CandidateSolver failed_four(pr, four), told_it_failed(pr, all, sample);
+  ModelFit failed;
+  failed.error = "handed over as failed";
+  failed_four.adopt(kb, failed);
+  told_it_failed.reuse_sample_fits(failed_four);
+  const ModelFit& c = told_it_failed.get(kb);
+  ASSERT_TRUE(c.ok) << c.error;
+  EXPECT_EQ(c.solver.find("on 4 views"), std::string::npos) << c.solver;
+  EXPECT_NE(a.solver.find("on 4 views, refined on all"), std::string::npos) << a.solver;
+  // Fits of other views are not taken (the same failed fit, on a sample the solve does not use).
+  ViewSubset other(all.begin(), all.begin() + 4);
+  ASSERT_NE(other, four);
+  CandidateSolver failed_other(pr, other), not_its_sample(pr, all, sample);
+  failed_other.adopt(kb, failed);
+  not_its_sample.reuse_sample_fits(failed_other);
+  EXPECT_EQ(not_its_sample.get(kb).model.intrinsics, a.model.intrinsics);
+}
+
 // Kannala-Brandt's seed stops cv::fisheye after SeedOptions::fisheye_iterations (30): on the
 // 190 deg lens it does not meet its own tolerance (it ran all 200 on the bench's synthetic
 // views). Here, run to 200 on every corner, cv::fisheye gives up and the seed falls back to the

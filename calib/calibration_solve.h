@@ -63,8 +63,9 @@ class CandidateSolver {
   // The fits already made by `sample_solver`, on a sample of these views of the same problem:
   // a solve that seeds on a sample (SeedOptions::sample_views) takes them when its sample is
   // those views, instead of solving it again (the outlier stage's reference choice and its
-  // first round: on 32 synthetic views Kannala-Brandt's 16-view fit, 0.17 s, twice in a row).
-  // Call before any get.
+  // first round, and the selection's screening sample to the full fits: on 32 synthetic views
+  // Kannala-Brandt's 16-view fit, 0.17 s, twice in a row). Call while no other thread uses
+  // this solver.
   void reuse_sample_fits(CandidateSolver& sample_solver);
 
  private:

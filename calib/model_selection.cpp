@@ -516,6 +516,9 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
       }
     }
   }
+  // A large set's full fits seed on the same evenly spaced views as the sample (SeedOptions::
+  // sample_views): they start from its fits instead of solving them again.
+  if (own_sample) fits.full.reuse_sample_fits(*own_sample);
   // The full fits, so that the screening knows which halves to fit; beside them the even
   // half of a candidate that fitted the odd one within screen_rms_px (it will hardly be
   // screened, and the cores do not wait for the slowest full fit before the halves start).

@@ -137,6 +137,12 @@ const ModelFit& CandidateSolver::adopt(LensType type, ModelFit f) {
   return kept;
 }
 
+const ModelFit* CandidateSolver::solved(LensType type) {
+  std::lock_guard lock(mutex_);
+  const auto it = cache_.find(type);
+  return it == cache_.end() ? nullptr : &it->second;
+}
+
 void CandidateSolver::reuse_sample_fits(CandidateSolver& sample_solver) {
   std::lock_guard lock(sample_solver.mutex_);
   sample_views_ = sample_solver.views_;

@@ -60,6 +60,9 @@ class CandidateSolver {
   // A fit of `type` on these views made elsewhere (warm-started): used instead of solving
   // (ignored when that candidate was solved already).
   const ModelFit& adopt(LensType type, ModelFit fit);
+  // The fit of `type` when it has been solved or adopted already (nullptr otherwise); does
+  // not solve it.
+  const ModelFit* solved(LensType type);
   // The fits already made by `sample_solver`, on a sample of these views of the same problem:
   // a solve that seeds on a sample (SeedOptions::sample_views) takes them when its sample is
   // those views, instead of solving it again (the outlier stage's reference choice and its

@@ -476,6 +476,22 @@ TEST(ModelSelection, ScreeningSkipsTheHalvesOfAModelThatMissesTheCorners) {
     EXPECT_EQ(sampled[i].rms_px, all[i].rms_px) << all[i].name;
     EXPECT_EQ(sampled[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
   }
+  // A candidate already fitted on every view (the outlier stage's reference, carried) is
+  // refitted on the sample warm from that fit, each sample view from its own pose: the same
+  // screening and the same rows.
+  CandidateFits carried(pr, all_of(views));
+  for (LensType t : types) carried.full.adopt(t, fits.full.get(t));
+  const auto warm = solve_candidates(pr, carried, types, o);
+  std::printf("  pinhole on the sample, warm from its fit on every view: %s\n", warm[0].error.c_str());
+  EXPECT_TRUE(warm[0].screened);
+  EXPECT_NE(warm[0].solver.find(", refitted warm on the sample"), std::string::npos) << warm[0].solver;
+  EXPECT_EQ(sampled[0].solver.find("warm"), std::string::npos) << sampled[0].solver;
+  EXPECT_NEAR(warm[0].rms_px, sampled[0].rms_px, 1e-3 * sampled[0].rms_px);
+  for (size_t i = 1; i < 3; ++i) {
+    EXPECT_FALSE(warm[i].screened) << all[i].name;
+    EXPECT_EQ(warm[i].rms_px, all[i].rms_px) << all[i].name;
+    EXPECT_EQ(warm[i].cross_validation_px, all[i].cross_validation_px) << all[i].name;
+  }
 }
 
 // SeedOptions::sample_views: plumb_bob, Mei and Kannala-Brandt seeded and solved on a sample

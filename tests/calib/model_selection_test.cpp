@@ -687,6 +687,7 @@ TEST(ModelSelection, SmallSetsAreSplitMoreOften) {
 TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
   const std::map<std::string, std::string> expected = {
       {"stereo left", "plumb_bob"},
+      {"stereo right", "plumb_bob"},
       {"fisheye1", "LENSMODEL_KANNALA_BRANDT"},
       {"Ladybug", "plumb_bob"},
       {"VMRImage", "LENSMODEL_OMNIDIR_MEI"},
@@ -697,7 +698,7 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
   // earlier reference: on fisheye1 Mei fits 0.16 % better than Kannala-Brandt, whose rounds
   // re-solve warm; on stereo and Ladybug the rational model, within 1 %, yields to Mei.
   const std::map<std::string, std::string> reference = {
-      {"stereo left", "LENSMODEL_OMNIDIR_MEI"}, {"fisheye1", "LENSMODEL_KANNALA_BRANDT"}, {"Ladybug", "LENSMODEL_OMNIDIR_MEI"},
+      {"stereo left", "LENSMODEL_OMNIDIR_MEI"}, {"stereo right", "LENSMODEL_OMNIDIR_MEI"}, {"fisheye1", "LENSMODEL_KANNALA_BRANDT"}, {"Ladybug", "LENSMODEL_OMNIDIR_MEI"},
       {"VMRImage", "LENSMODEL_OMNIDIR_MEI"},
       {"KaidanOmni", "LENSMODEL_OMNIDIR_MEI"}, {"MiniOmni", "LENSMODEL_OMNIDIR_MEI"},
       {"Fisheye190deg", "LENSMODEL_KANNALA_BRANDT"}};
@@ -713,7 +714,7 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
     EXPECT_EQ(r.outlier_reference, reference.at(set.name)) << set.name;
     // Mei's seed: from Kannala-Brandt on the narrow sets (their corners within 45 deg:
     // SolveOptions::mei_from_kannala_brandt), cv::omnidir on the wider ones.
-    const bool narrow = std::string(set.name) == "stereo left" || std::string(set.name) == "Ladybug";
+    const bool narrow = std::string(set.name).rfind("stereo", 0) == 0 || std::string(set.name) == "Ladybug";
     for (const ModelCandidate& c : r.table) {
       if (c.name == "LENSMODEL_OMNIDIR_MEI" && !c.solver.empty()) {
         EXPECT_EQ(c.solver.rfind(narrow ? "Kannala-Brandt fit" : "cv::omnidir", 0), 0u) << set.name << ": " << c.solver;
@@ -733,6 +734,7 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
     // longer matched) would still choose the same models, only slower: this pins it.
     const std::map<std::string, std::string> carried = {
         {"stereo left", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
+        {"stereo right", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
         {"fisheye1", "LENSMODEL_KANNALA_BRANDT carried"},
         {"Ladybug", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
         {"VMRImage", "LENSMODEL_OMNIDIR_MEI carried"},

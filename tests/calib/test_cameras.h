@@ -50,6 +50,7 @@ struct RealSet {
 inline std::vector<RealSet> real_sets() {
   const std::string data = LIGHTPROBE_SHARED_DATA;
   return {{"stereo left", data + "/calib-opencv-stereo-9x6", "left", {9, 6, 25}},
+          {"stereo right", data + "/calib-opencv-stereo-9x6", "right", {9, 6, 25}},
           {"fisheye1", data + "/calib-ocamcalib-fisheye1", "Fisheye1_", {6, 8, 32.5}},
           {"Ladybug", data + "/calib-ocamcalib-omni-samples/Ladybug", "", {5, 8, 30}},
           {"VMRImage", data + "/calib-ocamcalib-omni-samples/VMRImage", "", {6, 7, 30}},

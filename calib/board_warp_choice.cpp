@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 
-
 namespace lp {
 
 BoardWarpChoice choose_board_warp(const CalibrationProblem& problem, const ViewSubset& used, LensType type,

@@ -305,7 +305,7 @@ std::vector<std::vector<int>> balanced_view_splits(int views, int splits);
 double split_cross_validation(const CalibrationProblem& problem, const ViewSubset& used, const std::vector<int>& side,
                               LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step);
 
-// split_validation's inputs: candidate `type` of `problem` refitted from `full` (its fit on
+// split_validations' inputs: candidate `type` of `problem` refitted from `full` (its fit on
 // every used view) on the halves `side` gives.
 struct SplitTask {
   const CalibrationProblem* problem;

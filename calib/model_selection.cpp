@@ -671,18 +671,31 @@ std::vector<std::vector<int>> balanced_view_splits(int n, int k) {
 
 namespace {
 
-// Both halves of a split refitted warm from `full`; false when a half has < 2 views (the
-// odd/even halves of the smallest set calibrate accepts, 4 views) or cannot be fitted.
-bool split_halves(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side, LensType type,
-                  const ModelFit& full, ViewSubset (&hs)[2], ModelFit (&fit)[2]) {
-  std::vector<BoardPose> ps[2];
+// The two halves of a split: their views, and `full`'s poses of them (aligned); usable
+// when both have at least 2 views (the odd/even halves of the smallest set calibrate
+// accepts, 4 views, do).
+struct SplitSides {
+  ViewSubset views[2];
+  std::vector<BoardPose> poses[2];
+  bool usable() const { return views[0].size() >= 2 && views[1].size() >= 2; }
+};
+SplitSides split_sides(const ViewSubset& used, const std::vector<int>& side, const ModelFit& full) {
+  SplitSides s;
   for (size_t i = 0; i < used.size(); ++i) {
-    hs[side[i]].push_back(used[i]);
-    ps[side[i]].push_back(full.poses[i]);
+    s.views[side[i]].push_back(used[i]);
+    s.poses[side[i]].push_back(full.poses[i]);
   }
-  if (hs[0].size() < 2 || hs[1].size() < 2) return false;
+  return s;
+}
+
+// Both halves of a split refitted warm from `full`; false when a half has < 2 views or
+// cannot be fitted.
+bool split_halves(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side, LensType type,
+                  const ModelFit& full, ModelFit (&fit)[2]) {
+  const SplitSides s = split_sides(used, side, full);
+  if (!s.usable()) return false;
   for (int h = 0; h < 2; ++h) {
-    fit[h] = warm_refit(pr, hs[h], type, full, ps[h]);
+    fit[h] = warm_refit(pr, s.views[h], type, full, s.poses[h]);
     if (!fit[h].ok) return false;
   }
   return true;
@@ -692,9 +705,8 @@ bool split_halves(const CalibrationProblem& pr, const ViewSubset& used, const st
 
 double split_cross_validation(const CalibrationProblem& pr, const ViewSubset& used, const std::vector<int>& side,
                               LensType type, const ModelFit& full, const std::vector<uint8_t>& mask, int step) {
-  ViewSubset hs[2];
   ModelFit fit[2];
-  if (!split_halves(pr, used, side, type, full, hs, fit)) return kInf;
+  if (!split_halves(pr, used, side, type, full, fit)) return kInf;
   const ProjectionDiff d = projection_difference(fit[0].model, fit[1].model, mask, step);
   return d.samples > 0 ? d.rms_px : kInf;
 }
@@ -710,17 +722,12 @@ std::vector<SplitValidation> split_validations(const ViewSubset& used, const std
   run_jobs(halves.size(), [&](size_t q) {
     const SplitTask& t = tasks[q / 2];
     const int h = int(q % 2);
-    ViewSubset hs[2];
-    std::vector<BoardPose> poses;
-    for (size_t i = 0; i < used.size(); ++i) {
-      hs[(*t.side)[i]].push_back(used[i]);
-      if ((*t.side)[i] == h) poses.push_back(t.full->poses[i]);
-    }
-    if (hs[0].size() < 2 || hs[1].size() < 2) return;
+    const SplitSides s = split_sides(used, *t.side, *t.full);
+    if (!s.usable()) return;
     Half& out = halves[q];
-    out.fit = warm_refit(*t.problem, hs[h], t.type, *t.full, poses);
+    out.fit = warm_refit(*t.problem, s.views[h], t.type, *t.full, s.poses[h]);
     out.ok = out.fit.ok;
-    if (out.ok) out.heldout_px = heldout_rms(*t.problem, out.fit, hs[1 - h]);
+    if (out.ok) out.heldout_px = heldout_rms(*t.problem, out.fit, s.views[1 - h]);
   }, parallel ? 0 : 1);
   std::vector<SplitValidation> values(tasks.size(), SplitValidation{kInf, kInf});
   run_jobs(tasks.size(), [&](size_t k) {

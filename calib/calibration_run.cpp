@@ -58,12 +58,14 @@ std::string table_text(const CalibrationResult& r) {
       s += fmt::format("{:<44} {:>6} {:>9.3f} {:>10.3f} {:>10.3f} {:>10} {:>10} {:>6}{}\n", c.name, c.params, c.rms_px,
                        c.heldout_rms_px, c.cross_validation_px,
                        !repeated ? ""
-                                 : (std::isnan(c.cross_validation_repeated_px)
+                                 : (c.raced_out ? fmt::format("{} of {}", c.cross_validation_splits_px.size(), r.cv_splits)
+                                    : std::isnan(c.cross_validation_repeated_px)
                                         ? "screened"
                                         : fmt::format("{:.3f}", c.cross_validation_repeated_px)),
                        std::isfinite(c.linear_sigma_px) ? fmt::format("{:.3f}", c.linear_sigma_px) : "-",
-                       incumbent ? fmt::format("{}/{}", c.split_wins, r.cv_splits) : "",
+                       incumbent && !c.raced_out ? fmt::format("{}/{}", c.split_wins, r.cv_splits) : "",
                        c.name == r.selected ? "   <- chosen"
+                       : c.raced_out        ? "   (raced out: cannot change the pick)"
                                             : (c.outfitted ? "   (outfitted)" : (c.within_noise ? "   (within noise)" : "")));
     else if (c.screened)
       s += fmt::format("{:<44} {:>6} {:>9} {}\n", c.name, c.params,
@@ -219,7 +221,7 @@ nlohmann::json table_json(const CalibrationResult& r) {
                      {"cross_validation_px", c.cross_validation_px},
                      {"cross_validation_splits_px", c.cross_validation_splits_px},
                      {"cross_validation_repeated_px", num(c.cross_validation_repeated_px)},
-                     {"heldout_splits_px", c.heldout_splits_px}, {"split_wins", c.split_wins}, {"outfitted", c.outfitted},
+                     {"heldout_splits_px", c.heldout_splits_px}, {"split_wins", c.split_wins}, {"raced_out", c.raced_out}, {"outfitted", c.outfitted},
                      {"challenge_gain_px", num(c.challenge_gain_px)}, {"challenge_se_px", num(c.challenge_se_px)},
                      {"linear_sigma_px", num(c.linear_sigma_px)},
                      {"linear_forecast_cross_validation_px", num(c.linear_forecast_cv_px)},

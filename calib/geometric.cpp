@@ -69,6 +69,7 @@ SelectionOptions selection_options(const CalibrateOptions& o) {
   out.outfit_factor = o.selection_outfit_factor;
   out.small_set_views = o.selection_small_set_views;
   out.small_set_cv_splits = o.selection_small_set_cv_splits;
+  out.race_dear_candidates = o.selection_race_dear_candidates;
   out.measure_noise = o.model.empty();
   out.parallel = o.parallel;
   return out;
@@ -120,13 +121,14 @@ BoardWarpReport board_warp_report(const CalibrationProblem& pr, const ModelFit& 
   return w;
 }
 
-// The held-out RMS a candidate is ranked on: the mean over the splits where every split was
-// fitted, else the odd/even one; inf when some split could not be posed.
-double mean_heldout_px(const ModelCandidate& c) {
+// The held-out RMS a candidate is ranked on: the mean over its first `n` splits (every one it
+// has when n = 0 or more), else the odd/even one; inf when some split could not be posed.
+double mean_heldout_px(const ModelCandidate& c, size_t n = 0) {
   if (c.heldout_splits_px.empty()) return c.heldout_rms_px;
+  if (n == 0 || n > c.heldout_splits_px.size()) n = c.heldout_splits_px.size();
   double sum = 0;
-  for (double h : c.heldout_splits_px) sum += h;
-  return sum / double(c.heldout_splits_px.size());
+  for (size_t k = 0; k < n; ++k) sum += c.heldout_splits_px[k];
+  return sum / double(n);
 }
 
 // CalibrationResult::mrcal_stand_in: only candidates whose full fit exists (ok) are looked at,
@@ -141,7 +143,9 @@ std::optional<CalibrationResult::MrcalStandIn> mrcal_stand_in(CandidateFits& fit
   };
   auto better = [&](const ModelCandidate& a, const ModelCandidate& b) {  // a ranks before b
     if (fits_well(a) != fits_well(b)) return fits_well(a);
-    const double ha = fits_well(a) ? mean_heldout_px(a) : a.rms_px, hb = fits_well(b) ? mean_heldout_px(b) : b.rms_px;
+    // On the splits both have: a raced-out row (ModelCandidate::raced_out) has only the first.
+    const size_t n = std::min(a.heldout_splits_px.size(), b.heldout_splits_px.size());
+    const double ha = fits_well(a) ? mean_heldout_px(a, n) : a.rms_px, hb = fits_well(b) ? mean_heldout_px(b, n) : b.rms_px;
     if (!(ha == hb)) return ha < hb || std::isnan(hb);
     return a.params < b.params;
   };

@@ -95,6 +95,7 @@ struct CalibrateOptions {
   double selection_outfit_factor = SelectionOptions{}.outfit_factor;
   int selection_small_set_views = SelectionOptions{}.small_set_views;  // and small_set_cv_splits
   int selection_small_set_cv_splits = SelectionOptions{}.small_set_cv_splits;
+  bool selection_race_dear_candidates = SelectionOptions{}.race_dear_candidates;
   // Jackknife leverage of each view for the chosen model (one extra fit per view);
   // LeverageOptions (view_diagnostics.h).
   bool leverage = true;

@@ -127,13 +127,91 @@ ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensT
   return c;
 }
 
+// Candidates whose repeated splits are raced (SelectionOptions::race_dear_candidates): the
+// richest model of each family, whose warm refits cost most (stereo's split refits: the
+// spline's 41 ms, the rational model's 23; Mei's 5, Kannala-Brandt's 3, plumb_bob's 2).
+bool raced_type(LensType t) { return t == LensType::SplinedStereographic || t == LensType::OpenCV8; }
+
+// Finished: every split fitted, or one that could not be (the rest are not reported).
+bool splits_finished(const ModelCandidate& c, size_t splits) {
+  return c.cross_validation_splits_px.size() >= splits ||
+         (!c.cross_validation_splits_px.empty() && !std::isfinite(c.cross_validation_splits_px.back()));
+}
+
+// Each listed row's split validations from the next one it lacks up to (not including)
+// `upto`, refitted warm on every core, dearest first (each writes its own slot); appended
+// in split order up to the first that could not be fitted. Slots the board warp's decision
+// already filled (the same solves) are taken, not refitted.
+void extend_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::vector<ModelCandidate>& table,
+                        const std::vector<std::vector<int>>& splits, const std::vector<std::pair<size_t, size_t>>& rows,
+                        bool parallel) {
+  struct Slot {
+    size_t row, split;
+    LensType type;
+    bool known;
+  };
+  std::vector<Slot> slots;
+  std::vector<SplitValidation> values;
+  const auto& ks = fits.known_splits;
+  const bool have_known = ks && ks->splits == splits && ks->values.size() == splits.size();
+  for (const auto& [row, upto] : rows) {
+    const LensType type = candidate_lens_type(table[row].name);
+    for (size_t k = table[row].cross_validation_splits_px.size(); k < std::min(upto, splits.size()); ++k) {
+      const bool known = have_known && ks->type == type;
+      slots.push_back({row, k, type, known});
+      values.push_back(known ? ks->values[k] : SplitValidation{kInf, kInf});
+    }
+  }
+  std::vector<size_t> start;
+  for (size_t j = 0; j < slots.size(); ++j)
+    if (!slots[j].known) start.push_back(j);
+  std::stable_sort(start.begin(), start.end(), [&](size_t a, size_t b) {
+    return warm_refit_rank(slots[a].type) < warm_refit_rank(slots[b].type);
+  });
+  std::vector<SplitTask> tasks;
+  for (size_t j : start) tasks.push_back({&pr, slots[j].type, &fits.full.get(slots[j].type), &splits[slots[j].split]});
+  const std::vector<SplitValidation> got = split_validations(fits.used, tasks, fits.mask, fits.step, parallel);
+  for (size_t q = 0; q < start.size(); ++q) values[start[q]] = got[q];
+  for (size_t j = 0; j < slots.size(); ++j) {  // per row, in split order
+    ModelCandidate& c = table[slots[j].row];
+    if (splits_finished(c, splits.size()) || c.cross_validation_splits_px.size() != slots[j].split) continue;
+    c.cross_validation_splits_px.push_back(values[j].cross_validation_px);
+    c.heldout_splits_px.push_back(values[j].heldout_rms_px);
+  }
+}
+
+// The lens's own family first, then fewer parameters (incumbent_pick's order, without its
+// tie-break on the repeated cross-validation).
+std::pair<int, int> rule_rank(const ModelCandidate& c, bool perspective_first) {
+  const bool perspective = lens_type_info(candidate_lens_type(c.name)).family == LensFamily::Perspective;
+  return {perspective == perspective_first ? 0 : 1, c.params};
+}
+
+// Who may be picked: a fit of every view and of the odd/even halves that a lens model can
+// have (fit_max_*). Not the repeated value against fit_max_cross_validation_px: with halves
+// of 2 views one split of a good model can be 9 px off (190 deg lens, 4 views), and weighing
+// such a split against the others is the challenge's job.
+std::vector<char> eligible_rows(const std::vector<ModelCandidate>& table, const SelectionOptions& o) {
+  std::vector<char> eligible(table.size(), 0);
+  for (size_t i = 0; i < table.size(); ++i)
+    eligible[i] = table[i].ok && table[i].rms_px <= o.fit_max_rms_px &&
+                  table[i].cross_validation_px <= o.fit_max_cross_validation_px;
+  return eligible;
+}
+
 // The cross-validation repeated over the splits for every candidate that can matter (the
 // first split, odd/even, is the table's, fitted cold); true when some candidate got a
-// finite repeated value.
+// finite repeated value. With `race` (the incumbent rule, at least 3 splits), a raced_type
+// candidate is refitted on the second split first, then on one more at a time while it
+// could change the pick among the candidates with every split (cannot_change_pick): the
+// same pick, at fewer warm refits than 2 (K - 1) for a rich model that loses. Such a row
+// keeps the splits it has, is raced_out, and has no repeated value.
 bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::vector<ModelCandidate>& table,
-                        const std::vector<std::vector<int>>& splits, double best_odd_even,
-                        const SelectionOptions& o, const StageProgress& progress) {
+                        const std::vector<std::vector<int>>& splits, double best_odd_even, bool race,
+                        const std::vector<char>& eligible, bool perspective_first, const SelectionOptions& o,
+                        const StageProgress& progress) {
   if (splits.size() <= 1) return false;
+  const size_t K = splits.size();
   std::vector<size_t> repeat;
   for (size_t i = 0; i < table.size(); ++i) {
     const ModelCandidate& c = table[i];
@@ -141,43 +219,32 @@ bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::
         c.cross_validation_px <= o.screen_factor * best_odd_even + o.floor_px)
       repeat.push_back(i);
   }
-  // Every (candidate, split) refit on every core; each writes its own slot. The dearest
-  // refits start first, so that the last job to finish is a short one.
-  const size_t per = splits.size() - 1;
-  std::vector<SplitValidation> values(repeat.size() * per);
-  // Slots the board warp's decision already filled (the same solves); the rest are refitted.
-  std::vector<char> known(values.size(), 0);
-  if (const auto& ks = fits.known_splits; ks && ks->splits == splits && ks->values.size() == splits.size())
-    for (size_t r = 0; r < repeat.size(); ++r)
-      if (candidate_lens_type(table[repeat[r]].name) == ks->type)
-        for (size_t k = 0; k < per; ++k) values[r * per + k] = ks->values[1 + k], known[r * per + k] = 1;
-  std::vector<size_t> start;
-  for (size_t j = 0; j < values.size(); ++j)
-    if (!known[j]) start.push_back(j);
-  std::stable_sort(start.begin(), start.end(), [&](size_t a, size_t b) {
-    return warm_refit_rank(candidate_lens_type(table[repeat[a / per]].name)) <
-           warm_refit_rank(candidate_lens_type(table[repeat[b / per]].name));
-  });
   report_progress(progress, "repeated splits", 0, 1);
-  std::vector<SplitTask> tasks;
-  for (size_t j : start) {
-    const LensType type = candidate_lens_type(table[repeat[j / per]].name);
-    tasks.push_back({&pr, type, &fits.full.get(type), &splits[1 + j % per]});
-  }
-  const std::vector<SplitValidation> got = split_validations(fits.used, tasks, fits.mask, fits.step, o.parallel);
-  for (size_t q = 0; q < start.size(); ++q) values[start[q]] = got[q];
-  bool repeated = false;
-  for (size_t r = 0; r < repeat.size(); ++r) {
-    ModelCandidate& c = table[repeat[r]];
+  std::vector<std::pair<size_t, size_t>> first;
+  for (size_t r : repeat) {
+    ModelCandidate& c = table[r];
     c.cross_validation_splits_px = {c.cross_validation_px};
     c.heldout_splits_px = {c.heldout_rms_px};
-    for (size_t k = 0; k < per; ++k) {
-      const SplitValidation& v = values[r * per + k];
-      c.cross_validation_splits_px.push_back(v.cross_validation_px);
-      c.heldout_splits_px.push_back(v.heldout_rms_px);
-      if (!std::isfinite(v.cross_validation_px)) break;  // cannot qualify: the rest are not reported
-    }
-    c.cross_validation_repeated_px = rms_over_splits(c.cross_validation_splits_px);
+    first.push_back({r, race && raced_type(candidate_lens_type(c.name)) ? 2 : K});
+  }
+  extend_over_splits(pr, fits, table, splits, first, o.parallel);
+  // Until every raced row left unfinished cannot change the pick of the finished ones.
+  while (race) {
+    std::vector<ModelCandidate> trial = table;
+    const size_t pick = incumbent_pick(trial, eligible, perspective_first, o);
+    std::vector<std::pair<size_t, size_t>> more;
+    for (size_t r : repeat)
+      if (!splits_finished(table[r], K) &&
+          (pick >= table.size() || !cannot_change_pick(table[r], table, pick, K, perspective_first, o)))
+        more.push_back({r, table[r].cross_validation_splits_px.size() + 1});
+    if (more.empty()) break;
+    extend_over_splits(pr, fits, table, splits, more, o.parallel);
+  }
+  bool repeated = false;
+  for (size_t r : repeat) {
+    ModelCandidate& c = table[r];
+    c.raced_out = !splits_finished(c, K);
+    c.cross_validation_repeated_px = c.raced_out ? kNaN : rms_over_splits(c.cross_validation_splits_px);
     if (std::isfinite(c.cross_validation_repeated_px)) repeated = true;
   }
   return repeated;
@@ -314,6 +381,47 @@ bool outfits_over_splits(const SplitValues& better, const SplitValues& worse, do
     cv_not_worse += better.cross_validation_px[k] <= worse.cross_validation_px[k];
   }
   return 2 * cv_not_worse >= int(splits);
+}
+
+bool cannot_change_pick(const ModelCandidate& x, const std::vector<ModelCandidate>& table, size_t pick,
+                        size_t splits, bool perspective_first, const SelectionOptions& o) {
+  const ModelCandidate& p = table[pick];
+  const size_t m = x.cross_validation_splits_px.size();
+  if (!(rule_rank(p, perspective_first) < rule_rank(x, perspective_first))) return false;
+  const auto can_win_most = [&](const std::vector<double>& a, const std::vector<double>& b) {
+    size_t better = 0;
+    for (size_t k = 0; k < m; ++k) better += a[k] < b[k];
+    return 2 * (better + splits - m) > splits;
+  };
+  if (can_win_most(x.heldout_splits_px, p.heldout_splits_px) ||
+      can_win_most(x.cross_validation_splits_px, p.cross_validation_splits_px))
+    return false;
+  if (o.outfit_factor < 1) return true;
+  // Outfitting takes a candidate out of the rule. That can change the pick only when it is
+  // the pick, or beats a candidate up to the pick (it may be what kept that one from being
+  // picked); ties of the order counted as either side.
+  const auto rank = [&](const ModelCandidate& c) { return rule_rank(c, perspective_first); };
+  const auto complete = [&](const ModelCandidate& c) {
+    return &c != &x && c.heldout_splits_px.size() == splits && c.cross_validation_splits_px.size() == splits;
+  };
+  const auto may_matter = [&](const ModelCandidate& y) {
+    if (&y == &p) return true;
+    for (const ModelCandidate& z : table)
+      if (&z != &y && complete(z) && !(rank(p) < rank(z)) && !(rank(y) < rank(z)) &&
+          challenge_over_splits({y.heldout_splits_px, y.cross_validation_splits_px},
+                                {z.heldout_splits_px, z.cross_validation_splits_px}, o)
+              .wins)
+        return true;
+    return false;
+  };
+  for (const ModelCandidate& y : table) {
+    if (!complete(y)) continue;
+    bool lower_on_every = true;
+    for (size_t k = 0; k < m && lower_on_every; ++k)
+      lower_on_every = o.outfit_factor * x.heldout_splits_px[k] < y.heldout_splits_px[k];
+    if (lower_on_every && may_matter(y)) return false;
+  }
+  return true;
 }
 
 SplitChallenge challenge_over_splits(const SplitValues& challenger, const SplitValues& incumbent,
@@ -586,8 +694,17 @@ SelectionReport select_model(const CalibrationProblem& pr, CandidateFits& fits, 
                          ? std::max(o.cv_splits, o.small_set_cv_splits)
                          : o.cv_splits;
   rep.splits = balanced_view_splits(int(fits.used.size()), std::max(1, splits));
-  const bool repeated =
-      repeat_over_splits(pr, fits, table, rep.splits, best_odd_even->cross_validation_px, o, progress);
+  // The incumbent rule's eligibility and order depend on the odd/even fits only: known
+  // before the repeated splits, which the race needs.
+  const std::vector<char> eligible = eligible_rows(table, o);
+  const bool incumbent = o.rule == SelectionRule::Incumbent;
+  if (incumbent) {
+    rep.field_deg = observed_field_deg(fits, table, eligible);
+    rep.perspective_first = rep.field_deg <= o.perspective_field_deg;
+  }
+  const bool race = incumbent && o.race_dear_candidates && rep.splits.size() >= size_t(std::max(3, o.min_rule_splits));
+  const bool repeated = repeat_over_splits(pr, fits, table, rep.splits, best_odd_even->cross_validation_px, race,
+                                           eligible, rep.perspective_first, o, progress);
   rep.selected_on = repeated ? "repeated" : "odd/even";
   rep.cv_splits = repeated ? int(rep.splits.size()) : 1;
   const auto score = [&](const ModelCandidate& c) {
@@ -621,17 +738,7 @@ SelectionReport select_model(const CalibrationProblem& pr, CandidateFits& fits, 
   rep.simplest_within_noise = pick_within_noise(fits, table, best, rep.noise_px, score, o);
   rep.selected = rep.simplest_within_noise;
   rep.rule = "simplest within noise";
-  if (o.rule == SelectionRule::Incumbent) {
-    // Who may be picked: a fit of every view and of the odd/even halves that a lens model can
-    // have (fit_max_*). Not the repeated value against fit_max_cross_validation_px: with
-    // halves of 2 views one split of a good model can be 9 px off (190 deg lens, 4 views),
-    // and weighing such a split against the others is the challenge's job.
-    std::vector<char> eligible(table.size(), 0);
-    for (size_t i = 0; i < table.size(); ++i)
-      eligible[i] = table[i].ok && table[i].rms_px <= o.fit_max_rms_px &&
-                    table[i].cross_validation_px <= o.fit_max_cross_validation_px;
-    rep.field_deg = observed_field_deg(fits, table, eligible);
-    rep.perspective_first = rep.field_deg <= o.perspective_field_deg;
+  if (incumbent) {
     const size_t pick = incumbent_pick(table, eligible, rep.perspective_first, o);
     if (pick < table.size()) {
       rep.selected = pick;

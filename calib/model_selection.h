@@ -65,6 +65,10 @@ struct ModelCandidate {
   // RMS of the candidates with every split (a vote over resamples, reported).
   std::vector<double> heldout_splits_px;
   int split_wins = 0;
+  // Its splits were raced (SelectionOptions::race_dear_candidates) and stopped once it could
+  // no longer change the pick: the splits above hold only the first ones, and
+  // cross_validation_repeated_px is NaN.
+  bool raced_out = false;
   // Left out of the incumbent rule: another candidate fitted the held-out corners better by
   // more than SelectionOptions::outfit_factor on every split, and repeated no worse on at
   // least half of them.
@@ -249,6 +253,13 @@ struct SelectionOptions {
   int small_set_views = 12;
   int small_set_cv_splits = 8;
   double screen_factor = 10.0;
+  // Race the richest model of each family (the rational model and the spline, whose split
+  // refits cost 5-20x the others') through the repeated splits under the incumbent rule: it
+  // is refitted on one split beyond odd/even first, and on the rest only while, on the
+  // splits it has, it could still be better than the pick on most of them, or comes before
+  // it, or could outfit a candidate. The pick is then the same as with every split of it
+  // (ModelCandidate::raced_out); the rows it leaves short show only their first splits.
+  bool race_dear_candidates = true;
   // The tolerance's noise: false = the jackknife standard error of the best candidate's
   // odd/even cross-validation, a conservative bound for the K-split mean; true = the spread
   // of the best's K per-split values / sqrt(K). See docs/calibration.md for the measurement
@@ -344,6 +355,17 @@ SplitChallenge challenge_over_splits(const SplitValues& challenger, const SplitV
 // `better` outfits `worse` (SelectionOptions::outfit_factor): a held-out RMS lower by more
 // than `factor` on every split, and a cross-validation no worse on at least half of them.
 bool outfits_over_splits(const SplitValues& better, const SplitValues& worse, double factor);
+
+// The race's test (SelectionOptions::race_dear_candidates): true when `x`, fitted on the
+// first m < `splits` splits, cannot change the incumbent rule's pick `table[pick]` (fitted
+// on all of them) whatever its other splits give. It comes after the pick in the rule's
+// order (family, then parameters), it cannot be better than the pick on most splits in
+// either statistic (a challenger must be), and it cannot outfit (on some split it has, it is
+// not lower by outfit_factor) the pick or a candidate that beats one up to the pick. Then
+// every candidate before the pick stays beaten by one that is not `x`, and nothing beats the
+// pick.
+bool cannot_change_pick(const ModelCandidate& x, const std::vector<ModelCandidate>& table, size_t pick, size_t splits,
+                        bool perspective_first, const SelectionOptions& options = {});
 
 // The incumbent rule on a filled table (cross_validation_splits_px and heldout_splits_px of
 // equal length): the index picked, every other candidate's challenge_* (against the pick)

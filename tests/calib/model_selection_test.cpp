@@ -601,6 +601,102 @@ TEST(ModelSelection, ACandidateOutfittedOnEverySplitIsNotThePick) {
   EXPECT_TRUE(stereo[0].outfitted);
 }
 
+// The race (SelectionOptions::race_dear_candidates) stops a candidate's splits only when the
+// rest cannot change the pick. The rows are the stereo left set's (4 splits; plumb_bob the
+// pick), the spline's first two splits worse than plumb_bob's in both statistics.
+TEST(ModelSelection, ARacedCandidateStopsOnlyWhenItCannotChangeThePick) {
+  std::vector<ModelCandidate> table = {
+      measured_candidate("plumb_bob", 9, {0.183, 0.188, 0.198, 0.192}, {0.119, 0.146, 0.558, 0.876}),
+      measured_candidate("LENSMODEL_KANNALA_BRANDT", 8, {0.197, 0.341, 0.237, 0.342}, {0.756, 0.335, 1.072, 0.328}),
+      measured_candidate("LENSMODEL_OMNIDIR_MEI", 9, {0.182, 0.188, 0.211, 0.195}, {0.134, 0.146, 0.590, 0.858}),
+      measured_candidate("LENSMODEL_SPLINED_STEREOGRAPHIC", 100, {0.191, 0.213}, {0.539, 0.401})};
+  const std::vector<char> eligible = {1, 1, 1, 0};  // the spline's row is short: not in the rule yet
+  std::vector<ModelCandidate> trial = table;
+  const size_t pick = incumbent_pick(trial, eligible, true);
+  ASSERT_EQ(pick, 0u);
+  const ModelCandidate spline = table[3];
+  // Worse on 2 of 4 in both: at best 2 of 4 better, not most.
+  EXPECT_TRUE(cannot_change_pick(spline, table, pick, 4, true));
+  // With one split only it could still be better on 3 of 4.
+  ModelCandidate one = spline;
+  one.heldout_splits_px.resize(1);
+  one.cross_validation_splits_px.resize(1);
+  EXPECT_FALSE(cannot_change_pick(one, table, pick, 4, true));
+  // Better on one of its two splits in either statistic: 3 of 4 still possible.
+  ModelCandidate close = spline;
+  close.heldout_splits_px[1] = 0.187;
+  EXPECT_FALSE(cannot_change_pick(close, table, pick, 4, true));
+  close = spline;
+  close.cross_validation_splits_px[0] = 0.100;
+  EXPECT_FALSE(cannot_change_pick(close, table, pick, 4, true));
+  // With 8 splits, two lost ones leave 6 to win.
+  EXPECT_FALSE(cannot_change_pick(spline, table, pick, 8, true));
+  // Before the pick in the rule's order (the wide-angle family first): never stopped early.
+  EXPECT_FALSE(cannot_change_pick(table[1], table, 2, 4, false));
+  // Outfitting. Wide-angle family first: Kannala-Brandt is the pick, having beaten the
+  // stereographic model, and so has Mei. A spline lower than Mei's held-out RMS by the outfit
+  // factor on its splits could take Mei out of the rule, which may change what beats the
+  // stereographic model: not stopped.
+  std::vector<ModelCandidate> wide = {
+      measured_candidate("LENSMODEL_STEREOGRAPHIC", 4, {1.00, 1.00, 1.00, 1.00}, {2.00, 2.00, 2.00, 2.00}),
+      measured_candidate("LENSMODEL_KANNALA_BRANDT", 8, {0.20, 0.21, 0.20, 0.21}, {0.30, 0.31, 0.30, 0.31}),
+      measured_candidate("LENSMODEL_OMNIDIR_MEI", 9, {0.40, 0.41, 0.42, 0.40}, {0.50, 0.52, 0.51, 0.50}),
+      measured_candidate("LENSMODEL_SPLINED_STEREOGRAPHIC", 100, {0.25, 0.26}, {0.60, 0.60})};
+  trial = wide;
+  const size_t kb = incumbent_pick(trial, {1, 1, 1, 0}, false);
+  ASSERT_EQ(kb, 1u);
+  EXPECT_FALSE(cannot_change_pick(wide[3], wide, kb, 4, false));
+  SelectionOptions no_outfit;
+  no_outfit.outfit_factor = 0;
+  EXPECT_TRUE(cannot_change_pick(wide[3], wide, kb, 4, false, no_outfit));
+  // A Mei that beats nothing up to the pick may be outfitted: nothing changes.
+  wide[2].heldout_splits_px = {1.10, 1.10, 1.10, 1.10};
+  wide[2].cross_validation_splits_px = {2.50, 2.50, 2.50, 2.50};
+  EXPECT_TRUE(cannot_change_pick(wide[3], wide, kb, 4, false));
+}
+
+// The race on a real set: the same pick and the same numbers as every split of every
+// candidate, at fewer refits; the raced rows hold the first splits of the full rows. ~3 s.
+TEST(ModelSelection, RacingGivesThePickOfEverySplitOnTheStereoSet) {
+  CalibrateOptions o;
+  o.leverage = false;
+  o.uncertainty = false;
+  const calib_test::RealSet set = calib_test::real_sets()[0];
+  ASSERT_EQ(std::string(set.name), "stereo left");
+  const calib_test::RealSetViews rs = calib_test::real_set_views(set);
+  if (rs.views.empty()) GTEST_SKIP() << "no images in " << set.dir;
+  const CalibrationResult raced = calibrate(rs.views, set.board, rs.width, rs.height, o);
+  o.selection_race_dear_candidates = false;
+  const CalibrationResult full = calibrate(rs.views, set.board, rs.width, rs.height, o);
+  EXPECT_EQ(raced.selected, full.selected);
+  EXPECT_EQ(raced.model.intrinsics, full.model.intrinsics);
+  ASSERT_EQ(raced.table.size(), full.table.size());
+  std::string raced_out;
+  for (size_t i = 0; i < raced.table.size(); ++i) {
+    const ModelCandidate &a = raced.table[i], &b = full.table[i];
+    EXPECT_FALSE(b.raced_out) << b.name;
+    if (a.raced_out) raced_out += " " + a.name + " " + std::to_string(a.heldout_splits_px.size());
+    if (!a.raced_out) {
+      EXPECT_EQ(a.heldout_splits_px.size(), b.heldout_splits_px.size()) << a.name;
+    } else {
+      EXPECT_LT(a.heldout_splits_px.size(), b.heldout_splits_px.size()) << a.name;
+      EXPECT_TRUE(std::isnan(a.cross_validation_repeated_px)) << a.name;
+    }
+    ASSERT_LE(a.heldout_splits_px.size(), b.heldout_splits_px.size()) << a.name;
+    // (OpenCV8's seed is not bit-reproducible between calls, docs/calibration.md "Determinism".)
+    const double tol = a.name == "LENSMODEL_OPENCV8" ? 1e-6 : 0;
+    for (size_t k = 0; k < a.heldout_splits_px.size(); ++k) {
+      EXPECT_NEAR(a.heldout_splits_px[k], b.heldout_splits_px[k], tol * b.heldout_splits_px[k]) << a.name << " " << k;
+      EXPECT_NEAR(a.cross_validation_splits_px[k], b.cross_validation_splits_px[k],
+                  tol * b.cross_validation_splits_px[k])
+          << a.name << " " << k;
+    }
+  }
+  std::printf("  raced out:%s\n", raced_out.c_str());
+  // The spline loses to plumb_bob on the first two splits in both statistics.
+  EXPECT_EQ(raced_out, " LENSMODEL_SPLINED_STEREOGRAPHIC 2");
+}
+
 // The halves of the shared 190-degree set (4 + 4 views) choose one family and agree as well
 // as the best fixed one (they chose Mei and Kannala-Brandt under the chain of challenges,
 // 2.0 px apart against 0.15). ~3 s.
@@ -702,6 +798,16 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
       {"VMRImage", "LENSMODEL_OMNIDIR_MEI"},
       {"KaidanOmni", "LENSMODEL_OMNIDIR_MEI"}, {"MiniOmni", "LENSMODEL_OMNIDIR_MEI"},
       {"Fisheye190deg", "LENSMODEL_KANNALA_BRANDT"}};
+  // The richest models the race stopped early, with the splits they kept.
+  const std::map<std::string, std::string> raced_out = {
+      {"stereo left", " LENSMODEL_SPLINED_STEREOGRAPHIC 2"},
+      {"stereo right", " LENSMODEL_SPLINED_STEREOGRAPHIC 3"},
+      {"fisheye1", " LENSMODEL_OPENCV8 2 LENSMODEL_SPLINED_STEREOGRAPHIC 2"},
+      {"Ladybug", " LENSMODEL_OPENCV8 4 LENSMODEL_SPLINED_STEREOGRAPHIC 7"},
+      {"VMRImage", " LENSMODEL_SPLINED_STEREOGRAPHIC 4"},
+      {"KaidanOmni", " LENSMODEL_SPLINED_STEREOGRAPHIC 2"},
+      {"MiniOmni", " LENSMODEL_SPLINED_STEREOGRAPHIC 2"},
+      {"Fisheye190deg", " LENSMODEL_OPENCV8 7 LENSMODEL_SPLINED_STEREOGRAPHIC 4"}};
   CalibrateOptions o;
   o.leverage = false;
   o.uncertainty = false;
@@ -769,7 +875,13 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
         EXPECT_NE(c.name, r.selected) << set.name;
       }
     }
-    std::printf("  %s: %s; screened:%s\n", set.name, r.selected.c_str(), screened.c_str());
+    // The rows the race stopped early (SelectionOptions::race_dear_candidates), with the
+    // splits they kept: a race that no longer applied would choose the same, only slower.
+    std::string raced;
+    for (const ModelCandidate& c : r.table)
+      if (c.raced_out) raced += " " + c.name + " " + std::to_string(c.heldout_splits_px.size());
+    EXPECT_EQ(raced, raced_out.at(set.name)) << set.name;
+    std::printf("  %s: %s; screened:%s; raced out:%s\n", set.name, r.selected.c_str(), screened.c_str(), raced.c_str());
   }
 }
 

@@ -228,8 +228,20 @@ bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::
     first.push_back({r, race && raced_type(candidate_lens_type(c.name)) ? 2 : K});
   }
   extend_over_splits(pr, fits, table, splits, first, o.parallel);
-  // Until every raced row left unfinished cannot change the pick of the finished ones.
+  // Until every raced row left unfinished cannot change the pick of the finished ones. The
+  // rule counts the splits of the longest rows: without a row fitted on every split (every
+  // other one failed a split), a raced row completed would change what the rule compares,
+  // so then every row is completed.
   while (race) {
+    const bool some_complete = std::any_of(repeat.begin(), repeat.end(), [&](size_t r) {
+      return table[r].cross_validation_splits_px.size() == K;
+    });
+    if (!some_complete) {
+      std::vector<std::pair<size_t, size_t>> all;
+      for (size_t r : repeat) all.push_back({r, K});
+      extend_over_splits(pr, fits, table, splits, all, o.parallel);
+      break;
+    }
     std::vector<ModelCandidate> trial = table;
     const size_t pick = incumbent_pick(trial, eligible, perspective_first, o);
     std::vector<std::pair<size_t, size_t>> more;

@@ -44,6 +44,7 @@ struct ModelFit {
   // as for OpenCV's own solutions, which warp_fitted tells apart).
   BoardWarp warp{};
   bool warp_fitted = false;
+  int iterations = 0;  // the Ceres refinement's iterations (Kannala-Brandt, Mei); 0 otherwise
 };
 
 // What the solvers need to know beyond the corners.
@@ -65,6 +66,15 @@ struct SolveOptions {
   // Mei fit of one calibration is seeded alike; false (cv::omnidir only) for a requested model
   // and any other caller.
   bool mei_from_kannala_brandt = false;
+  // Mei is refined in the coordinates of its radial profile (f / (1 + xi), its theta^3 and
+  // theta^5 coefficients, xi) where its seed sees every corner within this many degrees of
+  // the axis. The same model and minimum; on a narrow field xi is barely observable and
+  // Ceres walked the valley it makes in (f, xi, k1, k2) for ~80 iterations (Ladybug: 80 -> 28
+  // a solve, the automatic choice 0.78x the wall time). On wide fields the profile
+  // coordinates are the slower ones (fisheye1, corners to 84 deg: 1.28x; Fisheye190deg,
+  // 69 deg: 37 -> 118 iterations a solve), hence 60, the selection's perspective_field_deg.
+  // 0: never.
+  double mei_profile_field_deg = 60;
 };
 
 struct CalibrationProblem {

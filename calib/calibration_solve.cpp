@@ -1,6 +1,9 @@
 #include "calib/calibration_solve.h"
 
+#include <algorithm>
 #include <cmath>
+
+#include <opencv2/calib3d.hpp>
 
 #include "calib/ceres_plugin.h"
 #include "calib/mrcal_solve.h"
@@ -43,7 +46,25 @@ ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, con
   finite = finite && std::isfinite(f.warp[0]) && std::isfinite(f.warp[1]);
   if (!finite || summary.final_cost > summary.initial_cost) return seed;
   if (f.solver.find("Ceres") == std::string::npos) f.solver += " + Ceres";
+  f.iterations = summary.iterations;
   return f;
+}
+
+// The widest angle off the axis at which `fit`'s poses put a used corner of `views`, deg.
+double posed_field_deg(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& fit) {
+  double widest = 0;
+  for (size_t i = 0; i < views.size() && i < fit.poses.size(); ++i) {
+    const BoardPose& p = fit.poses[i];
+    cv::Matx33d R;
+    cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
+    for (size_t k = 0; k < views[i]->px.size(); ++k) {
+      if (!views[i]->inlier[k]) continue;
+      const auto b = board_point(pr.board, int(k), fit.warp);
+      const cv::Vec3d C = R * cv::Vec3d(b[0], b[1], b[2]) + cv::Vec3d(p[3], p[4], p[5]);
+      widest = std::max(widest, std::atan2(std::hypot(C[0], C[1]), C[2]));
+    }
+  }
+  return widest * 180 / M_PI;
 }
 
 // mrcal's polish of a cv::calibrateCamera fit, from its rounded seed; OpenCV's solution
@@ -64,7 +85,10 @@ ModelFit refine_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& v
 }
 
 ModelFit refine_mei(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
-  return refine_joint(pr, views, seed, detail::CeresProjection::Mei);
+  // On a narrow field, in its radial profile's coordinates (SolveOptions::mei_profile_field_deg).
+  const double limit = pr.solve.mei_profile_field_deg;
+  const bool narrow = limit > 0 && posed_field_deg(pr, views, seed) <= limit;
+  return refine_joint(pr, views, seed, narrow ? detail::CeresProjection::MeiProfile : detail::CeresProjection::Mei);
 }
 
 ModelFit solve_mrcal(const CalibrationProblem& pr, const ViewSubset& views, const std::string& lensmodel,

@@ -28,9 +28,14 @@ struct CeresCorner {
   size_t view;
 };
 
-enum class CeresProjection : int { KannalaBrandt = 0, Mei = 1 };
-// Parameters of each projection (calibration_solve.cpp's KannalaBrandtProjection, MeiProjection).
-inline constexpr int kCeresProjectionParams[2] = {8, 9};
+// MeiProfile is Mei solved in the coordinates of its radial profile (the plugin's
+// MeiProfileProjection): the same model and minimum, its intrinsics given and returned as
+// Mei's, for narrow fields, where Mei's focal length, xi, k1 and k2 lie along one curved
+// valley (calibration_solve.cpp, refine_mei).
+enum class CeresProjection : int { KannalaBrandt = 0, Mei = 1, MeiProfile = 2 };
+// Parameters of each projection (the plugin's KannalaBrandtProjection, MeiProjection,
+// MeiProfileProjection).
+inline constexpr int kCeresProjectionParams[3] = {8, 9, 9};
 
 struct CeresJointSolve {
   CeresProjection projection = CeresProjection::KannalaBrandt;
@@ -44,6 +49,7 @@ struct CeresJointSolve {
 struct CeresSolveSummary {
   bool usable = false;  // ceres::Solver::Summary::IsSolutionUsable()
   double initial_cost = 0, final_cost = 0;
+  int iterations = 0;   // the solver's iterations
 };
 
 // The photometric fit (photometric.h): the robust least squares of one (linear: r = theta +
@@ -73,13 +79,14 @@ struct CeresPluginTable {
   CeresSolveSummary (*solve_joint)(const CeresJointSolve& problem);
   CeresPhotometricSummary (*fit_photometric)(const CeresPhotometricFit& problem);
   // The largest difference between a corner residual's hand-written Jacobians (the
-  // solver's, Mei or Kannala-Brandt) and Ceres' autodiff of the same expression, at one
-  // corner and parameter set (kCeresProjectionParams intrinsics), relative to the larger of
-  // 1 and the largest autodiff entry: for the plugin's tests.
+  // solver's, for each projection) and Ceres' autodiff of the same expression, at one
+  // corner and parameter set (kCeresProjectionParams intrinsics, in the projection's own
+  // coordinates), relative to the larger of 1 and the largest autodiff entry: for the
+  // plugin's tests.
   double (*jacobian_mismatch)(CeresProjection projection, const double* intrinsics, const double* pose,
                               const double* warp, const CeresCorner& corner);
 };
-inline constexpr int kCeresPluginVersion = 3;
+inline constexpr int kCeresPluginVersion = 4;
 inline constexpr const char* kCeresPluginFile = "liblightprobe_ceres.so";
 
 // The plugin's table, loaded once; throws std::runtime_error when it cannot be loaded.

@@ -7,6 +7,7 @@
 #include <ceres/rotation.h>
 
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 #include "calib/ceres_plugin.h"
@@ -52,8 +53,44 @@ struct MeiProjection {
     q[1] = in[1] * yd + in[3];
   }
 };
+// Mei in the coordinates of its radial profile. For a ray at theta off the axis Mei's
+// undistorted radius is sin(theta) / (cos(theta) + xi) = theta / s (1 + A theta^2 +
+// B theta^4 + ...), s = 1 + xi, A = 1 / (2 s) - 1/6, B = 1 / (4 s^2) - 1 / (8 s) + 1/120, and
+// with k1, k2 the distorted one is theta / s (1 + c3 theta^2 + c5 theta^4 + ...), c3 = A + k1
+// / s^2, c5 = B + 3 A k1 / s^2 + k2 / s^4. On a narrow field the corners pin g = f / s, c3 and
+// c5, not xi: in (fx, fy, xi, k1, k2) that is a curved valley that Ceres walked for ~80
+// iterations on Ladybug. Solved in (gx, gy, cx, cy, xi, c3, c5, p1, p2) instead, xi alone
+// moves only the theta^7 terms: 28. The map is one to one for s > 0; the same model.
+struct MeiProfileProjection {
+  static constexpr int kParams = 9;
+  template <typename T>
+  static void to_mei(const T* u, T* in) {
+    const T s = T(1) + u[4], s2 = s * s;
+    const T a = T(1) / (T(2) * s) - T(1.0 / 6);
+    const T b = T(1) / (T(4) * s2) - T(1) / (T(8) * s) + T(1.0 / 120);
+    in[0] = u[0] * s, in[1] = u[1] * s, in[2] = u[2], in[3] = u[3], in[4] = u[4];
+    in[5] = (u[5] - a) * s2;
+    in[6] = (u[6] - b - T(3) * a * (u[5] - a)) * s2 * s2;
+    in[7] = u[7], in[8] = u[8];
+  }
+  static void from_mei(const double* in, double* u) {
+    const double s = 1 + in[4], s2 = s * s;
+    const double a = 1 / (2 * s) - 1.0 / 6, b = 1 / (4 * s2) - 1 / (8 * s) + 1.0 / 120;
+    u[0] = in[0] / s, u[1] = in[1] / s, u[2] = in[2], u[3] = in[3], u[4] = in[4];
+    u[5] = a + in[5] / s2;
+    u[6] = b + 3 * a * in[5] / s2 + in[6] / (s2 * s2);
+    u[7] = in[7], u[8] = in[8];
+  }
+  template <typename T>
+  static void project(const T* u, const T* C, T* q) {
+    T in[9];
+    to_mei(u, in);
+    MeiProjection::project(in, C, q);
+  }
+};
 static_assert(KannalaBrandtProjection::kParams == kCeresProjectionParams[0] &&
-              MeiProjection::kParams == kCeresProjectionParams[1]);
+              MeiProjection::kParams == kCeresProjectionParams[1] &&
+              MeiProfileProjection::kParams == kCeresProjectionParams[2]);
 
 // Reprojection residual of one corner: board point (X, Y) lifted by the board warp
 // (mrcal's flex: z = x2 * dx + y2 * dy, dx and dy the corner's parabola factors,
@@ -176,6 +213,41 @@ struct MeiCornerCost final : HandWrittenCornerCost<9> {
   }
 };
 
+// CornerCost<MeiProfileProjection>: MeiCornerCost at the profile coordinates' Mei
+// intrinsics, its intrinsics' Jacobian carried to the profile coordinates by the chain rule.
+struct MeiProfileCornerCost final : HandWrittenCornerCost<9> {
+  MeiCornerCost mei;
+  MeiProfileCornerCost(double X_, double Y_, double dx_, double dy_, double qx_, double qy_)
+      : HandWrittenCornerCost(X_, Y_, dx_, dy_, qx_, qy_), mei(X_, Y_, dx_, dy_, qx_, qy_) {}
+  bool Evaluate(const double* const* parameters, double* residuals, double** jacobians) const override {
+    const double* u = parameters[0];
+    double in[9], J_mei[18];
+    MeiProfileProjection::to_mei(u, in);
+    const double* mei_parameters[3] = {in, parameters[1], parameters[2]};
+    double* mei_jacobians[3] = {nullptr, nullptr, nullptr};
+    if (jacobians) mei_jacobians[0] = jacobians[0] ? J_mei : nullptr, mei_jacobians[1] = jacobians[1], mei_jacobians[2] = jacobians[2];
+    if (!mei.Evaluate(mei_parameters, residuals, jacobians ? mei_jacobians : nullptr)) return false;
+    if (!jacobians || !jacobians[0]) return true;
+    // d(fx, fy, k1, k2) / d(gx, gy, xi, c3, c5); cx, cy, p1, p2 are the same.
+    const double s = 1 + u[4], s2 = s * s, s3 = s2 * s, s4 = s2 * s2;
+    const double a = 1 / (2 * s) - 1.0 / 6, b = 1 / (4 * s2) - 1 / (8 * s) + 1.0 / 120;
+    const double da = -1 / (2 * s2), db = -1 / (2 * s3) + 1 / (8 * s2);
+    const double dk1_dxi = -da * s2 + 2 * (u[5] - a) * s;
+    const double k2_core = u[6] - b - 3 * a * (u[5] - a);
+    const double dk2_dxi = (-db - 3 * da * u[5] + 6 * a * da) * s4 + 4 * k2_core * s3;
+    for (int i = 0; i < 2; ++i) {
+      const double* m = J_mei + 9 * i;
+      double* J = jacobians[0] + 9 * i;
+      J[0] = m[0] * s, J[1] = m[1] * s, J[2] = m[2], J[3] = m[3];
+      J[4] = m[4] + m[0] * u[0] + m[1] * u[1] + m[5] * dk1_dxi + m[6] * dk2_dxi;
+      J[5] = m[5] * s2 - m[6] * 3 * a * s4;
+      J[6] = m[6] * s4;
+      J[7] = m[7], J[8] = m[8];
+    }
+    return true;
+  }
+};
+
 // CornerCost<KannalaBrandtProjection> with its Jacobians written out, as MeiCornerCost: the
 // rotation by autodiff in 4 dimensions, the rest by hand. Autodiff in all 16 (8 intrinsics,
 // 6 pose, 2 warp) was ~30 % of a forced 64-view calibration's CPU (perf: its Jet arithmetic,
@@ -244,6 +316,10 @@ ceres::CostFunction* corner_cost<MeiProjection>(const CeresCorner& k) {
   return new MeiCornerCost(k.X, k.Y, k.dx, k.dy, k.qx, k.qy);
 }
 template <>
+ceres::CostFunction* corner_cost<MeiProfileProjection>(const CeresCorner& k) {
+  return new MeiProfileCornerCost(k.X, k.Y, k.dx, k.dy, k.qx, k.qy);
+}
+template <>
 ceres::CostFunction* corner_cost<KannalaBrandtProjection>(const CeresCorner& k) {
   return new KannalaBrandtCornerCost(k.X, k.Y, k.dx, k.dy, k.qx, k.qy);
 }
@@ -251,9 +327,17 @@ ceres::CostFunction* corner_cost<KannalaBrandtProjection>(const CeresCorner& k) 
 template <class Projection>
 CeresSolveSummary solve_joint_with(const CeresJointSolve& jp) {
   ceres::Problem problem;
+  // The profile coordinates are solved in a block of their own, from Mei's and back.
+  constexpr bool profile = std::is_same_v<Projection, MeiProfileProjection>;
+  double profile_block[MeiProfileProjection::kParams];
+  double* intrinsics = jp.intrinsics;
+  if constexpr (profile) {
+    MeiProfileProjection::from_mei(jp.intrinsics, profile_block);
+    intrinsics = profile_block;
+  }
   for (size_t c = 0; c < jp.corner_count; ++c) {
     const CeresCorner& k = jp.corners[c];
-    problem.AddResidualBlock(corner_cost<Projection>(k), nullptr, jp.intrinsics, jp.poses[k.view], jp.warp);
+    problem.AddResidualBlock(corner_cost<Projection>(k), nullptr, intrinsics, jp.poses[k.view], jp.warp);
   }
   if (!jp.fit_warp) problem.SetParameterBlockConstant(jp.warp);
   ceres::Solver::Options o;
@@ -271,12 +355,16 @@ CeresSolveSummary solve_joint_with(const CeresJointSolve& jp) {
   o.minimizer_progress_to_stdout = false;
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
-  return {summary.IsSolutionUsable(), summary.initial_cost, summary.final_cost};
+  if constexpr (profile) MeiProfileProjection::to_mei(profile_block, jp.intrinsics);
+  return {summary.IsSolutionUsable(), summary.initial_cost, summary.final_cost, int(summary.iterations.size())};
 }
 
 CeresSolveSummary solve_joint(const CeresJointSolve& jp) {
-  return jp.projection == CeresProjection::Mei ? solve_joint_with<MeiProjection>(jp)
-                                               : solve_joint_with<KannalaBrandtProjection>(jp);
+  switch (jp.projection) {
+    case CeresProjection::Mei: return solve_joint_with<MeiProjection>(jp);
+    case CeresProjection::MeiProfile: return solve_joint_with<MeiProfileProjection>(jp);
+    default: return solve_joint_with<KannalaBrandtProjection>(jp);
+  }
 }
 
 ceres::LossFunction* make_loss(int loss, double scale) {
@@ -371,9 +459,12 @@ double jacobian_mismatch_of(const double* in, const double* pose, const double* 
 
 double jacobian_mismatch(CeresProjection projection, const double* in, const double* pose, const double* warp,
                          const CeresCorner& k) {
-  return projection == CeresProjection::Mei
-             ? jacobian_mismatch_of<MeiProjection, MeiCornerCost>(in, pose, warp, k)
-             : jacobian_mismatch_of<KannalaBrandtProjection, KannalaBrandtCornerCost>(in, pose, warp, k);
+  switch (projection) {
+    case CeresProjection::Mei: return jacobian_mismatch_of<MeiProjection, MeiCornerCost>(in, pose, warp, k);
+    case CeresProjection::MeiProfile:
+      return jacobian_mismatch_of<MeiProfileProjection, MeiProfileCornerCost>(in, pose, warp, k);
+    default: return jacobian_mismatch_of<KannalaBrandtProjection, KannalaBrandtCornerCost>(in, pose, warp, k);
+  }
 }
 
 constexpr CeresPluginTable kTable{kCeresPluginVersion, &solve_joint, &fit_photometric, &jacobian_mismatch};

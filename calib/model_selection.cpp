@@ -187,6 +187,25 @@ std::pair<int, int> rule_rank(const ModelCandidate& c, bool perspective_first) {
   return {perspective == perspective_first ? 0 : 1, c.params};
 }
 
+// How many splits raced row `x` needs before cannot_change_pick can hold against `pick`:
+// all of them when it comes before the pick in the rule's order; else enough that, having
+// lost every one of them, it could no longer be better than the pick on most splits in the
+// statistic it has won more often so far. Fewer could not stop it, so the race refits that
+// many in one round (the two cores share them) instead of one split a round.
+size_t splits_before_it_can_stop(const ModelCandidate& x, const ModelCandidate& pick, size_t splits,
+                                 bool perspective_first) {
+  const size_t m = x.cross_validation_splits_px.size();
+  if (!(rule_rank(pick, perspective_first) < rule_rank(x, perspective_first))) return splits;
+  size_t better_heldout = 0, better_cv = 0;
+  for (size_t k = 0; k < m; ++k) {
+    better_heldout += x.heldout_splits_px[k] < pick.heldout_splits_px[k];
+    better_cv += x.cross_validation_splits_px[k] < pick.cross_validation_splits_px[k];
+  }
+  // better + (splits - m') <= splits / 2  <=>  m' >= better + splits - splits / 2
+  const size_t needed = std::max(better_heldout, better_cv) + splits - splits / 2;
+  return std::min(splits, std::max(m + 1, needed));
+}
+
 // Who may be picked: a fit of every view and of the odd/even halves that a lens model can
 // have (fit_max_*). Not the repeated value against fit_max_cross_validation_px: with halves
 // of 2 views one split of a good model can be 9 px off (190 deg lens, 4 views), and weighing
@@ -248,7 +267,8 @@ bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::
     for (size_t r : repeat)
       if (!splits_finished(table[r], K) &&
           (pick >= table.size() || !cannot_change_pick(table[r], table, pick, K, perspective_first, o)))
-        more.push_back({r, table[r].cross_validation_splits_px.size() + 1});
+        more.push_back({r, pick >= table.size() ? table[r].cross_validation_splits_px.size() + 1
+                                                : splits_before_it_can_stop(table[r], table[pick], K, perspective_first)});
     if (more.empty()) break;
     extend_over_splits(pr, fits, table, splits, more, o.parallel);
   }

@@ -86,8 +86,11 @@ ModelFit refine_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& v
 
 ModelFit refine_mei(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
   // On a narrow field, in its radial profile's coordinates (SolveOptions::mei_profile_field_deg).
+  // Their focal length is f / (1 + xi): a seed with xi near -1 (its projection centre near
+  // the sphere's far pole) stays in Mei's own.
   const double limit = pr.solve.mei_profile_field_deg;
-  const bool narrow = limit > 0 && posed_field_deg(pr, views, seed) <= limit;
+  const bool narrow = limit > 0 && seed.model.intrinsics.size() == 9 && seed.model.intrinsics[4] > -0.5 &&
+                      posed_field_deg(pr, views, seed) <= limit;
   return refine_joint(pr, views, seed, narrow ? detail::CeresProjection::MeiProfile : detail::CeresProjection::Mei);
 }
 

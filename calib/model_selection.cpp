@@ -221,8 +221,9 @@ std::vector<char> eligible_rows(const std::vector<ModelCandidate>& table, const 
 // The cross-validation repeated over the splits for every candidate that can matter (the
 // first split, odd/even, is the table's, fitted cold); true when some candidate got a
 // finite repeated value. With `race` (the incumbent rule, at least 3 splits), a raced_type
-// candidate is refitted on the second split first, then on one more at a time while it
-// could change the pick among the candidates with every split (cannot_change_pick): the
+// candidate is refitted on the second split first, then on more (splits_before_it_can_stop
+// a round) while it could change the pick among the candidates with every split
+// (cannot_change_pick): the
 // same pick, at fewer warm refits than 2 (K - 1) for a rich model that loses. Such a row
 // keeps the splits it has, is raced_out, and has no repeated value.
 bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::vector<ModelCandidate>& table,

@@ -203,6 +203,24 @@ double corner_field_deg(const CameraModel& model, const ViewSubset& views) {
   return field;
 }
 
+std::vector<double> posed_corner_angles(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& fit) {
+  std::vector<double> angles;
+  for (size_t i = 0; i < views.size() && i < fit.poses.size(); ++i) {
+    const BoardPose& p = fit.poses[i];
+    cv::Matx33d R;
+    cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
+    const cv::Vec3d t(p[3], p[4], p[5]);
+    const BoardView& v = *views[i];
+    for (size_t k = 0; k < v.px.size(); ++k)
+      if (v.inlier[k]) {
+        const auto b = board_point(pr.board, int(k), fit.warp);
+        const cv::Vec3d c = R * cv::Vec3d(b[0], b[1], b[2]) + t;
+        angles.push_back(std::atan2(std::hypot(c[0], c[1]), c[2]));
+      }
+  }
+  return angles;
+}
+
 double fit_rms(const CalibrationProblem& pr, const ModelFit& f, const ViewSubset& views) {
   std::vector<double> sq;
   for (size_t i = 0; i < views.size(); ++i) {

@@ -113,6 +113,10 @@ double view_squared_error(const CalibrationProblem& problem, const CameraModel& 
 // How far off the axis the boards were seen under `model`: the largest angle (deg) of an
 // inlier corner's unprojected ray; 0 when none unprojects.
 double corner_field_deg(const CameraModel& model, const ViewSubset& views);
+// The angle off the axis (rad) of every inlier corner of `views`, where `fit`'s poses and
+// board warp put it, view by view (views beyond fit.poses are left out): no unprojection.
+std::vector<double> posed_corner_angles(const CalibrationProblem& problem, const ViewSubset& views,
+                                        const ModelFit& fit);
 // RMS (2-D) of a fit over the inliers of its subset; 1e6 px per corner it cannot image.
 double fit_rms(const CalibrationProblem& problem, const ModelFit& fit, const ViewSubset& views);
 

@@ -68,19 +68,7 @@ std::optional<ModelFit> mei_from_kannala_brandt(const CalibrationProblem& pr, co
                                                 const ModelFit& kb) {
   const auto& in = kb.model.intrinsics;
   if (in.size() != 8 || kb.poses.size() != views.size()) return std::nullopt;
-  std::vector<double> thetas;
-  for (size_t i = 0; i < views.size(); ++i) {
-    cv::Matx33d R;
-    cv::Rodrigues(cv::Vec3d(kb.poses[i][0], kb.poses[i][1], kb.poses[i][2]), R);
-    const cv::Vec3d t(kb.poses[i][3], kb.poses[i][4], kb.poses[i][5]);
-    const BoardView& v = *views[i];
-    for (size_t k = 0; k < v.px.size(); ++k)
-      if (v.inlier[k]) {
-        const auto b = board_point(pr.board, int(k), kb.warp);
-        const cv::Vec3d c = R * cv::Vec3d(b[0], b[1], b[2]) + t;
-        thetas.push_back(std::atan2(std::hypot(c[0], c[1]), c[2]));
-      }
-  }
+  const std::vector<double> thetas = posed_corner_angles(pr, views, kb);
   if (thetas.size() < 12) return std::nullopt;
   std::vector<double> d(thetas.size());
   for (size_t j = 0; j < thetas.size(); ++j) {

@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include <opencv2/calib3d.hpp>
-
 #include "calib/ceres_plugin.h"
 #include "calib/mrcal_solve.h"
 
@@ -52,19 +50,8 @@ ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, con
 
 // The widest angle off the axis at which `fit`'s poses put a used corner of `views`, deg.
 double posed_field_deg(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& fit) {
-  double widest = 0;
-  for (size_t i = 0; i < views.size() && i < fit.poses.size(); ++i) {
-    const BoardPose& p = fit.poses[i];
-    cv::Matx33d R;
-    cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
-    for (size_t k = 0; k < views[i]->px.size(); ++k) {
-      if (!views[i]->inlier[k]) continue;
-      const auto b = board_point(pr.board, int(k), fit.warp);
-      const cv::Vec3d C = R * cv::Vec3d(b[0], b[1], b[2]) + cv::Vec3d(p[3], p[4], p[5]);
-      widest = std::max(widest, std::atan2(std::hypot(C[0], C[1]), C[2]));
-    }
-  }
-  return widest * 180 / M_PI;
+  const std::vector<double> angles = posed_corner_angles(pr, views, fit);
+  return angles.empty() ? 0.0 : *std::max_element(angles.begin(), angles.end()) * 180 / M_PI;
 }
 
 // mrcal's polish of a cv::calibrateCamera fit, from its rounded seed; OpenCV's solution

@@ -63,19 +63,25 @@ struct MeiProjection {
 // moves only the theta^7 terms: 28. The map is one to one for s > 0; the same model.
 struct MeiProfileProjection {
   static constexpr int kParams = 9;
+  // A(s) and B(s) above.
+  template <typename T>
+  static T a_of(const T& s) {
+    return T(1) / (T(2) * s) - T(1.0 / 6);
+  }
+  template <typename T>
+  static T b_of(const T& s) {
+    return T(1) / (T(4) * s * s) - T(1) / (T(8) * s) + T(1.0 / 120);
+  }
   template <typename T>
   static void to_mei(const T* u, T* in) {
-    const T s = T(1) + u[4], s2 = s * s;
-    const T a = T(1) / (T(2) * s) - T(1.0 / 6);
-    const T b = T(1) / (T(4) * s2) - T(1) / (T(8) * s) + T(1.0 / 120);
+    const T s = T(1) + u[4], s2 = s * s, a = a_of(s), b = b_of(s);
     in[0] = u[0] * s, in[1] = u[1] * s, in[2] = u[2], in[3] = u[3], in[4] = u[4];
     in[5] = (u[5] - a) * s2;
     in[6] = (u[6] - b - T(3) * a * (u[5] - a)) * s2 * s2;
     in[7] = u[7], in[8] = u[8];
   }
   static void from_mei(const double* in, double* u) {
-    const double s = 1 + in[4], s2 = s * s;
-    const double a = 1 / (2 * s) - 1.0 / 6, b = 1 / (4 * s2) - 1 / (8 * s) + 1.0 / 120;
+    const double s = 1 + in[4], s2 = s * s, a = a_of(s), b = b_of(s);
     u[0] = in[0] / s, u[1] = in[1] / s, u[2] = in[2], u[3] = in[3], u[4] = in[4];
     u[5] = a + in[5] / s2;
     u[6] = b + 3 * a * in[5] / s2 + in[6] / (s2 * s2);
@@ -230,7 +236,7 @@ struct MeiProfileCornerCost final : HandWrittenCornerCost<9> {
     if (!jacobians || !jacobians[0]) return true;
     // d(fx, fy, k1, k2) / d(gx, gy, xi, c3, c5); cx, cy, p1, p2 are the same.
     const double s = 1 + u[4], s2 = s * s, s3 = s2 * s, s4 = s2 * s2;
-    const double a = 1 / (2 * s) - 1.0 / 6, b = 1 / (4 * s2) - 1 / (8 * s) + 1.0 / 120;
+    const double a = MeiProfileProjection::a_of(s), b = MeiProfileProjection::b_of(s);
     const double da = -1 / (2 * s2), db = -1 / (2 * s3) + 1 / (8 * s2);
     const double dk1_dxi = -da * s2 + 2 * (u[5] - a) * s;
     const double k2_core = u[6] - b - 3 * a * (u[5] - a);

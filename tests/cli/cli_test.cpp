@@ -494,6 +494,16 @@ TEST(Cli, GeometricCalibrationRecoversASyntheticFisheyeAndRefusesBadSets) {
   EXPECT_EQ(j["selection"]["ranked_on"], "cross_validation_repeated_px");
   EXPECT_EQ(j["selection"]["splits"].get<int>(), 8);
   bool chosen_row = false;
+  for (const auto& row : j["table"]) {
+    // A row the race stopped (SelectionOptions::race_dear_candidates) holds only the splits
+    // it was fitted on and no repeated value; every row says whether it was.
+    ASSERT_TRUE(row["raced_out"].is_boolean()) << row["model"];
+    if (row["raced_out"].get<bool>()) {
+      EXPECT_NE(row["model"], j["selected"]);
+      EXPECT_LT(row["cross_validation_splits_px"].size(), 8u) << row["model"];
+      EXPECT_TRUE(row["cross_validation_repeated_px"].is_null()) << row["model"];
+    }
+  }
   for (const auto& row : j["table"])
     if (row["model"] == j["selected"]) {
       chosen_row = true;

@@ -54,13 +54,14 @@ struct SeedOptions {
   double kb_central_radius = 0.45;
   // Kannala-Brandt's seed: at most this many iterations of cv::fisheye's own solver. It is a
   // seed, which the Ceres refinement takes to convergence, and cv::fisheye re-solves every
-  // view's homography and extrinsics in each iteration (~65 ms an iteration on 32 views). On
-  // the seven shared sets it meets its tolerance within 30 (their reports are the same byte
-  // for byte as at 200); on the 190 deg synthetic views it never does, and its 200 were 2.1 s
-  // of a forced 32-view calibration's 3.9. Refined, the fits are one minimum (the same RMS to
-  // 1e-12 px, 1e-6 px apart), also where cv::fisheye, run to 200 on every corner, gives up and
-  // the seed falls back to the central ones, and stopped at 30 it seeds from every corner.
-  int fisheye_iterations = 30;
+  // view's homography and extrinsics in each iteration (~65 ms an iteration on 32 views).
+  // Refined, the fits are one minimum whether cv::fisheye stops at 200, 30 or 5: at 200 vs 30
+  // the same RMS to 1e-12 px, also where cv::fisheye, run to 200 on every corner, gives up
+  // and the seed falls back to the central ones; at 30 vs 5 every report of the seven shared
+  // sets and of the synthetic 8-64 views agrees to 6e-6 relative (3 still does). A narrow lens
+  // used all 30 (stereo: 143 ms of CPU for its 13 views, 49 at 5). On a mirror, where
+  // Kannala-Brandt cannot fit, 5 may return a fit that is then screened out where 30 threw.
+  int fisheye_iterations = 5;
   // The splined model's field of view: the stereographic seed's horizontal field times this
   // margin (so that the image's edge columns fall inside the spline's domain).
   double spline_fov_margin = 1.05;

@@ -61,10 +61,10 @@ struct SolveOptions {
   // "Board warp"). OpenCV's closed-form seeds are flat.
   bool board_warp = true;
   // Mei's seed (calibration_seed.h): from the Kannala-Brandt fit of the same views where that
-  // fits them within 1 px, else cv::omnidir. calibrate() with the automatic choice decides it
-  // once, from Kannala-Brandt on the outlier stage's sample (reject_outliers), so that every
-  // Mei fit of one calibration is seeded alike; false (cv::omnidir only) for a requested model
-  // and any other caller.
+  // fits them within 1 px, else the unit-xi search (mei_unit_xi_seed). calibrate() with the
+  // automatic choice decides it once, from Kannala-Brandt on the outlier stage's sample
+  // (reject_outliers), so that every Mei fit of one calibration is seeded alike; false (the
+  // unit-xi search only) for a requested model and any other caller.
   bool mei_from_kannala_brandt = false;
   // Mei is refined in the coordinates of its radial profile (f / (1 + xi), its theta^3 and
   // theta^5 coefficients, xi) where its seed sees every corner within this many degrees of

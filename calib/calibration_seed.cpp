@@ -112,7 +112,8 @@ std::optional<ModelFit> mei_from_kannala_brandt(const CalibrationProblem& pr, co
   return f;
 }
 
-SeedReport seed_mei(const CalibrationProblem& pr, const ViewSubset& views, const SolvedFit& solved) {
+SeedReport seed_mei(const CalibrationProblem& pr, const ViewSubset& views, const SolvedFit& solved,
+                    const SeedOptions& options) {
   SeedReport s;
   // From the Kannala-Brandt fit where it describes the lens (SolveOptions::
   // mei_from_kannala_brandt): no cv::omnidir, whose plugin alone loads 160 libraries (its
@@ -126,6 +127,10 @@ SeedReport seed_mei(const CalibrationProblem& pr, const ViewSubset& views, const
         s.fit = *f;
         return s;
       }
+  }
+  if (options.mei_unit_xi) {
+    s.fit = mei_unit_xi_seed(pr, views);
+    if (s.fit.ok) return s;
   }
   std::vector<char> has_pose;
   // 30 iterations of cv::omnidir's own solver, not 300: this is a seed, which the Ceres
@@ -212,6 +217,53 @@ SeedReport seed_splined(const CalibrationProblem& pr, const SolvedFit& solved, c
 }
 
 }  // namespace
+
+ModelFit mei_unit_xi_seed(const CalibrationProblem& pr, const ViewSubset& views, size_t probe_views) {
+  const double cx = (pr.width - 1) / 2.0, cy = (pr.height - 1) / 2.0;
+  const ViewSubset probe = evenly_spaced(views, std::max<size_t>(1, probe_views));
+  const auto with_gamma = [&](double gamma) {
+    ModelFit f;
+    f.model = make_model(pr, lens_type_name(LensType::OmnidirMei), {gamma, gamma, cx, cy, 1, 0, 0, 0, 0});
+    f.params = 9;
+    f.solver = "unit-xi search";
+    f.ok = true;
+    return f;
+  };
+  const auto cost = [&](double log_gamma) { return heldout_rms(pr, with_gamma(std::exp(log_gamma)), probe); };
+  double r_max = 0;
+  for (const BoardView* v : probe)
+    for (size_t k = 0; k < v->px.size(); ++k)
+      if (v->inlier[k]) r_max = std::max(r_max, std::hypot(v->px[k][0] - cx, v->px[k][1] - cy));
+  ModelFit f;
+  f.error = "no generalised focal length poses the views at xi = 1";
+  if (!(r_max > 0)) return f;
+  const double step = std::log(2.0);
+  double best_x = 0, best = HUGE_VAL;
+  for (double x = std::log(0.2 * r_max); x <= std::log(16 * r_max) + 1e-9; x += step)
+    if (const double c = cost(x); c < best) best = c, best_x = x;
+  if (!std::isfinite(best)) return f;
+  // Golden section on [best - step, best + step]: 4 steps narrow it to 0.15 of a grid step,
+  // ample for a seed the joint refinement takes to convergence.
+  const double phi = (std::sqrt(5.0) - 1) / 2;
+  double a = best_x - step, b = best_x + step;
+  double x1 = b - phi * (b - a), x2 = a + phi * (b - a), c1 = cost(x1), c2 = cost(x2);
+  for (int it = 0; it < 4; ++it) {
+    if (c1 < c2) {
+      b = x2, x2 = x1, c2 = c1;
+      x1 = b - phi * (b - a), c1 = cost(x1);
+    } else {
+      a = x1, x1 = x2, c1 = c2;
+      x2 = a + phi * (b - a), c2 = cost(x2);
+    }
+  }
+  const double x = std::min({c1, c2, best}) == best ? best_x : c1 < c2 ? x1 : x2;
+  f = with_gamma(std::exp(x));
+  f.poses.assign(views.size(), BoardPose{});
+  const std::vector<char> unposed(views.size(), 0);
+  int reposed = 0;
+  if (!repose_views(pr, views, unposed, f, &reposed, "unit-xi")) f.ok = false;
+  return f;
+}
 
 ModelFit opencv_fisheye(const CalibrationProblem& pr, const ViewSubset& views,
                         const std::function<bool(const std::array<double, 2>&)>& use, std::vector<char>* has_pose,
@@ -406,7 +458,7 @@ SeedReport seed_candidate(const CalibrationProblem& pr, const ViewSubset& views,
     case LensType::KannalaBrandt:
       return seed_kannala_brandt(pr, views, options);
     case LensType::OmnidirMei:
-      return seed_mei(pr, views, solved);
+      return seed_mei(pr, views, solved, options);
     case LensType::Pinhole:
     case LensType::OpenCV5:
     case LensType::OpenCV8:

@@ -141,8 +141,8 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
   // How Mei is seeded in this calibration (SolveOptions::mei_from_kannala_brandt), decided
   // once from Kannala-Brandt on the reference sample, before any Mei fit: that fit is one of
   // the references the automatic choice fits anyway. A requested model (options.model) keeps
-  // cv::omnidir: a forced Mei is nearly always a catadioptric lens, where the extra
-  // Kannala-Brandt fit cost 16 % of the command (VMRImage) and would decide for cv::omnidir.
+  // the unit-xi search: a forced Mei is nearly always a catadioptric lens, where the extra
+  // Kannala-Brandt fit cost 16 % of the command (VMRImage) and would decide against it.
   // The other references do not depend on the decision: they are fitted on the sample beside
   // Kannala-Brandt and Mei (one job: Kannala-Brandt, the decision, Mei), so that the decision
   // waits for none of them (on fisheye1 the rational model's fit is 0.39 s, Kannala-Brandt's
@@ -164,8 +164,8 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
     // waits only while another thread runs it).
     std::once_flag wide_once;
     WideField wide;
-    // Mei seeded by cv::omnidir, as the chain solves it when Kannala-Brandt does not decide
-    // for its own seed; shared, so that a perspective reference's job whose seed misses the
+    // Mei seeded without Kannala-Brandt (the unit-xi search), as the chain solves it when
+    // Kannala-Brandt does not decide for its own seed; shared, so that a perspective reference's job whose seed misses the
     // corners (a lens the chain will likely find too wide for it) can solve it ahead of the
     // chain, on the core that would wait (MiniOmni: Kannala-Brandt's 0.18 s, then Mei's 0.12,
     // had run one after the other). The same solve whichever thread makes it.
@@ -237,11 +237,12 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
     const ModelFit& f = fitter.get(*ref);
     // Kannala-Brandt always; Mei where its xi is pinned: seeded from Kannala-Brandt (a narrow
     // lens), or corners seen beyond kMeiFromKannalaBrandtFieldDeg under its own fit (a mirror,
-    // a wide lens). A Mei seeded by cv::omnidir on a narrow lens walks its xi/focal valley:
+    // a wide lens). A Mei seeded otherwise on a narrow lens walks its xi/focal valley:
     // on Ladybug, when it was seeded so, warm rounds moved it by 0.17 px RMS and flagged
     // other corners. On the mirrors the warm rounds flag the same corners as the cold ones
     // did until stop 41, and a forced Mei calibration of KaidanOmni or MiniOmni takes 0.55-0.59
-    // of the time (each cold round was a cv::omnidir seed and a Ceres solve).
+    // of the time (each cold round was a cv::omnidir seed and a Ceres solve, before stop 46's
+    // unit-xi search).
     if (round == 0)
       rep.reference_warm = *ref == LensType::KannalaBrandt ||
                            (*ref == LensType::OmnidirMei &&

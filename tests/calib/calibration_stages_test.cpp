@@ -706,12 +706,63 @@ TEST(CandidateSolver, KannalaBrandtsFiveIterationSeedReachesTheThirtyOnesMinimum
   EXPECT_LT(d, 1e-3);
 }
 
+// Mei's seed where Kannala-Brandt does not give it (wide lenses, mirrors): the unit-xi search
+// (xi = 1, no distortion, the generalised focal length that poses four views best), refined,
+// ends in the minimum that cv::omnidir's seed, refined, ends in: on a synthetic mirror-like
+// lens seen to 75 deg and on the shared 190-degree and KaidanOmni mirror sets. The search
+// itself is ~15 ms; cv::omnidir's plugin alone loads 160 libraries (85 ms).
+TEST(CandidateSolver, MeiFromTheUnitXiSearchEndsWhereCvOmnidirsSeedEnds) {
+  struct Case {
+    std::string name;
+    std::vector<std::vector<std::array<double, 2>>> corners;
+    CalibrationProblem pr;
+  };
+  std::vector<Case> cases;
+  {
+    const CameraModel lens{"LENSMODEL_OMNIDIR_MEI", {540, 541, 640.5, 479.5, 1.1, -0.05, 0.01, 0, 0}, 1280, 960};
+    cases.push_back({"synthetic xi 1.1", project_board_views(lens, kBoard, 12, 75, 600, 0.2, 6), problem_for(lens)});
+  }
+  for (const calib_test::RealSet& set : calib_test::real_sets()) {
+    if (std::string(set.name) != "Fisheye190deg" && std::string(set.name) != "KaidanOmni") continue;
+    const calib_test::RealSetViews rs = calib_test::real_set_views(set);
+    if (rs.views.empty()) continue;
+    CalibrationProblem pr;
+    pr.board = set.board;
+    pr.width = rs.width;
+    pr.height = rs.height;
+    cases.push_back({set.name, rs.views, pr});
+  }
+  for (const Case& k : cases) {
+    const auto views = make_board_views(k.corners, k.pr, "test", true);
+    const ViewSubset all = all_of(views);
+    SeedOptions unit_xi, omnidir;
+    omnidir.mei_unit_xi = false;
+    const SeedReport a = seed_candidate(k.pr, all, LensType::OmnidirMei, {}, unit_xi);
+    const SeedReport b = seed_candidate(k.pr, all, LensType::OmnidirMei, {}, omnidir);
+    ASSERT_TRUE(a.fit.ok && b.fit.ok) << k.name << ": " << a.fit.error << b.fit.error;
+    EXPECT_EQ(a.fit.solver, "unit-xi search") << k.name;
+    EXPECT_EQ(b.fit.solver.rfind("cv::omnidir", 0), 0u) << k.name << ": " << b.fit.solver;
+    EXPECT_EQ(a.fit.model.intrinsics[4], 1.0) << k.name;
+    const ModelFit fa = refine_seed(k.pr, all, LensType::OmnidirMei, a.fit);
+    const ModelFit fb = refine_seed(k.pr, all, LensType::OmnidirMei, b.fit);
+    ASSERT_TRUE(fa.ok && fb.ok) << k.name << ": " << fa.error << fb.error;
+    const double ra = fit_rms(k.pr, fa, all), rb = fit_rms(k.pr, fb, all);
+    const double d = projection_difference(fa.model, fb.model, coverage_mask(k.pr, all), 8).rms_px;
+    std::printf("  %s: seed RMS %.3f px (unit xi, gamma %.1f), %.3f (cv::omnidir); refined %.9f and %.9f px, %.2g px apart\n",
+                k.name.c_str(), fit_rms(k.pr, a.fit, all), a.fit.model.intrinsics[0], fit_rms(k.pr, b.fit, all), ra, rb,
+                d);
+    EXPECT_NEAR(ra, rb, 1e-6 * rb) << k.name;
+    EXPECT_LT(d, 1e-3) << k.name;
+  }
+  EXPECT_GE(cases.size(), 1u);
+}
+
 // SolveOptions::mei_from_kannala_brandt: on a narrow lens (the wide plumb_bob lens of the
 // selection tests, boards within 30 deg of the axis) the outlier
 // stage decides it, and Mei is seeded from the Kannala-Brandt fit without cv::omnidir; its
-// refined fit is as good as the cv::omnidir-seeded one (xi is barely observable there, so the
+// refined fit is as good as the unit-xi-seeded one (xi is barely observable there, so the
 // two end at different points of one flat minimum: the RMS is compared, not xi). A 190-degree
-// lens keeps cv::omnidir.
+// lens keeps the unit-xi search.
 TEST(CandidateSolver, MeiOnANarrowLensIsSeededFromKannalaBrandt) {
   const CameraModel lens{"LENSMODEL_OPENCV5", {600, 601, 639.2, 481.7, -0.28, 0.09, 4e-4, -3e-4, -0.012}, 1280, 960};
   const auto corners = project_board_views(lens, kBoard, 12, 30, 800, 0.2, 6);
@@ -728,7 +779,7 @@ TEST(CandidateSolver, MeiOnANarrowLensIsSeededFromKannalaBrandt) {
   EXPECT_EQ(a.solver.find("Kannala-Brandt"), std::string::npos) << a.solver;
   EXPECT_NE(b.solver.find("Kannala-Brandt fit"), std::string::npos) << b.solver;
   const double ra = fit_rms(pr, a, all_of(views)), rb = fit_rms(pr, b, all_of(views));
-  std::printf("  Mei RMS %.5f px from cv::omnidir, %.5f from Kannala-Brandt (xi %.3f, %.3f)\n", ra, rb,
+  std::printf("  Mei RMS %.5f px from the unit-xi search, %.5f from Kannala-Brandt (xi %.3f, %.3f)\n", ra, rb,
               a.model.intrinsics[4], b.model.intrinsics[4]);
   EXPECT_LE(rb, ra * 1.002);
   EXPECT_LT(rb, 0.3);  // the corners' 0.2 px noise a coordinate: 0.28 px in 2-D
@@ -741,8 +792,8 @@ TEST(CandidateSolver, MeiOnANarrowLensIsSeededFromKannalaBrandt) {
 }
 
 // OutlierReport::reference_warm: Mei's rounds re-solve warm where its xi is pinned and cold
-// where cv::omnidir seeds it on a narrow lens (its xi/focal valley). Mei is the requested
-// model here, so cv::omnidir seeds it on both lenses (no Kannala-Brandt sample is fitted):
+// where the unit-xi search seeds it on a narrow lens (its xi/focal valley). Mei is the requested
+// model here, so that search seeds it on both lenses (no Kannala-Brandt sample is fitted):
 // the warm rounds come from the field alone, beyond 45 deg on the wide Mei lens, within 30 on
 // the selection tests' wide plumb_bob lens seen near its axis. A gross outlier on each makes a second round run; the warm rounds
 // flag the same corner as outliers.

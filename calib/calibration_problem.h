@@ -75,6 +75,16 @@ struct SolveOptions {
   // 69 deg: 37 -> 118 iterations a solve), hence 60, the selection's perspective_field_deg.
   // 0: never.
   double mei_profile_field_deg = 60;
+  // Kannala-Brandt's Ceres refinement, from this iteration on, stops once 10 iterations
+  // gained less than 1 % of the cost (0: runs to the cap of 200, as Mei's). Where it fits
+  // the lens it converges in 5-9 (every shared set, synthetic 8-64 views of the 190 deg
+  // lens); on a mirror it cannot fit, and the misfit crawled to the cap (230 ms on MiniOmni's
+  // 15 views, on the reference choice's critical path, and twice more in the candidate
+  // stage), 258198 px off at 65 iterations (where it stalls) and at 200. A crawl can end
+  // somewhere better: on MiniOmni's 7-view sample Kannala-Brandt stalls at 8.3 px, and ran on
+  // to 0.37 px at 104 iterations, a mirror's half it fits but cannot fit whole (11.2 px); it
+  // is now screened out on the sample instead of on every view.
+  int kannala_brandt_stall_after = 50;
 };
 
 struct CalibrationProblem {

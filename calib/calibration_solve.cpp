@@ -13,7 +13,7 @@ namespace {
 // the board warp from `seed` (Ceres, in the plugin of calib/ceres_plugin.h); the seed when it
 // fails or does not improve.
 ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed,
-                      detail::CeresProjection projection) {
+                      detail::CeresProjection projection, int stall_after = 0) {
   ModelFit f = seed;
   if (!pr.solve.board_warp) f.warp = {0, 0};
   std::vector<detail::CeresCorner> corners;
@@ -36,6 +36,7 @@ ModelFit refine_joint(const CalibrationProblem& pr, const ViewSubset& views, con
   problem.poses = poses.data();
   problem.warp = f.warp.data();
   problem.fit_warp = pr.solve.board_warp;
+  problem.stall_after = stall_after;
   f.warp_fitted = pr.solve.board_warp;
   // Ceres and its 17 libraries are loaded by the first solve (calib/ceres_plugin.h).
   const detail::CeresSolveSummary summary = detail::ceres_plugin().solve_joint(problem);
@@ -68,7 +69,7 @@ ModelFit polish(const CalibrationProblem& pr, const ViewSubset& views, const Mod
 }  // namespace
 
 ModelFit refine_kannala_brandt(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {
-  return refine_joint(pr, views, seed, detail::CeresProjection::KannalaBrandt);
+  return refine_joint(pr, views, seed, detail::CeresProjection::KannalaBrandt, pr.solve.kannala_brandt_stall_after);
 }
 
 ModelFit refine_mei(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& seed) {

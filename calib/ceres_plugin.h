@@ -45,6 +45,10 @@ struct CeresJointSolve {
   double* const* poses = nullptr;  // one Rodrigues r, t (6 values) per view, solved in place
   double* warp = nullptr;          // the board warp {x2, y2}, solved in place when fit_warp
   bool fit_warp = false;
+  // From this iteration on (0: never), the solve stops when the cost fell by less than 1 %
+  // over the last 10 iterations: a fit that has converged that far, or one crawling towards
+  // a misfit (SolveOptions::kannala_brandt_stall_after).
+  int stall_after = 0;
 };
 struct CeresSolveSummary {
   bool usable = false;  // ceres::Solver::Summary::IsSolutionUsable()
@@ -86,7 +90,7 @@ struct CeresPluginTable {
   double (*jacobian_mismatch)(CeresProjection projection, const double* intrinsics, const double* pose,
                               const double* warp, const CeresCorner& corner);
 };
-inline constexpr int kCeresPluginVersion = 4;
+inline constexpr int kCeresPluginVersion = 5;
 inline constexpr const char* kCeresPluginFile = "liblightprobe_ceres.so";
 
 // The plugin's table, loaded once; throws std::runtime_error when it cannot be loaded.

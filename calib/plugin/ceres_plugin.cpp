@@ -359,6 +359,21 @@ CeresSolveSummary solve_joint_with(const CeresJointSolve& jp) {
   o.parameter_tolerance = 1e-10;
   o.logging_type = ceres::SILENT;
   o.minimizer_progress_to_stdout = false;
+  // CeresJointSolve::stall_after: the cost of every iteration so far, and a stop once the
+  // last 10 gained less than 1 % after that many.
+  struct StallStop : ceres::IterationCallback {
+    int after = 0;
+    std::vector<double> costs;
+    ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+      costs.push_back(s.cost);
+      const size_t n = costs.size();
+      if (after > 0 && n > size_t(after) && n > 10 && costs[n - 1] > 0.99 * costs[n - 11])
+        return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+      return ceres::SOLVER_CONTINUE;
+    }
+  } stall;
+  stall.after = jp.stall_after;
+  if (jp.stall_after > 0) o.callbacks.push_back(&stall);
   ceres::Solver::Summary summary;
   ceres::Solve(o, &problem, &summary);
   if constexpr (profile) MeiProfileProjection::to_mei(profile_block, jp.intrinsics);

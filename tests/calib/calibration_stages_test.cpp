@@ -324,6 +324,44 @@ TEST(CalibrationSolve, MeiOnANarrowFieldIsSolvedInItsProfileCoordinatesToTheSame
   EXPECT_EQ(fa.iterations, fb.iterations);
 }
 
+// SolveOptions::kannala_brandt_stall_after (50): where Kannala-Brandt fits the lens it
+// converges well before (stereo: the same fit as without the rule, bit for bit); on a mirror
+// it cannot fit (MiniOmni), the misfit stops once it stalls instead of crawling to the cap
+// of 200, screened out either way (thousands of px off).
+TEST(CalibrationSolve, KannalaBrandtStopsWhereItStallsOnAMirrorAndConvergesBeforeOnALens) {
+  for (const calib_test::RealSet& set : calib_test::real_sets()) {
+    const std::string name = set.name;
+    if (name != "stereo left" && name != "MiniOmni") continue;
+    const calib_test::RealSetViews rs = calib_test::real_set_views(set);
+    if (rs.views.empty()) GTEST_SKIP() << "no images in " << set.dir;
+    CalibrationProblem stall;
+    stall.board = set.board;
+    stall.width = rs.width;
+    stall.height = rs.height;
+    ASSERT_EQ(stall.solve.kannala_brandt_stall_after, 50);
+    CalibrationProblem to_the_cap = stall;
+    to_the_cap.solve.kannala_brandt_stall_after = 0;
+    const auto views = make_board_views(rs.views, stall, "test", true);
+    const ViewSubset all = all_of(views);
+    CandidateSolver a(stall, all), b(to_the_cap, all);
+    const ModelFit &fa = a.get(LensType::KannalaBrandt), &fb = b.get(LensType::KannalaBrandt);
+    ASSERT_TRUE(fa.ok && fb.ok) << name << ": " << fa.error << fb.error;
+    const double ra = fit_rms(stall, fa, all), rb = fit_rms(stall, fb, all);
+    std::printf("  %s: %d iterations, RMS %.4f px (stall rule); %d, RMS %.4f px (to the cap)\n", name.c_str(),
+                fa.iterations, ra, fb.iterations, rb);
+    if (name == "stereo left") {
+      EXPECT_LT(fa.iterations, 20);
+      EXPECT_EQ(fa.model.intrinsics, fb.model.intrinsics);
+    } else {
+      EXPECT_GT(fa.iterations, 50);   // Ceres counts the seed as iteration 0
+      EXPECT_LT(fa.iterations, 100);
+      EXPECT_EQ(fb.iterations, 201);  // the cap
+      EXPECT_GT(ra, 1000.0);          // a misfit either way, the screening's 1.5 px far below
+      EXPECT_GT(rb, 1000.0);
+    }
+  }
+}
+
 TEST(CalibrationSolve, JointSolveReachesTheTruthFromAPerturbedSeedAndWarmEqualsCold) {
   const CameraModel truth = kb190();
   const auto corners = project_board_views(truth, kBoard, 12, 80, 600, 0.0, 7, 93);  // noise-free, to 93 deg

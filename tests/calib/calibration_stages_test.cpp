@@ -334,10 +334,7 @@ TEST(CalibrationSolve, KannalaBrandtStopsWhereItStallsOnAMirrorAndConvergesBefor
     if (name != "stereo left" && name != "MiniOmni") continue;
     const calib_test::RealSetViews rs = calib_test::real_set_views(set);
     if (rs.views.empty()) GTEST_SKIP() << "no images in " << set.dir;
-    CalibrationProblem stall;
-    stall.board = set.board;
-    stall.width = rs.width;
-    stall.height = rs.height;
+    const CalibrationProblem stall = calib_test::real_set_problem(set, rs);
     ASSERT_EQ(stall.solve.kannala_brandt_stall_after, 50);
     CalibrationProblem to_the_cap = stall;
     to_the_cap.solve.kannala_brandt_stall_after = 0;
@@ -720,10 +717,7 @@ TEST(CandidateSolver, KannalaBrandtsFiveIterationSeedReachesTheThirtyOnesMinimum
   ASSERT_EQ(std::string(set.name), "stereo left");
   const calib_test::RealSetViews rs = calib_test::real_set_views(set);
   if (rs.views.empty()) GTEST_SKIP() << "no images in " << set.dir;
-  CalibrationProblem pr;
-  pr.board = set.board;
-  pr.width = rs.width;
-  pr.height = rs.height;
+  const CalibrationProblem pr = calib_test::real_set_problem(set, rs);
   const auto views = make_board_views(rs.views, pr, "test", true);
   const ViewSubset all = all_of(views);
   SeedOptions five, thirty;
@@ -764,11 +758,7 @@ TEST(CandidateSolver, MeiFromTheUnitXiSearchEndsWhereCvOmnidirsSeedEnds) {
     if (std::string(set.name) != "Fisheye190deg" && std::string(set.name) != "KaidanOmni") continue;
     const calib_test::RealSetViews rs = calib_test::real_set_views(set);
     if (rs.views.empty()) continue;
-    CalibrationProblem pr;
-    pr.board = set.board;
-    pr.width = rs.width;
-    pr.height = rs.height;
-    cases.push_back({set.name, rs.views, pr});
+    cases.push_back({set.name, rs.views, calib_test::real_set_problem(set, rs)});
   }
   for (const Case& k : cases) {
     const auto views = make_board_views(k.corners, k.pr, "test", true);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "calib/board_detect.h"
+#include "calib/calibration_problem.h"
 #include "calib/camera_model.h"
 
 namespace lp::calib_test {
@@ -92,6 +93,15 @@ inline RealSetViews real_set_views(const RealSet& set) {
   out.width = det.width;
   out.height = det.height;
   return out;
+}
+
+// The calibration problem of a real set's views: its board and image size, default options.
+inline CalibrationProblem real_set_problem(const RealSet& set, const RealSetViews& views) {
+  CalibrationProblem pr;
+  pr.board = set.board;
+  pr.width = views.width;
+  pr.height = views.height;
+  return pr;
 }
 
 }  // namespace lp::calib_test

@@ -242,8 +242,8 @@ ModelFit mei_unit_xi_seed(const CalibrationProblem& pr, const ViewSubset& views,
   for (double x = std::log(0.2 * r_max); x <= std::log(16 * r_max) + 1e-9; x += step)
     if (const double c = cost(x); c < best) best = c, best_x = x;
   if (!std::isfinite(best)) return f;
-  // Golden section on [best - step, best + step]: 4 steps narrow it to 0.15 of a grid step,
-  // ample for a seed the joint refinement takes to convergence.
+  // Golden section on [best - step, best + step]: its two first points and 4 steps narrow it
+  // to 0.18 of a grid step, ample for a seed the joint refinement takes to convergence.
   const double phi = (std::sqrt(5.0) - 1) / 2;
   double a = best_x - step, b = best_x + step;
   double x1 = b - phi * (b - a), x2 = a + phi * (b - a), c1 = cost(x1), c2 = cost(x2);

@@ -223,9 +223,8 @@ std::vector<char> eligible_rows(const std::vector<ModelCandidate>& table, const 
 // finite repeated value. With `race` (the incumbent rule, at least 3 splits), a raced_type
 // candidate is refitted on the second split first, then on more (splits_before_it_can_stop
 // a round) while it could change the pick among the candidates with every split
-// (cannot_change_pick): the
-// same pick, at fewer warm refits than 2 (K - 1) for a rich model that loses. Such a row
-// keeps the splits it has, is raced_out, and has no repeated value.
+// (cannot_change_pick): the same pick, at fewer warm refits than 2 (K - 1) for a rich model
+// that loses. Such a row keeps the splits it has, is raced_out, and has no repeated value.
 bool repeat_over_splits(const CalibrationProblem& pr, CandidateFits& fits, std::vector<ModelCandidate>& table,
                         const std::vector<std::vector<int>>& splits, double best_odd_even, bool race,
                         const std::vector<char>& eligible, bool perspective_first, const SelectionOptions& o,

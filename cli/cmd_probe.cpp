@@ -268,7 +268,7 @@ std::vector<Command> probe_commands() {
          f.flag("--fixed-ball", a->fixed_ball, "Sequences: no tracking, frame 0's geometry for all (for comparison)");
          f.opt("--colour-match", a->colour_match, "3x3 colour transform to the backplate (calib colour)");
          f.opt("--codes", a->codes, "Camera images (PNG, JPEG, TIFF): how codes encode light, made linear before unwrapping: srgb (8-bit default), linear, or a response.json from hdr response; 16-bit images need it");
-         f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers");
+         f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers (recorded in the map)");
          f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
          f.opt("--size", a->size, "WxH");
          f.opt("--nside", a->nside, "healpix nside");

@@ -42,6 +42,10 @@ struct EnvMap {
   std::vector<float> rgb;      // 3 floats per pixel, radiance
   std::vector<uint8_t> valid;  // empty: every pixel valid; else one 0/1 per pixel
   Units units = Units::Relative;
+  // The probe's camera-to-world rotation it was unwrapped with (CONVENTIONS.md: part of the
+  // probe's metadata), recorded in the file. Metadata only: the pixels are in the world frame
+  // whatever it holds, and maps made otherwise have none.
+  std::optional<Mat3> world_from_probe;
 
   size_t pixel_count() const { return size_t(width) * size_t(height); }
   bool is_valid(size_t i) const { return valid.empty() || valid[i] != 0; }

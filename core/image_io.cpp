@@ -12,6 +12,7 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfIntAttribute.h>
+#include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
 #include <ImfRgbaFile.h>
 #include <ImfStandardAttributes.h>
@@ -54,6 +55,10 @@
 namespace lp {
 
 namespace {
+
+// The EXR attribute of EnvMap::world_from_probe: a 3x3 double matrix, row-major as Mat3
+// (OpenImageIO shows it as a matrix33 "lightprobe.world_from_probe").
+constexpr const char* kExrRotationKey = "lightprobe.world_from_probe";
 
 [[noreturn]] void fail(const std::string& path, const std::string& problem) {
   throw InputError(path + ": " + problem);
@@ -133,6 +138,7 @@ struct RawImage {
   std::optional<std::string> layout;  // as recorded in the file
   std::optional<std::string> units;
   std::optional<int> nside;
+  std::optional<Mat3> world_from_probe;
   std::string layout_key = "layout";  // how the file names the field, for messages
   // Said once the file is accepted (finish_map), so that a file refused after all says one line.
   std::vector<std::string> warnings;
@@ -212,6 +218,11 @@ EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions&
     const auto units = units_from_string(*raw.units);
     if (!units) fail(path, fmt::format("unknown units '{}' (expected relative or radiance)", one_line(*raw.units, 40)));
     map.units = *units;
+  }
+  if (raw.world_from_probe) {
+    if (!is_rotation(*raw.world_from_probe))
+      fail(path, "the recorded probe rotation (world_from_probe) is not a rotation matrix");
+    map.world_from_probe = raw.world_from_probe;
   }
   if (layout == Layout::Healpix) {
     const int nside = raw.width;
@@ -452,6 +463,12 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   if (auto* a = header.findTypedAttribute<Imf::StringAttribute>("lightprobe.layout")) raw.layout = a->value();
   if (auto* a = header.findTypedAttribute<Imf::StringAttribute>("lightprobe.units")) raw.units = a->value();
   if (auto* a = header.findTypedAttribute<Imf::IntAttribute>("lightprobe.nside")) raw.nside = a->value();
+  if (auto* a = header.findTypedAttribute<Imf::M33dAttribute>(kExrRotationKey)) {
+    Mat3 r;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) r.m[size_t(3 * i + j)] = a->value()[i][j];
+    raw.world_from_probe = r;
+  }
 
   const Imf::ChannelList& channels = header.channels();
   // Channels of the layer read: the file's own R, G, B (A, Y, RY, BY), or, when it has none,
@@ -561,6 +578,11 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
     header.insert("lightprobe.layout", Imf::StringAttribute(std::string(to_string(map.layout))));
   header.insert("lightprobe.units", Imf::StringAttribute(std::string(to_string(map.units))));
   if (map.layout == Layout::Healpix) header.insert("lightprobe.nside", Imf::IntAttribute(map.nside));
+  if (map.world_from_probe) {
+    const Mat3& r = *map.world_from_probe;
+    header.insert(kExrRotationKey, Imf::M33dAttribute(Imath::M33d(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2),
+                                                                   r(2, 0), r(2, 1), r(2, 2))));
+  }
 
   // The frame buffer must hold the file's pixel type: convert to half here when needed.
   std::vector<float> alpha;
@@ -686,6 +708,16 @@ HdrHeader read_hdr_header(const std::string& path, const std::string& bytes) {
       if (end == value.c_str() || *end != '\0' || v <= 0 || v > 8192)
         fail(path, fmt::format("bad LIGHTPROBE_NSIDE value '{}'", one_line(value, 40)));
       raw.nside = int(v);
+    } else if (key == "LIGHTPROBE_WORLD_FROM_PROBE") {
+      std::istringstream in(value);
+      Mat3 r;
+      std::string extra;
+      for (double& x : r.m)
+        if (!(in >> x) || !std::isfinite(x))
+          fail(path, fmt::format("bad LIGHTPROBE_WORLD_FROM_PROBE value '{}' (expected 9 numbers)", one_line(value, 60)));
+      if (in >> extra)
+        fail(path, fmt::format("bad LIGHTPROBE_WORLD_FROM_PROBE value '{}' (expected 9 numbers)", one_line(value, 60)));
+      raw.world_from_probe = r;
     }
   }
   for (int k = 0; k < 3; ++k) header.scale[k] = 1.0 / (exposure * colorcorr[k]);
@@ -873,6 +905,11 @@ std::string encode_hdr(const std::string& path, const EnvMap& map, const WriteMa
   if (options.record_layout) out += fmt::format("LIGHTPROBE_LAYOUT={}\n", to_string(map.layout));
   out += fmt::format("LIGHTPROBE_UNITS={}\n", to_string(map.units));
   if (map.layout == Layout::Healpix) out += fmt::format("LIGHTPROBE_NSIDE={}\n", map.nside);
+  if (map.world_from_probe) {
+    out += "LIGHTPROBE_WORLD_FROM_PROBE=";
+    for (size_t k = 0; k < 9; ++k) out += fmt::format("{}{:.17g}", k ? " " : "", map.world_from_probe->m[k]);
+    out += "\n";
+  }
   out += fmt::format("\n-Y {} +X {}\n", img.height, img.width);
   const int W = img.width;
   std::vector<uint8_t> rgbe(4 * size_t(W));

@@ -496,6 +496,8 @@ void gather_power(const EnvMap& src, const Footprints& f, const std::vector<doub
 EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const ResampleOptions& options) {
   EnvMap dst = make_envmap(layout, width, height);
   dst.units = src.units;
+  // The probe turned with its map: the rotation recorded composes with this one.
+  if (src.world_from_probe) dst.world_from_probe = options.world_from_source * *src.world_from_probe;
   check_resample(src, layout, options);
   if (src.layout != Layout::Healpix && layout != Layout::Healpix) {
     if (const auto rot = separable_rotation(options.world_from_source))

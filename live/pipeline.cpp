@@ -367,6 +367,8 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
   double& unwrap_s = timings.stage[1];
   auto map = std::make_shared<EnvMap>();
   *map = make_envmap(options_.layout, options_.width, options_.height);
+  // Unwrapped here with this rotation (a replayed map was unwrapped elsewhere: none claimed).
+  if (!options_.frames_are_maps) map->world_from_probe = options_.world_from_probe;
   // The bracket's frames (3 x 14.7 MB at 1280x960) are freed when this function returns,
   // after the list is published: unmapping their pages (and the TLB shootdowns of a
   // threaded process) sat between the fusion and the sampling, ~2 ms of the latency at

@@ -680,6 +680,7 @@ EnvMap unwrap_mirror_ball(const RgbImage& image, const BallInImage& ball, const 
   const MirrorBallProjection proj(ball, camera, image.width);
   EnvMap out = make_envmap(layout, width, height);
   out.units = image.units;
+  out.world_from_probe = camera.world_from_probe;
 
   // Sub-samples per edge.
   int k = options.samples_per_edge;

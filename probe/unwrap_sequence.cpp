@@ -220,6 +220,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
       throw InputError(files[i] + ": the unwrapped map holds no valid pixel (is the " +
                        (o.type == ProbeType::MirrorBall ? "ball" : "image circle") + " inside the image?)");
     map.units = frame.units;
+    map.world_from_probe = o.world_from_probe;
     if (o.colour) apply_colour_match(map, *o.colour);
     if (auto c = centroid(map)) centroids.push_back(*c);
     emit(i, map);

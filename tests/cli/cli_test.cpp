@@ -377,6 +377,46 @@ TEST(Cli, ASynthesisedMirrorBallUnwrapsToTheMapItCameFrom) {
   expect_one_line_error(lightprobe("probe unwrap " + flat.string() + " --type mirrorball -o " + map.string()), "flat.pfm");
 }
 
+// CONVENTIONS.md: the probe's rotation is part of its metadata, the map is in the world
+// frame. Unwrapped with --rotation, the sun turns with the probe and the file records the
+// rotation (identity without one), which `info` and OpenImageIO's iinfo show.
+TEST(Cli, AnUnwrappedMapRecordsTheProbeRotationItWasTurnedBy) {
+  const fs::path ball = scratch() / "ball_r.exr", plain = scratch() / "plain_r.exr", turned = scratch() / "turned_r.exr";
+  ASSERT_EQ(lightprobe("synth probe scene --type mirrorball --size 400x400 -o " + ball.string()).code, 0);
+  const std::string unwrap = "probe unwrap " + ball.string() + " --type mirrorball --layout latlong --size 256x128 -o ";
+  ASSERT_EQ(lightprobe(unwrap + plain.string()).code, 0);
+  ASSERT_EQ(lightprobe(unwrap + turned.string() + " --rotation 90,0,0").code, 0);
+  const auto info = [](const fs::path& f) {
+    const CliRun r = lightprobe("info --json " + f.string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    return nlohmann::json::parse(r.out);
+  };
+  const auto a = info(plain), b = info(turned);
+  const std::vector<double> identity{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  EXPECT_EQ(a["world_from_probe"].get<std::vector<double>>(), identity);
+  const lp::Mat3 yaw90 = lp::rotation_from_yaw_pitch_roll_deg(90, 0, 0);
+  const auto got = b["world_from_probe"].get<std::vector<double>>();
+  ASSERT_EQ(got.size(), 9u);
+  for (size_t k = 0; k < 9; ++k) EXPECT_NEAR(got[k], yaw90.m[k], 1e-15) << k;
+  // The sun (theta 50, phi 30 in the probe's frame) is at phi 120 in the turned world.
+  const auto phi = [](const nlohmann::json& j) {
+    const auto d = j["brightest_direction"];
+    return std::atan2(d[1].get<double>(), d[0].get<double>()) * 180 / M_PI;
+  };
+  EXPECT_NEAR(phi(a), 30, 2);
+  EXPECT_NEAR(phi(b), 120, 2);
+  EXPECT_NE(lightprobe("info " + turned.string()).out.find("world_from_probe"), std::string::npos);
+  // OpenImageIO, a consumer that knows nothing of lightprobe, lists the attribute.
+  if (std::system("command -v iinfo >/dev/null 2>&1") != 0) GTEST_SKIP() << "iinfo (openimageio-tools) not installed";
+  std::string listing;
+  if (FILE* p = popen(("iinfo -v " + turned.string() + " 2>&1").c_str(), "r")) {
+    char buf[512];
+    while (fgets(buf, sizeof buf, p)) listing += buf;
+    pclose(p);
+  }
+  EXPECT_NE(listing.find("lightprobe.world_from_probe"), std::string::npos) << listing;
+}
+
 // A photo's codes are made linear before they become a map (maps are radiance): an 8-bit
 // PNG of code 128 unwraps to 0.2158605, sRGB's decoding, not 0.502; a 16-bit one says how
 // its codes encode light (--codes) or is refused, and nothing is written.

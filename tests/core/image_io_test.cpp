@@ -372,6 +372,42 @@ TEST(ImageIo, ExrWithAnUnknownLayoutAttributeIsRefused) {
   expect_input_error([&] { read_envmap(dir + "m.exr"); }, {dir + "m.exr", "unknown", "cubemap"});
 }
 
+// CONVENTIONS.md: the probe's camera-to-world rotation is part of its metadata. It survives
+// EXR and HDR to the last bit, a map made without one reads back without one, PFM (no
+// metadata) drops it, and a recorded matrix that is no rotation is refused by name.
+TEST(ImageIo, TheProbeRotationIsRecordedInExrAndHdrAndARecordThatIsNoRotationIsRefused) {
+  const std::string dir = temp_dir();
+  EnvMap map = make_latlong(16, 8);
+  fill_random(map, 3);
+  const Mat3 r = rotation_from_yaw_pitch_roll_deg(31.7, -12.25, 4.5);
+  for (const char* ext : {".exr", ".hdr"}) {
+    const std::string path = dir + "plain" + ext;
+    write_envmap(path, map);
+    EXPECT_FALSE(read_envmap(path).world_from_probe.has_value()) << ext;
+    map.world_from_probe = r;
+    write_envmap(dir + "turned" + ext, map);
+    const EnvMap back = read_envmap(dir + "turned" + ext);
+    ASSERT_TRUE(back.world_from_probe.has_value()) << ext;
+    EXPECT_EQ(back.world_from_probe->m, r.m) << ext;  // %.17g and doubles: exact
+    map.world_from_probe.reset();
+  }
+  map.world_from_probe = r;
+  write_envmap(dir + "turned.pfm", map);
+  EXPECT_FALSE(read_envmap(dir + "turned.pfm").world_from_probe.has_value());
+  // A matrix that is not a rotation (a scale, a reflection) is no probe orientation.
+  std::string hdr = read_bytes(dir + "turned.hdr");
+  const size_t at = hdr.find("LIGHTPROBE_WORLD_FROM_PROBE=");
+  ASSERT_NE(at, std::string::npos);
+  const size_t end = hdr.find('\n', at);
+  write_bytes(dir + "scaled.hdr", hdr.substr(0, at) + "LIGHTPROBE_WORLD_FROM_PROBE=2 0 0 0 2 0 0 0 2" + hdr.substr(end));
+  expect_input_error([&] { read_envmap(dir + "scaled.hdr"); }, {dir + "scaled.hdr", "not a rotation"});
+  write_bytes(dir + "short.hdr", hdr.substr(0, at) + "LIGHTPROBE_WORLD_FROM_PROBE=1 0 0 0 1 0" + hdr.substr(end));
+  expect_input_error([&] { read_envmap(dir + "short.hdr"); }, {dir + "short.hdr", "expected 9 numbers"});
+  map.world_from_probe = Mat3{{-1, 0, 0, 0, 1, 0, 0, 0, 1}};  // a mirror image
+  write_envmap(dir + "mirrored.exr", map);
+  expect_input_error([&] { read_envmap(dir + "mirrored.exr"); }, {dir + "mirrored.exr", "not a rotation"});
+}
+
 // ----------------------------------------------------------------------------- Radiance HDR
 
 TEST(ImageIo, HdrRoundTripIsWithinRgbePrecisionAndKeepsMetadata) {

@@ -189,6 +189,21 @@ TEST(Resample, RotatingByNinetyDegreesOfYawMovesASunAtPhiZeroToPhiNinety) {
   EXPECT_FLOAT_EQ(dst.pixel(size_t(v) * w + u + w / 4)[0], src.pixel(size_t(v) * w + u)[0]);
 }
 
+// A map unwrapped with a probe rotation (EnvMap::world_from_probe) and turned again keeps
+// the record of the whole turn; one without a record gains none.
+TEST(Resample, TurningAMapTurnsItsRecordedProbeRotationWithIt) {
+  EnvMap src = one_pixel_sun(64, 32, 5, 10);
+  const Mat3 yaw90 = rotation_from_yaw_pitch_roll_deg(90, 0, 0);
+  EXPECT_FALSE(rotate(src, yaw90).world_from_probe.has_value());
+  const Mat3 probe = rotation_from_yaw_pitch_roll_deg(12, -30, 7);
+  src.world_from_probe = probe;
+  const EnvMap dst = rotate(src, yaw90);
+  ASSERT_TRUE(dst.world_from_probe.has_value());
+  const Mat3 want = yaw90 * probe;
+  for (size_t k = 0; k < 9; ++k) EXPECT_NEAR(dst.world_from_probe->m[k], want.m[k], 1e-15) << k;
+  EXPECT_GT(std::abs(dst.world_from_probe->m[0] - probe.m[0]), 0.1);  // it did turn
+}
+
 TEST(Resample, AnArbitraryRotationKeepsThePowerOfASmoothMap) {
   const Mat3 r = rotation_from_yaw_pitch_roll_deg(33, -20, 12);
   for (const EnvMap& src : {smooth_map(make_latlong(256, 128)), smooth_map(make_healpix(64))}) {

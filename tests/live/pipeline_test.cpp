@@ -86,6 +86,29 @@ TEST(LivePipeline, EveryFrameIsProcessedInAWholeBracketOrCountedAsDropped) {
   EXPECT_GT(s.brackets_processed, 40u);
 }
 
+// The published map records the probe rotation it was unwrapped with (CONVENTIONS.md), as
+// `probe unwrap` does: what /probe.exr and the recorder write.
+TEST(LivePipeline, ThePublishedMapRecordsTheProbeRotation) {
+  std::atomic<int> opened{0};
+  auto o = options();
+  o.world_from_probe = rotation_from_yaw_pitch_roll_deg(45, 0, 0);
+  std::mutex m;
+  std::optional<Mat3> seen;
+  int maps = 0;
+  LivePipeline p([&] { return std::make_unique<ScriptedSource>(30, 0, -1, &opened); }, o,
+                 [&](const LightList&, std::shared_ptr<const EnvMap> map) {
+                   const std::lock_guard lock(m);
+                   ASSERT_TRUE(map);
+                   seen = map->world_from_probe;
+                   ++maps;
+                 });
+  p.start();
+  p.wait();
+  ASSERT_GT(maps, 0);
+  ASSERT_TRUE(seen.has_value());
+  EXPECT_EQ(seen->m, o.world_from_probe.m);
+}
+
 TEST(LivePipeline, ACameraModelOfAnotherSizeDropsEveryBracketNamingItsFile) {
   std::atomic<int> opened{0};
   std::atomic<int> published{0};

@@ -1,7 +1,11 @@
 // Board detection per image over the real calibration sets (calib/board_detect.h).
 // Each benchmark detects every image of one set per iteration; counters report the recall
 // and the CPU time per image (mean and worst). Sets missing from ../shared/data are skipped.
+// Also the Kannala-Brandt unprojection of a pixel grid (calib/camera_model.h), beside
+// cv::fisheye::undistortPoints on the same pixels: every projection difference of the
+// selection unprojects such a grid twice.
 #include <benchmark/benchmark.h>
+#include <opencv2/calib3d.hpp>
 
 #include <algorithm>
 #include <ctime>
@@ -12,6 +16,7 @@
 #include <vector>
 
 #include "calib/board_detect.h"
+#include "calib/camera_model.h"
 #include "core/image_io.h"
 
 namespace fs = std::filesystem;
@@ -103,6 +108,55 @@ void register_all() {
     }
   }
 }
+
+}  // namespace
+
+// The 190 deg lens of the tests (kb190); test_cameras.h's real sets need this macro.
+#define LIGHTPROBE_SHARED_DATA shared_data()
+#include "tests/calib/test_cameras.h"
+#undef LIGHTPROBE_SHARED_DATA
+
+namespace {
+
+// The pixels of an 8 px grid (as the selection's projection differences sample a 1280x960
+// image) whose ray is within 85 deg of the axis under the 190 deg lens of the tests: where
+// cv::fisheye, which unprojects onto the plane z = 1, has an answer too.
+std::vector<lp::Pixel> kb_grid(const lp::CameraModel& cam) {
+  std::vector<lp::Pixel> px;
+  for (int y = 4; y < cam.height; y += 8)
+    for (int x = 4; x < cam.width; x += 8)
+      if (const auto r = lp::unproject(cam, {double(x), double(y)}); r && r->z > std::cos(85 * M_PI / 180))
+        px.push_back({double(x), double(y)});
+  return px;
+}
+
+void BM_UnprojectKannalaBrandt(benchmark::State& state) {
+  const lp::CameraModel cam = lp::calib_test::kb190();
+  const std::vector<lp::Pixel> px = kb_grid(cam);
+  double sum = 0;
+  for (auto _ : state)
+    for (const lp::Pixel& q : px) sum += lp::unproject(cam, q)->z;
+  benchmark::DoNotOptimize(sum);
+  state.counters["pixels"] = double(px.size());
+}
+
+void BM_UnprojectKannalaBrandtOpenCv(benchmark::State& state) {
+  const lp::CameraModel cam = lp::calib_test::kb190();
+  const std::vector<lp::Pixel> px = kb_grid(cam);
+  const auto& p = cam.intrinsics;
+  const cv::Matx33d K(p[0], 0, p[2], 0, p[1], p[3], 0, 0, 1);
+  const cv::Vec4d D(p[4], p[5], p[6], p[7]);
+  std::vector<cv::Point2d> in, out;
+  for (const lp::Pixel& q : px) in.push_back({q.x, q.y});
+  for (auto _ : state) cv::fisheye::undistortPoints(in, out, K, D);
+  benchmark::DoNotOptimize(out.data());
+  state.counters["pixels"] = double(px.size());
+}
+
+BENCHMARK(BM_UnprojectKannalaBrandt)->Name("calib/unproject_kannala_brandt_grid/ours")->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_UnprojectKannalaBrandtOpenCv)
+    ->Name("calib/unproject_kannala_brandt_grid/peer:cv::fisheye::undistortPoints")
+    ->Unit(benchmark::kMicrosecond);
 
 const int registered = (register_all(), 0);
 

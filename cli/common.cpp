@@ -68,7 +68,9 @@ Mat3 parse_rotation(const std::string& text) {
     Mat3 m;
     std::copy(v.begin(), v.end(), m.m.begin());
     if (!is_rotation(m, 1e-4)) throw InputError("--rotation: the 9 numbers are not a rotation matrix");
-    return m;
+    // Typed to four or five decimals it is a rotation only to 1e-4: the nearest exact one is
+    // what the unwrappers need (they check to 1e-6) and what the map records.
+    return nearest_rotation(m);
   }
   throw InputError("--rotation takes 'yaw,pitch,roll' (degrees) or 9 comma-separated numbers");
 }

@@ -1,5 +1,8 @@
 #include "core/vec3.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace lp {
 
 Mat3 operator*(const Mat3& a, const Mat3& b) {
@@ -18,6 +21,30 @@ Mat3 rotation_from_yaw_pitch_roll_deg(double yaw, double pitch, double roll) {
   const Mat3 ry{{cp, 0, sp, 0, 1, 0, -sp, 0, cp}};
   const Mat3 rx{{1, 0, 0, 0, cr, -sr, 0, sr, cr}};
   return rz * (ry * rx);
+}
+
+// Newton's iteration for the polar factor, R <- (R + R^-T) / 2: quadratic near a rotation,
+// so a matrix within 1e-4 of one is orthonormal to rounding in three or four steps.
+Mat3 nearest_rotation(const Mat3& a) {
+  Mat3 r = a;
+  for (int it = 0; it < 30; ++it) {
+    Mat3 cof;  // cofactors: R^-T = cof / det
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3, j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+        cof.m[size_t(3 * i + j)] = r(i1, j1) * r(i2, j2) - r(i1, j2) * r(i2, j1);
+      }
+    const double det = r(0, 0) * cof(0, 0) + r(0, 1) * cof(0, 1) + r(0, 2) * cof(0, 2);
+    double change = 0;
+    Mat3 next;
+    for (size_t k = 0; k < 9; ++k) {
+      next.m[k] = 0.5 * (r.m[k] + cof.m[k] / det);
+      change = std::max(change, std::fabs(next.m[k] - r.m[k]));
+    }
+    r = next;
+    if (!(change > 1e-15)) break;
+  }
+  return r;
 }
 
 bool is_rotation(const Mat3& a, double tol) {

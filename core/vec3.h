@@ -55,5 +55,8 @@ Mat3 operator*(const Mat3& a, const Mat3& b);
 Mat3 rotation_from_yaw_pitch_roll_deg(double yaw, double pitch, double roll);
 // True when a is orthonormal with determinant +1 to within tol.
 bool is_rotation(const Mat3& a, double tol = 1e-6);
+// The rotation nearest to a (in the Frobenius norm), for an a close to one (a matrix typed
+// to a few decimals): orthonormal to rounding. a must have a positive determinant.
+Mat3 nearest_rotation(const Mat3& a);
 
 }  // namespace lp

@@ -406,6 +406,14 @@ TEST(Cli, AnUnwrappedMapRecordsTheProbeRotationItWasTurnedBy) {
   EXPECT_NEAR(phi(a), 30, 2);
   EXPECT_NEAR(phi(b), 120, 2);
   EXPECT_NE(lightprobe("info " + turned.string()).out.find("world_from_probe"), std::string::npos);
+  // A matrix typed to four decimals, which --rotation accepts, is unwrapped with (and recorded
+  // as) the exact rotation nearest to it: the yaw of 45 degrees it stands for.
+  const fs::path typed = scratch() / "typed_r.exr";
+  const CliRun tr = lightprobe(unwrap + typed.string() + " --rotation 0.7071,-0.7071,0,0.7071,0.7071,0,0,0,1");
+  ASSERT_EQ(tr.code, 0) << tr.err;
+  const auto t = info(typed)["world_from_probe"].get<std::vector<double>>();
+  const lp::Mat3 yaw45 = lp::rotation_from_yaw_pitch_roll_deg(45, 0, 0);
+  for (size_t k = 0; k < 9; ++k) EXPECT_NEAR(t[k], yaw45.m[k], 1e-12) << k;
   // OpenImageIO, a consumer that knows nothing of lightprobe, lists the attribute.
   if (std::system("command -v iinfo >/dev/null 2>&1") != 0) GTEST_SKIP() << "iinfo (openimageio-tools) not installed";
   std::string listing;

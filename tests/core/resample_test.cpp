@@ -189,6 +189,27 @@ TEST(Resample, RotatingByNinetyDegreesOfYawMovesASunAtPhiZeroToPhiNinety) {
   EXPECT_FLOAT_EQ(dst.pixel(size_t(v) * w + u + w / 4)[0], src.pixel(size_t(v) * w + u)[0]);
 }
 
+// A matrix close to a rotation (typed to four decimals, or perturbed) goes to the rotation
+// nearest to it: orthonormal to rounding, and the exact one when the input is a scaled one.
+TEST(Rotation, TheNearestRotationOfAMatrixTypedToFourDecimalsIsExact) {
+  const Mat3 typed{{0.7071, -0.7071, 0, 0.7071, 0.7071, 0, 0, 0, 1}};
+  EXPECT_FALSE(is_rotation(typed));
+  const Mat3 r = nearest_rotation(typed);
+  EXPECT_TRUE(is_rotation(r, 1e-14));
+  const Mat3 yaw45 = rotation_from_yaw_pitch_roll_deg(45, 0, 0);
+  for (size_t k = 0; k < 9; ++k) EXPECT_NEAR(r.m[k], yaw45.m[k], 1e-15) << k;
+  // A rotation perturbed by 1e-5 per element: the polar factor moves it by about as much,
+  // and a rotation is its own nearest.
+  const Mat3 q = rotation_from_yaw_pitch_roll_deg(31, -12, 77);
+  Mat3 p = q;
+  for (size_t k = 0; k < 9; ++k) p.m[k] += 1e-5 * double(int(k % 3) - 1);
+  const Mat3 back = nearest_rotation(p);
+  EXPECT_TRUE(is_rotation(back, 1e-14));
+  for (size_t k = 0; k < 9; ++k) EXPECT_NEAR(back.m[k], q.m[k], 3e-5) << k;
+  const Mat3 same = nearest_rotation(q);
+  for (size_t k = 0; k < 9; ++k) EXPECT_NEAR(same.m[k], q.m[k], 1e-15) << k;
+}
+
 // A map unwrapped with a probe rotation (EnvMap::world_from_probe) and turned again keeps
 // the record of the whole turn; one without a record gains none.
 TEST(Resample, TurningAMapTurnsItsRecordedProbeRotationWithIt) {

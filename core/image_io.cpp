@@ -12,7 +12,6 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfIntAttribute.h>
-#include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
 #include <ImfRgbaFile.h>
 #include <ImfStandardAttributes.h>
@@ -56,12 +55,19 @@ namespace lp {
 
 namespace {
 
-// The EXR attribute of EnvMap::world_from_probe: a 3x3 double matrix, row-major as Mat3
-// (OpenImageIO shows it as a matrix33 "lightprobe.world_from_probe").
+// The EXR attribute of EnvMap::world_from_probe, a string of 9 numbers, row-major as Mat3
+// and as the .hdr header line. Not OpenEXR's m33d: three.js' EXRLoader warns on every map
+// with a type it does not know (the live /probe.exr), and it knows strings.
 constexpr const char* kExrRotationKey = "lightprobe.world_from_probe";
 
 [[noreturn]] void fail(const std::string& path, const std::string& problem) {
   throw InputError(path + ": " + problem);
+}
+
+std::string rotation_text(const Mat3& r) {
+  std::string out;
+  for (size_t k = 0; k < 9; ++k) out += fmt::format("{}{:.17g}", k ? " " : "", r.m[k]);
+  return out;
 }
 
 // Keeps a foreign message to one printable line.
@@ -77,6 +83,18 @@ std::string one_line(std::string_view text, size_t max_len = 200) {
   }
   while (!out.empty() && out.back() == ' ') out.pop_back();
   return out;
+}
+
+// 9 finite numbers and nothing else (rotation_text's format); whether they are a rotation
+// is finish_map's question.
+Mat3 parse_rotation_text(const std::string& path, const std::string& key, const std::string& text) {
+  std::istringstream in(text);
+  Mat3 r;
+  std::string extra;
+  for (double& x : r.m)
+    if (!(in >> x) || !std::isfinite(x)) fail(path, fmt::format("bad {} value '{}' (expected 9 numbers)", key, one_line(text, 60)));
+  if (in >> extra) fail(path, fmt::format("bad {} value '{}' (expected 9 numbers)", key, one_line(text, 60)));
+  return r;
 }
 
 // A JPEG that stops before its End Of Image marker: libjpeg decodes what is there, fills the
@@ -463,12 +481,8 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   if (auto* a = header.findTypedAttribute<Imf::StringAttribute>("lightprobe.layout")) raw.layout = a->value();
   if (auto* a = header.findTypedAttribute<Imf::StringAttribute>("lightprobe.units")) raw.units = a->value();
   if (auto* a = header.findTypedAttribute<Imf::IntAttribute>("lightprobe.nside")) raw.nside = a->value();
-  if (auto* a = header.findTypedAttribute<Imf::M33dAttribute>(kExrRotationKey)) {
-    Mat3 r;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) r.m[size_t(3 * i + j)] = a->value()[i][j];
-    raw.world_from_probe = r;
-  }
+  if (auto* a = header.findTypedAttribute<Imf::StringAttribute>(kExrRotationKey))
+    raw.world_from_probe = parse_rotation_text(path, kExrRotationKey, a->value());
 
   const Imf::ChannelList& channels = header.channels();
   // Channels of the layer read: the file's own R, G, B (A, Y, RY, BY), or, when it has none,
@@ -578,11 +592,7 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
     header.insert("lightprobe.layout", Imf::StringAttribute(std::string(to_string(map.layout))));
   header.insert("lightprobe.units", Imf::StringAttribute(std::string(to_string(map.units))));
   if (map.layout == Layout::Healpix) header.insert("lightprobe.nside", Imf::IntAttribute(map.nside));
-  if (map.world_from_probe) {
-    const Mat3& r = *map.world_from_probe;
-    header.insert(kExrRotationKey, Imf::M33dAttribute(Imath::M33d(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2),
-                                                                   r(2, 0), r(2, 1), r(2, 2))));
-  }
+  if (map.world_from_probe) header.insert(kExrRotationKey, Imf::StringAttribute(rotation_text(*map.world_from_probe)));
 
   // The frame buffer must hold the file's pixel type: convert to half here when needed.
   std::vector<float> alpha;
@@ -709,15 +719,7 @@ HdrHeader read_hdr_header(const std::string& path, const std::string& bytes) {
         fail(path, fmt::format("bad LIGHTPROBE_NSIDE value '{}'", one_line(value, 40)));
       raw.nside = int(v);
     } else if (key == "LIGHTPROBE_WORLD_FROM_PROBE") {
-      std::istringstream in(value);
-      Mat3 r;
-      std::string extra;
-      for (double& x : r.m)
-        if (!(in >> x) || !std::isfinite(x))
-          fail(path, fmt::format("bad LIGHTPROBE_WORLD_FROM_PROBE value '{}' (expected 9 numbers)", one_line(value, 60)));
-      if (in >> extra)
-        fail(path, fmt::format("bad LIGHTPROBE_WORLD_FROM_PROBE value '{}' (expected 9 numbers)", one_line(value, 60)));
-      raw.world_from_probe = r;
+      raw.world_from_probe = parse_rotation_text(path, "LIGHTPROBE_WORLD_FROM_PROBE", value);
     }
   }
   for (int k = 0; k < 3; ++k) header.scale[k] = 1.0 / (exposure * colorcorr[k]);
@@ -905,11 +907,7 @@ std::string encode_hdr(const std::string& path, const EnvMap& map, const WriteMa
   if (options.record_layout) out += fmt::format("LIGHTPROBE_LAYOUT={}\n", to_string(map.layout));
   out += fmt::format("LIGHTPROBE_UNITS={}\n", to_string(map.units));
   if (map.layout == Layout::Healpix) out += fmt::format("LIGHTPROBE_NSIDE={}\n", map.nside);
-  if (map.world_from_probe) {
-    out += "LIGHTPROBE_WORLD_FROM_PROBE=";
-    for (size_t k = 0; k < 9; ++k) out += fmt::format("{}{:.17g}", k ? " " : "", map.world_from_probe->m[k]);
-    out += "\n";
-  }
+  if (map.world_from_probe) out += "LIGHTPROBE_WORLD_FROM_PROBE=" + rotation_text(*map.world_from_probe) + "\n";
   out += fmt::format("\n-Y {} +X {}\n", img.height, img.width);
   const int W = img.width;
   std::vector<uint8_t> rgbe(4 * size_t(W));

@@ -4,8 +4,8 @@
 //
 // Map formats, chosen by file extension:
 //   .exr  OpenEXR, float or half RGB(A); attributes "lightprobe.layout",
-//         "lightprobe.units", "lightprobe.nside" and "lightprobe.world_from_probe" (a 3x3
-//         double matrix: EnvMap::world_from_probe) carry the metadata.
+//         "lightprobe.units", "lightprobe.nside" and "lightprobe.world_from_probe" (9 numbers,
+//         row-major, in a string: EnvMap::world_from_probe) carry the metadata.
 //         Reads R,G,B or Y (grey, or Y/RY/BY luminance-chroma) channels of any pixel type,
 //         or, in a file without them, its one layer that has R,G,B ("ViewLayer.Combined.R"
 //         of a Blender render; two such layers are refused); a multi-part file's first part,

@@ -372,6 +372,12 @@ TEST(ImageIo, ExrWithAnUnknownLayoutAttributeIsRefused) {
   expect_input_error([&] { read_envmap(dir + "m.exr"); }, {dir + "m.exr", "unknown", "cubemap"});
 }
 
+std::string fmt_g17(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
 // CONVENTIONS.md: the probe's camera-to-world rotation is part of its metadata. It survives
 // EXR and HDR to the last bit, a map made without one reads back without one, PFM (no
 // metadata) drops it, and a recorded matrix that is no rotation is refused by name.
@@ -406,6 +412,16 @@ TEST(ImageIo, TheProbeRotationIsRecordedInExrAndHdrAndARecordThatIsNoRotationIsR
   map.world_from_probe = Mat3{{-1, 0, 0, 0, 1, 0, 0, 0, 1}};  // a mirror image
   write_envmap(dir + "mirrored.exr", map);
   expect_input_error([&] { read_envmap(dir + "mirrored.exr"); }, {dir + "mirrored.exr", "not a rotation"});
+  // In EXR it is a string attribute, which every reader knows (three.js' EXRLoader warns on
+  // types it does not): the same 9 numbers as the .hdr line, here spelt out in the file.
+  const std::string exr = read_bytes(dir + "turned.exr");
+  EXPECT_NE(exr.find(std::string("lightprobe.world_from_probe") + '\0' + "string" + '\0'), std::string::npos);
+  std::string bad = exr;
+  const size_t v = bad.find(fmt_g17(r.m[0]));
+  ASSERT_NE(v, std::string::npos);
+  bad[v] = 'x';  // the first number unreadable, the attribute's length unchanged
+  write_bytes(dir + "garbled.exr", bad);
+  expect_input_error([&] { read_envmap(dir + "garbled.exr"); }, {dir + "garbled.exr", "expected 9 numbers"});
 }
 
 // ----------------------------------------------------------------------------- Radiance HDR

@@ -7,13 +7,7 @@
 set -uo pipefail
 LP=$1
 HERE=$(cd "$(dirname "$0")" && pwd)
-export LIGHTPROBE_JS=$(cd "$HERE/../../../tools/js" && pwd)/node_modules
-skip() { echo "SKIPPED: $*"; exit 77; }
-fail() { echo "FAILED: $*"; exit 1; }
-command -v node >/dev/null || skip "node not installed (Debian package nodejs)"
-[ -d "$LIGHTPROBE_JS/three" ] || skip "three not in $LIGHTPROBE_JS: run scripts/install-js-tools.sh"
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
+. "$HERE/../../js_consumer.sh" three
 "$LP" --no-progress synth probe scene --type mirrorball --size 300x300 -o "$WORK/ball.exr" >/dev/null || fail "synth probe"
 "$LP" --no-progress probe unwrap "$WORK/ball.exr" --type mirrorball --layout latlong --size 256x128 \
   --rotation 30,10,-5 -o "$WORK/map.exr" >/dev/null || fail "probe unwrap"

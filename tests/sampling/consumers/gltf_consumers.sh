@@ -7,14 +7,7 @@
 set -uo pipefail
 LP=$1
 HERE=$(cd "$(dirname "$0")" && pwd)
-export LIGHTPROBE_JS=$(cd "$HERE/../../../tools/js" && pwd)/node_modules
-skip() { echo "SKIPPED: $*"; exit 77; }
-fail() { echo "FAILED: $*"; exit 1; }
-command -v node >/dev/null || skip "node not installed (Debian package nodejs)"
-[ -d "$LIGHTPROBE_JS/gltf-validator" ] || skip "gltf-validator not in $LIGHTPROBE_JS: run scripts/install-js-tools.sh"
-[ -d "$LIGHTPROBE_JS/three" ] || skip "three not in $LIGHTPROBE_JS: run scripts/install-js-tools.sh"
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
+. "$HERE/../../js_consumer.sh" gltf-validator three
 
 "$LP" --no-progress synth scene -o "$WORK/scene.exr" --size 256x128 >/dev/null || fail "synth scene"
 run() { "$LP" --no-progress "$@" >>"$WORK/log" 2>&1 || fail "lightprobe $* ($(tail -2 "$WORK/log"))"; }

@@ -47,7 +47,10 @@ int run_info(const InfoArgs& args, const Output& out) {
     const MapStatistics s = map_statistics(map);
     nlohmann::json j = s.to_json(map);
     j["file"] = path;
-    if (map.world_from_probe) j["world_from_probe"] = map.world_from_probe->m;
+    if (map.world_from_probe) {
+      j["world_from_probe"] = map.world_from_probe->m;
+      j["probe_yaw_pitch_roll_deg"] = yaw_pitch_roll_deg(*map.world_from_probe);
+    }
     all.push_back(j);
     const Vec3 b = s.brightest_direction;
     say(out,
@@ -59,9 +62,11 @@ int run_info(const InfoArgs& args, const Output& out) {
         s.min_positive, s.median, s.mean, s.p99, s.max, s.range_stops, s.power_rgb[0], s.power_rgb[1], s.power_rgb[2],
         s.power_luminance, zenith_of(b) * 180 / M_PI, azimuth_of(b) * 180 / M_PI, 100 * s.top_power_share);
     if (map.world_from_probe) {
-      const Mat3& r = *map.world_from_probe;
-      say(out, "  probe       world_from_probe [{:.6g} {:.6g} {:.6g}; {:.6g} {:.6g} {:.6g}; {:.6g} {:.6g} {:.6g}] (unwrapped with it)\n",
-          r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2));
+      // Rounding residue (1e-15 deg) printed as the 0 it is.
+      const auto deg = [](double v) { return std::abs(v) < 5e-10 ? 0.0 : v; };
+      const auto ypr = yaw_pitch_roll_deg(*map.world_from_probe);
+      say(out, "  probe       unwrapped turned by yaw {:.4g}, pitch {:.4g}, roll {:.4g} deg (--rotation)\n", deg(ypr[0]),
+          deg(ypr[1]), deg(ypr[2]));
     }
   }
   emit_json(out, all.size() == 1 ? all[0] : nlohmann::json{{"maps", all}});

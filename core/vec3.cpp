@@ -47,6 +47,15 @@ Mat3 nearest_rotation(const Mat3& a) {
   return r;
 }
 
+std::array<double, 3> yaw_pitch_roll_deg(const Mat3& r) {
+  const double r2d = 180.0 / M_PI;
+  // R = Rz(yaw) Ry(pitch) Rx(roll): R20 = -sin(pitch), R21 / R22 = tan(roll), R10 / R00 = tan(yaw).
+  const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  if (std::hypot(r(2, 1), r(2, 2)) < 1e-12)  // gimbal lock: roll 0, R01 = -sin(yaw), R11 = cos(yaw)
+    return {std::atan2(-r(0, 1), r(1, 1)) * r2d, pitch * r2d, 0.0};
+  return {std::atan2(r(1, 0), r(0, 0)) * r2d, pitch * r2d, std::atan2(r(2, 1), r(2, 2)) * r2d};
+}
+
 bool is_rotation(const Mat3& a, double tol) {
   const Mat3 p = transpose(a) * a;
   for (int i = 0; i < 3; ++i)

@@ -53,6 +53,9 @@ Mat3 operator*(const Mat3& a, const Mat3& b);
 // Rotation from yaw (about +Z), pitch (about +Y), roll (about +X), in degrees, applied
 // roll first: R = Rz(yaw) * Ry(pitch) * Rx(roll). This is the meaning of --rotation.
 Mat3 rotation_from_yaw_pitch_roll_deg(double yaw, double pitch, double roll);
+// Its inverse for a rotation: {yaw, pitch, roll} in degrees, pitch in [-90, 90], yaw and roll
+// in (-180, 180]; at pitch +-90 (where only yaw - roll or yaw + roll is defined) roll is 0.
+std::array<double, 3> yaw_pitch_roll_deg(const Mat3& r);
 // True when a is orthonormal with determinant +1 to within tol.
 bool is_rotation(const Mat3& a, double tol = 1e-6);
 // The rotation nearest to a (in the Frobenius norm), for an a close to one (a matrix typed

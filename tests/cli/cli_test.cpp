@@ -405,7 +405,12 @@ TEST(Cli, AnUnwrappedMapRecordsTheProbeRotationItWasTurnedBy) {
   };
   EXPECT_NEAR(phi(a), 30, 2);
   EXPECT_NEAR(phi(b), 120, 2);
-  EXPECT_NE(lightprobe("info " + turned.string()).out.find("world_from_probe"), std::string::npos);
+  const auto ypr = b["probe_yaw_pitch_roll_deg"].get<std::vector<double>>();
+  ASSERT_EQ(ypr.size(), 3u);
+  EXPECT_NEAR(ypr[0], 90, 1e-9);
+  EXPECT_NEAR(ypr[1], 0, 1e-9);
+  EXPECT_NEAR(ypr[2], 0, 1e-9);
+  EXPECT_NE(lightprobe("info " + turned.string()).out.find("yaw 90, pitch 0, roll 0 deg"), std::string::npos);
   // A matrix typed to four decimals, which --rotation accepts, is unwrapped with (and recorded
   // as) the exact rotation nearest to it: the yaw of 45 degrees it stands for.
   const fs::path typed = scratch() / "typed_r.exr";

@@ -210,6 +210,24 @@ TEST(Rotation, TheNearestRotationOfAMatrixTypedToFourDecimalsIsExact) {
   for (size_t k = 0; k < 9; ++k) EXPECT_NEAR(same.m[k], q.m[k], 1e-15) << k;
 }
 
+// yaw_pitch_roll_deg undoes rotation_from_yaw_pitch_roll_deg, also at the gimbal lock
+// (pitch +-90, where only the combination is defined: the matrix comes back).
+TEST(Rotation, YawPitchRollComeBackFromTheirMatrix) {
+  for (const std::array<double, 3>& a : std::vector<std::array<double, 3>>{
+           {30, 10, -5}, {-170, -89, 179}, {0, 0, 0}, {90, 0, 0}, {135, 45, -120}, {-45, 60, 30}}) {
+    const auto b = yaw_pitch_roll_deg(rotation_from_yaw_pitch_roll_deg(a[0], a[1], a[2]));
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(b[size_t(k)], a[size_t(k)], 1e-9) << a[0] << " " << a[1] << " " << a[2];
+  }
+  for (double pitch : {90.0, -90.0}) {
+    const Mat3 r = rotation_from_yaw_pitch_roll_deg(40, pitch, 25);
+    const auto b = yaw_pitch_roll_deg(r);
+    EXPECT_NEAR(b[1], pitch, 1e-6);
+    EXPECT_EQ(b[2], 0.0);
+    const Mat3 back = rotation_from_yaw_pitch_roll_deg(b[0], b[1], b[2]);
+    for (size_t k = 0; k < 9; ++k) EXPECT_NEAR(back.m[k], r.m[k], 1e-9) << pitch << " " << k;
+  }
+}
+
 // A map unwrapped with a probe rotation (EnvMap::world_from_probe) and turned again keeps
 // the record of the whole turn; one without a record gains none.
 TEST(Resample, TurningAMapTurnsItsRecordedProbeRotationWithIt) {

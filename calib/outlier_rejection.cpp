@@ -165,10 +165,11 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
     std::once_flag wide_once;
     WideField wide;
     // Mei seeded without Kannala-Brandt (the unit-xi search), as the chain solves it when
-    // Kannala-Brandt does not decide for its own seed; shared, so that a perspective reference's job whose seed misses the
-    // corners (a lens the chain will likely find too wide for it) can solve it ahead of the
-    // chain, on the core that would wait (MiniOmni: Kannala-Brandt's 0.18 s, then Mei's 0.12,
-    // had run one after the other). The same solve whichever thread makes it.
+    // Kannala-Brandt does not decide for its own seed; shared, so that a perspective
+    // reference's job whose seed misses the corners (a lens the chain will likely find too
+    // wide for it) can solve it ahead of the chain, on the core that would wait (MiniOmni:
+    // Kannala-Brandt's 0.18 s, then Mei's 0.12, had run one after the other). The same solve
+    // whichever thread makes it.
     CalibrationProblem pr_omnidir = problem;
     pr_omnidir.solve.mei_from_kannala_brandt = false;
     CandidateSolver mei_omnidir(pr_omnidir, sample);

@@ -16,6 +16,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -396,6 +398,16 @@ TEST(ImageIo, TheProbeRotationIsRecordedInExrAndHdrAndARecordThatIsNoRotationIsR
     ASSERT_TRUE(back.world_from_probe.has_value()) << ext;
     EXPECT_EQ(back.world_from_probe->m, r.m) << ext;  // %.17g and doubles: exact
     map.world_from_probe.reset();
+  }
+  // OpenImageIO, a reader that knows nothing of the header line, still reads the .hdr.
+  if (std::system("command -v iinfo >/dev/null 2>&1") == 0) {
+    std::string listing;
+    if (FILE* p = popen(("iinfo " + dir + "turned.hdr 2>&1").c_str(), "r")) {
+      char buf[512];
+      while (fgets(buf, sizeof buf, p)) listing += buf;
+      pclose(p);
+    }
+    EXPECT_NE(listing.find("16 x    8, 3 channel, float hdr"), std::string::npos) << listing;
   }
   map.world_from_probe = r;
   write_envmap(dir + "turned.pfm", map);

@@ -121,7 +121,7 @@ std::optional<Pixel> kb_project(const double* p, Vec3 d) {
   return Pixel{p[0] * s * d.x + p[2], p[1] * s * d.y + p[3]};
 }
 
-std::optional<Vec3> kb_unproject(const double* p, Pixel q) {
+std::optional<Vec3> kb_unproject(const double* p, Pixel q, int* iterations = nullptr) {
   const double* k = p + 4;
   const double a = (q.x - p[2]) / p[0], b = (q.y - p[3]) / p[1];
   const double theta_d = std::hypot(a, b);
@@ -138,7 +138,8 @@ std::optional<Vec3> kb_unproject(const double* p, Pixel q) {
   // angle within 1.3e-14 relative of before (docs/calibration.md, "Stop 47").
   const double matched = 4 * std::numeric_limits<double>::epsilon() * theta_d;
   double lo = 0, hi = hi0, t = std::min(theta_d, hi0);
-  for (int it = 0; it < 100; ++it) {
+  int it = 0;
+  for (; it < 100; ++it) {
     const double f = kb_distort(k, t) - theta_d;
     if (std::abs(f) <= matched) break;
     if (f > 0) hi = t; else lo = t;
@@ -150,6 +151,7 @@ std::optional<Vec3> kb_unproject(const double* p, Pixel q) {
     t = next;
     if (step < 1e-15 * std::max(1.0, t) || hi - lo < 1e-15) break;
   }
+  if (iterations) *iterations = it;
   const double s = std::sin(t) / theta_d;
   return Vec3{s * a, s * b, std::cos(t)};
 }
@@ -257,6 +259,10 @@ constexpr int kSheetSamples = 16;
 // converge to a point of the distortion's central sheet (Jacobian determinant > 0 at the point
 // and at kSheetSamples points between it and the axis): beyond the fold the polynomial images
 // the answer is ambiguous, and the caller asks mrcal instead.
+std::optional<Vec3> detail::kb_unproject(const double* intrinsics, Pixel pixel, int* iterations) {
+  return lp::kb_unproject(intrinsics, pixel, iterations);
+}
+
 std::optional<Vec3> detail::opencv_unproject(const double* p, int ndist, Pixel q) {
   if (ndist != 4 && ndist != 5) return std::nullopt;
   double D[5] = {};

@@ -54,6 +54,9 @@ namespace detail {
 // unproject's own path for plumb_bob (OpenCV4/5: `intrinsics` fx fy cx cy and `ndist` 4 or 5
 // coefficients), exposed for its test: nullopt where unproject falls back to mrcal's.
 std::optional<Vec3> opencv_unproject(const double* intrinsics, int ndist, Pixel pixel);
+// unproject's path for Kannala-Brandt (fx fy cx cy k1-k4), with the Newton iterations it
+// took, for the test that keeps its root finder from bisecting back to roots it has found.
+std::optional<Vec3> kb_unproject(const double* intrinsics, Pixel pixel, int* iterations = nullptr);
 }  // namespace detail
 
 // Files. .cameramodel is mrcal's text format (readable by mrcal's Python and C readers);

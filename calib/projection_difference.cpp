@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "calib/calibration_problem.h"
 
@@ -26,8 +27,11 @@ ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b,
   return projection_difference(a, b, grid_rays(b, mask, step_px), fit_rotation);
 }
 
-ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const GridRays& b_rays,
-                                     bool fit_rotation) {
+namespace {
+
+// a_ray(i, q): a's ray at b_rays' i-th grid pixel q.
+template <class ARay>
+ProjectionDiff difference_of_rays(const ARay& a_ray, const CameraModel& b, const GridRays& b_rays, bool fit_rotation) {
   ProjectionDiff out;
   std::vector<Vec3> va, vb;
   std::vector<Pixel> qs;
@@ -35,7 +39,7 @@ ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b,
     const auto& db = b_rays.rays[i];
     if (!db) continue;
     const Pixel q = b_rays.pixels[i];
-    const auto da = unproject(a, q);
+    const std::optional<Vec3> da = a_ray(i, q);
     if (!da) continue;
     va.push_back(*da);
     vb.push_back(*db);
@@ -68,6 +72,20 @@ ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b,
   out.max_px = *std::max_element(d.begin(), d.end());
   out.median_px = median_of(d);
   return out;
+}
+
+}  // namespace
+
+ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const GridRays& b_rays,
+                                     bool fit_rotation) {
+  return difference_of_rays([&](size_t, const Pixel& q) { return unproject(a, q); }, b, b_rays, fit_rotation);
+}
+
+ProjectionDiff projection_difference(const GridRays& a_rays, const CameraModel& b, const GridRays& b_rays,
+                                     bool fit_rotation) {
+  if (a_rays.pixels.size() != b_rays.pixels.size())
+    throw std::invalid_argument("projection_difference: the two models' rays are on different grids");
+  return difference_of_rays([&](size_t i, const Pixel&) { return a_rays.rays[i]; }, b, b_rays, fit_rotation);
 }
 
 }  // namespace lp

@@ -33,5 +33,9 @@ struct GridRays {
 GridRays grid_rays(const CameraModel& b, const std::vector<uint8_t>& mask, int step_px);
 ProjectionDiff projection_difference(const CameraModel& a, const CameraModel& b, const GridRays& b_rays,
                                      bool fit_rotation = true);
+// The same with a's rays on the same grid too (grid_rays(a, mask, step_px)): the two
+// unprojections of a split's halves run beside their refits, not after both (model_selection).
+ProjectionDiff projection_difference(const GridRays& a_rays, const CameraModel& b, const GridRays& b_rays,
+                                     bool fit_rotation = true);
 
 }  // namespace lp

@@ -145,7 +145,8 @@ TEST(CalibrationSeed, CalibrateCameraSeedOfANarrowLensAndTheMrcalSeedsBuiltOnFit
 // The leverage and the noise jackknife compare many refits with one model whose rays are
 // unprojected once (grid_rays): the same numbers, bit for bit, as unprojecting it each time,
 // with a mask and a step, a ray-less part of the image included (the pinhole's rays beyond
-// the 190 deg lens' rim), and with and without the rotation fitted.
+// the 190 deg lens' rim), and with and without the rotation fitted. The same with both models'
+// rays unprojected beforehand (a split's halves, split_validations).
 TEST(ProjectionDifference, RaysUnprojectedOnceGiveTheSameDifferenceBitForBit) {
   const CameraModel plumb = narrow();
   CameraModel other = plumb;
@@ -158,12 +159,16 @@ TEST(ProjectionDifference, RaysUnprojectedOnceGiveTheSameDifferenceBitForBit) {
   for (bool rotation : {true, false}) {
     const ProjectionDiff plain = projection_difference(other, plumb, mask, 6, rotation);
     const ProjectionDiff cached = projection_difference(other, plumb, grid_rays(plumb, mask, 6), rotation);
+    const ProjectionDiff both =
+        projection_difference(grid_rays(other, mask, 6), plumb, grid_rays(plumb, mask, 6), rotation);
     ASSERT_GT(plain.samples, 1000);
     EXPECT_GT(plain.rms_px, 0.1);
-    EXPECT_EQ(cached.samples, plain.samples);
-    EXPECT_EQ(cached.rms_px, plain.rms_px);
-    EXPECT_EQ(cached.median_px, plain.median_px);
-    EXPECT_EQ(cached.max_px, plain.max_px);
+    for (const ProjectionDiff& d : {cached, both}) {
+      EXPECT_EQ(d.samples, plain.samples);
+      EXPECT_EQ(d.rms_px, plain.rms_px);
+      EXPECT_EQ(d.median_px, plain.median_px);
+      EXPECT_EQ(d.max_px, plain.max_px);
+    }
   }
   // A model with no ray for part of the grid: those pixels drop out alike.
   const CameraModel wide = kb190();
@@ -171,11 +176,16 @@ TEST(ProjectionDifference, RaysUnprojectedOnceGiveTheSameDifferenceBitForBit) {
   const ProjectionDiff plain = projection_difference(pin, wide, {}, 16);
   const ProjectionDiff cached = projection_difference(pin, wide, grid_rays(wide, {}, 16));
   const GridRays rays = grid_rays(wide, {}, 16);
+  const ProjectionDiff both = projection_difference(grid_rays(pin, {}, 16), wide, rays);
   ASSERT_GT(plain.samples, 100);
   EXPECT_LT(size_t(plain.samples), rays.pixels.size());  // some pixels have no ray under one of them
-  EXPECT_EQ(cached.samples, plain.samples);
-  EXPECT_EQ(cached.rms_px, plain.rms_px);
-  EXPECT_EQ(cached.max_px, plain.max_px);
+  for (const ProjectionDiff& d : {cached, both}) {
+    EXPECT_EQ(d.samples, plain.samples);
+    EXPECT_EQ(d.rms_px, plain.rms_px);
+    EXPECT_EQ(d.max_px, plain.max_px);
+  }
+  // Rays of another grid are refused, not paired pixel by pixel.
+  EXPECT_THROW(projection_difference(grid_rays(pin, {}, 8), wide, rays), std::invalid_argument);
   // The cache is of b's rays: given another model's, the difference is another one.
   EXPECT_NE(projection_difference(other, plumb, grid_rays(other, mask, 6)).rms_px,
             projection_difference(other, plumb, mask, 6).rms_px);

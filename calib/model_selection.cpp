@@ -76,14 +76,6 @@ void solve_jobs(std::vector<SolveJob> jobs, bool parallel) {
   run_jobs(jobs.size(), [&](size_t i) { jobs[i].first->get(jobs[i].second); }, parallel ? 0 : 1);
 }
 
-// Every fit of `types` in `solvers` (each solver's own views), on every core.
-void solve_all(std::vector<CandidateSolver*> solvers, const std::vector<LensType>& types, bool parallel) {
-  std::vector<SolveJob> jobs;
-  for (LensType t : types)
-    for (CandidateSolver* s : solvers) jobs.push_back({s, t});
-  solve_jobs(std::move(jobs), parallel);
-}
-
 ViewSubset half_of(const ViewSubset& used, int h) {
   ViewSubset s;
   for (size_t i = 0; i < used.size(); ++i)
@@ -701,9 +693,31 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
   for (LensType type : fitted)
     if (const ModelFit& f = fits.full.get(type); f.ok && fit_rms(pr, f, fits.used) <= screen) kept.push_back(type);
   report_progress(progress, "candidates", 2, 3);
-  solve_all({&fits.halves[0], &fits.halves[1]}, kept, o.parallel);
+  // The halves, started in start_rank order; a kept candidate's row is made by the job that fits its
+  // second half, beside the other solves, instead of all rows after the last solve (their
+  // projection differences, on one core per row, left a core idle for 10-15 ms on stereo and
+  // Fisheye190deg).
+  const auto row_of = [&](LensType t) { return size_t(std::find(candidates.begin(), candidates.end(), t) - candidates.begin()); };
   std::vector<ModelCandidate> table(candidates.size());
+  std::vector<char> made(candidates.size(), 0);
+  for (size_t i = 0; i < candidates.size(); ++i)
+    made[i] = std::find(kept.begin(), kept.end(), candidates[i]) != kept.end() && !on_sample.count(candidates[i]);
+  std::vector<SolveJob> halves;
+  for (LensType t : kept)
+    for (CandidateSolver* h : {&fits.halves[0], &fits.halves[1]}) halves.push_back({h, t});
+  std::stable_sort(halves.begin(), halves.end(),
+                   [](const SolveJob& a, const SolveJob& b) { return start_rank(a.second) < start_rank(b.second); });
+  std::unique_ptr<std::atomic<int>[]> fitted_halves(new std::atomic<int>[candidates.size()]);
+  for (size_t i = 0; i < candidates.size(); ++i) fitted_halves[i] = 0;
+  run_jobs(halves.size(), [&](size_t j) {
+    const LensType type = halves[j].second;
+    halves[j].first->get(type);
+    const size_t i = row_of(type);
+    if (made[i] && fitted_halves[i].fetch_add(1, std::memory_order_acq_rel) == 1)
+      table[i] = evaluate(pr, fits, type, screen);
+  }, o.parallel ? 0 : 1);
   run_jobs(candidates.size(), [&](size_t i) {
+    if (made[i]) return;
     const auto it = on_sample.find(candidates[i]);
     table[i] = it != on_sample.end() ? it->second : evaluate(pr, fits, candidates[i], screen);
   }, o.parallel ? 0 : 1);

@@ -69,13 +69,6 @@ int warm_refit_rank(LensType t) {
   }
 }
 
-// Every fit in `jobs`, on every core, started in start_rank order.
-void solve_jobs(std::vector<SolveJob> jobs, bool parallel) {
-  std::stable_sort(jobs.begin(), jobs.end(),
-                   [](const SolveJob& a, const SolveJob& b) { return start_rank(a.second) < start_rank(b.second); });
-  run_jobs(jobs.size(), [&](size_t i) { jobs[i].first->get(jobs[i].second); }, parallel ? 0 : 1);
-}
-
 ViewSubset half_of(const ViewSubset& used, int h) {
   ViewSubset s;
   for (size_t i = 0; i < used.size(); ++i)
@@ -680,42 +673,63 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
   // half of a candidate that fitted the odd one within screen_rms_px (it will hardly be
   // screened, and the cores do not wait for the slowest full fit before the halves start).
   report_progress(progress, "candidates", 1, 3);
+  // Each row (the halves' projection difference and held-out RMS) is made by the job that
+  // completes its candidate's fits, beside the other solves, not after the last of them: the
+  // rows, one core each (the rational model's unprojects every grid pixel), waited for the
+  // stage's longest solve while the other core idled (stereo: the spline's 40 ms tail, then
+  // 17 ms of rows). A candidate whose own RMS is within screen_rms_px is kept whatever the
+  // others' (`screen` below is screen_rms_px or infinite), so its row can be made at once.
+  const auto row_of = [&](LensType t) {
+    return size_t(std::find(candidates.begin(), candidates.end(), t) - candidates.begin());
+  };
+  std::vector<ModelCandidate> table(candidates.size());
+  std::vector<char> made(candidates.size(), 0);
+  std::unique_ptr<std::atomic<int>[]> fits_left(new std::atomic<int>[candidates.size()]);
+  const auto run_fits = [&](std::vector<SolveJob> jobs, const std::function<void(LensType)>& fitted_one) {
+    std::stable_sort(jobs.begin(), jobs.end(),
+                     [](const SolveJob& a, const SolveJob& b) { return start_rank(a.second) < start_rank(b.second); });
+    run_jobs(jobs.size(), [&](size_t j) {
+      jobs[j].first->get(jobs[j].second);
+      fitted_one(jobs[j].second);
+    }, o.parallel ? 0 : 1);
+  };
+  // The full fits, so that the screening knows which halves to fit; beside them the even
+  // half of a candidate that fitted the odd one within screen_rms_px (it will hardly be
+  // screened, and the cores do not wait for the slowest full fit before the halves start).
   std::vector<SolveJob> jobs;
+  for (size_t i = 0; i < candidates.size(); ++i) fits_left[i] = 0;
   for (LensType type : fitted) jobs.push_back({&fits.full, type});
-  for (LensType type : fit_the_sample) jobs.push_back({&fits.halves[0], type});
-  solve_jobs(std::move(jobs), o.parallel);
+  for (LensType type : fit_the_sample) {
+    jobs.push_back({&fits.halves[0], type});
+    fits_left[row_of(type)] = 2;  // the full fit and the even half; the odd one is the sample's
+  }
+  run_fits(std::move(jobs), [&](LensType type) {
+    const size_t i = row_of(type);
+    if (fits_left[i].fetch_sub(1, std::memory_order_acq_rel) != 1) return;
+    if (const ModelFit& f = fits.full.get(type); f.ok && fit_rms(pr, f, fits.used) <= o.screen_rms_px) {
+      table[i] = evaluate(pr, fits, type, o.screen_rms_px);
+      made[i] = 1;
+    }
+  });
   double best_rms = kInf;
   for (LensType type : fitted)
     if (const ModelFit& f = fits.full.get(type); f.ok) best_rms = std::min(best_rms, fit_rms(pr, f, fits.used));
   // No candidate fits: nothing is screened (the least bad one is still ranked on its halves).
   const double screen = best_rms <= o.screen_rms_px ? o.screen_rms_px : kInf;
-  std::vector<LensType> kept;
-  for (LensType type : fitted)
-    if (const ModelFit& f = fits.full.get(type); f.ok && fit_rms(pr, f, fits.used) <= screen) kept.push_back(type);
   report_progress(progress, "candidates", 2, 3);
-  // The halves, started in start_rank order; a kept candidate's row is made by the job that fits its
-  // second half, beside the other solves, instead of all rows after the last solve (their
-  // projection differences, on one core per row, left a core idle for 10-15 ms on stereo and
-  // Fisheye190deg).
-  const auto row_of = [&](LensType t) { return size_t(std::find(candidates.begin(), candidates.end(), t) - candidates.begin()); };
-  std::vector<ModelCandidate> table(candidates.size());
-  std::vector<char> made(candidates.size(), 0);
-  for (size_t i = 0; i < candidates.size(); ++i)
-    made[i] = std::find(kept.begin(), kept.end(), candidates[i]) != kept.end() && !on_sample.count(candidates[i]);
+  // The other kept candidates' halves; a row made when its second half is fitted.
   std::vector<SolveJob> halves;
-  for (LensType t : kept)
-    for (CandidateSolver* h : {&fits.halves[0], &fits.halves[1]}) halves.push_back({h, t});
-  std::stable_sort(halves.begin(), halves.end(),
-                   [](const SolveJob& a, const SolveJob& b) { return start_rank(a.second) < start_rank(b.second); });
-  std::unique_ptr<std::atomic<int>[]> fitted_halves(new std::atomic<int>[candidates.size()]);
-  for (size_t i = 0; i < candidates.size(); ++i) fitted_halves[i] = 0;
-  run_jobs(halves.size(), [&](size_t j) {
-    const LensType type = halves[j].second;
-    halves[j].first->get(type);
+  for (LensType type : fitted)
+    if (const ModelFit& f = fits.full.get(type); f.ok && fit_rms(pr, f, fits.used) <= screen && !made[row_of(type)]) {
+      for (CandidateSolver* h : {&fits.halves[0], &fits.halves[1]}) halves.push_back({h, type});
+      fits_left[row_of(type)] = 2;
+    }
+  run_fits(std::move(halves), [&](LensType type) {
     const size_t i = row_of(type);
-    if (made[i] && fitted_halves[i].fetch_add(1, std::memory_order_acq_rel) == 1)
-      table[i] = evaluate(pr, fits, type, screen);
-  }, o.parallel ? 0 : 1);
+    if (fits_left[i].fetch_sub(1, std::memory_order_acq_rel) != 1) return;
+    table[i] = evaluate(pr, fits, type, screen);
+    made[i] = 1;
+  });
   run_jobs(candidates.size(), [&](size_t i) {
     if (made[i]) return;
     const auto it = on_sample.find(candidates[i]);

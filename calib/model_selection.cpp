@@ -78,7 +78,11 @@ ViewSubset half_of(const ViewSubset& used, int h) {
 
 // One table row: full fit, halves, cross-validation, held-out RMS. screen_rms_px: a full fit
 // above it is screened out (see CandidateOptions::screen_rms_px), its halves not fitted.
-ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensType type, double screen_rms_px) {
+// The halves' rays and held-out RMS are four jobs (`parallel`): the row made last, after the
+// stage's longest solve (stereo's spline: mrcal unprojects its grids pixel by pixel), no
+// longer runs on one core while the other waits.
+ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensType type, double screen_rms_px,
+                        bool parallel) {
   ModelCandidate c;
   c.name = candidate_name(type);
   const ModelFit& f = fits.full.get(type);
@@ -103,11 +107,20 @@ ModelCandidate evaluate(const CalibrationProblem& pr, CandidateFits& fits, LensT
     c.error = "a half of the views could not be fitted: " + (a.ok ? b.error : a.error);
     return c;
   }
-  const ProjectionDiff d = projection_difference(a.model, b.model, fits.mask, fits.step);
+  GridRays rays[2];
+  double heldout[2];  // each half's model on the other half's views
+  run_jobs(4, [&](size_t k) {
+    const size_t h = k % 2;
+    const ModelFit& f = h == 0 ? a : b;
+    if (k < 2)
+      rays[h] = grid_rays(f.model, fits.mask, fits.step);
+    else
+      heldout[h] = heldout_rms(pr, f, fits.half[1 - h]);
+  }, parallel ? 0 : 1);
+  const ProjectionDiff d = projection_difference(rays[0], b.model, rays[1]);
   c.cross_validation_px = d.samples > 0 ? d.rms_px : kInf;
   c.cross_validation_median_px = d.median_px;
-  const double h1 = heldout_rms(pr, a, fits.half[1]), h2 = heldout_rms(pr, b, fits.half[0]);
-  c.heldout_rms_px = std::sqrt(0.5 * (h1 * h1 + h2 * h2));
+  c.heldout_rms_px = std::sqrt(0.5 * (heldout[0] * heldout[0] + heldout[1] * heldout[1]));
   c.model.cross_validation_px = c.cross_validation_px;
   c.ok = std::isfinite(c.cross_validation_px);
   if (!c.ok) c.error = "no covered pixel both half-models can image";
@@ -707,7 +720,7 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
     const size_t i = row_of(type);
     if (fits_left[i].fetch_sub(1, std::memory_order_acq_rel) != 1) return;
     if (const ModelFit& f = fits.full.get(type); f.ok && fit_rms(pr, f, fits.used) <= o.screen_rms_px) {
-      table[i] = evaluate(pr, fits, type, o.screen_rms_px);
+      table[i] = evaluate(pr, fits, type, o.screen_rms_px, o.parallel);
       made[i] = 1;
     }
   });
@@ -727,13 +740,13 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
   run_fits(std::move(halves), [&](LensType type) {
     const size_t i = row_of(type);
     if (fits_left[i].fetch_sub(1, std::memory_order_acq_rel) != 1) return;
-    table[i] = evaluate(pr, fits, type, screen);
+    table[i] = evaluate(pr, fits, type, screen, o.parallel);
     made[i] = 1;
   });
   run_jobs(candidates.size(), [&](size_t i) {
     if (made[i]) return;
     const auto it = on_sample.find(candidates[i]);
-    table[i] = it != on_sample.end() ? it->second : evaluate(pr, fits, candidates[i], screen);
+    table[i] = it != on_sample.end() ? it->second : evaluate(pr, fits, candidates[i], screen, o.parallel);
   }, o.parallel ? 0 : 1);
   return table;
 }

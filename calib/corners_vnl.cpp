@@ -39,13 +39,30 @@ std::vector<Row> read_rows(const std::string& path) {
   std::istringstream in(read_text_file(path, "corners file"));
   std::vector<Row> rows;
   std::string text;
+  // vnlog's legend ('# filename x y level', the first '#' line that is not a '##' or '#!'
+  // comment) names every row's columns: a row with fewer is cut short, as the last row of a
+  // truncated file is (its level, or its y's last digits, lost), not a row without a level.
+  size_t columns = 0;
+  int legend_line = 0;
   for (int line = 1; std::getline(in, text); ++line) {
     std::istringstream words(text);
     std::vector<std::string> f;
     for (std::string w; words >> w;) f.push_back(w);
-    if (f.empty() || f[0][0] == '#') continue;  // blank, the header, vnlog comments
+    if (f.empty()) continue;
+    if (f[0][0] == '#') {  // the legend, vnlog comments
+      const bool comment = f[0].rfind("##", 0) == 0 || f[0].rfind("#!", 0) == 0;
+      if (!comment && columns == 0 && rows.empty()) {
+        columns = f.size() - (f[0] == "#" ? 1 : 0);
+        legend_line = line;
+      }
+      continue;
+    }
     if (f.size() != 3 && f.size() != 4)
       throw InputError(fmt::format("{}:{}: {} fields, rows are 'filename x y [level]'", path, line, f.size()));
+    if ((columns == 3 || columns == 4) && f.size() != columns)
+      throw InputError(fmt::format("{}:{}: {} fields where the legend (line {}) names {}: a row cut short (a "
+                                   "truncated file?)",
+                                   path, line, f.size(), legend_line, columns));
     Row r{f[0], field(path, line, f[1]), field(path, line, f[2]), f.size() == 4 ? field(path, line, f[3]) : 0.0, line};
     rows.push_back(std::move(r));
   }

@@ -687,9 +687,6 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
   // A large set's full fits seed on the same evenly spaced views as the sample (SeedOptions::
   // sample_views): they start from its fits instead of solving them again.
   if (own_sample) fits.full.reuse_sample_fits(*own_sample);
-  // The full fits, so that the screening knows which halves to fit; beside them the even
-  // half of a candidate that fitted the odd one within screen_rms_px (it will hardly be
-  // screened, and the cores do not wait for the slowest full fit before the halves start).
   report_progress(progress, "candidates", 1, 3);
   // Each row (the halves' projection difference and held-out RMS) is made by the job that
   // completes its candidate's fits, beside the other solves, not after the last of them: the
@@ -721,6 +718,7 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
     jobs.push_back({&fits.halves[0], type});
     fits_left[row_of(type)] = 2;  // the full fit and the even half; the odd one is the sample's
   }
+  // (A candidate fitted on every view only counts below zero here: its halves come later.)
   run_fits(std::move(jobs), [&](LensType type) {
     const size_t i = row_of(type);
     if (fits_left[i].fetch_sub(1, std::memory_order_acq_rel) != 1) return;

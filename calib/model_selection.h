@@ -327,10 +327,12 @@ struct SplitTask {
 
 // Each task's cross-validation and held-out RMS (each half's model on the other half's
 // corners, poses re-solved; RMS of both ways), its halves refitted as split_cross_validation
-// refits them; both inf where that gives inf. Every half is its own job (its refit and its
-// held-out RMS), then every split's comparison: a few dear refits as whole splits left a
-// core idle at the end (MiniOmni: 3 splits of the spline on 2 cores). Jobs start in task
-// order, so put the dearest tasks first. The same numbers on any number of threads.
+// refits them; both inf where that gives inf. Every half is its own job (its refit, its
+// held-out RMS and its rays), and the job that finishes a split's second half compares the
+// two: whole splits as jobs left a core idle at the end (MiniOmni: 3 splits of the spline on
+// 2 cores), and comparisons after every refit left one idle behind the round's longest.
+// Jobs start in task order, so put the dearest tasks first. The same numbers on any number
+// of threads.
 std::vector<SplitValidation> split_validations(const ViewSubset& used, const std::vector<SplitTask>& tasks,
                                                const std::vector<uint8_t>& mask, int step, bool parallel);
 

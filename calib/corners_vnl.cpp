@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -78,6 +79,25 @@ std::string locate(const std::string& vnl, const std::string& image) {
   return (fs::path(vnl).parent_path() / image).string();
 }
 
+double median_of(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// A view's corners run in rows of the board's width, each row's last corner followed by the
+// next row's first: a step across the board. The median of the steps that, with rows of
+// `width`, would be those, over the median of the others: about width - 1 for the rows the
+// corners really run in, about 1 for another width.
+double row_jump_ratio(const std::vector<std::array<double, 2>>& c, int width) {
+  std::vector<double> within, across;
+  for (size_t k = 0; k + 1 < c.size(); ++k) {
+    const double step = std::hypot(c[k + 1][0] - c[k][0], c[k + 1][1] - c[k][1]);
+    (int(k % size_t(width)) == width - 1 ? across : within).push_back(step);
+  }
+  if (within.empty() || across.empty()) return NAN;
+  return median_of(across) / median_of(within);
+}
+
 }  // namespace
 
 void write_corners_vnl(const std::string& path, const BoardDetections& d) {
@@ -141,6 +161,22 @@ CornersFile read_corners_vnl(const std::string& path, const BoardSpec& board, do
     d.per_image.push_back(std::move(det));
     d.corners.push_back(std::move(corners));
     begin = end;
+  }
+  // A W x H board's corners and an H x W board's are as many, so a file written for the board
+  // turned reads without complaint, and every model then misses by thousands of pixels
+  // (Fisheye190deg's 6x7 corners read as 7x6: 1.3e5 px RMS, exit 0 but for a warning).
+  if (board.cols != board.rows && std::min(board.cols, board.rows) >= 3) {
+    int views = 0, turned = 0;
+    for (const auto& c : d.corners)
+      if (c.size() == per_board) {
+        ++views;
+        turned += row_jump_ratio(c, board.cols) < 1.5 && row_jump_ratio(c, board.rows) > 2;
+      }
+    if (views > 0 && 2 * turned > views)
+      throw InputError(fmt::format("{}: the corners of {} of its {} views run in rows of {}, not {}: written for a "
+                                   "{}x{} board (--board {}x{}?)",
+                                   path, turned, views, board.rows, board.cols, board.rows, board.cols, board.rows,
+                                   board.cols));
   }
   if (weighed_below_one > 0)
     out.notes.push_back(fmt::format("{}: {} corners have a level above 0 (mrcal weighs them 2^-level); lightprobe "

@@ -4,6 +4,8 @@
 // equals the one from the detections it was written from.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -127,6 +129,25 @@ TEST(CornersVnl, ReadsThreeColumnFilesAndFilesWithoutALegend) {
   const std::string no_legend = write(temp_dir("no_legend") / "corners.vnl",
                                       "a.jpg 10 20 0\na.jpg 30 20\na.jpg 10 40 0\na.jpg 30 40\n");
   EXPECT_EQ(read_corners_vnl(no_legend, b, 640, 480).detections.found, 1);
+}
+
+// A 4x3 board's 12 corners are a 3x4 board's count too: a file read with the board turned
+// would be solved into a model thousands of pixels off. Its rows give it away.
+TEST(CornersVnl, CornersWrittenForTheBoardTurnedAreRefused) {
+  std::string text = "# filename x y level\n";
+  for (const char* view : {"a.jpg", "b.jpg"})
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c)  // rows of 4, slightly sheared as a tilted board is
+        text += fmt::format("{} {} {} 0\n", view, 100 + 20 * c + 2 * r + (view[0] == 'b' ? 7 : 0), 50 + 21 * r + c);
+  const std::string path = write(temp_dir("turned") / "corners.vnl", text);
+  EXPECT_EQ(read_corners_vnl(path, BoardSpec{4, 3, 10}, 640, 480).detections.found, 2);
+  try {
+    read_corners_vnl(path, BoardSpec{3, 4, 10}, 640, 480);
+    ADD_FAILURE() << "read with the board turned";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ": the corners of 2 of its 2 views run in rows of 4, not 3: written for "
+                                            "a 4x3 board (--board 4x3?)");
+  }
 }
 
 TEST(CornersVnl, MalformedFilesAreOneLineErrorsNamingFileAndLine) {

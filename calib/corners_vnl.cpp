@@ -182,28 +182,35 @@ CornersFile read_corners_vnl(const std::string& path, const BoardSpec& board, do
     out.notes.push_back(fmt::format("{}: {} corners have a level above 0 (mrcal weighs them 2^-level); lightprobe "
                                     "weighs every corner 1",
                                     path, weighed_below_one));
+  // The first image the file names that is here: its size, or a check of the one given.
   int width = 0, height = 0;
+  std::string here;
+  for (const std::string& image : d.images) {
+    const std::string file = locate(path, image);
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) continue;
+    const CameraImage img = read_camera_image(file);
+    width = img.width;
+    height = img.height;
+    here = file;
+    break;
+  }
   if (given_width != 0 || given_height != 0) {
     for (double v : {given_width, given_height})
       if (!(v >= 1 && v <= 1e9) || v != std::floor(v))
         throw InputError(fmt::format("--imagersize {},{}: not two positive whole numbers of pixels", given_width,
                                      given_height));
-    width = int(given_width);
-    height = int(given_height);
-    check_image_size("--imagersize", width, height, "image size");
-  } else {
-    for (const std::string& image : d.images) {
-      const std::string file = locate(path, image);
-      std::error_code ec;
-      if (!fs::is_regular_file(file, ec)) continue;
-      const CameraImage img = read_camera_image(file);
-      width = img.width;
-      height = img.height;
-      break;
-    }
-    if (width <= 0)
-      throw InputError(path + ": the image size is unknown: none of the images it names is here (" +
-                       locate(path, d.images.front()) + ", ...); give it (--imagersize W,H)");
+    const int w = int(given_width), h = int(given_height);
+    check_image_size("--imagersize", w, h, "image size");
+    // A model written for another size than its images is wrong wherever it is used on them.
+    if (!here.empty() && (w != width || h != height))
+      throw InputError(fmt::format("--imagersize {},{}: {} (named in {}) is {}x{}{}", w, h, here, path, width, height,
+                                   turned_size_hint(w, h, width, height)));
+    width = w;
+    height = h;
+  } else if (width <= 0) {
+    throw InputError(path + ": the image size is unknown: none of the images it names is here (" +
+                     locate(path, d.images.front()) + ", ...); give it (--imagersize W,H)");
   }
   d.width = width;
   d.height = height;

@@ -197,7 +197,18 @@ TEST(CornersVnl, ImageSizeFromTheImagesBesideTheFileOrGivenOrRefused) {
   const CornersFile f = read_corners_vnl(path, board);
   EXPECT_EQ(f.detections.width, 64);
   EXPECT_EQ(f.detections.height, 48);
-  EXPECT_EQ(read_corners_vnl(path, board, 1280, 960).detections.width, 1280);  // given wins
+  EXPECT_EQ(read_corners_vnl(path, board, 64, 48).detections.width, 64);  // given, and as the image is
+  // Given otherwise than the image beside: a model for 1280x960 would be wrong on these views.
+  try {
+    read_corners_vnl(path, board, 1280, 960);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "--imagersize 1280,960: " + (dir / "views" / "a.png").string() + " (named in " +
+                                         path + ") is 64x48");
+  }
+  // No image here: the size given is the size.
+  fs::remove(dir / "views" / "a.png");
+  EXPECT_EQ(read_corners_vnl(path, board, 1280, 960).detections.width, 1280);
 }
 
 TEST(CornersVnl, CalibratingFromTheFileGivesTheModelOfTheDetections) {

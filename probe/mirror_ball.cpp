@@ -1,5 +1,7 @@
 #include "probe/mirror_ball.h"
 
+#include <fmt/format.h>
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -513,6 +515,10 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   rep.confidence = confidence;
   rep.cut_fraction = cut_fraction(result, w, h);
   if (report) *report = rep;
+  if (!(result.r >= options.min_radius_px))
+    throw InputError(fmt::format("find_ball: the circle found is {:.1f} px in radius, below {:g} px: too small to "
+                                 "unwrap (is there a ball in this image?)",
+                                 result.r, options.min_radius_px));
   if (rep.cut_fraction > options.max_cut_fraction)
     throw InputError("find_ball: ball cut by the image border (" + std::to_string(int(std::round(100 * rep.cut_fraction))) +
                      " % of its rim outside, max_cut_fraction allows " +

@@ -146,6 +146,9 @@ struct FindBallOptions {
   int rays = 360;
   double max_cut_fraction = 0.3;
   double min_confidence = 0.5;
+  // A smaller ball holds under ~200 pixels: no map comes from it, and in a 64x32 preview of
+  // a map (no ball at all) a 2.5 px "ball" was found and unwrapped with exit 0.
+  double min_radius_px = 8;
   // Skips the Hough search and refines this guess (and the inscribed circle).
   std::optional<BallInImage> initial_guess;
   // With initial_guess: how far (px) the ball may be from it. The guess is refined only on

@@ -1,6 +1,8 @@
 // find_ball's precision on balls rendered from every shared map (eval/ball_eval.h).
 #include <gtest/gtest.h>
 
+#include "core/error.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -108,6 +110,32 @@ TEST(BallPrecision, AUniformBallOnBlackIsFoundToHundredthsOfAPixel) {
     EXPECT_LT(std::hypot(b.cx - c.truth.cx, b.cy - c.truth.cy), 0.05);
     EXPECT_LT(std::abs(b.radius_px - c.truth.radius_px), 0.05);
   }
+}
+
+// Below FindBallOptions::min_radius_px a circle is no ball to unwrap: a 6 px ball, found, is
+// refused with one line; at 12 px it is found as usual.
+TEST(BallPrecision, ABallTooSmallToUnwrapIsRefused) {
+  RgbImage tiny;  // a 6 px disc on black (the harness renders from 8 px up)
+  tiny.width = tiny.height = 48;
+  tiny.rgb.assign(size_t(48 * 48 * 3), 0.0f);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x)
+      if (std::hypot(x - 23.6, y - 24.3) <= 6)
+        for (int c = 0; c < 3; ++c) tiny.rgb[size_t(y * 48 + x) * 3 + size_t(c)] = 0.8f;
+  try {
+    find_ball(tiny);
+    ADD_FAILURE() << "a 6 px ball was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("px in radius, below 8 px: too small to unwrap"), std::string::npos)
+        << e.what();
+  }
+  FindBallOptions any_size;  // the refusal is the size rule: without it the disc is found
+  any_size.min_radius_px = 0;
+  EXPECT_NEAR(find_ball(tiny, any_size).radius_px, 6, 1.0);
+  const BallCase small = render_ball_case(uniform_map(), BallBackground::Black, 12, {}, 11);
+  const BallInImage b = find_ball(small.image);
+  EXPECT_LT(std::hypot(b.cx - small.truth.cx, b.cy - small.truth.cy), 0.5);
+  EXPECT_NEAR(b.radius_px, small.truth.radius_px, 0.5);
 }
 
 // A studio map at two sizes on four backgrounds: the photo behind the ball has round

@@ -271,6 +271,18 @@ TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   EXPECT_EQ(ok.height(), 6);
 }
 
+// A longer exposure is brighter: times that say the opposite are not the frames' (a list
+// given in another order), and were fused into a wrong map with exit 0. The memorial
+// bracket's 32 s and 1 s frames, with their times and swapped.
+TEST(ReadBracket, TimesInAnotherOrderThanTheFramesBrightnessAreRefused) {
+  const std::string m = kData + "/hdr-memorial-debevec/";
+  const std::string bright = m + "memorial0061.png", dark = m + "memorial0066.png";
+  EXPECT_NO_THROW(read_bracket({bright, dark}, std::vector<double>{32, 1}));
+  EXPECT_EQ(message_of([&] { read_bracket({bright, dark}, std::vector<double>{1, 32}); }),
+            dark + " (32 s) is darker than " + bright + " (1 s) in 100 % of the pixels they both expose: the " +
+                "exposure times given (--exposure-times) are not these frames' (another order?)");
+}
+
 // An 8-bit bracket keeps its codes (Bracket::codes): each the file's code, as its float
 // k / 255 says, and merging through them is merging the floats, bit for bit. 16-bit files keep none.
 TEST(ReadBracket, Keeps8BitCodesThatMergeAsTheFloats) {

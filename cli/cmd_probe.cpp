@@ -17,6 +17,7 @@
 #include "core/image_io.h"
 #include "core/map_sequence.h"
 #include "core/progress.h"
+#include "core/warnings.h"
 #include "calib/colour_match.h"
 #include "hdr/bracket.h"
 #include "hdr/response.h"
@@ -109,6 +110,12 @@ UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   if (!a.ball.empty()) {
     const auto v = parse_numbers(a.ball, "--ball", 3);
     o.ball = BallInImage{v[0], v[1], v[2]};
+    // Given, not found: unwrapped as asked, but a ball find_ball would refuse as too small
+    // holds too few pixels for the map to be more than interpolation.
+    if (const double least = FindBallOptions{}.min_radius_px; v[2] > 0 && v[2] < least)
+      warn(fmt::format("--ball radius {:g} px: a ball under {:g} px holds under ~200 pixels of the scene; the map "
+                       "is mostly interpolation",
+                       v[2], least));
   }
   o.blind_spot_deg = a.blind_spot_deg;
   if (!a.camera.empty()) o.camera = read_camera_model(a.camera);

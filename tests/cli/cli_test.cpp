@@ -375,6 +375,14 @@ TEST(Cli, ASynthesisedMirrorBallUnwrapsToTheMapItCameFrom) {
     for (int i = 0; i < 64 * 64 * 3; ++i) f.write(reinterpret_cast<const char*>(&v), 4);
   }
   expect_one_line_error(lightprobe("probe unwrap " + flat.string() + " --type mirrorball -o " + map.string()), "flat.pfm");
+  // A ball given by hand (--ball) too small to find is unwrapped as asked, with one warning.
+  const CliRun tiny = lightprobe("probe unwrap " + ball.string() + " --type mirrorball --ball 200,200,5 --size 64x32 -o " +
+                                 map.string());
+  EXPECT_EQ(tiny.code, 0) << tiny.err;
+  EXPECT_NE(tiny.err.find("warning: --ball radius 5 px: a ball under 8 px"), std::string::npos) << tiny.err;
+  const CliRun given = lightprobe("probe unwrap " + ball.string() + " --type mirrorball --ball 200,200,160 --size 64x32 -o " +
+                                  map.string());
+  EXPECT_EQ(given.err.find("--ball radius"), std::string::npos) << given.err;
 }
 
 // CONVENTIONS.md: the probe's rotation is part of its metadata, the map is in the world

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "core/error.h"
 #include "core/file_io.h"
@@ -189,9 +190,7 @@ CornersFile read_corners_vnl(const std::string& path, const BoardSpec& board, do
     const std::string file = locate(path, image);
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) continue;
-    const CameraImage img = read_camera_image(file);
-    width = img.width;
-    height = img.height;
+    std::tie(width, height) = camera_image_size(file);  // the header: no decode
     here = file;
     break;
   }

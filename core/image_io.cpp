@@ -1376,6 +1376,19 @@ CameraImage read_camera_image(const std::string& path) {
   return camera_image_from_bytes(path, guarded(path, "read", [&] { return read_whole_file(path); }));
 }
 
+std::pair<int, int> camera_image_size(const std::string& path) {
+  const std::string bytes = guarded(path, "read", [&] { return read_whole_file(path); });
+  return guarded(path, "read", [&] {
+    if (bytes.empty()) fail(path, "cannot read: empty file");
+    const auto header = read_image_header(path, bytes);
+    if (!header) fail(path, "unsupported camera image format (expected PNG, JPEG, TIFF, PNM or BMP)");
+    check_image_size(path, header->width, header->height);
+    const int w = int(header->width), h = int(header->height);
+    // Orientations 5-8 exchange rows and columns (turned_for_display; OpenCV turns TIFFs alike).
+    return header->orientation >= 5 ? std::pair{h, w} : std::pair{w, h};
+  });
+}
+
 void make_output_directory(const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);

@@ -173,8 +173,8 @@ void check_exposure_order(const Bracket& b, const char* times_from) {
       darker += c < a - 0.02f;
     }
     if (darker >= 1000 && darker > 4 * brighter)
-      throw InputError(fmt::format("{} ({} s) is darker than {} ({} s) in {} % of the pixels they both expose: the "
-                                   "exposure times {} are not these frames' (another order?)",
+      throw InputError(fmt::format("{} ({} s) is darker than {} ({} s) in {} % of the sampled values they both "
+                                   "expose: the exposure times {} are not these frames' (another order?)",
                                    frame_name(b, l), b.exposure_seconds[l], frame_name(b, s), b.exposure_seconds[s],
                                    int(std::lround(100.0 * double(darker) / double(darker + brighter))), times_from));
   }

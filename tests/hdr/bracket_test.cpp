@@ -149,6 +149,8 @@ TEST(ReadCameraImage, TurnsJpegsAsTheirExifOrientationSays) {
       ASSERT_EQ(ours.width, peer.cols);
       ASSERT_EQ(ours.height, peer.rows);
       EXPECT_EQ(ours.width, o >= 5 ? 5 : 7);
+      // The header alone gives the same size (corners.vnl's --imagersize check reads it so).
+      EXPECT_EQ(camera_image_size(path), std::make_pair(ours.width, ours.height));
       for (int y = 0; y < peer.rows; ++y)
         for (int x = 0; x < peer.cols; ++x)
           for (int c = 0; c < 3; ++c)
@@ -279,7 +281,7 @@ TEST(ReadBracket, TimesInAnotherOrderThanTheFramesBrightnessAreRefused) {
   const std::string bright = m + "memorial0061.png", dark = m + "memorial0066.png";
   EXPECT_NO_THROW(read_bracket({bright, dark}, std::vector<double>{32, 1}));
   EXPECT_EQ(message_of([&] { read_bracket({bright, dark}, std::vector<double>{1, 32}); }),
-            dark + " (32 s) is darker than " + bright + " (1 s) in 100 % of the pixels they both expose: the " +
+            dark + " (32 s) is darker than " + bright + " (1 s) in 100 % of the sampled values they both expose: the " +
                 "exposure times given (--exposure-times) are not these frames' (another order?)");
 }
 

@@ -1,5 +1,7 @@
 #include "calib/photometric.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -268,6 +270,11 @@ void validate(const std::vector<PhotometricReading>& readings, const Photometric
       throw InputError(where(r) + ": camera value " + std::to_string(r.camera_value) + " of '" + r.label + "' is not positive");
     if (!std::isfinite(r.measured) || !(r.measured > 0))
       throw InputError(where(r) + ": measured value " + std::to_string(r.measured) + " of '" + r.label + "' is not a positive number");
+    if (!log_model && r.code_bits > 0)
+      throw InputError(where(r) + ": '" + r.label + "' is a region of " + std::to_string(r.code_bits) +
+                       "-bit camera codes, not relative radiance (not linearised, not divided by the exposure time); a "
+                       "linear scale is read off the map it scales: give the region in the fused .exr (hdr fuse), or "
+                       "fit a log sensor's codes (--model log)");
     if (log_model && r.unit == PhotometricReading::Unit::Lux)
       throw InputError(where(r) + ": a log-sensor fit takes luminance (cd/m2) readings only, '" + r.label + "' is in lux");
     auto [it, inserted] = seen.emplace(r.label, where(r));
@@ -356,13 +363,36 @@ void resolve_regions(std::vector<PhotometricReading>& readings, const std::strin
         throw InputError(where(r) + ": " + e.what());
       }
     }
+    const RgbImage& image = it->second;
+    const ImageRegion& g = *r.region;
     try {
-      r.camera_value = mean_luminance_in_region(it->second, r.region->x, r.region->y,
-                                                r.region->width, r.region->height);
+      r.camera_value = mean_luminance_in_region(image, g.x, g.y, g.width, g.height);
     } catch (const InputError& e) {
       throw InputError(where(r) + ": " + image_path.string() + ": " + e.what());
     }
+    r.code_bits = image.code_bits;
+    // A clipped pixel's code says only "at least" (or "at most"): the mean is biased by an
+    // unknown amount, which no loss can flag when every reading of a patch clips alike.
+    if (const size_t clipped = clipped_codes_in_region(image, g.x, g.y, g.width, g.height))
+      throw InputError(fmt::format("{}: {}: {} of {} pixels of region {},{},{},{} are clipped ({}-bit codes at 0 or "
+                                   "the top): their mean is not the patch's; pick a region or an exposure that does not clip",
+                                   where(r), image_path.string(), clipped, size_t(g.width) * size_t(g.height), g.x, g.y,
+                                   g.width, g.height, image.code_bits));
   }
+}
+
+size_t clipped_codes_in_region(const RgbImage& image, int x, int y, int width, int height) {
+  if (image.code_bits <= 0) return 0;
+  const float top = 1.0f - 0.5f / float((1 << image.code_bits) - 1);  // codes are in [0, 1]
+  size_t clipped = 0;
+  for (int v = std::max(y, 0); v < std::min(y + height, image.height); ++v)
+    for (int u = std::max(x, 0); u < std::min(x + width, image.width); ++u) {
+      const float* p = &image.rgb[3 * (size_t(v) * size_t(image.width) + size_t(u))];
+      const bool top_hit = p[0] >= top || p[1] >= top || p[2] >= top;
+      const bool black = p[0] <= 0 && p[1] <= 0 && p[2] <= 0;
+      clipped += top_hit || black;
+    }
+  return clipped;
 }
 
 double mean_luminance_in_region(const RgbImage& image, int x, int y, int width, int height) {

@@ -78,6 +78,9 @@ struct PhotometricReading {
   std::string label;                  // unique; the region text for image regions
   std::optional<ImageRegion> region;  // set when the label is "image:x,y,w,h"
   std::string source;                 // "file.csv:7" for messages; empty for readings built in code
+  // > 0: camera_value is the mean code of an 8- or 16-bit camera image's region (what a log
+  // sensor's fit reads), not relative radiance; a linear fit refuses it.
+  int code_bits = 0;
 };
 
 enum class RobustLoss { None, Huber, Cauchy };
@@ -122,12 +125,17 @@ struct PhotometricCalibration {
 std::vector<PhotometricReading> read_readings_csv(const std::string& path);
 // Fills camera_value of region readings with mean_luminance_in_region of the image, read
 // with read_rgb_image from `base_dir` (the CSV's folder when empty and the reading's
-// source names a file). Throws InputError naming the reading's file:line.
+// source names a file), and code_bits from the image. Throws InputError naming the
+// reading's file:line, also when a camera image's region holds clipped codes.
 void resolve_regions(std::vector<PhotometricReading>& readings, const std::string& base_dir = "");
 
 // Mean relative luminance Y over the valid pixels of a rectangle (x, y its top-left corner).
 // Throws InputError when the rectangle leaves the image or holds no valid pixel.
 double mean_luminance_in_region(const RgbImage& image, int x, int y, int width, int height);
+// Pixels of the rectangle with a channel at the top code or all channels at code 0 (a
+// camera image's codes, code_bits > 0): their true value is unknown, so a mean over them is
+// biased. 0 for radiance images.
+size_t clipped_codes_in_region(const RgbImage& image, int x, int y, int width, int height);
 // E_rel = sum over valid pixels of Y max(0, n . d) dw: the relative illuminance on a surface
 // with normal n (default straight up), to compare with a lux meter. Invalid pixels count
 // as dark, so a map with holes gives a lower bound.

@@ -319,6 +319,44 @@ TEST(Photometric, FitsRefuseTooFewReadingsAndLuxForLogSensors) {
             std::string::npos);
 }
 
+// Regions of a camera image are codes: a log sensor's fit reads them, a linear scale must
+// not (they are neither linear nor divided by the exposure time), and a clipped code's value
+// is unknown, so a region holding one is refused.
+TEST(Photometric, RegionsOfCameraCodesAreReadOnlyUnclippedAndOnlyByALogFit) {
+  const std::string dir = temp_dir();
+  RgbImage frame;
+  frame.width = 12;
+  frame.height = 2;
+  // Three 4x2 patches: codes 0.2, 0.5 and one whose right half is at the top code.
+  for (int v = 0; v < 2; ++v)
+    for (int u = 0; u < 12; ++u)
+      for (int c = 0; c < 3; ++c) frame.rgb.push_back(u < 4 ? 0.2f : u < 8 ? 0.5f : u < 10 ? 0.9f : 1.0f);
+  write_code_image(dir + "frame.png", frame, 8);
+  const std::string header = "region,camera_value,measured,unit\n";
+  const std::string two = "\"frame.png:0,0,4,2\",,10,cd/m2\n\"frame.png:4,0,4,2\",,100,cd/m2\n";
+  auto readings = read_readings_csv(write_text(dir + "log.csv", header + two + "c,0.8,1000,cd/m2\n"));
+  resolve_regions(readings);
+  EXPECT_NEAR(readings[0].camera_value, 51.0 / 255, 1e-6);
+  EXPECT_NEAR(readings[1].camera_value, 128.0 / 255, 1e-6);
+  EXPECT_EQ(readings[0].code_bits, 8);
+  EXPECT_EQ(readings[2].code_bits, 0);
+  PhotometricOptions log;
+  log.model = PhotometricOptions::Model::LogSensor;
+  EXPECT_TRUE(fit_photometric(readings, log).log_sensor.has_value());
+  EXPECT_NE(input_error([&] { fit_photometric(readings); }).find(dir + "log.csv:2: 'frame.png:0,0,4,2' is a region of 8-bit camera codes"),
+            std::string::npos);
+
+  auto clipped = read_readings_csv(write_text(dir + "clipped.csv", header + two + "\"frame.png:8,0,4,2\",,1000,cd/m2\n"));
+  EXPECT_NE(input_error([&] { resolve_regions(clipped); }).find(dir + "clipped.csv:4: " + dir + "frame.png: 4 of 8 pixels of region 8,0,4,2 are clipped"),
+            std::string::npos);
+  EXPECT_EQ(clipped_codes_in_region(frame, 8, 0, 4, 2), 0u) << "radiance (code_bits 0) never clips";
+  frame.code_bits = 8;
+  EXPECT_EQ(clipped_codes_in_region(frame, 8, 0, 4, 2), 4u);
+  EXPECT_EQ(clipped_codes_in_region(frame, 0, 0, 8, 2), 0u);
+  frame.rgb.assign(frame.rgb.size(), 0.0f);
+  EXPECT_EQ(clipped_codes_in_region(frame, 0, 0, 3, 1), 3u) << "black in every channel is clipped too";
+}
+
 TEST(Photometric, RegionsOutsideTheImageAreRejected) {
   RgbImage image{4, 4, std::vector<float>(48, 1.0f)};
   EXPECT_DOUBLE_EQ(mean_luminance_in_region(image, 1, 1, 2, 2), 1.0);

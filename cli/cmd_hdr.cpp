@@ -47,11 +47,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// --exposure-times: a list of seconds (1/40 allowed) or a file (one per line, or CSV).
-std::optional<std::vector<double>> exposure_times(const std::string& text) {
+// --exposure-times: a list of seconds (1/40 allowed) or a file (one per line, or CSV: by
+// file name where it names them).
+std::optional<std::vector<double>> exposure_times(const std::string& text, const std::vector<std::string>& images) {
   if (text.empty()) return std::nullopt;
   std::error_code ec;
-  if (fs::is_regular_file(text, ec)) return read_exposure_list(text);
+  if (fs::is_regular_file(text, ec)) return exposure_times_for(text, images);
   return parse_numbers(text, "--exposure-times");
 }
 
@@ -69,7 +70,7 @@ std::optional<std::array<uint8_t, 3>> ignore_colour(const std::string& text) {
 }  // namespace
 
 int run_hdr_response(const HdrResponseArgs& args, const Output& out) {
-  const Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times));
+  const Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times, args.images));
   const auto t0 = Clock::now();
   CameraResponse response;
   if (args.method == "debevec") {
@@ -105,7 +106,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     radiance = decode_log_sensor(read_rgb_image(args.images[0]), *photometric);
     report["mode"] = "log-sensor";
   } else {
-    Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times));
+    Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times, args.images));
     CameraResponse response;
     if (!args.response.empty()) {
       response = load_response(args.response);
@@ -175,7 +176,7 @@ std::vector<Command> hdr_commands() {
        [](Flags& f) -> Handler {
          auto a = std::make_shared<HdrResponseArgs>();
          f.arg("IMAGE", a->images, "Bracket frames (8/16-bit PNG, JPEG, TIFF)").required();
-         f.opt("--exposure-times", a->exposure_times, "Seconds per frame ('1/40' allowed) or a list file; default EXIF");
+         f.opt("--exposure-times", a->exposure_times, "Seconds per frame ('1/40' allowed) or a list file (read by file name where it names them); default EXIF");
          f.opt("--method", a->method, "debevec|robertson");
          f.opt("--lambda", a->lambda, "Debevec smoothness weight");
          f.opt("--ignore-colour", a->ignore_colour, "r,g,b of registration borders to leave out");
@@ -187,7 +188,7 @@ std::vector<Command> hdr_commands() {
        [](Flags& f) -> Handler {
          auto a = std::make_shared<HdrFuseArgs>();
          f.arg("IMAGE", a->images, "Bracket frames, or one frame of a log sensor").required();
-         f.opt("--exposure-times", a->exposure_times, "Seconds per frame or a list file; default EXIF");
+         f.opt("--exposure-times", a->exposure_times, "Seconds per frame or a list file (read by file name where it names them); default EXIF");
          f.opt("--response", a->response, "Saved response (hdr response); default: recovered here");
          f.flag("--linear", a->linear, "Linear sensor: no response curve");
          f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");

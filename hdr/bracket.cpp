@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <numeric>
@@ -21,6 +22,8 @@
 
 namespace lp {
 namespace {
+
+namespace fs = std::filesystem;
 
 std::string frame_name(const Bracket& b, size_t k) {
   return k < b.paths.size() ? b.paths[k] : fmt::format("bracket frame {}", k);
@@ -250,9 +253,9 @@ void keep_8bit_codes(Bracket& b) {
   }
 }
 
-std::vector<double> read_exposure_list(const std::string& path) {
+std::vector<ExposureEntry> read_exposure_entries(const std::string& path) {
   std::istringstream in(read_text_file(path, "the exposure list"));
-  std::vector<double> times;
+  std::vector<ExposureEntry> entries;
   std::string line;
   int line_no = 0;
   bool first_data_line = true;
@@ -270,17 +273,63 @@ std::vector<double> read_exposure_list(const std::string& path) {
       std::string f;
       while (ss >> f) fields.push_back(f);
     }
+    ExposureEntry e;
+    e.line = line_no;
     std::optional<double> t = parse_seconds(fields[0]);
-    if (!t && fields.size() >= 2) t = parse_seconds(fields[1]);
+    if (!t && fields.size() >= 2) {
+      t = parse_seconds(fields[1]);
+      e.file = fields[0];
+    }
     const bool header = first_data_line && !t;
     first_data_line = false;
     if (header) continue;
     if (!t) throw InputError(fmt::format("{}:{}: no exposure time in '{}'", path, line_no, line));
     if (!std::isfinite(*t) || !(*t > 0.0))
       throw InputError(fmt::format("{}:{}: exposure time {} s is not positive and finite", path, line_no, *t));
-    times.push_back(*t);
+    e.seconds = *t;
+    entries.push_back(std::move(e));
   }
-  if (times.empty()) throw InputError(path + ": no exposure times in the file");
+  if (entries.empty()) throw InputError(path + ": no exposure times in the file");
+  return entries;
+}
+
+std::vector<double> read_exposure_list(const std::string& path) {
+  std::vector<double> times;
+  for (const ExposureEntry& e : read_exposure_entries(path)) times.push_back(e.seconds);
+  return times;
+}
+
+std::vector<double> exposure_times_for(const std::string& path, const std::vector<std::string>& images) {
+  const std::vector<ExposureEntry> entries = read_exposure_entries(path);
+  const size_t named = size_t(std::count_if(entries.begin(), entries.end(), [](const auto& e) { return !e.file.empty(); }));
+  if (named == 0) {
+    if (entries.size() != images.size())
+      throw InputError(fmt::format("{}: {} times for {} images (a list of times alone is read in order)", path,
+                                   entries.size(), images.size()));
+    return read_exposure_list(path);
+  }
+  if (named != entries.size()) {
+    const auto bare = std::find_if(entries.begin(), entries.end(), [](const auto& e) { return e.file.empty(); });
+    throw InputError(fmt::format("{}:{}: a time without a file name in a list that names its files", path, bare->line));
+  }
+  // Glob order is not the list's order (ball_1-160s.jpg sorts before ball_1-40s.jpg), and a
+  // subset of a bracket is a bracket: names, not positions, say which time is whose.
+  std::vector<double> times;
+  for (const std::string& image : images) {
+    const std::string file = fs::path(image).filename().string();
+    const ExposureEntry* found = nullptr;
+    for (const bool whole_path : {true, false}) {
+      for (const ExposureEntry& e : entries) {
+        if (!(whole_path ? e.file == image : fs::path(e.file).filename().string() == file)) continue;
+        if (found)
+          throw InputError(fmt::format("{}: lines {} and {} both name {}", path, found->line, e.line, image));
+        found = &e;
+      }
+      if (found) break;
+    }
+    if (!found) throw InputError(fmt::format("{}: no line names {} (the list names its files)", path, image));
+    times.push_back(found->seconds);
+  }
   return times;
 }
 

@@ -72,4 +72,21 @@ std::optional<double> read_exif_exposure_seconds(const std::string& path);
 // time field is not a number is a header. Throws InputError naming the file and line.
 std::vector<double> read_exposure_list(const std::string& csv_or_txt);
 
+// One line of an exposure list: its time, the file it names (empty when the line holds a
+// time alone) and its line number.
+struct ExposureEntry {
+  std::string file;
+  double seconds = 0;
+  int line = 0;
+};
+// The lines of an exposure list as read_exposure_list reads them, with their names.
+std::vector<ExposureEntry> read_exposure_entries(const std::string& csv_or_txt);
+
+// The times of `images`, in their order. A list that names its files is looked up by name
+// (an image's path as given, else its file name), so the images may be any of them in any
+// order; a list of times alone is taken in order and must have one per image. Throws
+// InputError naming the list and the image for an image it does not name, a name given
+// twice, or a list that mixes named and unnamed lines.
+std::vector<double> exposure_times_for(const std::string& csv_or_txt, const std::vector<std::string>& images);
+
 }  // namespace lp

@@ -241,6 +241,36 @@ TEST(ReadExposureList, ReadsTheSharedCsvsDebevecsListAndPlainLines) {
   EXPECT_THROW(read_exposure_list(tmp.text("empty.txt", "# nothing\n")), InputError);
 }
 
+// A list that names its files is read by name: glob order is not the list's (ls sorts
+// ball_1-160s.jpg before ball_1-40s.jpg), and a subset of a bracket is a bracket. Read in
+// order, both gave frames another frame's time.
+TEST(ReadExposureList, AListThatNamesItsFilesIsReadByName) {
+  const std::string kartik = kData + "/hdr-mirrorball-kartik/";
+  EXPECT_EQ(exposure_times_for(kartik + "exposures.csv",
+                               {kartik + "ball_1-10s.jpg", kartik + "ball_1-160s.jpg", kartik + "ball_1-40s.jpg"}),
+            (std::vector<double>{0.1, 1.0 / 160, 1.0 / 40}));
+  const std::string m = kData + "/hdr-memorial-debevec/";
+  for (const std::string list : {"exposures.csv", "hdr_image_list.txt"}) {
+    EXPECT_EQ(exposure_times_for(m + list, {m + "memorial0070.png", "memorial0066.png", m + "memorial0068.png"}),
+              (std::vector<double>{0.0625, 1.0, 0.25}))
+        << list;
+  }
+  TempDir tmp;
+  const std::string named = tmp.text("named.csv", "file,seconds\na/x.png,0.5\nb/x.png,0.25\ny.png,1\n");
+  EXPECT_EQ(exposure_times_for(named, {"b/x.png", "y.png"}), (std::vector<double>{0.25, 1.0}))
+      << "a path as given wins over a file name";
+  EXPECT_EQ(message_of([&] { exposure_times_for(named, {"c/x.png"}); }), named + ": lines 2 and 3 both name c/x.png");
+  EXPECT_EQ(message_of([&] { exposure_times_for(named, {"z.png"}); }),
+            named + ": no line names z.png (the list names its files)");
+  const std::string mixed = tmp.text("mixed.csv", "x.png,0.5\n0.25\n");
+  EXPECT_EQ(message_of([&] { exposure_times_for(mixed, {"x.png"}); }),
+            mixed + ":2: a time without a file name in a list that names its files");
+  const std::string bare = tmp.text("bare.txt", "0.5\n0.25\n");
+  EXPECT_EQ(exposure_times_for(bare, {"q.png", "p.png"}), (std::vector<double>{0.5, 0.25})) << "times alone: in order";
+  EXPECT_EQ(message_of([&] { exposure_times_for(bare, {"q.png"}); }),
+            bare + ": 2 times for 1 images (a list of times alone is read in order)");
+}
+
 TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   TempDir tmp;
   const std::string a = tmp.png("a.png", 8, 6), b = tmp.png("b.png", 8, 6), odd = tmp.png("odd.png", 7, 8);

@@ -151,6 +151,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     report["saturated_everywhere"] = mr.saturated_everywhere;
     report["black_everywhere"] = mr.black_everywhere;
     report["frames"] = bracket.frames.size();
+    if (bracket.white_level) report["white_level"] = bracket.white_level;
     report["mode"] = "bracket";
     if (mr.saturated_everywhere)
       say(out, "{}: {} pixels are saturated in every frame (their radiance is a lower bound)\n", args.output,

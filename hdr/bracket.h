@@ -34,6 +34,9 @@ struct Bracket {
   // profile that cannot be applied (a LUT one, warned about).
   std::optional<std::array<double, 9>> to_rec709;
   std::string colour_profile;  // that profile's description
+  // 16-bit files that hold a 10- to 15-bit sensor's codes in their low bits: the code the
+  // clipping piles up at, which read_bracket has mapped to 1.0 (0: the container's top).
+  int white_level = 0;
 
   int width() const { return frames.empty() ? 0 : frames[0].width; }
   int height() const { return frames.empty() ? 0 : frames[0].height; }
@@ -50,11 +53,18 @@ void check_bracket(const Bracket& bracket);
 // code k; tests/hdr/merge_codes_test.cpp).
 void keep_8bit_codes(Bracket& bracket);
 
+// 16-bit frames (not RAW) whose codes never reach the container's top half and pile up at
+// their largest code (at least 16 values, and 1 in 10,000): a sensor of fewer bits whose
+// codes were stored as they came, clipped at that code. Maps that code to 1.0 (c / white
+// level), sets white_level and warns in one line; otherwise leaves the bracket as it is.
+void apply_sensor_white_level(Bracket& bracket);
+
 // Reads every image (read_camera_image) and its exposure time: from `exposure_seconds`
 // when given (one per path, same order), else from each file's EXIF ExposureTime, else
 // InputError("<file>: no exposure time in EXIF; give --exposure-times"). All files must
-// have the same bit depth. The result passes check_bracket; a bracket of 8-bit files keeps
-// their codes too (keep_8bit_codes).
+// have the same bit depth. The result passes check_bracket, has its sensor's white level
+// applied (apply_sensor_white_level); a bracket of 8-bit files keeps their codes too
+// (keep_8bit_codes).
 Bracket read_bracket(const std::vector<std::string>& paths,
                      const std::optional<std::vector<double>>& exposure_seconds = std::nullopt);
 

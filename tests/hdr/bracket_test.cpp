@@ -315,6 +315,66 @@ TEST(ReadBracket, TimesInAnotherOrderThanTheFramesBrightnessAreRefused) {
                 "exposure times given (--exposure-times) are not these frames' (another order?)");
 }
 
+// A 12-bit camera's codes saved as they came in 16-bit PNGs (Mono12 to PNG): clipped at
+// 4095, which a merge that knows only 65535 as saturated took for a valid value. The same
+// codes shifted to the top bits (the 16-bit PNG a careful writer makes) are the reference.
+TEST(ReadBracket, SixteenBitFilesOfATwelveBitSensorAreReadAtItsWhiteLevel) {
+  TempDir tmp;
+  const std::vector<double> times{1.0 / 64, 1.0 / 8, 1.0};
+  const int w = 64, h = 32;
+  // Radiance over 13 stops, every pixel its own value, so that only clipping repeats a code.
+  auto write = [&](const std::string& name, double gain, int shift) {
+    std::vector<std::string> paths;
+    for (size_t k = 0; k < times.size(); ++k) {
+      RgbImage f;
+      f.width = w;
+      f.height = h;
+      for (int i = 0; i < w * h; ++i) {
+        const double l = 0.5 * std::exp(std::log(8000.0) * i / (w * h - 1));
+        for (const double c : {1.0, 0.8, 0.6}) {
+          const double code = std::min(4095.0, std::round(gain * l * c * times[k]));
+          f.rgb.push_back(float(code * (1 << shift) / 65535.0));
+        }
+      }
+      paths.push_back((tmp.path / (name + std::to_string(k) + ".png")).string());
+      write_code_image(paths.back(), f, 16);
+    }
+    return paths;
+  };
+  std::vector<std::string> warnings;
+  set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const Bracket low = read_bracket(write("low", 40, 0), times);
+  const Bracket high = read_bracket(write("high", 40, 4), times);
+  const Bracket dark = read_bracket(write("dark", 0.5, 0), times);  // clips nowhere
+  set_warning_sink(nullptr);
+  EXPECT_EQ(low.white_level, 4095);
+  EXPECT_EQ(high.white_level, 0);
+  EXPECT_EQ(dark.white_level, 0);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("low0.png: the 16-bit codes of all 3 frames stop at 4095"), std::string::npos) << warnings[0];
+  EXPECT_NE(warnings[0].find("read as a 12-bit sensor's codes, white level 4095"), std::string::npos) << warnings[0];
+  size_t clipped = 0;
+  for (size_t k = 0; k < 3; ++k)
+    for (size_t i = 0; i < low.frames[k].rgb.size(); ++i) {
+      const double c = std::round(double(high.frames[k].rgb[i]) * 65535.0 / 16.0);  // the 12-bit code
+      ASSERT_FLOAT_EQ(low.frames[k].rgb[i], float(c / 4095.0));
+      clipped += c == 4095;
+    }
+  EXPECT_GT(clipped, 1000u);
+  EXPECT_EQ(dark.frames[2].rgb.back(), float(std::round(0.5 * 0.5 * 8000 * 0.6) / 65535.0)) << "left as read";
+  // Fused: the clipped highlights now come from the short frames, as with the top-bit codes.
+  const RgbImage a = merge_bracket(low, linear_response(1024), {});
+  const RgbImage b = merge_bracket(high, linear_response(1024), {});
+  double sum_a = 0, sum_b = 0, worst = 0;
+  for (size_t i = 0; i < a.rgb.size(); ++i) {
+    sum_a += a.rgb[i];
+    sum_b += b.rgb[i];
+    worst = std::max(worst, std::abs(std::log(double(a.rgb[i]) / double(b.rgb[i]))));
+  }
+  EXPECT_NEAR(sum_a / sum_b, 1.0, 1e-3);
+  EXPECT_LT(worst, 0.01);
+}
+
 // An 8-bit bracket keeps its codes (Bracket::codes): each the file's code, as its float
 // k / 255 says, and merging through them is merging the floats, bit for bit. 16-bit files keep none.
 TEST(ReadBracket, Keeps8BitCodesThatMergeAsTheFloats) {

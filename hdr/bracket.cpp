@@ -108,13 +108,18 @@ void check_bracket(const Bracket& b) {
                                    b.frames[k].rgb.size()));
 }
 
-std::optional<double> read_exif_exposure_seconds(const std::string& path) {
+ExifExposureSettings read_exif_exposure(const std::string& path) {
   // Exiv2 is loaded by the first EXIF read (hdr/camera_files_plugin.h).
   const detail::ExifExposure e = detail::camera_files_plugin().exif_exposure(path);
   if (e.status == detail::ExifExposure::Status::Failed) throw InputError(fmt::format("{}: {}", path, e.message));
-  if (e.status == detail::ExifExposure::Status::Absent) return std::nullopt;
-  return e.seconds;
+  ExifExposureSettings s;
+  if (e.status == detail::ExifExposure::Status::Found) s.seconds = e.seconds;
+  s.iso = e.iso;
+  s.f_number = e.f_number;
+  return s;
 }
+
+std::optional<double> read_exif_exposure_seconds(const std::string& path) { return read_exif_exposure(path).seconds; }
 
 namespace {
 
@@ -128,6 +133,51 @@ bool may_have_icc_profile(const std::string& path) {
   head.resize(size_t(in.gcount()));
   if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
   return head.find("ICC_PROFILE") != std::string::npos || head.find("iCCP") != std::string::npos;
+}
+
+// Whether a camera file may carry EXIF, from its first 64 KB, without Exiv2: a JPEG's APP1
+// "Exif" segment and a PNG's eXIf chunk come before the pixels; a TIFF is its own EXIF.
+bool may_have_exif(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(64 * 1024, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
+  return head.find(std::string("Exif\0\0", 6)) != std::string::npos || head.find("eXIf") != std::string::npos;
+}
+
+// "100, 400, 1600" (format: one value's text).
+std::string list_of(const std::vector<ExifExposureSettings>& s, double ExifExposureSettings::*field) {
+  std::string out;
+  for (const auto& e : s) out += (out.empty() ? "" : ", ") + fmt::format("{:g}", e.*field);
+  return out;
+}
+
+// The exposure is H = E t ISO / N^2, not E t: a bracket shot with auto ISO (phones), ISO
+// bracketing or aperture bracketing changes more than the time. Read with times alone, such
+// frames are fused at the wrong ratios and nothing looks wrong (a longer time is still
+// brighter). Where every frame records a setting and it differs, it scales the exposure.
+void fold_iso_and_aperture(Bracket& b, const std::vector<ExifExposureSettings>& s) {
+  if (s.size() != b.frames.size() || s.empty()) return;
+  auto all_recorded = [&](double ExifExposureSettings::*field) {
+    return std::all_of(s.begin(), s.end(), [&](const auto& e) { return e.*field > 0; });
+  };
+  auto varies = [&](double ExifExposureSettings::*field) {
+    return std::any_of(s.begin(), s.end(), [&](const auto& e) { return std::abs(e.*field / s[0].*field - 1) > 0.01; });
+  };
+  const bool iso = all_recorded(&ExifExposureSettings::iso) && varies(&ExifExposureSettings::iso);
+  const bool aperture = all_recorded(&ExifExposureSettings::f_number) && varies(&ExifExposureSettings::f_number);
+  if (!iso && !aperture) return;
+  for (size_t k = 0; k < s.size(); ++k) {
+    if (iso) b.exposure_seconds[k] *= s[k].iso / s[0].iso;
+    if (aperture) b.exposure_seconds[k] *= (s[0].f_number / s[k].f_number) * (s[0].f_number / s[k].f_number);
+  }
+  std::string what;
+  if (iso) what = "ISO " + list_of(s, &ExifExposureSettings::iso);
+  if (aperture) what += (iso ? " and f-numbers " : "f-numbers ") + list_of(s, &ExifExposureSettings::f_number);
+  warn(fmt::format("{}: the frames' EXIF {} differ: each frame's exposure is taken as its time x ISO / f-number^2, "
+                   "relative to the first",
+                   b.paths.empty() ? std::string("bracket") : b.paths.front(), what));
 }
 
 // Camera codes are sRGB unless the first file's ICC profile says otherwise. A matrix profile
@@ -187,6 +237,7 @@ void check_exposure_order(const Bracket& b, const char* times_from) {
 
 Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<std::vector<double>>& times) {
   Bracket b;
+  std::vector<ExifExposureSettings> settings;  // non-RAW frames' EXIF ISO and f-number
   if (times && times->size() != paths.size())
     throw InputError(fmt::format("--exposure-times: {} times for {} images", times->size(), paths.size()));
   // Camera RAW files (through LibRaw) are linear 16-bit with their own shutter time.
@@ -227,12 +278,23 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     b.paths.push_back(paths[k]);
     if (times) {
       b.exposure_seconds.push_back((*times)[k]);
+      // Given times are times: the ISO and aperture still count, where EXIF has them. A file
+      // whose EXIF cannot be read was given its time, so that is no error here.
+      ExifExposureSettings e;
+      if (may_have_exif(paths[k])) {
+        try {
+          e = read_exif_exposure(paths[k]);
+        } catch (const InputError&) {
+        }
+      }
+      settings.push_back(e);
     } else {
-      const auto t = read_exif_exposure_seconds(paths[k]);
-      if (!t) throw InputError(paths[k] + ": no exposure time in EXIF; give --exposure-times");
-      b.exposure_seconds.push_back(*t);
+      settings.push_back(read_exif_exposure(paths[k]));
+      if (!settings.back().seconds) throw InputError(paths[k] + ": no exposure time in EXIF; give --exposure-times");
+      b.exposure_seconds.push_back(*settings.back().seconds);
     }
   }
+  fold_iso_and_aperture(b, settings);
   check_bracket(b);
   apply_sensor_white_level(b);
   check_exposure_order(b, times ? "given (--exposure-times)" : "read from the files");

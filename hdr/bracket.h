@@ -61,8 +61,10 @@ void apply_sensor_white_level(Bracket& bracket);
 
 // Reads every image (read_camera_image) and its exposure time: from `exposure_seconds`
 // when given (one per path, same order), else from each file's EXIF ExposureTime, else
-// InputError("<file>: no exposure time in EXIF; give --exposure-times"). All files must
-// have the same bit depth. The result passes check_bracket, has its sensor's white level
+// InputError("<file>: no exposure time in EXIF; give --exposure-times"). Where every frame's
+// EXIF records its ISO (or f-number) and they differ, each frame's exposure_seconds is its
+// time x ISO / f-number^2 relative to the first frame's, said in one warning (auto-ISO and
+// ISO or aperture bracketing). All files must have the same bit depth. The result passes check_bracket, has its sensor's white level
 // applied (apply_sensor_white_level); a bracket of 8-bit files keeps their codes too
 // (keep_8bit_codes).
 Bracket read_bracket(const std::vector<std::string>& paths,
@@ -72,6 +74,14 @@ Bracket read_bracket(const std::vector<std::string>& paths,
 // Exif.Image.ExposureTime, else the APEX Exif.Photo.ShutterSpeedValue), in seconds;
 // nullopt when the file carries none. Throws InputError when the file cannot be read.
 std::optional<double> read_exif_exposure_seconds(const std::string& path);
+
+// What a file's EXIF says of its exposure: the time as read_exif_exposure_seconds reads it,
+// and the ISO and f-number (Exiv2's isoSpeed and fNumber; 0 where not recorded).
+struct ExifExposureSettings {
+  std::optional<double> seconds;
+  double iso = 0, f_number = 0;
+};
+ExifExposureSettings read_exif_exposure(const std::string& path);
 
 // A list of exposure times in seconds, in file order. Accepts:
 //  - one time per line ("0.025" or "1/40"), blank lines and '#' comments skipped;

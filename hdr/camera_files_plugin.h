@@ -37,6 +37,9 @@ struct ExifExposure {
   Status status = Status::Absent;
   double seconds = 0;
   std::string message;  // Failed: "cannot open to read EXIF" or "cannot read EXIF: <Exiv2's reason>"
+  // What else sets the exposure, where recorded (Exiv2's isoSpeed and fNumber, maker notes
+  // included), else 0; read whether or not a time was found.
+  double iso = 0, f_number = 0;
 };
 
 // What the plugin exports (its one symbol, `lightprobe_camera_files`, returns it). The
@@ -51,7 +54,7 @@ struct CameraFilesPluginTable {
   // cannot read the file (the image reader reports that).
   std::string (*icc_profile)(const std::string& path);
 };
-inline constexpr int kCameraFilesPluginVersion = 2;
+inline constexpr int kCameraFilesPluginVersion = 3;
 inline constexpr const char* kCameraFilesPluginFile = "liblightprobe_camera_files.so";
 
 // The plugin's table, loaded once; throws std::runtime_error when it cannot be loaded.

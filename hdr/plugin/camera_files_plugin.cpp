@@ -73,6 +73,13 @@ Exiv2::Image::AutoPtr open_with_metadata(const std::string& path) {
   return image;
 }
 
+// The first value of a metadatum as a positive number, else 0.
+double positive_value(const Exiv2::ExifData& exif, Exiv2::ExifData::const_iterator it) {
+  if (it == exif.end() || it->count() == 0) return 0;
+  const double v = it->toFloat(0);
+  return std::isfinite(v) && v > 0 ? double(v) : 0;
+}
+
 ExifExposure exif_exposure(const std::string& path) {
   ExifExposure out;
   try {
@@ -83,6 +90,8 @@ ExifExposure exif_exposure(const std::string& path) {
       return out;
     }
     const Exiv2::ExifData& exif = image->exifData();
+    out.iso = positive_value(exif, Exiv2::isoSpeed(exif));
+    out.f_number = positive_value(exif, Exiv2::fNumber(exif));
     for (const char* key : {"Exif.Photo.ExposureTime", "Exif.Image.ExposureTime"}) {
       const auto it = exif.findKey(Exiv2::ExifKey(key));
       if (it == exif.end() || it->count() == 0) continue;

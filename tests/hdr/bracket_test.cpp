@@ -1,5 +1,6 @@
 #include "hdr/bracket.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -98,6 +99,97 @@ TEST(ReadExifExposure, AnExposureTimeOfTwoValuesIsRefusedNotReadAsItsFirst) {
   const std::string bad = jpeg_with_exposure_entry(tmp, "bad.jpg", 4, {1, 8});
   const std::string msg = message_of([&] { read_exif_exposure_seconds(bad); });
   EXPECT_EQ(msg.rfind(bad + ": EXIF Exif.Photo.ExposureTime holds 2 values (1 8)", 0), 0u) << msg;
+}
+
+// A JPEG of `rgb` (linear values in [0, 1], stored sRGB-encoded) whose EXIF records the
+// exposure time t_num/t_den s, the f-number f_num/f_den and the ISO, as a camera writes them.
+std::string jpeg_with_settings(const TempDir& tmp, const std::string& name, int w, int h, const std::vector<float>& rgb,
+                               uint32_t t_num, uint32_t t_den, uint32_t f_num, uint32_t f_den, uint32_t iso) {
+  const std::string plain = (tmp.path / (name + ".plain.jpg")).string();
+  write_display_image(plain, w, h, rgb);  // sRGB-encodes
+  std::ifstream in(plain, std::ios::binary);
+  const std::string jpeg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string tiff;
+  auto u16 = [&](uint32_t v) { tiff += char(v & 0xff), tiff += char((v >> 8) & 0xff); };
+  auto u32 = [&](uint32_t v) { u16(v & 0xffff), u16(v >> 16); };
+  tiff += "II", u16(42), u32(8);
+  u16(1), u16(0x8769), u16(4), u32(1), u32(26), u32(0);  // IFD0: the Exif IFD's offset
+  u16(3);                                                // Exif IFD, its tags in order:
+  u16(0x829A), u16(5), u32(1), u32(68);                  // ExposureTime, RATIONAL
+  u16(0x829D), u16(5), u32(1), u32(76);                  // FNumber, RATIONAL
+  u16(0x8827), u16(3), u32(1), u16(iso), u16(0);         // ISOSpeedRatings, SHORT
+  u32(0);
+  u32(t_num), u32(t_den), u32(f_num), u32(f_den);
+  const std::string app1 = std::string("Exif\0\0", 6) + tiff;
+  const size_t length = app1.size() + 2;
+  const std::string path = (tmp.path / name).string();
+  std::ofstream(path, std::ios::binary) << jpeg.substr(0, 2) << char(0xFF) << char(0xE1) << char(length >> 8)
+                                        << char(length & 0xff) << app1 << jpeg.substr(2);
+  return path;
+}
+
+// A phone's bracket: the time doubles, the ISO quadruples (exposures 1 : 8 : 64). Read by
+// their times alone (1 : 2 : 4) the frames fused at the wrong ratios, with nothing to see: a
+// longer time was still the brighter frame.
+TEST(ReadBracket, FramesOfAnotherIsoOrApertureAreExposedByItToo) {
+  TempDir tmp;
+  const int w = 96, h = 8;
+  std::vector<double> radiance;  // 6 stops left to right: every pixel well exposed somewhere
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) radiance.push_back(std::exp2(6.0 * u / (w - 1)));
+  struct Shot {
+    uint32_t t_den, f_num, iso;  // time 1/t_den s, f/(f_num / 10)
+  };
+  auto bracket = [&](const std::string& name, const std::vector<Shot>& shots) {
+    auto exposure_of = [](const Shot& s) { return s.iso / 100.0 / s.t_den / (s.f_num * s.f_num / 100.0); };
+    const double scale = 0.5 / (8 * exposure_of(shots[1]));  // the middle frame at half scale mid-scene
+    std::vector<std::string> paths;
+    for (size_t k = 0; k < shots.size(); ++k) {
+      std::vector<float> rgb;
+      for (double l : radiance)
+        for (int c = 0; c < 3; ++c) rgb.push_back(float(l * exposure_of(shots[k]) * scale));
+      paths.push_back(jpeg_with_settings(tmp, name + std::to_string(k) + ".jpg", w, h, rgb, 1, shots[k].t_den,
+                                         shots[k].f_num, 10, shots[k].iso));
+    }
+    return paths;
+  };
+  // The spread of log(fused / true radiance) over the pixels: 0 for a fusion at the right ratios.
+  auto spread = [&](const Bracket& b) {
+    const RgbImage fused = merge_bracket(b, srgb_response(256), {});
+    double lo = 1e9, hi = -1e9;
+    for (size_t i = 0; i < radiance.size(); ++i) {
+      const double r = std::log(double(fused.rgb[3 * i + 1]) / radiance[i]);
+      lo = std::min(lo, r), hi = std::max(hi, r);
+    }
+    return hi - lo;
+  };
+  std::vector<std::string> warnings;
+  set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const auto iso = bracket("iso", {{100, 18, 100}, {50, 18, 400}, {25, 18, 1600}});
+  const Bracket from_exif = read_bracket(iso);
+  const Bracket given = read_bracket(iso, std::vector<double>{0.01, 0.02, 0.04});
+  const Bracket aperture = read_bracket(bracket("f", {{100, 80, 200}, {100, 40, 200}, {100, 20, 200}}),
+                                        std::vector<double>{0.01, 0.01, 0.01});
+  const Bracket plain = read_bracket(bracket("plain", {{400, 18, 100}, {50, 18, 100}, {6, 18, 100}}));
+  set_warning_sink(nullptr);
+  ASSERT_EQ(warnings.size(), 3u);
+  EXPECT_EQ(warnings[0], iso[0] + ": the frames' EXIF ISO 100, 400, 1600 differ: each frame's exposure is taken as its "
+                                  "time x ISO / f-number^2, relative to the first");
+  EXPECT_EQ(warnings[1], warnings[0]) << "given times are times: the ISO still counts";
+  EXPECT_NE(warnings[2].find(": the frames' EXIF f-numbers 8, 4, 2 differ"), std::string::npos) << warnings[2];
+  // Measured: 0.043 (ISO), 0.021 (aperture), 0.044 (one ISO), 1.85 by the times alone.
+  for (const Bracket* b : {&from_exif, &given}) {
+    EXPECT_NEAR(b->exposure_seconds[1] / b->exposure_seconds[0], 8.0, 1e-9);
+    EXPECT_NEAR(b->exposure_seconds[2] / b->exposure_seconds[0], 64.0, 1e-9);
+    EXPECT_LT(spread(*b), 0.1);
+  }
+  EXPECT_NEAR(aperture.exposure_seconds[2] / aperture.exposure_seconds[0], 16.0, 1e-9);
+  EXPECT_LT(spread(aperture), 0.1);
+  EXPECT_EQ(plain.exposure_seconds, (std::vector<double>{1.0 / 400, 1.0 / 50, 1.0 / 6}));
+  EXPECT_LT(spread(plain), 0.1) << "the same scene at one ISO: the reference spread";
+  Bracket times_only = from_exif;
+  times_only.exposure_seconds = {0.01, 0.02, 0.04};
+  EXPECT_GT(spread(times_only), 1.0) << "what the times alone gave";
 }
 
 // `jpeg` with an APP1 Exif segment stating EXIF Orientation `orientation`, in the byte

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <map>
@@ -93,6 +94,24 @@ std::string example_footer(const std::string& example) {
   return s.str();
 }
 
+// One line for a --config file's error, naming the file: CLI11 says "INI was not able to parse
+// sample.metod" on two lines, without the file.
+std::string config_error_line(const CLI::App& app, const CLI::ConfigError& e) {
+  const CLI::Option* config = app.get_config_ptr();
+  const std::string file = config && !config->results().empty() ? config->results().front() : "--config";
+  const std::string what = e.what();
+  const std::string prefix = "INI was not able to parse ";
+  if (what.rfind(prefix, 0) != 0) return file + ": " + what;
+  std::string item = what.substr(prefix.size());
+  std::replace(item.begin(), item.end(), '.', ' ');  // "probe unwrap type": a command's words, then the key
+  const size_t space = item.rfind(' ');
+  const std::string section = space == std::string::npos ? "" : item.substr(0, space);
+  const std::string key = space == std::string::npos ? item : item.substr(space + 1);
+  if (key == "++" || key == "--") return file + ": [" + section + "] is not a command (a section per command, e.g. [stream])";
+  if (section.empty()) return file + ": '" + key + "' is not an option every command takes (put it in its command's [section])";
+  return file + ": '" + key + "' is not an option of " + section;
+}
+
 // Parses the command line (and a --config file) against the table; runs the chosen
 // handler only when `run`.
 int parse_command_line(int argc, char** argv, bool run) {
@@ -102,6 +121,9 @@ int parse_command_line(int argc, char** argv, bool run) {
   // A rig's setup in one file: TOML with a section per command, e.g. [stream] source = "aravis"
   // (usable after the subcommand too: lightprobe stream --config rig.toml).
   app.set_config("--config", "", "TOML file of options, one [section] per command (e.g. [stream])");
+  // A misspelt key or section is an error: ignored (CLI11's default), `metod = "mediancut"`
+  // ran the default method with exit 0. Sections of other commands are theirs, not extras.
+  app.allow_config_extras(CLI::config_extras_mode::error);
   app.fallthrough();  // shared options may follow the subcommand
   app.option_defaults()->always_capture_default();
   Output out;
@@ -137,6 +159,12 @@ int parse_command_line(int argc, char** argv, bool run) {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
     return app.exit(e);
+  } catch (const CLI::FileError& e) {  // the --config file: one line, as every input error
+    std::fprintf(stderr, "lightprobe: %s\n", e.what());
+    return 2;
+  } catch (const CLI::ConfigError& e) {
+    std::fprintf(stderr, "lightprobe: %s\n", config_error_line(app, e).c_str());
+    return 2;
   } catch (const CLI::ParseError& e) {
     app.exit(e);
     return 2;

@@ -93,6 +93,38 @@ TEST(GarbageCli, StreamReplayRefusesAGarbageFrameAndPacesByTimestamps) {
                         "timestamps.txt:2");
 }
 
+// A --config file's misspelt key or section was ignored: `metod = "mediancut"` ran the
+// default method with exit 0. A rig file's sections for other commands are theirs.
+TEST(GarbageCli, AConfigFileWithAKeyOrSectionNoCommandHasIsRefusedNamingIt) {
+  const fs::path dir = fresh_dir("config");
+  const std::string map = (dir / "map.hdr").string();
+  EnvMap m = make_envmap(Layout::LatLong, 64, 32);
+  std::fill(m.rgb.begin(), m.rgb.end(), 1.0f);
+  write_envmap(map, m);
+  const std::string sample = "sample " + map + " --n 8 -o " + (dir / "lights.json").string() + " --config ";
+  auto config = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return (dir / name).string();
+  };
+  const std::string key = config("key.toml", "[sample]\nmetod = \"mediancut\"\n");
+  expect_one_line_error(lightprobe(sample + key), key + ": 'metod' is not an option of sample");
+  const std::string section = config("section.toml", "[smaple]\nmethod = \"mediancut\"\n");
+  expect_one_line_error(lightprobe(sample + section), section + ": [smaple] is not a command");
+  const std::string nested = config("nested.toml", "[probe.unwrap]\ntipe = \"fisheye\"\n");
+  expect_one_line_error(lightprobe(sample + nested), nested + ": 'tipe' is not an option of probe unwrap");
+  const std::string top = config("top.toml", "metod = \"mediancut\"\n");
+  expect_one_line_error(lightprobe(sample + top), top + ": 'metod' is not an option every command takes");
+  expect_one_line_error(lightprobe(sample + (dir / "missing.toml").string()), "missing.toml");
+  EXPECT_FALSE(fs::exists(dir / "lights.json"));
+  const std::string rig = config("rig.toml",
+                                 "max-pixels = 100000000\n[stream]\nsource = \"aravis:Fake_1\"\nn = 64\n"
+                                 "[probe.unwrap]\ntype = \"fisheye\"\n[sample]\nmethod = \"mediancut\"\n");
+  const CliRun r = lightprobe("--json " + sample + rig);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["method"], "mediancut");
+  EXPECT_EQ(nlohmann::json::parse(r.out)["lights"], 8) << "the [stream] section's n is the stream's";
+}
+
 TEST(GarbageCli, JsonFilesOfTheWrongFormatNameTheFileAndWhatIsWrong) {
   const fs::path dir = fresh_dir("json");
   const fs::path bad = dir / "bad.json";

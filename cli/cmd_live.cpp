@@ -12,6 +12,7 @@
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/limits.h"
+#include "core/warnings.h"
 #include "hdr/response.h"
 #include "live/merge_session.h"
 #include "live/stream_session.h"
@@ -92,7 +93,15 @@ int run_stream(const StreamArgs& args, const Output& out) {
   st.mqtt.camera = mqtt_camera_name(args.name, args.source, "--name");
   st.mqtt.qos = args.mqtt_qos, st.mqtt.client.cafile = args.mqtt_cafile;
   st.method_name = args.method, st.duration_s = args.duration;
+  // Aravis' simulated camera has no lens to calibrate; any other camera's frames are unwrapped
+  // through a guessed one without --camera. Said once the stream is up, so that an input
+  // refused before it starts is still one line.
+  const bool guessed_lens = !lo.camera && !args.maps && args.source.rfind("aravis:Fake", 0) != 0;
   const StreamSessionReport r = run_stream_session(st, [&](int port) {
+    if (guessed_lens)
+      warn(fmt::format("no --camera: frames are unwrapped as an ideal equidistant fisheye of {:g} deg whose image "
+                       "circle fits the frame's short side (calibrate the lens: calib geometric)",
+                       args.fov));
     say(out, "lightprobe stream: {} -> http://{}:{}/ (lights at /lights, live at /lights/stream, metrics at /metrics)\n",
         args.source, st.server.host, port);
     std::fflush(stdout);

@@ -120,6 +120,11 @@ UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   o.blind_spot_deg = a.blind_spot_deg;
   if (!a.camera.empty()) o.camera = read_camera_model(a.camera);
   o.fisheye_fov_deg = a.fov;
+  // Without either, the lens was guessed (equidistant, 180 deg, its circle inscribed in the
+  // frame) and the map written with exit 0: a real lens is none of these.
+  if (o.type == ProbeType::Fisheye && !o.camera && !(a.fov > 0))
+    throw InputError("--type fisheye needs the lens: --camera MODEL (from calib geometric), or --fov DEG for an ideal "
+                     "equidistant lens whose image circle fits the frame's short side");
   if (!a.rotation.empty()) o.world_from_probe = parse_rotation(a.rotation);
   o.smooth_track = a.stabilise;
   o.static_probe = a.static_probe;
@@ -263,7 +268,7 @@ std::vector<Command> probe_commands() {
          f.arg("IMAGE", a->inputs, "Probe image(s) or a directory of frames").required();
          f.opt("--type", a->type, "mirrorball|fisheye");
          f.opt("--camera", a->camera, "fisheye: calibrated model (.cameramodel or OpenCV YAML, any lens model)");
-         f.opt("--fov", a->fov, "fisheye: field of view (deg): of the equidistant default model, or the image circle of --camera; " "ball: the camera's field of view");
+         f.opt("--fov", a->fov, "fisheye: field of view (deg) of an ideal equidistant lens whose image circle fits the frame's short side, or the image circle of --camera; " "ball: the camera's field of view");
          f.opt("--distance", a->distance, "ball: camera distance in ball radii (default orthographic)");
          f.opt("--ball", a->ball, "ball: 'cx,cy,r' in pixels instead of detection");
          f.opt("--reflectivity", a->reflectivity, "ball: reflectivity at normal incidence (chrome ~0.6-0.7)");

@@ -93,6 +93,34 @@ TEST(GarbageCli, StreamReplayRefusesAGarbageFrameAndPacesByTimestamps) {
                         "timestamps.txt:2");
 }
 
+// A fisheye without --camera or --fov was unwrapped through a guessed lens (equidistant,
+// 180 deg, its circle inscribed in the frame) with exit 0.
+TEST(GarbageCli, AFisheyeWithoutItsLensIsRefusedAndAnIdealOneIsUnwrappedAsGiven) {
+  const fs::path dir = fresh_dir("fisheye_lens");
+  const std::string image = (dir / "sky.exr").string(), out = (dir / "sky_map.exr").string();
+  ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 190 --size 128x128 -o " + image).code, 0);
+  expect_one_line_error(lightprobe("probe unwrap " + image + " --type fisheye --layout hemisphere -o " + out),
+                        "--type fisheye needs the lens: --camera MODEL");
+  EXPECT_FALSE(fs::exists(out));
+  const CliRun r = lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout hemisphere -o " + out);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_TRUE(fs::exists(out));
+  // A stream guesses the lens too, but runs (a rig is set up live): it says so, once it is up.
+  const fs::path frames = dir / "frames";
+  ASSERT_EQ(lightprobe("synth bracket scene --exposure-times 0.01,0.1 -o " + frames.string()).code, 0);
+  const std::string stream = "stream --duration 1 --listen 127.0.0.1:0 --exposures 0.01,0.1 --source ";
+  const CliRun guessed = lightprobe(stream + "replay:" + frames.string());
+  EXPECT_EQ(guessed.code, 0) << guessed.err;
+  EXPECT_EQ(line_count(guessed.err), 1) << guessed.err;
+  EXPECT_NE(guessed.err.find("warning: no --camera: frames are unwrapped as an ideal equidistant fisheye of 180 deg"),
+            std::string::npos)
+      << guessed.err;
+  const CliRun fake = lightprobe(stream + "aravis:Fake_1");
+  EXPECT_EQ(fake.code, 0) << fake.err;
+  EXPECT_EQ(fake.err.find("no --camera"), std::string::npos) << "Aravis' simulated camera has no lens: " << fake.err;
+}
+
 // A --config file's misspelt key or section was ignored: `metod = "mediancut"` ran the
 // default method with exit 0. A rig file's sections for other commands are theirs.
 TEST(GarbageCli, AConfigFileWithAKeyOrSectionNoCommandHasIsRefusedNamingIt) {

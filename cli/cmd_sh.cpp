@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -9,6 +10,7 @@
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/warnings.h"
 #include "core/spherical_harmonics.h"
 #include "eval/harness.h"
 #include "render/prefilter.h"
@@ -39,6 +41,15 @@ int run_sh(const ShArgs& args, const Output& out) {
   const double ms = 1e3 * seconds_since(start);
   const LightUnitsResult scaled = apply_light_units(std::move(ambient), args.units.options(), args.output);
   if (!scaled.warning.empty()) std::fprintf(stderr, "warning: %s\n", scaled.warning.c_str());
+  // SH9 has no "unknown": what the map does not hold (a hemisphere's lower half, a fisheye's
+  // ground, beyond a mask) is black light to the engine that reads it.
+  double covered = 0;
+  for (size_t i = 0; i < map.pixel_count(); ++i)
+    if (map.is_valid(i)) covered += pixel_solid_angle(map, i);
+  covered /= 4 * M_PI;
+  if (covered < 0.9)
+    warn(fmt::format("{}: the map holds {:.0f} % of the sphere ({}): SH9 takes the rest as black", args.output,
+                     100 * covered, map.layout == Layout::Hemisphere ? "a hemisphere map" : "its valid pixels"));
   const Sh9& sh = *scaled.list.sh9;
   write_file_atomically(args.output, sh9_to_json(sh, scaled.list.units));
 
@@ -60,6 +71,7 @@ int run_sh(const ShArgs& args, const Output& out) {
                   {"units", std::string(to_string(scaled.list.units))},
                   {"scale_factor", scaled.factor},
                   {"project_ms", ms},
+                  {"sphere_covered", covered},
                   {"irradiance_up", luminance(up.data())},
                   {"irradiance_down", luminance(down.data())},
                   {"irradiance_axes", axes},

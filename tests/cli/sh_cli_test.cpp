@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include "cli_run.h"
@@ -59,6 +60,25 @@ TEST(ShCli, RelativeUnitsWarnOrAreScaledToTheAskedIlluminance) {
   EXPECT_NEAR(doc["coefficients"][0][1].get<double>(), factor * plain["coefficients"][0][1].get<double>(),
               1e-9 * std::abs(doc["coefficients"][0][1].get<double>()));
   expect_one_line_error(lightprobe("sh " + shared(kGrace) + " --scale 2 --exposure 1 -o " + out.string()), "at most one");
+}
+
+// SH9 has no "unknown": a hemisphere map's lower half reaches the engine as black light.
+// Said in one warning with the share of the sphere the map holds; a whole map says nothing.
+TEST(ShCli, AMapThatHoldsPartOfTheSphereSaysSo) {
+  EnvMap sky = make_envmap(Layout::Hemisphere, 360, 90);
+  std::fill(sky.rgb.begin(), sky.rgb.end(), 1.0f);
+  const fs::path in = scratch() / "sky_hemisphere.exr", out = scratch() / "sky_sh.json";
+  write_envmap(in.string(), sky);
+  CliRun r = lightprobe("sh --json " + in.string() + " --normalize-illuminance 1000 -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find(out.string() + ": the map holds 50 % of the sphere (a hemisphere map): SH9 takes the rest as black"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["sphere_covered"].get<double>(), 0.5, 1e-9);
+  r = lightprobe("sh --json " + shared(kGrace) + " --normalize-illuminance 1000 -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["sphere_covered"].get<double>(), 1.0, 1e-9);
 }
 
 TEST(ShCli, BadInputIsOneLineAndWritesNothing) {

@@ -57,6 +57,13 @@ std::string trim(const std::string& s) {
   return s.substr(a, b - a + 1);
 }
 
+// "100, 400, 1600" (format: one value's text).
+std::string list_of(const std::vector<ExifExposureSettings>& s, double ExifExposureSettings::*field) {
+  std::string out;
+  for (const auto& e : s) out += (out.empty() ? "" : ", ") + fmt::format("{:g}", e.*field);
+  return out;
+}
+
 }  // namespace
 
 void check_bracket(const Bracket& b) {
@@ -121,38 +128,6 @@ ExifExposureSettings read_exif_exposure(const std::string& path) {
 
 std::optional<double> read_exif_exposure_seconds(const std::string& path) { return read_exif_exposure(path).seconds; }
 
-namespace {
-
-// Whether a camera file may carry an ICC profile, from its first 256 KB, without Exiv2 (whose
-// load costs every bracket ~5 ms): a JPEG's APP2 "ICC_PROFILE" segments and a PNG's iCCP
-// chunk come before the pixels; a TIFF may hold one anywhere.
-bool may_have_icc_profile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(256 * 1024, '\0');
-  in.read(head.data(), std::streamsize(head.size()));
-  head.resize(size_t(in.gcount()));
-  if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
-  return head.find("ICC_PROFILE") != std::string::npos || head.find("iCCP") != std::string::npos;
-}
-
-// Whether a camera file may carry EXIF, from its first 64 KB, without Exiv2: a JPEG's APP1
-// "Exif" segment and a PNG's eXIf chunk come before the pixels; a TIFF is its own EXIF.
-bool may_have_exif(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(64 * 1024, '\0');
-  in.read(head.data(), std::streamsize(head.size()));
-  head.resize(size_t(in.gcount()));
-  if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
-  return head.find(std::string("Exif\0\0", 6)) != std::string::npos || head.find("eXIf") != std::string::npos;
-}
-
-// "100, 400, 1600" (format: one value's text).
-std::string list_of(const std::vector<ExifExposureSettings>& s, double ExifExposureSettings::*field) {
-  std::string out;
-  for (const auto& e : s) out += (out.empty() ? "" : ", ") + fmt::format("{:g}", e.*field);
-  return out;
-}
-
 // The exposure is H = E t ISO / N^2, not E t: a bracket shot with auto ISO (phones), ISO
 // bracketing or aperture bracketing changes more than the time. Read with times alone, such
 // frames are fused at the wrong ratios and nothing looks wrong (a longer time is still
@@ -179,6 +154,33 @@ void fold_iso_and_aperture(Bracket& b, const std::vector<ExifExposureSettings>& 
                    "relative to the first",
                    b.paths.empty() ? std::string("bracket") : b.paths.front(), what));
 }
+
+
+namespace {
+
+// Whether a camera file may carry an ICC profile, from its first 256 KB, without Exiv2 (whose
+// load costs every bracket ~5 ms): a JPEG's APP2 "ICC_PROFILE" segments and a PNG's iCCP
+// chunk come before the pixels; a TIFF may hold one anywhere.
+bool may_have_icc_profile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(256 * 1024, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
+  return head.find("ICC_PROFILE") != std::string::npos || head.find("iCCP") != std::string::npos;
+}
+
+// Whether a camera file may carry EXIF, from its first 64 KB, without Exiv2: a JPEG's APP1
+// "Exif" segment and a PNG's eXIf chunk come before the pixels; a TIFF is its own EXIF.
+bool may_have_exif(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(64 * 1024, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
+  return head.find(std::string("Exif\0\0", 6)) != std::string::npos || head.find("eXIf") != std::string::npos;
+}
+
 
 // Camera codes are sRGB unless the first file's ICC profile says otherwise. A matrix profile
 // is applied (Bracket::to_rec709); a LUT profile (Apple's wide-colour one in iPhone photos) is
@@ -404,13 +406,19 @@ std::vector<double> exposure_times_for(const std::string& path, const std::vecto
   }
   // Glob order is not the list's order (ball_1-160s.jpg sorts before ball_1-40s.jpg), and a
   // subset of a bracket is a bracket: names, not positions, say which time is whose.
+  // Matched on the path as given, else the file name, else the stem: a photo converted or
+  // registered to PNG (probe register) keeps its name but not its extension.
   std::vector<double> times;
   for (const std::string& image : images) {
-    const std::string file = fs::path(image).filename().string();
+    const fs::path p(image);
     const ExposureEntry* found = nullptr;
-    for (const bool whole_path : {true, false}) {
+    for (const int tier : {0, 1, 2}) {
       for (const ExposureEntry& e : entries) {
-        if (!(whole_path ? e.file == image : fs::path(e.file).filename().string() == file)) continue;
+        const fs::path q(e.file);
+        const bool match = tier == 0   ? e.file == image
+                           : tier == 1 ? q.filename() == p.filename()
+                                       : q.stem() == p.stem();
+        if (!match) continue;
         if (found)
           throw InputError(fmt::format("{}: lines {} and {} both name {}", path, found->line, e.line, image));
         found = &e;

@@ -83,6 +83,11 @@ struct ExifExposureSettings {
 };
 ExifExposureSettings read_exif_exposure(const std::string& path);
 
+// Where every frame records an ISO (or f-number) in `settings` (one per frame) and they
+// differ, multiplies each frame's exposure_seconds by its ISO / f-number^2 relative to the
+// first frame's and warns in one line; otherwise leaves the bracket as it is.
+void fold_iso_and_aperture(Bracket& bracket, const std::vector<ExifExposureSettings>& settings);
+
 // A list of exposure times in seconds, in file order. Accepts:
 //  - one time per line ("0.025" or "1/40"), blank lines and '#' comments skipped;
 //  - CSV "file,seconds[,...]" with an optional header line (the exposures.csv files
@@ -103,10 +108,10 @@ struct ExposureEntry {
 std::vector<ExposureEntry> read_exposure_entries(const std::string& csv_or_txt);
 
 // The times of `images`, in their order. A list that names its files is looked up by name
-// (an image's path as given, else its file name), so the images may be any of them in any
-// order; a list of times alone is taken in order and must have one per image. Throws
-// InputError naming the list and the image for an image it does not name, a name given
-// twice, or a list that mixes named and unnamed lines.
+// (an image's path as given, else its file name, else its stem: ball.png finds ball.jpg's
+// line), so the images may be any of them in any order; a list of times alone is taken in
+// order and must have one per image. Throws InputError naming the list and the image for an
+// image it does not name, a name given twice, or a list that mixes named and unnamed lines.
 std::vector<double> exposure_times_for(const std::string& csv_or_txt, const std::vector<std::string>& images);
 
 }  // namespace lp

@@ -352,6 +352,9 @@ TEST(ReadExposureList, AListThatNamesItsFilesIsReadByName) {
   EXPECT_EQ(exposure_times_for(named, {"b/x.png", "y.png"}), (std::vector<double>{0.25, 1.0}))
       << "a path as given wins over a file name";
   EXPECT_EQ(message_of([&] { exposure_times_for(named, {"c/x.png"}); }), named + ": lines 2 and 3 both name c/x.png");
+  EXPECT_EQ(exposure_times_for(kartik + "exposures.csv", {"registered/ball_1-40s.png", "registered/ball_1-10s.png"}),
+            (std::vector<double>{1.0 / 40, 0.1}))
+      << "a photo registered to PNG (probe register) finds its line by its stem";
   EXPECT_EQ(message_of([&] { exposure_times_for(named, {"z.png"}); }),
             named + ": no line names z.png (the list names its files)");
   const std::string mixed = tmp.text("mixed.csv", "x.png,0.5\n0.25\n");

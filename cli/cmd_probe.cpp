@@ -12,6 +12,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/heap_tuning.h"
 #include "core/limits.h"
 #include "core/image_io.h"
@@ -225,6 +226,30 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   return 0;
 }
 
+// The photos' EXIF exposures, which the registered PNGs do not carry, as exposures.csv
+// beside them (`hdr fuse registered/*.png --exposure-times registered/exposures.csv`): each
+// time, scaled by ISO / f-number^2 relative to the first photo's where those differ, as
+// read_bracket would. Nothing is written when a photo records no time.
+void write_registered_exposures(const std::vector<std::string>& images, const std::vector<std::string>& names,
+                                const std::string& dir) {
+  std::vector<ExifExposureSettings> s;
+  for (const std::string& f : images) {
+    if (lower_extension(f) == ".exr" || lower_extension(f) == ".hdr" || lower_extension(f) == ".pfm") return;
+    s.push_back(read_exif_exposure(f));
+    if (!s.back().seconds) return;
+  }
+  Bracket b;
+  for (const auto& e : s) b.exposure_seconds.push_back(*e.seconds);
+  const std::vector<double> times = b.exposure_seconds;
+  b.frames.resize(s.size());
+  b.paths = images;
+  fold_iso_and_aperture(b, s);
+  std::string csv = "file,exposure_s\n";
+  if (b.exposure_seconds != times) csv = "# seconds x ISO / f-number^2, relative to the first photo's\n" + csv;
+  for (size_t i = 0; i < names.size(); ++i) csv += fmt::format("{},{}\n", names[i], b.exposure_seconds[i]);
+  write_file_atomically((fs::path(dir) / "exposures.csv").string(), csv);
+}
+
 int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   // Differently cropped photos of one ball (a bracket shot by hand): find the ball in
   // each, then resample every photo so the ball is centred with one radius, code values
@@ -246,11 +271,18 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   }
   const std::vector<RgbImage> registered = register_balls(frames, balls, args.size);
   make_output_directory(args.output_dir);
+  // Each photo keeps what it holds: 8- or 16-bit codes as a PNG of that depth, radiance as
+  // EXR. All went to 8-bit PNG: a 16-bit bracket lost 8 bits, radiance was clipped at 1.
+  std::vector<std::string> names;
   for (size_t i = 0; i < registered.size(); ++i) {
-    const std::string name = fs::path(args.images[i]).stem().string() + ".png";
-    write_code_image((fs::path(args.output_dir) / name).string(), registered[i], 8);
-    found[i]["output"] = name;
+    const RgbImage& r = registered[i];
+    names.push_back(fs::path(args.images[i]).stem().string() + (r.code_bits > 0 ? ".png" : ".exr"));
+    const std::string path = (fs::path(args.output_dir) / names.back()).string();
+    if (r.code_bits > 0) write_code_image(path, r, r.code_bits);
+    else write_rgb_image(path, r);
+    found[i]["output"] = names.back();
   }
+  write_registered_exposures(args.images, names, args.output_dir);
   const BallInImage ball = registered_ball(args.size);
   say(out, "{}: {} photos registered to {}x{}, ball at ({:.1f}, {:.1f}) r {:.1f} px\n", args.output_dir,
       registered.size(), args.size, args.size, ball.cx, ball.cy, ball.radius_px);

@@ -35,6 +35,7 @@ std::vector<RgbImage> register_balls(const std::vector<RgbImage>& frames, const 
     RgbImage img;
     img.width = img.height = output_size;
     img.units = src.units;
+    img.code_bits = src.code_bits;
     img.rgb.assign(size_t(3) * output_size * output_size, 0.f);
     img.valid.assign(size_t(output_size) * output_size, 0);
     const double k = b.radius_px / dst.radius_px;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -524,9 +525,13 @@ TEST(Cli, DifferentlyCroppedBallPhotosAreRegisteredFusedAndUnwrapped) {
                           "/ball_1-160s.jpg --size 320 -o " + dir.string());
   ASSERT_EQ(reg.code, 0) << reg.err;
   const fs::path fused = scratch() / "kartik.exr", map = scratch() / "kartik_map.exr", png = scratch() / "kartik.png";
-  // Exposure times from the JPEGs' EXIF are gone after registration: give them.
-  CliRun fuse = lightprobe("hdr fuse " + (dir / "ball_1-10s.png").string() + " " + (dir / "ball_1-40s.png").string() + " " +
-                           (dir / "ball_1-160s.png").string() + " --exposure-times 1/10,1/40,1/160 -o " + fused.string());
+  // The JPEGs' EXIF times are not in the registered PNGs: exposures.csv beside them has them,
+  // named, so a glob in any order finds its own.
+  EXPECT_EQ(slurp(dir / "exposures.csv"),
+            "file,exposure_s\nball_1-10s.png,0.1\nball_1-40s.png,0.025\nball_1-160s.png,0.00625\n");
+  CliRun fuse = lightprobe("hdr fuse " + (dir / "ball_1-160s.png").string() + " " + (dir / "ball_1-10s.png").string() +
+                           " " + (dir / "ball_1-40s.png").string() + " --exposure-times " + (dir / "exposures.csv").string() +
+                           " -o " + fused.string());
   ASSERT_EQ(fuse.code, 0) << fuse.err;
   CliRun un = lightprobe("probe unwrap --json " + fused.string() + " --type mirrorball --layout latlong --size 256x128 -o " +
                          map.string());
@@ -536,6 +541,40 @@ TEST(Cli, DifferentlyCroppedBallPhotosAreRegisteredFusedAndUnwrapped) {
   EXPECT_NEAR(ball[1].get<double>(), 160, 3);
   ASSERT_EQ(lightprobe("preview " + fused.string() + " -o " + png.string()).code, 0);
   EXPECT_GT(fs::file_size(png), 1000u);
+}
+
+// Registered photos keep what they hold: all were written as 8-bit PNGs, so radiance was
+// clipped at 1 and 16-bit codes lost 8 bits.
+TEST(Cli, RegisteredPhotosKeepTheirRadianceOrTheirBitDepth) {
+  const fs::path dir = scratch() / "register_kinds";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string map = shared("probes-probulator-latlong256/ennis.hdr");
+  const fs::path a = dir / "a.exr", b = dir / "b.exr";
+  ASSERT_EQ(lightprobe("synth probe " + map + " --size 300x300 -o " + a.string()).code, 0);
+  ASSERT_EQ(lightprobe("synth probe " + map + " --size 340x320 -o " + b.string()).code, 0);
+  const CliRun exr = lightprobe("probe register " + a.string() + " " + b.string() + " --size 256 -o " + (dir / "exr").string());
+  ASSERT_EQ(exr.code, 0) << exr.err;
+  const lp::RgbImage in = lp::read_rgb_image(a.string()), out = lp::read_rgb_image((dir / "exr" / "a.exr").string());
+  const float in_max = *std::max_element(in.rgb.begin(), in.rgb.end());
+  const float out_max = *std::max_element(out.rgb.begin(), out.rgb.end());
+  EXPECT_GT(in_max, 10.0f);
+  EXPECT_GT(out_max, 0.5f * in_max) << "radiance above 1 kept (resampled)";
+  EXPECT_FALSE(fs::exists(dir / "exr" / "exposures.csv")) << "maps have no exposure time";
+  // 16-bit codes: the same photo at 1/64 of its radiance, as a 16-bit camera stored it.
+  lp::RgbImage codes = in;
+  for (float& v : codes.rgb) v = std::min(1.0f, v / 64);
+  lp::write_code_image((dir / "c.png").string(), codes, 16);
+  lp::write_code_image((dir / "d.png").string(), codes, 16);
+  ASSERT_EQ(lightprobe("probe register " + (dir / "c.png").string() + " " + (dir / "d.png").string() + " --size 256 -o " +
+                       (dir / "png").string())
+                .code,
+            0);
+  const lp::RgbImage c = lp::read_rgb_image((dir / "png" / "c.png").string());
+  EXPECT_EQ(c.code_bits, 16);
+  size_t between = 0;  // values that are no 8-bit code
+  for (float v : c.rgb) between += std::abs(v * 255 - std::round(v * 255)) > 0.01f;
+  EXPECT_GT(between, c.rgb.size() / 4);
 }
 
 TEST(Cli, GeometricCalibrationRecoversASyntheticFisheyeAndRefusesBadSets) {

@@ -23,4 +23,9 @@ std::string lower_extension(const std::string& path);
 bool is_radiance_file(const std::string& path);
 bool is_camera_image_file(const std::string& path);
 
+// The order of a folder's frames: names compared with their runs of digits as numbers, so
+// frame_2 comes before frame_10 (capture tools number frames without padding); names that
+// differ only in leading zeros fall back to plain order. The order folders are read in.
+bool frame_name_less(const std::string& a, const std::string& b);
+
 }  // namespace lp

@@ -31,7 +31,9 @@ std::vector<std::string> expand(const std::vector<std::string>& inputs, bool (*k
       std::vector<std::string> found;
       for (const auto& entry : fs::directory_iterator(in))
         if (entry.is_regular_file() && keep(entry.path())) found.push_back(entry.path().string());
-      std::sort(found.begin(), found.end());
+      std::sort(found.begin(), found.end(), [](const std::string& a, const std::string& b) {
+        return frame_name_less(fs::path(a).filename().string(), fs::path(b).filename().string());
+      });
       if (found.empty()) throw InputError(fmt::format("{}: directory holds no {}", in, what));
       files.insert(files.end(), found.begin(), found.end());
     } else {

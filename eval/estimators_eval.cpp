@@ -12,6 +12,7 @@
 #include <time.h>
 
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 #include "core/resample.h"
 #include "eval/svg_chart.h"
@@ -114,7 +115,9 @@ std::vector<Sequence> load_sequences(const EvalEstimatorsOptions& o) {
       std::vector<std::string> files;
       for (const auto& entry : fs::directory_iterator(in))
         if (entry.is_regular_file() && is_map_file(entry.path())) files.push_back(entry.path().string());
-      std::sort(files.begin(), files.end());
+      std::sort(files.begin(), files.end(), [](const std::string& a, const std::string& b) {
+        return frame_name_less(fs::path(a).filename().string(), fs::path(b).filename().string());
+      });
       if (files.size() < 2) throw InputError(fmt::format("{}: a sequence needs at least 2 .exr/.hdr/.pfm maps", in));
       if (files.size() > size_t(o.frames)) files.resize(size_t(o.frames));
       Sequence s{fs::path(in).filename().string(), {}};

@@ -133,7 +133,9 @@ class ReplaySource final : public CameraSource {
     }
     if (ec) throw InputError(spec_ + ": cannot list " + dir + ": " + ec.message());
     if (files_.empty()) throw InputError(spec_ + ": no images (.png .jpg .tif .exr .hdr .pfm) in " + dir);
-    std::sort(files_.begin(), files_.end(), [](const fs::path& a, const fs::path& b) { return a.filename() < b.filename(); });
+    std::sort(files_.begin(), files_.end(), [](const fs::path& a, const fs::path& b) {
+      return frame_name_less(a.filename().string(), b.filename().string());
+    });
     const fs::path exposures = fs::path(dir) / "exposures.csv", timestamps = fs::path(dir) / "timestamps.txt";
     if (fs::exists(exposures)) exposures_ = read_sidecar(exposures, true);
     if (fs::exists(timestamps)) timestamps_ = read_sidecar(timestamps, false);

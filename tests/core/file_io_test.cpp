@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/map_sequence.h"
 #include "core/picture_io.h"
 #include "core/tonemap.h"
 
@@ -73,6 +75,31 @@ TEST(FileIo, ExtensionsAreTheFileNamesLowerCased) {
 }
 
 // The one picture encoder (core/picture_io.h), read back through read_camera_image.
+
+// Capture tools number frames without padding: frame_10 sorted before frame_2, and a
+// folder's sequence was replayed scrambled.
+TEST(FileIo, FrameNamesSortByTheirNumbers) {
+  std::vector<std::string> names = {"frame_10.png", "frame_2.png", "frame_1.png", "frame_02.png", "b.exr",
+                                    "frame_100.png", "a9.exr", "a10.exr", "frame_.png", "cam1_frame_3.png", "cam1_frame_20.png"};
+  std::sort(names.begin(), names.end(), frame_name_less);
+  EXPECT_EQ(names, (std::vector<std::string>{"a9.exr", "a10.exr", "b.exr", "cam1_frame_3.png", "cam1_frame_20.png",
+                                             "frame_.png", "frame_1.png", "frame_02.png", "frame_2.png",
+                                             "frame_10.png", "frame_100.png"}));
+  EXPECT_FALSE(frame_name_less("x", "x"));
+  EXPECT_TRUE(frame_name_less("frame_000", "frame_001")) << "padded names keep their order";
+  EXPECT_TRUE(frame_name_less("frame_99999999999999999999", "frame_100000000000000000000")) << "runs longer than 64 bits";
+  // A folder of maps (sample, probe unwrap, eval temporal) is read in that order.
+  const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / "lightprobe_frame_order";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  for (const char* name : {"map_10.exr", "map_2.exr", "map_1.exr"}) std::ofstream(dir / name) << "";
+  const MapSequence seq = find_map_sequence({dir.string()});
+  ASSERT_EQ(seq.files.size(), 3u);
+  EXPECT_EQ(std::filesystem::path(seq.files[0]).filename(), "map_1.exr");
+  EXPECT_EQ(std::filesystem::path(seq.files[1]).filename(), "map_2.exr");
+  EXPECT_EQ(std::filesystem::path(seq.files[2]).filename(), "map_10.exr");
+  std::filesystem::remove_all(dir);
+}
 
 TEST(PictureEncoder, ServedPngsAreTheBytesOfTheWrittenFile) {
   const std::string dir = temp_dir();

@@ -79,6 +79,20 @@ TEST(CameraSourceReplay, FramesInNameOrderWithSidecarExposuresAndTimestamps) {
   EXPECT_TRUE(source->finished());
 }
 
+TEST(CameraSourceReplay, FramesNumberedWithoutPaddingComeInTheirNumbersOrder) {
+  TempDir dir;
+  for (const int k : {1, 2, 10, 11}) {
+    cv::imwrite((dir.path / ("frame_" + std::to_string(k) + ".png")).string(),
+                cv::Mat(6, 8, CV_8UC3, cv::Scalar::all(10 * k)));
+  }
+  auto source = lp::open_source("replay:" + dir.path.string(), {});
+  for (const int k : {1, 2, 10, 11}) {
+    auto frame = source->next(1.0);
+    ASSERT_TRUE(frame) << k;
+    EXPECT_NEAR(frame->image.rgb[0], 10 * k / 255.0, 1e-6) << "frame_" << k << " (frame_10 came before frame_2)";
+  }
+}
+
 TEST(CameraSourceReplay, LoopsPacedWithOrderedExposures) {
   TempDir dir;
   for (int k = 0; k < 2; ++k) cv::imwrite((dir.path / ("a" + std::to_string(k) + ".png")).string(), cv::Mat(4, 4, CV_16UC3, cv::Scalar::all(1000 * (k + 1))));

@@ -158,27 +158,31 @@ void fold_iso_and_aperture(Bracket& b, const std::vector<ExifExposureSettings>& 
 
 namespace {
 
+// A camera file's first `bytes` (fewer when it is shorter): what lies before its pixels.
+std::string file_head(const std::string& path, size_t bytes) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(bytes, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  return head;
+}
+
+bool is_tiff(const std::string& head) { return head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0; }
+
 // Whether a camera file may carry an ICC profile, from its first 256 KB, without Exiv2 (whose
 // load costs every bracket ~5 ms): a JPEG's APP2 "ICC_PROFILE" segments and a PNG's iCCP
 // chunk come before the pixels; a TIFF may hold one anywhere.
 bool may_have_icc_profile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(256 * 1024, '\0');
-  in.read(head.data(), std::streamsize(head.size()));
-  head.resize(size_t(in.gcount()));
-  if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
-  return head.find("ICC_PROFILE") != std::string::npos || head.find("iCCP") != std::string::npos;
+  const std::string head = file_head(path, 256 * 1024);
+  return is_tiff(head) || head.find("ICC_PROFILE") != std::string::npos || head.find("iCCP") != std::string::npos;
 }
 
 // Whether a camera file may carry EXIF, from its first 64 KB, without Exiv2: a JPEG's APP1
 // "Exif" segment and a PNG's eXIf chunk come before the pixels; a TIFF is its own EXIF.
 bool may_have_exif(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(64 * 1024, '\0');
-  in.read(head.data(), std::streamsize(head.size()));
-  head.resize(size_t(in.gcount()));
-  if (head.rfind("II*", 0) == 0 || head.rfind("MM", 0) == 0) return true;
-  return head.find(std::string("Exif\0\0", 6)) != std::string::npos || head.find("eXIf") != std::string::npos;
+  const std::string head = file_head(path, 64 * 1024);
+  return is_tiff(head) || head.find(std::string("Exif\0\0", 6)) != std::string::npos ||
+         head.find("eXIf") != std::string::npos;
 }
 
 

@@ -68,27 +68,39 @@ TEST(ReadExifExposure, GivesTheKartikMirrorBallPhotosTimesAndReadBracketRefusesT
   EXPECT_FALSE(read_exif_exposure_seconds(kData + "/hdr-memorial-debevec/memorial0061.png").has_value());
 }
 
-// A JPEG whose EXIF holds one ExposureTime entry of the given TIFF type and values (little
-// endian, in an Exif IFD), spliced in after the JPEG's start-of-image marker.
-std::string jpeg_with_exposure_entry(const TempDir& tmp, const std::string& name, uint16_t type,
-                                     std::vector<uint32_t> values) {
-  const std::string plain = tmp.png(name + ".plain.jpg", 8, 6);
+// A little-endian TIFF whose IFD0 points to an Exif IFD at offset 26, which the caller writes.
+struct ExifTiff {
+  std::string bytes;
+  ExifTiff() {
+    bytes += "II", u16(42), u32(8);
+    u16(1), u16(0x8769), u16(4), u32(1), u32(26), u32(0);  // IFD0: the Exif IFD's offset
+  }
+  void u16(uint32_t v) { bytes += char(v & 0xff), bytes += char((v >> 8) & 0xff); }
+  void u32(uint32_t v) { u16(v & 0xffff), u16(v >> 16); }
+};
+
+// The JPEG at `plain` with an APP1 Exif segment holding `tiff` spliced in after its
+// start-of-image marker, written to tmp/name.
+std::string write_with_exif(const TempDir& tmp, const std::string& name, const std::string& plain, const ExifTiff& tiff) {
   std::ifstream in(plain, std::ios::binary);
   const std::string jpeg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::string tiff;
-  auto u16 = [&](uint32_t v) { tiff += char(v & 0xff), tiff += char((v >> 8) & 0xff); };
-  auto u32 = [&](uint32_t v) { u16(v & 0xffff), u16(v >> 16); };
-  tiff += "II", u16(42), u32(8);
-  u16(1), u16(0x8769), u16(4), u32(1), u32(26), u32(0);  // IFD0: the Exif IFD's offset
-  const uint32_t count = type == 5 ? uint32_t(values.size() / 2) : uint32_t(values.size());
-  u16(1), u16(0x829A), u16(type), u32(count), u32(44), u32(0);  // Exif IFD: ExposureTime
-  for (uint32_t v : values) u32(v);
-  const std::string app1 = std::string("Exif\0\0", 6) + tiff;
+  const std::string app1 = std::string("Exif\0\0", 6) + tiff.bytes;
   const size_t length = app1.size() + 2;
   const std::string path = (tmp.path / name).string();
   std::ofstream(path, std::ios::binary) << jpeg.substr(0, 2) << char(0xFF) << char(0xE1) << char(length >> 8)
                                         << char(length & 0xff) << app1 << jpeg.substr(2);
   return path;
+}
+
+// A JPEG whose EXIF holds one ExposureTime entry of the given TIFF type and values (little
+// endian, in an Exif IFD), spliced in after the JPEG's start-of-image marker.
+std::string jpeg_with_exposure_entry(const TempDir& tmp, const std::string& name, uint16_t type,
+                                     std::vector<uint32_t> values) {
+  ExifTiff t;
+  const uint32_t count = type == 5 ? uint32_t(values.size() / 2) : uint32_t(values.size());
+  t.u16(1), t.u16(0x829A), t.u16(type), t.u32(count), t.u32(44), t.u32(0);  // Exif IFD: ExposureTime
+  for (uint32_t v : values) t.u32(v);
+  return write_with_exif(tmp, name, tmp.png(name + ".plain.jpg", 8, 6), t);
 }
 
 TEST(ReadExifExposure, AnExposureTimeOfTwoValuesIsRefusedNotReadAsItsFirst) {
@@ -107,25 +119,14 @@ std::string jpeg_with_settings(const TempDir& tmp, const std::string& name, int 
                                uint32_t t_num, uint32_t t_den, uint32_t f_num, uint32_t f_den, uint32_t iso) {
   const std::string plain = (tmp.path / (name + ".plain.jpg")).string();
   write_display_image(plain, w, h, rgb);  // sRGB-encodes
-  std::ifstream in(plain, std::ios::binary);
-  const std::string jpeg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::string tiff;
-  auto u16 = [&](uint32_t v) { tiff += char(v & 0xff), tiff += char((v >> 8) & 0xff); };
-  auto u32 = [&](uint32_t v) { u16(v & 0xffff), u16(v >> 16); };
-  tiff += "II", u16(42), u32(8);
-  u16(1), u16(0x8769), u16(4), u32(1), u32(26), u32(0);  // IFD0: the Exif IFD's offset
-  u16(3);                                                // Exif IFD, its tags in order:
-  u16(0x829A), u16(5), u32(1), u32(68);                  // ExposureTime, RATIONAL
-  u16(0x829D), u16(5), u32(1), u32(76);                  // FNumber, RATIONAL
-  u16(0x8827), u16(3), u32(1), u16(iso), u16(0);         // ISOSpeedRatings, SHORT
-  u32(0);
-  u32(t_num), u32(t_den), u32(f_num), u32(f_den);
-  const std::string app1 = std::string("Exif\0\0", 6) + tiff;
-  const size_t length = app1.size() + 2;
-  const std::string path = (tmp.path / name).string();
-  std::ofstream(path, std::ios::binary) << jpeg.substr(0, 2) << char(0xFF) << char(0xE1) << char(length >> 8)
-                                        << char(length & 0xff) << app1 << jpeg.substr(2);
-  return path;
+  ExifTiff t;
+  t.u16(3);                                                  // Exif IFD, its tags in order:
+  t.u16(0x829A), t.u16(5), t.u32(1), t.u32(68);              // ExposureTime, RATIONAL
+  t.u16(0x829D), t.u16(5), t.u32(1), t.u32(76);              // FNumber, RATIONAL
+  t.u16(0x8827), t.u16(3), t.u32(1), t.u16(iso), t.u16(0);   // ISOSpeedRatings, SHORT
+  t.u32(0);
+  t.u32(t_num), t.u32(t_den), t.u32(f_num), t.u32(f_den);
+  return write_with_exif(tmp, name, plain, t);
 }
 
 // A phone's bracket: the time doubles, the ISO quadruples (exposures 1 : 8 : 64). Read by

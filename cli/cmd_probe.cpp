@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <memory>
+#include <optional>
 
 #include <algorithm>
 #include <chrono>
@@ -172,7 +173,12 @@ constexpr double kFewValidWarning = 0.05;
 
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   const std::vector<std::string> files = find_images(args.inputs);
-  const UnwrapSequenceOptions o = unwrap_options(args);
+  UnwrapSequenceOptions o = unwrap_options(args);
+  // Photos in Adobe RGB or Display P3 were read as sRGB: their colours, as hdr fuse reads a
+  // bracket's, from the first photo's ICC profile.
+  std::optional<ColourProfile> profile;
+  if (!files.empty() && is_camera_image_file(files.front())) profile = read_colour_profile(files.front());
+  if (profile) o.to_rec709 = profile->to_rec709;
   const bool sequence = files.size() > 1;
   if (sequence) make_output_directory(args.output);
   if (sequence) keep_heap_for_reuse();  // each frame allocates and frees the same large buffers
@@ -222,7 +228,12 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
             ? fmt::format("; probe centre moved {:.3f} px per frame, unwrapped map {:.4f} deg per frame",
                           residual_jitter_px(r.detected), r.map_jitter_deg.value_or(0))
             : "");
-  emit_json(out, report_json(args, o, r));
+  nlohmann::json report = report_json(args, o, r);
+  if (profile) {
+    report["colour_profile"] = profile->name;
+    say(out, "{}: colours converted from the photos' ICC profile ('{}') to Rec. 709\n", args.output, profile->name);
+  }
+  emit_json(out, report);
   return 0;
 }
 

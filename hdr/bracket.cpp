@@ -186,31 +186,6 @@ bool may_have_exif(const std::string& path) {
 }
 
 
-// Camera codes are sRGB unless the first file's ICC profile says otherwise. A matrix profile
-// is applied (Bracket::to_rec709); a LUT profile (Apple's wide-colour one in iPhone photos) is
-// not, and that is said in one warning, once per profile and process.
-void read_colour_profile(const std::string& path, Bracket& b) {
-  if (!may_have_icc_profile(path)) return;
-  const std::string icc = detail::camera_files_plugin().icc_profile(path);
-  if (icc.empty()) return;
-  const auto summary = summarize_icc_profile(icc);
-  if (summary && summary->srgb) return;
-  const std::string name = summary && !summary->description.empty() ? summary->description
-                           : summary                                ? "no description"
-                                                                    : "unreadable";
-  if (summary && summary->has_colorants) {
-    b.to_rec709 = icc_colorants_to_rec709(*summary, path.c_str());
-    b.colour_profile = name;
-    return;
-  }
-  static std::mutex mutex;
-  static std::set<std::string> warned;
-  {
-    std::lock_guard lock(mutex);
-    if (!warned.insert(name).second) return;
-  }
-  warn(fmt::format("{}: its ICC profile ('{}') is not applied: its colours are taken as sRGB", path, name));
-}
 
 // A longer exposure is at least as bright in every pixel (the same scene, a monotonic
 // response): where the frames say the opposite, the times given are not theirs. Sampled
@@ -240,6 +215,26 @@ void check_exposure_order(const Bracket& b, const char* times_from) {
 }
 
 }  // namespace
+
+std::optional<ColourProfile> read_colour_profile(const std::string& path) {
+  if (!may_have_icc_profile(path)) return std::nullopt;
+  const std::string icc = detail::camera_files_plugin().icc_profile(path);
+  if (icc.empty()) return std::nullopt;
+  const auto summary = summarize_icc_profile(icc);
+  if (summary && summary->srgb) return std::nullopt;
+  const std::string name = summary && !summary->description.empty() ? summary->description
+                           : summary                                ? "no description"
+                                                                    : "unreadable";
+  if (summary && summary->has_colorants) return ColourProfile{name, icc_colorants_to_rec709(*summary, path.c_str())};
+  static std::mutex mutex;
+  static std::set<std::string> warned;
+  {
+    std::lock_guard lock(mutex);
+    if (!warned.insert(name).second) return std::nullopt;
+  }
+  warn(fmt::format("{}: its ICC profile ('{}') is not applied: its colours are taken as sRGB", path, name));
+  return std::nullopt;
+}
 
 Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<std::vector<double>>& times) {
   Bracket b;
@@ -304,7 +299,9 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
   check_bracket(b);
   apply_sensor_white_level(b);
   check_exposure_order(b, times ? "given (--exposure-times)" : "read from the files");
-  if (!b.linear) read_colour_profile(paths[0], b);  // after the checks: a refused bracket says one line
+  if (!b.linear) {  // after the checks: a refused bracket says one line
+    if (auto profile = read_colour_profile(paths[0])) b.to_rec709 = profile->to_rec709, b.colour_profile = profile->name;
+  }
   if (b.bit_depth == 8 && !b.linear) keep_8bit_codes(b);
   return b;
 }

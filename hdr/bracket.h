@@ -83,6 +83,16 @@ struct ExifExposureSettings {
 };
 ExifExposureSettings read_exif_exposure(const std::string& path);
 
+// A camera file's colours when its ICC profile is a matrix one other than sRGB (Adobe RGB,
+// Display P3, ProPhoto from a raw converter): the profile's description and the matrix from
+// linear values in it to Rec. 709 (row-major). nullopt for sRGB, no profile, or a profile
+// that cannot be applied (a LUT one: said in one warning, once per profile and process).
+struct ColourProfile {
+  std::string name;
+  std::array<double, 9> to_rec709;
+};
+std::optional<ColourProfile> read_colour_profile(const std::string& path);
+
 // Where every frame records an ISO (or f-number) in `settings` (one per frame) and they
 // differ, multiplies each frame's exposure_seconds by its ISO / f-number^2 relative to the
 // first frame's and warns in one line; otherwise leaves the bracket as it is.

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/chromaticities.h"
 #include "core/accuracy.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -221,6 +222,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
                        (o.type == ProbeType::MirrorBall ? "ball" : "image circle") + " inside the image?)");
     map.units = frame.units;
     map.world_from_probe = o.world_from_probe;
+    if (o.to_rec709 && !fr.codes.empty()) apply_colour_matrix(map.rgb, *o.to_rec709);  // a linear map of codes
     if (o.colour) apply_colour_match(map, *o.colour);
     if (auto c = centroid(map)) centroids.push_back(*c);
     emit(i, map);

@@ -11,6 +11,7 @@
 // static world must keep still, and the detected and used tracks' jitter.
 #pragma once
 
+#include <array>
 #include <nlohmann/json_fwd.hpp>
 
 #include <functional>
@@ -56,6 +57,9 @@ struct UnwrapSequenceOptions {
   // Frames are kept in memory between the two passes while all of them so far fit in this
   // many bytes; the rest are read again in pass 2.
   double kept_frames_bytes = 512e6;
+  // Camera codes in a wide-gamut colour space (the files' ICC profile, hdr/bracket.h's
+  // read_colour_profile): linear values in it to Rec. 709, row-major, applied before `colour`.
+  std::optional<std::array<double, 9>> to_rec709;
   std::optional<ColourMatch> colour;  // 3x3 transform to the backplate camera
   // How camera images' codes encode light (probe/camera_codes.h), linearised before the
   // unwrap (the ball is found on the codes as read). nullopt: sRGB for 8-bit images, as JPEG

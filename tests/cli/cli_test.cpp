@@ -18,9 +18,11 @@
 #include <cmath>
 
 #include "core/accuracy.h"
+#include "core/chromaticities.h"
 #include "core/image_io.h"
 #include "core/light_list.h"
 #include "tests/cli/cli_run.h"
+#include "tests/core/icc_blob.h"
 
 namespace fs = std::filesystem;
 
@@ -497,6 +499,44 @@ TEST(Cli, APhotosCodesAreMadeLinearBeforeTheyBecomeAMap) {
   EXPECT_EQ(nlohmann::json::parse(r.out)["per_frame"][0]["codes"], response.string());
   m = lp::read_envmap(map.string());
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(m.rgb[3 * (16 * 64 + 10) + c], (c + 1) * 129.0 / 256, 1e-5) << c;
+}
+
+// A photo in Display P3 (a matrix ICC profile) was unwrapped as if sRGB; hdr fuse already
+// read a bracket's profile. The map is now the sRGB reading turned by the profile's matrix.
+TEST(Cli, AProbePhotosIccProfileTurnsItsColoursToRec709) {
+  const fs::path plain = scratch() / "p3_plain.jpg", tagged = scratch() / "p3_tagged.jpg";
+  std::vector<float> rgb;
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 120; ++x) rgb.insert(rgb.end(), {0.2f + 0.6f * x / 119, 0.5f, 0.2f + 0.6f * y / 119});
+  lp::write_display_image(plain.string(), 120, 120, rgb);
+  {
+    std::ifstream in(plain, std::ios::binary);
+    const std::string jpeg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string app2 = std::string("ICC_PROFILE\0", 12) + char(1) + char(1) + lp::icc_blob("Display P3", &lp::kP3Colorants);
+    const size_t length = app2.size() + 2;
+    std::ofstream(tagged, std::ios::binary) << jpeg.substr(0, 2) << char(0xFF) << char(0xE2) << char(length >> 8)
+                                            << char(length & 0xff) << app2 << jpeg.substr(2);
+  }
+  const std::string ball = " --type mirrorball --ball 60,60,50 --layout latlong --size 64x32 -o ";
+  const fs::path a = scratch() / "p3_plain.exr", b = scratch() / "p3_tagged.exr";
+  ASSERT_EQ(lightprobe("probe unwrap " + plain.string() + ball + a.string()).code, 0);
+  const CliRun r = lightprobe("probe unwrap --json " + tagged.string() + ball + b.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["colour_profile"], "Display P3");
+  const auto m = lp::icc_colorants_to_rec709(*lp::summarize_icc_profile(lp::icc_blob("Display P3", &lp::kP3Colorants)), "t");
+  const lp::RgbImage sa = lp::read_rgb_image(a.string()), sb = lp::read_rgb_image(b.string());
+  ASSERT_EQ(sa.rgb.size(), sb.rgb.size());
+  size_t compared = 0;
+  for (size_t p = 0; p < sa.rgb.size() / 3; ++p) {
+    if (!sa.valid.empty() && !sa.valid[p]) continue;
+    const float* x = &sa.rgb[3 * p];
+    for (int c = 0; c < 3; ++c) {
+      const double want = m[3 * c] * x[0] + m[3 * c + 1] * x[1] + m[3 * c + 2] * x[2];
+      ASSERT_NEAR(sb.rgb[3 * p + size_t(c)], std::max(want, 0.0), 1e-5) << "pixel " << p << " channel " << c;
+    }
+    ++compared;
+  }
+  EXPECT_GT(compared, 1000u);
 }
 
 TEST(Cli, TrackingTheBallFrameByFrameKeepsTheUnwrappedMapStillWhenTheCameraShakes) {

@@ -60,8 +60,7 @@
 
 namespace lp {
 
-// Maximum luminous efficacy used to turn luminance into per-channel radiance, lm/W.
-inline constexpr double kLuminousEfficacy = 683.0;
+// kLuminousEfficacy (683 lm/W, core/envmap.h) turns luminance into per-channel radiance.
 
 struct ImageRegion {
   std::string image;  // path as written in the CSV (relative to the CSV's folder)

@@ -27,6 +27,8 @@ std::optional<Layout> layout_from_string(std::string_view name);
 // Relative units, or absolute radiance (W sr^-1 m^-2 per channel; cd m^-2 for luminance)
 // after photometric calibration. Files record which.
 enum class Units { Relative, Radiance };
+// Radiance units are photopically weighted W sr^-1 m^-2: 683 Y is cd/m2 (CONVENTIONS.md).
+inline constexpr double kLuminousEfficacy = 683.0;
 std::string_view to_string(Units units);
 std::optional<Units> units_from_string(std::string_view name);
 

@@ -558,6 +558,17 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
     convert_to_rec709(path, raw.rgb, Chromaticities{{c.red.x, c.red.y}, {c.green.x, c.green.y}, {c.blue.x, c.blue.y},
                                                     {c.white.x, c.white.y}});
   }
+  // OpenEXR's standard whiteLuminance (cd/m2 of RGB 1, 1, 1) makes a file absolute: a
+  // calibrated render or capture from another tool, read as relative until now. Radiance
+  // units are those where 683 Y is cd/m2 (CONVENTIONS.md), so the pixels scale by W / 683.
+  // Our own units attribute, which is written with it, decides when both are there.
+  if (!raw.units && Imf::hasWhiteLuminance(header)) {
+    const float white = Imf::whiteLuminance(header);
+    if (!(white > 0) || !std::isfinite(white))
+      fail(path, fmt::format("whiteLuminance {} is not a positive luminance (cd/m2 of RGB 1, 1, 1)", white));
+    for (float& v : raw.rgb) v *= white / kLuminousEfficacy;
+    raw.units = std::string(to_string(Units::Radiance));
+  }
   if (want_mask) alpha_to_mask(path, raw, alpha);
   fit_to_display_window(path, raw, dw, header.displayWindow());
   return raw;
@@ -591,6 +602,8 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
   if (options.record_layout)
     header.insert("lightprobe.layout", Imf::StringAttribute(std::string(to_string(map.layout))));
   header.insert("lightprobe.units", Imf::StringAttribute(std::string(to_string(map.units))));
+  // The same for every OpenEXR reader (OpenImageIO, Nuke): RGB 1, 1, 1 is 683 cd/m2.
+  if (map.units == Units::Radiance) Imf::addWhiteLuminance(header, float(kLuminousEfficacy));
   if (map.layout == Layout::Healpix) header.insert("lightprobe.nside", Imf::IntAttribute(map.nside));
   if (map.world_from_probe) header.insert(kExrRotationKey, Imf::StringAttribute(rotation_text(*map.world_from_probe)));
 

@@ -8,6 +8,7 @@
 #include <ImfHeader.h>
 #include <ImfMultiPartOutputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfInputFile.h>
 #include <ImfOutputPart.h>
 #include <ImfPartType.h>
 #include <ImfStandardAttributes.h>
@@ -923,6 +924,50 @@ TEST(ImageIo, AnExrIsItsDisplayWindowWithPixelsWithoutDataMasked) {
   // Nothing inside the display window: refused.
   write_windowed_exr(dir + "out.exr", display, Imath::Box2i({40, 0}, {45, 15}));
   expect_input_error([&] { read_envmap(dir + "out.exr"); }, {dir + "out.exr", "lies outside the display window"});
+}
+
+// OpenEXR's whiteLuminance (cd/m2 of RGB 1, 1, 1) makes a file absolute: read as radiance
+// (683 Y = cd/m2), scaled by W / 683; it was read as relative. Our radiance maps carry it, so
+// that every OpenEXR reader knows their luminance; a wrong one is refused.
+TEST(ImageIo, AnExrsWhiteLuminanceMakesItRadianceAndOursCarryIt) {
+  const std::string dir = temp_dir();
+  auto write = [&](const std::string& name, float white) {
+    Imf::Header header(4, 2);
+    for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    Imf::addWhiteLuminance(header, white);
+    std::vector<float> rgb(24, 1.0f);
+    rgb[3] = 2.0f;  // pixel 1's red
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c)
+      fb.insert(std::string(1, "RGB"[c]), Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&rgb[size_t(c)]), 12, 48));
+    Imf::OutputFile file((dir + name).c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(2);
+    return dir + name;
+  };
+  const EnvMap nits = read_envmap(write("nits.exr", 100.0f));
+  EXPECT_EQ(nits.units, Units::Radiance);
+  EXPECT_FLOAT_EQ(nits.pixel(0)[1], float(100.0 / 683.0));
+  EXPECT_FLOAT_EQ(nits.pixel(1)[0], float(200.0 / 683.0));
+  EXPECT_NEAR(683.0 * luminance(nits.pixel(0)[0], nits.pixel(0)[1], nits.pixel(0)[2]), 100.0, 1e-4);
+  expect_input_error([&] { read_envmap(write("zero.exr", 0.0f)); }, {dir + "zero.exr", "whiteLuminance 0"});
+  // Ours: radiance maps state 683, relative ones nothing; both read back as written.
+  EnvMap map = make_latlong(4, 2);
+  for (float& v : map.rgb) v = 0.5f;
+  map.units = Units::Radiance;
+  write_envmap(dir + "radiance.exr", map);
+  {
+    Imf::InputFile in((dir + "radiance.exr").c_str());
+    ASSERT_TRUE(Imf::hasWhiteLuminance(in.header()));
+    EXPECT_FLOAT_EQ(Imf::whiteLuminance(in.header()), 683.0f);
+  }
+  const EnvMap back = read_envmap(dir + "radiance.exr");
+  EXPECT_EQ(back.units, Units::Radiance);
+  EXPECT_EQ(back.rgb, map.rgb) << "our units attribute decides: not scaled twice";
+  map.units = Units::Relative;
+  write_envmap(dir + "relative.exr", map);
+  Imf::InputFile in((dir + "relative.exr").c_str());
+  EXPECT_FALSE(Imf::hasWhiteLuminance(in.header()));
 }
 
 // Files in other primaries are converted to Rec. 709 (core/chromaticities.h): an EXR whose

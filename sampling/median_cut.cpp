@@ -89,8 +89,7 @@ class MedianCutSampler final : public Sampler {
     const double lum_power = luminance(power.data());
     const double table_power = table(h, w);
     if (!std::isfinite(lum_power) || !std::isfinite(table_power) || !(lum_power > 0) || !(table_power > 0)) {
-      require_samplable(*map, "mediancut");  // throws the shared message
-      throw InputError("mediancut: the map has no positive luminance to sample");
+      refuse_unsummable(*map, "mediancut");
     }
     power_ = input.layout == Layout::Healpix ? total_power(input) : power;
     width_ = w;
@@ -128,6 +127,11 @@ class MedianCutSampler final : public Sampler {
     std::vector<Light> lights;
     lights.reserve(leaves_.size());
     for (const Region& g : leaves_) lights.push_back(integrate(g));
+    // A region's single-precision sums overflow only on values near float's limit (3e38):
+    // said here, at the cost of the lights, not of a pass over the map in prepare().
+    for (const Light& l : lights)
+      if (!std::isfinite(l.rgb[0] + l.rgb[1] + l.rgb[2]))
+        throw InputError("mediancut: the map's power overflows single precision (values near 3.4e38): scale the map down");
     match_total_power(lights, power_);
     return lights;
   }

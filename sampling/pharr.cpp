@@ -54,8 +54,7 @@ class PharrSampler final : public Sampler {
     for (; r < h; ++r) sweep_rows<1>(*map, r, power, marginal);
     const double lum_power = luminance(power.data());
     if (!std::isfinite(lum_power) || !std::isfinite(marginal) || !(lum_power > 0) || !(marginal > 0)) {
-      require_samplable(*map, "pharr");  // throws the shared message
-      throw InputError("pharr: the map has no positive luminance to sample");
+      refuse_unsummable(*map, "pharr");
     }
     power_ = input.layout == Layout::Healpix ? total_power(input) : power;
     luminance_power_ = luminance(power_.data());

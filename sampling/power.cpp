@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -30,6 +31,15 @@ void require_samplable(const EnvMap& map, const char* method) {
   const double p = total_luminance_power(map);
   if (!std::isfinite(p)) throw InputError(fmt::format("{}: the map has non-finite pixels", method));
   if (!(p > 0)) throw InputError(fmt::format("{}: the map is black (zero power): there is no light to sample", method));
+}
+
+void refuse_unsummable(const EnvMap& map, const char* method) {
+  require_samplable(map, method);
+  float top = 0;
+  for (size_t i = 0; i < map.pixel_count(); ++i)
+    if (map.is_valid(i)) top = std::max({top, map.pixel(i)[0], map.pixel(i)[1], map.pixel(i)[2]});
+  throw InputError(fmt::format("{}: the map's power overflows single precision (values up to {:.3g}): scale the map down",
+                               method, top));
 }
 
 }  // namespace lp

@@ -21,5 +21,9 @@ EnvMap as_row_grid(const EnvMap& map);
 
 // Throws InputError unless the map has positive, finite total luminance power.
 void require_samplable(const EnvMap& map, const char* method);
+// For a sampler whose own single-precision sums came out empty or not finite: throws
+// require_samplable's message, else says the map's values overflow those sums (a map with
+// values near float's limit, 3e38), which an empty map's message misnamed.
+[[noreturn]] void refuse_unsummable(const EnvMap& map, const char* method);
 
 }  // namespace lp

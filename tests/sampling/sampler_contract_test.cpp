@@ -153,6 +153,25 @@ TEST_P(SamplerContract, RejectsAMapWithNaN) {
   }
 }
 
+// Values near float's limit (3e38) overflow a sampler's single-precision sums: the map is
+// then refused saying so (pharr and mediancut said "no positive luminance"), or sampled
+// into finite lights.
+TEST_P(SamplerContract, AMapNearFloatsLimitIsRefusedAsSuchOrSampledFinitely) {
+  MAKE_OR_SKIP(s, GetParam());
+  EnvMap map = make_latlong(128, 64);
+  for (int v = 20; v < 30; ++v)
+    for (int u = 40; u < 50; ++u) std::fill_n(map.pixel(size_t(v) * 128 + size_t(u)), 3, 3e38f);
+  try {
+    s->prepare(map);
+    for (const Light& l : s->place(16))
+      for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(l.rgb[c])) << "light " << l.id;
+  } catch (const InputError& e) {
+    if (not_implemented(e)) GTEST_SKIP();
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the map's power overflows single precision"), std::string::npos) << what;
+  }
+}
+
 // All lights of a one-pixel map sit on that pixel and carry exactly its power.
 void expect_on_single_pixel(const std::vector<Light>& lights, const EnvMap& map, size_t pixel) {
   const double one_pixel = 0.36 * M_PI / 180;  // 1024 x 512: 360 / 1024 deg

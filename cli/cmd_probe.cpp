@@ -104,6 +104,10 @@ UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   else throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", a.type));
   target_size(a.layout, a.size, a.nside, &o.layout, &o.width, &o.height);
   o.fill = a.fill;
+  // 0 is each one's default (orthographic; no field of view); below it is a typo, which
+  // the unwrap ignored (`--distance -3` gave an orthographic map with exit 0).
+  if (!(a.distance >= 0)) throw InputError(fmt::format("--distance must be 0 (orthographic) or more, got {}", a.distance));
+  if (!(a.fov >= 0)) throw InputError(fmt::format("--fov must be a field of view in degrees, got {}", a.fov));
   if (a.distance > 0) o.ball_camera.distance_in_radii = a.distance;
   if (a.fov > 0) o.ball_camera.fov_deg = a.fov;
   if (!(a.reflectivity > 0 && a.reflectivity <= 1)) throw InputError("--reflectivity must be in (0, 1]");

@@ -102,6 +102,10 @@ TEST(GarbageCli, AFisheyeWithoutItsLensIsRefusedAndAnIdealOneIsUnwrappedAsGiven)
   expect_one_line_error(lightprobe("probe unwrap " + image + " --type fisheye --layout hemisphere -o " + out),
                         "--type fisheye needs the lens: --camera MODEL");
   EXPECT_FALSE(fs::exists(out));
+  expect_one_line_error(lightprobe("probe unwrap " + image + " --type fisheye --fov -190 --layout hemisphere -o " + out),
+                        "--fov must be a field of view in degrees, got -190");
+  expect_one_line_error(lightprobe("probe unwrap " + image + " --type mirrorball --distance -3 --layout hemisphere -o " + out),
+                        "--distance must be 0 (orthographic) or more, got -3");
   const CliRun r = lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout hemisphere -o " + out);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");

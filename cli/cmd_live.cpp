@@ -73,7 +73,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
   lo.layout = *layout;
   if (!args.size.empty()) parse_image_size(args.size, "--size", &lo.width, &lo.height);
   else if (*layout == Layout::LatLong) lo.width = 512, lo.height = 256;
-  if (*layout == Layout::Healpix) lo.width = args.nside > 0 ? args.nside : 32, lo.height = 1;
+  if (*layout == Layout::Healpix) lo.width = given_nside(args.nside) > 0 ? args.nside : 32, lo.height = 1;
   if (*layout == Layout::Healpix) check_nside("--nside", lo.width);
   check_light_count("--cluster", args.cluster);
   const auto method = method_from_string(args.method);

@@ -71,7 +71,7 @@ void target_size(const std::string& layout_name, const std::string& size, int ns
   if (!l) throw InputError(fmt::format("--layout: unknown layout '{}' (latlong, hemisphere, healpix)", layout_name));
   *layout = *l;
   if (*l == Layout::Healpix) {
-    *w = nside > 0 ? nside : 64;
+    *w = given_nside(nside) > 0 ? nside : 64;
     *h = 1;
     check_nside("--nside", *w);
   } else if (!size.empty()) {

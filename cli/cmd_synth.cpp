@@ -79,7 +79,7 @@ int run_synth_scene(const SynthSceneArgs& args, const Output& out) {
   if (layout == Layout::Healpix && !args.size.empty())
     throw InputError("--size does not apply to healpix: use --nside");
   int w = 0, h = 0;
-  target_geometry(layout, args.size, args.nside > 0 ? args.nside : 128, nullptr, &w, &h);
+  target_geometry(layout, args.size, given_nside(args.nside) > 0 ? args.nside : 128, nullptr, &w, &h);
   SceneOptions so;
   if (!(args.sun_scale >= 0)) throw InputError("--sun-scale must be >= 0");
   for (double& c : so.sun_rgb) c *= args.no_sun ? 0.0 : args.sun_scale;

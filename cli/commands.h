@@ -22,6 +22,9 @@ enum class Scenario;
 
 namespace lp::cli {
 
+// --nside as given: 0 for the command's default, else check_nside; a negative one was
+// taken for the default (healpix 64 or 32) with exit 0.
+int given_nside(int nside);
 // Comma-separated items, empty ones kept (so that "mis," names an empty estimator).
 std::vector<std::string> split_commas(const std::string& text);
 // --methods: comma-separated method names or "all".

@@ -82,14 +82,21 @@ std::optional<Layout> optional_layout(const std::string& name, const char* optio
   return l;
 }
 
+int given_nside(int nside) {
+  if (nside < 0) throw InputError(fmt::format("--nside must be a power of two (0: the default), got {}", nside));
+  if (nside > 0) check_nside("--nside", nside);
+  return nside;
+}
+
 void check_target_flags(const std::string& size, int nside) {
   int w = 0, h = 0;
   if (!size.empty()) parse_image_size(size, "--size", &w, &h);
-  if (nside > 0) check_nside("--nside", nside);
+  given_nside(nside);
 }
 
 // Target (layout, width, height) of convert/synth from --layout/--size/--nside.
 void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h) {
+  given_nside(nside);
   if (layout == Layout::Healpix) {
     if (nside > 0) check_nside("--nside", nside);
     *w = nside > 0 ? nside : (like && like->layout == Layout::Healpix ? like->nside : 0);

@@ -106,6 +106,11 @@ TEST(GarbageCli, AFisheyeWithoutItsLensIsRefusedAndAnIdealOneIsUnwrappedAsGiven)
                         "--fov must be a field of view in degrees, got -190");
   expect_one_line_error(lightprobe("probe unwrap " + image + " --type mirrorball --distance -3 --layout hemisphere -o " + out),
                         "--distance must be 0 (orthographic) or more, got -3");
+  // A negative --nside was taken for the default (healpix 64) with exit 0.
+  expect_one_line_error(lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout healpix --nside -8 -o " + out),
+                        "--nside must be a power of two (0: the default), got -8");
+  expect_one_line_error(lightprobe("convert " + image + " " + out + " --layout healpix --nside -4"), "got -4");
+  EXPECT_FALSE(fs::exists(out));
   const CliRun r = lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout hemisphere -o " + out);
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(r.err, "");

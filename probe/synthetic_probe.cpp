@@ -91,6 +91,14 @@ nlohmann::json write_synthetic_probe(const EnvMap& world, const std::string& inp
   if (o.type != "mirrorball" && o.type != "fisheye")
     throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", o.type));
   if (o.type == "fisheye" && sequence) throw InputError("--frames applies to mirror balls only");
+  // Ground truth says what it rendered: a negative or NaN radius or distance was taken for
+  // the default, a negative noise flipped its sign, and the truth file said neither.
+  if (!(o.radius_px >= 0)) throw InputError(fmt::format("--radius must be 0 (the default) or more, got {}", o.radius_px));
+  if (!(o.distance_in_radii >= 0))
+    throw InputError(fmt::format("--distance must be 0 (orthographic) or more, got {}", o.distance_in_radii));
+  if (!(o.noise_relative >= 0)) throw InputError(fmt::format("--noise must be 0 or more, got {}", o.noise_relative));
+  if (o.type == "fisheye" && !(o.fov_deg > 0 && o.fov_deg <= 360))
+    throw InputError(fmt::format("--fov must be in (0, 360] degrees, got {}", o.fov_deg));
   if (sequence) make_output_directory(output);
   nlohmann::json truth = {{"type", o.type}, {"input", input_label}, {"frames", o.frames}};
   nlohmann::json per_frame = nlohmann::json::array();

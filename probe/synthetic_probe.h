@@ -60,8 +60,8 @@ struct SyntheticProbeOptions {
 // Renders the probe and writes it to `output`: one image, or for a sequence a directory
 // (created) of frame_NNNN.exr and truth.json. Returns the truth: type, input (the label of
 // `world`), frames, per frame the ball (cx, cy, radius_px; none for a fisheye), and
-// distance_in_radii or fov_deg. InputError for an unknown type, a fisheye sequence or no
-// frames, before anything is written.
+// distance_in_radii or fov_deg. InputError for an unknown type, a fisheye sequence, no
+// frames, or a negative (or NaN) radius, distance or noise, before anything is written.
 nlohmann::json write_synthetic_probe(const EnvMap& world, const std::string& input_label,
                                      const SyntheticProbeOptions& options, const std::string& output);
 

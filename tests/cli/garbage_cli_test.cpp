@@ -110,6 +110,13 @@ TEST(GarbageCli, AFisheyeWithoutItsLensIsRefusedAndAnIdealOneIsUnwrappedAsGiven)
   expect_one_line_error(lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout healpix --nside -8 -o " + out),
                         "--nside must be a power of two (0: the default), got -8");
   expect_one_line_error(lightprobe("convert " + image + " " + out + " --layout healpix --nside -4"), "got -4");
+  // Ground truth that says what it rendered: these were taken for the defaults, or flipped.
+  for (const auto& [flag, message] : std::vector<std::pair<std::string, std::string>>{
+           {"--radius -5", "--radius must be 0 (the default) or more, got -5"},
+           {"--distance nan", "--distance must be 0 (orthographic) or more, got nan"},
+           {"--noise -0.1", "--noise must be 0 or more, got -0.1"},
+           {"--type fisheye --fov -190", "--fov must be in (0, 360] degrees, got -190"}})
+    expect_one_line_error(lightprobe("synth probe scene --size 64x64 " + flag + " -o " + out), message);
   EXPECT_FALSE(fs::exists(out));
   const CliRun r = lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout hemisphere -o " + out);
   EXPECT_EQ(r.code, 0) << r.err;

@@ -234,6 +234,12 @@ SyntheticBoards synthesize_boards(const SyntheticBoardsOptions& options, const L
   if (board.cols < 3 || board.rows < 3 || !(board.square_mm > 0))
     throw InputError("synth boards: board needs >= 3x3 inner corners and a positive square size");
   if (W < 16 || H < 16) throw InputError("synth boards: camera model has no image size");
+  // Taken as given, a negative or NaN noise, blur or field made images the truth does not
+  // describe (NaN noise: images of NaN codes), with exit 0.
+  if (!(options.noise_sigma >= 0)) throw InputError(fmt::format("synth boards: --noise must be 0 or more, got {}", options.noise_sigma));
+  if (!(options.blur_px >= 0)) throw InputError(fmt::format("synth boards: blur must be 0 or more, got {}", options.blur_px));
+  if (!(options.field_deg >= 0 && options.field_deg <= 360))
+    throw InputError(fmt::format("synth boards: --fov must be in [0, 360] degrees (0: the model's own), got {}", options.field_deg));
   if (!lens.project || !lens.unproject) throw InputError("synth boards: lens functions missing");
 
   const Renderer renderer(options, lens);

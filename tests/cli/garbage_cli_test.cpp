@@ -117,6 +117,10 @@ TEST(GarbageCli, AFisheyeWithoutItsLensIsRefusedAndAnIdealOneIsUnwrappedAsGiven)
            {"--noise -0.1", "--noise must be 0 or more, got -0.1"},
            {"--type fisheye --fov -190", "--fov must be in (0, 360] degrees, got -190"}})
     expect_one_line_error(lightprobe("synth probe scene --size 64x64 " + flag + " -o " + out), message);
+  expect_one_line_error(lightprobe("synth boards --views 2 --noise nan -o " + (dir / "boards").string()),
+                        "--noise must be 0 or more, got nan");
+  expect_one_line_error(lightprobe("synth boards --views 2 --fov -190 -o " + (dir / "boards").string()),
+                        "--fov must be in [0, 360] degrees (0: the model's own), got -190");
   EXPECT_FALSE(fs::exists(out));
   const CliRun r = lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout hemisphere -o " + out);
   EXPECT_EQ(r.code, 0) << r.err;

@@ -96,9 +96,8 @@ void check_target_flags(const std::string& size, int nside) {
 
 // Target (layout, width, height) of convert/synth from --layout/--size/--nside.
 void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h) {
-  given_nside(nside);
   if (layout == Layout::Healpix) {
-    if (nside > 0) check_nside("--nside", nside);
+    given_nside(nside);
     *w = nside > 0 ? nside : (like && like->layout == Layout::Healpix ? like->nside : 0);
     if (*w == 0) {
       // About as many pixels as the source.

@@ -82,6 +82,13 @@ int run_stream(const StreamArgs& args, const Output& out) {
   lo.sampling.count = light_count(args.n);
   lo.sampling.auto_count = lo.sampling.count == 0;
   lo.sampling.auto_options.target_error = args.target_error;
+  // Refused before anything starts: a negative or NaN duration or frame rate ran the stream
+  // until it was killed, and a target error of 0 or less failed every frame of a stream
+  // that kept serving nothing new.
+  if (!(args.duration >= 0)) throw InputError(fmt::format("--duration must be 0 (until stopped) or more seconds, got {}", args.duration));
+  if (!(args.fps >= 0)) throw InputError(fmt::format("--fps must be 0 (the source's own pace) or more, got {}", args.fps));
+  if (lo.sampling.auto_count && !(args.target_error > 0))
+    throw InputError(fmt::format("--target-error must be positive, got {}", args.target_error));
   lo.sampling.auto_options.measure = error_measure_from_string(args.error_measure);
   lo.sampling.budget.budget_ms = args.frame_budget_ms;
   lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21, lo.sampling.cluster_max_lights = args.cluster;
@@ -114,6 +121,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
 
 int run_merge(const MergeArgs& args, const Output& out) {
   MergeSessionOptions mo = args.mo;
+  if (!(mo.duration_s >= 0)) throw InputError(fmt::format("--duration must be 0 (until stopped) or more seconds, got {}", mo.duration_s));
   check_light_count("--n", mo.mqtt.merge.merge.n);
   if (!args.weights.empty()) mo.mqtt.merge.merge.weights = parse_numbers(args.weights, "--weights", mo.urls.size());
   std::string xyz = args.camera_positions;

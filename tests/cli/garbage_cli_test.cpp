@@ -102,6 +102,31 @@ TEST(GarbageCli, AFisheyeWithoutItsLensIsRefusedAndAnIdealOneIsUnwrappedAsGiven)
   expect_one_line_error(lightprobe("probe unwrap " + image + " --type fisheye --layout hemisphere -o " + out),
                         "--type fisheye needs the lens: --camera MODEL");
   EXPECT_FALSE(fs::exists(out));
+  const CliRun r = lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout hemisphere -o " + out);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_TRUE(fs::exists(out));
+  // A stream guesses the lens too, but runs (a rig is set up live): it says so, once it is up.
+  const fs::path frames = dir / "frames";
+  ASSERT_EQ(lightprobe("synth bracket scene --exposure-times 0.01,0.1 -o " + frames.string()).code, 0);
+  const std::string stream = "stream --duration 1 --listen 127.0.0.1:0 --exposures 0.01,0.1 --source ";
+  const CliRun guessed = lightprobe(stream + "replay:" + frames.string());
+  EXPECT_EQ(guessed.code, 0) << guessed.err;
+  EXPECT_EQ(line_count(guessed.err), 1) << guessed.err;
+  EXPECT_NE(guessed.err.find("warning: no --camera: frames are unwrapped as an ideal equidistant fisheye of 180 deg"),
+            std::string::npos)
+      << guessed.err;
+  const CliRun fake = lightprobe(stream + "aravis:Fake_1");
+  EXPECT_EQ(fake.code, 0) << fake.err;
+  EXPECT_EQ(fake.err.find("no --camera"), std::string::npos) << "Aravis' simulated camera has no lens: " << fake.err;
+}
+
+// Numbers out of range were taken for a default, flipped, or ran a stream until it was
+// killed, with exit 0 (found by giving every numeric option -1, nan and 0).
+TEST(GarbageCli, NumbersOutOfRangeAreRefusedNotTakenForDefaults) {
+  const fs::path dir = fresh_dir("out_of_range");
+  const std::string image = (dir / "sky.exr").string(), out = (dir / "out.exr").string();
+  ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 190 --size 64x64 -o " + image).code, 0);
   expect_one_line_error(lightprobe("probe unwrap " + image + " --type fisheye --fov -190 --layout hemisphere -o " + out),
                         "--fov must be a field of view in degrees, got -190");
   expect_one_line_error(lightprobe("probe unwrap " + image + " --type mirrorball --distance -3 --layout hemisphere -o " + out),
@@ -121,24 +146,17 @@ TEST(GarbageCli, AFisheyeWithoutItsLensIsRefusedAndAnIdealOneIsUnwrappedAsGiven)
                         "--noise must be 0 or more, got nan");
   expect_one_line_error(lightprobe("synth boards --views 2 --fov -190 -o " + (dir / "boards").string()),
                         "--fov must be in [0, 360] degrees (0: the model's own), got -190");
-  EXPECT_FALSE(fs::exists(out));
-  const CliRun r = lightprobe("probe unwrap " + image + " --type fisheye --fov 190 --layout hemisphere -o " + out);
-  EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_EQ(r.err, "");
-  EXPECT_TRUE(fs::exists(out));
-  // A stream guesses the lens too, but runs (a rig is set up live): it says so, once it is up.
   const fs::path frames = dir / "frames";
   ASSERT_EQ(lightprobe("synth bracket scene --exposure-times 0.01,0.1 -o " + frames.string()).code, 0);
-  const std::string stream = "stream --duration 1 --listen 127.0.0.1:0 --exposures 0.01,0.1 --source ";
-  const CliRun guessed = lightprobe(stream + "replay:" + frames.string());
-  EXPECT_EQ(guessed.code, 0) << guessed.err;
-  EXPECT_EQ(line_count(guessed.err), 1) << guessed.err;
-  EXPECT_NE(guessed.err.find("warning: no --camera: frames are unwrapped as an ideal equidistant fisheye of 180 deg"),
-            std::string::npos)
-      << guessed.err;
-  const CliRun fake = lightprobe(stream + "aravis:Fake_1");
-  EXPECT_EQ(fake.code, 0) << fake.err;
-  EXPECT_EQ(fake.err.find("no --camera"), std::string::npos) << "Aravis' simulated camera has no lens: " << fake.err;
+  // Refused before the stream starts: these ran it until it was killed (timeouts here).
+  for (const auto& [flag, message] : std::vector<std::pair<std::string, std::string>>{
+           {" --duration -1", "--duration must be 0 (until stopped) or more seconds, got -1"},
+           {" --fps nan", "--fps must be 0 (the source's own pace) or more, got nan"},
+           {" --n auto --target-error -0.01", "--target-error must be positive, got -0.01"}})
+    expect_one_line_error(lightprobe("stream --listen 127.0.0.1:0 --source replay:" + frames.string() + flag), message);
+  expect_one_line_error(lightprobe("merge http://127.0.0.1:1 --listen 127.0.0.1:0 --duration nan"),
+                        "--duration must be 0 (until stopped) or more seconds, got nan");
+  EXPECT_FALSE(fs::exists(out));
 }
 
 // A --config file's misspelt key or section was ignored: `metod = "mediancut"` ran the

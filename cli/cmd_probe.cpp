@@ -241,17 +241,22 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   return 0;
 }
 
-// The photos' EXIF exposures, which the registered PNGs do not carry, as exposures.csv
-// beside them (`hdr fuse registered/*.png --exposure-times registered/exposures.csv`): each
-// time, scaled by ISO / f-number^2 relative to the first photo's where those differ, as
-// read_bracket would. Nothing is written when a photo records no time.
-void write_registered_exposures(const std::vector<std::string>& images, const std::vector<std::string>& names,
-                                const std::string& dir) {
+// The photos' EXIF exposures, which the registered PNGs do not carry, as the text of an
+// exposures.csv to write beside them (`hdr fuse registered/*.png --exposure-times
+// registered/exposures.csv`): each time, scaled by ISO / f-number^2 relative to the first
+// photo's where those differ, as read_bracket would. nullopt when a photo is no camera
+// image, records no time, or has EXIF that cannot be read: the registration needs none.
+std::optional<std::string> registered_exposures_csv(const std::vector<std::string>& images,
+                                                    const std::vector<std::string>& names) {
   std::vector<ExifExposureSettings> s;
   for (const std::string& f : images) {
-    if (lower_extension(f) == ".exr" || lower_extension(f) == ".hdr" || lower_extension(f) == ".pfm") return;
-    s.push_back(read_exif_exposure(f));
-    if (!s.back().seconds) return;
+    if (!is_camera_image_file(f)) return std::nullopt;
+    try {
+      s.push_back(read_exif_exposure(f));
+    } catch (const InputError&) {
+      return std::nullopt;
+    }
+    if (!s.back().seconds) return std::nullopt;
   }
   Bracket b;
   for (const auto& e : s) b.exposure_seconds.push_back(*e.seconds);
@@ -262,7 +267,7 @@ void write_registered_exposures(const std::vector<std::string>& images, const st
   std::string csv = "file,exposure_s\n";
   if (b.exposure_seconds != times) csv = "# seconds x ISO / f-number^2, relative to the first photo's\n" + csv;
   for (size_t i = 0; i < names.size(); ++i) csv += fmt::format("{},{}\n", names[i], b.exposure_seconds[i]);
-  write_file_atomically((fs::path(dir) / "exposures.csv").string(), csv);
+  return csv;
 }
 
 int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
@@ -285,19 +290,25 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
     found.push_back({{"file", f}, {"ball", {balls.back().cx, balls.back().cy, balls.back().radius_px}}});
   }
   const std::vector<RgbImage> registered = register_balls(frames, balls, args.size);
-  make_output_directory(args.output_dir);
   // Each photo keeps what it holds: 8- or 16-bit codes as a PNG of that depth, radiance as
   // EXR. All went to 8-bit PNG: a 16-bit bracket lost 8 bits, radiance was clipped at 1.
   std::vector<std::string> names;
+  for (size_t i = 0; i < registered.size(); ++i)
+    names.push_back(fs::path(args.images[i]).stem().string() + (registered[i].code_bits > 0 ? ".png" : ".exr"));
+  // Read before anything is written: nothing here can fail after the photos are.
+  const std::optional<std::string> exposures = registered_exposures_csv(args.images, names);
+  make_output_directory(args.output_dir);
   for (size_t i = 0; i < registered.size(); ++i) {
     const RgbImage& r = registered[i];
-    names.push_back(fs::path(args.images[i]).stem().string() + (r.code_bits > 0 ? ".png" : ".exr"));
-    const std::string path = (fs::path(args.output_dir) / names.back()).string();
+    const std::string path = (fs::path(args.output_dir) / names[i]).string();
     if (r.code_bits > 0) write_code_image(path, r, r.code_bits);
     else write_rgb_image(path, r);
-    found[i]["output"] = names.back();
+    found[i]["output"] = names[i];
   }
-  write_registered_exposures(args.images, names, args.output_dir);
+  // An exposures.csv of an earlier run would name these photos with another set's times.
+  const fs::path csv = fs::path(args.output_dir) / "exposures.csv";
+  if (exposures) write_file_atomically(csv.string(), *exposures);
+  else fs::remove(csv);
   const BallInImage ball = registered_ball(args.size);
   say(out, "{}: {} photos registered to {}x{}, ball at ({:.1f}, {:.1f}) r {:.1f} px\n", args.output_dir,
       registered.size(), args.size, args.size, ball.cx, ball.cy, ball.radius_px);

@@ -155,7 +155,6 @@ void fold_iso_and_aperture(Bracket& b, const std::vector<ExifExposureSettings>& 
                    b.paths.empty() ? std::string("bracket") : b.paths.front(), what));
 }
 
-
 namespace {
 
 // A camera file's first `bytes` (fewer when it is shorter): what lies before its pixels.
@@ -184,8 +183,6 @@ bool may_have_exif(const std::string& path) {
   return is_tiff(head) || head.find(std::string("Exif\0\0", 6)) != std::string::npos ||
          head.find("eXIf") != std::string::npos;
 }
-
-
 
 // A longer exposure is at least as bright in every pixel (the same scene, a monotonic
 // response): where the frames say the opposite, the times given are not theirs. Sampled
@@ -399,7 +396,9 @@ std::vector<double> exposure_times_for(const std::string& path, const std::vecto
     if (entries.size() != images.size())
       throw InputError(fmt::format("{}: {} times for {} images (a list of times alone is read in order)", path,
                                    entries.size(), images.size()));
-    return read_exposure_list(path);
+    std::vector<double> times;
+    for (const ExposureEntry& e : entries) times.push_back(e.seconds);
+    return times;
   }
   if (named != entries.size()) {
     const auto bare = std::find_if(entries.begin(), entries.end(), [](const auto& e) { return e.file.empty(); });

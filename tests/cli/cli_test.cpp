@@ -593,6 +593,8 @@ TEST(Cli, RegisteredPhotosKeepTheirRadianceOrTheirBitDepth) {
   const fs::path a = dir / "a.exr", b = dir / "b.exr";
   ASSERT_EQ(lightprobe("synth probe " + map + " --size 300x300 -o " + a.string()).code, 0);
   ASSERT_EQ(lightprobe("synth probe " + map + " --size 340x320 -o " + b.string()).code, 0);
+  fs::create_directories(dir / "exr");
+  std::ofstream(dir / "exr" / "exposures.csv") << "file,exposure_s\na.exr,0.5\n";  // an earlier run's
   const CliRun exr = lightprobe("probe register " + a.string() + " " + b.string() + " --size 256 -o " + (dir / "exr").string());
   ASSERT_EQ(exr.code, 0) << exr.err;
   const lp::RgbImage in = lp::read_rgb_image(a.string()), out = lp::read_rgb_image((dir / "exr" / "a.exr").string());
@@ -600,7 +602,7 @@ TEST(Cli, RegisteredPhotosKeepTheirRadianceOrTheirBitDepth) {
   const float out_max = *std::max_element(out.rgb.begin(), out.rgb.end());
   EXPECT_GT(in_max, 10.0f);
   EXPECT_GT(out_max, 0.5f * in_max) << "radiance above 1 kept (resampled)";
-  EXPECT_FALSE(fs::exists(dir / "exr" / "exposures.csv")) << "maps have no exposure time";
+  EXPECT_FALSE(fs::exists(dir / "exr" / "exposures.csv")) << "maps have no exposure time, and an old list is not theirs";
   // 16-bit codes: the same photo at 1/64 of its radiance, as a 16-bit camera stored it.
   lp::RgbImage codes = in;
   for (float& v : codes.rgb) v = std::min(1.0f, v / 64);

@@ -54,8 +54,10 @@ grep -E '^[0-9]+% tests passed|\*\*\*Failed|\(Failed\)|\(Timeout\)|Exception' "$
 total=$(sed -n 's/.*tests passed, \([0-9]*\) tests failed out of \([0-9]*\).*/\2/p' "$log")
 failed=$(sed -n 's/.*tests passed, \([0-9]*\) tests failed out of \([0-9]*\).*/\1/p' "$log")
 if [ -z "$total" ]; then
-  passed=$(grep -cE '^ *[0-9]+/[0-9]+ Test +#[0-9]+: .* Passed' "$log" || true)
-  failed=$(grep -cE '^ *[0-9]+/[0-9]+ Test +#[0-9]+: .*(Failed|Exception|Timeout)' "$log" || true)
+  # ctest's verdicts, not words in a test's name (MergeCameras.SilentInputIsDroppedAfterTheTimeout...
+  # passed, and was once counted as failed here).
+  passed=$(grep -cE '^ *[0-9]+/[0-9]+ Test +#[0-9]+: .* +Passed +[0-9.]+ sec$' "$log" || true)
+  failed=$(grep -cE '^ *[0-9]+/[0-9]+ Test +#[0-9]+: .*\*\*\*(Failed|Exception|Timeout)' "$log" || true)
   if [ "$rc" -eq 124 ] || [ "$rc" -eq 137 ]; then
     echo "sanitize: cut short at the ${limit} s budget; of the tests that finished:"
     echo "sanitize: $passed passed, $failed failed"

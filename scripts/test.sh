@@ -36,6 +36,8 @@ fi
 # What failed, once more at the very end: CI may show only the tail of a long log.
 case $failed_stages in *" ctest "*) echo "test: ctest failed: $(cut -d: -f2 build/Testing/Temporary/LastTestsFailed.log 2>/dev/null | tr '\n' ' ')" ;; esac
 case $failed_stages in *" fuzz "*) grep -h -A3 ' FAILED ' build-fuzz/logs/summary.txt 2>/dev/null | sed 's/^/test: /' || true ;; esac
-case $failed_stages in *" sanitize "*) echo "test: sanitize failed: $(cut -d: -f2 build-asan/Testing/Temporary/LastTestsFailed.log 2>/dev/null | tr '\n' ' ')" ;; esac
+# A sanitizer run cut short at the budget writes no LastTestsFailed.log: its log names them.
+case $failed_stages in *" sanitize "*) echo "test: sanitize failed: $( { cut -d: -f2 build-asan/Testing/Temporary/LastTestsFailed.log 2>/dev/null ||
+  sed -n 's/^ *[0-9]*\/[0-9]* Test *#[0-9]*: \([^ ]*\) .*\*\*\*\(Failed\|Exception\|Timeout\).*/\1/p' build-asan/ctest.log 2>/dev/null; } | tr '\n' ' ')" ;; esac
 echo "test: times:${times%,}"
 exit $status

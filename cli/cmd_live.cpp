@@ -90,6 +90,12 @@ int run_stream(const StreamArgs& args, const Output& out) {
   if (lo.sampling.auto_count && !(args.target_error > 0))
     throw InputError(fmt::format("--target-error must be positive, got {}", args.target_error));
   lo.sampling.auto_options.measure = error_measure_from_string(args.error_measure);
+  // What only --n auto reads is refused with a fixed count, not ignored (as sample does).
+  const StreamArgs defaults;
+  for (const auto& [given, option] : {std::pair{args.target_error != defaults.target_error, "--target-error"},
+                                      std::pair{args.error_measure != defaults.error_measure, "--error-measure"},
+                                      std::pair{args.frame_budget_ms != defaults.frame_budget_ms, "--frame-budget-ms"}})
+    if (given && !lo.sampling.auto_count) throw InputError(fmt::format("{} applies only with --n auto", option));
   lo.sampling.budget.budget_ms = args.frame_budget_ms;
   lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21, lo.sampling.cluster_max_lights = args.cluster;
   lo.sampling.sampler.upper_only = *layout == Layout::Hemisphere;

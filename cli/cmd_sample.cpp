@@ -111,11 +111,46 @@ int run_sample_residual(const SampleArgs& args, const Output& out, Method method
   return 0;
 }
 
+// Options that do nothing for the chosen method are refused, not ignored: `--method pharr
+// --q2-a 2` or `--light-cap 10` without --residual ran with exit 0 and lists that the
+// user believed shaped by the option. Compared against the defaults, so a config file
+// may still spell a default out.
+void refuse_unused_options(const SampleArgs& args, Method method, bool residual, bool auto_count) {
+  const SampleArgs d;
+  const SamplerOptions &s = args.pipeline.sampler, &ds = d.pipeline.sampler;
+  auto refuse_unless = [](bool applies, const char* option, const std::string& where) {
+    if (!applies) throw InputError(fmt::format("{} applies only {}", option, where));
+  };
+  const std::string name(to_string(method));
+  const bool hemigon = method == Method::Hemigon, q2tree = method == Method::Q2Tree;
+  if (s.upper_only != ds.upper_only) refuse_unless(hemigon, "--upper-only", "to --method hemigon, not " + name);
+  if (s.lloyd_relaxed != ds.lloyd_relaxed)
+    refuse_unless(hemigon && !residual, "--lloyd", residual ? "without --residual" : "to --method hemigon, not " + name);
+  if (s.q2_jitter != ds.q2_jitter)
+    refuse_unless(q2tree && !residual, "--q2-jitter", residual ? "without --residual" : "to --method q2tree, not " + name);
+  if (s.q2_luminance_exponent != ds.q2_luminance_exponent) refuse_unless(q2tree, "--q2-a", "to --method q2tree, not " + name);
+  if (s.q2_solid_angle_exponent != ds.q2_solid_angle_exponent)
+    refuse_unless(q2tree, "--q2-b", "to --method q2tree, not " + name);
+  if (s.q2_nside != ds.q2_nside) refuse_unless(q2tree, "--q2-nside", "to --method q2tree, not " + name);
+  if (args.ambient.light_cap_deg != d.ambient.light_cap_deg) refuse_unless(residual, "--light-cap", "with --residual sh9");
+  const auto& ao = args.pipeline.auto_options;
+  if (ao.target_error != d.pipeline.auto_options.target_error) refuse_unless(auto_count, "--target-error", "with --n auto");
+  if (args.error_measure != d.error_measure) refuse_unless(auto_count, "--error-measure", "with --n auto");
+  if (!residual) return;
+  const FramePipelineOptions &p = args.pipeline, &dp = d.pipeline;
+  refuse_unless(p.cluster_max_lights == dp.cluster_max_lights, "--cluster", "without --residual");
+  refuse_unless(args.filter == d.filter, "--filter", "without --residual (it filters sequences)");
+  refuse_unless(p.frame_rate_hz == dp.frame_rate_hz, "--fps", "without --residual (it times sequences)");
+  refuse_unless(args.overlay.empty(), "--overlay", "without --residual");
+  refuse_unless(!args.glossy_errors, "--glossy-errors", "without --residual (it scores the glossy errors already)");
+}
+
 }  // namespace
 
 int run_sample(const SampleArgs& args, const Output& out) {
   const auto method = method_from_string(args.method);
   if (!method) throw InputError(fmt::format("--method: unknown method '{}' (pharr, hemigon, q2tree, mediancut)", args.method));
+  refuse_unused_options(args, *method, !args.residual.empty(), args.n == "auto");
   if (!args.residual.empty()) return run_sample_residual(args, out, *method);
   SampleMapsOptions o;
   o.pipeline = args.pipeline;

@@ -159,6 +159,36 @@ TEST(GarbageCli, NumbersOutOfRangeAreRefusedNotTakenForDefaults) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// An option the chosen method never reads was ignored with exit 0: `--method pharr --q2-a 2`
+// gave pharr's lists, which the user took for the exponent's effect.
+TEST(GarbageCli, OptionsTheChosenMethodDoesNotReadAreRefusedNotIgnored) {
+  const fs::path dir = fresh_dir("unused_options");
+  const std::string map = (dir / "map.exr").string(), out = (dir / "lights.json").string();
+  ASSERT_EQ(lightprobe("synth scene --size 64x32 -o " + map).code, 0);
+  for (const auto& [flags, message] : std::vector<std::pair<std::string, std::string>>{
+           {"--method pharr --q2-a 2", "--q2-a applies only to --method q2tree, not pharr"},
+           {"--method hemigon --q2-nside 16", "--q2-nside applies only to --method q2tree, not hemigon"},
+           {"--method mediancut --q2-jitter", "--q2-jitter applies only to --method q2tree, not mediancut"},
+           {"--method q2tree --lloyd", "--lloyd applies only to --method hemigon, not q2tree"},
+           {"--method pharr --upper-only", "--upper-only applies only to --method hemigon, not pharr"},
+           {"--method pharr --light-cap 10", "--light-cap applies only with --residual sh9"},
+           {"--method pharr --n 16 --target-error 0.05", "--target-error applies only with --n auto"},
+           {"--method pharr --error-measure glossy10", "--error-measure applies only with --n auto"},
+           {"--method hemigon --n 16 --residual sh9 --lloyd", "--lloyd applies only without --residual"},
+           {"--method pharr --n 16 --residual sh9 --cluster 4", "--cluster applies only without --residual"}})
+    expect_one_line_error(lightprobe("sample " + map + " " + flags + " -o " + out), message);
+  EXPECT_FALSE(fs::exists(out));
+  // What the method does read still runs (a control for the refusals above).
+  EXPECT_EQ(lightprobe("sample " + map + " --method q2tree --n 16 --q2-a 0.5 --q2-nside 16 -o " + out).code, 0);
+  EXPECT_EQ(lightprobe("sample " + map + " --method pharr --n 8 --residual sh9 --light-cap 10 -o " + out).code, 0);
+  EXPECT_EQ(lightprobe("sample " + map + " --method pharr --n auto --target-error 0.05 -o " + out).code, 0);
+  const fs::path frames = dir / "frames";
+  ASSERT_EQ(lightprobe("synth bracket scene --exposure-times 0.01,0.1 -o " + frames.string()).code, 0);
+  expect_one_line_error(lightprobe("stream --listen 127.0.0.1:0 --source replay:" + frames.string() +
+                                   " --n 64 --frame-budget-ms 5"),
+                        "--frame-budget-ms applies only with --n auto");
+}
+
 // A --config file's misspelt key or section was ignored: `metod = "mediancut"` ran the
 // default method with exit 0. A rig file's sections for other commands are theirs.
 TEST(GarbageCli, AConfigFileWithAKeyOrSectionNoCommandHasIsRefusedNamingIt) {

@@ -235,7 +235,7 @@ std::optional<ColourProfile> read_colour_profile(const std::string& path) {
 
 Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<std::vector<double>>& times) {
   Bracket b;
-  std::vector<ExifExposureSettings> settings;  // non-RAW frames' EXIF ISO and f-number
+  std::vector<ExifExposureSettings> settings;  // each frame's recorded ISO and f-number
   if (times && times->size() != paths.size())
     throw InputError(fmt::format("--exposure-times: {} times for {} images", times->size(), paths.size()));
   // Camera RAW files (through LibRaw) are linear 16-bit with their own shutter time.
@@ -248,8 +248,12 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
   };
   for (size_t k = 0; k < paths.size(); ++k) {
     if (is_raw(paths[k])) {
-      double t = 0;
-      RgbImage f = read_camera_raw(paths[k], &t);
+      RawExposure raw;
+      RgbImage f = read_camera_raw(paths[k], &raw);
+      const double t = raw.seconds;
+      ExifExposureSettings e;  // the same fold as for EXIF: a RAW bracket may vary its ISO too
+      e.iso = raw.iso, e.f_number = raw.f_number;
+      settings.push_back(e);
       if (k > 0 && !b.linear) throw InputError(fmt::format("{}: a RAW file in a bracket of non-RAW images", paths[k]));
       b.linear = true;
       b.bit_depth = 16;

@@ -28,6 +28,7 @@ struct DevelopedRaw {
   int width = 0, height = 0, colors = 0;    // Ok: the developed image, colors 1 or 3
   std::vector<uint16_t> samples;            // Ok: width * height * colors, row-major
   double shutter_seconds = 0;               // as recorded; 0 when none
+  double iso = 0, f_number = 0;             // as recorded; 0 when none
 };
 
 // EXIF exposure time: Exif.Photo.ExposureTime, Exif.Image.ExposureTime, then the APEX
@@ -54,7 +55,7 @@ struct CameraFilesPluginTable {
   // cannot read the file (the image reader reports that).
   std::string (*icc_profile)(const std::string& path);
 };
-inline constexpr int kCameraFilesPluginVersion = 3;
+inline constexpr int kCameraFilesPluginVersion = 4;
 inline constexpr const char* kCameraFilesPluginFile = "liblightprobe_camera_files.so";
 
 // The plugin's table, loaded once; throws std::runtime_error when it cannot be loaded.

@@ -84,7 +84,7 @@ RgbImage mono_to_rgb(const std::vector<uint16_t>& data, int width, int height, i
   return out;
 }
 
-RgbImage read_camera_raw(const std::string& path, double* exposure_seconds_out) {
+RgbImage read_camera_raw(const std::string& path, RawExposure* exposure_out) {
   // LibRaw is loaded by the first RAW file (hdr/camera_files_plugin.h).
   const detail::DevelopedRaw img = detail::camera_files_plugin().develop_raw(path, [](int width, int height) {
     try {
@@ -108,7 +108,7 @@ RgbImage read_camera_raw(const std::string& path, double* exposure_seconds_out) 
   const int colors = img.colors;
   for (size_t i = 0; i < n; ++i)
     for (int c = 0; c < 3; ++c) out.rgb[3 * i + c] = img.samples[i * colors + (colors == 3 ? c : 0)] / 65535.0f;
-  if (exposure_seconds_out) *exposure_seconds_out = img.shutter_seconds;
+  if (exposure_out) *exposure_out = {img.shutter_seconds, img.iso, img.f_number};
   return out;
 }
 

@@ -29,9 +29,12 @@ RgbImage mono_to_rgb(const std::vector<uint16_t>& data, int width, int height, i
 
 // A camera RAW file (CR2, NEF, ARW, DNG, ...) developed by LibRaw to linear 16-bit sRGB
 // primaries: camera white balance, no gamma, no auto-brightening, values / 65535.
-// `exposure_seconds_out` (may be null) receives the shutter time recorded in the file,
-// 0 when it records none. Throws InputError naming the file when LibRaw cannot open,
-// unpack or develop it.
-RgbImage read_camera_raw(const std::string& path, double* exposure_seconds_out = nullptr);
+// What a RAW file records of its exposure; 0 where it records nothing.
+struct RawExposure {
+  double seconds = 0, iso = 0, f_number = 0;
+};
+// `exposure_out` (may be null) receives the shutter time, ISO and f-number recorded in the
+// file. Throws InputError naming the file when LibRaw cannot open, unpack or develop it.
+RgbImage read_camera_raw(const std::string& path, RawExposure* exposure_out = nullptr);
 
 }  // namespace lp

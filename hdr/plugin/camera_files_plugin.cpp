@@ -55,7 +55,11 @@ DevelopedRaw develop_raw(const std::string& path, bool (*sensor_fits)(int, int))
   out.colors = img->colors;
   out.samples.resize(size_t(out.width) * size_t(out.height) * size_t(out.colors));
   std::memcpy(out.samples.data(), img->data, out.samples.size() * 2);
-  out.shutter_seconds = raw->imgdata.other.shutter > 0 ? raw->imgdata.other.shutter : 0.0;
+  const auto& other = raw->imgdata.other;
+  auto positive = [](float v) { return std::isfinite(v) && v > 0 ? double(v) : 0.0; };
+  out.shutter_seconds = positive(other.shutter);
+  out.iso = positive(other.iso_speed);
+  out.f_number = positive(other.aperture);
   out.status = DevelopedRaw::Status::Ok;
   return out;
 }

@@ -18,6 +18,7 @@
 #include "core/image_io.h"
 #include "core/warnings.h"
 #include "hdr/merge.h"
+#include "hdr/response.h"
 #include "tests/core/icc_blob.h"
 #include "tests/hdr/synthetic_bracket.h"
 
@@ -189,6 +190,128 @@ TEST(ReadBracket, FramesOfAnotherIsoOrApertureAreExposedByItToo) {
   EXPECT_EQ(plain.exposure_seconds, (std::vector<double>{1.0 / 400, 1.0 / 50, 1.0 / 6}));
   EXPECT_LT(spread(plain), 0.1) << "the same scene at one ISO: the reference spread";
   Bracket times_only = from_exif;
+  times_only.exposure_seconds = {0.01, 0.02, 0.04};
+  EXPECT_GT(spread(times_only), 1.0) << "what the times alone gave";
+}
+
+// A minimal linear DNG (LinearRaw RGB, 16 bit, white level 65535, identity colour matrix)
+// of `codes` (w x h x 3), whose Exif IFD records the exposure time 1/t_den s, the f-number
+// and the ISO, as a camera writes them: what LibRaw develops back to the same grey ramp.
+std::string dng_with_settings(const TempDir& tmp, const std::string& name, int w, int h,
+                              const std::vector<uint16_t>& codes, uint32_t t_den, uint32_t f_num10, uint32_t iso) {
+  struct Entry {
+    uint16_t tag, type;
+    uint32_t count;
+    std::string data;  // little endian; inline when 4 bytes or fewer
+  };
+  auto le = [](std::initializer_list<uint32_t> v, int bytes) {
+    std::string out;
+    for (uint32_t x : v)
+      for (int i = 0; i < bytes; ++i) out += char((x >> (8 * i)) & 0xff);
+    return out;
+  };
+  const uint32_t pixels_bytes = uint32_t(codes.size() * 2);
+  std::vector<Entry> ifd0 = {
+      {254, 4, 1, le({0}, 4)},                         // NewSubFileType: the main image
+      {256, 4, 1, le({uint32_t(w)}, 4)},
+      {257, 4, 1, le({uint32_t(h)}, 4)},
+      {258, 3, 3, le({16, 16, 16}, 2)},                // BitsPerSample
+      {259, 3, 1, le({1}, 2)},                         // no compression
+      {262, 3, 1, le({34892}, 2)},                     // LinearRaw
+      {271, 2, 5, std::string("Test", 5)},             // Make
+      {272, 2, 5, std::string("Test", 5)},             // Model
+      {273, 4, 1, le({8}, 4)},                         // StripOffsets: the pixels right after the header
+      {277, 3, 1, le({3}, 2)},                         // SamplesPerPixel
+      {278, 4, 1, le({uint32_t(h)}, 4)},               // RowsPerStrip
+      {279, 4, 1, le({pixels_bytes}, 4)},              // StripByteCounts
+      {284, 3, 1, le({1}, 2)},                         // chunky
+      {34665, 4, 1, ""},                               // Exif IFD, filled in below
+      {50706, 1, 4, le({1, 4, 0, 0}, 1)},              // DNGVersion 1.4
+      {50708, 2, 5, std::string("Test", 5)},           // UniqueCameraModel
+      {50717, 4, 1, le({65535}, 4)},                   // WhiteLevel
+      {50721, 10, 9, le({1, 1, 0, 1, 0, 1, 0, 1, 1, 1, 0, 1, 0, 1, 0, 1, 1, 1}, 4)},  // ColorMatrix1 = I
+      {50728, 5, 3, le({1, 1, 1, 1, 1, 1}, 4)},        // AsShotNeutral
+      {50778, 3, 1, le({21}, 2)},                      // CalibrationIlluminant1 D65
+  };
+  const std::vector<Entry> exif = {
+      {33434, 5, 1, le({1, t_den}, 4)},     // ExposureTime
+      {33437, 5, 1, le({f_num10, 10}, 4)},  // FNumber
+      {34855, 3, 1, le({iso}, 2)},          // ISOSpeedRatings
+  };
+  // Layout: header (8), pixels, IFD0, its out-of-line values, the Exif IFD, its values.
+  auto ifd_size = [](const std::vector<Entry>& e) { return 2 + 12 * uint32_t(e.size()) + 4; };
+  auto values_size = [](const std::vector<Entry>& e) {
+    uint32_t n = 0;
+    for (const Entry& x : e) n += x.data.size() > 4 ? uint32_t((x.data.size() + 1) & ~size_t(1)) : 0;
+    return n;
+  };
+  const uint32_t ifd0_at = 8 + pixels_bytes, exif_at = ifd0_at + ifd_size(ifd0) + values_size(ifd0);
+  for (Entry& e : ifd0)
+    if (e.tag == 34665) e.data = le({exif_at}, 4);
+  auto write_ifd = [&](std::string& out, const std::vector<Entry>& entries, uint32_t at) {
+    std::string values;
+    uint32_t value_at = at + ifd_size(entries);
+    out += le({uint32_t(entries.size())}, 2);
+    for (const Entry& e : entries) {
+      out += le({e.tag, e.type}, 2) + le({e.count}, 4);
+      if (e.data.size() <= 4) {
+        out += e.data + std::string(4 - e.data.size(), '\0');
+      } else {
+        out += le({value_at + uint32_t(values.size())}, 4);
+        values += e.data;
+        if (values.size() % 2) values += '\0';
+      }
+    }
+    out += le({0}, 4) + values;
+  };
+  std::string file = "II" + le({42}, 2) + le({ifd0_at}, 4);
+  for (uint16_t c : codes) file += le({c}, 2);
+  write_ifd(file, ifd0, ifd0_at);
+  write_ifd(file, exif, exif_at);
+  const std::string path = (tmp.path / name).string();
+  std::ofstream(path, std::ios::binary) << file;
+  return path;
+}
+
+// The same blindness in RAW brackets: LibRaw reads the ISO and f-number, the bracket used
+// only the shutter time. An auto-ISO RAW bracket (time x2, ISO x4 per frame) fused at the
+// times' ratios 1 : 2 : 4 instead of 1 : 8 : 64.
+TEST(ReadBracket, RawFramesOfAnotherIsoAreExposedByItToo) {
+  TempDir tmp;
+  const int w = 96, h = 24;  // LibRaw takes no image under 22 pixels a side for RAW
+  std::vector<double> radiance;  // 6 stops left to right
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) radiance.push_back(std::exp2(6.0 * u / (w - 1)));
+  const uint32_t t_den[] = {100, 50, 25}, iso[] = {100, 400, 1600};
+  std::vector<std::string> paths;
+  for (int k = 0; k < 3; ++k) {
+    const double exposure = iso[k] / 100.0 / t_den[k];  // 0.01, 0.08, 0.64
+    const double scale = 0.5 / (8 * 0.08);                // the middle frame at half scale mid-scene
+    std::vector<uint16_t> codes;
+    for (double l : radiance)
+      for (int c = 0; c < 3; ++c) codes.push_back(uint16_t(std::lround(std::min(1.0, l * exposure * scale) * 65535)));
+    paths.push_back(dng_with_settings(tmp, "raw" + std::to_string(k) + ".dng", w, h, codes, t_den[k], 28, iso[k]));
+  }
+  std::vector<std::string> warnings;
+  set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const Bracket b = read_bracket(paths);
+  set_warning_sink(nullptr);
+  ASSERT_TRUE(b.linear);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("ISO 100, 400, 1600 differ"), std::string::npos) << warnings[0];
+  EXPECT_NEAR(b.exposure_seconds[1] / b.exposure_seconds[0], 8.0, 1e-9);
+  EXPECT_NEAR(b.exposure_seconds[2] / b.exposure_seconds[0], 64.0, 1e-9);
+  auto spread = [&](const Bracket& bracket) {
+    const RgbImage fused = merge_bracket(bracket, linear_response(65536), {});
+    double lo = 1e9, hi = -1e9;
+    for (size_t i = 0; i < radiance.size(); ++i) {
+      const double r = std::log(double(fused.rgb[3 * i + 1]) / radiance[i]);
+      lo = std::min(lo, r), hi = std::max(hi, r);
+    }
+    return hi - lo;
+  };
+  EXPECT_LT(spread(b), 0.1);
+  Bracket times_only = b;
   times_only.exposure_seconds = {0.01, 0.02, 0.04};
   EXPECT_GT(spread(times_only), 1.0) << "what the times alone gave";
 }

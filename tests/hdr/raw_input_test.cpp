@@ -107,7 +107,7 @@ TEST(Raw, BuffersOfTheWrongSizeDepthOrRangeAreRefused) {
 
 TEST(Raw, AFileLibRawCannotReadIsAnInputErrorNamingIt) {
   for (const std::string& path : {kData + "/hdr-memorial-debevec/memorial0068.png", kData + "/no-such-file.cr2"}) {
-    double t = -1;
+    RawExposure t{-1, -1, -1};
     try {
       read_camera_raw(path, &t);
       ADD_FAILURE() << "no throw for " << path;
@@ -116,7 +116,7 @@ TEST(Raw, AFileLibRawCannotReadIsAnInputErrorNamingIt) {
       EXPECT_NE(msg.find(path), std::string::npos) << msg;
       EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
     }
-    EXPECT_EQ(t, -1);  // untouched on failure
+    EXPECT_EQ(t.seconds, -1);  // untouched on failure
   }
 }
 

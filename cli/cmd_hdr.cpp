@@ -148,6 +148,12 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
       say(out, "{}: colours converted from the frames' ICC profile ('{}') to Rec. 709\n", args.output,
           bracket.colour_profile);
     }
+    // At ISO 100 and f/1, where the frames record their settings: one photometric k then
+    // holds for every setting of the camera (hdr/bracket.h reference_exposure_scale).
+    if (const double scale = reference_exposure_scale(bracket); scale != 1) {
+      for (float& v : radiance.rgb) v = float(v * scale);
+      report["exposure_reference"] = {{"iso", bracket.iso}, {"f_number", bracket.f_number}, {"scale", scale}};
+    }
     report["saturated_everywhere"] = mr.saturated_everywhere;
     report["black_everywhere"] = mr.black_everywhere;
     report["frames"] = bracket.frames.size();

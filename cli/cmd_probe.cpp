@@ -264,9 +264,14 @@ std::optional<std::string> registered_exposures_csv(const std::vector<std::strin
   b.frames.resize(s.size());
   b.paths = images;
   fold_iso_and_aperture(b, s);
+  // The PNGs lose the photos' ISO and f-number, so the times carry them: at ISO 100 and f/1,
+  // the registered bracket fuses to the map the photos themselves fuse to.
+  const double scale = reference_exposure_scale(b);
+  for (double& t : b.exposure_seconds) t /= scale;
   std::string csv = "file,exposure_s\n";
-  if (b.exposure_seconds != times) csv = "# seconds x ISO / f-number^2, relative to the first photo's\n" + csv;
-  for (size_t i = 0; i < names.size(); ++i) csv += fmt::format("{},{}\n", names[i], b.exposure_seconds[i]);
+  if (b.exposure_seconds != times)
+    csv = "# seconds x (ISO / 100) / f-number^2: the exposure at ISO 100 and f/1, as hdr fuse scales maps\n" + csv;
+  for (size_t i = 0; i < names.size(); ++i) csv += fmt::format("{},{:.6g}\n", names[i], b.exposure_seconds[i]);
   return csv;
 }
 

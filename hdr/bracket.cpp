@@ -137,6 +137,8 @@ void fold_iso_and_aperture(Bracket& b, const std::vector<ExifExposureSettings>& 
   auto all_recorded = [&](double ExifExposureSettings::*field) {
     return std::all_of(s.begin(), s.end(), [&](const auto& e) { return e.*field > 0; });
   };
+  b.iso = all_recorded(&ExifExposureSettings::iso) ? s[0].iso : 0;
+  b.f_number = all_recorded(&ExifExposureSettings::f_number) ? s[0].f_number : 0;
   auto varies = [&](double ExifExposureSettings::*field) {
     return std::any_of(s.begin(), s.end(), [&](const auto& e) { return std::abs(e.*field / s[0].*field - 1) > 0.01; });
   };
@@ -305,6 +307,10 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
   }
   if (b.bit_depth == 8 && !b.linear) keep_8bit_codes(b);
   return b;
+}
+
+double reference_exposure_scale(const Bracket& b) {
+  return (b.iso > 0 ? 100.0 / b.iso : 1.0) * (b.f_number > 0 ? b.f_number * b.f_number : 1.0);
 }
 
 void apply_sensor_white_level(Bracket& b) {

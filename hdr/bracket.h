@@ -37,6 +37,9 @@ struct Bracket {
   // 16-bit files that hold a 10- to 15-bit sensor's codes in their low bits: the code the
   // clipping piles up at, which read_bracket has mapped to 1.0 (0: the container's top).
   int white_level = 0;
+  // The first frame's ISO and f-number where every frame records them (0: not every frame
+  // does): exposure_seconds are relative to them. reference_exposure_scale reads them.
+  double iso = 0, f_number = 0;
 
   int width() const { return frames.empty() ? 0 : frames[0].width; }
   int height() const { return frames.empty() ? 0 : frames[0].height; }
@@ -97,6 +100,14 @@ std::optional<ColourProfile> read_colour_profile(const std::string& path);
 // differ, multiplies each frame's exposure_seconds by its ISO / f-number^2 relative to the
 // first frame's and warns in one line; otherwise leaves the bracket as it is.
 void fold_iso_and_aperture(Bracket& bracket, const std::vector<ExifExposureSettings>& settings);
+
+// A fused map's values are code / t at the first frame's ISO and f-number: the same scene at
+// ISO 400, or at f/4 instead of f/2, gives a map 4 times brighter, and a photometric
+// calibration (one k per camera) fitted at one setting is wrong at any other. Scaling by
+// (100 / ISO) x N^2 puts every map at ISO 100 and f/1, where k is the camera's alone (the
+// reflected-light meter's equation, L = K N^2 / (t S)). Returns that factor from what
+// the bracket records (1 for a setting it does not; both unrecorded: 1).
+double reference_exposure_scale(const Bracket& bracket);
 
 // A list of exposure times in seconds, in file order. Accepts:
 //  - one time per line ("0.025" or "1/40"), blank lines and '#' comments skipped;

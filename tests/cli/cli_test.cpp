@@ -335,6 +335,15 @@ TEST(Cli, HdrFuseOfMemorialBeatsNothingLessThanAValidRadianceImageAndBadBrackets
   const std::string k = shared("hdr-mirrorball-kartik");
   expect_one_line_error(lightprobe("hdr fuse " + k + "/ball_1-10s.jpg " + k + "/ball_1-40s.jpg -o " + out.string()),
                         "ball_1-40s.jpg");
+  // Photos that record ISO 100 and f/1.8 are fused at ISO 100 and f/1 (x 1.8^2); Memorial's
+  // PNGs record neither and stay at code / t.
+  const CliRun photo = lightprobe("hdr fuse --json " + k + "/ball_1-10s.jpg " + k + "/ball_1-10s.jpg --exposure-times 0.1,0.025 -o " + out.string());
+  ASSERT_EQ(photo.code, 0) << photo.err;
+  const auto reference = nlohmann::json::parse(photo.out)["exposure_reference"];
+  EXPECT_EQ(reference["iso"].get<double>(), 100);
+  EXPECT_NEAR(reference["f_number"].get<double>(), 1.8, 1e-6);
+  EXPECT_NEAR(reference["scale"].get<double>(), 3.24, 1e-5);
+  EXPECT_FALSE(nlohmann::json::parse(r.out).contains("exposure_reference"));
 }
 
 TEST(Cli, PhotometricCalibrationRecoversAKnownScaleAndRejectsBadReadings) {
@@ -566,9 +575,11 @@ TEST(Cli, DifferentlyCroppedBallPhotosAreRegisteredFusedAndUnwrapped) {
   ASSERT_EQ(reg.code, 0) << reg.err;
   const fs::path fused = scratch() / "kartik.exr", map = scratch() / "kartik_map.exr", png = scratch() / "kartik.png";
   // The JPEGs' EXIF times are not in the registered PNGs: exposures.csv beside them has them,
-  // named, so a glob in any order finds its own.
+  // named, so a glob in any order finds its own. Their ISO 100 and f/1.8 are folded in (the
+  // exposure at ISO 100, f/1: 0.1 s / 1.8^2), as hdr fuse scales a map of the photos.
   EXPECT_EQ(slurp(dir / "exposures.csv"),
-            "file,exposure_s\nball_1-10s.png,0.1\nball_1-40s.png,0.025\nball_1-160s.png,0.00625\n");
+            "# seconds x (ISO / 100) / f-number^2: the exposure at ISO 100 and f/1, as hdr fuse scales maps\n"
+            "file,exposure_s\nball_1-10s.png,0.0308642\nball_1-40s.png,0.00771605\nball_1-160s.png,0.00192901\n");
   CliRun fuse = lightprobe("hdr fuse " + (dir / "ball_1-160s.png").string() + " " + (dir / "ball_1-10s.png").string() +
                            " " + (dir / "ball_1-40s.png").string() + " --exposure-times " + (dir / "exposures.csv").string() +
                            " -o " + fused.string());

@@ -194,6 +194,40 @@ TEST(ReadBracket, FramesOfAnotherIsoOrApertureAreExposedByItToo) {
   EXPECT_GT(spread(times_only), 1.0) << "what the times alone gave";
 }
 
+// The same scene at ISO 100 f/2, ISO 400 f/2 (a quarter of the time) and ISO 100 f/4 (four
+// times the time) gives the same codes. Fused by code / t, the three maps differed 4x and
+// 16x: a photometric calibration fitted at one setting was wrong at the others.
+TEST(ReadBracket, MapsScaledToTheReferenceExposureAgreeAcrossIsoAndAperture) {
+  TempDir tmp;
+  const int w = 32, h = 8;
+  std::vector<float> low, high;  // the two frames' linear values: a ramp, 4x brighter
+  for (int i = 0; i < w * h; ++i)
+    for (int c = 0; c < 3; ++c) low.push_back(0.02f + 0.2f * float(i % w) / w), high.push_back(4 * low.back());
+  struct Setting {
+    uint32_t t_num, t_den, f_num10, iso;  // the short frame; the long one is 4x the time
+  };
+  auto fused = [&](const std::string& name, const Setting& s) {
+    const Bracket b = read_bracket({jpeg_with_settings(tmp, name + "0.jpg", w, h, low, s.t_num, s.t_den, s.f_num10, 10, s.iso),
+                                    jpeg_with_settings(tmp, name + "1.jpg", w, h, high, 4 * s.t_num, s.t_den, s.f_num10, 10, s.iso)});
+    RgbImage m = merge_bracket(b, srgb_response(256), {});
+    const double scale = reference_exposure_scale(b);
+    for (float& v : m.rgb) v = float(v * scale);
+    return std::pair{m, scale};
+  };
+  const auto [a, scale_a] = fused("a", {1, 100, 20, 100});
+  const auto [b, scale_b] = fused("b", {1, 400, 20, 400});
+  const auto [c, scale_c] = fused("c", {4, 100, 40, 100});
+  EXPECT_DOUBLE_EQ(scale_a, 4.0);   // f/2: N^2 = 4
+  EXPECT_DOUBLE_EQ(scale_b, 1.0);   // ISO 400, f/2
+  EXPECT_DOUBLE_EQ(scale_c, 16.0);  // f/4
+  for (size_t i = 0; i < a.rgb.size(); i += 3 * 7) {
+    EXPECT_NEAR(b.rgb[i] / a.rgb[i], 1.0, 1e-5) << i;  // unscaled: 4
+    EXPECT_NEAR(c.rgb[i] / a.rgb[i], 1.0, 1e-5) << i;  // unscaled: 1/4
+  }
+  Bracket unrecorded;  // no settings: nothing to scale by
+  EXPECT_DOUBLE_EQ(reference_exposure_scale(unrecorded), 1.0);
+}
+
 // A minimal linear DNG (LinearRaw RGB, 16 bit, white level 65535, identity colour matrix)
 // of `codes` (w x h x 3), whose Exif IFD records the exposure time 1/t_den s, the f-number
 // and the ISO, as a camera writes them: what LibRaw develops back to the same grey ramp.

@@ -54,7 +54,7 @@ class Answer final : public HttpExchange {
   void respond(HttpResponse r) override { response = std::move(r); }
   std::shared_ptr<HttpDeferred> defer() override { throw std::logic_error("not expected"); }
   std::shared_ptr<HttpStream> stream(HttpResponse, HttpStreamOptions) override { throw std::logic_error("not expected"); }
-  HttpResponse response{0};
+  HttpResponse response = [] { HttpResponse r; r.status = 0; return r; }();  // 0: no answer yet
 };
 
 int route(LightServer& server, const std::string& head) {

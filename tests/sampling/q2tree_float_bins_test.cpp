@@ -51,7 +51,7 @@ void expect_children_within_parents(const EnvMap& map, int nside, const std::str
   auto s = make_sampler(Method::Q2Tree, o);
   s->prepare(map);
   auto lum = [](const std::array<double, 3>& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
-  size_t checked = 0, failed = 0, equal_below_parent = 0;
+  size_t checked = 0, failed = 0;
   for (int level = 0; level < level_of(nside); ++level)
     for (int64_t ipix = 0; ipix < 12 * (int64_t(1) << (2 * level)); ++ipix) {
       const auto parent = q2tree_node_rgb(*s, level, ipix);
@@ -60,7 +60,6 @@ void expect_children_within_parents(const EnvMap& map, int nside, const std::str
         bool ok = lum(child) <= lum(parent);
         for (int k = 0; k < 3; ++k) ok = ok && child[k] <= parent[k] && child[k] >= 0;
         failed += !ok;
-        equal_below_parent += child[0] == parent[0] && parent[0] > 0;
         ++checked;
       }
     }

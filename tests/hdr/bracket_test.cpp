@@ -130,6 +130,17 @@ std::string jpeg_with_settings(const TempDir& tmp, const std::string& name, int 
   return write_with_exif(tmp, name, plain, t);
 }
 
+// The spread of log(fused / true radiance) of the green channel over the pixels: 0 for a
+// fusion at the right ratios, whatever its global scale.
+double log_spread(const RgbImage& fused, const std::vector<double>& radiance) {
+  double lo = 1e9, hi = -1e9;
+  for (size_t i = 0; i < radiance.size(); ++i) {
+    const double r = std::log(double(fused.rgb[3 * i + 1]) / radiance[i]);
+    lo = std::min(lo, r), hi = std::max(hi, r);
+  }
+  return hi - lo;
+}
+
 // A phone's bracket: the time doubles, the ISO quadruples (exposures 1 : 8 : 64). Read by
 // their times alone (1 : 2 : 4) the frames fused at the wrong ratios, with nothing to see: a
 // longer time was still the brighter frame.
@@ -155,16 +166,7 @@ TEST(ReadBracket, FramesOfAnotherIsoOrApertureAreExposedByItToo) {
     }
     return paths;
   };
-  // The spread of log(fused / true radiance) over the pixels: 0 for a fusion at the right ratios.
-  auto spread = [&](const Bracket& b) {
-    const RgbImage fused = merge_bracket(b, srgb_response(256), {});
-    double lo = 1e9, hi = -1e9;
-    for (size_t i = 0; i < radiance.size(); ++i) {
-      const double r = std::log(double(fused.rgb[3 * i + 1]) / radiance[i]);
-      lo = std::min(lo, r), hi = std::max(hi, r);
-    }
-    return hi - lo;
-  };
+  auto spread = [&](const Bracket& b) { return log_spread(merge_bracket(b, srgb_response(256), {}), radiance); };
   std::vector<std::string> warnings;
   set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
   const auto iso = bracket("iso", {{100, 18, 100}, {50, 18, 400}, {25, 18, 1600}});
@@ -335,15 +337,7 @@ TEST(ReadBracket, RawFramesOfAnotherIsoAreExposedByItToo) {
   EXPECT_NE(warnings[0].find("ISO 100, 400, 1600 differ"), std::string::npos) << warnings[0];
   EXPECT_NEAR(b.exposure_seconds[1] / b.exposure_seconds[0], 8.0, 1e-9);
   EXPECT_NEAR(b.exposure_seconds[2] / b.exposure_seconds[0], 64.0, 1e-9);
-  auto spread = [&](const Bracket& bracket) {
-    const RgbImage fused = merge_bracket(bracket, linear_response(65536), {});
-    double lo = 1e9, hi = -1e9;
-    for (size_t i = 0; i < radiance.size(); ++i) {
-      const double r = std::log(double(fused.rgb[3 * i + 1]) / radiance[i]);
-      lo = std::min(lo, r), hi = std::max(hi, r);
-    }
-    return hi - lo;
-  };
+  auto spread = [&](const Bracket& bracket) { return log_spread(merge_bracket(bracket, linear_response(65536), {}), radiance); };
   EXPECT_LT(spread(b), 0.1);
   Bracket times_only = b;
   times_only.exposure_seconds = {0.01, 0.02, 0.04};

@@ -49,6 +49,11 @@ int pixel_format_bits(const std::string& pixel_format) {
   return bits >= 1 && bits <= 16 ? bits : 0;
 }
 
+double frame_exposure(const CameraFrame& frame) {
+  const double gain = std::isfinite(frame.gain_db) ? std::pow(10.0, frame.gain_db / 20.0) : 1.0;
+  return (frame.exposure_s > 0 ? frame.exposure_s : 1.0) * gain;
+}
+
 void decode_single_frame(CameraFrame& frame, FrameDecode decode, const PhotometricCalibration* photometric,
                          const CameraResponse* response, CodeTable* table) {
   if (decode != FrameDecode::Relative && !photometric) throw InputError("decode_single_frame: no photometric calibration");
@@ -68,13 +73,13 @@ void decode_single_frame(CameraFrame& frame, FrameDecode decode, const Photometr
       (table ? *table : own) =
           make_code_table(response_code_curve(response->log_exposure, "--response"), bits, "--response");
     const CodeTable& levels_table = table ? *table : own;
-    if (frame.exposure_s > 0) {
-      // The division by the exposure time folded into this frame's copy of the table: one
-      // pass over the frame instead of two, the same floats (each entry divided as a code's
+    if (const double exposure = frame_exposure(frame); exposure != 1.0) {
+      // The division by the exposure folded into this frame's copy of the table: one pass
+      // over the frame instead of two, the same floats (each entry divided as a code's
       // value would be).
       CodeTable scaled = levels_table;
       for (auto& channel : scaled.linear)
-        for (float& v : channel) v = float(v / frame.exposure_s);
+        for (float& v : channel) v = float(v / exposure);
       apply_code_table(frame.image.rgb.data(), frame.image.rgb.size() / 3, scaled);
     } else {
       apply_code_table(frame.image.rgb.data(), frame.image.rgb.size() / 3, levels_table);
@@ -82,8 +87,8 @@ void decode_single_frame(CameraFrame& frame, FrameDecode decode, const Photometr
     if (decode == FrameDecode::Linear) apply_photometric(frame.image, *photometric);
     return;
   }
-  if (frame.exposure_s > 0)
-    for (float& v : frame.image.rgb) v = float(v / frame.exposure_s);
+  if (const double exposure = frame_exposure(frame); exposure != 1.0)
+    for (float& v : frame.image.rgb) v = float(v / exposure);
   if (decode == FrameDecode::Linear) apply_photometric(frame.image, *photometric);
 }
 

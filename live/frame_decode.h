@@ -50,6 +50,12 @@ std::optional<std::string> undecodable_frame(const CameraFrame& frame, FrameDeco
 // BayerRG16 16, RGB8 8), 0 for float frames (RGBFloat) or a name without a trailing depth.
 int pixel_format_bits(const std::string& pixel_format);
 
+// What a frame's codes are divided by to give radiance: its exposure time (1 when unknown)
+// times its analogue gain 10^(gain_db / 20). The gain counts: libcamera's auto-exposure
+// raises it in a dim room frame by frame, and a map divided by the time alone jumped by that
+// factor, as did a photometric k used at another gain than it was fitted at.
+double frame_exposure(const CameraFrame& frame);
+
 // A single frame (no bracket) to radiance, in place, as described above; `photometric` is
 // required for Linear and LogSensor. With `response` (stream --response, from hdr response)
 // a linear decode first maps each code through the camera's curve (exp g(z)), as the bracket

@@ -395,8 +395,11 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     merge_options.threads = small ? 1 : 0;
     RemapOptions ro;
     ro.threads = small ? 1 : 0;
+    // Each frame's exposure at the first frame's gain: the times the planner sets. The map
+    // is divided by that gain once planned (frame_exposure: radiance per unit gain).
+    const double gain0 = frame_exposure(b.frames[0]) / (b.frames[0].exposure_s > 0 ? b.frames[0].exposure_s : 1.0);
     for (auto& f : b.frames) {
-      hb.exposure_seconds.push_back(f.exposure_s > 0 ? f.exposure_s : 1.0);
+      hb.exposure_seconds.push_back(frame_exposure(f) / gain0);
       hb.frames.push_back(std::move(f.image));
     }
     const CameraResponse response = options_.response ? *options_.response : linear_response(256);
@@ -412,6 +415,8 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
       throw;
     }
     if (planner_) plan_next_bracket(meter_image(radiance, hb.exposure_seconds));  // before any photometric scale
+    if (gain0 != 1.0)
+      for (float& v : radiance.rgb) v = float(v / gain0);
     if (options_.photometric) apply_photometric(radiance, *options_.photometric);
     map->rgb = std::move(radiance.rgb);
     map->valid = std::move(radiance.valid);

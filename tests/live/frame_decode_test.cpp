@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 
@@ -58,6 +59,29 @@ TEST(FrameDecode, ASingleFrameGoesThroughTheGivenResponse) {
   const auto before = radiance.image.rgb;
   decode_single_frame(radiance, FrameDecode::Relative, nullptr, &response);
   EXPECT_EQ(radiance.image.rgb, before);
+}
+
+// libcamera's auto-exposure raises the analogue gain in a dim room frame by frame; the
+// stream divided by the time alone, so the same scene's map jumped by the gain (x2 at
+// 6 dB), with or without a response curve.
+TEST(FrameDecode, TheAnalogueGainDividesOutAsTheTimeDoes) {
+  CameraResponse response = linear_response(256);
+  for (const CameraResponse* curve : std::vector<const CameraResponse*>{nullptr, &response}) {
+    CameraFrame at_0db;
+    at_0db.pixel_format = "RGB8";
+    at_0db.exposure_s = 0.02;
+    at_0db.image.width = at_0db.image.height = 1;
+    at_0db.image.rgb = {20.0f / 255, 40.0f / 255, 80.0f / 255};
+    CameraFrame at_6db = at_0db;  // twice the gain, half the time: the same codes
+    at_6db.exposure_s = 0.01;
+    at_6db.gain_db = 20 * std::log10(2.0);
+    EXPECT_NEAR(frame_exposure(at_6db), 0.02, 1e-12);
+    decode_single_frame(at_0db, FrameDecode::Relative, nullptr, curve);
+    decode_single_frame(at_6db, FrameDecode::Relative, nullptr, curve);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(at_6db.image.rgb[c] / at_0db.image.rgb[c], 1.0, 1e-5) << c;  // was 2
+  }
+  CameraFrame unknown;  // no time, no gain: codes as they are
+  EXPECT_EQ(frame_exposure(unknown), 1.0);
 }
 
 // The stream keeps the response's per-level table between frames (live/pipeline.cpp): every

@@ -71,6 +71,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
   const auto layout = layout_from_string(args.layout);
   if (!layout) throw InputError(fmt::format("--layout: unknown layout '{}'", args.layout));
   lo.layout = *layout;
+  refuse_misplaced_geometry(*layout, args.size, args.nside);
   if (!args.size.empty()) parse_image_size(args.size, "--size", &lo.width, &lo.height);
   else if (*layout == Layout::LatLong) lo.width = 512, lo.height = 256;
   if (*layout == Layout::Healpix) lo.width = given_nside(args.nside) > 0 ? args.nside : 32, lo.height = 1;

@@ -91,9 +91,7 @@ int run_convert(const ConvertArgs& args, const Output& out) {
     return m;
   }();
   const Layout layout = optional_layout(args.layout, "--layout").value_or(src.layout);
-  if (layout == Layout::Healpix && !args.size.empty())
-    throw InputError("--size does not apply to healpix: use --nside");
-  if (layout != Layout::Healpix && args.nside != 0) throw InputError("--nside applies only to --layout healpix");
+  refuse_misplaced_geometry(layout, args.size, args.nside);
   int w = 0, h = 0;
   target_geometry(layout, args.size, args.nside, &src, &w, &h);
   ResampleOptions options;

@@ -70,6 +70,7 @@ void target_size(const std::string& layout_name, const std::string& size, int ns
   const auto l = layout_from_string(layout_name);
   if (!l) throw InputError(fmt::format("--layout: unknown layout '{}' (latlong, hemisphere, healpix)", layout_name));
   *layout = *l;
+  refuse_misplaced_geometry(*l, size, nside);
   if (*l == Layout::Healpix) {
     *w = given_nside(nside) > 0 ? nside : 64;
     *h = 1;
@@ -102,6 +103,9 @@ UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   if (a.type == "mirrorball") o.type = ProbeType::MirrorBall;
   else if (a.type == "fisheye") o.type = ProbeType::Fisheye;
   else throw InputError(fmt::format("--type must be mirrorball or fisheye, got '{}'", a.type));
+  if (o.type == ProbeType::MirrorBall && !a.camera.empty())
+    throw InputError("--camera applies only to --type fisheye (a ball is unwrapped from its silhouette; --fov, --distance "
+                     "give the camera)");
   target_size(a.layout, a.size, a.nside, &o.layout, &o.width, &o.height);
   o.fill = a.fill;
   // 0 is each one's default (orthographic; no field of view); below it is a typo, which
@@ -131,6 +135,17 @@ UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   if (o.type == ProbeType::Fisheye && !o.camera && !(a.fov > 0))
     throw InputError("--type fisheye needs the lens: --camera MODEL (from calib geometric), or --fov DEG for an ideal "
                      "equidistant lens whose image circle fits the frame's short side");
+  // What the other probe type reads is refused, not ignored: `--type fisheye --reflectivity
+  // 0.6` wrote a map no darker, with exit 0.
+  const ProbeUnwrapArgs d;
+  if (o.type == ProbeType::Fisheye)
+    for (const auto& [given, option] : {std::pair{a.distance != d.distance, "--distance"}, std::pair{!a.ball.empty(), "--ball"},
+                                        std::pair{a.reflectivity != d.reflectivity, "--reflectivity"},
+                                        std::pair{a.fresnel != d.fresnel, "--fresnel"},
+                                        std::pair{a.blind_spot_deg != d.blind_spot_deg, "--blind-spot"}})
+      if (given) throw InputError(fmt::format("{} applies only to --type mirrorball (a ball's geometry)", option));
+  if (a.static_probe && !a.stabilise) throw InputError("--static-probe applies only with --smooth-track");
+  if (a.fixed_ball && a.stabilise) throw InputError("--fixed-ball and --smooth-track: give one (no tracking, or a smoothed track)");
   if (!a.rotation.empty()) o.world_from_probe = parse_rotation(a.rotation);
   o.smooth_track = a.stabilise;
   o.static_probe = a.static_probe;

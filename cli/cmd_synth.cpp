@@ -76,8 +76,7 @@ struct SynthWalkthroughArgs {
 
 int run_synth_scene(const SynthSceneArgs& args, const Output& out) {
   const auto layout = optional_layout(args.layout, "--layout").value_or(Layout::LatLong);
-  if (layout == Layout::Healpix && !args.size.empty())
-    throw InputError("--size does not apply to healpix: use --nside");
+  refuse_misplaced_geometry(layout, args.size, args.nside);
   int w = 0, h = 0;
   target_geometry(layout, args.size, given_nside(args.nside) > 0 ? args.nside : 128, nullptr, &w, &h);
   SceneOptions so;

@@ -52,6 +52,9 @@ std::optional<Layout> optional_layout(const std::string& name, const char* optio
 // check_target_flags checks --size and --nside alone, before any input is read.
 void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h);
 void check_target_flags(const std::string& size, int nside);
+// --size with a healpix target, or --nside with another: refused, not ignored (a healpix
+// unwrap took --size 64x32's... nothing, and --nside with latlong changed nothing).
+void refuse_misplaced_geometry(Layout layout, const std::string& size, int nside);
 // --board COLSxROWS inner corners and --square in mm.
 BoardSpec board_from(const std::string& text, double square_mm);
 // --response linear|gamma|scurve of the synthetic brackets.

@@ -94,6 +94,11 @@ void check_target_flags(const std::string& size, int nside) {
   given_nside(nside);
 }
 
+void refuse_misplaced_geometry(Layout layout, const std::string& size, int nside) {
+  if (layout == Layout::Healpix && !size.empty()) throw InputError("--size does not apply to healpix: use --nside");
+  if (layout != Layout::Healpix && nside != 0) throw InputError("--nside applies only to --layout healpix");
+}
+
 // Target (layout, width, height) of convert/synth from --layout/--size/--nside.
 void target_geometry(Layout layout, const std::string& size, int nside, const EnvMap* like, int* w, int* h) {
   if (layout == Layout::Healpix) {

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <csignal>
 #include <string>
+#include <tuple>
 #include <thread>
 
 #include <fcntl.h>
@@ -187,6 +188,33 @@ TEST(GarbageCli, OptionsTheChosenMethodDoesNotReadAreRefusedNotIgnored) {
   expect_one_line_error(lightprobe("stream --listen 127.0.0.1:0 --source replay:" + frames.string() +
                                    " --n 64 --frame-budget-ms 5"),
                         "--frame-budget-ms applies only with --n auto");
+}
+
+// The same for the probe's type and the map's layout: `--type fisheye --reflectivity 0.6`
+// wrote a map no darker, and `--layout healpix --size 64x32` a healpix map of the default
+// nside, both with exit 0.
+TEST(GarbageCli, OptionsTheProbeTypeOrLayoutDoesNotReadAreRefusedNotIgnored) {
+  const fs::path dir = fresh_dir("unused_probe_options");
+  const std::string ball = (dir / "ball.exr").string(), fish = (dir / "fish.exr").string(), out = (dir / "map.exr").string();
+  ASSERT_EQ(lightprobe("synth probe scene --size 96x96 -o " + ball).code, 0);
+  ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 180 --size 96x96 -o " + fish).code, 0);
+  for (const auto& [input, flags, message] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {fish, "--type fisheye --fov 180 --reflectivity 0.6", "--reflectivity applies only to --type mirrorball"},
+           {fish, "--type fisheye --fov 180 --distance 3", "--distance applies only to --type mirrorball"},
+           {fish, "--type fisheye --fov 180 --fresnel", "--fresnel applies only to --type mirrorball"},
+           {fish, "--type fisheye --fov 180 --blind-spot 30", "--blind-spot applies only to --type mirrorball"},
+           {fish, "--type fisheye --fov 180 --ball 48,48,40", "--ball applies only to --type mirrorball"},
+           {ball, "--type mirrorball --camera lens.yaml", "--camera applies only to --type fisheye"},
+           {ball, "--static-probe", "--static-probe applies only with --smooth-track"},
+           {ball, "--fixed-ball --smooth-track", "--fixed-ball and --smooth-track: give one"},
+           {ball, "--layout latlong --nside 8", "--nside applies only to --layout healpix"},
+           {ball, "--layout healpix --size 64x32", "--size does not apply to healpix: use --nside"}})
+    expect_one_line_error(lightprobe("probe unwrap " + input + " " + flags + " -o " + out), message);
+  expect_one_line_error(lightprobe("synth scene --layout latlong --nside 8 -o " + out), "--nside applies only to --layout healpix");
+  EXPECT_FALSE(fs::exists(out));
+  // Controls: each option where it applies.
+  EXPECT_EQ(lightprobe("probe unwrap " + ball + " --reflectivity 0.6 --blind-spot 30 --size 64x32 -o " + out).code, 0);
+  EXPECT_EQ(lightprobe("probe unwrap " + fish + " --type fisheye --fov 180 --layout healpix --nside 8 -o " + out).code, 0);
 }
 
 // A --config file's misspelt key or section was ignored: `metod = "mediancut"` ran the

@@ -61,6 +61,7 @@ Command eval_sampling_command() {
               o.methods = parse_method_list(a->methods);
               o.counts = parse_light_counts(a->counts, "--n");
               o.shadowed = !a->no_shadowed;
+              if (o.repeats < 0) throw InputError(fmt::format("--repeats must be 0 (adaptive) or more, got {}", o.repeats));
               return evaluate_and_report("eval sampling", out, evaluate_sampling, o);
             };
           }};
@@ -95,7 +96,16 @@ Command eval_temporal_command() {
               o.count = light_count(a->n), o.auto_count = o.count == 0;
               if (!o.auto_count) check_light_count("--n", o.count);
               o.auto_options.measure = error_measure_from_string(a->error_measure);
+              const EvalTemporalArgs d;  // what only --n auto reads is refused with a fixed count
+              for (const auto& [given, option] :
+                   {std::pair{o.auto_options.target_error != d.o.auto_options.target_error, "--target-error"},
+                    std::pair{a->error_measure != d.error_measure, "--error-measure"},
+                    std::pair{o.frame_budget_ms != d.o.frame_budget_ms, "--frame-budget-ms"}})
+                if (given && !o.auto_count) throw InputError(fmt::format("{} applies only with --n auto", option));
               check_frame_count("--frames", o.frames);
+              // "--filter of" ran as auto: a misspelt mode is refused, as sample refuses it.
+              if (a->filter != "auto" && a->filter != "on" && a->filter != "off")
+                throw InputError(fmt::format("--filter must be auto, on or off, got '{}'", a->filter));
               o.filter = a->filter == "on" ? FilterMode::On : a->filter == "off" ? FilterMode::Off : FilterMode::Auto;
               return evaluate_and_report("eval temporal", out, evaluate_temporal, o);
             };

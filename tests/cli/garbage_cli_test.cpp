@@ -188,6 +188,14 @@ TEST(GarbageCli, OptionsTheChosenMethodDoesNotReadAreRefusedNotIgnored) {
   expect_one_line_error(lightprobe("stream --listen 127.0.0.1:0 --source replay:" + frames.string() +
                                    " --n 64 --frame-budget-ms 5"),
                         "--frame-budget-ms applies only with --n auto");
+  // eval temporal the same; a misspelt --filter ran as auto, a negative --repeats as adaptive.
+  const std::string eval_out = (dir / "eval").string();
+  expect_one_line_error(lightprobe("eval temporal scene --methods pharr --frames 4 --target-error 0.05 -o " + eval_out),
+                        "--target-error applies only with --n auto");
+  expect_one_line_error(lightprobe("eval temporal scene --methods pharr --frames 4 --filter of -o " + eval_out),
+                        "--filter must be auto, on or off, got 'of'");
+  expect_one_line_error(lightprobe("eval sampling " + map + " --methods pharr --n 8 --repeats -1 -o " + eval_out),
+                        "--repeats must be 0 (adaptive) or more, got -1");
 }
 
 // The same for the probe's type and the map's layout: `--type fisheye --reflectivity 0.6`

@@ -365,6 +365,13 @@ void resolve_regions(std::vector<PhotometricReading>& readings, const std::strin
     }
     const RgbImage& image = it->second;
     const ImageRegion& g = *r.region;
+    // k maps relative values to cd/m2. Fitted on a map in radiance units already (fused with
+    // --photometric, or an EXR whose whiteLuminance makes it absolute) it came out near 683,
+    // and scaled the relative maps it was applied to by that, with exit 0.
+    if (image.units == Units::Radiance)
+      throw InputError(fmt::format("{}: {} is in radiance units already (calibrated): fit on the relative map, e.g. "
+                                   "hdr fuse without --photometric",
+                                   where(r), image_path.string()));
     try {
       r.camera_value = mean_luminance_in_region(image, g.x, g.y, g.width, g.height);
     } catch (const InputError& e) {

@@ -357,6 +357,26 @@ TEST(Photometric, RegionsOfCameraCodesAreReadOnlyUnclippedAndOnlyByALogFit) {
   EXPECT_EQ(clipped_codes_in_region(frame, 0, 0, 3, 1), 3u) << "black in every channel is clipped too";
 }
 
+// A region of a map that is calibrated already gave k near 683 (its radiance units), which
+// then scaled relative maps by that.
+TEST(Photometric, RegionsOfAMapInRadianceUnitsAreRefused) {
+  const std::string dir = temp_dir();
+  RgbImage map{4, 2, std::vector<float>(24, 0.1f)};
+  map.units = Units::Radiance;
+  write_rgb_image(dir + "calibrated.exr", map);
+  map.units = Units::Relative;
+  write_rgb_image(dir + "relative.exr", map);
+  const std::string header = "region,camera_value,measured,unit\n";
+  const std::string second = "\"relative.exr:2,0,2,2\",,68.3,cd/m2\n";
+  auto relative = read_readings_csv(write_text(dir + "relative.csv", header + "\"relative.exr:0,0,2,2\",,68.3,cd/m2\n" + second));
+  resolve_regions(relative);
+  EXPECT_NEAR(relative[0].camera_value, 0.1, 1e-6);
+  auto calibrated = read_readings_csv(write_text(dir + "calibrated.csv", header + "\"calibrated.exr:0,0,2,2\",,68.3,cd/m2\n" + second));
+  EXPECT_NE(input_error([&] { resolve_regions(calibrated); })
+                .find(dir + "calibrated.csv:2: " + dir + "calibrated.exr is in radiance units already"),
+            std::string::npos);
+}
+
 TEST(Photometric, RegionsOutsideTheImageAreRejected) {
   RgbImage image{4, 4, std::vector<float>(48, 1.0f)};
   EXPECT_DOUBLE_EQ(mean_luminance_in_region(image, 1, 1, 2, 2), 1.0);

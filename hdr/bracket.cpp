@@ -13,6 +13,7 @@
 
 #include "core/chromaticities.h"
 #include "core/error.h"
+#include "core/sensor_white_level.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
 #include "core/picture_io.h"
@@ -314,30 +315,19 @@ double reference_exposure_scale(const Bracket& b) {
 }
 
 void apply_sensor_white_level(Bracket& b) {
-  // Machine-vision cameras (Mono12, BayerRG12 ...) saved to 16-bit PNG or TIFF keep their
-  // codes in the low bits. A merge that knows only 65535 as saturated then takes a 12-bit
-  // highlight clipped at 4095 for a valid value: measured on a synthetic 12-bit bracket, the
-  // fused map's brightest pixel came out at 1/900 of the truth's, with exit 0.
+  // core/sensor_white_level.h: measured on a synthetic 12-bit bracket, the fused map's
+  // brightest pixel came out at 1/900 of the truth's, with exit 0, before this.
   if (b.bit_depth != 16 || b.linear || b.frames.empty()) return;
-  auto code = [](float v) { return std::lround(double(v) * 65535.0); };
-  long top = 0;
-  for (const RgbImage& f : b.frames)
-    for (float v : f.rgb) top = std::max(top, code(v));
-  if (top <= 0 || top >= 32768) return;  // the top bit is used: the container's own range
-  size_t at_top = 0;
-  for (const RgbImage& f : b.frames)
-    for (float v : f.rgb) at_top += code(v) == top;
-  // Without clipping, noise spreads the brightest values over many codes: a pile-up at the
-  // largest one is a clip. A dark bracket that clips nowhere is right as it is (its codes
-  // are linear in the container's scale too).
-  if (at_top < std::max<size_t>(16, b.frames[0].rgb.size() / 10000)) return;
-  for (RgbImage& f : b.frames)
-    for (float& v : f.rgb) v = code(v) >= top ? 1.0f : float(double(code(v)) / double(top));
-  b.white_level = int(top);
-  const int bits = int(std::ceil(std::log2(double(top) + 1.0)));
+  std::vector<const std::vector<float>*> frames;
+  for (const RgbImage& f : b.frames) frames.push_back(&f.rgb);
+  const SensorWhiteLevel level = find_sensor_white_level(frames);
+  if (!level.code) return;
+  for (RgbImage& f : b.frames) read_at_white_level(f.rgb, level.code);
+  b.white_level = int(level.code);
   warn(fmt::format("{}: the 16-bit codes of all {} frames stop at {}, {} values clipped there: read as a {}-bit "
                    "sensor's codes, white level {}",
-                   b.paths.empty() ? std::string("bracket") : b.paths.front(), b.frames.size(), top, at_top, bits, top));
+                   b.paths.empty() ? std::string("bracket") : b.paths.front(), b.frames.size(), level.code,
+                   level.at_top, white_level_bits(level.code), level.code));
 }
 
 void keep_8bit_codes(Bracket& b) {

@@ -450,6 +450,35 @@ TEST(Cli, AnUnwrappedMapRecordsTheProbeRotationItWasTurnedBy) {
   EXPECT_NE(listing.find("lightprobe.world_from_probe"), std::string::npos) << listing;
 }
 
+// A Mono12 frame saved as 16-bit PNG: its lamp clipped at code 4095 was unwrapped as a valid
+// value of 4095 / 65535 and the report said no pixel clipped.
+TEST(Cli, SixteenBitFramesOfATwelveBitSensorAreReadAtItsWhiteLevel) {
+  const fs::path png = scratch() / "mono12.png", dark = scratch() / "dark16.png", map = scratch() / "mono12.exr";
+  lp::RgbImage frame;
+  frame.width = frame.height = 120;
+  frame.rgb.assign(3 * 120 * 120, 1000.0f / 65535.0f);
+  lp::write_code_image(dark.string(), frame, 16);  // no pile-up: the container's own scale
+  for (int y = 57; y < 63; ++y)
+    for (int x = 57; x < 63; ++x)
+      for (int c = 0; c < 3; ++c) frame.rgb[3 * size_t(y * 120 + x) + c] = 4095.0f / 65535.0f;
+  lp::write_code_image(png.string(), frame, 16);
+  const std::string ball = " --type mirrorball --ball 60,60,50 --layout latlong --size 64x32 --codes linear -o " + map.string();
+  CliRun r = lightprobe("probe unwrap --json " + png.string() + ball);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find(png.string() + ": its 16-bit codes stop at 4095, 108 values clipped there: read as a 12-bit "
+                                      "sensor's codes, white level 4095"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["per_frame"][0]["clipped_fraction"].get<double>(), 36.0 / 14400, 1e-12);
+  lp::EnvMap m = lp::read_envmap(map.string());
+  EXPECT_NEAR(m.rgb[3 * (16 * 64 + 10)], 1000.0 / 4095.0, 1e-6);  // was 1000 / 65535
+  r = lightprobe("probe unwrap --json " + dark.string() + ball);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("white level"), std::string::npos) << r.err;
+  m = lp::read_envmap(map.string());
+  EXPECT_NEAR(m.rgb[3 * (16 * 64 + 10)], 1000.0 / 65535.0, 1e-6);
+}
+
 // A photo's codes are made linear before they become a map (maps are radiance): an 8-bit
 // PNG of code 128 unwraps to 0.2158605, sRGB's decoding, not 0.502; a 16-bit one says how
 // its codes encode light (--codes) or is refused, and nothing is written.

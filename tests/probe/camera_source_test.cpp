@@ -93,6 +93,28 @@ TEST(CameraSourceReplay, FramesNumberedWithoutPaddingComeInTheirNumbersOrder) {
   }
 }
 
+// A recorded Mono12 camera saved as 16-bit PNGs: the first frame's lamp piles up at 4095, so
+// both frames replay as 12-bit codes (the second, which clips nowhere, at the same scale),
+// and a frame with codes above that white level is refused.
+TEST(CameraSourceReplay, SixteenBitFramesOfATwelveBitSensorReplayAtItsWhiteLevel) {
+  TempDir dir;
+  cv::Mat lamp(20, 20, CV_16UC3, cv::Scalar::all(1000));
+  lamp(cv::Rect(8, 8, 4, 4)).setTo(cv::Scalar::all(4095));
+  cv::imwrite((dir.path / "frame_0.png").string(), lamp);
+  cv::imwrite((dir.path / "frame_1.png").string(), cv::Mat(20, 20, CV_16UC3, cv::Scalar::all(2000)));
+  cv::imwrite((dir.path / "frame_2.png").string(), cv::Mat(20, 20, CV_16UC3, cv::Scalar::all(5000)));
+  auto source = lp::open_source("replay:" + dir.path.string(), {});
+  auto first = source->next(1.0), second = source->next(1.0);
+  ASSERT_TRUE(first && second);
+  EXPECT_EQ(first->pixel_format, "RGB12");
+  EXPECT_NEAR(first->image.rgb[0], 1000.0 / 4095, 1e-6);  // was 1000 / 65535
+  EXPECT_EQ(first->image.rgb[3 * (9 * 20 + 9)], 1.0f);    // the lamp: clipped, at the top
+  EXPECT_EQ(second->pixel_format, "RGB12");
+  EXPECT_NEAR(second->image.rgb[0], 2000.0 / 4095, 1e-6);
+  EXPECT_NE(message_of([&] { source->next(1.0); }).find("16-bit codes up to 5000 above the white level 4095"),
+            std::string::npos);
+}
+
 TEST(CameraSourceReplay, LoopsPacedWithOrderedExposures) {
   TempDir dir;
   for (int k = 0; k < 2; ++k) cv::imwrite((dir.path / ("a" + std::to_string(k) + ".png")).string(), cv::Mat(4, 4, CV_16UC3, cv::Scalar::all(1000 * (k + 1))));

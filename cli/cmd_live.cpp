@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <memory>
 
 #include "calib/camera_model.h"
@@ -11,8 +12,10 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/limits.h"
 #include "core/warnings.h"
+#include "hdr/bracket.h"
 #include "hdr/response.h"
 #include "live/merge_session.h"
 #include "live/stream_session.h"
@@ -65,6 +68,20 @@ int run_stream(const StreamArgs& args, const Output& out) {
     lo.response = load_response(args.response);
   if (!args.photometric.empty()) lo.photometric = load_photometric(args.photometric), lo.photometric_file = args.photometric;
   if (!args.camera.empty()) lo.camera = read_camera_model(args.camera), lo.camera_file = args.camera;
+  // Replayed photos in Display P3 or Adobe RGB streamed as if sRGB: their colours, from the
+  // first photo's ICC profile, as probe unwrap and hdr fuse read them.
+  std::string colour_profile;  // reported: what the colours were converted from
+  if (args.source.rfind("replay:", 0) == 0 && !args.maps) {
+    std::error_code ec;
+    std::vector<std::string> photos;
+    for (const auto& e : std::filesystem::directory_iterator(args.source.substr(7), ec))
+      if (e.is_regular_file() && is_camera_image_file(e.path().string())) photos.push_back(e.path().string());
+    std::sort(photos.begin(), photos.end(), [](const std::string& a, const std::string& b) {
+      return frame_name_less(std::filesystem::path(a).filename().string(), std::filesystem::path(b).filename().string());
+    });
+    if (!photos.empty())
+      if (auto profile = read_colour_profile(photos.front())) lo.to_rec709 = profile->to_rec709, colour_profile = profile->name;
+  }
   lo.fov_deg = args.fov;
   if (!args.rotation.empty()) lo.world_from_probe = parse_rotation(args.rotation);
   lo.frames_are_maps = args.maps;
@@ -121,7 +138,9 @@ int run_stream(const StreamArgs& args, const Output& out) {
     std::fflush(stdout);
   });
   say(out, "{}", r.summary());
-  emit_json(out, r.to_json());
+  nlohmann::json report = r.to_json();
+  if (!colour_profile.empty()) report["colour_profile"] = colour_profile;
+  emit_json(out, report);
   if (!r.error.empty()) throw InputError(r.error);  // a bad frame or a refused login, after the summary
   return 0;
 }

@@ -11,6 +11,7 @@
 #include <deque>
 #include <iterator>
 
+#include "core/chromaticities.h"
 #include "core/error.h"
 #include "hdr/bracket.h"
 #include "hdr/merge.h"
@@ -436,6 +437,10 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     map->units = radiance.units;
     unwrap_s = seconds_since(t0);
   }
+
+  // Codes of another colour space (Display P3, Adobe RGB) to Rec. 709, as probe unwrap and
+  // hdr fuse convert them.
+  if (options_.to_rec709 && !options_.frames_are_maps) apply_colour_matrix(map->rgb, *options_.to_rec709);
 
   // 3. Lights, with the temporal processing of the stream.
   t0 = Clock::now();

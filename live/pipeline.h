@@ -14,6 +14,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <array>
 #include <optional>
 #include <string>
 #include <thread>
@@ -55,6 +56,10 @@ struct LivePipelineOptions {
   std::string camera_file;  // where `camera` was read from, named in errors about it
   double fov_deg = 180;
   Mat3 world_from_probe{};
+  // The frames' colours when they are codes of a colour space other than sRGB (a replayed
+  // photo's matrix ICC profile, hdr/bracket.h read_colour_profile): linear values in it to
+  // Rec. 709, row-major, applied to each unwrapped map. Empty: sRGB.
+  std::optional<std::array<double, 9>> to_rec709;
   // Input frames that are already environment maps (replayed .exr maps) skip unwrapping.
   bool frames_are_maps = false;
   Layout layout = Layout::Hemisphere;

@@ -575,6 +575,14 @@ TEST(Cli, AProbePhotosIccProfileTurnsItsColoursToRec709) {
     ++compared;
   }
   EXPECT_GT(compared, 1000u);
+  // A replay of such photos streams in Rec. 709 too (live/pipeline.h to_rec709).
+  const fs::path replay = scratch() / "p3_replay";
+  fs::remove_all(replay);
+  fs::create_directories(replay);
+  fs::copy_file(tagged, replay / "frame_0.jpg");
+  const CliRun stream = lightprobe("stream --json --source replay:" + replay.string() + " --fov 180 --duration 1 --listen 127.0.0.1:0");
+  ASSERT_EQ(stream.code, 0) << stream.err;
+  EXPECT_EQ(nlohmann::json::parse(stream.out)["colour_profile"], "Display P3");
 }
 
 TEST(Cli, TrackingTheBallFrameByFrameKeepsTheUnwrappedMapStillWhenTheCameraShakes) {

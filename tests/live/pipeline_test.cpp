@@ -2,6 +2,7 @@
 // camera reopened without the stream stopping, slow back ends dropping whole brackets.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -107,6 +108,36 @@ TEST(LivePipeline, ThePublishedMapRecordsTheProbeRotation) {
   ASSERT_GT(maps, 0);
   ASSERT_TRUE(seen.has_value());
   EXPECT_EQ(seen->m, o.world_from_probe.m);
+}
+
+// Codes of another colour space (a replayed photo's ICC profile) are turned to Rec. 709 in
+// every published map; replayed photos in Display P3 streamed as if sRGB.
+TEST(LivePipeline, TheFramesColourMatrixTurnsEveryMap) {
+  auto ratios = [](const std::optional<std::array<double, 9>>& matrix) {
+    std::atomic<int> opened{0};
+    auto o = options();
+    o.to_rec709 = matrix;
+    std::mutex m;
+    std::array<double, 2> r_and_b_over_g{0, 0};
+    LivePipeline p([&] { return std::make_unique<ScriptedSource>(30, 0, -1, &opened); }, o,
+                   [&](const LightList&, std::shared_ptr<const EnvMap> map) {
+                     const std::lock_guard lock(m);
+                     for (size_t i = 0; i < map->pixel_count(); ++i)
+                       if ((map->valid.empty() || map->valid[i]) && map->rgb[3 * i + 1] > 0) {
+                         r_and_b_over_g = {map->rgb[3 * i] / map->rgb[3 * i + 1], map->rgb[3 * i + 2] / map->rgb[3 * i + 1]};
+                         break;
+                       }
+                   });
+    p.start();
+    p.wait();
+    return r_and_b_over_g;
+  };
+  const auto grey = ratios(std::nullopt);  // the source paints R = G = B
+  EXPECT_NEAR(grey[0], 1.0, 1e-5);
+  EXPECT_NEAR(grey[1], 1.0, 1e-5);
+  const auto turned = ratios(std::array<double, 9>{2, 0, 0, 0, 1, 0, 0, 0, 0.5});
+  EXPECT_NEAR(turned[0], 2.0, 1e-5);
+  EXPECT_NEAR(turned[1], 0.5, 1e-5);
 }
 
 TEST(LivePipeline, ACameraModelOfAnotherSizeDropsEveryBracketNamingItsFile) {

@@ -3,7 +3,6 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <filesystem>
 #include <memory>
 
 #include "calib/camera_model.h"
@@ -14,6 +13,7 @@
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/limits.h"
+#include "core/map_sequence.h"
 #include "core/warnings.h"
 #include "hdr/bracket.h"
 #include "hdr/response.h"
@@ -72,15 +72,14 @@ int run_stream(const StreamArgs& args, const Output& out) {
   // first photo's ICC profile, as probe unwrap and hdr fuse read them.
   std::string colour_profile;  // reported: what the colours were converted from
   if (args.source.rfind("replay:", 0) == 0 && !args.maps) {
-    std::error_code ec;
-    std::vector<std::string> photos;
-    for (const auto& e : std::filesystem::directory_iterator(args.source.substr(7), ec))
-      if (e.is_regular_file() && is_camera_image_file(e.path().string())) photos.push_back(e.path().string());
-    std::sort(photos.begin(), photos.end(), [](const std::string& a, const std::string& b) {
-      return frame_name_less(std::filesystem::path(a).filename().string(), std::filesystem::path(b).filename().string());
-    });
-    if (!photos.empty())
-      if (auto profile = read_colour_profile(photos.front())) lo.to_rec709 = profile->to_rec709, colour_profile = profile->name;
+    std::vector<std::string> frames;
+    try {
+      frames = find_images({args.source.substr(7)});  // in the replay's order
+    } catch (const InputError&) {
+      // The replay source refuses a folder without frames, in its own words.
+    }
+    if (!frames.empty() && is_camera_image_file(frames.front()))
+      if (auto profile = read_colour_profile(frames.front())) lo.to_rec709 = profile->to_rec709, colour_profile = profile->name;
   }
   lo.fov_deg = args.fov;
   if (!args.rotation.empty()) lo.world_from_probe = parse_rotation(args.rotation);

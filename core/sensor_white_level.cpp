@@ -1,7 +1,12 @@
 #include "core/sensor_white_level.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+
+#include "core/error.h"
+#include "core/warnings.h"
 
 namespace lp {
 namespace {
@@ -34,5 +39,23 @@ void read_at_white_level(std::vector<float>& values, long code) {
 }
 
 int white_level_bits(long code) { return int(std::ceil(std::log2(double(code) + 1.0))); }
+
+int SequenceWhiteLevel::read(std::vector<float>& values, const std::string& file) {
+  if (code_ < 0) {
+    const SensorWhiteLevel level = find_sensor_white_level({&values});
+    code_ = level.code;
+    if (code_)
+      warn(fmt::format("{}: its 16-bit codes stop at {}, {} values clipped there: read as a {}-bit sensor's codes, "
+                       "white level {} (for every frame)",
+                       file, code_, level.at_top, white_level_bits(code_), code_));
+  }
+  if (code_ == 0) return 16;
+  long top = 0;
+  for (float v : values) top = std::max(top, code_of(v));
+  if (top > code_)
+    throw InputError(fmt::format("{}: 16-bit codes up to {} above the white level {} the first frame showed", file, top, code_));
+  read_at_white_level(values, code_);
+  return white_level_bits(code_);
+}
 
 }  // namespace lp

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace lp {
@@ -27,5 +28,19 @@ void read_at_white_level(std::vector<float>& values, long code);
 
 // The bits of a white level: 4095 -> 12.
 int white_level_bits(long code);
+
+// One white level for a sequence of 16-bit frames (probe unwrap, stream replay), decided at
+// the first frame and kept: a frame that clips nowhere must not be read at another scale
+// than its neighbours.
+class SequenceWhiteLevel {
+ public:
+  // Reads a 16-bit frame's `values` at the sequence's white level, in place, and returns the
+  // bits its codes now have (16: the container's own). The frame that finds a level says so
+  // in one warning naming `file`; a later frame with codes above it throws InputError.
+  int read(std::vector<float>& values, const std::string& file);
+
+ private:
+  long code_ = -1;  // -1 undecided, 0 the container's own
+};
 
 }  // namespace lp

@@ -9,14 +9,11 @@
 #include <sstream>
 #include <thread>
 
-#include <fmt/format.h>
-
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/lazy_libs.h"
 #include "core/sensor_white_level.h"
 #include "core/timestamps.h"
-#include "core/warnings.h"
 #include "probe/camera_source.h"
 
 namespace lp {
@@ -187,7 +184,10 @@ class ReplaySource final : public CameraSource {
       frame.image.width = image.width, frame.image.height = image.height;
       frame.image.rgb = std::move(image.rgb);
       frame.pixel_format = image.bit_depth > 8 ? "RGB16" : "RGB8";
-      if (image.bit_depth == 16) read_at_sensor_white_level(file.string(), frame);
+      // A recorded Mono12 camera saved as 16-bit files: its clipped highlights sat at
+      // 4095 / 65535, which the decode took for valid values.
+      if (image.bit_depth == 16)
+        frame.pixel_format = "RGB" + std::to_string(white_level_.read(frame.image.rgb, spec_ + ": " + file.string()));
     }
     frame.exposure_s = exposures_.lookup(file, index).value_or(0.0);
     frame.sequence = delivered_;
@@ -232,28 +232,6 @@ class ReplaySource final : public CameraSource {
     return (*hi - *lo) * double(t.size()) / double(t.size() - 1);
   }
 
-  // A recorded Mono12 camera saved as 16-bit files: its clipped highlights sit at 4095 /
-  // 65535, which the decode took for valid values. The first 16-bit frame decides the white
-  // level (core/sensor_white_level.h) for the whole replay, as probe unwrap does: a frame
-  // that clips nowhere must not be read at another scale than its neighbours.
-  void read_at_sensor_white_level(const std::string& file, CameraFrame& frame) {
-    if (white_level_ < 0) {
-      const SensorWhiteLevel level = find_sensor_white_level({&frame.image.rgb});
-      white_level_ = level.code;
-      if (level.code)
-        warn(fmt::format("{}: {}: its 16-bit codes stop at {}, {} values clipped there: replayed as a {}-bit "
-                         "sensor's codes, white level {} (for every frame)",
-                         spec_, file, level.code, level.at_top, white_level_bits(level.code), level.code));
-    }
-    if (white_level_ <= 0) return;
-    const float top = *std::max_element(frame.image.rgb.begin(), frame.image.rgb.end());
-    if (std::lround(double(top) * 65535.0) > white_level_)
-      throw InputError(fmt::format("{}: {}: 16-bit codes up to {} above the white level {} the first frame showed", spec_,
-                                   file, std::lround(double(top) * 65535.0), white_level_));
-    read_at_white_level(frame.image.rgb, white_level_);
-    frame.pixel_format = "RGB" + std::to_string(white_level_bits(white_level_));
-  }
-
   std::string spec_;
   SourceOptions options_;
   std::vector<fs::path> files_;
@@ -263,7 +241,7 @@ class ReplaySource final : public CameraSource {
   int64_t delivered_ = 0;
   double span_s_ = -1;
   std::optional<double> first_time_s_;  // the first recorded time: the pacing's origin
-  long white_level_ = -1;  // 16-bit frames: -1 undecided, 0 the container's own, else the sensor's
+  SequenceWhiteLevel white_level_;  // of 16-bit frames, decided at the first
 };
 
 // ---- video:FILE and v4l2:N ----------------------------------------------------------

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -11,7 +10,6 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/sensor_white_level.h"
-#include "core/warnings.h"
 #include "probe/fisheye.h"
 
 namespace lp {
@@ -60,9 +58,8 @@ struct FirstPass {
   int width = 0, height = 0;
   std::vector<std::optional<FindBallReport>> fits;
   std::vector<char> seeded;
-  // 16-bit frames: the white level of a sensor of fewer bits, decided at the first frame
-  // (core/sensor_white_level.h) and kept for all: -1 undecided, 0 the container's own.
-  long white_level = -1;
+  // 16-bit frames: the white level of a sensor of fewer bits, decided at the first frame.
+  SequenceWhiteLevel white_level;
 };
 
 // Frames are read in both passes: a frame whose codes cannot be made linear is refused as
@@ -76,27 +73,9 @@ RgbImage read_frame(const std::string& f, FirstPass& pass, const UnwrapSequenceO
     throw InputError(fmt::format("{}: {}-bit camera codes may be linear (a raw developer's) or gamma-encoded (an "
                                  "editor's): say which with --codes linear, --codes srgb or --codes RESPONSE.json",
                                  f, img.code_bits));
-  if (img.code_bits == 16) {
-    // A Mono12 frame saved as 16-bit: its clipped sun at 4095 was linearised as a valid value
-    // and the report's clipped fraction said 0. One white level for the whole sequence: a
-    // frame that clips nowhere must not be read at another scale than its neighbours.
-    if (pass.white_level < 0) {
-      const SensorWhiteLevel level = find_sensor_white_level({&img.rgb});
-      pass.white_level = level.code;
-      if (level.code)
-        warn(fmt::format("{}: its 16-bit codes stop at {}, {} values clipped there: read as a {}-bit sensor's codes, "
-                         "white level {} (for every frame)",
-                         f, level.code, level.at_top, white_level_bits(level.code), level.code));
-    }
-    if (pass.white_level > 0) {
-      const float top = img.rgb.empty() ? 0.0f : *std::max_element(img.rgb.begin(), img.rgb.end());
-      if (std::lround(double(top) * 65535.0) > pass.white_level)
-        throw InputError(fmt::format("{}: 16-bit codes up to {} above the white level {} the first frame showed", f,
-                                     std::lround(double(top) * 65535.0), pass.white_level));
-      read_at_white_level(img.rgb, pass.white_level);
-      img.code_bits = white_level_bits(pass.white_level);
-    }
-  }
+  // A Mono12 frame saved as 16-bit: its clipped sun at 4095 was linearised as a valid value
+  // and the report's clipped fraction said 0.
+  if (img.code_bits == 16) img.code_bits = pass.white_level.read(img.rgb, f);
   return img;
 }
 

@@ -153,6 +153,10 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     if (const double scale = reference_exposure_scale(bracket); scale != 1) {
       for (float& v : radiance.rgb) v = float(v * scale);
       report["exposure_reference"] = {{"iso", bracket.iso}, {"f_number", bracket.f_number}, {"scale", scale}};
+      say(out, "{}: scaled x{:.4g} to ISO 100 and f/1 from the frames' {}\n", args.output, scale,
+          bracket.iso > 0 && bracket.f_number > 0 ? fmt::format("ISO {:g}, f/{:g}", bracket.iso, bracket.f_number)
+          : bracket.iso > 0                       ? fmt::format("ISO {:g} (no f-number recorded)", bracket.iso)
+                                                  : fmt::format("f/{:g} (no ISO recorded)", bracket.f_number));
     }
     report["saturated_everywhere"] = mr.saturated_everywhere;
     report["black_everywhere"] = mr.black_everywhere;

@@ -344,6 +344,8 @@ TEST(Cli, HdrFuseOfMemorialBeatsNothingLessThanAValidRadianceImageAndBadBrackets
   EXPECT_NEAR(reference["f_number"].get<double>(), 1.8, 1e-6);
   EXPECT_NEAR(reference["scale"].get<double>(), 3.24, 1e-5);
   EXPECT_FALSE(nlohmann::json::parse(r.out).contains("exposure_reference"));
+  const CliRun told = lightprobe("hdr fuse " + k + "/ball_1-10s.jpg " + k + "/ball_1-10s.jpg --exposure-times 0.1,0.025 -o " + out.string());
+  EXPECT_NE(told.out.find("scaled x3.24 to ISO 100 and f/1 from the frames' ISO 100, f/1.8"), std::string::npos) << told.out;
 }
 
 TEST(Cli, PhotometricCalibrationRecoversAKnownScaleAndRejectsBadReadings) {

@@ -2,6 +2,7 @@
 #include "cli/command_table.h"
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -112,6 +113,35 @@ std::string config_error_line(const CLI::App& app, const CLI::ConfigError& e) {
   return file + ": '" + key + "' is not an option of " + section;
 }
 
+// One line for a usage error, naming the command it is about: CLI11 prints "MAP is required"
+// and "Run with --help for more information." on two lines, without saying whose MAP, and
+// answers a misspelt command ("lightprobe smaple") with "A subcommand is required".
+std::string usage_error_line(const CLI::App& app, const CLI::ParseError& e) {
+  const CLI::App* deepest = &app;
+  std::string path;
+  for (std::vector<CLI::App*> subs = app.get_subcommands(); !subs.empty(); subs = subs.front()->get_subcommands()) {
+    deepest = subs.front();
+    path += (path.empty() ? "" : " ") + deepest->get_name();
+  }
+  const std::string command = path.empty() ? "lightprobe" : "lightprobe " + path;
+  std::string what = e.what();
+  // A word that no command took: left on the command, or on the top (fallthrough).
+  std::vector<std::string> extra = deepest->remaining();
+  if (extra.empty()) extra = app.remaining(true);
+  if (what == "A subcommand is required" && !extra.empty() && extra.front().rfind('-', 0) != 0) {
+    std::string names;
+    for (const CLI::App* sub : deepest->get_subcommands({}))
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    what = fmt::format("'{}' is not a command of {} (commands: {})", extra.front(), command, names);
+  } else if (!path.empty()) {
+    what = path + ": " + what;
+  }
+  const CLI::Option* config = app.get_config_ptr();
+  const std::string from_config =
+      config && !config->results().empty() ? " (the command line with " + config->results().front() + ")" : "";
+  return what + from_config + "; see " + command + " --help";
+}
+
 // Parses the command line (and a --config file) against the table; runs the chosen
 // handler only when `run`.
 int parse_command_line(int argc, char** argv, bool run) {
@@ -166,7 +196,7 @@ int parse_command_line(int argc, char** argv, bool run) {
     std::fprintf(stderr, "lightprobe: %s\n", config_error_line(app, e).c_str());
     return 2;
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
+    std::fprintf(stderr, "lightprobe: %s\n", usage_error_line(app, e).c_str());
     return 2;
   }
   if (!run) return 0;

@@ -109,6 +109,8 @@ std::string config_error_line(const CLI::App& app, const CLI::ConfigError& e) {
   const std::string section = space == std::string::npos ? "" : item.substr(0, space);
   const std::string key = space == std::string::npos ? item : item.substr(space + 1);
   if (key == "++" || key == "--") return file + ": [" + section + "] is not a command (a section per command, e.g. [stream])";
+  if (item.rfind('[', 0) == 0)  // "[sample" without its ']': CLI11 reads the line as a key
+    return file + ": '" + item + "' is not a section header (a ']' is missing)";
   if (section.empty()) return file + ": '" + key + "' is not an option every command takes (put it in its command's [section])";
   return file + ": '" + key + "' is not an option of " + section;
 }

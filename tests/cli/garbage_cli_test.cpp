@@ -247,6 +247,10 @@ TEST(GarbageCli, AConfigFileWithAKeyOrSectionNoCommandHasIsRefusedNamingIt) {
   const std::string top = config("top.toml", "metod = \"mediancut\"\n");
   expect_one_line_error(lightprobe(sample + top), top + ": 'metod' is not an option every command takes");
   expect_one_line_error(lightprobe(sample + (dir / "missing.toml").string()), "missing.toml");
+  const std::string open = config("open.toml", "[sample\nmethod = \"mediancut\"\n");
+  expect_one_line_error(lightprobe(sample + open), open + ": '[sample' is not a section header (a ']' is missing)");
+  const std::string twice = config("twice.toml", "[sample]\nmethod = \"pharr\"\nmethod = \"mediancut\"\n");
+  expect_one_line_error(lightprobe(sample + twice), "sample: --method: At Most 1 required but received 2 (the command line with " + twice);
   EXPECT_FALSE(fs::exists(dir / "lights.json"));
   const std::string rig = config("rig.toml",
                                  "max-pixels = 100000000\n[stream]\nsource = \"aravis:Fake_1\"\nn = 64\n"

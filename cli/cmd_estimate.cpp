@@ -12,6 +12,7 @@
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/json_file.h"
+#include "core/warnings.h"
 #include "core/image_io.h"
 #include "estimate/light_quadtree.h"
 #include "estimate/metadata_track.h"
@@ -46,6 +47,9 @@ namespace {
 // The camera: the track's header, then --photometric and the explicit options.
 MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
   MeteringOptions m = track.camera;
+  if (!a.photometric.empty() && a.meter_equation)
+    throw InputError(fmt::format("--photometric {} and --meter-equation contradict: the first gives the scale the second ignores",
+                                 a.photometric));
   if (!a.photometric.empty()) {
     const PhotometricCalibration cal = load_photometric(a.photometric);
     if (cal.log_sensor)
@@ -53,17 +57,41 @@ MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
     m.photometric_scale = cal.scale_luminance;
   }
   if (a.meter_equation) m.photometric_scale.reset();
-  if (a.calibration_f_number >= 0) m.calibration_f_number = a.calibration_f_number;
-  if (a.f_number >= 0) m.f_number = a.f_number;
-  if (a.ae_target >= 0) m.ae_target = a.ae_target;
-  if (a.iso_base >= 0) m.iso_base = a.iso_base;
-  if (a.meter_constant >= 0) m.meter_constant = a.meter_constant;
+  // -1 exactly is "not given": any other value is the user's and is validated below (a NaN or
+  // a negative aperture used to fall back to the track's without a word).
+  auto given = [](double v) { return v != -1; };
+  // An option the route never reads is refused, not ignored: the meter constant means nothing
+  // beside a photometric scale, the calibration's aperture nothing without one.
+  if (m.photometric_scale && given(a.meter_constant))
+    throw InputError("--meter-constant is read by the meter equation only, and this run has a photometric scale "
+                     "(--photometric or the track's); add --meter-equation to use it");
+  if (!m.photometric_scale && given(a.calibration_f_number))
+    throw InputError("--calibration-f-number is the aperture of a photometric scale, and this run has none "
+                     "(the meter equation)");
+  if (given(a.calibration_f_number)) m.calibration_f_number = a.calibration_f_number;
+  if (given(a.f_number)) m.f_number = a.f_number;
+  if (given(a.ae_target)) m.ae_target = a.ae_target;
+  if (given(a.iso_base)) m.iso_base = a.iso_base;
+  if (given(a.meter_constant)) m.meter_constant = a.meter_constant;
   if (!a.colour_matrix.empty()) {
     const auto v = parse_numbers(a.colour_matrix, "--colour-matrix", 9);
     m.colour_matrix = std::array<double, 9>{};
     std::copy(v.begin(), v.end(), m.colour_matrix->begin());
   }
   validate_metering(m);
+  // The per-frame fallbacks are read only for frames that lack the value: said when none does.
+  size_t no_aperture = 0, no_mean = 0, iso_only = 0;
+  for (const TrackFrame& f : track.frames) {
+    no_aperture += !f.metadata.f_number;
+    no_mean += !f.metadata.mean_code;
+    iso_only += f.metadata.iso && !f.metadata.gain_db && !f.metadata.analog_gain;
+  }
+  if (given(a.f_number) && no_aperture == 0)
+    warn(fmt::format("--f-number {} is not used: every frame of {} records its aperture", a.f_number, a.track));
+  if (given(a.ae_target) && no_mean == 0 && m.photometric_scale)
+    warn(fmt::format("--ae-target {} is not used: every frame of {} records its mean code", a.ae_target, a.track));
+  if (given(a.iso_base) && iso_only == 0 && m.photometric_scale)
+    warn(fmt::format("--iso-base {} is not used: every frame of {} records its gain", a.iso_base, a.track));
   return m;
 }
 

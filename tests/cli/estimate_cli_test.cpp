@@ -126,6 +126,33 @@ TEST(EstimateCli, BadMetadataIsAOneLineErrorNamingFileAndLine) {
                         "truth.json");
 }
 
+// Camera options that the run never reads were dropped without a word, and so were a NaN or
+// negative aperture (read as "not given"). The walk-through's track has a photometric scale
+// and records every frame's aperture, mean code and gain.
+TEST(EstimateCli, CameraOptionsTheRouteNeverReadsAreRefusedOrWarnedAbout) {
+  const std::string track = (walkthrough_dir() / "track.jsonl").string();
+  const fs::path out = scratch() / "unread.json";
+  const std::string metadata = "estimate metadata " + track + " -o " + out.string() + " ";
+  expect_one_line_error(lightprobe(metadata + "--meter-constant 14"), "--meter-constant is read by the meter equation only");
+  expect_one_line_error(lightprobe(metadata + "--meter-equation --calibration-f-number 4"),
+                        "--calibration-f-number is the aperture of a photometric scale");
+  expect_one_line_error(lightprobe(metadata + "--meter-equation --f-number nan"), "--f-number must be positive, got nan");
+  expect_one_line_error(lightprobe(metadata + "--ae-target -0.5"), "--ae-target must be in (0, 1]");
+  const fs::path cal = scratch() / "photometric.json";
+  write(cal, "{}");
+  expect_one_line_error(lightprobe(metadata + "--meter-equation --photometric " + cal.string()), "contradict");
+  EXPECT_FALSE(fs::exists(out));
+
+  const CliRun fallback = lightprobe(metadata + "--f-number 2.8 --iso-base 200");
+  ASSERT_EQ(fallback.code, 0) << fallback.err;
+  EXPECT_NE(fallback.err.find("warning: --f-number 2.8 is not used: every frame of " + track + " records its aperture"),
+            std::string::npos) << fallback.err;
+  EXPECT_NE(fallback.err.find("warning: --iso-base 200 is not used"), std::string::npos) << fallback.err;
+  const CliRun meter = lightprobe(metadata + "--meter-equation --meter-constant 14");
+  ASSERT_EQ(meter.code, 0) << meter.err;
+  EXPECT_EQ(meter.err, "");
+}
+
 // The probe-less mode fed live: Aravis' simulated camera, a fixed rig.
 TEST(EstimateCli, StreamFeedsTheMetadataModelLive) {
   const fs::path model = scratch() / "live_model.json";

@@ -148,6 +148,10 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
   if (at.size() != 2 && at.size() != 3) throw InputError(fmt::format("--at: give X,Y or X,Y,Z in metres, got '{}'", args.at));
   if (!(args.min_frames >= 1)) throw InputError(fmt::format("--min-frames must be >= 1, got {}", args.min_frames));
   if (!(args.shrink >= 0)) throw InputError(fmt::format("--shrink must be >= 0, got {}", args.shrink));
+  if (args.max_depth < -1) throw InputError(fmt::format("--max-depth must be >= 0 (or -1: no limit), got {}", args.max_depth));
+  // Shrinkage weighs every level of the path itself: the depth rule's options would be ignored.
+  if (args.shrink > 0 && (args.max_depth != -1 || args.min_frames != 1))
+    throw InputError("--shrink blends every level of the tree; --max-depth and --min-frames belong to the rule without it");
   const ExportFormat format = export_format_for(args.format, args.output, false);
   const auto t0 = Clock::now();
   const auto look = args.shrink > 0 ? model.lookup_shrunk(at[0], at[1], args.shrink)

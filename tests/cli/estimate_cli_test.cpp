@@ -148,6 +148,13 @@ TEST(EstimateCli, CameraOptionsTheRouteNeverReadsAreRefusedOrWarnedAbout) {
   EXPECT_NE(fallback.err.find("warning: --f-number 2.8 is not used: every frame of " + track + " records its aperture"),
             std::string::npos) << fallback.err;
   EXPECT_NE(fallback.err.find("warning: --iso-base 200 is not used"), std::string::npos) << fallback.err;
+  const std::string model = (scratch() / "query_model.json").string();
+  ASSERT_EQ(lightprobe("estimate metadata " + track + " -o " + model).code, 0);
+  const std::string query = "estimate query " + model + " --at 4,3 -o " + (scratch() / "q.json").string() + " ";
+  expect_one_line_error(lightprobe(query + "--shrink 5 --max-depth 2"), "--shrink blends every level");
+  expect_one_line_error(lightprobe(query + "--shrink 5 --min-frames 3"), "--shrink blends every level");
+  expect_one_line_error(lightprobe(query + "--max-depth -7"), "--max-depth must be >= 0");
+  EXPECT_EQ(lightprobe(query + "--shrink 5").code, 0);
   const CliRun meter = lightprobe(metadata + "--meter-equation --meter-constant 14");
   ASSERT_EQ(meter.code, 0) << meter.err;
   EXPECT_EQ(meter.err, "");

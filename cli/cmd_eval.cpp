@@ -123,11 +123,12 @@ int run_eval_estimators(const EvalEstimatorsArgs& args, const Output& out) {
   EvalEstimatorsOptions o = args.o;
   check_frame_count("--frames", o.frames);
   std::string budgets = args.budgets;
-  if (args.quick) {  // the demo: short, and no sweep
-    o.frames = std::min(o.frames, 4);
-    o.repeats = 2;
+  if (args.quick) {  // the demo: short, and no sweep; what the user gave stays (it was overridden)
+    const EvalEstimatorsOptions d;
+    if (o.frames == d.frames) o.frames = 4;
+    if (o.repeats == d.repeats) o.repeats = 2;
     if (budgets == EvalEstimatorsArgs{}.budgets) budgets = "4,16,64";
-    o.sweep = false;
+    if (o.sweep == d.sweep) o.sweep = false;
   }
   o.budgets = parse_int_list(budgets, "--budgets");
   o.estimators = split_commas(args.estimators);
@@ -152,7 +153,7 @@ Command eval_estimators_command() {
             f.opt("--seed", a->o.seed, "Random seed");
             f.opt("--ray-cost-us", a->o.ray_cost_us, "Modelled microseconds per visibility test, added to the time");
             f.flag("!--no-sweep", a->o.sweep, "Skip the SMC parameter sweep");
-            f.flag("--quick", a->quick, "Demo: 4 frames, 2 runs, budgets 4,16,64, no sweep");
+            f.flag("--quick", a->quick, "Demo: 4 frames, 2 runs, budgets 4,16,64, no sweep (where not given)");
             f.output(a->o.output_dir, "Directory for estimators.csv/.svg and smc_sweep.csv/.svg");
             return [a](const Output& out) { return run_eval_estimators(*a, out); };
           }};

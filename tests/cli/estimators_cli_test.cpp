@@ -43,6 +43,12 @@ TEST(EstimatorsCli, QuickRunWritesCsvChartAndJson) {
   const std::string csv = slurp(j["csv"].get<std::string>());
   EXPECT_EQ(csv.rfind("estimator,variant,lobe,budget,rel_rmse", 0), 0u);
   EXPECT_EQ(line_count(csv), 76);
+  EXPECT_EQ(j["repeats"], 2);  // --quick's
+  // What the user gives beside --quick stays: --repeats 3 ran as 2.
+  const CliRun given = lightprobe("eval estimators scene --quick --size 64x32 --scenarios abrupt-switch --budgets 4 "
+                                  "--repeats 3 --json -o " + (scratch() / "quick3").string());
+  ASSERT_EQ(given.code, 0) << given.err;
+  EXPECT_EQ(nlohmann::json::parse(given.out)["repeats"], 3);
   EXPECT_NE(slurp(j["chart"].get<std::string>()).find("<svg"), std::string::npos);
 }
 

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <atomic>
+#include <cmath>
 #include <chrono>
 #include <thread>
 
@@ -17,6 +18,7 @@
 #include "cli/report.h"
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/warnings.h"
 #include "estimate/light_quadtree.h"
 #include "live/light_server.h"
 #include "probe/camera_source.h"
@@ -98,6 +100,7 @@ int run_stream_metadata(const StreamArgs& args, const Output& out) {
   uint64_t used = 0, skipped = 0;
   std::string last_skip;
   LightReading last{};
+  bool gain_unit_warned = false;
   while (!interrupt_signal()) {
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (args.duration > 0 && elapsed >= args.duration) break;
@@ -110,6 +113,15 @@ int run_stream_metadata(const StreamArgs& args, const Output& out) {
     if (!meta) {
       ++skipped;
       continue;
+    }
+    if (!std::isfinite(frame->gain_db)) {  // a gain in the camera's own steps (GainRaw)
+      if (!camera.photometric_scale)
+        throw InputError(source->describe() + ": the camera's gain is not in dB, and the meter equation needs it; "
+                         "give --photometric, calibrated at a fixed gain");
+      if (!gain_unit_warned)
+        warn(source->describe() + ": the camera's gain is not in dB: taken as the gain --photometric was calibrated at; keep it fixed");
+      gain_unit_warned = true;
+      meta->gain_db = 0.0;
     }
     last = meter_frame(*meta, camera, fmt::format("{} frame {}", args.source, frame->sequence));
     model.update(pos[0], pos[1], v, last, frame->sequence);

@@ -13,6 +13,7 @@
 
 #include "core/chromaticities.h"
 #include "core/error.h"
+#include "core/warnings.h"
 #include "hdr/bracket.h"
 #include "hdr/merge.h"
 #include "probe/camera_codes.h"
@@ -230,6 +231,11 @@ void LivePipeline::capture_loop() {
       std::lock_guard<std::mutex> lock(mutex_);
       stats_.input_error = stats_.last_error = *why;
       break;
+    }
+    if (!std::isfinite(frame->gain_db) && !gain_unit_warned_) {
+      gain_unit_warned_ = true;
+      warn(source_->describe() + ": the camera's gain is not in dB, so frames are divided by their exposure time "
+           "only; keep the gain fixed (and calibrate at it)");
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);

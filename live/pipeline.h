@@ -136,6 +136,7 @@ class LivePipeline {
   LivePipelineOptions options_;
   Publish publish_;
   std::unique_ptr<CameraSource> source_;
+  bool gain_unit_warned_ = false;  // a camera whose gain is not in dB, said once
   std::thread capture_, processor_;
   std::atomic<bool> running_{false};
   std::atomic<bool> capture_done_{false};

@@ -52,7 +52,8 @@ struct CameraFrame {
   RgbImage image;
   double timestamp_s = 0;   // camera clock when known, else host clock; monotonic per source
   double exposure_s = 0;    // exposure the frame was taken at; <= 0 unknown
-  double gain_db = 0;       // analogue gain (0 when unknown or none)
+  double gain_db = 0;       // analogue gain (0 when none; NaN when the camera states it in
+                            // another unit than dB, e.g. GenICam's GainRaw steps)
   std::string pixel_format; // as the camera names it ("Mono8", "BayerRG16", "RGB8", "RGBFloat")
   int64_t sequence = 0;     // camera frame id (gaps = dropped frames) or replay index
   int bracket_index = -1;   // position in the exposure cycle, -1 none

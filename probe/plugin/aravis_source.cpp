@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -14,6 +15,7 @@
 #include "probe/camera_source.h"
 #include "probe/genicam_sequencer.h"
 #include "probe/plugin/aravis_errors.h"
+#include "probe/plugin/aravis_gain.h"
 
 namespace lp {
 
@@ -466,7 +468,56 @@ class AravisSource final : public CameraSource {
     int x = 0, y = 0, w = 0, h = 0;
     arv_camera_get_region(camera, &x, &y, &w, &h, nullptr);
     description_ = spec_ + " (" + (vendor ? vendor : "?") + " " + (model ? model : "?") + ", " + std::to_string(w) + "x" +
-                   std::to_string(h) + " " + pixel_format_ + (chunks_ ? ", exposure from chunk data" : "") + ")";
+                   std::to_string(h) + " " + pixel_format_ + (chunks_ ? ", exposure from chunk data" : "") + gain_note_ + ")";
+  }
+
+  // The gain feature (kGainFeatures) in dB into gain_db_, after setting it to --gain-db
+  // when `set`. A gain that is not in dB is NaN (the stream divides by exposure time only and
+  // says so) and named in the description; --gain-db on such a camera is refused (Aravis
+  // would write the dB value as raw steps).
+  void read_gain(bool set) {
+    ArvCamera* camera = camera_.get();
+    ArvDevice* device = arv_camera_get_device(camera);
+    gain_db_ = 0;
+    gain_note_.clear();
+    for (const char* name : kGainFeatures) {
+      ArvGcNode* node = arv_device_get_feature(device, name);
+      if (!node) continue;
+      GError* error = nullptr;
+      std::string unit;
+      double value = NAN;
+      if (ARV_IS_GC_FLOAT(node)) {
+        const char* u = arv_gc_float_get_unit(ARV_GC_FLOAT(node));
+        unit = u ? u : "";
+        const std::optional<double> to_write = options_.gain_db ? gain_feature_value(name, unit, *options_.gain_db) : std::nullopt;
+        if (set && to_write) {
+          arv_gc_float_set_value(ARV_GC_FLOAT(node), *to_write, &error);
+          if (error) fail("gain", error);
+        }
+        value = arv_gc_float_get_value(ARV_GC_FLOAT(node), &error);
+      } else if (ARV_IS_GC_INTEGER(node)) {
+        const char* u = arv_gc_integer_get_unit(ARV_GC_INTEGER(node));
+        unit = u ? u : "";
+        value = double(arv_gc_integer_get_value(ARV_GC_INTEGER(node), &error));
+      } else {
+        continue;
+      }
+      g_clear_error(&error);
+      const std::optional<double> db = gain_feature_db(name, unit, value);
+      if (db) {
+        gain_db_ = *db;
+      } else {
+        if (set && options_.gain_db)
+          throw InputError(spec_ + ": the camera's gain (" + name + (unit.empty() ? "" : " in " + unit) +
+                           ") is not in dB, so --gain-db cannot set it; set it with the vendor's tool");
+        gain_db_ = NAN;  // CameraFrame: a gain that is there but not in dB
+        char shown[32];
+        std::snprintf(shown, sizeof shown, "%g", value);
+        gain_note_ = std::string(", gain ") + name + " " + shown + (unit.empty() ? "" : " " + unit) + " not in dB";
+      }
+      return;
+    }
+    if (set && options_.gain_db) throw InputError(spec_ + ": the camera has no gain feature for --gain-db");
   }
 
   void configure() {
@@ -493,18 +544,14 @@ class AravisSource final : public CameraSource {
     if (arv_camera_is_exposure_auto_available(camera, nullptr)) arv_camera_set_exposure_time_auto(camera, ARV_AUTO_OFF, nullptr);
     if (arv_camera_is_gain_auto_available(camera, nullptr)) arv_camera_set_gain_auto(camera, ARV_AUTO_OFF, nullptr);
     g_clear_error(&error);
-    if (options_.gain_db) {
-      if (fake_) {
-        arv_camera_set_integer(camera, "GainRaw", gint64(std::lround(*options_.gain_db)), &error);  // the fake paints GainRaw as dB
-      } else {
-        arv_camera_set_gain(camera, *options_.gain_db, &error);
-      }
-      if (error) fail("gain", error);
-    }
     if (fake_) {
+      if (options_.gain_db) {
+        arv_camera_set_integer(camera, "GainRaw", gint64(std::lround(*options_.gain_db)), &error);  // the fake paints GainRaw as dB
+        if (error) fail("gain", error);
+      }
       gain_db_ = double(arv_camera_get_integer(camera, "GainRaw", nullptr));
-    } else if (arv_camera_is_gain_available(camera, nullptr)) {
-      gain_db_ = arv_camera_get_gain(camera, nullptr);
+    } else {
+      read_gain(true);
     }
     g_clear_error(&error);
     // Per-frame exposure from chunk data, when the camera has it (the fake paints its own).
@@ -630,6 +677,7 @@ class AravisSource final : public CameraSource {
   std::atomic<bool> lost_{false};
   FakePainter painter_;
   std::string description_, pixel_format_;
+  std::string gain_note_;  // ", gain GainRaw 120 not in dB: ..." when the gain is not divided out
   bool chunks_ = false;
   double gain_db_ = 0;
   double target_us_ = 0;  // exposure the camera was last set to (read back)

@@ -10,6 +10,8 @@
 
 #include "eval/synthetic_scene.h"
 #include "live/pipeline.h"
+
+#include "core/warnings.h"
 #include "probe/camera_unwrap.h"
 #include "probe/fisheye.h"
 
@@ -44,8 +46,11 @@ class ScriptedSource : public CameraSource {
     f.image.width = 64;
     f.image.height = 64;
     f.image.rgb.assign(64 * 64 * 3, float(std::min(1.0, 0.3 * f.exposure_s / 0.01)));
+    f.gain_db = gain_db;
     return f;
   }
+
+  double gain_db = 0;  // every frame's
 
  private:
   int frames_, skip_every_, die_at_;
@@ -108,6 +113,45 @@ TEST(LivePipeline, ThePublishedMapRecordsTheProbeRotation) {
   ASSERT_GT(maps, 0);
   ASSERT_TRUE(seen.has_value());
   EXPECT_EQ(seen->m, o.world_from_probe.m);
+}
+
+// A camera whose gain is in its own steps (GenICam's GainRaw) reports NaN: frames are divided
+// by the time alone, as at 0 dB, and the stream says so once (Aravis' raw 120 was read as
+// 120 dB and divided every frame by 10^6).
+TEST(LivePipeline, AGainNotInDecibelsIsDividedOutAsNoneAndSaidOnce) {
+  auto power_with = [](double gain_db, std::vector<std::string>* warnings) {
+    std::atomic<int> opened{0};
+    std::mutex m;
+    double power = 0;
+    const WarningSink before = set_warning_sink([&](const std::string& line) {
+      const std::lock_guard lock(m);
+      warnings->push_back(line);
+    });
+    LivePipeline p(
+        [&] {
+          auto source = std::make_unique<ScriptedSource>(30, 0, -1, &opened);
+          source->gain_db = gain_db;
+          return source;
+        },
+        options(), [&](const LightList& l, std::shared_ptr<const EnvMap>) {
+          const std::lock_guard lock(m);
+          power = 0;
+          for (const Light& light : l.lights) power += light.rgb[1];
+        });
+    p.start();
+    p.wait();
+    set_warning_sink(before);
+    return power;
+  };
+  std::vector<std::string> none, raw;
+  const double at_0db = power_with(0.0, &none);
+  const double unknown = power_with(NAN, &raw);
+  ASSERT_GT(at_0db, 0);
+  EXPECT_NEAR(unknown / at_0db, 1.0, 1e-6);
+  EXPECT_TRUE(none.empty());
+  ASSERT_EQ(raw.size(), 1u);
+  EXPECT_NE(raw[0].find("scripted: the camera's gain is not in dB"), std::string::npos) << raw[0];
+  EXPECT_NEAR(power_with(20 * std::log10(2.0), &none) / at_0db, 0.5, 1e-4);  // a known gain divides
 }
 
 // Codes of another colour space (a replayed photo's ICC profile) are turned to Rec. 709 in

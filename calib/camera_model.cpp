@@ -671,6 +671,12 @@ CameraModel read_opencv_yaml(const std::string& path) {
     K.convertTo(K, CV_64F);
     if (K.at<double>(0, 1) != 0)
       throw InputError(path + ": camera_matrix has skew " + g17(K.at<double>(0, 1)) + ", which no lens model here holds");
+    // OpenCV's K is [fx 0 cx; 0 fy cy; 0 0 1]. A transposed one (MATLAB's IntrinsicMatrix) was
+    // read with its centre at (0, 0), and a bottom row other than 0 0 1 was never looked at.
+    if (K.at<double>(2, 0) != 0 || K.at<double>(2, 1) != 0 || K.at<double>(2, 2) != 1 || K.at<double>(1, 0) != 0)
+      throw InputError(path + ": camera_matrix is not [fx 0 cx; 0 fy cy; 0 0 1] (bottom row " + g17(K.at<double>(2, 0)) +
+                       " " + g17(K.at<double>(2, 1)) + " " + g17(K.at<double>(2, 2)) +
+                       (K.at<double>(2, 0) != 0 || K.at<double>(2, 1) != 0 ? "; transposed, as MATLAB stores it?" : "") + ")");
     D.convertTo(D, CV_64F);
     D = D.reshape(1, 1);
     std::vector<double> dist(D.begin<double>(), D.end<double>());

@@ -4,7 +4,10 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "core/error.h"
@@ -29,6 +32,14 @@ ColourMatch fit_colour_match(const std::vector<ColourPatchPair>& pairs) {
   // Least squares Q = P M^T, solved column by column with a rank-revealing QR.
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(P);
   if (qr.rank() < 3) throw InputError("colour match: the probe colours of the patches do not span RGB (singular fit)");
+  // Nearly grey patches pass the rank test and give entries of +-100 that fit noise: refused
+  // when the probe colours' condition number says the fit amplifies a 0.1 % error past 100 %.
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(P);
+  const Eigen::Vector3d sv = svd.singularValues();
+  if (!(sv(2) > 1e-3 * sv(0)))
+    throw InputError(fmt::format("colour match: the probe colours barely span RGB (condition number {:.0f}, nearly grey "
+                                 "patches): the matrix would fit noise; add saturated patches",
+                                 sv(2) > 0 ? sv(0) / sv(2) : INFINITY));
   const Eigen::MatrixXd Mt = qr.solve(Q);  // 3x3, = M^T
   ColourMatch m;
   for (int r = 0; r < 3; ++r)
@@ -49,25 +60,52 @@ std::vector<ColourPatchPair> read_colour_patches_csv(const std::string& path) {
   std::vector<ColourPatchPair> pairs;
   std::string line;
   int line_no = 0;
+  bool first = true;
+  // Where each of probe_r, probe_g, probe_b, plate_r, plate_g, plate_b is: the header's order
+  // (it was skipped, and a plate-first file gave the inverse matrix), else this one.
+  std::array<size_t, 6> column{0, 1, 2, 3, 4, 5};
+  static const std::array<const char*, 6> kNames{"probe_r", "probe_g", "probe_b", "plate_r", "plate_g", "plate_b"};
+  auto split = [](const std::string& text) {
+    std::vector<std::string> fields;
+    std::stringstream ss(text);
+    std::string f;
+    while (std::getline(ss, f, ',')) fields.push_back(trim_blanks(f));
+    return fields;
+  };
   while (std::getline(in, line)) {
     ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+    line = trim_blanks(line);
     if (line.empty() || line[0] == '#') continue;
-    if (line_no == 1 && line.find("probe_r") != std::string::npos) continue;
-    std::stringstream ss(line);
-    std::string f;
-    std::vector<double> v;
-    while (std::getline(ss, f, ',')) {
-      try {
-        size_t used = 0;
-        v.push_back(std::stod(f, &used));
-      } catch (const std::exception&) {
-        throw InputError(fmt::format("{}:{}: '{}' is not a number", path, line_no, f));
+    const std::vector<std::string> fields = split(line);
+    if (first && !fields.empty() && !parse_decimal(fields[0])) {
+      first = false;
+      if (fields.size() != 6)
+        throw InputError(fmt::format("{}:{}: the header must name 6 columns ({}), found '{}'", path, line_no,
+                                     "probe_r,probe_g,probe_b,plate_r,plate_g,plate_b", line));
+      std::array<bool, 6> seen{};
+      for (size_t i = 0; i < 6; ++i) {
+        std::string name = fields[i];
+        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+        const auto it = std::find(kNames.begin(), kNames.end(), name);
+        if (it == kNames.end() || seen[size_t(it - kNames.begin())])
+          throw InputError(fmt::format("{}:{}: header column '{}' is not one of probe_r, probe_g, probe_b, plate_r, "
+                                       "plate_g, plate_b (each once)",
+                                       path, line_no, fields[i]));
+        seen[size_t(it - kNames.begin())] = true;
+        column[size_t(it - kNames.begin())] = i;
       }
+      continue;
+    }
+    first = false;
+    std::vector<double> v;
+    for (const std::string& f : fields) {
+      const std::optional<double> x = parse_decimal(f);
+      if (!x) throw InputError(fmt::format("{}:{}: '{}' is not a number", path, line_no, f));
+      v.push_back(*x);
     }
     if (v.size() != 6) throw InputError(fmt::format("{}:{}: expected 6 numbers, got {}", path, line_no, v.size()));
     ColourPatchPair p;
-    for (int c = 0; c < 3; ++c) p.probe[size_t(c)] = v[size_t(c)], p.plate[size_t(c)] = v[size_t(c) + 3];
+    for (int c = 0; c < 3; ++c) p.probe[size_t(c)] = v[column[size_t(c)]], p.plate[size_t(c)] = v[column[size_t(c) + 3]];
     for (double x : v)
       if (!std::isfinite(x) || x < 0)
         throw InputError(fmt::format("{}:{}: values must be finite and non-negative", path, line_no));

@@ -27,12 +27,6 @@ std::string where(const PhotometricReading& r) {
   return "reading '" + r.label + "'";
 }
 
-std::string trim(std::string_view s) {
-  size_t b = 0, e = s.size();
-  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
-  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
-  return std::string(s.substr(b, e - b));
-}
 
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -55,11 +49,11 @@ std::vector<std::string> split_csv(const std::string& line, const std::string& a
       } else {
         field += c;
       }
-    } else if (c == '"' && trim(field).empty()) {
+    } else if (c == '"' && trim_blanks(field).empty()) {
       quoted = was_quoted = true;
       field.clear();
     } else if (c == ',') {
-      fields.push_back(was_quoted ? field : trim(field));
+      fields.push_back(was_quoted ? field : trim_blanks(field));
       field.clear();
       was_quoted = false;
     } else {
@@ -67,19 +61,19 @@ std::vector<std::string> split_csv(const std::string& line, const std::string& a
     }
   }
   if (quoted) throw InputError(at + ": unterminated quote");
-  fields.push_back(was_quoted ? field : trim(field));
+  fields.push_back(was_quoted ? field : trim_blanks(field));
   return fields;
 }
 
 bool parse_int(const std::string& s, int* out) {
-  const std::string t = trim(s);
+  const std::string t = trim_blanks(s);
   if (t.empty()) return false;
   auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), *out);
   return ec == std::errc() && p == t.data() + t.size();
 }
 
 double parse_number(const std::string& s, const std::string& what, const std::string& at) {
-  const std::string t = trim(s);
+  const std::string t = trim_blanks(s);
   double v = 0;
   auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
   if (t.empty() || ec != std::errc() || p != t.data() + t.size())
@@ -90,7 +84,7 @@ double parse_number(const std::string& s, const std::string& what, const std::st
 }
 
 std::optional<PhotometricReading::Unit> parse_unit(const std::string& text) {
-  std::string u = lower(trim(text));
+  std::string u = lower(trim_blanks(text));
   if (u == "cd/m2" || u == "cd/m^2" || u == "cd m-2" || u == "cd/m²" || u == "nit" || u == "nits")
     return PhotometricReading::Unit::CandelaPerSquareMetre;
   if (u == "lux" || u == "lx") return PhotometricReading::Unit::Lux;
@@ -275,6 +269,12 @@ void validate(const std::vector<PhotometricReading>& readings, const Photometric
                        "-bit camera codes, not relative radiance (not linearised, not divided by the exposure time); a "
                        "linear scale is read off the map it scales: give the region in the fused .exr (hdr fuse), or "
                        "fit a log sensor's codes (--model log)");
+    // A region's camera value is its mean luminance: a lux reading is compared with E_rel, the
+    // cosine-weighted integral over the upper hemisphere, and against a mean it gave a k
+    // about pi times too large.
+    if (r.region && r.unit == PhotometricReading::Unit::Lux)
+      throw InputError(where(r) + ": '" + r.label + "' is an image region, whose value is a mean luminance; give its "
+                       "reading in cd/m2 (a luminance meter), or a lux reading with the map's E_rel as camera_value");
     if (log_model && r.unit == PhotometricReading::Unit::Lux)
       throw InputError(where(r) + ": a log-sensor fit takes luminance (cd/m2) readings only, '" + r.label + "' is in lux");
     auto [it, inserted] = seen.emplace(r.label, where(r));
@@ -303,13 +303,13 @@ std::vector<PhotometricReading> read_readings_csv(const std::string& path) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // UTF-8 BOM
-    const std::string t = trim(line);
+    const std::string t = trim_blanks(line);
     if (t.empty() || t[0] == '#') continue;
     const std::string at = path + ":" + std::to_string(line_no);
     auto fields = split_csv(line, at);
     if (!header) {
       std::string h;
-      for (size_t i = 0; i < fields.size(); ++i) h += (i ? "," : "") + lower(trim(fields[i]));
+      for (size_t i = 0; i < fields.size(); ++i) h += (i ? "," : "") + lower(trim_blanks(fields[i]));
       if (h != "region,camera_value,measured,unit")
         throw InputError(at + ": header must be 'region,camera_value,measured,unit', found '" + t + "'");
       header = true;
@@ -323,7 +323,7 @@ std::vector<PhotometricReading> read_readings_csv(const std::string& path) {
     r.label = fields[0];
     if (r.label.empty()) throw InputError(at + ": empty region label");
     r.region = parse_region(r.label, at);
-    if (trim(fields[1]).empty()) {
+    if (trim_blanks(fields[1]).empty()) {
       if (!r.region) throw InputError(at + ": camera_value is empty and '" + r.label + "' is not an image region");
       r.camera_value = kNaN;
     } else {
@@ -331,7 +331,7 @@ std::vector<PhotometricReading> read_readings_csv(const std::string& path) {
     }
     r.measured = parse_number(fields[2], "measured value", at);
     const auto unit = parse_unit(fields[3]);
-    if (!unit) throw InputError(at + ": unknown unit '" + trim(fields[3]) + "' (cd/m2 or lux)");
+    if (!unit) throw InputError(at + ": unknown unit '" + trim_blanks(fields[3]) + "' (cd/m2 or lux)");
     r.unit = *unit;
     auto [it, inserted] = first_line.emplace(r.label, line_no);
     if (!inserted)

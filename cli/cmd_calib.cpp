@@ -93,11 +93,18 @@ int run_calib_compare(const CalibCompareArgs& args, const Output& out) {
   const CameraModel a = read_camera_model(args.a), b = read_camera_model(args.b);
   if (a.width != b.width || a.height != b.height)
     throw InputError(fmt::format("{} is for {}x{}, {} for {}x{}", args.a, a.width, a.height, args.b, b.width, b.height));
+  // --step 0 or -7 ran as 1 without a word; one so coarse that fewer than 3 samples fit the
+  // rotation printed "(rotation fitted out)" over an unfitted one.
+  if (args.step_px < 1 || args.step_px > std::min(a.width, a.height) / 3)
+    throw InputError(fmt::format("--step must be 1..{} px (a third of the {}x{} image's shorter side), got {}",
+                                 std::max(1, std::min(a.width, a.height) / 3), a.width, a.height, args.step_px));
   std::vector<uint8_t> mask(size_t(a.width) * size_t(a.height), 1);
-  const ProjectionDiff d = projection_difference(a, b, mask, std::max(1, args.step_px), !args.no_rotation);
-  if (d.samples == 0)  // an RMS over nothing is no agreement
-    throw InputError(fmt::format("{} vs {}: no pixel of the {}x{} image (every {} px) images a ray both models can project",
-                                 args.a, args.b, a.width, a.height, std::max(1, args.step_px)));
+  const ProjectionDiff d = projection_difference(a, b, mask, args.step_px, !args.no_rotation);
+  if (d.samples < (args.no_rotation ? 1 : 3))  // an RMS over nothing is no agreement
+    throw InputError(fmt::format("{} vs {}: {} pixels of the {}x{} image (every {} px) image a ray both models can "
+                                 "project, too few to compare{}",
+                                 args.a, args.b, d.samples, a.width, a.height, args.step_px,
+                                 args.no_rotation ? "" : " with the rotation fitted out"));
   say(out, "{} vs {}: RMS {:.3f} px, median {:.3f} px, max {:.3f} px over {} samples{}\n", args.a, args.b, d.rms_px,
       d.median_px, d.max_px, d.samples, args.no_rotation ? "" : " (rotation fitted out)");
   emit_json(out, {{"rms_px", d.rms_px}, {"median_px", d.median_px}, {"max_px", d.max_px}, {"samples", d.samples}});
@@ -110,6 +117,14 @@ int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out) {
   PhotometricOptions o;
   o.model = args.model == "log" ? PhotometricOptions::Model::LogSensor : PhotometricOptions::Model::Linear;  // one_of
   o.loss = args.loss == "huber" ? RobustLoss::Huber : args.loss == "cauchy" ? RobustLoss::Cauchy : RobustLoss::None;
+  // hdr fuse and the stream decode a log sensor's codes as they are read, in [0, 1]: a curve
+  // fitted on 8-bit codes 0..255 decoded every frame to a flat map, with exit 0.
+  if (o.model == PhotometricOptions::Model::LogSensor)
+    for (const PhotometricReading& r : readings)
+      if (!(r.camera_value >= 0 && r.camera_value <= 1))
+        throw InputError(fmt::format("{}: camera value {:g} of '{}' is not a code in [0, 1]; a log sensor's codes are "
+                                     "given as read (8-bit 51 is 51/255 = 0.2)",
+                                     args.readings, r.camera_value, r.label));
   const PhotometricCalibration cal = fit_photometric(readings, o);
   save_photometric(args.output, cal);
   if (cal.log_sensor)

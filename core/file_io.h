@@ -4,7 +4,9 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace lp {
 
@@ -27,5 +29,12 @@ bool is_camera_image_file(const std::string& path);
 // frame_2 comes before frame_10 (capture tools number frames without padding); names that
 // differ only in leading zeros fall back to plain order. The order folders are read in.
 bool frame_name_less(const std::string& a, const std::string& b);
+
+// `text` without the blanks (spaces, tabs, line ends) around it.
+std::string trim_blanks(std::string_view text);
+
+// The number in `text` (surrounding blanks ignored), or nullopt when it is anything but one
+// finite decimal number: "40%", "0x10", "0.10 lin", "nan" and "" are not numbers.
+std::optional<double> parse_decimal(std::string_view text);
 
 }  // namespace lp

@@ -639,12 +639,6 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
 // ---------------------------------------------------------------------------------------
 // Radiance RGBE
 
-std::string trim(std::string_view s) {
-  size_t a = 0, b = s.size();
-  while (a < b && std::isspace(static_cast<unsigned char>(s[a]))) ++a;
-  while (b > a && std::isspace(static_cast<unsigned char>(s[b - 1]))) --b;
-  return std::string(s.substr(a, b - a));
-}
 
 double parse_positive(const std::string& path, const std::string& what, const std::string& text) {
   char* end = nullptr;
@@ -700,8 +694,8 @@ HdrHeader read_hdr_header(const std::string& path, const std::string& bytes) {
     if ((*line)[0] == '#') continue;
     const size_t eq = line->find('=');
     if (eq == std::string_view::npos) continue;  // e.g. a command line recorded by a Radiance tool
-    const std::string key = trim(line->substr(0, eq));
-    const std::string value = trim(line->substr(eq + 1));
+    const std::string key = trim_blanks(line->substr(0, eq));
+    const std::string value = trim_blanks(line->substr(eq + 1));
     if (key == "FORMAT") {
       if (value == "32-bit_rle_xyze")
         fail(path, "XYZE pixels are not supported (convert to RGBE, e.g. with Radiance's ra_xyze -r)");

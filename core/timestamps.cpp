@@ -12,16 +12,7 @@
 
 namespace lp {
 
-std::optional<double> parse_seconds(std::string_view text) {
-  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
-  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
-  if (text.size() > 1 && text[0] == '+' && text[1] != '-') text.remove_prefix(1);  // from_chars takes no '+'
-  double v = 0;
-  // from_chars in general format: decimal or exponent notation only, never hex or "nan".
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v, std::chars_format::general);
-  if (text.empty() || ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v)) return std::nullopt;
-  return v;
-}
+std::optional<double> parse_seconds(std::string_view text) { return parse_decimal(text); }
 
 void check_increasing(const std::string& path, const std::vector<TimedLine>& times) {
   for (size_t i = 1; i < times.size(); ++i)

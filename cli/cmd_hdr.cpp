@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 
@@ -11,6 +12,7 @@
 #include "cli/report.h"
 #include "core/chromaticities.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 #include "hdr/align.h"
 #include "hdr/bracket.h"
@@ -61,7 +63,8 @@ std::optional<std::array<uint8_t, 3>> ignore_colour(const std::string& text) {
   const auto v = parse_numbers(text, "--ignore-colour", 3);
   std::array<uint8_t, 3> c{};
   for (int i = 0; i < 3; ++i) {
-    if (v[size_t(i)] < 0 || v[size_t(i)] > 255) throw InputError("--ignore-colour takes 0..255 per channel");
+    if (!(v[size_t(i)] >= 0 && v[size_t(i)] <= 255) || v[size_t(i)] != std::floor(v[size_t(i)]))
+      throw InputError(fmt::format("--ignore-colour takes whole 8-bit codes 0..255 per channel, got '{}'", text));
     c[size_t(i)] = uint8_t(v[size_t(i)]);
   }
   return c;
@@ -79,6 +82,8 @@ int run_hdr_response(const HdrResponseArgs& args, const Output& out) {
     o.ignore_colour = ignore_colour(args.ignore_colour);
     response = recover_debevec(bracket, o);
   } else if (args.method == "robertson") {
+    if (args.lambda != HdrResponseArgs{}.lambda)
+      throw InputError("--lambda is Debevec's smoothness weight; Robertson's method has none");
     RobertsonOptions o;
     o.ignore_colour = ignore_colour(args.ignore_colour);
     response = recover_robertson(bracket, o);
@@ -103,11 +108,27 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
   if (photometric && photometric->log_sensor) {
     // A logarithmic sensor: one frame, decoded with the fitted value = a + b ln L.
     if (args.images.size() != 1) throw InputError(args.photometric + ": a log-sensor calibration decodes one frame, not a bracket");
+    // The bracket's options mean nothing to one decoded frame: refused, not ignored.
+    const HdrFuseArgs d;
+    for (const auto& [given, option] :
+         {std::pair{args.exposure_times != d.exposure_times, "--exposure-times"}, std::pair{args.response != d.response, "--response"},
+          std::pair{args.linear != d.linear, "--linear"}, std::pair{args.align != d.align, "--align"},
+          std::pair{args.deghost != d.deghost, "--deghost"},
+          std::pair{args.no_exposure_weighting != d.no_exposure_weighting, "--no-exposure-weighting"},
+          std::pair{args.ignore_colour != d.ignore_colour, "--ignore-colour"}})
+      if (given)
+        throw InputError(fmt::format("{} is an option of brackets; {} is a log-sensor calibration, which decodes one frame",
+                                     option, args.photometric));
+    if (is_radiance_file(args.images[0]))
+      throw InputError(args.images[0] + ": a log sensor's frame is its camera codes (PNG, TIFF, JPEG), not a float image");
     radiance = decode_log_sensor(read_rgb_image(args.images[0]), *photometric);
     report["mode"] = "log-sensor";
   } else {
     Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times, args.images));
     CameraResponse response;
+    if (!args.response.empty() && (args.linear || bracket.linear))
+      throw InputError(fmt::format("--response {} and {} contradict: a linear bracket has no response curve", args.response,
+                                   args.linear ? "--linear" : "RAW frames (linear)"));
     if (!args.response.empty()) {
       response = load_response(args.response);
       report["response"] = args.response;

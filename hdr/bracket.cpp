@@ -51,12 +51,6 @@ std::optional<double> parse_seconds(const std::string& text) {
   return *num / *den;
 }
 
-std::string trim(const std::string& s) {
-  const size_t a = s.find_first_not_of(" \t\r\n");
-  if (a == std::string::npos) return {};
-  const size_t b = s.find_last_not_of(" \t\r\n");
-  return s.substr(a, b - a + 1);
-}
 
 // "100, 400, 1600" (format: one value's text).
 std::string list_of(const std::vector<ExifExposureSettings>& s, double ExifExposureSettings::*field) {
@@ -199,18 +193,42 @@ void check_exposure_order(const Bracket& b, const char* times_from) {
     const std::vector<float>& shorter = b.frames[s].rgb;
     const std::vector<float>& longer = b.frames[l].rgb;
     const size_t stride = std::max<size_t>(1, shorter.size() / 60000);
-    size_t brighter = 0, darker = 0;
+    size_t brighter = 0, darker = 0, compared = 0, equal = 0, well = 0, up = 0, down = 0;
     for (size_t i = 0; i < shorter.size(); i += stride) {
       const float a = shorter[i], c = longer[i];
       if ((a >= 0.98f && c >= 0.98f) || (a <= 0.02f && c <= 0.02f)) continue;  // clipped in both alike
+      ++compared;
+      equal += std::fabs(c - a) < 0.5f / 255;  // the same 8-bit code (Memorial's pairs: at most 38 %)
       brighter += c > a + 0.02f;
       darker += c < a - 0.02f;
+      // Where the longer frame is well exposed, half a stop more raises even a gamma-encoded
+      // code by a tenth; flat fog (a film scan's shadows) moves by noise alone.
+      if (c < 0.25f || c > 0.95f) continue;
+      ++well;
+      up += c > a + 1.5f / 255;  // any change beyond an 8-bit code's rounding
+      down += c < a - 1.5f / 255;
     }
     if (darker >= 1000 && darker > 4 * brighter)
       throw InputError(fmt::format("{} ({} s) is darker than {} ({} s) in {} % of the sampled values they both "
                                    "expose: the exposure times {} are not these frames' (another order?)",
                                    frame_name(b, l), b.exposure_seconds[l], frame_name(b, s), b.exposure_seconds[s],
                                    int(std::lround(100.0 * double(darker) / double(darker + brighter))), times_from));
+    // Half a stop longer, yet equal, or its well-exposed values no more often brighter than darker: the
+    // same picture twice (a bracket that did not fire, a file listed twice under two times),
+    // identical or differing by noise alone. Fused, it halved the map where it counted.
+    const bool longer_by_half_a_stop = b.exposure_seconds[l] >= 1.5 * b.exposure_seconds[s];
+    if (longer_by_half_a_stop && compared >= 1000 && equal * 10 >= compared * 9)
+      throw InputError(fmt::format("{} ({} s) and {} ({} s) are the same picture: {} % of the values they both expose "
+                                   "are equal (the same file twice, or a bracket that did not change exposure?)",
+                                   frame_name(b, l), b.exposure_seconds[l], frame_name(b, s), b.exposure_seconds[s],
+                                   int(std::lround(100.0 * double(equal) / double(compared)))));
+    if (longer_by_half_a_stop && well >= 200 && up <= 2 * down + well / 10)
+      throw InputError(fmt::format("{} ({} s) and {} ({} s) are the same picture: where the longer is well exposed it "
+                                   "is brighter in {} % of the values, darker in {} % (a bracket that did not change "
+                                   "exposure?)",
+                                   frame_name(b, l), b.exposure_seconds[l], frame_name(b, s), b.exposure_seconds[s],
+                                   int(std::lround(100.0 * double(up) / double(well))),
+                                   int(std::lround(100.0 * double(down) / double(well)))));
   }
 }
 
@@ -250,6 +268,12 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     return false;
   };
   for (size_t k = 0; k < paths.size(); ++k) {
+    for (size_t j = 0; j < k; ++j) {
+      std::error_code ec;
+      if (paths[j] == paths[k] || fs::equivalent(paths[j], paths[k], ec))
+        throw InputError(fmt::format("{}: given twice (as image {} and {}): each frame of a bracket is its own photo",
+                                     paths[k], j + 1, k + 1));
+    }
     if (is_raw(paths[k])) {
       RawExposure raw;
       RgbImage f = read_camera_raw(paths[k], &raw);
@@ -291,6 +315,14 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
           e = read_exif_exposure(paths[k]);
         } catch (const InputError&) {
         }
+      }
+      // A given time a third of a stop or more from the photo's own: said, then used (a
+      // typo, or another bracket's list; the order check cannot see a wrong ratio).
+      if (e.seconds && *e.seconds > 0 && (*times)[k] > 0) {
+        const double stops = std::log2((*times)[k] / *e.seconds);
+        if (std::fabs(stops) >= 1.0 / 3.0)
+          warn(fmt::format("{}: --exposure-times gives {} s, its EXIF {} s ({:+.1f} stops); the given time is used",
+                           paths[k], (*times)[k], *e.seconds, stops));
       }
       settings.push_back(e);
     } else {
@@ -351,13 +383,13 @@ std::vector<ExposureEntry> read_exposure_entries(const std::string& path) {
   bool first_data_line = true;
   while (std::getline(in, line)) {
     ++line_no;
-    line = trim(line);
+    line = trim_blanks(line);
     if (line.empty() || line[0] == '#') continue;
     std::vector<std::string> fields;
     if (line.find(',') != std::string::npos) {
       std::stringstream ss(line);
       std::string f;
-      while (std::getline(ss, f, ',')) fields.push_back(trim(f));
+      while (std::getline(ss, f, ',')) fields.push_back(trim_blanks(f));
     } else {
       std::istringstream ss(line);
       std::string f;
@@ -372,7 +404,22 @@ std::vector<ExposureEntry> read_exposure_entries(const std::string& path) {
     }
     const bool header = first_data_line && !t;
     first_data_line = false;
-    if (header) continue;
+    if (header) {
+      // Times are seconds (CONVENTIONS.md): a header naming another unit is refused, not
+      // skipped (exposure_ms read as seconds made the map 1000x too dark).
+      for (const std::string& f : fields) {
+        std::string name = f;
+        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+        for (const char* unit : {"ms", "msec", "milli", "us", "usec", "micro", "\xc2\xb5s", "ns", "nano"})
+          if (name == unit || name.find(std::string("_") + unit) != std::string::npos ||
+              name.find(std::string("(") + unit) != std::string::npos || name.find(std::string("[") + unit) != std::string::npos ||
+              (std::string_view(unit).size() > 2 && name.find(unit) != std::string::npos))
+            throw InputError(fmt::format("{}:{}: the header '{}' names its times in another unit than seconds; write "
+                                         "them in seconds (1/250 or 0.004)",
+                                         path, line_no, line));
+      }
+      continue;
+    }
     if (!t) throw InputError(fmt::format("{}:{}: no exposure time in '{}'", path, line_no, line));
     if (!std::isfinite(*t) || !(*t > 0.0))
       throw InputError(fmt::format("{}:{}: exposure time {} s is not positive and finite", path, line_no, *t));

@@ -71,7 +71,10 @@ inline int line_count(const std::string& s) {
 inline std::string six_board_images(const fs::path& dir) {
   if (lightprobe("synth boards --views 6 --board 9x6 --square 30 -o " + (dir / "boards").string()).code != 0) return "";
   std::string images;
-  for (int i = 0; i < 6; ++i) images += " " + (dir / "boards" / ("board_0" + std::to_string(i) + ".png")).string();
+  for (int i = 0; i < 6; ++i) {  // appended in two steps: GCC 12 warns (-Wrestrict) on " " + a temporary
+    images += ' ';
+    images += (dir / "boards" / ("board_0" + std::to_string(i) + ".png")).string();
+  }
   return images;
 }
 

@@ -346,14 +346,34 @@ TEST(Cli, HdrFuseOfMemorialBeatsNothingLessThanAValidRadianceImageAndBadBrackets
                         "ball_1-40s.jpg");
   // Photos that record ISO 100 and f/1.8 are fused at ISO 100 and f/1 (x 1.8^2); Memorial's
   // PNGs record neither and stay at code / t.
-  const CliRun photo = lightprobe("hdr fuse --json " + k + "/ball_1-10s.jpg " + k + "/ball_1-10s.jpg --exposure-times 0.1,0.025 -o " + out.string());
+  // (Its longer frame: a brighter JPEG of the same photo, given the photo's EXIF segment; the
+  // same file twice is not a bracket.)
+  const std::string bright = (scratch() / "bright.jpg").string();
+  ASSERT_EQ(lightprobe("preview " + k + "/ball_1-10s.jpg --percentile 0.3 -o " + bright).code, 0);
+  {
+    const std::string photo_bytes = slurp(k + "/ball_1-10s.jpg"), preview_bytes = slurp(bright);
+    size_t at = 2;  // after SOI: walk the segments to APP1 "Exif"
+    std::string exif;
+    while (at + 4 < photo_bytes.size() && uint8_t(photo_bytes[at]) == 0xFF) {
+      const size_t length = size_t(uint8_t(photo_bytes[at + 2])) << 8 | uint8_t(photo_bytes[at + 3]);
+      if (uint8_t(photo_bytes[at + 1]) == 0xE1 && photo_bytes.compare(at + 4, 4, "Exif") == 0) {
+        exif = photo_bytes.substr(at, 2 + length);
+        break;
+      }
+      at += 2 + length;
+    }
+    ASSERT_FALSE(exif.empty());
+    std::ofstream(bright, std::ios::binary) << preview_bytes.substr(0, 2) << exif << preview_bytes.substr(2);
+  }
+  const CliRun photo =
+      lightprobe("hdr fuse --json " + k + "/ball_1-10s.jpg " + bright + " --exposure-times 0.1,0.4 -o " + out.string());
   ASSERT_EQ(photo.code, 0) << photo.err;
   const auto reference = nlohmann::json::parse(photo.out)["exposure_reference"];
   EXPECT_EQ(reference["iso"].get<double>(), 100);
   EXPECT_NEAR(reference["f_number"].get<double>(), 1.8, 1e-6);
   EXPECT_NEAR(reference["scale"].get<double>(), 3.24, 1e-5);
   EXPECT_FALSE(nlohmann::json::parse(r.out).contains("exposure_reference"));
-  const CliRun told = lightprobe("hdr fuse " + k + "/ball_1-10s.jpg " + k + "/ball_1-10s.jpg --exposure-times 0.1,0.025 -o " + out.string());
+  const CliRun told = lightprobe("hdr fuse " + k + "/ball_1-10s.jpg " + bright + " --exposure-times 0.1,0.4 -o " + out.string());
   EXPECT_NE(told.out.find("scaled x3.24 to ISO 100 and f/1 from the frames' ISO 100, f/1.8"), std::string::npos) << told.out;
 }
 

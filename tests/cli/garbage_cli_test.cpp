@@ -49,8 +49,7 @@ TEST(GarbageCli, CalibCompareOverNoSampleSaysSoInsteadOfAnRmsOfZero) {
   ASSERT_EQ(lightprobe("calib compare " + a + " " + b).code, 0);
   // A step larger than the image leaves no pixel to compare.
   const CliRun r = lightprobe("calib compare " + a + " " + b + " --step 100000");
-  expect_one_line_error(r, a);
-  EXPECT_NE(r.err.find("no pixel"), std::string::npos) << r.err;
+  expect_one_line_error(r, "--step must be 1..160 px");
   EXPECT_EQ(r.out.find("RMS"), std::string::npos) << r.out;
 }
 
@@ -267,17 +266,19 @@ TEST(GarbageCli, JsonFilesOfTheWrongFormatNameTheFileAndWhatIsWrong) {
   std::ofstream(bad) << R"({"format": 5})";
   ASSERT_EQ(lightprobe("synth scene --size 64x32 -o " + (dir / "map.exr").string()).code, 0);
   ASSERT_EQ(lightprobe("preview " + (dir / "map.exr").string() + " -o " + (dir / "map.png").string()).code, 0);
-  const std::string map = (dir / "map.png").string();
+  // A bracket of the preview and a brighter one (a file twice is refused before its options are read).
+  ASSERT_EQ(lightprobe("preview " + (dir / "map.exr").string() + " --percentile 0.3 -o " + (dir / "bright.png").string()).code, 0);
+  const std::string map = (dir / "map.png").string() + " " + (dir / "bright.png").string();
   // A response, a photometric calibration and a colour match, each through its command.
-  const CliRun response = lightprobe("hdr fuse " + map + " " + map + " --exposure-times 0.1,0.2 --response " +
+  const CliRun response = lightprobe("hdr fuse " + map + " --exposure-times 0.1,0.2 --response " +
                                      bad.string() + " -o " + (dir / "out.exr").string());
   expect_one_line_error(response, bad.string() + ": not a lightprobe.response/1 file (\"format\" is 5)");
-  const CliRun photometric = lightprobe("hdr fuse " + map + " " + map + " --exposure-times 0.1,0.2 --photometric " +
+  const CliRun photometric = lightprobe("hdr fuse " + map + " --exposure-times 0.1,0.2 --photometric " +
                                         bad.string() + " -o " + (dir / "out.exr").string());
   expect_one_line_error(photometric, bad.string() + ": not a lightprobe.photometric/1 file");
   EXPECT_FALSE(fs::exists(dir / "out.exr"));
   std::ofstream(bad) << "{\"format\": \"lightprobe.response/1\", \"levels\": \"many\"}";
-  const CliRun typed = lightprobe("hdr fuse " + map + " " + map + " --exposure-times 0.1,0.2 --response " +
+  const CliRun typed = lightprobe("hdr fuse " + map + " --exposure-times 0.1,0.2 --response " +
                                   bad.string() + " -o " + (dir / "out.exr").string());
   expect_one_line_error(typed, bad.string() + ": \"levels\" is \"many\", not a count of code values");
   EXPECT_EQ(typed.err.find("json.exception"), std::string::npos) << typed.err;
@@ -440,7 +441,9 @@ TEST(GarbageCli, SigtermDuringALargeWriteLeavesNoTempFileAndExits143) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
     const int code = wait_code(c);
-    if (caught) EXPECT_EQ(code, 143) << slurp(scratch() / "child.err");
+    if (caught) {
+      EXPECT_EQ(code, 143) << slurp(scratch() / "child.err");
+    }
     EXPECT_TRUE(temp_files_in(dir).empty());
     fs::remove(out);
   }

@@ -89,7 +89,11 @@ TEST(Startup, ReadingPngAndJpegBracketsLoadsNoCodecPlugin) {
   EXPECT_FALSE(loaded(r, "libexiv2"));  // the exposure times are given: no EXIF read
   EXPECT_GT(fs::file_size(out), 100000u);
   const std::string k = shared("hdr-mirrorball-kartik") + "/ball_1-10s.jpg";
-  const CliRun j = traced("hdr fuse " + k + " " + k + " --exposure-times 0.1,0.025 -o " + (scratch() / "j.exr").string());
+  // Its longer frame: a brighter JPEG of it, made by another command (the same file twice is
+  // not a bracket).
+  const std::string bright = (scratch() / "bright.jpg").string();
+  ASSERT_EQ(lightprobe("preview " + k + " --percentile 0.3 -o " + bright).code, 0);
+  const CliRun j = traced("hdr fuse " + k + " " + bright + " --exposure-times 0.025,0.1 -o " + (scratch() / "j.exr").string());
   ASSERT_EQ(j.code, 0) << j.err.substr(j.err.size() > 2000 ? j.err.size() - 2000 : 0);
   EXPECT_FALSE(loaded(j, "libopencv_imgcodecs"));
   EXPECT_TRUE(loaded(j, "libexiv2"));  // its ICC profile is read (and warned about)

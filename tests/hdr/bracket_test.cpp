@@ -424,13 +424,17 @@ TEST(ReadBracket, AnIccProfileThatIsNotSrgbIsWarnedAboutOnce) {
   std::vector<std::string> warnings;
   const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
   const std::string photo = kData + "/hdr-mirrorball-kartik/ball_1-10s.jpg";
-  const Bracket b = read_bracket({photo, photo}, std::vector<double>{0.1, 0.025});
+  // Its shorter frame: a dark image of its size (the same file twice is not a bracket).
+  TempDir tmp;
+  const std::string dark = (tmp.path / "dark.png").string();
+  write_display_image(dark, 480, 472, std::vector<float>(3 * 480 * 472, 0.01f));
+  const Bracket b = read_bracket({photo, dark}, std::vector<double>{0.1, 0.025});
   EXPECT_EQ(b.frames.size(), 2u);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_EQ(warnings[0], photo + ": its ICC profile ('Apple Wide Color Sharing Profile') is not applied: its colours are "
                                  "taken as sRGB");
   warnings.clear();
-  read_bracket({photo, photo}, std::vector<double>{0.1, 0.025});  // the same profile again: said once
+  read_bracket({photo, dark}, std::vector<double>{0.1, 0.025});  // the same profile again: said once
   const std::string m = kData + "/hdr-memorial-debevec/";
   read_bracket({m + "memorial0066.png", m + "memorial0068.png"}, std::vector<double>{0.125, 0.03125});
   EXPECT_TRUE(warnings.empty());

@@ -1,0 +1,175 @@
+// Inputs that hdr and calib took with exit 0 and answered wrongly (an audit of stop 51):
+// the same frame twice, times in milliseconds, options the mode never reads, calibrations
+// fitted on the wrong code scale, a colour chart of greys, a transposed camera matrix. Each
+// is now refused in one line naming the problem, or, where the input may be right, warned
+// about in one.
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+#include "tests/cli/cli_run.h"
+
+namespace lp::cli_test {
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = scratch() / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+// A synthetic 8-bit bracket of three frames (1/64, 1/8, 1 s) with its exposures.csv.
+const fs::path& bracket_dir() {
+  static const fs::path dir = [] {
+    const fs::path d = scratch() / "bracket";
+    fs::remove_all(d);
+    const CliRun r = lightprobe("synth bracket scene -o " + d.string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    return d;
+  }();
+  return dir;
+}
+
+std::string frames() {
+  const fs::path& d = bracket_dir();
+  return (d / "frame_00.png").string() + " " + (d / "frame_01.png").string() + " " + (d / "frame_02.png").string();
+}
+
+std::string write(const fs::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(UnreadOptionsCli, ABracketOfOnePictureTwiceIsRefused) {
+  const fs::path dir = fresh_dir("twice");
+  const fs::path& b = bracket_dir();
+  const std::string out = (dir / "x.exr").string();
+  const std::string f0 = (b / "frame_00.png").string(), f2 = (b / "frame_02.png").string();
+  expect_one_line_error(lightprobe("hdr fuse " + f0 + " " + f0 + " " + f2 + " --exposure-times 1/64,1/8,1 -o " + out),
+                        "frame_00.png: given twice (as image 1 and 2)");
+  // The same picture under another name: half a stop longer and nowhere brighter.
+  fs::copy_file(b / "frame_00.png", dir / "copy.png");
+  expect_one_line_error(
+      lightprobe("hdr fuse " + f0 + " " + (dir / "copy.png").string() + " " + f2 + " --exposure-times 1/64,1/8,1 -o " + out),
+      "are the same picture");
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(lightprobe("hdr fuse " + frames() + " --exposure-times " + (b / "exposures.csv").string() + " -o " + out).code, 0);
+}
+
+TEST(UnreadOptionsCli, AnExposureListInAnotherUnitThanSecondsIsRefused) {
+  const fs::path dir = fresh_dir("units");
+  for (const std::string header : {"file,exposure_ms", "file,time (us)", "name,milliseconds"}) {
+    const std::string list = write(dir / "ms.csv", header + "\nframe_00.png,15.625\nframe_01.png,125\nframe_02.png,1000\n");
+    expect_one_line_error(lightprobe("hdr fuse " + frames() + " --exposure-times " + list + " -o " + (dir / "x.exr").string()),
+                          "names its times in another unit than seconds");
+  }
+  const std::string seconds = write(dir / "s.csv", "file,exposure_s\nframe_00.png,0.015625\nframe_01.png,0.125\nframe_02.png,1\n");
+  EXPECT_EQ(lightprobe("hdr fuse " + frames() + " --exposure-times " + seconds + " -o " + (dir / "x.exr").string()).code, 0);
+}
+
+// A given time two stops from the photo's EXIF is used, and said (the Kartik photos differ in
+// size, so the bracket is then refused for that: the warning comes first).
+TEST(UnreadOptionsCli, AGivenTimeFarFromThePhotosOwnIsSaid) {
+  const std::string k = shared("hdr-mirrorball-kartik/");
+  const CliRun r = lightprobe("hdr fuse " + k + "ball_1-10s.jpg " + k + "ball_1-40s.jpg " + k +
+                              "ball_1-160s.jpg --exposure-times 1/10,1/40,1/40 -o " + (scratch() / "k.exr").string());
+  EXPECT_NE(r.err.find("ball_1-160s.jpg: --exposure-times gives 0.025 s, its EXIF 0.00625 s (+2.0 stops)"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("ball_1-40s.jpg: --exposure-times"), std::string::npos) << r.err;
+}
+
+TEST(UnreadOptionsCli, HdrOptionsTheModeNeverReadsAreRefused) {
+  const fs::path dir = fresh_dir("modes");
+  const fs::path& b = bracket_dir();
+  const std::string out = " -o " + (dir / "x.exr").string();
+  const std::string times = " --exposure-times " + (b / "exposures.csv").string();
+  const std::string response = (dir / "r.json").string();
+  ASSERT_EQ(lightprobe("hdr response " + frames() + times + " -o " + response).code, 0);
+  expect_one_line_error(lightprobe("hdr fuse " + frames() + times + " --response " + response + " --linear" + out),
+                        "contradict: a linear bracket has no response curve");
+  expect_one_line_error(lightprobe("hdr response " + frames() + times + " --method robertson --lambda 5000 -o " + response),
+                        "--lambda is Debevec's smoothness weight");
+  expect_one_line_error(lightprobe("hdr fuse " + frames() + times + " --ignore-colour 0,0,254.7" + out), "--ignore-colour");
+  // A log sensor's calibration decodes one frame: the bracket's options are refused.
+  const std::string readings = write(dir / "log.csv", "region,camera_value,measured,unit\na,0.2,10,cd/m2\nb,0.35,40,cd/m2\n"
+                                                      "c,0.5,160,cd/m2\nd,0.65,640,cd/m2\ne,0.8,2560,cd/m2\n");
+  const std::string log_cal = (dir / "log_cal.json").string();
+  ASSERT_EQ(lightprobe("calib photometric " + readings + " --model log -o " + log_cal).code, 0);
+  const std::string one = (b / "frame_01.png").string();
+  for (const std::string option : {"--align mtb", "--deghost", "--linear", "--ignore-colour 0,0,255", "--exposure-times 0.5"})
+    expect_one_line_error(lightprobe("hdr fuse " + one + " --photometric " + log_cal + " " + option + out),
+                          option.substr(0, option.find(' ')) + " is an option of brackets");
+  expect_one_line_error(lightprobe("hdr fuse " + (b / "truth.exr").string() + " --photometric " + log_cal + out),
+                        "truth.exr: a log sensor's frame is its camera codes");
+  EXPECT_EQ(lightprobe("hdr fuse " + one + " --photometric " + log_cal + out).code, 0);
+  EXPECT_FALSE(fs::exists(dir / "y.exr"));
+}
+
+TEST(UnreadOptionsCli, PhotometricReadingsOnTheWrongScaleOrUnitAreRefused) {
+  const fs::path dir = fresh_dir("photometric");
+  // 8-bit codes 51..204 for a log sensor: the curve decoded every [0, 1] frame to a flat map.
+  const std::string codes = write(dir / "codes.csv", "region,camera_value,measured,unit\na,51,10,cd/m2\nb,89,40,cd/m2\n"
+                                                     "c,128,160,cd/m2\nd,166,640,cd/m2\ne,204,2560,cd/m2\n");
+  expect_one_line_error(lightprobe("calib photometric " + codes + " --model log -o " + (dir / "c.json").string()),
+                        "codes.csv: camera value 51 of 'a' is not a code in [0, 1]");
+  // A lux reading on an image region: the region's value is a mean luminance, not E_rel.
+  const std::string map = (dir / "map.exr").string();
+  ASSERT_EQ(lightprobe("synth scene --size 64x32 -o " + map).code, 0);
+  const std::string lux = write(dir / "lux.csv", "region,camera_value,measured,unit\n\"map.exr:10,10,8,8\",,5000,lux\n"
+                                                 "\"map.exr:30,10,8,8\",,4000,lux\n");
+  expect_one_line_error(lightprobe("calib photometric " + lux + " -o " + (dir / "k.json").string()),
+                        "is an image region, whose value is a mean luminance");
+  EXPECT_FALSE(fs::exists(dir / "c.json"));
+  EXPECT_FALSE(fs::exists(dir / "k.json"));
+}
+
+TEST(UnreadOptionsCli, AColourChartIsReadByItsHeaderAndRefusedWhenItIsGrey) {
+  const fs::path dir = fresh_dir("colour");
+  const std::string rows = "0.45,0.2,0.12,0.5,0.2,0.1\n0.1,0.45,0.2,0.1,0.5,0.2\n0.12,0.2,0.45,0.1,0.2,0.5\n0.3,0.3,0.3,0.3,0.3,0.3\n";
+  const std::string probe_first = write(dir / "probe_first.csv", "probe_r,probe_g,probe_b,plate_r,plate_g,plate_b\n" + rows);
+  // The same chart with the plate's columns first: the header says so (it was skipped, and the
+  // inverse matrix came out).
+  std::string swapped = "plate_r,plate_g,plate_b,probe_r,probe_g,probe_b\n";
+  for (const std::string row : {"0.5,0.2,0.1,0.45,0.2,0.12", "0.1,0.5,0.2,0.1,0.45,0.2", "0.1,0.2,0.5,0.12,0.2,0.45",
+                                "0.3,0.3,0.3,0.3,0.3,0.3"})
+    swapped += row + "\n";
+  const std::string plate_first = write(dir / "plate_first.csv", swapped);
+  const CliRun a = lightprobe("--json calib colour " + probe_first + " -o " + (dir / "a.json").string());
+  const CliRun b = lightprobe("--json calib colour " + plate_first + " -o " + (dir / "b.json").string());
+  ASSERT_EQ(a.code, 0) << a.err;
+  ASSERT_EQ(b.code, 0) << b.err;
+  const auto ma = nlohmann::json::parse(a.out)["matrix"], mb = nlohmann::json::parse(b.out)["matrix"];
+  for (size_t i = 0; i < 9; ++i) EXPECT_NEAR(ma[i].get<double>(), mb[i].get<double>(), 1e-12) << i;
+  EXPECT_NEAR(ma[0].get<double>(), 1.12, 0.01);  // the plate is 12 % redder than the probe
+  expect_one_line_error(lightprobe("calib colour " + write(dir / "pct.csv", "0.45,0.2,0.12,0.5,0.2,40%\n") + " -o x.json"),
+                        "'40%' is not a number");
+  expect_one_line_error(lightprobe("calib colour " + write(dir / "names.csv", "r,g,b,R,G,B\n" + rows) + " -o x.json"),
+                        "header column 'r' is not one of");
+  const std::string grey = write(dir / "grey.csv", "0.05,0.0501,0.05,0.05,0.05,0.05\n0.18,0.18,0.1801,0.18,0.18,0.18\n"
+                                                   "0.5001,0.5,0.5,0.5,0.5,0.5\n0.9,0.9,0.9,0.9,0.9,0.9\n");
+  expect_one_line_error(lightprobe("calib colour " + grey + " -o x.json"), "the probe colours barely span RGB");
+}
+
+TEST(UnreadOptionsCli, CalibCompareRefusesATransposedMatrixAndStepsItCannotUse) {
+  const fs::path dir = fresh_dir("compare");
+  const std::string a = shared("calib-opencv-stereo-9x6/reference/opencv_left_intrinsics.yml");
+  std::string text = slurp(a);
+  const std::string k = "data: [ 5.3591573396163199e+02, 0., 3.4228315473308373e+02, 0.,\n       5.3591573396163199e+02, "
+                        "2.3557082909788173e+02, 0., 0., 1. ]";
+  const size_t at = text.find(k);
+  ASSERT_NE(at, std::string::npos);
+  const std::string transposed = write(
+      dir / "transposed.yml",
+      text.substr(0, at) + "data: [ 5.3591573396163199e+02, 0., 0., 0., 5.3591573396163199e+02, 0., 3.4228315473308373e+02, "
+                           "2.3557082909788173e+02, 1. ]" + text.substr(at + k.size()));
+  expect_one_line_error(lightprobe("calib compare " + a + " " + transposed), "transposed, as MATLAB stores it?");
+  const std::string k22 = write(dir / "k22.yml", text.substr(0, at) + k.substr(0, k.size() - 4) + "2. ]" + text.substr(at + k.size()));
+  expect_one_line_error(lightprobe("calib compare " + a + " " + k22), "k22.yml: camera_matrix is not [fx 0 cx; 0 fy cy; 0 0 1]");
+  expect_one_line_error(lightprobe("calib compare " + a + " " + a + " --step 0"), "--step must be 1..160 px");
+  expect_one_line_error(lightprobe("calib compare " + a + " " + a + " --step 400"), "--step must be 1..160 px");
+  EXPECT_EQ(lightprobe("calib compare " + a + " " + a + " --step 8").code, 0);
+}
+
+}  // namespace
+}  // namespace lp::cli_test

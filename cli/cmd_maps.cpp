@@ -10,6 +10,7 @@
 #include "cli/report.h"
 #include "core/envmap.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 #include "core/map_statistics.h"
 #include "core/resample.h"
@@ -82,6 +83,11 @@ int run_convert(const ConvertArgs& args, const Output& out) {
   // assemble them into a latlong map at about the cube's resolution first.
   std::error_code ec;
   const bool cube = std::filesystem::is_directory(args.input, ec) || args.input.find("{face}") != std::string::npos;
+  // Options that the input or the output never reads are refused, not ignored.
+  if (cube && ro.layout)
+    throw InputError(fmt::format("--in-layout reads a map file; {} is a cube map's six faces", args.input));
+  if (args.half && lower_extension(args.output) != ".exr")
+    throw InputError(fmt::format("--half writes EXR half floats; {} is not an .exr", args.output));
   const EnvMap src = [&] {
     if (!cube) return read_envmap(args.input, ro);
     const CubeFaces faces = read_cube_faces(args.input);

@@ -114,7 +114,9 @@ UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   if (!(a.fov >= 0)) throw InputError(fmt::format("--fov must be a field of view in degrees, got {}", a.fov));
   if (a.distance > 0) o.ball_camera.distance_in_radii = a.distance;
   if (a.fov > 0) o.ball_camera.fov_deg = a.fov;
-  if (!(a.reflectivity > 0 && a.reflectivity <= 1)) throw InputError("--reflectivity must be in (0, 1]");
+  // Below 1 % no real mirror: 1e-300 divided the map to infinity, with exit 0.
+  if (!(a.reflectivity >= 0.01 && a.reflectivity <= 1))
+    throw InputError(fmt::format("--reflectivity must be in [0.01, 1] (a chrome ball reflects about 0.6), got {}", a.reflectivity));
   o.ball_camera.reflectivity = a.reflectivity;
   o.ball_camera.fresnel = a.fresnel;
   if (!a.ball.empty()) {
@@ -193,6 +195,19 @@ constexpr double kFewValidWarning = 0.05;
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   const std::vector<std::string> files = find_images(args.inputs);
   UnwrapSequenceOptions o = unwrap_options(args);
+  // The track's options act across frames, on a ball or circle that is found: with one frame,
+  // or a ball given by hand, they changed nothing, with exit 0.
+  for (const auto& [given, option] : {std::pair{args.stabilise, "--smooth-track"}, std::pair{args.static_probe, "--static-probe"},
+                                      std::pair{args.fixed_ball, "--fixed-ball"}}) {
+    if (given && files.size() < 2)
+      throw InputError(fmt::format("{} acts on a sequence's track, and {} is one frame", option, files.front()));
+    if (given && o.ball)
+      throw InputError(fmt::format("{} acts on the ball found in each frame; --ball gives one for every frame", option));
+  }
+  // A sequence is written as a folder of EXR frames: a map file's name for it is a slip.
+  if (files.size() > 1 && is_radiance_file(args.output))
+    throw InputError(fmt::format("{}: {} frames are written as a folder of frame_NNNN.exr; give a folder, not a map file",
+                                 args.output, files.size()));
   // Photos in Adobe RGB or Display P3 were read as sRGB: their colours, as hdr fuse reads a
   // bracket's, from the first photo's ICC profile.
   std::optional<ColourProfile> profile;
@@ -313,14 +328,37 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   // Each photo keeps what it holds: 8- or 16-bit codes as a PNG of that depth, radiance as
   // EXR. All went to 8-bit PNG: a 16-bit bracket lost 8 bits, radiance was clipped at 1.
   std::vector<std::string> names;
-  for (size_t i = 0; i < registered.size(); ++i)
+  for (size_t i = 0; i < registered.size(); ++i) {
     names.push_back(fs::path(args.images[i]).stem().string() + (registered[i].code_bits > 0 ? ".png" : ".exr"));
+    // a/ball.jpg and b/ball.jpg: one file overwrote the other, and exposures.csv named it twice.
+    for (size_t j = 0; j < i; ++j)
+      if (names[j] == names[i])
+        throw InputError(fmt::format("{} and {} would both be written as {}: give the photos different names",
+                                     args.images[j], args.images[i], names[i]));
+  }
   // Read before anything is written: nothing here can fail after the photos are.
   const std::optional<std::string> exposures = registered_exposures_csv(args.images, names);
   make_output_directory(args.output_dir);
+  const BallInImage target = registered_ball(args.size);
   for (size_t i = 0; i < registered.size(); ++i) {
     const RgbImage& r = registered[i];
     const std::string path = (fs::path(args.output_dir) / names[i]).string();
+    // The part of the ball that lay outside the photo: a PNG holds no mask, so it is code 0,
+    // which hdr fuse and probe unwrap take for black. Said, with how much.
+    if (r.code_bits > 0 && !r.valid.empty()) {
+      size_t lost = 0, inside = 0;
+      for (int y = 0; y < r.height; ++y)
+        for (int x = 0; x < r.width; ++x) {
+          const double dx = x + 0.5 - target.cx, dy = y + 0.5 - target.cy;
+          if (dx * dx + dy * dy > target.radius_px * target.radius_px) continue;
+          ++inside;
+          lost += r.valid[size_t(y) * size_t(r.width) + size_t(x)] == 0;
+        }
+      if (lost > 0)
+        warn(fmt::format("{}: {} pixels of the ball ({:.2f} %) lay outside the photo and are black (code 0) in {}, "
+                         "which a PNG cannot mark as unseen",
+                         args.images[i], lost, 100.0 * double(lost) / double(std::max<size_t>(1, inside)), names[i]));
+    }
     if (r.code_bits > 0) write_code_image(path, r, r.code_bits);
     else write_rgb_image(path, r);
     found[i]["output"] = names[i];
@@ -329,7 +367,7 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   const fs::path csv = fs::path(args.output_dir) / "exposures.csv";
   if (exposures) write_file_atomically(csv.string(), *exposures);
   else fs::remove(csv);
-  const BallInImage ball = registered_ball(args.size);
+  const BallInImage& ball = target;
   say(out, "{}: {} photos registered to {}x{}, ball at ({:.1f}, {:.1f}) r {:.1f} px\n", args.output_dir,
       registered.size(), args.size, args.size, ball.cx, ball.cy, ball.radius_px);
   emit_json(out, {{"output", args.output_dir}, {"frames", found},

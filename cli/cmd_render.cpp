@@ -32,6 +32,12 @@ int run_tables(const TablesArgs& args, const Output& out) {
   if (args.tables.n < 1) throw InputError(fmt::format("--n must be at least 1, got {}", args.tables.n));
   ReadMapOptions ro;
   ro.layout = optional_layout(args.layout, "--layout");
+  if (args.input == "scene" && ro.layout) throw InputError("--layout reads a map file; 'scene' is made as a latlong map");
+  // The tables are a raw RGBA32F texture (or JSON): under an image's name they read as a broken image.
+  if (is_radiance_file(args.output) || is_camera_image_file(args.output))
+    throw InputError(fmt::format("{}: the tables are a raw RGBA32F texture (or .json), not an image file; name it "
+                                 "e.g. tables.lpst",
+                                 args.output));
   const EnvMap map = args.input == "scene" ? map_or_scene(args.input, 1024) : read_envmap(args.input, ro);
   const auto t0 = Clock::now();
   auto sampler = make_sampler(method);

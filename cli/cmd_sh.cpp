@@ -9,6 +9,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/image_io.h"
 #include "core/warnings.h"
 #include "core/spherical_harmonics.h"
@@ -31,6 +32,10 @@ int run_sh(const ShArgs& args, const Output& out) {
     throw InputError(fmt::format("--order: only order {} (9 coefficients) is supported, got {}", kSh9Order, args.order));
   ReadMapOptions read;
   read.layout = optional_layout(args.layout, "--layout");
+  if (args.input == "scene" && read.layout) throw InputError("--layout reads a map file; 'scene' is made as a latlong map");
+  // The coefficients are JSON: `-o sh.exr` wrote JSON text into a file named as an image.
+  if (lower_extension(args.output) != ".json")
+    throw InputError(fmt::format("{}: sh writes its coefficients as JSON; name the output .json", args.output));
   const EnvMap map = args.input == "scene" ? map_or_scene(args.input, 1024) : read_envmap(args.input, read);
 
   const auto start = Clock::now();
@@ -87,6 +92,12 @@ struct PrefilterArgs {
 
 int run_prefilter(const PrefilterArgs& args, const Output& out) {
   check_prefiltered_cube_path(args.output);
+  // The DFG table's B channel is far below A: an RGBE .hdr's shared exponent zeroed a quarter
+  // of it. And its size without the table was never read.
+  if (!args.lut.empty() && lower_extension(args.lut) != ".exr")
+    throw InputError(fmt::format("--lut {}: the DFG table is written as OpenEXR floats; name it .exr", args.lut));
+  if (args.lut.empty() && args.lut_size != PrefilterArgs{}.lut_size)
+    throw InputError("--lut-size is the size of the DFG table that --lut FILE writes; give --lut");
   const EnvMap map = map_or_scene(args.input, 1024);
   const auto start = Clock::now();
   const PrefilteredCube cube = prefilter_ggx(map, args.options, args.input);

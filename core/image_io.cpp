@@ -162,6 +162,14 @@ struct RawImage {
   std::vector<std::string> warnings;
 };
 
+// The layout a file without a recorded one is read as, from its shape alone.
+std::optional<Layout> layout_from_shape(int w, int h) {
+  if (w == 2 * h) return Layout::LatLong;
+  if (h == 12 * w && is_power_of_two(w)) return Layout::Healpix;
+  if (w == 4 * h) return Layout::Hemisphere;  // the shape of the default hemisphere map, 360x90
+  return std::nullopt;
+}
+
 Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMapOptions& options) {
   const int w = raw.width, h = raw.height;
   Layout layout;
@@ -173,12 +181,8 @@ Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMa
       fail(path, fmt::format("unknown {} '{}' (expected latlong, hemisphere or healpix)", raw.layout_key,
                              one_line(*raw.layout, 40)));
     layout = *parsed;
-  } else if (w == 2 * h) {
-    layout = Layout::LatLong;
-  } else if (h == 12 * w && is_power_of_two(w)) {
-    layout = Layout::Healpix;
-  } else if (w == 4 * h) {  // the shape of the default hemisphere map, 360x90
-    layout = Layout::Hemisphere;
+  } else if (const std::optional<Layout> by_shape = layout_from_shape(w, h)) {
+    layout = *by_shape;
   } else {
     // A photo or a fused bracket is not a map: sampling it as a hemisphere would be silently wrong.
     // A square one is most likely a probe photo: a mirror ball, or an angular map (Debevec's
@@ -998,6 +1002,20 @@ std::string encode_pfm(const std::string& path, const EnvMap& map) {
   if (has_invalid_pixels(map))
     fail(path, "cannot write: the map has invalid pixels (a validity mask), which .pfm cannot store; write .exr");
   const FileImage img = to_file_image(map);
+  // A .pfm records no layout, units or rotation: one that would read back otherwise is refused
+  // (a 2:1 hemisphere map came back as latlong, the sun below the horizon; radiance as relative).
+  const std::optional<Layout> read_back = layout_from_shape(img.width, img.height);
+  if (read_back != map.layout)
+    fail(path, fmt::format("cannot write: .pfm records no layout, and this {} map of {}x{} would read back as {}; "
+                           "write .exr or .hdr",
+                           to_string(map.layout), img.width, img.height,
+                           read_back ? std::string(to_string(*read_back)) : std::string("no layout")));
+  if (map.units == Units::Radiance)
+    fail(path, "cannot write: .pfm records no units, and this map in radiance units would read back as relative; "
+               "write .exr or .hdr");
+  const Mat3 identity = rotation_from_yaw_pitch_roll_deg(0, 0, 0);
+  if (map.world_from_probe && map.world_from_probe->m != identity.m)
+    fail(path, "cannot write: .pfm records no probe rotation (world_from_probe); write .exr or .hdr");
   const bool little = std::endian::native == std::endian::little;
   std::string out = fmt::format("PF\n{} {}\n{}\n", img.width, img.height, little ? "-1.0" : "1.0");
   const size_t row_floats = 3 * size_t(img.width);

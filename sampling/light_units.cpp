@@ -34,6 +34,12 @@ LightUnitsResult apply_light_units(LightList list, const LightUnitsOptions& opti
     r.list = std::move(list);
     return r;
   }
+  // They give a relative list its unit: on a calibrated map, --scale 3 tripled lights already
+  // in W sr^-1 m^-2 without a word.
+  if (list.units == Units::Radiance)
+    throw InputError(fmt::format("{}: the map is in radiance units already (calibrated); --exposure, --scale and "
+                                 "--normalize-illuminance give a relative map its unit",
+                                 output));
   if (options.exposure_ev) {
     if (!std::isfinite(*options.exposure_ev))
       throw InputError(fmt::format("--exposure must be a finite number of stops, got {}", *options.exposure_ev));
@@ -54,9 +60,20 @@ LightUnitsResult apply_light_units(LightList list, const LightUnitsOptions& opti
       throw InputError("--normalize-illuminance: the lights give no illuminance on an upward-facing surface");
     r.factor = lux / now;
   }
+  if (!(r.factor > 0) || !std::isfinite(r.factor))  // --exposure 1100 is x inf, -1100 is x 0
+    throw InputError(fmt::format("{}: the unit option scales by {:g}, not a finite positive factor", output, r.factor));
   for (Light& l : list.lights)
-    for (double& c : l.rgb) c *= r.factor;
-  if (list.sh9) list.sh9 = scaled(*list.sh9, r.factor);
+    for (double& c : l.rgb) {
+      c *= r.factor;
+      if (!std::isfinite(c))
+        throw InputError(fmt::format("{}: scaled by {:g}, a light's value overflows", output, r.factor));
+    }
+  if (list.sh9) {
+    list.sh9 = scaled(*list.sh9, r.factor);
+    for (const auto& coefficient : list.sh9->coefficients)
+      for (double v : coefficient)
+        if (!std::isfinite(v)) throw InputError(fmt::format("{}: scaled by {:g}, the SH9 overflows", output, r.factor));
+  }
   // A scaled relative list is what a calibration would have given: absolute radiance.
   list.units = Units::Radiance;
   r.list = std::move(list);

@@ -171,5 +171,66 @@ TEST(UnreadOptionsCli, CalibCompareRefusesATransposedMatrixAndStepsItCannotUse) 
   EXPECT_EQ(lightprobe("calib compare " + a + " " + a + " --step 8").code, 0);
 }
 
+// Map outputs that would read back otherwise, and options the input or output never reads.
+TEST(UnreadOptionsCli, MapsProbesAndTablesRefuseWhatTheirOutputCannotHoldOrTheirInputNeverReads) {
+  const fs::path dir = fresh_dir("maps");
+  const std::string map = (dir / "map.exr").string();
+  ASSERT_EQ(lightprobe("synth scene --size 128x64 -o " + map).code, 0);
+  // .pfm records no layout: a 2:1 hemisphere map came back as latlong.
+  expect_one_line_error(lightprobe("convert " + map + " " + (dir / "h.pfm").string() + " --layout hemisphere --size 128x64"),
+                        "h.pfm: cannot write: .pfm records no layout, and this hemisphere map of 128x64 would read back as latlong");
+  EXPECT_EQ(lightprobe("convert " + map + " " + (dir / "l.pfm").string()).code, 0);
+  EXPECT_EQ(lightprobe("convert " + map + " " + (dir / "h4.pfm").string() + " --layout hemisphere --size 256x64").code, 0);
+  expect_one_line_error(lightprobe("convert " + map + " " + (dir / "o.hdr").string() + " --half"), "--half writes EXR half floats");
+  expect_one_line_error(lightprobe("convert " + shared("probes-threejs-spot-and-cube/pisa_cube") + " " +
+                                   (dir / "c.exr").string() + " --in-layout healpix"),
+                        "--in-layout reads a map file");
+  expect_one_line_error(lightprobe("sh " + map + " -o " + (dir / "sh.exr").string()), "name the output .json");
+  expect_one_line_error(lightprobe("sh scene --layout hemisphere -o " + (dir / "sh.json").string()), "--layout reads a map file");
+  expect_one_line_error(lightprobe("sh " + map + " --exposure 1100 -o " + (dir / "sh.json").string()), "not a finite positive factor");
+  expect_one_line_error(lightprobe("tables " + map + " --n 16 -o " + (dir / "t.exr").string()), "not an image file");
+  expect_one_line_error(lightprobe("prefilter " + map + " --size 16 --lut " + (dir / "d.hdr").string() + " -o " +
+                                   (dir / "p.exr").string()),
+                        "name it .exr");
+  expect_one_line_error(lightprobe("prefilter " + map + " --size 16 --lut-size 16 -o " + (dir / "p.exr").string()), "give --lut");
+  for (const char* name : {"h.pfm", "o.hdr", "c.exr", "sh.exr", "sh.json", "t.exr", "d.hdr", "p.exr"})
+    EXPECT_FALSE(fs::exists(dir / name)) << name;
+}
+
+TEST(UnreadOptionsCli, ProbeOptionsForASequenceOrAFoundBallNeedThem) {
+  const fs::path dir = fresh_dir("probe");
+  const std::string ball = (dir / "ball.exr").string(), seq = (dir / "seq").string();
+  ASSERT_EQ(lightprobe("synth probe scene --size 256x256 -o " + ball).code, 0);
+  ASSERT_EQ(lightprobe("synth probe scene --frames 2 --size 256x256 -o " + seq).code, 0);
+  const std::string out = " --size 64x32 -o " + (dir / "u.exr").string();
+  expect_one_line_error(lightprobe("probe unwrap " + ball + " --smooth-track" + out), "--smooth-track acts on a sequence's track");
+  expect_one_line_error(lightprobe("probe unwrap " + ball + " --fixed-ball" + out), "--fixed-ball acts on a sequence's track");
+  expect_one_line_error(lightprobe("probe unwrap " + seq + " --ball 128,128,100 --smooth-track --size 64x32 -o " +
+                                   (dir / "s").string()),
+                        "--ball gives one for every frame");
+  expect_one_line_error(lightprobe("probe unwrap " + seq + " --size 64x32 -o " + (dir / "s.hdr").string()),
+                        "s.hdr: 2 frames are written as a folder");
+  expect_one_line_error(lightprobe("probe unwrap " + ball + " --reflectivity 1e-30" + out), "--reflectivity must be in [0.01, 1]");
+  EXPECT_FALSE(fs::exists(dir / "u.exr"));
+  EXPECT_EQ(lightprobe("probe unwrap " + seq + " --smooth-track --size 64x32 -o " + (dir / "s").string()).code, 0);
+}
+
+TEST(UnreadOptionsCli, ProbeRegisterRefusesTwoPhotosOfOneNameAndSaysWhatLayOutsideThePhoto) {
+  const fs::path dir = fresh_dir("register");
+  const std::string k = shared("hdr-mirrorball-kartik/");
+  fs::create_directories(dir / "a");
+  fs::create_directories(dir / "b");
+  fs::copy_file(k + "ball_1-10s.jpg", dir / "a" / "ball.jpg");
+  fs::copy_file(k + "ball_1-160s.jpg", dir / "b" / "ball.jpg");
+  expect_one_line_error(lightprobe("probe register " + (dir / "a" / "ball.jpg").string() + " " +
+                                   (dir / "b" / "ball.jpg").string() + " -o " + (dir / "reg").string()),
+                        "would both be written as ball.png");
+  // Kartik's 1/10 s ball runs a few pixels past the top of the photo.
+  const CliRun r = lightprobe("probe register " + k + "ball_1-10s.jpg " + k + "ball_1-160s.jpg -o " + (dir / "reg").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("ball_1-10s.jpg: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("lay outside the photo and are black (code 0) in ball_1-10s.png"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace lp::cli_test

@@ -411,8 +411,14 @@ TEST(ImageIo, TheProbeRotationIsRecordedInExrAndHdrAndARecordThatIsNoRotationIsR
     EXPECT_NE(listing.find("16 x    8, 3 channel, float hdr"), std::string::npos) << listing;
   }
   map.world_from_probe = r;
-  write_envmap(dir + "turned.pfm", map);
-  EXPECT_FALSE(read_envmap(dir + "turned.pfm").world_from_probe.has_value());
+  // A .pfm records no rotation: the map is refused there, not written without it.
+  try {
+    write_envmap(dir + "turned.pfm", map);
+    ADD_FAILURE() << "a turned map was written to .pfm";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("records no probe rotation"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "turned.pfm"));
   // A matrix that is not a rotation (a scale, a reflection) is no probe orientation.
   std::string hdr = read_bytes(dir + "turned.hdr");
   const size_t at = hdr.find("LIGHTPROBE_WORLD_FROM_PROBE=");

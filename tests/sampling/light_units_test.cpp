@@ -91,17 +91,39 @@ TEST(LightUnits, ExposureScaleAndIlluminanceTargetsGiveTheNumbersAsked) {
 }
 
 TEST(LightUnits, BadTargetsAreOneLineErrorsNamingTheFlag) {
+  LightList rel = calibrated_list();
+  rel.units = Units::Relative;
+  auto message = [&](const LightUnitsOptions& o, const LightList& list) {
+    try {
+      apply_light_units(list, o, "x");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
   LightUnitsOptions o;
   o.normalize_illuminance_lux = 0;
-  EXPECT_THROW(apply_light_units(calibrated_list(), o, "x"), InputError);
+  EXPECT_NE(message(o, rel).find("--normalize-illuminance must be a positive"), std::string::npos);
   o.normalize_illuminance_lux = -5;
-  EXPECT_THROW(apply_light_units(calibrated_list(), o, "x"), InputError);
+  EXPECT_NE(message(o, rel).find("--normalize-illuminance must be a positive"), std::string::npos);
   o = {};
   o.scale = 0;
-  EXPECT_THROW(apply_light_units(calibrated_list(), o, "x"), InputError);
+  EXPECT_NE(message(o, rel).find("--scale must be positive"), std::string::npos);
   o.scale = 2;
   o.exposure_ev = 1;
-  EXPECT_THROW(apply_light_units(calibrated_list(), o, "x"), InputError);
+  EXPECT_NE(message(o, rel).find("give at most one"), std::string::npos);
+  // A factor that is not finite and positive: 2^1100 is inf, 2^-1100 is 0.
+  o = {};
+  o.exposure_ev = 1100;
+  EXPECT_NE(message(o, rel).find("not a finite positive factor"), std::string::npos);
+  o.exposure_ev = -1100;
+  EXPECT_NE(message(o, rel).find("not a finite positive factor"), std::string::npos);
+  // A calibrated list has its unit: --scale 3 tripled it without a word.
+  o = {};
+  o.scale = 3;
+  EXPECT_NE(message(o, calibrated_list()).find("in radiance units already"), std::string::npos);
+  o.scale = 1e308;  // overflows a light (5 x 1e308)
+  EXPECT_EQ(message(o, rel).find("(accepted)"), std::string::npos);
   LightList down;
   down.lights = {light({0, 0, -1}, {1, 1, 1})};
   o = {};

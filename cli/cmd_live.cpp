@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "calib/camera_model.h"
@@ -35,6 +36,11 @@ struct MergeArgs {
 
 namespace {
 
+std::string fs_name(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
 void parse_listen(const std::string& text, std::string* host, int* port) {
   const auto colon = text.rfind(':');
   if (colon == std::string::npos) throw InputError(fmt::format("--listen must be HOST:PORT, got '{}'", text));
@@ -50,8 +56,64 @@ void parse_listen(const std::string& text, std::string* host, int* port) {
 
 }  // namespace
 
+// What either mode reads, and which options belong to one mode, one source or MQTT only:
+// given elsewhere they did nothing, with exit 0 (an audit found twenty such).
+void refuse_options_the_stream_never_reads(const StreamArgs& a) {
+  const StreamArgs d;
+  if (!(a.duration >= 0)) throw InputError(fmt::format("--duration must be 0 (until stopped) or more seconds, got {}", a.duration));
+  if (!(a.fps >= 0) || !std::isfinite(a.fps))
+    throw InputError(fmt::format("--fps must be 0 (the source's own pace) or more, got {}", a.fps));
+  std::string host;
+  int port = 0;
+  parse_listen(a.listen, &host, &port);
+  auto refuse = [](std::initializer_list<std::pair<bool, const char*>> options, const std::string& why) {
+    for (const auto& [given, option] : options)
+      if (given) throw InputError(fmt::format("{} {}", option, why));
+  };
+  const bool metadata = !a.metadata_model.empty();
+  if (metadata) {
+    refuse({{!a.publish.empty(), "--publish"}, {!a.exposures.empty(), "--exposures"}, {a.bracketing != d.bracketing, "--bracketing"},
+            {!a.response.empty(), "--response"}, {!a.camera.empty(), "--camera"}, {a.fov != d.fov, "--fov"},
+            {!a.rotation.empty(), "--rotation"}, {a.maps, "--maps"}, {a.layout != d.layout, "--layout"},
+            {!a.size.empty(), "--size"}, {a.nside != d.nside, "--nside"}, {a.method != d.method, "--method"},
+            {a.n != d.n, "--n"}, {a.target_error != d.target_error, "--target-error"},
+            {a.error_measure != d.error_measure, "--error-measure"}, {a.frame_budget_ms != d.frame_budget_ms, "--frame-budget-ms"},
+            {a.cluster != d.cluster, "--cluster"}},
+           "belongs to the probe chain, which --metadata-model replaces (it meters exposure and gain alone)");
+    if (!(a.min_frames >= 1) || !std::isfinite(a.min_frames))
+      throw InputError(fmt::format("--min-frames must be >= 1, got {}", a.min_frames));
+  } else {
+    refuse({{a.position != d.position, "--position"}, {a.view_dir != d.view_dir, "--view-dir"}, {a.min_frames != d.min_frames, "--min-frames"}},
+           "applies only with --metadata-model");
+  }
+  if (a.publish.empty())
+    refuse({{a.name != d.name, "--name"}, {a.mqtt_qos != d.mqtt_qos, "--mqtt-qos"}, {a.mqtt_cafile != d.mqtt_cafile, "--mqtt-cafile"}},
+           "applies only with --publish (MQTT)");
+  else if (!a.mqtt_cafile.empty() && a.publish.rfind("mqtts://", 0) != 0)
+    throw InputError("--mqtt-cafile is for TLS (mqtts://), and --publish names a plain mqtt:// broker");
+  const bool replay = a.source.rfind("replay:", 0) == 0, video = a.source.rfind("video:", 0) == 0;
+  const bool aravis = a.source == "aravis" || a.source.rfind("aravis:", 0) == 0;
+  if (a.loop && !replay && !video) throw InputError(fmt::format("--loop replays a recording; {} is a live camera", a.source));
+  if (a.bracketing != d.bracketing && !aravis)
+    throw InputError(fmt::format("--bracketing chooses how an Aravis camera brackets; {} is not one", a.source));
+  if (a.bracketing != d.bracketing && a.exposures.empty()) throw InputError("--bracketing needs --exposures (a bracket)");
+  if (a.maps)
+    refuse({{!a.rotation.empty(), "--rotation"}, {!a.response.empty(), "--response"}, {!a.camera.empty(), "--camera"},
+            {a.fov != d.fov, "--fov"}, {!a.exposures.empty(), "--exposures"}},
+           "applies to camera frames; with --maps the frames are maps already");
+  else if (!(a.fov > 0 && a.fov <= 360))
+    throw InputError(fmt::format("--fov must be a field of view in (0, 360] degrees, got {}", a.fov));
+  if (!metadata && a.cluster > 0 && a.n != "auto") {
+    try {
+      if (a.cluster >= std::stoi(a.n))
+        throw InputError(fmt::format("--cluster {} keeps every one of --n {} lights: clustering does nothing", a.cluster, a.n));
+    } catch (const std::logic_error&) {  // --n is checked where it is read
+    }
+  }
+}
+
 int run_stream(const StreamArgs& args, const Output& out) {
-  if (!args.metadata_model.empty() && !args.publish.empty()) throw InputError("--publish: not with --metadata-model");
+  refuse_options_the_stream_never_reads(args);
   if (!args.metadata_model.empty()) return run_stream_metadata(args, out);  // the probe-less mode
   // Options in, validated before anything starts.
   StreamSessionOptions st;
@@ -80,6 +142,10 @@ int run_stream(const StreamArgs& args, const Output& out) {
     }
     if (!frames.empty() && is_camera_image_file(frames.front()))
       if (auto profile = read_colour_profile(frames.front())) lo.to_rec709 = profile->to_rec709, colour_profile = profile->name;
+    // Float frames are radiance already: a response curve was skipped for them without a word.
+    if (!frames.empty() && is_radiance_file(frames.front()) && !args.response.empty())
+      throw InputError(fmt::format("--response: {} holds float frames ({}), radiance already; a response maps camera codes",
+                                   args.source, fs_name(frames.front())));
   }
   lo.fov_deg = args.fov;
   if (!args.rotation.empty()) lo.world_from_probe = parse_rotation(args.rotation);
@@ -148,7 +214,23 @@ int run_merge(const MergeArgs& args, const Output& out) {
   MergeSessionOptions mo = args.mo;
   if (!(mo.duration_s >= 0)) throw InputError(fmt::format("--duration must be 0 (until stopped) or more seconds, got {}", mo.duration_s));
   check_light_count("--n", mo.mqtt.merge.merge.n);
-  if (!args.weights.empty()) mo.mqtt.merge.merge.weights = parse_numbers(args.weights, "--weights", mo.urls.size());
+  const double timeout = mo.mqtt.merge.timeout_s;
+  if (!(timeout > 0) || !std::isfinite(timeout))
+    throw InputError(fmt::format("--timeout must be a positive number of seconds, got {}", timeout));
+  if (!args.weights.empty()) {
+    mo.mqtt.merge.merge.weights = parse_numbers(args.weights, "--weights", mo.urls.size());
+    for (double w : mo.mqtt.merge.merge.weights)  // a weight of 0 or less merged nothing, every round
+      if (!(w > 0) || !std::isfinite(w)) throw InputError(fmt::format("--weights must be positive, got '{}'", args.weights));
+  }
+  // MQTT's options without a topic, a camera server's token with one: read by nothing.
+  const MergeArgs d;
+  if (mo.subscribe.empty()) {
+    for (const auto& [given, option] : {std::pair{mo.mqtt.qos != d.mo.mqtt.qos, "--mqtt-qos"},
+                                        std::pair{mo.mqtt.client.cafile != d.mo.mqtt.client.cafile, "--mqtt-cafile"}})
+      if (given) throw InputError(fmt::format("{} applies only with --subscribe (MQTT)", option));
+  } else if (!mo.mqtt.merge.token.empty()) {
+    throw InputError("--upstream-token is for the cameras' HTTP servers; with --subscribe the lists come from the broker");
+  }
   std::string xyz = args.camera_positions;
   std::replace(xyz.begin(), xyz.end(), ';', ',');
   const auto p = xyz.empty() ? std::vector<double>{} : parse_numbers(xyz, "--camera-positions", 3 * mo.urls.size());

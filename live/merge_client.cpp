@@ -31,7 +31,10 @@ Endpoint parse_url(const std::string& url) {
   const auto slash = rest.find('/');
   if (slash != std::string::npos) {
     const std::string p = rest.substr(slash);
-    if (p != "/" && !p.empty()) e.path = p;
+    // A camera's lights are at /lights: /lights/stream never ends (the merge hung, past
+    // --duration) and /metrics is no light list (every round failed, with exit 0).
+    if (p != "/" && p != "/lights")
+      throw InputError(fmt::format("{}: give the camera's server, http://HOST:PORT (its lights at /lights), not {}", url, p));
     rest = rest.substr(0, slash);
   }
   const auto colon = rest.rfind(':');
@@ -142,6 +145,14 @@ void run_merge_client(const std::vector<std::string>& urls, const MergeClientOpt
   for (const std::string& u : urls) {
     Upstream up;
     up.endpoint = parse_url(u);
+    // The same server twice counted its camera twice (2/3 of the weight beside a third).
+    auto same_host = [](const std::string& a, const std::string& b) {
+      auto loopback = [](const std::string& h) { return h == "localhost" || h == "127.0.0.1" || h == "::1" || h == "[::1]"; };
+      return a == b || (loopback(a) && loopback(b));
+    };
+    for (const Upstream& seen : ups)
+      if (seen.endpoint.port == up.endpoint.port && same_host(seen.endpoint.host, up.endpoint.host))
+        throw InputError(fmt::format("{} and {} are the same server: each camera once", seen.endpoint.url, u));
     up.client.reset(detail::http_client_plugin().new_client(up.endpoint.host, up.endpoint.port,
                                                             options.request_timeout_s, options.token));
     inputs.push_back({u, std::nullopt, 0});

@@ -73,10 +73,11 @@ MergeSessionReport run_merge_session(const MergeSessionOptions& options, const s
 }
 
 std::string MergeSessionReport::summary() const {
-  return fmt::format("merge stopped: {} lists published; last used {} of {} inputs ({} skipped); weights {}{}{}\n",
+  return fmt::format("merge stopped: {} lists published; last used {} of {} inputs ({} skipped); weights {}{}{}{}\n",
                      published, last.state.used.size(), inputs, skipped, weights_from,
                      weights.empty() ? "" : fmt::format(" {:.4g}", fmt::join(weights, ",")),
-                     last.error.empty() ? "" : "; last error: " + last.error);
+                     last.error.empty() ? "" : "; last error: " + last.error,
+                     published > 0 ? "" : "; no input ever gave a light list (is each one a running lightprobe stream?)");
 }
 
 nlohmann::json MergeSessionReport::to_json() const {

@@ -3,6 +3,7 @@
 #include "live/bracket_unwrap.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
@@ -247,8 +248,18 @@ void LivePipeline::capture_loop() {
     if (cycle > 1 && index < 0) {
       std::lock_guard<std::mutex> lock(mutex_);
       ++stats_.frames_dropped_partial;
+      // Frames that never carry a time of the cycle (a replay without its exposures.csv, or
+      // of another bracket): every one was dropped and the stream served nothing, with exit 0.
+      // Four cycles and eight frames: more than a camera's settling frames after its first writes.
+      if (++unmatched_from_start_ >= 4 * cycle + 8 && !matched_once_ && stats_.input_error.empty())
+        stats_.input_error = stats_.last_error =
+            fmt::format("{}: {} frames in, none at an exposure time of the cycle {} (exposure {} s); a replay needs "
+                        "its exposures.csv",
+                        source_->describe(), unmatched_from_start_, fmt::join(cycle_, ","), frame->exposure_s);
+      if (!stats_.input_error.empty()) break;
       continue;
     }
+    matched_once_ = true;
     if (!current || int(current->frames.size()) != index) {
       if (current) {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -325,6 +336,13 @@ void LivePipeline::process_loop() {
       std::lock_guard<std::mutex> lock(mutex_);
       stats_.last_error = e.what();
       ++stats_.brackets_dropped;
+      // Bad input from the start (a camera model for another sensor size, a map replay in
+      // another layout): every bracket fails alike, and the stream served nothing with exit
+      // 0. Three in a row before any succeeded end it as bad input; later failures (a scene
+      // that changed) are dropped brackets, as before.
+      const bool input = dynamic_cast<const InputError*>(&e) != nullptr;
+      failed_from_start_ = input && stats_.brackets_processed == 0 ? failed_from_start_ + 1 : 0;
+      if (failed_from_start_ >= 3 && stats_.input_error.empty()) stats_.input_error = e.what();
     }
   }
 }

@@ -10,9 +10,9 @@
 namespace lp::cli_test {
 namespace {
 
-// Nobody listens on port 1: the merge runs its second, publishes nothing, and reports the
+// Nobody listens on ports 1 and 2: the merge runs its second, publishes nothing, and reports the
 // weights it would merge with.
-const std::string kDeadUrls = "http://127.0.0.1:1 http://127.0.0.1:1/b ";
+const std::string kDeadUrls = "http://127.0.0.1:1 http://127.0.0.1:2 ";
 
 TEST(MergePositionsCli, AConfigFileGivesPositionsAndTheTargetAndTheWeightsFollow) {
   const fs::path cfg = scratch() / "merge.toml";

@@ -232,5 +232,63 @@ TEST(UnreadOptionsCli, ProbeRegisterRefusesTwoPhotosOfOneNameAndSaysWhatLayOutsi
   EXPECT_NE(r.err.find("lay outside the photo and are black (code 0) in ball_1-10s.png"), std::string::npos) << r.err;
 }
 
+// stream and merge options that the mode, the source or the transport never reads, and
+// inputs that made every bracket or round fail while the command ran on with exit 0.
+TEST(UnreadOptionsCli, StreamAndMergeRefuseOptionsTheirModeOrSourceNeverReads) {
+  const std::string fake = "stream --source aravis:Fake_1 --listen 127.0.0.1:0 --duration 0.5 ";
+  expect_one_line_error(lightprobe(fake + "--fov nan"), "--fov must be a field of view in (0, 360]");
+  expect_one_line_error(lightprobe(fake + "--metadata-model " + (scratch() / "m.json").string() + " --method q2tree"),
+                        "--method belongs to the probe chain, which --metadata-model replaces");
+  expect_one_line_error(lightprobe(fake + "--position 3,4"), "--position applies only with --metadata-model");
+  expect_one_line_error(lightprobe(fake + "--mqtt-qos 0"), "--mqtt-qos applies only with --publish");
+  expect_one_line_error(lightprobe(fake + "--publish mqtt://127.0.0.1:1/x --mqtt-cafile ca.pem"), "--mqtt-cafile is for TLS");
+  expect_one_line_error(lightprobe(fake + "--loop"), "--loop replays a recording");
+  expect_one_line_error(lightprobe(fake + "--cluster 500"), "--cluster 500 keeps every one of --n 300 lights");
+  expect_one_line_error(lightprobe("stream --source aravis:Fake_1 --listen 127.0.0.1:0junk --metadata-model m.json"),
+                        "--listen: '0junk' is not a port");
+  const fs::path dir = fresh_dir("stream");
+  const std::string seq = (dir / "maps").string();
+  ASSERT_EQ(lightprobe("synth probe scene --frames 2 --size 64x64 -o " + seq).code, 0);
+  const std::string replay = "stream --source replay:" + seq + " --listen 127.0.0.1:0 --duration 0.5 ";
+  expect_one_line_error(lightprobe(replay + "--maps --rotation 90,0,0"), "--rotation applies to camera frames");
+  expect_one_line_error(lightprobe(replay + "--response srgb"), "holds float frames");
+  expect_one_line_error(lightprobe(replay + "--bracketing sequencer --exposures 0.1,0.2"), "--bracketing chooses how an Aravis");
+
+  const std::string merge = "merge --listen 127.0.0.1:0 --duration 0.5 ";
+  expect_one_line_error(lightprobe(merge + "http://127.0.0.1:21001 --timeout -1"), "--timeout must be a positive number");
+  expect_one_line_error(lightprobe(merge + "http://127.0.0.1:21001 --weights 0"), "--weights must be positive");
+  expect_one_line_error(lightprobe(merge + "http://127.0.0.1:21001 --mqtt-qos 0"), "--mqtt-qos applies only with --subscribe");
+  expect_one_line_error(lightprobe(merge + "--subscribe mqtt://127.0.0.1:1/s/+/lights --upstream-token t"),
+                        "--upstream-token is for the cameras' HTTP servers");
+  const CliRun stream_url = lightprobe(merge + "http://127.0.0.1:21001/lights/stream");
+  EXPECT_EQ(stream_url.code, 2);
+  EXPECT_NE(stream_url.err.find("not /lights/stream"), std::string::npos) << stream_url.err;
+  const CliRun twice = lightprobe(merge + "http://127.0.0.1:21001 http://localhost:21001/lights");
+  EXPECT_EQ(twice.code, 2);
+  EXPECT_NE(twice.err.find("are the same server"), std::string::npos) << twice.err;
+  const CliRun nobody = lightprobe(merge + "http://127.0.0.1:21001");
+  EXPECT_EQ(nobody.code, 0) << nobody.err;  // a camera may come later: said, not refused
+  EXPECT_NE(nobody.out.find("no input ever gave a light list"), std::string::npos) << nobody.out;
+}
+
+// Bad input from the start made every bracket fail, and the stream served nothing with exit 0:
+// a camera model for another sensor size, a replay without the times of its --exposures.
+TEST(UnreadOptionsCli, AStreamWhoseEveryBracketFailsFromTheStartEndsAsBadInput) {
+  const fs::path dir = fresh_dir("fails");
+  ASSERT_EQ(lightprobe("synth boards --views 1 -o " + (dir / "boards").string()).code, 0);
+  const CliRun model = lightprobe("stream --source aravis:Fake_1 --listen 127.0.0.1:0 --duration 5 --camera " +
+                                  (dir / "boards" / "true_camera.yaml").string());
+  EXPECT_EQ(model.code, 2) << model.err;
+  EXPECT_NE(model.err.find("camera model is for 1280x960, frames are 512x512"), std::string::npos) << model.err;
+  const std::string fish = (dir / "fish").string();
+  fs::create_directories(fish);
+  for (const char* name : {"a.exr", "b.exr", "c.exr"})
+    ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 190 --size 64x64 -o " + (dir / "fish" / name).string()).code, 0);
+  const CliRun replay = lightprobe("stream --source replay:" + fish +
+                                   " --exposures 0.01,0.1,1 --fps 50 --loop --listen 127.0.0.1:0 --duration 5");
+  EXPECT_EQ(replay.code, 2) << replay.err;
+  EXPECT_NE(replay.err.find("none at an exposure time of the cycle 0.01,0.1,1"), std::string::npos) << replay.err;
+}
+
 }  // namespace
 }  // namespace lp::cli_test

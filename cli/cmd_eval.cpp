@@ -237,6 +237,10 @@ std::vector<Command> eval_commands() {
          f.output(a->o.output_dir, "Directory for calib_compare.csv, calib_sweep.csv/.svg");
          return [a](const Output& out) {
            EvalCalibOptions o = a->o;
+           // The sweep renders its own board: without images, --board and --square said nothing.
+           const EvalCalibArgs d;
+           if (o.images.empty() && (a->board != d.board || a->square_mm != d.square_mm))
+             throw InputError("--board and --square describe the images given; the sweep alone uses its own 10x7, 40 mm board");
            parse_size(a->board, "--board", &o.board.cols, &o.board.rows);
            o.board.square_mm = a->square_mm;
            keep_heap_for_reuse();

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <memory>
 
 #include "calib/camera_model.h"
@@ -80,7 +81,9 @@ int run_synth_scene(const SynthSceneArgs& args, const Output& out) {
   int w = 0, h = 0;
   target_geometry(layout, args.size, given_nside(args.nside) > 0 ? args.nside : 128, nullptr, &w, &h);
   SceneOptions so;
-  if (!(args.sun_scale >= 0)) throw InputError("--sun-scale must be >= 0");
+  if (!(args.sun_scale >= 0) || !std::isfinite(args.sun_scale))  // inf wrote a map of infinite pixels
+    throw InputError(fmt::format("--sun-scale must be a finite number >= 0, got {}", args.sun_scale));
+  if (args.no_sun && args.sun_scale != SynthSceneArgs{}.sun_scale) throw InputError("--sun-scale and --no-sun: give one");
   for (double& c : so.sun_rgb) c *= args.no_sun ? 0.0 : args.sun_scale;
   const SceneDescription scene = describe_scene(so);
   const EnvMap map = render_scene(scene, layout, w, h);
@@ -145,6 +148,7 @@ int run_synth_bracket(const SynthBracketArgs& args, const Output& out) {
   if (!args.exposure_times.empty()) o.exposure_seconds = parse_numbers(args.exposure_times, "--exposure-times");
   o.response = curve_from(args.response);
   o.add_noise = !args.no_noise;
+  if (args.no_noise && o.seed != SynthBracketArgs{}.o.seed) throw InputError("--seed seeds the noise, and --no-noise has none");
   if (o.bit_depth != 8 && o.bit_depth != 16) throw InputError("--bit-depth must be 8 or 16");
   const SyntheticBracket b = make_synthetic_bracket(radiance_or_scene(args.input), o);
   write_synthetic_bracket(args.output_dir, b, o.bit_depth);

@@ -10,6 +10,7 @@
 
 #include "calib/board_detect.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/limits.h"
 #include "eval/synthetic_sequence.h"
 #include "hdr/synthetic_bracket.h"
@@ -150,9 +151,17 @@ int light_count(const std::string& text) {
 
 std::vector<double> parse_numbers(const std::string& text, const char* option, size_t count) {
   std::vector<double> v;
-  std::istringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
+  // Split keeping empty items: "0.5," and "1,,2" were read as "0.5" and "1,2".
+  std::vector<std::string> items;
+  for (size_t start = 0;;) {
+    const size_t comma = text.find(',', start);
+    items.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (text.empty()) items.clear();
+  for (std::string item : items) {
+    item = trim_blanks(item);
     try {
       size_t used = 0;
       // Fractions such as 1/40 are common for exposure times.

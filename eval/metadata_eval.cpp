@@ -222,8 +222,15 @@ std::string chart(const std::vector<MetadataRow>& rows, const std::vector<double
 
 void validate(const EvalMetadataOptions& o) {
   if (o.fractions.empty()) throw InputError("--fractions is empty");
-  for (double f : o.fractions)
+  for (size_t i = 0; i < o.fractions.size(); ++i) {
+    const double f = o.fractions[i];
     if (!(f > 0 && f <= 1)) throw InputError(fmt::format("--fractions: each must be in (0, 1], got {}", f));
+    // The same fraction twice gave its rows twice.
+    for (size_t j = 0; j < i; ++j)
+      if (o.fractions[j] == f) throw InputError(fmt::format("--fractions: {} is given twice", f));
+  }
+  // 0 is the default (twice the room); below it was taken for the default too.
+  if (!(o.root_size >= 0)) throw InputError(fmt::format("--root-size must be 0 (automatic) or a side in m, got {}", o.root_size));
 }
 
 EvalMetadataReport evaluate_metadata(const EvalMetadataOptions& options, const EvalProgress& progress) {

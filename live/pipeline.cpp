@@ -97,6 +97,7 @@ void LivePipeline::start() {
   }
   running_ = true;
   capture_done_ = false;
+  processing_done_ = false;
   capture_ = std::thread([this] { capture_loop(); });
   processor_ = std::thread([this] { process_loop(); });
 }
@@ -345,6 +346,7 @@ void LivePipeline::process_loop() {
       if (failed_from_start_ >= 3 && stats_.input_error.empty()) stats_.input_error = e.what();
     }
   }
+  processing_done_ = true;
 }
 
 void LivePipeline::plan_next_bracket(const MeteredScene& scene) {

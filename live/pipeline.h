@@ -117,6 +117,9 @@ class LivePipeline {
   // Blocks until the source is finished (replay without loop) and everything is processed.
   void wait();
   LiveStats stats() const;
+  // The source has ended (a replay without --loop, or bad input) and every bracket it gave is
+  // processed or dropped: nothing new will be published.
+  bool finished() const { return processing_done_; }
   // Prometheus text: the counters of stats(), and histograms of every published list's
   // stage times (lightprobe_stage_duration_seconds{stage=fuse|unwrap|fuse_unwrap|sample|
   // sh9|publish}) and capture-to-publish latency (lightprobe_latency_seconds), in seconds.
@@ -143,6 +146,7 @@ class LivePipeline {
   std::thread capture_, processor_;
   std::atomic<bool> running_{false};
   std::atomic<bool> capture_done_{false};
+  std::atomic<bool> processing_done_{false};
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<std::unique_ptr<Bracket>> queue_;

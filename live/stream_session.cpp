@@ -87,6 +87,9 @@ StreamSessionReport run_stream_session(const StreamSessionOptions& options, cons
                                                quiet_s).dump());
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (options.duration_s > 0 && elapsed >= options.duration_s) break;
+    // Without --duration a replay that has ended ends the stream (it kept serving its last
+    // lights until killed); with one, the lights stay up that long.
+    if (options.duration_s <= 0 && pipeline.finished()) break;
   }
   pipeline.stop();
   report.stats = pipeline.stats();

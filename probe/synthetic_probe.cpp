@@ -99,6 +99,21 @@ nlohmann::json write_synthetic_probe(const EnvMap& world, const std::string& inp
   if (!(o.noise_relative >= 0)) throw InputError(fmt::format("--noise must be 0 or more, got {}", o.noise_relative));
   if (o.type == "fisheye" && !(o.fov_deg > 0 && o.fov_deg <= 360))
     throw InputError(fmt::format("--fov must be in (0, 360] degrees, got {}", o.fov_deg));
+  if (!std::isfinite(o.noise_relative) || o.noise_relative > 1)  // inf wrote infinite pixels
+    throw InputError(fmt::format("--noise must be a relative noise in [0, 1], got {}", o.noise_relative));
+  // What the other probe type reads is refused: the fisheye render took a ball's options, and
+  // the ball a fisheye's --fov, wrote the same image, and the truth file named neither.
+  const SyntheticProbeOptions d;
+  if (o.type == "fisheye") {
+    for (const auto& [given, option] : {std::pair{o.radius_px != d.radius_px, "--radius"},
+                                        std::pair{o.distance_in_radii != d.distance_in_radii, "--distance"},
+                                        std::pair{o.noise_relative != d.noise_relative, "--noise"},
+                                        std::pair{o.jitter_px != d.jitter_px, "--jitter"}, std::pair{o.seed != d.seed, "--seed"}})
+      if (given) throw InputError(fmt::format("{} applies to --type mirrorball (the fisheye render is noiseless)", option));
+  } else if (o.fov_deg != d.fov_deg) {
+    throw InputError("--fov applies to --type fisheye (a ball's camera is --distance)");
+  }
+  if (!sequence && o.jitter_px != d.jitter_px) throw InputError("--jitter moves the ball between frames: give --frames");
   if (sequence) make_output_directory(output);
   nlohmann::json truth = {{"type", o.type}, {"input", input_label}, {"frames", o.frames}};
   nlohmann::json per_frame = nlohmann::json::array();

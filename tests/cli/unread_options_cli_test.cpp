@@ -232,6 +232,30 @@ TEST(UnreadOptionsCli, ProbeRegisterRefusesTwoPhotosOfOneNameAndSaysWhatLayOutsi
   EXPECT_NE(r.err.find("lay outside the photo and are black (code 0) in ball_1-10s.png"), std::string::npos) << r.err;
 }
 
+TEST(UnreadOptionsCli, SynthRefusesValuesItCannotRenderAndOptionsItNeverReads) {
+  const std::string out = " -o " + (scratch() / "s.exr").string();
+  expect_one_line_error(lightprobe("synth scene --size 64x32 --sun-scale inf" + out), "--sun-scale must be a finite number");
+  expect_one_line_error(lightprobe("synth scene --size 64x32 --sun-scale 5 --no-sun" + out), "--sun-scale and --no-sun");
+  expect_one_line_error(lightprobe("synth bracket scene --no-noise --seed 5 -o " + (scratch() / "b").string()),
+                        "--no-noise has none");
+  expect_one_line_error(lightprobe("synth probe scene --type fisheye --radius 30 --size 64x64" + out),
+                        "--radius applies to --type mirrorball");
+  EXPECT_FALSE(fs::exists(scratch() / "s.exr"));
+}
+
+TEST(UnreadOptionsCli, EvalRefusesOptionsItsRunNeverReadsAndListsWithHoles) {
+  expect_one_line_error(lightprobe("eval calib --sweep --board 7x5 --square 20 -o " + (scratch() / "ec").string()),
+                        "the sweep alone uses its own 10x7, 40 mm board");
+  const fs::path walk = scratch() / "walk";
+  ASSERT_EQ(lightprobe("synth walkthrough --probe-size 32 --samples 2 --rays 4 -o " + walk.string()).code, 0);
+  const std::string eval = "eval metadata " + walk.string() + " -o " + (scratch() / "em").string() + " ";
+  expect_one_line_error(lightprobe(eval + "--root-size -5"), "--root-size must be 0 (automatic)");
+  expect_one_line_error(lightprobe(eval + "--fractions 1,1"), "--fractions: 1 is given twice");
+  expect_one_line_error(lightprobe(eval + "--fractions 0.5,"), "--fractions: '' is not a number");
+  expect_one_line_error(lightprobe(eval + "--fractions 0.5,,1"), "--fractions: '' is not a number");
+  EXPECT_FALSE(fs::exists(scratch() / "em"));
+}
+
 // stream and merge options that the mode, the source or the transport never reads, and
 // inputs that made every bracket or round fail while the command ran on with exit 0.
 TEST(UnreadOptionsCli, StreamAndMergeRefuseOptionsTheirModeOrSourceNeverReads) {
@@ -284,6 +308,10 @@ TEST(UnreadOptionsCli, AStreamWhoseEveryBracketFailsFromTheStartEndsAsBadInput) 
   fs::create_directories(fish);
   for (const char* name : {"a.exr", "b.exr", "c.exr"})
     ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 190 --size 64x64 -o " + (dir / "fish" / name).string()).code, 0);
+  // Without --loop and --duration, a replay that ends ends the stream (it served until killed).
+  const CliRun once = lightprobe("--json stream --source replay:" + fish + " --fps 50 --listen 127.0.0.1:0");
+  ASSERT_EQ(once.code, 0) << once.err;
+  EXPECT_EQ(nlohmann::json::parse(once.out)["brackets_processed"], 3) << once.out;
   const CliRun replay = lightprobe("stream --source replay:" + fish +
                                    " --exposures 0.01,0.1,1 --fps 50 --loop --listen 127.0.0.1:0 --duration 5");
   EXPECT_EQ(replay.code, 2) << replay.err;

@@ -1,6 +1,8 @@
 #include "probe/synthetic_probe.h"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 #include <unistd.h>
 
 #include <filesystem>
@@ -59,6 +61,28 @@ TEST(SyntheticProbe, RefusesBeforeWritingAnything) {
   o.type = "cube";
   o.frames = 1;
   EXPECT_THROW(write_synthetic_probe(world, "scene", o, (dir / "x.exr").string()), InputError);
+  // The other type's options: the fisheye render took --noise and wrote the same noiseless image.
+  auto message = [&](const SyntheticProbeOptions& bad) {
+    try {
+      write_synthetic_probe(world, "scene", bad, (dir / "x.exr").string());
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  SyntheticProbeOptions fisheye;
+  fisheye.type = "fisheye";
+  fisheye.noise_relative = 0.5;
+  EXPECT_NE(message(fisheye).find("--noise applies to --type mirrorball"), std::string::npos);
+  SyntheticProbeOptions ball;
+  ball.fov_deg = 90;
+  EXPECT_NE(message(ball).find("--fov applies to --type fisheye"), std::string::npos);
+  ball = {};
+  ball.noise_relative = INFINITY;
+  EXPECT_NE(message(ball).find("--noise must be a relative noise"), std::string::npos);
+  ball = {};
+  ball.jitter_px = 3;
+  EXPECT_NE(message(ball).find("give --frames"), std::string::npos);
   EXPECT_FALSE(fs::exists(dir));
   fs::remove_all(dir.parent_path());
 }

@@ -998,18 +998,20 @@ RawImage read_pfm(const std::string& path) {
   return raw;
 }
 
-std::string encode_pfm(const std::string& path, const EnvMap& map) {
+std::string encode_pfm(const std::string& path, const EnvMap& map, const WriteMapOptions& options) {
   if (has_invalid_pixels(map))
     fail(path, "cannot write: the map has invalid pixels (a validity mask), which .pfm cannot store; write .exr");
   const FileImage img = to_file_image(map);
   // A .pfm records no layout, units or rotation: one that would read back otherwise is refused
   // (a 2:1 hemisphere map came back as latlong, the sun below the horizon; radiance as relative).
+  // (A shape of no layout is refused when read, so an image of another shape, a cube face,
+  // is written: it cannot come back as the wrong map.)
+  // An image that is no map (write_rgb_image: a fused photo, a cube face) has no layout to lose.
   const std::optional<Layout> read_back = layout_from_shape(img.width, img.height);
-  if (read_back != map.layout)
+  if (options.record_layout && read_back && *read_back != map.layout)
     fail(path, fmt::format("cannot write: .pfm records no layout, and this {} map of {}x{} would read back as {}; "
                            "write .exr or .hdr",
-                           to_string(map.layout), img.width, img.height,
-                           read_back ? std::string(to_string(*read_back)) : std::string("no layout")));
+                           to_string(map.layout), img.width, img.height, to_string(*read_back)));
   if (map.units == Units::Radiance)
     fail(path, "cannot write: .pfm records no units, and this map in radiance units would read back as relative; "
                "write .exr or .hdr");
@@ -1119,7 +1121,7 @@ void write_envmap(const std::string& path, const EnvMap& map, const WriteMapOpti
     const std::string ext = lower_extension(path);
     if (ext == ".exr") return encode_exr(path, map, options);
     if (ext == ".hdr") return encode_hdr(path, map, options);
-    if (ext == ".pfm") return encode_pfm(path, map);
+    if (ext == ".pfm") return encode_pfm(path, map, options);
     fail(path, unsupported_map_extension(path));
   });
   write_file_atomically(path, bytes);

@@ -221,10 +221,12 @@ class CubeFilesTest : public ::testing::Test {
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
-  void write_face(const std::string& name, int w, int h) {
-    EnvMap m = make_hemisphere(w, h);
-    std::fill(m.rgb.begin(), m.rgb.end(), 0.5f);
-    write_envmap((dir_ / (name + ".pfm")).string(), m);
+  void write_face(const std::string& name, int w, int h) {  // a face is an image, not a map
+    RgbImage face;
+    face.width = w;
+    face.height = h;
+    face.rgb.assign(3 * size_t(w) * size_t(h), 0.5f);
+    write_rgb_image((dir_ / (name + ".pfm")).string(), face);
   }
   void write_all(int n) {
     for (const char* f : {"px", "nx", "py", "ny", "pz", "nz"}) write_face(f, n, n);

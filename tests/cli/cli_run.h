@@ -47,6 +47,14 @@ inline fs::path scratch() {
   return dir;
 }
 
+// An empty directory `name` in this test's scratch directory (emptied if a run left it).
+inline fs::path fresh_dir(const std::string& name) {
+  const fs::path d = scratch() / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
 inline CliRun lightprobe(const std::string& args) {
   const fs::path out = scratch() / "stdout.txt", err = scratch() / "stderr.txt";
   const std::string cmd = std::string(LIGHTPROBE_CLI) + " --no-progress " + args + " >" + out.string() + " 2>" + err.string();

@@ -19,13 +19,6 @@
 namespace lp::cli_test {
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = scratch() / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
 std::string pinhole_model(const fs::path& path, const std::string& fx) {
   std::ofstream(path) << "{ 'lensmodel': 'LENSMODEL_PINHOLE', 'intrinsics': [" << fx
                       << ", 600, 319.5, 239.5], 'extrinsics': [0, 0, 0, 0, 0, 0], 'imagersize': [640, 480] }\n";

@@ -12,13 +12,6 @@
 namespace lp::cli_test {
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = scratch() / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
 // A synthetic 8-bit bracket of three frames (1/64, 1/8, 1 s) with its exposures.csv.
 const fs::path& bracket_dir() {
   static const fs::path dir = [] {

@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/warnings.h"
 
 namespace lp {
 
@@ -50,7 +51,18 @@ MergeSessionReport run_merge_session(const MergeSessionOptions& options, const s
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     stop = true;
   });
+  // --n sets the count of a Q2-tree or direction merge; cameras of one index-keyed method
+  // are merged light by light, keeping their count: an --n that does nothing is said once,
+  // when the first merge shows it.
+  const bool n_given = options.mqtt.merge.merge.n != MergeAvailableOptions{}.n;
+  bool n_unused_said = false;
   const auto serve = [&](const LightList& l, const MergeClientStatus& st) {
+    if (n_given && !n_unused_said && st.mode == "index") {
+      n_unused_said = true;
+      warn(fmt::format("--n {} is not used: the cameras' lists are merged light by light (index), which keeps their "
+                       "own light count",
+                       options.mqtt.merge.merge.n));
+    }
     server.publish(l, nullptr);
     server.publish_metrics(merge_metrics_text(st));
     server.publish_status("merge", merge_status_json(st));

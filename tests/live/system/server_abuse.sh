@@ -47,6 +47,14 @@ wait "$M_PID"; rc=$?
 published=$(sed -n 's/.*"published":\([0-9]*\).*/\1/p' "$WORK/M.json")
 [ "${published:-0}" -gt 0 ] || fail "merge published nothing: $(cat "$WORK/M.json")"
 
+# --n is read by a Q2-tree or direction merge: above it merged by direction, without a word;
+# one pharr camera is merged light by light (index), which keeps its count: said once.
+grep -q -- "--n 64 is not used" "$WORK/M.err" && fail "a direction merge said its --n was not used: $(cat "$WORK/M.err")"
+start_bg N merge "http://127.0.0.1:$B_PORT" --n 20 --duration 2 --listen 127.0.0.1:0
+wait "$N_PID"; rc=$?
+[ "$rc" = 0 ] || fail "merge of one camera exited with $rc: $(tail -2 "$WORK/N.err")"
+[ "$(grep -c -- "--n 20 is not used" "$WORK/N.err")" = 1 ] || fail "an index merge did not say once that --n is unused: $(cat "$WORK/N.err")"
+
 # With a token: authenticated '/%ff' is a 404 too, and only the exact scheme is taken.
 start_bg T stream --source aravis:Fake_1 --method pharr --n 32 --duration 30 --listen 127.0.0.1:0 --token s3cret
 PORT=$T_PORT TOKEN=s3cret wait_for_lights 15

@@ -49,8 +49,18 @@ FilterMode filter_mode(const std::string& name) {
   throw InputError(fmt::format("--filter must be auto, on or off, got '{}'", name));
 }
 
+// Formats whose consumers read the numbers as physical (the csv records no units at all).
 bool has_physical_units(ExportFormat f) {
-  return f == ExportFormat::Gltf || f == ExportFormat::Glb || f == ExportFormat::Pbrt || f == ExportFormat::Mitsuba;
+  return f == ExportFormat::Gltf || f == ExportFormat::Glb || f == ExportFormat::Pbrt || f == ExportFormat::Mitsuba ||
+         f == ExportFormat::Csv;
+}
+
+// pbrt, Mitsuba and csv hold lights only: an SH9 asked for was dropped without a word, and
+// with --residual a third of the power with it.
+void refuse_sh9_the_format_drops(ExportFormat f, const std::string& output, const char* option) {
+  if (f == ExportFormat::Pbrt || f == ExportFormat::Mitsuba || f == ExportFormat::Csv)
+    throw InputError(fmt::format("{}: {} cannot carry the SH9 of {}; write .json, .ndjson, .gltf or .glb", output,
+                                 to_string(f), option));
 }
 
 // The lists in the units of the output format; the warning of a relative list, once.
@@ -76,6 +86,7 @@ int run_sample_residual(const SampleArgs& args, const Output& out, Method method
   read.layout = optional_layout(args.layout, "--layout");
   const EnvMap map = read_envmap(args.inputs[0], read);
   const ExportFormat format = export_format_for(args.format, args.output, false);
+  refuse_sh9_the_format_drops(format, args.output, "--residual sh9");
   SamplerOptions so = args.pipeline.sampler;
   so.lloyd_relaxed = so.q2_jitter = false;  // the residual's lights are the plain samplers'
   const LightsAndAmbientOptions& ao = args.ambient;
@@ -169,9 +180,12 @@ int run_sample(const SampleArgs& args, const Output& out) {
   const MapSequence maps = find_map_sequence(args.inputs);
   const bool sequence = maps.is_sequence();
   const ExportFormat format = export_format_for(args.format, args.output, sequence);
-  if (sequence && format != ExportFormat::Ndjson && format != ExportFormat::Csv)
-    throw InputError(fmt::format("{} maps form a sequence: use --format ndjson (or csv)", maps.files.size()));
+  // A csv has no frame column: a sequence's frames ran together, its ids repeated.
+  if (sequence && format != ExportFormat::Ndjson)
+    throw InputError(fmt::format("{} maps form a sequence: write NDJSON, one frame a line (.ndjson, .jsonl or --format ndjson)",
+                                 maps.files.size()));
   if (sequence && args.sh9) throw InputError("--sh9 takes one map, not a sequence");
+  if (args.sh9) refuse_sh9_the_format_drops(format, args.output, "--sh9");
 
   Progress progress("sample", maps.files.size(), out.progress && sequence);
   SampleMapsResult result = sample_maps(maps, o, [&] { progress.advance(); });

@@ -337,6 +337,28 @@ std::optional<std::string> HttpRequest::query_param(std::string_view name) const
   return std::nullopt;
 }
 
+std::optional<std::string> HttpRequest::query_problem(std::initializer_list<std::string_view> allowed) const {
+  std::string_view q = query;
+  std::vector<std::string> seen;
+  while (!q.empty()) {
+    const size_t amp = q.find('&');
+    const std::string_view pair = q.substr(0, amp);
+    q = amp == std::string_view::npos ? std::string_view{} : q.substr(amp + 1);
+    if (pair.empty()) continue;
+    const size_t eq = pair.find('=');
+    std::string key, value;
+    if (!percent_decode(pair.substr(0, eq), key, true) ||
+        (eq != std::string_view::npos && !percent_decode(pair.substr(eq + 1), value, true)))
+      return "query parameter '" + std::string(pair.substr(0, 60)) + "' is not percent-encoded text";
+    if (std::find(allowed.begin(), allowed.end(), std::string_view(key)) == allowed.end())
+      return allowed.size() == 0 ? "this path takes no query parameters, got '" + key.substr(0, 60) + "'"
+                                 : "unknown query parameter '" + key.substr(0, 60) + "'";
+    if (std::find(seen.begin(), seen.end(), key) != seen.end()) return "query parameter '" + key + "' is given twice";
+    seen.push_back(key);
+  }
+  return std::nullopt;
+}
+
 namespace {
 
 // Splits the complete lines of a request head from `scan` on ([begin, end), no EOL) into

@@ -35,6 +35,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -81,6 +82,10 @@ struct HttpRequest {
   const std::string* header(std::string_view lower_name) const;
   // A query parameter, percent-decoded; nullopt when absent.
   std::optional<std::string> query_param(std::string_view name) const;
+  // Why the query is not one the route takes: a parameter not in `allowed`, one given twice,
+  // or one that does not percent-decode; nullopt when it is fine (a default was served for
+  // ?format=%zz, and ?frame=3 or ?FORMAT=ndjson were dropped, with 200).
+  std::optional<std::string> query_problem(std::initializer_list<std::string_view> allowed) const;
 };
 
 struct HttpResponse {

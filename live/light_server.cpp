@@ -187,6 +187,14 @@ void LightServer::Impl::handle(const HttpRequest& req, HttpExchange& ex) {
     ex.respond(std::move(r));
     return;
   }
+  // The data routes take no query parameter but /lights/stream's format: anything else was
+  // dropped (?frame=3 served the latest list) with 200.
+  const bool data_route = req.path == "/lights" || req.path == "/lights/stream" || req.path == "/probe.png" ||
+                          req.path == "/probe.exr" || req.path == "/status" || req.path == "/metrics" || req.path == "/sh";
+  if (data_route) {
+    const auto problem = req.path == "/lights/stream" ? req.query_problem({"format"}) : req.query_problem({});
+    if (problem) return ex.respond(error_response(400, *problem));
+  }
   if (req.path == "/lights") return ex.respond(lights_response(req));
   if (req.path == "/lights/stream") return handle_stream(req, ex);
   if (req.path == "/probe.png") return handle_map(MapView::Png, req, ex);
@@ -249,6 +257,8 @@ void LightServer::Impl::handle_stream(const HttpRequest& req, HttpExchange& ex) 
 }
 
 void LightServer::Impl::handle_map(MapView view, const HttpRequest& req, HttpExchange& ex) {
+  if (!options.serves_maps)
+    return ex.respond(error_response(404, "this server merges light lists and has no map (ask a camera's stream)"));
   if (!snapshot()) {
     HttpResponse r = error_response(503, "no frame published yet");
     r.headers.emplace_back("Retry-After", "1");

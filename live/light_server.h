@@ -51,6 +51,9 @@ struct LightServerOptions {
   // /probe.png's exposure follows the map over this time constant (seconds of list
   // timestamps; core/temporal_tonemap.h) instead of jumping per picture; 0: per picture.
   double preview_time_constant_s = 0.5;
+  // False for a server that never publishes a map (merge): /probe.png and /probe.exr are 404,
+  // not a 503 "try again" that never ends.
+  bool serves_maps = true;
 };
 
 // Counters as /metrics reports them (for callers that want numbers, not text).

@@ -39,7 +39,9 @@ MergeSessionReport run_merge_session(const MergeSessionOptions& options, const s
   MergeSessionReport report;
   MqttMergeOptions merge_options = options.mqtt;
   merge_options.merge.merge.weights = report.weights = merge_session_weights(options, &report.weights_from);
-  LightServer server(options.server);
+  LightServerOptions server_options = options.server;
+  server_options.serves_maps = false;  // merged lists have no map behind them
+  LightServer server(server_options);
   report.port = server.start();
   if (started) started(report.port);
   defer_interrupts();  // a signal stops the watchdog below: the summary is returned

@@ -275,12 +275,20 @@ std::string export_light_sequence(const std::vector<LightList>& lists, ExportFor
 }
 
 ExportFormat export_format_for(const std::string& name, const std::string& path, bool sequence) {
+  const std::string e = lower_extension(path);
   if (!name.empty()) {
     auto f = export_format_from_string(name);
     if (!f) throw InputError(fmt::format("--format: unknown format '{}' (json, ndjson, pbrt, mitsuba, gltf, glb, csv)", name));
+    // --format names a format for a name that does not say one: against a known extension
+    // that says another (csv text in a .gltf) it is refused. JSON's two shapes share .json.
+    const bool json_family = (*f == ExportFormat::Json || *f == ExportFormat::Ndjson) && (e == ".json" || e == ".jsonl");
+    if (!json_family)
+      for (const FormatInfo& k : kFormats)
+        if (k.extension == e && k.format != *f)
+          throw InputError(fmt::format("{}: --format {} contradicts the extension {} ({}); give the file a matching name",
+                                       path, name, e, k.name));
     return *f;
   }
-  const std::string e = lower_extension(path);
   if (e == ".jsonl") return ExportFormat::Ndjson;
   if (e == ".json") return sequence ? ExportFormat::Ndjson : ExportFormat::Json;
   for (const FormatInfo& f : kFormats)

@@ -225,6 +225,35 @@ TEST(UnreadOptionsCli, ProbeRegisterRefusesTwoPhotosOfOneNameAndSaysWhatLayOutsi
   EXPECT_NE(r.err.find("lay outside the photo and are black (code 0) in ball_1-10s.png"), std::string::npos) << r.err;
 }
 
+// What a light-list format cannot carry, and a --format against the file's extension.
+TEST(UnreadOptionsCli, SampleRefusesWhatItsFormatCannotCarry) {
+  const fs::path dir = fresh_dir("sample");
+  const std::string map = (dir / "map.exr").string();
+  ASSERT_EQ(lightprobe("synth scene --size 64x32 -o " + map).code, 0);
+  const std::string sample = "sample " + map + " --method pharr --n 3 ";
+  // --residual sh9 to pbrt lost a third of the power and reported the error of lights + SH9.
+  for (const char* name : {"rs.pbrt", "rs.xml", "rs.csv"})
+    expect_one_line_error(lightprobe(sample + "--residual sh9 -o " + (dir / name).string()), "cannot carry the SH9 of --residual sh9");
+  expect_one_line_error(lightprobe(sample + "--sh9 -o " + (dir / "s.pbrt").string()), "cannot carry the SH9 of --sh9");
+  expect_one_line_error(lightprobe(sample + "--format csv -o " + (dir / "c.gltf").string()),
+                        "--format csv contradicts the extension .gltf (gltf)");
+  EXPECT_EQ(lightprobe(sample + "--format ndjson -o " + (dir / "n.json").string()).code, 0);
+  EXPECT_EQ(lightprobe(sample + "--format gltf -o " + (dir / "g.txt").string()).code, 0);
+  EXPECT_EQ(lightprobe(sample + "--residual sh9 -o " + (dir / "rs.gltf").string()).code, 0);
+  // A csv has no frame column: a sequence's frames ran together.
+  const fs::path seq = dir / "seq";
+  fs::create_directories(seq);
+  fs::copy_file(map, seq / "a.exr");
+  fs::copy_file(map, seq / "b.exr");
+  expect_one_line_error(lightprobe("sample " + seq.string() + " --n 3 -o " + (dir / "seq.csv").string()),
+                        "form a sequence: write NDJSON");
+  // A relative csv is said, as a relative pbrt is: the csv records no units.
+  const CliRun csv = lightprobe(sample + "-o " + (dir / "r.csv").string());
+  ASSERT_EQ(csv.code, 0) << csv.err;
+  EXPECT_NE(csv.err.find("relative units written as they are"), std::string::npos) << csv.err;
+  for (const char* name : {"rs.pbrt", "rs.xml", "rs.csv", "s.pbrt", "c.gltf"}) EXPECT_FALSE(fs::exists(dir / name)) << name;
+}
+
 TEST(UnreadOptionsCli, SynthRefusesValuesItCannotRenderAndOptionsItNeverReads) {
   const std::string out = " -o " + (scratch() / "s.exr").string();
   expect_one_line_error(lightprobe("synth scene --size 64x32 --sun-scale inf" + out), "--sun-scale must be a finite number");

@@ -639,6 +639,42 @@ TEST(LightServer, TokenGuardsEveryRouteButThePageWithTheExactBearerScheme) {
   s.server->stop();
 }
 
+// A query the route does not take was dropped with 200: ?frame=3 served the latest list,
+// ?FORMAT=ndjson an SSE stream, ?format=%zz the default. Each is a 400 now.
+TEST(LightServer, QueryParametersARouteDoesNotTakeAre400) {
+  auto s = start_server();
+  s.server->publish(make_list(5, 2), nullptr);
+  auto c = client(s.port);
+  for (const char* target : {"/lights?frame=3", "/lights?n=5", "/status?format=xml", "/metrics?format=json",
+                             "/sh?x", "/probe.png?width=64", "/lights/stream?FORMAT=ndjson",
+                             "/lights/stream?format=%zz", "/lights/stream?format=ndjson&format=sse",
+                             "/lights/stream?since=5"}) {
+    auto res = c->Get(target);
+    ASSERT_TRUE(res) << target;
+    EXPECT_EQ(res->status, 400) << target << ": " << res->body;
+    EXPECT_NE(res->body.find("\"error\""), std::string::npos) << target;
+  }
+  auto res = c->Get("/lights");
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  s.server->stop();
+}
+
+TEST(LightServer, AServerWithoutMapsSaysSoInsteadOfAskingToRetry) {
+  lp::LightServerOptions options;
+  options.serves_maps = false;  // merge
+  auto s = start_server(options);
+  s.server->publish(make_list(5, 2), nullptr);
+  auto c = client(s.port);
+  for (const char* path : {"/probe.png", "/probe.exr"}) {
+    auto res = c->Get(path);
+    ASSERT_TRUE(res) << path;
+    EXPECT_EQ(res->status, 404) << path;
+    EXPECT_FALSE(res->has_header("Retry-After")) << path;
+  }
+  s.server->stop();
+}
+
 TEST(LightServer, RefusesToListenBeyondLoopbackWithoutAToken) {
   lp::LightServerOptions options;
   options.host = "0.0.0.0";

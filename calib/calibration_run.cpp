@@ -112,6 +112,10 @@ std::string views_text(const GeometricCalibration& run) {
   std::string s;
   for (const DroppedView& d : run.dropped)
     s += fmt::format("dropped influential view: {} ({:.2f} px)\n", images[d.view], d.leverage_px);
+  // Views the solve left out (too many outlier corners): named here, not only in --json.
+  for (size_t v = 0; v < r.views.size() && v < images.size(); ++v)
+    if (!r.views[v].used && !run.corners[v].empty() && r.views[v].why.rfind("dropped: influential", 0) != 0)
+      s += fmt::format("view left out: {} ({})\n", images[v], r.views[v].why.empty() ? "not used" : r.views[v].why);
   if (run.before_dropping) {
     const auto& b = *run.before_dropping;
     s += fmt::format("with all views: {} (cross-validation {:.3f} px, RMS {:.3f} px); without the {} most influential: "
@@ -362,6 +366,17 @@ GeometricCalibration calibrate_detections(BoardDetections detections, const Boar
     throw InputError(fmt::format("no {}x{} board found in any of the {} images (check --board: inner corners)",
                                  board.cols, board.rows, n));
   }
+  // Some images show another board size (a count of squares given for inner corners finds
+  // a sub-board in a few views and drops the rest): said, or refused when they are the most.
+  std::map<std::pair<int, int>, int> other_sizes;
+  for (const BoardDetection& b : d.per_image)
+    if (b.other_cols > 0) ++other_sizes[{b.other_cols, b.other_rows}];
+  for (const auto& [size, count] : other_sizes) {
+    const std::string what = fmt::format("{} of the {} images show a {}x{} board (inner corners), not the {}x{} of --board",
+                                         count, n, size.first, size.second, board.cols, board.rows);
+    if (count > int(d.found)) throw InputError(what + fmt::format(", found in only {}: check --board", d.found));
+    run.notes.push_back(what + ": those views are left out");
+  }
   if (d.found < 4)
     throw InputError(fmt::format("a {}x{} board was found in only {} of {} images; at least 4 views are needed",
                                  board.cols, board.rows, d.found, n));
@@ -380,6 +395,12 @@ GeometricCalibration calibrate_detections(BoardDetections detections, const Boar
   run.result = calibrate(run.corners, board, d.width, d.height, options.calibrate);
   if (options.drop_influential > 0) {
     const std::vector<DroppedView> drop = views_to_drop(run.result, options.drop_influential);
+    // At least five views stay: asking for more than that leaves was capped without a word.
+    int flagged = 0;
+    for (const auto& v : run.result.views) flagged += v.influential;
+    if (int(drop.size()) < std::min(options.drop_influential, flagged))
+      run.notes.push_back(fmt::format("--drop-influential {}: {} of the {} influential views dropped; at least 5 views stay",
+                                      options.drop_influential, drop.size(), flagged));
     if (!drop.empty()) {
       const CalibrationResult& r = run.result;
       run.before_dropping =
@@ -420,6 +441,10 @@ void write_calibration_files(GeometricCalibration& run, const std::string& outpu
           model.lensmodel, yaml, output, s->model.lensmodel, s->rms_px, s->heldout_rms_px,
           s->fits_poorly ? ", beyond the fit limits: use with care" : "", s->median_from_chosen_px));
     } else {
+      // An earlier run's .cameramodel beside the new YAML would disagree with it: said.
+      std::error_code ec;
+      if (fs::exists(output, ec))
+        run.notes.push_back(output + " is from an earlier run and was not replaced: it no longer matches " + yaml);
       // No stand-in: the model was forced (--model), or no mrcal candidate fits; say which.
       const ModelCandidate* best = nullptr;
       for (const ModelCandidate& c : run.result.table)

@@ -15,6 +15,7 @@
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
+#include "core/file_io.h"
 #include "core/warnings.h"
 #include "core/heap_tuning.h"
 #include "core/progress.h"
@@ -67,6 +68,25 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   o.calibrate.progress = stage_progress_bars("solve: ", out.progress);
   o.drop_influential = args.drop_influential;
   if (args.images.empty() == args.corners_in.empty()) throw InputError("give either IMAGE... or --corners-in");
+  // Checked before the solve: a file there ended the run with an internal error after the
+  // camera file was written.
+  if (std::error_code ec; !args.report_dir.empty() && fs::exists(args.report_dir, ec) && !fs::is_directory(args.report_dir, ec))
+    throw InputError(fmt::format("--report {}: a file is there; it names a directory for the pictures", args.report_dir));
+  // The images say their size: --imagersize is for a corners.vnl whose images are not at hand.
+  if (!args.imagersize.empty() && !args.images.empty())
+    throw InputError("--imagersize is for --corners-in without the images; the images give their own size");
+  // --corners-out over one of the inputs: `--corners-out imgs/*.jpg` took the first image's
+  // name and overwrote the photo with corner text; over --corners-in it dropped what it held.
+  if (!args.corners_out.empty()) {
+    std::error_code ec;
+    auto same = [&](const std::string& other) { return other == args.corners_out || fs::equivalent(other, args.corners_out, ec); };
+    for (const std::string& image : args.images)
+      if (same(image)) throw InputError(fmt::format("--corners-out {} is one of the images", args.corners_out));
+    if (!args.corners_in.empty() && same(args.corners_in))
+      throw InputError(fmt::format("--corners-out {} is the --corners-in file; write the corners elsewhere", args.corners_out));
+    if (is_camera_image_file(args.corners_out) || is_radiance_file(args.corners_out))
+      throw InputError(fmt::format("--corners-out {}: the corners are text (mrcal's corners.vnl), not an image", args.corners_out));
+  }
   const std::vector<double> size = args.imagersize.empty() ? std::vector<double>{0, 0} : parse_numbers(args.imagersize, "--imagersize", 2);
   Progress detected("detect boards", args.images.size(), out.progress);
   CornersFile corners = !args.corners_in.empty() ? read_corners_vnl(args.corners_in, board, size[0], size[1])

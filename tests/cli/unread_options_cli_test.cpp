@@ -6,6 +6,9 @@
 #include <nlohmann/json.hpp>
 
 #include <string>
+#include <vector>
+#include <sstream>
+#include <map>
 
 #include "tests/cli/cli_run.h"
 
@@ -223,6 +226,79 @@ TEST(UnreadOptionsCli, ProbeRegisterRefusesTwoPhotosOfOneNameAndSaysWhatLayOutsi
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("ball_1-10s.jpg: "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("lay outside the photo and are black (code 0) in ball_1-10s.png"), std::string::npos) << r.err;
+}
+
+// calib geometric: the corners of eight stereo views, detected once (corners.vnl rows: name x y level).
+const fs::path& stereo_corners() {
+  static const fs::path vnl = [] {
+    const fs::path dir = scratch() / "stereo_corners";
+    fs::create_directories(dir);
+    std::string images;
+    for (int i = 1; i <= 8; ++i) images += ' ' + shared("calib-opencv-stereo-9x6/left0" + std::to_string(i) + ".jpg");
+    const CliRun r = lightprobe("calib geometric" + images + " --board 9x6 --square 25 --model plumb_bob --corners-out " +
+                                (dir / "corners.vnl").string() + " -o " + (dir / "camera.yaml").string());
+    EXPECT_EQ(r.code, 0) << r.err;
+    return dir / "corners.vnl";
+  }();
+  return vnl;
+}
+
+// The first `views` views of stereo_corners(), the first `transposed` of them with their
+// corners in column-major order (no 9x6 board: the outlier stage leaves them out).
+std::string corners_subset(const std::string& name, int views, int transposed) {
+  std::istringstream in(slurp(stereo_corners()));
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    const std::string file = line.substr(0, line.find(' '));
+    if (!rows.count(file)) order.push_back(file);
+    rows[file].push_back(line);
+  }
+  std::string text = "# filename x y level\n";
+  for (int v = 0; v < views && v < int(order.size()); ++v) {
+    const std::vector<std::string>& r = rows[order[size_t(v)]];
+    for (int k = 0; k < 54; ++k) text += r[size_t(v < transposed ? (k % 6) * 9 + k / 6 : k)] + "\n";
+  }
+  const fs::path path = stereo_corners().parent_path() / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(UnreadOptionsCli, CalibGeometricSaysWhatItLeavesOutAndRefusesWhatItWouldOverwrite) {
+  const std::string solve = " --board 9x6 --square 25 -o " + (scratch() / "cam.yaml").string();
+  const std::string eight = stereo_corners().string();
+  // A board of another size in some views: they were left out without a word.
+  std::string images;
+  for (int i = 1; i <= 8; ++i) images += ' ' + shared("calib-opencv-stereo-9x6/left0" + std::to_string(i) + ".jpg");
+  const CliRun wrong = lightprobe("calib geometric" + images + " --board 8x6 --square 25 --model plumb_bob -o " +
+                                  (scratch() / "w.yaml").string());
+  ASSERT_EQ(wrong.code, 0) << wrong.err;
+  EXPECT_NE(wrong.out.find("show a 9x6 board (inner corners), not the 8x6 of --board: those views are left out"),
+            std::string::npos) << wrong.out;
+  // Views the outlier stage drops are named in the text, not only in --json.
+  const CliRun out = lightprobe("calib geometric --corners-in " + corners_subset("t.vnl", 8, 2) + solve + " --model plumb_bob");
+  ASSERT_EQ(out.code, 0) << out.err;
+  EXPECT_NE(out.out.find("view left out: "), std::string::npos) << out.out;
+  // --drop-influential is capped so that five views stay: said.
+  const CliRun capped = lightprobe("calib geometric --corners-in " + corners_subset("five.vnl", 5, 0) + solve +
+                                   " --model plumb_bob --drop-influential 3");
+  ASSERT_EQ(capped.code, 0) << capped.err;
+  EXPECT_NE(capped.out.find("influential view:"), std::string::npos) << capped.out;  // left02 (0.68 px)
+  EXPECT_NE(capped.out.find("--drop-influential 3: 0 of the 1 influential views dropped; at least 5 views stay"),
+            std::string::npos) << capped.out;
+  expect_one_line_error(lightprobe("calib geometric" + images + " --imagersize 1280,960" + solve),
+                        "--imagersize is for --corners-in without the images");
+  expect_one_line_error(lightprobe("calib geometric --corners-in " + eight + " --corners-out " + eight + solve),
+                        "is the --corners-in file");
+  expect_one_line_error(lightprobe("calib geometric --corners-in " + eight + " --corners-out " +
+                                   (scratch() / "left01.jpg").string() + solve),
+                        "the corners are text (mrcal's corners.vnl), not an image");
+  std::ofstream(scratch() / "report.txt") << "x";
+  expect_one_line_error(lightprobe("calib geometric --corners-in " + eight + " --report " + (scratch() / "report.txt").string() + solve),
+                        "a file is there");
+  expect_one_line_error(lightprobe("calib geometric --corners-in " + eight + " --board 2x2 --square 25 -o x.yaml"),
+                        "needs at least 3x3");
 }
 
 // What a light-list format cannot carry, and a --format against the file's extension.

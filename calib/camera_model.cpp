@@ -18,6 +18,7 @@
 #include "calib/lens_model.h"
 #include "calib/opencv_storage_check.h"
 #include "core/error.h"
+#include "core/warnings.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
 
@@ -561,6 +562,22 @@ CameraModel read_cameramodel(const std::string& path) {
   m.rms_reprojection_px = comment_value(text, "rms_reprojection_px");
   m.cross_validation_px = comment_value(text, "cross_validation_px");
   check_model_file(path, m);
+  // What the file says that lightprobe does not apply is said, not dropped: mrcal's region
+  // where the model is trusted (the unwrap uses the model beyond it too), and a rig camera's
+  // pose (the probe's rotation is --rotation).
+  for (const char* quote : {"'", "\""}) {
+    const size_t key = text.find(std::string(quote) + "valid_intrinsics_region" + quote);
+    if (key == std::string::npos) continue;
+    const size_t open = text.find_first_not_of(" \t\r\n:", key + 25);
+    if (open != std::string::npos && text[open] == '[' && text.find_first_not_of(" \t\r\n", open + 1) != std::string::npos &&
+        text[text.find_first_not_of(" \t\r\n", open + 1)] != ']')
+      warn(path + ": its valid_intrinsics_region is not applied: the model is used beyond it too, where mrcal calls it "
+                  "unreliable");
+  }
+  bool posed = false;
+  for (double v : cm->rt_cam_ref) posed |= v != 0;
+  if (posed)
+    warn(path + ": its extrinsics (a rig camera's pose) are not applied; give the probe's rotation with --rotation");
   return m;
 }
 

@@ -3,6 +3,9 @@
 // camera looking sideways. The camera's rotation into the world is given separately.
 #pragma once
 
+#include <array>
+#include <optional>
+
 #include "calib/camera_model.h"
 #include "core/envmap.h"
 #include "core/image_io.h"
@@ -23,12 +26,19 @@ CameraModel camera_model_from_fisheye(const FisheyeModel& fisheye);
 // Per output map pixel, the source pixel (remap convention: centres at +0.5); directions
 // the model cannot image, or that fall outside the image, are invalid (NaN).
 // max_field_deg > 0 also masks rays further than that from the optical axis (a fisheye's
-// image circle: the model alone does not know where the lens stops imaging).
+// image circle: the model alone does not know where the lens stops imaging), and
+// image_circle (cx, cy, r) the pixels beyond the circle. Directions where a model that can
+// fold (OpenCV's polynomials, CAHVOR(E), the spline) does not unproject back to within half
+// a degree are invalid too.
 RemapTable camera_remap(const CameraModel& model, const Mat3& world_from_camera, Layout layout, int width,
-                        int height, double max_field_deg = 0);
+                        int height, double max_field_deg = 0,
+                        const std::optional<std::array<double, 3>>& image_circle = std::nullopt);
 
 struct CameraUnwrapOptions {
   double max_field_deg = 0;  // 0: no limit beyond the model's own domain
+  // The lens's image circle in the frame (a disc on black): pixels beyond it are not the
+  // scene, whatever the model projects there. None: the whole frame is image.
+  std::optional<std::array<double, 3>> image_circle;  // cx, cy, r in pixels
   FillOptions fill{.method = FillMethod::None};
   RemapOptions remap;
 };

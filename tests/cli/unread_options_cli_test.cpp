@@ -5,6 +5,7 @@
 // about in one.
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <string>
 #include <vector>
 #include <sstream>
@@ -299,6 +300,50 @@ TEST(UnreadOptionsCli, CalibGeometricSaysWhatItLeavesOutAndRefusesWhatItWouldOve
                         "a file is there");
   expect_one_line_error(lightprobe("calib geometric --corners-in " + eight + " --board 2x2 --square 25 -o x.yaml"),
                         "needs at least 3x3");
+}
+
+double valid_fraction(const std::string& map) {
+  const CliRun r = lightprobe("--json info " + map);
+  EXPECT_EQ(r.code, 0) << r.err;
+  return r.code == 0 ? nlohmann::json::parse(r.out)["valid_fraction"].get<double>() : -1;
+}
+
+std::string opencv_yaml(const fs::path& path, int w, int h, double f, double cx, double cy, const std::string& model,
+                        const std::string& coefficients, int count) {
+  std::ofstream(path) << "%YAML:1.0\n---\nimage_width: " << w << "\nimage_height: " << h
+                      << "\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ " << f << ", 0., "
+                      << cx << ", 0., " << f << ", " << cy << ", 0., 0., 1. ]\ndistortion_coefficients: !!opencv-matrix\n"
+                      << "   rows: 1\n   cols: " << count << "\n   dt: d\n   data: [ " << coefficients
+                      << " ]\ndistortion_model: " << model << "\n";
+  return path.string();
+}
+
+// Through a calibrated lens (--camera): the black around a fisheye's image circle was mapped
+// as valid dark sky, and a polynomial fit used past its fold wrote rings of the zenith at
+// 45-50 deg. Both are invalid now.
+TEST(UnreadOptionsCli, ACalibratedLensMapsNeitherTheBlackAroundItsCircleNorItsFold) {
+  const fs::path dir = fresh_dir("lens");
+  const std::string fish = (dir / "fish.exr").string();
+  ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 190 --size 512x512 -o " + fish).code, 0);
+  // The render's own lens: equidistant, its 190 deg circle inscribed (f = 256 / 95 deg).
+  const std::string ideal = opencv_yaml(dir / "ideal.yaml", 512, 512, 256 / (95 * M_PI / 180), 255.5, 255.5, "fisheye",
+                                        "0., 0., 0., 0.", 4);
+  const std::string by_fov = (dir / "fov.exr").string(), by_camera = (dir / "camera.exr").string();
+  ASSERT_EQ(lightprobe("probe unwrap " + fish + " --type fisheye --fov 190 --size 256x128 -o " + by_fov).code, 0);
+  ASSERT_EQ(lightprobe("probe unwrap " + fish + " --type fisheye --camera " + ideal + " --size 256x128 -o " + by_camera).code, 0);
+  EXPECT_NEAR(valid_fraction(by_camera), valid_fraction(by_fov), 0.01);  // was 0.59 against 0.53
+  // The shared stereo camera's plumb_bob fit (k1 0.296, k2 -1.035) peaks at 36.1 deg off axis
+  // and folds back: nothing beyond 36.1 deg, 20.1 % of a latlong's rows, may be valid.
+  const std::string wide = (dir / "wide.exr").string();
+  ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 190 --size 640x480 -o " + wide).code, 0);
+  const std::string folds = opencv_yaml(dir / "plumb.yaml", 640, 480, 534.80326845051309, 335.68643204394891,
+                                        240.66183054066337, "plumb_bob",
+                                        "2.9589439552724328e-01, -1.0354662043042675e+00, 0., 0., 0.", 5);
+  const std::string folded = (dir / "folded.exr").string();
+  ASSERT_EQ(lightprobe("probe unwrap " + wide + " --type fisheye --camera " + folds + " --size 256x128 -o " + folded).code, 0);
+  const double v = valid_fraction(folded);
+  EXPECT_LE(v, 36.1 / 180 + 0.005);
+  EXPECT_GT(v, 0.05);
 }
 
 // What a light-list format cannot carry, and a --format against the file's extension.

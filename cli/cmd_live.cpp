@@ -148,6 +148,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
                                    args.source, fs_name(frames.front())));
   }
   lo.fov_deg = args.fov;
+  lo.fov_given = args.fov != StreamArgs{}.fov;
   if (!args.rotation.empty()) lo.world_from_probe = parse_rotation(args.rotation);
   lo.frames_are_maps = args.maps;
   const auto layout = layout_from_string(args.layout);

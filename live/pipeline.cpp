@@ -369,7 +369,8 @@ std::vector<double> auto_first_bracket(const ExposureRange& range) {
   return times;
 }
 
-void LivePipeline::ensure_remap(int width, int height) {
+void LivePipeline::ensure_remap(const RgbImage& frame) {
+  const int width = frame.width, height = frame.height;
   if (remap_ && remap_->width == width && remap_->height == height) return;
   const CameraModel model =
       options_.camera ? *options_.camera : camera_model_from_fisheye(equidistant_fisheye(width, height, options_.fov_deg));
@@ -381,9 +382,11 @@ void LivePipeline::ensure_remap(int width, int height) {
   remap_->width = width;
   remap_->height = height;
   const Mat3 world_from_camera = options_.world_from_probe * upward_camera_world_from_camera();
-  remap_->compiled = compile_remap(
-      camera_remap(model, world_from_camera, options_.layout, options_.width, options_.height, options_.fov_deg / 2),
-      width, height);
+  const bool lens_bounds = options_.camera && !options_.fov_given;
+  remap_->compiled = compile_remap(camera_remap(model, world_from_camera, options_.layout, options_.width, options_.height,
+                                                lens_bounds ? 0.0 : options_.fov_deg / 2,
+                                                lens_bounds ? lens_image_circle(frame) : std::nullopt),
+                                   width, height);
   remap_->plan = plan_bracket_unwrap(remap_->compiled);
 }
 
@@ -414,7 +417,10 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
   } else if (b.frames.size() > 1) {
     // Fuse only the sensor pixels the unwrap reads (live/bracket_unwrap.h): the same map
     // as merging every pixel and unwrapping, for a tenth of the work at 1280x960.
-    ensure_remap(b.frames[0].image.width, b.frames[0].image.height);
+    // The longest exposure shows the image circle best.
+    ensure_remap(std::max_element(b.frames.begin(), b.frames.end(), [](const CameraFrame& x, const CameraFrame& y) {
+                   return x.exposure_s < y.exposure_s;
+                 })->image);
     // A map this small is cheaper on the calling thread than the wake-up of TBB workers,
     // which costs milliseconds when the cores are busy.
     const bool small = size_t(options_.width) * size_t(options_.height) <= 512 * 256;
@@ -456,7 +462,7 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     RgbImage radiance = std::move(b.frames[0].image);
     fuse_s = seconds_since(t0);
     t0 = Clock::now();
-    ensure_remap(radiance.width, radiance.height);
+    ensure_remap(radiance);
     apply_remap(radiance, remap_->compiled, &remap_->out);
     map->rgb = remap_->out.rgb;
     map->valid = remap_->out.valid;

@@ -55,6 +55,10 @@ struct LivePipelineOptions {
   std::optional<CameraModel> camera;
   std::string camera_file;  // where `camera` was read from, named in errors about it
   double fov_deg = 180;
+  // With `camera`: whether fov_deg was given. Without it the calibrated model's own domain
+  // is bounded by the image circle found in the first frame (probe unwrap's rule), not by
+  // 180 deg, which cut a 190 deg lens and kept a 150 deg lens's black surround.
+  bool fov_given = false;
   Mat3 world_from_probe{};
   // The frames' colours when they are codes of a colour space other than sRGB (a replayed
   // photo's matrix ICC profile, hdr/bracket.h read_colour_profile): linear values in it to
@@ -132,7 +136,7 @@ class LivePipeline {
   void capture_loop();
   void process_loop();
   Timings process(Bracket& bracket);
-  void ensure_remap(int width, int height);
+  void ensure_remap(const RgbImage& frame);
   void plan_next_bracket(const MeteredScene& scene);  // compiles the unwrap table for this frame size
 
   OpenSource open_;

@@ -8,6 +8,7 @@
 
 #include "calib/lens_model.h"
 #include "core/error.h"
+#include "probe/stabilise.h"
 
 namespace lp {
 
@@ -54,6 +55,16 @@ RemapTable camera_remap(const CameraModel& model, const Mat3& world_from_camera,
                        }
                        return std::array<double, 2>{p->x + 0.5, p->y + 0.5};  // remap convention
                      });
+}
+
+std::optional<std::array<double, 3>> lens_image_circle(const RgbImage& frame) {
+  try {
+    const FindCircleOptions fo;
+    const ImageCircle c = find_image_circle(frame, fo);
+    if (c.rms_residual_px < 1.5 && c.boundary_points * 4 >= fo.rays * 3) return std::array<double, 3>{c.cx, c.cy, c.r - 1.0};
+  } catch (const InputError&) {  // no disc: the frame is image edge to edge
+  }
+  return std::nullopt;
 }
 
 EnvMap unwrap_with_camera(const RgbImage& image, const CameraModel& model, const Mat3& world_from_camera,

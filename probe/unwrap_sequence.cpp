@@ -164,7 +164,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
   const CircleTrack& track = report.used;
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<CameraModel> base_model;
-  std::optional<ImageCircle> lens_circle;  // a calibrated lens's image circle, found on its first frame
+  std::optional<std::array<double, 3>> lens_circle;  // a calibrated lens's image circle, found on its first frame
   bool lens_circle_tried = false;
   std::vector<Vec3> centroids;
   CodeTable code_table;  // built at the first frame of codes, for their bit depth
@@ -215,23 +215,14 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
         co.max_field_deg = o.fisheye_fov_deg > 0 ? o.fisheye_fov_deg / 2 : (o.camera ? 0 : 90);
         // A calibrated lens without --fov: its model images rays up to its own domain (180 deg
         // for Kannala-Brandt), past the lens's image circle, and the black around the disc was
-        // mapped as valid dark sky. The circle found in the frame bounds it, when it is a clean
-        // disc on black (a fit within 1.5 px on three quarters of the rays); a full-frame image
-        // has none and keeps every pixel.
+        // mapped as valid dark sky. The circle found in the frame bounds it (lens_image_circle:
+        // a clean disc on black only; a full-frame image keeps every pixel).
         if (o.camera && !(o.fisheye_fov_deg > 0)) {
           if (!track.cx.empty()) {
             co.image_circle = std::array<double, 3>{track.cx[i], track.cy[i], track.r[i] - 1.0};
           } else {
-            if (!lens_circle_tried) {
-              lens_circle_tried = true;
-              try {
-                const FindCircleOptions fo;
-                const ImageCircle c = find_image_circle(frame, fo);
-                if (c.rms_residual_px < 1.5 && c.boundary_points * 4 >= fo.rays * 3) lens_circle = c;
-              } catch (const InputError&) {  // no disc: the frame is image edge to edge
-              }
-            }
-            if (lens_circle) co.image_circle = std::array<double, 3>{lens_circle->cx, lens_circle->cy, lens_circle->r - 1.0};
+            if (!lens_circle_tried) lens_circle = lens_image_circle(frame), lens_circle_tried = true;
+            co.image_circle = lens_circle;
           }
         }
         if (o.fill) co.fill.method = FillMethod::PushPull;

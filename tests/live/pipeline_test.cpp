@@ -5,6 +5,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <mutex>
 #include <thread>
 
@@ -152,6 +153,68 @@ TEST(LivePipeline, AGainNotInDecibelsIsDividedOutAsNoneAndSaidOnce) {
   ASSERT_EQ(raw.size(), 1u);
   EXPECT_NE(raw[0].find("scripted: the camera's gain is not in dB"), std::string::npos) << raw[0];
   EXPECT_NEAR(power_with(20 * std::log10(2.0), &none) / at_0db, 0.5, 1e-4);  // a known gain divides
+}
+
+// A camera whose frames hold a bright disc (the lens's image circle) on black.
+class DiscSource : public CameraSource {
+ public:
+  explicit DiscSource(int frames) : frames_(frames) {}
+  std::string describe() const override { return "disc"; }
+  void set_exposure_cycle(const std::vector<double>&) override {}
+  bool finished() const override { return produced_ >= frames_; }
+  std::optional<CameraFrame> next(double) override {
+    if (produced_ >= frames_) return std::nullopt;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    CameraFrame f;
+    f.exposure_s = 1.0;
+    f.sequence = produced_++;
+    f.image.width = f.image.height = 64;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const double dx = x + 0.5 - 32, dy = y + 0.5 - 32;
+        const float v = dx * dx + dy * dy <= 24.0 * 24.0 ? 0.6f : 0.0f;
+        f.image.rgb.insert(f.image.rgb.end(), {v, v, v});
+      }
+    return f;
+  }
+
+ private:
+  int frames_, produced_ = 0;
+};
+
+// Through a calibrated lens without --fov, the stream masked at the default 180 deg: a 150
+// deg lens's black surround, 75 to 90 deg off axis, streamed as valid dark sky (and a 190 deg
+// lens lost its last 5 deg). The circle found in the frame bounds it now, as probe unwrap
+// does. The disc is a 150 deg lens's circle (r 24 px at 75 deg).
+TEST(LivePipeline, ACalibratedLensIsBoundedByItsImageCircle) {
+  auto valid_share = [](double fov_deg, bool fov_given) {
+    LivePipelineOptions o = options();
+    o.exposure_cycle = {};
+    o.layout = Layout::LatLong;
+    o.width = 180;
+    o.height = 90;
+    o.camera = camera_model_from_fisheye(equidistant_fisheye(64, 64, 180));
+    const double f = 24 / (75 * M_PI / 180);
+    o.camera->intrinsics = {f, f, 32, 32, 0, 0, 0, 0};  // pixel centres at +0.5: the disc's centre is 32
+    o.fov_deg = fov_deg;
+    o.fov_given = fov_given;
+    std::mutex m;
+    double share = 0;
+    LivePipeline p([&] { return std::make_unique<DiscSource>(4); }, o, [&](const LightList&, std::shared_ptr<const EnvMap> map) {
+      const std::lock_guard lock(m);
+      size_t valid = 0;
+      for (size_t i = 0; i < map->pixel_count(); ++i) valid += map->valid.empty() || map->valid[i];
+      share = double(valid) / double(map->pixel_count());
+    });
+    p.start();
+    p.wait();
+    return share;
+  };
+  const double by_fov = valid_share(150, true), by_circle = valid_share(180, false);
+  EXPECT_NEAR(by_fov, 75.0 / 180, 0.02);
+  // Within the circle, less its 1 px soft edge (4 deg here); at 180 deg it was 90 / 180.
+  EXPECT_LE(by_circle, by_fov + 0.005);
+  EXPECT_GT(by_circle, by_fov - 0.04);
 }
 
 // Codes of another colour space (a replayed photo's ICC profile) are turned to Rec. 709 in

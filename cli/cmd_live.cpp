@@ -266,7 +266,7 @@ std::vector<Command> live_commands() {
          f.opt("--response", a->response, "Camera response: a response.json (hdr response), or srgb for codes written as sRGB (a phone's JPEGs); default linear");
          f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");
          f.opt("--camera", a->camera, "Calibrated camera model (default: equidistant fisheye)");
-         f.opt("--fov", a->fov, "Fisheye field of view / image circle, deg");
+         f.opt("--fov", a->fov, "Fisheye field of view / image circle, deg (with --camera only when given: else the image circle found in the first frame bounds the lens)");
          f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees");
          f.flag("--maps", a->maps, "The source delivers environment maps already (replayed .exr)");
          f.opt("--layout", a->layout, "latlong|hemisphere|healpix");

@@ -384,7 +384,7 @@ std::vector<Command> probe_commands() {
          f.arg("IMAGE", a->inputs, "Probe image(s) or a directory of frames").required();
          f.opt("--type", a->type, "mirrorball|fisheye");
          f.opt("--camera", a->camera, "fisheye: calibrated model (.cameramodel or OpenCV YAML, any lens model)");
-         f.opt("--fov", a->fov, "fisheye: field of view (deg) of an ideal equidistant lens whose image circle fits the frame's short side, or the image circle of --camera; " "ball: the camera's field of view");
+         f.opt("--fov", a->fov, "fisheye: field of view (deg) of an ideal equidistant lens whose image circle fits the frame's short side, or the image circle of --camera (without it, the circle found in the frame); " "ball: the camera's field of view");
          f.opt("--distance", a->distance, "ball: camera distance in ball radii (default orthographic)");
          f.opt("--ball", a->ball, "ball: 'cx,cy,r' in pixels instead of detection");
          f.opt("--reflectivity", a->reflectivity, "ball: reflectivity at normal incidence (chrome ~0.6-0.7)");

@@ -260,7 +260,7 @@ std::vector<Command> live_commands() {
          auto a = std::make_shared<StreamArgs>();
          f.opt("--source", a->source, "replay:DIR | video:FILE | aravis[:ID] | libcamera[:ID] | v4l2:N");
          f.opt("--listen", a->listen, "HOST:PORT to serve on (127.0.0.1 by default; port 0 picks one)");
-         f.opt("--token", a->token, "Bearer token required on every route (needed beyond localhost)");
+         f.opt("--token", a->token, "Bearer token required on every route (needed beyond localhost)").non_empty();
          f.opt("--exposures", a->exposures, "Bracketing: exposure times cycled by the camera, seconds; or 'auto': the fewest that cover the scene, re-planned as it changes");
          f.opt("--bracketing", a->bracketing, "auto: the camera's sequencer when it has one, else per-frame writes; sequencer; writes").one_of({"auto", "sequencer", "writes"});
          f.opt("--response", a->response, "Camera response: a response.json (hdr response), or srgb for codes written as sRGB (a phone's JPEGs); default linear");
@@ -300,8 +300,8 @@ std::vector<Command> live_commands() {
          f.opt("--mqtt-qos", a->mo.mqtt.qos, "QoS of the subscription and the merged lists, 0 or 1").one_of({"0", "1"});
          f.opt("--mqtt-cafile", a->mo.mqtt.client.cafile, "mqtts: CA certificates (PEM); default the system's");
          f.opt("--listen", a->listen, "HOST:PORT to serve the merged lights on");
-         f.opt("--token", a->token, "Bearer token for our server");
-         f.opt("--upstream-token", a->mo.mqtt.merge.token, "Bearer token for the cameras' servers");
+         f.opt("--token", a->token, "Bearer token for our server").non_empty();
+         f.opt("--upstream-token", a->mo.mqtt.merge.token, "Bearer token for the cameras' servers").non_empty();
          f.opt("--weights", a->weights, "Comma-separated weights, one per URL");
          f.opt("--camera-positions", a->camera_positions, "Where each URL's camera stands, X,Y,Z;X,Y,Z;... (with --target: weights 1/distance^2)");
          f.opt("--target", a->target, "X,Y,Z: the point being lit, for --camera-positions");

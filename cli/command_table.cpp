@@ -67,6 +67,11 @@ class CliFlags final : public Flags {
     last_->check(CLI::IsMember(std::move(values)));
     return *this;
   }
+  Flags& non_empty() override {
+    last_->check(CLI::Validator([](std::string& v) { return v.empty() ? std::string("must not be empty") : std::string(); },
+                                ""));  // no name: the help keeps "TEXT"
+    return *this;
+  }
 
  private:
   Flags& keep(CLI::Option* option) {

@@ -42,6 +42,9 @@ class Flags {
   virtual Flags& required() = 0;
   // The option declared last takes one of these values.
   virtual Flags& one_of(std::vector<std::string> values) = 0;
+  // The option declared last, when given, must not be empty: an empty value would read as
+  // "not given" (`--token ""` would otherwise serve without authentication).
+  virtual Flags& non_empty() = 0;
   // The shared required output: -o,--output.
   Flags& output(std::string& target, const char* help) { return opt("-o,--output", target, help).required(); }
 };

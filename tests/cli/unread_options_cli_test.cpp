@@ -433,6 +433,11 @@ TEST(UnreadOptionsCli, StreamAndMergeRefuseOptionsTheirModeOrSourceNeverReads) {
   const CliRun twice = lightprobe(merge + "http://127.0.0.1:21001 http://localhost:21001/lights");
   EXPECT_EQ(twice.code, 2);
   EXPECT_NE(twice.err.find("are the same server"), std::string::npos) << twice.err;
+  // An empty token read as "no token": on localhost the server then answered everyone.
+  expect_one_line_error(lightprobe(fake + "--token ''"), "--token: must not be empty");
+  expect_one_line_error(lightprobe(merge + "http://127.0.0.1:21001 --token ''"), "--token: must not be empty");
+  expect_one_line_error(lightprobe(merge + "http://127.0.0.1:21001 --upstream-token ''"),
+                        "--upstream-token: must not be empty");
   const CliRun nobody = lightprobe(merge + "http://127.0.0.1:21001");
   EXPECT_EQ(nobody.code, 0) << nobody.err;  // a camera may come later: said, not refused
   EXPECT_NE(nobody.out.find("no input ever gave a light list"), std::string::npos) << nobody.out;

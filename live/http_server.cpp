@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -47,6 +48,7 @@ const char* http_reason(int status) {
     case 403: return "Forbidden";
     case 404: return "Not Found";
     case 405: return "Method Not Allowed";
+    case 406: return "Not Acceptable";
     case 408: return "Request Timeout";
     case 413: return "Content Too Large";
     case 414: return "URI Too Long";
@@ -357,6 +359,64 @@ std::optional<std::string> HttpRequest::query_problem(std::initializer_list<std:
     seen.push_back(key);
   }
   return std::nullopt;
+}
+
+namespace {
+
+// A q value as RFC 9110 writes it: 0, 1, or 0.ddd / 1.000 (at most three decimals).
+std::optional<double> parse_qvalue(std::string_view v) {
+  if (v.empty() || v.size() > 5 || (v[0] != '0' && v[0] != '1')) return std::nullopt;
+  if (v.size() > 1 && v[1] != '.') return std::nullopt;
+  int thousandths = (v[0] - '0') * 1000, scale = 100;  // in integers: "0.7" is the double 0.7
+  for (size_t i = 2; i < v.size(); ++i, scale /= 10) {
+    if (v[i] < '0' || v[i] > '9') return std::nullopt;
+    thousandths += (v[i] - '0') * scale;
+  }
+  return thousandths <= 1000 ? std::optional<double>(thousandths / 1000.0) : std::nullopt;
+}
+
+}  // namespace
+
+double HttpRequest::accept_quality(std::string_view media_type) const {
+  const std::string* accept = header("accept");
+  if (!accept || trim(*accept).empty()) return 1;
+  const size_t slash = media_type.find('/');
+  const std::string_view type = media_type.substr(0, slash), subtype = media_type.substr(slash + 1);
+  int best_specificity = -1;
+  double best_q = 0;
+  std::string_view rest = *accept;
+  while (!rest.empty()) {
+    const size_t comma = rest.find(',');
+    std::string_view element = rest.substr(0, comma);
+    rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+    const size_t semi = element.find(';');
+    const std::string_view range = trim(element.substr(0, semi));
+    if (range.empty()) continue;  // "a,,b" is allowed
+    const size_t rs = range.find('/');
+    if (rs == std::string_view::npos || rs == 0 || rs + 1 == range.size()) return 1;  // not a media range
+    const std::string_view rtype = range.substr(0, rs), rsub = range.substr(rs + 1);
+    double q = 1;
+    for (std::string_view params = semi == std::string_view::npos ? std::string_view{} : element.substr(semi + 1);
+         !params.empty();) {
+      const size_t next = params.find(';');
+      const std::string_view param = trim(params.substr(0, next));
+      params = next == std::string_view::npos ? std::string_view{} : params.substr(next + 1);
+      const size_t eq = param.find('=');
+      if (eq == std::string_view::npos || lower(trim(param.substr(0, eq))) != "q") continue;
+      const auto parsed = parse_qvalue(trim(param.substr(eq + 1)));
+      if (!parsed) return 1;
+      q = *parsed;
+    }
+    int specificity = -1;
+    if (rtype == "*" && rsub == "*")
+      specificity = 0;
+    else if (lower(rtype) == type && rsub == "*")
+      specificity = 1;
+    else if (lower(rtype) == type && lower(rsub) == subtype)
+      specificity = 2;
+    if (specificity > best_specificity) best_specificity = specificity, best_q = q;
+  }
+  return best_specificity < 0 ? 0 : best_q;
 }
 
 namespace {

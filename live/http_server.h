@@ -86,6 +86,12 @@ struct HttpRequest {
   // or one that does not percent-decode; nullopt when it is fine (a default was served for
   // ?format=%zz, and ?frame=3 or ?FORMAT=ndjson were dropped, with 200).
   std::optional<std::string> query_problem(std::initializer_list<std::string_view> allowed) const;
+  // How much the Accept header takes `media_type` (lower case, no parameters: "image/png"):
+  // the q of the most specific range that matches it (type/subtype, then type/*, then */*;
+  // range parameters such as Prometheus' version=0.0.4 do not narrow the match), 0 when no
+  // range does. 1 without an Accept header or with one that does not parse (RFC 9110 lets a
+  // server ignore it then).
+  double accept_quality(std::string_view media_type) const;
 };
 
 struct HttpResponse {

@@ -195,6 +195,16 @@ void LightServer::Impl::handle(const HttpRequest& req, HttpExchange& ex) {
     const auto problem = req.path == "/lights/stream" ? req.query_problem({"format"}) : req.query_problem({});
     if (problem) return ex.respond(error_response(400, *problem));
   }
+  // What the route serves, against the Accept header: a client that reads only JSON asking
+  // for /probe.png got a PNG with 200. (The stream's format is negotiated in handle_stream.)
+  if (data_route && req.path != "/lights/stream") {
+    const char* type = req.path == "/probe.png"   ? "image/png"
+                       : req.path == "/probe.exr" ? "image/x-exr"
+                       : req.path == "/metrics"   ? "text/plain"
+                                                  : "application/json";
+    if (req.accept_quality(type) <= 0)
+      return ex.respond(error_response(406, fmt::format("{} is {}, which the Accept header does not take", req.path, type)));
+  }
   if (req.path == "/lights") return ex.respond(lights_response(req));
   if (req.path == "/lights/stream") return handle_stream(req, ex);
   if (req.path == "/probe.png") return handle_map(MapView::Png, req, ex);
@@ -222,9 +232,18 @@ HttpResponse LightServer::Impl::sh_response(const HttpRequest& req) const {
 }
 
 void LightServer::Impl::handle_stream(const HttpRequest& req, HttpExchange& ex) {
-  const std::string format = req.query_param("format").value_or("sse");
+  // ?format= chooses; without it the Accept header does (EventSource sends
+  // text/event-stream, an NDJSON reader application/x-ndjson), server-sent events on a tie.
+  const double q_sse = req.accept_quality("text/event-stream"), q_ndjson = req.accept_quality("application/x-ndjson");
+  const std::optional<std::string> given = req.query_param("format");
+  const std::string format = given ? *given : q_ndjson > q_sse ? "ndjson" : "sse";
   if (format != "sse" && format != "ndjson") return ex.respond(error_response(400, "format must be sse or ndjson"));
   const bool ndjson = format == "ndjson";
+  if ((ndjson ? q_ndjson : q_sse) <= 0)
+    return ex.respond(error_response(
+        406, given ? fmt::format("format={} is {}, which the Accept header does not take", format,
+                                 ndjson ? "application/x-ndjson" : "text/event-stream")
+                   : "/lights/stream is text/event-stream or application/x-ndjson; the Accept header takes neither"));
   HttpResponse head;
   head.content_type = ndjson ? "application/x-ndjson" : "text/event-stream";
   head.headers = {{"Cache-Control", "no-cache"}, {"X-Accel-Buffering", "no"}};

@@ -81,5 +81,72 @@ TEST(LightServerAnswer, RoutesWithTheTokenWithoutASocket) {
   EXPECT_EQ(route(server, "GET / HTTP/1.1\r\n\r\n"), 200);  // the page is public
 }
 
+// The Accept header's q for a media type, against RFC 9110's rules (section 12.5.1): the
+// most specific range wins, whatever its order; q=0 refuses; parameters other than q do not
+// narrow a range; a header that does not parse is ignored.
+TEST(HttpRequest, AcceptQualityTakesTheMostSpecificRange) {
+  const auto q = [](const std::string& accept, std::string_view type) {
+    const HttpHeadParse p = http_parse_head("GET / HTTP/1.1\r\n" + accept + "\r\n\r\n");
+    EXPECT_TRUE(p.request) << accept;
+    return p.request ? p.request->accept_quality(type) : -1.0;
+  };
+  EXPECT_EQ(q("X-None: 1", "application/json"), 1);  // no Accept header: anything
+  EXPECT_EQ(q("Accept: */*", "image/png"), 1);
+  EXPECT_EQ(q("Accept: image/png", "application/json"), 0);
+  EXPECT_EQ(q("Accept: image/*;q=0.5, image/png;q=0.2", "image/png"), 0.2);  // exact beats type/*
+  EXPECT_EQ(q("Accept: image/*;q=0.5, image/png;q=0.2", "image/x-exr"), 0.5);
+  EXPECT_EQ(q("Accept: application/json;q=0, */*", "application/json"), 0);  // refused outright
+  EXPECT_EQ(q("Accept: APPLICATION/JSON; Q=0.7", "application/json"), 0.7);  // case-insensitive
+  // Prometheus' scrape: its version parameter does not narrow text/plain.
+  EXPECT_DOUBLE_EQ(q("Accept: application/openmetrics-text;version=1.0.0;q=0.5,text/plain;version=0.0.4;q=0.4,*/*;q=0.1",
+                     "text/plain"),
+                   0.4);
+  EXPECT_EQ(q("Accept: text/event-stream", "application/x-ndjson"), 0);  // what EventSource sends
+  // Not parseable: ignored, as no header.
+  EXPECT_EQ(q("Accept: json", "image/png"), 1);
+  EXPECT_EQ(q("Accept: image/png;q=2", "application/json"), 1);
+  EXPECT_EQ(q("Accept: image/png;q=abc", "application/json"), 1);
+}
+
+// A client that reads one type gets 406 from a route that serves another, not a body it
+// cannot read with 200; the stream's format follows the header when ?format= is absent.
+TEST(LightServerAnswer, RoutesAnswerTheAcceptHeader) {
+  LightServerOptions o;
+  o.port = 0;
+  LightServer server(o);
+  LightList list;
+  list.frame = 3;
+  list.lights.push_back({5, {0, 0, 1}, {1, 1, 1}, 0.1});
+  server.publish(list, nullptr);
+  const auto answer = [&](const std::string& head) {
+    const HttpHeadParse p = http_parse_head(head);
+    EXPECT_TRUE(p.request) << head;
+    Answer a;
+    if (p.request) server.answer(*p.request, a);
+    return a.response;
+  };
+  EXPECT_EQ(answer("GET /lights HTTP/1.1\r\nAccept: application/json\r\n\r\n").status, 200);
+  EXPECT_EQ(answer("GET /lights HTTP/1.1\r\nAccept: text/html,*/*;q=0.8\r\n\r\n").status, 200);  // a browser
+  const HttpResponse png_only = answer("GET /lights HTTP/1.1\r\nAccept: image/png\r\n\r\n");
+  EXPECT_EQ(png_only.status, 406);
+  ASSERT_TRUE(png_only.body);
+  EXPECT_NE(png_only.body->find("/lights is application/json"), std::string::npos) << *png_only.body;
+  EXPECT_EQ(answer("GET /status HTTP/1.1\r\nAccept: application/json;q=0\r\n\r\n").status, 406);
+  EXPECT_EQ(answer("GET /probe.png HTTP/1.1\r\nAccept: application/json\r\n\r\n").status, 406);
+  EXPECT_EQ(answer("GET /metrics HTTP/1.1\r\nAccept: application/openmetrics-text;version=1.0.0;q=0.5,"
+                   "text/plain;version=0.0.4;q=0.4,*/*;q=0.1\r\n\r\n")
+                .status,
+            200);
+  EXPECT_EQ(answer("HEAD /lights/stream HTTP/1.1\r\n\r\n").content_type, "text/event-stream");
+  EXPECT_EQ(answer("HEAD /lights/stream HTTP/1.1\r\nAccept: application/x-ndjson\r\n\r\n").content_type,
+            "application/x-ndjson");
+  EXPECT_EQ(answer("HEAD /lights/stream HTTP/1.1\r\nAccept: text/event-stream\r\n\r\n").content_type,
+            "text/event-stream");
+  EXPECT_EQ(answer("HEAD /lights/stream?format=ndjson HTTP/1.1\r\nAccept: */*\r\n\r\n").content_type,
+            "application/x-ndjson");
+  EXPECT_EQ(answer("HEAD /lights/stream?format=ndjson HTTP/1.1\r\nAccept: text/event-stream\r\n\r\n").status, 406);
+  EXPECT_EQ(answer("HEAD /lights/stream HTTP/1.1\r\nAccept: application/json\r\n\r\n").status, 406);
+}
+
 }  // namespace
 }  // namespace lp

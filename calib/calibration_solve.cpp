@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "calib/ceres_plugin.h"
 #include "calib/mrcal_solve.h"
@@ -179,13 +180,47 @@ bool seeds_on_a_sample(LensType type) {
 
 }  // namespace
 
+namespace {
+
+// A Mei fit whose xi walked off along its valley: on a narrow lens xi is barely observable,
+// and from the unit-xi seed the refinement can cross s = 1 + xi = 0 (where the radial profile's
+// coordinates are singular) and run on to xi = -4e7 with a focal length of -2e10 px: a model
+// that images no pixel (the stereo set's halves, --model LENSMODEL_OMNIDIR_MEI).
+bool mei_walked_off(const ModelFit& f) {
+  if (!f.ok || f.model.intrinsics.size() != 9) return false;
+  const double fx = f.model.intrinsics[0], xi = f.model.intrinsics[4];
+  return !(xi > -1 + 1e-6 && xi < 1e3 && fx > 0 && std::isfinite(fx));
+}
+
+}  // namespace
+
 ModelFit CandidateSolver::solve(LensType type) {
+  ModelFit f = solve_seeded(type, problem_);
+  if (type != LensType::OmnidirMei || problem_.solve.mei_from_kannala_brandt || !mei_walked_off(f)) return f;
+  // Seeded from the Kannala-Brandt fit instead, as the automatic choice seeds Mei on such a
+  // lens (a forced Mei keeps the unit-xi seed, which mirrors need: see reject_outliers).
+  CalibrationProblem from_kb = problem_;
+  from_kb.solve.mei_from_kannala_brandt = true;
+  ModelFit g = solve_seeded(type, from_kb);
+  if (g.ok && !mei_walked_off(g)) {
+    g.solver += " (the unit-xi seed's xi walked off)";
+    return g;
+  }
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "Mei's xi walked off to %.3g (focal length %.3g px): too narrow a lens to pin it",
+                f.model.intrinsics[4], f.model.intrinsics[0]);
+  f.ok = false;
+  f.error = buf;
+  return f;
+}
+
+ModelFit CandidateSolver::solve_seeded(LensType type, const CalibrationProblem& pr) {
   const bool mei = type == LensType::OmnidirMei, kb = type == LensType::KannalaBrandt;
   if (seed_.sample_views >= 4 && views_.size() >= 2 * size_t(seed_.sample_views) && seeds_on_a_sample(type) &&
-      (mei || kb || problem_.solve.use_mrcal)) {
+      (mei || kb || pr.solve.use_mrcal)) {
     // Solved on the sample, every view posed under that fit, then refined on all of them.
     const ViewSubset sample = evenly_spaced(views_, size_t(seed_.sample_views));
-    CandidateSolver on_sample(problem_, sample, seed_);
+    CandidateSolver on_sample(pr, sample, seed_);
     if (const auto it = sample_fits_.find(type); it != sample_fits_.end() && sample == sample_views_)
       on_sample.adopt(type, it->second);
     const ModelFit& s = on_sample.get(type);
@@ -196,16 +231,16 @@ ModelFit CandidateSolver::solve(LensType type) {
       for (size_t i = 0, j = 0; i < views_.size() && posed; ++i) {
         if (j < sample.size() && sample[j] == views_[i]) {
           seed.poses.push_back(s.poses[j++]);
-        } else if (const auto p = solve_pose(problem_, s.model, s.warp, *views_[i])) {
+        } else if (const auto p = solve_pose(pr, s.model, s.warp, *views_[i])) {
           seed.poses.push_back(*p);
         } else {
           posed = false;
         }
       }
       if (posed) {
-        ModelFit f = mei  ? refine_mei(problem_, views_, seed)
-                     : kb ? refine_kannala_brandt(problem_, views_, seed)
-                          : solve_mrcal(problem_, views_, s.model.lensmodel, s.model.intrinsics, seed.poses, false,
+        ModelFit f = mei  ? refine_mei(pr, views_, seed)
+                     : kb ? refine_kannala_brandt(pr, views_, seed)
+                          : solve_mrcal(pr, views_, s.model.lensmodel, s.model.intrinsics, seed.poses, false,
                                         s.warp);
         if (f.ok) {
           f.solver = s.solver + " on " + std::to_string(sample.size()) + " views, refined on all";
@@ -216,8 +251,8 @@ ModelFit CandidateSolver::solve(LensType type) {
     // A view the sample's fit cannot pose, or a refinement that fails: the whole solve.
   }
   const SeedReport seed =
-      seed_candidate(problem_, views_, type, [this](LensType t) -> const ModelFit& { return get(t); }, seed_);
-  return refine_seed(problem_, views_, type, seed.fit);
+      seed_candidate(pr, views_, type, [this](LensType t) -> const ModelFit& { return get(t); }, seed_);
+  return refine_seed(pr, views_, type, seed.fit);
 }
 
 ModelFit refine_seed(const CalibrationProblem& pr, const ViewSubset& views, LensType type, const ModelFit& seed) {

@@ -73,6 +73,7 @@ class CandidateSolver {
 
  private:
   ModelFit solve(LensType type);
+  ModelFit solve_seeded(LensType type, const CalibrationProblem& pr);  // solve() with pr's settings
   const CalibrationProblem& problem_;
   ViewSubset views_;
   SeedOptions seed_;

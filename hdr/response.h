@@ -41,9 +41,17 @@ struct DebevecOptions {
   // Pixels of exactly this 8-bit colour in any frame (registration borders, e.g. pure
   // blue (0, 0, 255) in Debevec's Memorial set) are never sampled.
   std::optional<std::array<uint8_t, 3>> ignore_colour;
+  // Observations the fitted curve misses by more than outlier_sigmas robust sigmas (1.4826
+  // MAD of every residual, each weighted as the fit weighs it) are dropped and the curve
+  // solved again, up to outlier_rounds times: a pixel that moved between frames is not the
+  // curve's evidence. 0 rounds: the paper's plain least squares.
+  int outlier_rounds = 2;
+  double outlier_sigmas = 8.0;
 };
 // Solves Debevec–Malik's weighted least squares per channel (hat weights, second-difference
-// smoothness, g(levels/2) = 0) through its sparse normal equations (Eigen SimplicialLDLT).
+// smoothness, g(levels/2) = 0) through its sparse normal equations (Eigen SimplicialLDLT),
+// without the observations it cannot explain (DebevecOptions::outlier_*); the curve is then
+// made non-decreasing (its least-squares closest monotone curve), as every recovered one is.
 // Throws InputError (via check_bracket) on a bad bracket.
 CameraResponse recover_debevec(const Bracket& bracket, const DebevecOptions& options = {});
 
@@ -60,7 +68,8 @@ struct RobertsonOptions {
 // Robertson et al. 2003: alternates the ML irradiance estimate x_j = Σ w t I(z) / Σ w t²
 // with I(m) = mean of t x_j over the observations at level m, Gaussian-like weights
 // w(m) = exp(−4 (m − c)² / c²), c = (levels − 1)/2, I normalised to I(levels/2) = 1.
-// Levels never observed are interpolated in g from their observed neighbours.
+// Levels never observed are interpolated in g from their observed neighbours; the curve is
+// then made non-decreasing, as recover_debevec's.
 // With no smoothness term, brackets whose exposure ratios are all equal leave g ambiguous
 // by a function periodic in ln E with the period ln(ratio) (Grossberg & Nayar 2003): on
 // such brackets prefer recover_debevec, whose smoothness term resolves it.

@@ -40,6 +40,7 @@ bl_info = {
 import http.client
 import json
 import math
+import os
 import sys
 import threading
 import time
@@ -426,8 +427,17 @@ def _main(argv):
         if image is not None:
             image.file_format = "OPEN_EXR"  # float pixels, packed into the .blend
             image.pack()
-        bpy.ops.wm.save_as_mainfile(filepath=a.save)
+        # Blender takes only absolute paths here ("lit.blend" raised, and nothing was saved).
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(a.save))
 
 
 if __name__ == "__main__" and bpy is not None and "--" in sys.argv:
-    _main(sys.argv[sys.argv.index("--") + 1:])
+    # Blender prints an exception from a --python script and exits 0: a script driving it
+    # headless would take a failed run (nothing applied, nothing saved) for a good one.
+    try:
+        _main(sys.argv[sys.argv.index("--") + 1:])
+    except SystemExit:
+        raise
+    except Exception as e:  # noqa: BLE001 - any failure is one line and exit 1
+        print(f"lightprobe_live: {e}", file=sys.stderr)
+        sys.exit(1)

@@ -24,4 +24,14 @@ blender -b --factory-startup --python "$HERE/blender_live_check.py" -- "$HERE/..
   { grep -E "blender_live:|Error|error|Traceback" "$WORK/blender.log" | head -8; fail "the live link in Blender"; }
 grep -q "relative' units" "$WORK/blender.log" || fail "no warning about relative units: $(grep 'lightprobe live' "$WORK/blender.log")"
 grep '^blender_live:' "$WORK/blender.log"
+# The README's headless command saves under the name given: a relative one raised inside
+# Blender (it takes only absolute paths) and nothing was written, with exit 0. A run that
+# fails (no server) exits 1.
+SCRIPT="$HERE/../../../tools/blender/lightprobe_live.py"
+(cd "$WORK" && blender -b --factory-startup --python "$SCRIPT" -- --url "http://127.0.0.1:$PORT" --frames 2 \
+  --save lit.blend) >"$WORK/save.log" 2>&1 || fail "headless --save: $(tail -2 "$WORK/save.log")"
+[ -s "$WORK/lit.blend" ] || fail "--save lit.blend wrote nothing: $(grep -iE 'error|lightprobe_live:' "$WORK/save.log" | head -2)"
+blender -b --factory-startup --python "$SCRIPT" -- --url http://127.0.0.1:1 --frames 1 >"$WORK/nohost.log" 2>&1 &&
+  fail "a run with no server exited 0"
+grep -q "^lightprobe_live: " "$WORK/nohost.log" || fail "no one-line reason: $(tail -2 "$WORK/nohost.log")"
 echo "PASSED"

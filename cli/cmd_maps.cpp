@@ -14,6 +14,7 @@
 #include "core/image_io.h"
 #include "core/map_statistics.h"
 #include "core/resample.h"
+#include "core/warnings.h"
 #include "core/tonemap.h"
 #include "probe/cube_map.h"
 
@@ -108,6 +109,12 @@ int run_convert(const ConvertArgs& args, const Output& out) {
   write_envmap(args.output, dst, wo);
   const double seconds = seconds_since(t0);
   const double p_in = total_luminance_power(src), p_out = total_luminance_power(dst);
+  // A hemisphere holds the upper half only: what lay below the horizon is gone, said rather
+  // than printed only as a power change (README promises power kept to 1e-4 otherwise).
+  if (dst.layout == Layout::Hemisphere && src.layout != Layout::Hemisphere && p_in > 0 && (p_in - p_out) / p_in > 1e-3)
+    warn(fmt::format("{}: a hemisphere map holds the upper half only; the {:.1f} % of {}'s power below the horizon "
+                     "is not in it",
+                     args.output, 100 * (p_in - p_out) / p_in, args.input));
   say(out, "{} ({}) -> {} ({}); power {:.6g} -> {:.6g} ({:+.2e} relative), {:.2f} s\n", args.input,
       describe_size(src), args.output, describe_size(dst), p_in, p_out, p_in > 0 ? (p_out - p_in) / p_in : 0.0,
       seconds);

@@ -398,7 +398,12 @@ GeometricCalibration calibrate_detections(BoardDetections detections, const Boar
     // At least five views stay: asking for more than that leaves was capped without a word.
     int flagged = 0;
     for (const auto& v : run.result.views) flagged += v.influential;
-    if (int(drop.size()) < std::min(options.drop_influential, flagged))
+    if (flagged == 0)  // asked for and nothing done: said, not left to the reader to notice
+      run.notes.push_back(fmt::format(
+          "--drop-influential {}: no view is flagged influential (none moves the projection by more than both {} x "
+          "the median view's leverage and {:.2g} px), so none was dropped",
+          options.drop_influential, options.calibrate.leverage_flag_factor, options.calibrate.leverage_min_px));
+    else if (int(drop.size()) < std::min(options.drop_influential, flagged))
       run.notes.push_back(fmt::format("--drop-influential {}: {} of the {} influential views dropped; at least 5 views stay",
                                       options.drop_influential, drop.size(), flagged));
     if (!drop.empty()) {

@@ -288,6 +288,10 @@ TEST(UnreadOptionsCli, CalibGeometricSaysWhatItLeavesOutAndRefusesWhatItWouldOve
   EXPECT_NE(capped.out.find("influential view:"), std::string::npos) << capped.out;  // left02 (0.68 px)
   EXPECT_NE(capped.out.find("--drop-influential 3: 0 of the 1 influential views dropped; at least 5 views stay"),
             std::string::npos) << capped.out;
+  // Asked to drop and nothing flagged: said (the run was the same as without the option).
+  const CliRun none = lightprobe("calib geometric --corners-in " + eight + solve + " --model plumb_bob --drop-influential 1");
+  ASSERT_EQ(none.code, 0) << none.err;
+  EXPECT_NE(none.out.find("--drop-influential 1: no view is flagged influential"), std::string::npos) << none.out;
   expect_one_line_error(lightprobe("calib geometric" + images + " --imagersize 1280,960" + solve),
                         "--imagersize is for --corners-in without the images");
   expect_one_line_error(lightprobe("calib geometric --corners-in " + eight + " --corners-out " + eight + solve),

@@ -146,6 +146,9 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
   const LightQuadtree model = load_model(args.model);
   const auto at = parse_numbers(args.at, "--at");
   if (at.size() != 2 && at.size() != 3) throw InputError(fmt::format("--at: give X,Y or X,Y,Z in metres, got '{}'", args.at));
+  // A tracker's position has a height; the model is a floor plan and cannot use it.
+  if (at.size() == 3)
+    warn(fmt::format("--at: the model maps the floor plan (X, Y); the height Z = {:g} m is not used", at[2]));
   if (!(args.min_frames >= 1)) throw InputError(fmt::format("--min-frames must be >= 1, got {}", args.min_frames));
   if (!(args.shrink >= 0)) throw InputError(fmt::format("--shrink must be >= 0, got {}", args.shrink));
   if (args.max_depth < -1) throw InputError(fmt::format("--max-depth must be >= 0 (or -1: no limit), got {}", args.max_depth));
@@ -190,7 +193,7 @@ int run_estimate_query(const EstimateQueryArgs& args, const Output& out) {
 std::vector<Command> estimate_commands() {
   return {
       {"estimate metadata", "A recorded track (position, view, exposure, gain, WB per frame) -> quadtree model",
-       "lightprobe estimate metadata track.jsonl [--photometric photometric.json] -o model.json",
+       "lightprobe estimate metadata track.jsonl -o model.json\nlightprobe estimate metadata track.jsonl --photometric photometric.json -o model.json",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<EstimateMetadataArgs>();
          f.arg("TRACK", a->track, "JSONL track (see docs/metadata.md for the schema)").required();
@@ -215,7 +218,7 @@ std::vector<Command> estimate_commands() {
        [](Flags& f) -> Handler {
          auto a = std::make_shared<EstimateQueryArgs>();
          f.arg("MODEL", a->model, "Model JSON (estimate metadata)").required();
-         f.opt("--at", a->at, "Position X,Y[,Z] in metres").required();
+         f.opt("--at", a->at, "Position X,Y in metres (a Z is accepted and not used: the model is a floor plan)").required();
          f.output(a->output, "Light list (.json, .pbrt, .xml, .gltf, .csv)");
          f.opt("--format", a->format, "json|ndjson|pbrt|mitsuba|gltf|glb|csv (default from -o)");
          f.opt("--min-frames", a->min_frames, "Frames that make a sector informed (1: the paper's rule)");

@@ -268,7 +268,7 @@ std::vector<Command> live_commands() {
          f.opt("--camera", a->camera, "Calibrated camera model (default: equidistant fisheye)");
          f.opt("--fov", a->fov, "Fisheye field of view / image circle, deg (with --camera only when given: else the image circle found in the first frame bounds the lens)");
          f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees");
-         f.flag("--maps", a->maps, "The source delivers environment maps already (replayed .exr)");
+         f.flag("--maps", a->maps, "The source delivers environment maps already (replayed .exr, of the --layout and --size given: not resampled)");
          f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
          f.opt("--size", a->size, "Map size WxH");
          f.opt("--nside", a->nside, "healpix nside");

@@ -3,8 +3,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <limits>
+#include <string>
 
 #include "core/accuracy.h"
 #include "core/error.h"
@@ -35,6 +39,12 @@ double median_ms(F&& f, int fixed, double budget_s) {
   return median(t);
 }
 
+// An error not measured (--no-shadowed): NaN, which the CSV writes as nan, JSON as null and
+// the table as a dash; it was 0, a perfect score.
+constexpr double kNotMeasured = std::numeric_limits<double>::quiet_NaN();
+std::string percent_or_dash(double x) { return std::isfinite(x) ? fmt::format("{:.2f}%", 100 * x) : "-"; }
+nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
+
 std::vector<ChartPanel> panels_for(const std::vector<SamplingPoint>& points, const std::vector<Method>& methods) {
   struct Metric {
     const char* title;
@@ -46,6 +56,8 @@ std::vector<ChartPanel> panels_for(const std::vector<SamplingPoint>& points, con
                             {"shadowed error (60 deg caps)", &SamplingPoint::shadowed}};
   std::vector<ChartPanel> panels;
   for (const Metric& m : metrics) {
+    if (std::none_of(points.begin(), points.end(), [&](const SamplingPoint& p) { return std::isfinite(p.*(m.field)); }))
+      continue;  // not measured (--no-shadowed): no panel of zeros
     ChartPanel panel{m.title, "time per frame, ms (prepare + place, median)", "relative RMS error", {}};
     for (Method method : methods) {
       ChartSeries s{std::string(to_string(method)), {}, {}, {}};
@@ -73,7 +85,8 @@ void measure_ambient(const std::string& path, const EnvMap& map, const AccuracyR
       throw InputError(fmt::format("{}: {}", path, e.what()));
     }
     auto point = [&](const char* variant, const LightError& e, double share) {
-      points.push_back({map_label(path), variant, n, e.diffuse, e.glossy.at(0), e.glossy.at(1), e.shadowed, share});
+      points.push_back({map_label(path), variant, n, e.diffuse, e.glossy.at(0), e.glossy.at(1),
+                        options.shadowed ? e.shadowed : kNotMeasured, share});
     };
     point("lights+sh9", c.lights_and_sh9, c.light_power_share);
     point("lights", c.lights_only, 1);
@@ -103,7 +116,7 @@ void measure_map(const std::string& path, const EvalSamplingOptions& options, Pr
       const double place_ms = median_ms([&] { lights = sampler->place(n); }, options.repeats, 0.1);
       const LightError e = light_error(reference, lights);
       points.push_back({map_label(path), std::string(to_string(method)), n, int(lights.size()), prepare_ms, place_ms,
-                        e.diffuse, e.glossy.at(0), e.glossy.at(1), e.shadowed});
+                        e.diffuse, e.glossy.at(0), e.glossy.at(1), options.shadowed ? e.shadowed : kNotMeasured});
     }
   }
   measure_ambient(path, map, reference, options, ambient);
@@ -120,7 +133,8 @@ std::vector<AmbientPoint> ambient_medians(const std::vector<AmbientPoint>& point
           sh.push_back(p.shadowed), share.push_back(p.light_power_share);
         }
       if (!d.empty())
-        out.push_back({"median", variant, n, median(d), median(g10), median(g100), median(sh), median(share)});
+        out.push_back({"median", variant, n, median(d), median(g10), median(g100),
+                       options.shadowed ? median(sh) : kNotMeasured, median(share)});
     }
   return out;
 }
@@ -173,7 +187,7 @@ std::vector<SamplingPoint> medians_over_maps(const std::vector<SamplingPoint>& p
         }
       if (d.empty()) continue;
       medians.push_back({"median", std::string(to_string(method)), n, int(median(lights)), median(pre), median(place),
-                         median(d), median(g10), median(g100), median(sh)});
+                         median(d), median(g10), median(g100), options.shadowed ? median(sh) : kNotMeasured});
     }
   return medians;
 }
@@ -227,16 +241,17 @@ std::string EvalSamplingReport::summary() const {
   std::string s = fmt::format("{:<10} {:>6} {:>7} {:>11} {:>10} {:>9} {:>9} {:>10} {:>9}\n", "method", "n", "lights",
                               "prepare ms", "place ms", "diffuse", "glossy10", "glossy100", "shadowed");
   for (const SamplingPoint& p : medians)
-    s += fmt::format("{:<10} {:>6} {:>7} {:>11.3f} {:>10.4f} {:>8.2f}% {:>8.2f}% {:>9.2f}% {:>8.2f}%\n", p.method, p.n,
+    s += fmt::format("{:<10} {:>6} {:>7} {:>11.3f} {:>10.4f} {:>8.2f}% {:>8.2f}% {:>9.2f}% {:>9}\n", p.method, p.n,
                      p.lights, p.prepare_ms, p.place_ms, 100 * p.diffuse, 100 * p.glossy10, 100 * p.glossy100,
-                     100 * p.shadowed);
+                     percent_or_dash(p.shadowed));
   s += fmt::format("{} points on {} maps -> {}, {}\n", points.size(), maps, csv_path, svg_path);
   if (ambient_medians.empty()) return s;
   s += fmt::format("\n{:<11} {:>4} {:>9} {:>9} {:>10} {:>9} {:>12}\n", "lighting", "n", "diffuse", "glossy10",
                    "glossy100", "shadowed", "light share");
   for (const AmbientPoint& p : ambient_medians)
-    s += fmt::format("{:<11} {:>4} {:>8.2f}% {:>8.2f}% {:>9.2f}% {:>8.2f}% {:>11.1f}%\n", p.variant, p.n,
-                     100 * p.diffuse, 100 * p.glossy10, 100 * p.glossy100, 100 * p.shadowed, 100 * p.light_power_share);
+    s += fmt::format("{:<11} {:>4} {:>8.2f}% {:>8.2f}% {:>9.2f}% {:>9} {:>11.1f}%\n", p.variant, p.n,
+                     100 * p.diffuse, 100 * p.glossy10, 100 * p.glossy100, percent_or_dash(p.shadowed),
+                     100 * p.light_power_share);
   s += fmt::format("-> {}, {}\n", ambient_csv_path, ambient_svg_path);
   return s;
 }
@@ -246,11 +261,11 @@ nlohmann::json EvalSamplingReport::to_json() const {
   for (const SamplingPoint& p : points)
     rows.push_back({{"map", p.map}, {"method", p.method}, {"n", p.n}, {"lights", p.lights},
                     {"prepare_ms", p.prepare_ms}, {"place_ms", p.place_ms}, {"diffuse", p.diffuse},
-                    {"glossy10", p.glossy10}, {"glossy100", p.glossy100}, {"shadowed", p.shadowed}});
+                    {"glossy10", p.glossy10}, {"glossy100", p.glossy100}, {"shadowed", finite_or_null(p.shadowed)}});
   nlohmann::json ambient_rows = nlohmann::json::array();
   for (const AmbientPoint& p : ambient)
     ambient_rows.push_back({{"map", p.map}, {"variant", p.variant}, {"n", p.n}, {"diffuse", p.diffuse},
-                            {"glossy10", p.glossy10}, {"glossy100", p.glossy100}, {"shadowed", p.shadowed},
+                            {"glossy10", p.glossy10}, {"glossy100", p.glossy100}, {"shadowed", finite_or_null(p.shadowed)},
                             {"light_power_share", p.light_power_share}});
   return {{"csv", csv_path},
           {"chart", svg_path},

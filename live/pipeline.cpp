@@ -407,8 +407,9 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
   if (options_.frames_are_maps) {
     RgbImage& radiance = b.frames[0].image;
     if (radiance.width != map->width || radiance.height != map->height)
-      throw InputError(fmt::format("replayed map is {}x{}, the pipeline expects {}", radiance.width, radiance.height,
-                                   describe_size(*map)));
+      throw InputError(fmt::format("replayed map is {}x{}, the pipeline expects {}: with --maps, --layout and --size "
+                                   "(or --nside) describe the maps replayed; nothing is resampled",
+                                   radiance.width, radiance.height, describe_size(*map)));
     if (options_.photometric) apply_photometric(radiance, *options_.photometric);
     map->rgb = std::move(radiance.rgb);
     map->valid = std::move(radiance.valid);

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -75,7 +76,14 @@ TEST(SamplingEval, Q2TreeDiffuseErrorAt256LightsMatchesAnIndependentRunAndItsBou
   // change, not for a tree that misplaces its lights.
   EXPECT_LT(p.diffuse, 1e-3);
   EXPECT_LT(p.diffuse, scene_report().points[0].diffuse);  // more lights, less error
-  EXPECT_EQ(p.shadowed, 0);                                 // not measured
+  // Not measured (--no-shadowed): NaN, null in JSON, a dash in the table, nan in the CSV. It
+  // was 0, which read as a perfect score.
+  EXPECT_TRUE(std::isnan(p.shadowed));
+  EXPECT_TRUE(std::isnan(scene_report().medians[1].shadowed));
+  EXPECT_TRUE(std::isnan(scene_report().ambient[0].shadowed));
+  EXPECT_TRUE(scene_report().to_json()["points"][1]["shadowed"].is_null());
+  EXPECT_EQ(scene_report().summary().find("0.00%\n"), std::string::npos) << scene_report().summary();
+  EXPECT_NE(slurp(scene_report().csv_path).find(",nan\n"), std::string::npos);
   EXPECT_GT(p.prepare_ms + p.place_ms, 0);
 }
 

@@ -77,6 +77,11 @@ TEST(EstimateCli, MetadataThenQueryGivesSixLightsInRadianceUnits) {
   EXPECT_EQ(list["format"], "lightprobe.lights/1");
   EXPECT_EQ(list["units"], "radiance");
   EXPECT_EQ(list["lights"].size(), 6u);
+  // A tracker's height: the same lights (the model is a floor plan), and said.
+  const CliRun z = lightprobe("estimate query " + model.string() + " --at 4,3,1.5 -o " + (scratch() / "z.json").string());
+  ASSERT_EQ(z.code, 0) << z.err;
+  EXPECT_NE(z.err.find("the height Z = 1.5 m is not used"), std::string::npos) << z.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(scratch() / "z.json"))["lights"], list["lights"]);
   // Other formats through the exporters.
   r = lightprobe("estimate query " + model.string() + " --at 4,3 --shrink 20 -o " + (scratch() / "l.pbrt").string());
   EXPECT_EQ(r.code, 0) << r.err;

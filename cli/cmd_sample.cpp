@@ -162,6 +162,7 @@ int run_sample(const SampleArgs& args, const Output& out) {
   const auto method = method_from_string(args.method);
   if (!method) throw InputError(fmt::format("--method: unknown method '{}' (pharr, hemigon, q2tree, mediancut)", args.method));
   refuse_unused_options(args, *method, !args.residual.empty(), args.n == "auto");
+  check_light_units_options(args.units.options());  // before any work: a refusal after the report read as success
   if (!args.residual.empty()) return run_sample_residual(args, out, *method);
   SampleMapsOptions o;
   o.pipeline = args.pipeline;
@@ -191,7 +192,15 @@ int run_sample(const SampleArgs& args, const Output& out) {
   SampleMapsResult result = sample_maps(maps, o, [&] { progress.advance(); });
   progress.finish();
 
+  // Units first: a refusal (a calibrated map given --scale) came after each frame's line had
+  // been printed, and read as a success.
   std::vector<LightList> lists;
+  for (SampledFrame& f : result.frames) lists.push_back(f.list);
+  if (args.sh9) {
+    lists[0].sh9 = project_sh9(result.last_map, maps.files[0]);
+    lists[0].sh9_content = Sh9Content::Map;
+  }
+  apply_units(lists, args, format);
   nlohmann::json frames = nlohmann::json::array();
   for (SampledFrame& f : result.frames) {
     if (f.target_missed)
@@ -205,13 +214,7 @@ int run_sample(const SampleArgs& args, const Output& out) {
                                  : fmt::format("glossy {:.2f} % (s=10), {:.2f} % (s=100)", 100 * f.error.glossy[0],
                                                100 * f.error.glossy[1]));
     frames.push_back(f.to_json());
-    lists.push_back(std::move(f.list));
   }
-  if (args.sh9) {
-    lists[0].sh9 = project_sh9(result.last_map, maps.files[0]);
-    lists[0].sh9_content = Sh9Content::Map;
-  }
-  apply_units(lists, args, format);
   write_file_atomically(args.output, export_light_sequence(lists, format));
   if (!args.overlay.empty()) write_overlay_png(args.overlay, result.last_map, lists.back().lights);
   if (sequence && !out.json)

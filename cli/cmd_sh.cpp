@@ -30,6 +30,7 @@ struct ShArgs {
 int run_sh(const ShArgs& args, const Output& out) {
   if (args.order != kSh9Order)
     throw InputError(fmt::format("--order: only order {} (9 coefficients) is supported, got {}", kSh9Order, args.order));
+  check_light_units_options(args.units.options());
   ReadMapOptions read;
   read.layout = optional_layout(args.layout, "--layout");
   if (args.input == "scene" && read.layout) throw InputError("--layout reads a map file; 'scene' is made as a latlong map");

@@ -20,10 +20,22 @@ double upward_illuminance(const LightList& list) {
   return luminance(e.data()) * (list.units == Units::Radiance ? kLumensPerWatt : 1.0);
 }
 
-LightUnitsResult apply_light_units(LightList list, const LightUnitsOptions& options, const std::string& output) {
+void check_light_units_options(const LightUnitsOptions& options) {
   const int given = int(options.exposure_ev.has_value()) + int(options.scale.has_value()) +
                     int(options.normalize_illuminance_lux.has_value());
   if (given > 1) throw InputError("--exposure, --scale and --normalize-illuminance: give at most one");
+  if (options.exposure_ev && !std::isfinite(*options.exposure_ev))
+    throw InputError(fmt::format("--exposure must be a finite number of stops, got {}", *options.exposure_ev));
+  if (options.scale && (!(*options.scale > 0) || !std::isfinite(*options.scale)))
+    throw InputError(fmt::format("--scale must be positive, got {}", *options.scale));
+  if (const auto& lux = options.normalize_illuminance_lux; lux && (!(*lux > 0) || !std::isfinite(*lux)))
+    throw InputError(fmt::format("--normalize-illuminance must be a positive illuminance in lux, got {}", *lux));
+}
+
+LightUnitsResult apply_light_units(LightList list, const LightUnitsOptions& options, const std::string& output) {
+  check_light_units_options(options);
+  const int given = int(options.exposure_ev.has_value()) + int(options.scale.has_value()) +
+                    int(options.normalize_illuminance_lux.has_value());
   LightUnitsResult r;
   if (given == 0) {
     if (list.units == Units::Relative)
@@ -41,17 +53,11 @@ LightUnitsResult apply_light_units(LightList list, const LightUnitsOptions& opti
                                  "--normalize-illuminance give a relative map its unit",
                                  output));
   if (options.exposure_ev) {
-    if (!std::isfinite(*options.exposure_ev))
-      throw InputError(fmt::format("--exposure must be a finite number of stops, got {}", *options.exposure_ev));
     r.factor = std::exp2(*options.exposure_ev);
   } else if (options.scale) {
-    if (!(*options.scale > 0) || !std::isfinite(*options.scale))
-      throw InputError(fmt::format("--scale must be positive, got {}", *options.scale));
     r.factor = *options.scale;
   } else {
     const double lux = *options.normalize_illuminance_lux;
-    if (!(lux > 0) || !std::isfinite(lux))
-      throw InputError(fmt::format("--normalize-illuminance must be a positive illuminance in lux, got {}", lux));
     // The target is reached in "radiance" units, where 683 Y is lux.
     LightList probe = list;
     probe.units = Units::Radiance;

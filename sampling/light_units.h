@@ -33,9 +33,11 @@ struct LightUnitsResult {
   double factor = 1;     // what rgb (and SH9) were multiplied by
   std::string warning;   // non-empty: a relative list exported unscaled (one line)
 };
-// Throws InputError naming the flag: two options at once, a non-finite exposure, a scale
-// or illuminance of 0 or below, or an illuminance target for a list that lights nothing
-// from above. `output` names the file in the warning.
+// The checks of the options alone (two at once, a non-finite exposure, a scale or illuminance
+// of 0 or below), as apply_light_units makes them: for a command to refuse before it works.
+void check_light_units_options(const LightUnitsOptions& options);
+// Throws InputError naming the flag: check_light_units_options, or an illuminance target for
+// a list that lights nothing from above. `output` names the file in the warning.
 LightUnitsResult apply_light_units(LightList list, const LightUnitsOptions& options, const std::string& output);
 
 }  // namespace lp

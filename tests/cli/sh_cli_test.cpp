@@ -162,6 +162,12 @@ TEST(SampleCli, RelativeUnitsWarnOrScaleToTheIlluminanceAsked) {
   expect_one_line_error(lightprobe("sample " + shared(kGrace) + " --n 16 --normalize-illuminance 0 -o " + out.string()),
                         "--normalize-illuminance");
   EXPECT_FALSE(fs::exists(out));
+  // Refused before any work: the sampling report ("16 pharr lights ... diffuse error") was
+  // printed first and read as a success.
+  const CliRun both = lightprobe("sample " + shared(kGrace) + " --n 16 --exposure 1 --scale 2 -o " + out.string());
+  expect_one_line_error(both, "give at most one");
+  EXPECT_EQ(both.out, "");
+  EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(SampleCli, ResidualSh9CarriesLightsAndAmbientAndScoresThem) {

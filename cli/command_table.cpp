@@ -47,6 +47,21 @@ const std::map<std::string, std::string>& group_help() {
   return help;
 }
 
+// CLI11 shows a negated flag ("!--no-progress") as "--no-progress{false}" in the help; what a
+// user types has no braces.
+class HelpFormatter final : public CLI::Formatter {
+ public:
+  std::string make_option_name(const CLI::Option* opt, bool is_positional) const override {
+    std::string name = CLI::Formatter::make_option_name(opt, is_positional);
+    for (size_t open; (open = name.find('{')) != std::string::npos;) {
+      const size_t close = name.find('}', open);
+      if (close == std::string::npos) break;
+      name.erase(open, close - open + 1);
+    }
+    return name;
+  }
+};
+
 class CliFlags final : public Flags {
  public:
   explicit CliFlags(CLI::App* app) : app_(app) {}
@@ -155,6 +170,7 @@ int parse_command_line(int argc, char** argv, bool run) {
   CLI::App app{kDescription, "lightprobe"};
   app.set_version_flag("--version", std::string("lightprobe ") + LIGHTPROBE_VERSION);
   app.require_subcommand(1);
+  app.formatter(std::make_shared<HelpFormatter>());  // before the subcommands, which copy it
   // A rig's setup in one file: TOML with a section per command, e.g. [stream] source = "aravis"
   // (usable after the subcommand too: lightprobe stream --config rig.toml).
   app.set_config("--config", "", "TOML file of options, one [section] per command (e.g. [stream])");

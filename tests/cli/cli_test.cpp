@@ -39,10 +39,12 @@ TEST(Cli, VersionAndHelpSucceed) {
   EXPECT_EQ(v.code, 0);
   EXPECT_NE(v.out.find("lightprobe 0."), std::string::npos) << v.out;
   for (const char* sub : {"--help", "info --help", "convert --help", "sample --help", "eval sampling --help",
-                          "synth scene --help"}) {
+                          "synth scene --help", "eval estimators --help"}) {
     CliRun h = lightprobe(sub);
     EXPECT_EQ(h.code, 0) << sub;
     EXPECT_NE(h.out.find("Usage"), std::string::npos) << sub;
+    // A negated flag is shown as typed: "--no-progress", not CLI11's "--no-progress{false}".
+    EXPECT_EQ(h.out.find("{false}"), std::string::npos) << sub << ": " << h.out;
   }
 }
 

@@ -146,6 +146,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
       if (args.align == "mtb") ao.method = AlignOptions::Method::Mtb;
       else if (args.align == "ecc") ao.method = AlignOptions::Method::Ecc;
       else throw InputError(fmt::format("--align must be none, mtb or ecc, got '{}'", args.align));
+      ao.ignore_colour = ignore_colour(args.ignore_colour);
       AlignReport ar;
       bracket.frames = align_frames(bracket.frames, bracket.exposure_seconds, ao, &ar);
       bracket.codes.clear();  // the file's 8-bit codes are not the shifted frames': merge the floats

@@ -1,10 +1,12 @@
 #include "hdr/align.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numeric>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -40,15 +42,54 @@ void check_frames(const std::vector<RgbImage>& frames, const std::vector<double>
   }
 }
 
-cv::Mat grey8(const RgbImage& f) {
+// Grey codes for Mtb. Pixels that take no part (invalid, or of the ignored colour) are set to
+// the median of the others: Mtb's exclusion bitmap leaves out every pixel within a few codes
+// of the median, so they neither match nor mismatch anything.
+cv::Mat grey8(const RgbImage& f, const std::optional<std::array<uint8_t, 3>>& ignore = std::nullopt) {
   cv::Mat out(f.height, f.width, CV_8UC1);
   const size_t n = size_t(f.width) * f.height;
   auto* dst = out.ptr<uint8_t>();
+  std::vector<char> skip(n, 0);
+  size_t skipped = 0;
   for (size_t i = 0; i < n; ++i) {
     const float m = (f.rgb[3 * i] + f.rgb[3 * i + 1] + f.rgb[3 * i + 2]) * (255.0f / 3.0f);
     dst[i] = cv::saturate_cast<uint8_t>(m);
+    bool out_of_match = !f.valid.empty() && !f.valid[i];
+    if (ignore) {
+      bool same = true;
+      for (int c = 0; c < 3; ++c) same = same && std::lround(f.rgb[3 * i + size_t(c)] * 255.0f) == (*ignore)[size_t(c)];
+      out_of_match = out_of_match || same;
+    }
+    skip[i] = out_of_match;
+    skipped += out_of_match;
   }
+  if (skipped == 0 || skipped == n) return out;
+  std::array<size_t, 256> histogram{};
+  for (size_t i = 0; i < n; ++i)
+    if (!skip[i]) ++histogram[dst[i]];
+  size_t below = 0, median = 0;
+  for (; median < 255 && 2 * (below + histogram[median]) < n - skipped; ++median) below += histogram[median];
+  for (size_t i = 0; i < n; ++i)
+    if (skip[i]) dst[i] = uint8_t(median);
   return out;
+}
+
+// Ward's Mtb error at full resolution: the pixels whose threshold bits differ between the
+// reference and the frame moved by `shift`, among those both exclusion bitmaps keep; a
+// reference pixel the move leaves without a counterpart (shifted in from outside, or
+// excluded in the frame) counts as half a mismatch, what a random bit would give, so that a
+// shift cannot score well by moving the structure out of the comparison.
+double mtb_mismatch(cv::AlignMTB& mtb, const cv::Mat& ref_grey, const cv::Mat& frame_grey, cv::Point shift) {
+  cv::Mat ref_tb, ref_eb, tb, eb, moved_tb, moved_eb;
+  mtb.computeBitmaps(ref_grey, ref_tb, ref_eb);
+  mtb.computeBitmaps(frame_grey, tb, eb);
+  mtb.shiftMat(tb, moved_tb, shift);
+  mtb.shiftMat(eb, moved_eb, shift);  // pixels shifted in from outside are 0: not kept
+  cv::Mat kept, differ;
+  cv::bitwise_and(ref_eb, moved_eb, kept);
+  cv::bitwise_xor(ref_tb, moved_tb, differ);
+  cv::bitwise_and(differ, kept, differ);
+  return double(cv::countNonZero(differ)) + 0.5 * double(cv::countNonZero(ref_eb) - cv::countNonZero(kept));
 }
 
 // Linear-ish luminance (code^2.2), not yet divided by the exposure time.
@@ -135,7 +176,7 @@ std::vector<RgbImage> align_frames(const std::vector<RgbImage>& frames, const st
   const int max_bits = std::clamp(int(std::floor(std::log2(short_side / 8.0))), 1, wanted_bits);
   cv::Ptr<cv::AlignMTB> mtb = cv::createAlignMTB(max_bits);
 
-  const cv::Mat ref_grey = grey8(frames[ref]);
+  const cv::Mat ref_grey = grey8(frames[ref], options.ignore_colour);
   cv::Mat ref_lin;
   if (options.method == AlignOptions::Method::Ecc) ref_lin = linear_luma(frames[ref]);
   const double dark_lin = std::pow(kDark, kGamma), bright_lin = std::pow(kBright, kGamma);
@@ -150,7 +191,16 @@ std::vector<RgbImage> align_frames(const std::vector<RgbImage>& frames, const st
     }
     // calculateShift(ref, frame) is the shift that moves the frame onto the reference,
     // i.e. minus the frame's motion.
-    const cv::Point s = mtb->calculateShift(ref_grey, grey8(frames[i]));
+    const cv::Mat frame_grey = grey8(frames[i], options.ignore_colour);
+    cv::Point s = mtb->calculateShift(ref_grey, frame_grey);
+    // Mtb's coarse levels can lock onto a wrong shift where one frame is mostly black or
+    // white (Memorial's 1/16 s frame against its 1/4 s one: "moved by (39, 9) px" on registered
+    // frames). Checked at full resolution against not moving at all: the one with fewer
+    // mismatched bits (Ward's own error) wins.
+    if (s != cv::Point(0, 0)) {
+      const double still = mtb_mismatch(*mtb, ref_grey, frame_grey, {0, 0}), moved = mtb_mismatch(*mtb, ref_grey, frame_grey, s);
+      if (still <= moved) s = {0, 0};
+    }
     double dx = -s.x, dy = -s.y, angle = 0.0;
     if (std::max(std::abs(dx), std::abs(dy)) > options.max_shift_px)
       throw InputError("align: frame " + std::to_string(i) + " moved by (" + std::to_string(int(dx)) + ", " +

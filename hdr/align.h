@@ -21,6 +21,8 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/image_io.h"
@@ -37,6 +39,11 @@ struct AlignOptions {
   // Ecc only: also estimate an in-plane rotation (MOTION_EUCLIDEAN instead of
   // MOTION_TRANSLATION). Ignored by Mtb.
   bool rotation = false;
+  // Pixels of exactly this 8-bit colour (registration borders: pure blue in Debevec's
+  // Memorial set), like a frame's invalid pixels, take no part in the match: their edges
+  // moved with each frame's border and Mtb locked onto them (Memorial 0066/0068/0070:
+  // "moved by (33, 17) px" on registered frames).
+  std::optional<std::array<uint8_t, 3>> ignore_colour;
 };
 
 struct AlignReport {

@@ -159,6 +159,31 @@ int run_stream(const StreamArgs& args, const Output& out) {
   else if (*layout == Layout::LatLong) lo.width = 512, lo.height = 256;
   if (*layout == Layout::Healpix) lo.width = given_nside(args.nside) > 0 ? args.nside : 32, lo.height = 1;
   if (*layout == Layout::Healpix) check_nside("--nside", lo.width);
+  // Replayed maps are not resampled: without a geometry given they take the first map's own
+  // (the default hemisphere 360x90 refused every latlong map), and a geometry given that the
+  // maps do not have is refused before the stream starts.
+  if (args.maps && args.source.rfind("replay:", 0) == 0) {
+    std::vector<std::string> maps;
+    try {
+      maps = find_images({args.source.substr(7)});
+    } catch (const InputError&) {
+      // The replay source refuses a folder without frames, in its own words.
+    }
+    if (!maps.empty() && is_radiance_file(maps.front())) {
+      const EnvMap first = read_envmap(maps.front());
+      const int width = first.layout == Layout::Healpix ? first.nside : first.width;  // the pipeline's healpix size
+      const int height = first.layout == Layout::Healpix ? 1 : first.height;
+      const StreamArgs unset;
+      if (args.layout == unset.layout && args.size.empty() && args.nside == unset.nside) {
+        lo.layout = first.layout, lo.width = width, lo.height = height;
+      } else if (first.layout != lo.layout || width != lo.width || height != lo.height) {
+        throw InputError(fmt::format("{} is {}, the pipeline expects {}: with --maps, --layout and --size (or --nside) "
+                                     "describe the maps replayed (nothing is resampled); leave them out to take the maps' own",
+                                     maps.front(), describe_size(first),
+                                     describe_size(make_envmap(lo.layout, lo.width, lo.height))));
+      }
+    }
+  }
   check_light_count("--cluster", args.cluster);
   const auto method = method_from_string(args.method);
   if (!method) throw InputError(fmt::format("--method: unknown method '{}'", args.method));
@@ -182,7 +207,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
     if (given && !lo.sampling.auto_count) throw InputError(fmt::format("{} applies only with --n auto", option));
   lo.sampling.budget.budget_ms = args.frame_budget_ms;
   lo.sampling.frame_rate_hz = args.fps > 0 ? args.fps : 21, lo.sampling.cluster_max_lights = args.cluster;
-  lo.sampling.sampler.upper_only = *layout == Layout::Hemisphere;
+  lo.sampling.sampler.upper_only = lo.layout == Layout::Hemisphere;
   parse_listen(args.listen, &st.server.host, &st.server.port);
   if (!args.token.empty()) st.server.token = args.token;
   st.source = args.source;
@@ -268,7 +293,7 @@ std::vector<Command> live_commands() {
          f.opt("--camera", a->camera, "Calibrated camera model (default: equidistant fisheye)");
          f.opt("--fov", a->fov, "Fisheye field of view / image circle, deg (with --camera only when given: else the image circle found in the first frame bounds the lens)");
          f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees");
-         f.flag("--maps", a->maps, "The source delivers environment maps already (replayed .exr, of the --layout and --size given: not resampled)");
+         f.flag("--maps", a->maps, "The source delivers environment maps already (replayed .exr, not resampled: their own layout and size unless --layout/--size/--nside are given)");
          f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
          f.opt("--size", a->size, "Map size WxH");
          f.opt("--nside", a->nside, "healpix nside");

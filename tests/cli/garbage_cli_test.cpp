@@ -86,6 +86,21 @@ TEST(GarbageCli, StreamReplayRefusesAGarbageFrameAndPacesByTimestamps) {
                         "timestamps.txt:2");
 }
 
+// Replayed maps take their own layout and size when none is given: the default hemisphere
+// 360x90 refused every latlong map ("replayed map is 64x32, the pipeline expects ..."). A
+// geometry given that the maps do not have is refused, saying what the options describe.
+TEST(GarbageCli, StreamReplayOfMapsTakesTheirOwnLayoutAndSize) {
+  const fs::path dir = fresh_dir("replay_maps");
+  ASSERT_EQ(lightprobe("synth scene --size 64x32 -o " + (dir / "a.exr").string()).code, 0);
+  fs::copy_file(dir / "a.exr", dir / "b.exr");
+  const CliRun r = lightprobe("stream --maps --source replay:" + dir.string() + " --duration 2 --listen 127.0.0.1:0 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"brackets_processed\":2"), std::string::npos) << r.out;
+  expect_one_line_error(lightprobe("stream --maps --source replay:" + dir.string() +
+                                   " --layout latlong --size 128x64 --duration 2 --listen 127.0.0.1:0"),
+                        "with --maps, --layout and --size (or --nside) describe the maps replayed");
+}
+
 // A fisheye without --camera or --fov was unwrapped through a guessed lens (equidistant,
 // 180 deg, its circle inscribed in the frame) with exit 0.
 TEST(GarbageCli, AFisheyeWithoutItsLensIsRefusedAndAnIdealOneIsUnwrappedAsGiven) {

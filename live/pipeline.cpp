@@ -346,6 +346,14 @@ void LivePipeline::process_loop() {
       if (failed_from_start_ >= 3 && stats_.input_error.empty()) stats_.input_error = e.what();
     }
   }
+  {
+    // A source that ended (a replay) before three failures, none processed and every bracket
+    // bad input: the same end (a two-frame replay through a camera model of another sensor
+    // ended with exit 0 having served nothing).
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stats_.brackets_processed == 0 && failed_from_start_ > 0 && stats_.input_error.empty())
+      stats_.input_error = stats_.last_error;
+  }
   processing_done_ = true;
 }
 

@@ -460,6 +460,15 @@ TEST(UnreadOptionsCli, AStreamWhoseEveryBracketFailsFromTheStartEndsAsBadInput) 
   fs::create_directories(fish);
   for (const char* name : {"a.exr", "b.exr", "c.exr"})
     ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 190 --size 64x64 -o " + (dir / "fish" / name).string()).code, 0);
+  // Two frames through a camera model of another sensor size, the replay over before three
+  // failures: bad input all the same (it ended with exit 0 having served nothing).
+  const std::string two = (dir / "two").string();
+  fs::create_directories(two);
+  for (const char* name : {"a.exr", "b.exr"}) fs::copy_file(dir / "fish" / name, dir / "two" / name);
+  const CliRun short_replay = lightprobe("stream --source replay:" + two + " --fps 50 --listen 127.0.0.1:0 --camera " +
+                                         (dir / "boards" / "true_camera.yaml").string());
+  EXPECT_EQ(short_replay.code, 2) << short_replay.err;
+  EXPECT_NE(short_replay.err.find("camera model is for 1280x960, frames are 64x64"), std::string::npos) << short_replay.err;
   // Without --loop and --duration, a replay that ends ends the stream (it served until killed).
   const CliRun once = lightprobe("--json stream --source replay:" + fish + " --fps 50 --listen 127.0.0.1:0");
   ASSERT_EQ(once.code, 0) << once.err;

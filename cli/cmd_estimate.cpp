@@ -89,9 +89,13 @@ MeteringOptions camera_from(const Track& track, const EstimateMetadataArgs& a) {
   if (given(a.f_number) && no_aperture == 0)
     warn(fmt::format("--f-number {} is not used: every frame of {} records its aperture", a.f_number, a.track));
   if (given(a.ae_target) && no_mean == 0 && m.photometric_scale)
-    warn(fmt::format("--ae-target {} is not used: every frame of {} records its mean code", a.ae_target, a.track));
+    warn(fmt::format("--ae-target {} is not used: the photometric scale reads each frame's own mean code, and every "
+                     "frame of {} records one",
+                     a.ae_target, a.track));
   if (given(a.iso_base) && iso_only == 0 && m.photometric_scale)
-    warn(fmt::format("--iso-base {} is not used: every frame of {} records its gain", a.iso_base, a.track));
+    warn(fmt::format("--iso-base {} is not used: the photometric scale reads each frame's own gain, and every frame "
+                     "of {} records one (the meter equation, --meter-equation, would read it)",
+                     a.iso_base, a.track));
   return m;
 }
 

@@ -219,10 +219,13 @@ std::string export_glb(const LightList& list) {
 }
 
 std::string export_csv(const LightList& list) {
-  std::string out = "id,x,y,z,r,g,b,solid_angle\n";
+  // The units on every row: a csv had no place for them, and a relative list read the same
+  // as one in W m^-2.
+  std::string out = "id,x,y,z,r,g,b,solid_angle,units\n";
+  const std::string_view units = to_string(list.units);
   for (const Light& l : list.lights)
-    out += fmt::format("{},{},{},{},{},{},{},{}\n", l.id, l.direction.x, l.direction.y, l.direction.z, l.rgb[0],
-                       l.rgb[1], l.rgb[2], l.solid_angle);
+    out += fmt::format("{},{},{},{},{},{},{},{},{}\n", l.id, l.direction.x, l.direction.y, l.direction.z, l.rgb[0],
+                       l.rgb[1], l.rgb[2], l.solid_angle, units);
   return out;
 }
 

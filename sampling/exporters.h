@@ -61,8 +61,9 @@
 //            intensities); each light's id and solid angle in its extras.
 //   glb      the same glTF document as binary glTF 2.0: a 12-byte header and one JSON chunk
 //            padded with spaces to 4 bytes (no BIN chunk: lights need no buffers).
-//   csv      header `id,x,y,z,r,g,b,solid_angle`, one row per light in our frame, every
-//            number with the shortest text that reads back to the same double.
+//   csv      header `id,x,y,z,r,g,b,solid_angle,units`, one row per light in our frame, every
+//            number with the shortest text that reads back to the same double; units is the
+//            list's ("radiance": rgb in W m^-2, or "relative").
 //
 // Numbers are written in full precision (shortest round-trip form) everywhere.
 // Throws InputError on a light with a non-finite or zero-length direction or a

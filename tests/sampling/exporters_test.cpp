@@ -265,14 +265,15 @@ TEST(ExportCsv, RowsReadBackToTheSameLights) {
   std::istringstream in(export_lights(list, ExportFormat::Csv));
   std::string line;
   ASSERT_TRUE(std::getline(in, line));
-  EXPECT_EQ(line, "id,x,y,z,r,g,b,solid_angle");
+  EXPECT_EQ(line, "id,x,y,z,r,g,b,solid_angle,units");
   size_t i = 0;
   while (std::getline(in, line)) {
     ASSERT_LT(i, list.lights.size());
     std::vector<std::string> cells;
     std::stringstream row(line);
     for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
-    ASSERT_EQ(cells.size(), 8u) << line;
+    ASSERT_EQ(cells.size(), 9u) << line;
+    EXPECT_EQ(cells[8], to_string(list.units)) << line;
     const Light& l = list.lights[i];
     EXPECT_EQ(std::stoull(cells[0]), l.id);
     // Full precision: every double reads back bit for bit.

@@ -74,22 +74,30 @@ cv::Mat grey8(const RgbImage& f, const std::optional<std::array<uint8_t, 3>>& ig
   return out;
 }
 
+// Mtb's threshold and exclusion bitmaps of one grey image at full resolution.
+struct MtbBitmaps {
+  cv::Mat threshold, exclusion;
+};
+MtbBitmaps mtb_bitmaps(cv::AlignMTB& mtb, const cv::Mat& grey) {
+  MtbBitmaps b;
+  mtb.computeBitmaps(grey, b.threshold, b.exclusion);
+  return b;
+}
+
 // Ward's Mtb error at full resolution: the pixels whose threshold bits differ between the
 // reference and the frame moved by `shift`, among those both exclusion bitmaps keep; a
 // reference pixel the move leaves without a counterpart (shifted in from outside, or
 // excluded in the frame) counts as half a mismatch, what a random bit would give, so that a
 // shift cannot score well by moving the structure out of the comparison.
-double mtb_mismatch(cv::AlignMTB& mtb, const cv::Mat& ref_grey, const cv::Mat& frame_grey, cv::Point shift) {
-  cv::Mat ref_tb, ref_eb, tb, eb, moved_tb, moved_eb;
-  mtb.computeBitmaps(ref_grey, ref_tb, ref_eb);
-  mtb.computeBitmaps(frame_grey, tb, eb);
-  mtb.shiftMat(tb, moved_tb, shift);
-  mtb.shiftMat(eb, moved_eb, shift);  // pixels shifted in from outside are 0: not kept
+double mtb_mismatch(cv::AlignMTB& mtb, const MtbBitmaps& ref, const MtbBitmaps& frame, cv::Point shift) {
+  cv::Mat moved_tb, moved_eb;
+  mtb.shiftMat(frame.threshold, moved_tb, shift);
+  mtb.shiftMat(frame.exclusion, moved_eb, shift);  // pixels shifted in from outside are 0: not kept
   cv::Mat kept, differ;
-  cv::bitwise_and(ref_eb, moved_eb, kept);
-  cv::bitwise_xor(ref_tb, moved_tb, differ);
+  cv::bitwise_and(ref.exclusion, moved_eb, kept);
+  cv::bitwise_xor(ref.threshold, moved_tb, differ);
   cv::bitwise_and(differ, kept, differ);
-  return double(cv::countNonZero(differ)) + 0.5 * double(cv::countNonZero(ref_eb) - cv::countNonZero(kept));
+  return double(cv::countNonZero(differ)) + 0.5 * double(cv::countNonZero(ref.exclusion) - cv::countNonZero(kept));
 }
 
 // Linear-ish luminance (code^2.2), not yet divided by the exposure time.
@@ -177,6 +185,7 @@ std::vector<RgbImage> align_frames(const std::vector<RgbImage>& frames, const st
   cv::Ptr<cv::AlignMTB> mtb = cv::createAlignMTB(max_bits);
 
   const cv::Mat ref_grey = grey8(frames[ref], options.ignore_colour);
+  MtbBitmaps ref_bitmaps;  // made when a shift needs checking (mtb_mismatch)
   cv::Mat ref_lin;
   if (options.method == AlignOptions::Method::Ecc) ref_lin = linear_luma(frames[ref]);
   const double dark_lin = std::pow(kDark, kGamma), bright_lin = std::pow(kBright, kGamma);
@@ -198,8 +207,10 @@ std::vector<RgbImage> align_frames(const std::vector<RgbImage>& frames, const st
     // frames). Checked at full resolution against not moving at all: the one with fewer
     // mismatched bits (Ward's own error) wins.
     if (s != cv::Point(0, 0)) {
-      const double still = mtb_mismatch(*mtb, ref_grey, frame_grey, {0, 0}), moved = mtb_mismatch(*mtb, ref_grey, frame_grey, s);
-      if (still <= moved) s = {0, 0};
+      if (ref_bitmaps.threshold.empty()) ref_bitmaps = mtb_bitmaps(*mtb, ref_grey);
+      const MtbBitmaps frame_bitmaps = mtb_bitmaps(*mtb, frame_grey);
+      if (mtb_mismatch(*mtb, ref_bitmaps, frame_bitmaps, {0, 0}) <= mtb_mismatch(*mtb, ref_bitmaps, frame_bitmaps, s))
+        s = {0, 0};
     }
     double dx = -s.x, dy = -s.y, angle = 0.0;
     if (std::max(std::abs(dx), std::abs(dy)) > options.max_shift_px)

@@ -162,10 +162,22 @@ struct RawImage {
   std::vector<std::string> warnings;
 };
 
+// The nside of an image that can hold a healpix map: nside wide and 12 nside tall, or one
+// row or column of 12 nside^2 pixels; 0 for any other shape.
+int healpix_nside_of_shape(int w, int h) {
+  if (h == 12 * w && is_power_of_two(w) && w <= 8192) return w;
+  const int64_t n = int64_t(w) * h;
+  if ((w == 1 || h == 1) && n % 12 == 0) {
+    const auto nside = int64_t(std::llround(std::sqrt(double(n / 12))));
+    if (12 * nside * nside == n && is_power_of_two(int(nside)) && nside <= 8192) return int(nside);
+  }
+  return 0;
+}
+
 // The layout a file without a recorded one is read as, from its shape alone.
 std::optional<Layout> layout_from_shape(int w, int h) {
   if (w == 2 * h) return Layout::LatLong;
-  if (h == 12 * w && is_power_of_two(w)) return Layout::Healpix;
+  if (healpix_nside_of_shape(w, h) > 0) return Layout::Healpix;
   if (w == 4 * h) return Layout::Hemisphere;  // the shape of the default hemisphere map, 360x90
   return std::nullopt;
 }
@@ -199,11 +211,11 @@ Layout resolve_layout(const std::string& path, const RawImage& raw, const ReadMa
       if (w != 2 * h) fail(path, fmt::format("layout latlong needs width = 2 x height, but the image is {}x{}", w, h));
       break;
     case Layout::Healpix:
-      if (h != 12 * w || !is_power_of_two(w) || w > 8192)
-        fail(path, fmt::format("layout healpix needs an image nside wide and 12 nside tall (nside a power of two), "
-                               "but the image is {}x{}",
+      if (healpix_nside_of_shape(w, h) == 0)
+        fail(path, fmt::format("layout healpix needs an image nside wide and 12 nside tall, or 12 nside^2 pixels in "
+                               "one row or column (nside a power of two), but the image is {}x{}",
                                w, h));
-      if (raw.nside && *raw.nside != w)
+      if (raw.nside && *raw.nside != healpix_nside_of_shape(w, h))
         fail(path, fmt::format("healpix nside {} recorded in the file does not match the {}x{} image", *raw.nside, w, h));
       break;
     case Layout::Hemisphere: break;
@@ -247,20 +259,13 @@ EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions&
     map.world_from_probe = raw.world_from_probe;
   }
   if (layout == Layout::Healpix) {
-    const int nside = raw.width;
+    // The file's pixels, row by row from the top, are the NESTED pixels in order.
+    const int nside = healpix_nside_of_shape(raw.width, raw.height);
     map.nside = nside;
     map.width = 12 * nside * nside;
     map.height = 1;
-    map.rgb.resize(raw.rgb.size());
-    if (!raw.valid.empty()) map.valid.resize(raw.valid.size());
-    for (int row = 0; row < raw.height; ++row) {
-      for (int col = 0; col < raw.width; ++col) {
-        const size_t src = size_t(row) * size_t(raw.width) + size_t(col);
-        const size_t dst = healpix_nested_index(nside, row / nside, col, row % nside);
-        std::copy_n(&raw.rgb[3 * src], 3, &map.rgb[3 * dst]);
-        if (!raw.valid.empty()) map.valid[dst] = raw.valid[src];
-      }
-    }
+    map.rgb = std::move(raw.rgb);
+    map.valid = std::move(raw.valid);
   } else {
     map.width = raw.width;
     map.height = raw.height;
@@ -290,17 +295,10 @@ FileImage to_file_image(const EnvMap& map) {
     const int nside = map.nside;
     if (!is_power_of_two(nside) || size_t(map.width) != 12 * size_t(nside) * size_t(nside) || map.height != 1)
       throw std::invalid_argument("write_envmap: healpix map with inconsistent nside");
-    img.width = nside;
+    img.width = nside;  // NESTED order row by row: face f fills rows [f nside, (f + 1) nside)
     img.height = 12 * nside;
-    img.rgb.resize(map.rgb.size());
-    if (!map.valid.empty()) img.valid.resize(map.valid.size());
-    for (size_t n = 0; n < map.pixel_count(); ++n) {
-      int face, ix, iy;
-      healpix_face_xy(nside, n, &face, &ix, &iy);
-      const size_t dst = (size_t(face) * nside + iy) * size_t(nside) + ix;
-      std::copy_n(&map.rgb[3 * n], 3, &img.rgb[3 * dst]);
-      if (!map.valid.empty()) img.valid[dst] = map.valid[n];
-    }
+    img.rgb = map.rgb;
+    img.valid = map.valid;
   } else {
     img.width = map.width;
     img.height = map.height;

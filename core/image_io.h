@@ -28,11 +28,12 @@
 //   .tif  Read only: floating-point TIFFs (32-bit IEEE or LogLuv, panorama stitchers' HDR
 //         output) through OpenCV; alpha as an EXR's. Integer TIFFs are camera codes: refused.
 // .hdr and .pfm cannot hold a mask: writing a map with invalid pixels to them throws.
-// A healpix map is stored as an image nside wide and 12 nside tall: face f occupies rows
-// [f nside, (f+1) nside), and the pixel at (column ix, row iy) of a face is NESTED index
-// f nside^2 + interleave(ix, iy) (ix on the even bits).
-// With no layout in the file: W = 2H latlong, 12 W = H (W a power of two) healpix, W = 4H
-// hemisphere, other shapes refused. Headers are checked against core/limits.h first.
+// A healpix map is stored as an image nside wide and 12 nside tall whose pixels, read row
+// by row from the top, are the NESTED pixels in order (CONVENTIONS.md: 12 nside^2 pixels,
+// NESTED order): pixel p at row p / nside, column p % nside, so face f fills rows
+// [f nside, (f+1) nside). One row or one column of 12 nside^2 pixels reads the same way.
+// With no layout in the file: W = 2H latlong, 12 W = H (W a power of two) or 12 nside^2
+// x 1 healpix, W = 4H hemisphere, other shapes refused. Headers are checked against core/limits.h first.
 //
 // All failures throw InputError naming the path and the problem.
 #pragma once
@@ -43,7 +44,7 @@
 #include <vector>
 
 #include "core/envmap.h"
-#include "core/healpix.h"  // healpix_nested_index: the healpix file layout below
+#include "core/healpix.h"  // the NESTED scheme of the healpix file layout below
 
 namespace lp {
 

@@ -682,15 +682,50 @@ TEST(ImageIo, HealpixMapsRoundTripThroughTheFileLayoutInEveryFormat) {
     for (size_t i = 0; i < map.pixel_count(); ++i)  // i + 1 <= 192 is exact in RGBE too
       ASSERT_NEAR(back.pixel(i)[0], map.pixel(i)[0], map.pixel(i)[0] / 256) << i;
   }
-  // The file image (PFM, stored bottom to top): nside wide, 12 nside tall; face f's
-  // (ix, iy) at row f nside + iy.
+  // The file image (PFM, stored bottom to top): nside wide, 12 nside tall, its pixels row
+  // by row from the top the NESTED pixels in order (CONVENTIONS.md), so that a reader that
+  // takes the file as a flat array of 12 nside^2 NESTED pixels reads it right.
   const std::string pfm = read_bytes(dir + "h.pfm");
   const std::string head = "PF\n4 48\n-1.0\n";
   ASSERT_EQ(pfm.substr(0, head.size()), head);
-  const int f = 7, ix = 2, iy = 1, row = f * nside + iy;
-  float r;
-  std::memcpy(&r, pfm.data() + head.size() + (size_t(12 * nside - 1 - row) * nside + ix) * 12, 4);
-  EXPECT_EQ(r, float(healpix_nested_index(nside, f, ix, iy) + 1));
+  for (const size_t p : {size_t(0), size_t(5), healpix_nested_index(nside, 7, 2, 1), size_t(191)}) {
+    const size_t row = p / nside, col = p % nside;
+    float r;
+    std::memcpy(&r, pfm.data() + head.size() + (size_t(12 * nside - 1 - row) * nside + col) * 12, 4);
+    EXPECT_EQ(r, float(p + 1)) << p;
+  }
+}
+
+// A little-endian colour PFM of rows given top to bottom (PFM stores them bottom first).
+void write_pfm_raw(const std::string& path, int w, int h, const std::vector<float>& rgb) {
+  std::string f = "PF\n" + std::to_string(w) + " " + std::to_string(h) + "\n-1.0\n";
+  for (int row = h - 1; row >= 0; --row)  // the test host is little-endian
+    f.append(reinterpret_cast<const char*>(&rgb[size_t(3) * size_t(row) * size_t(w)]), size_t(12) * size_t(w));
+  write_bytes(path, f);
+}
+
+// A flat healpix map, one row (or column) of 12 nside^2 NESTED pixels, as another tool would
+// write one, reads as healpix with or without a recorded layout; any other flat length is refused.
+TEST(ImageIo, AFlatRowOfNestedPixelsReadsAsHealpix) {
+  const std::string dir = temp_dir();
+  const int nside = 2, npix = 12 * nside * nside;
+  for (const bool row : {true, false}) {
+    SCOPED_TRACE(row ? "one row" : "one column");
+    const int w = row ? npix : 1, h = row ? 1 : npix;
+    std::vector<float> rgb(size_t(3) * npix);
+    for (int p = 0; p < npix; ++p) rgb[3 * size_t(p)] = rgb[3 * size_t(p) + 1] = rgb[3 * size_t(p) + 2] = float(p + 1);
+    write_pfm_raw(dir + "flat.pfm", w, h, rgb);
+    const EnvMap map = read_envmap(dir + "flat.pfm");
+    ASSERT_EQ(map.layout, Layout::Healpix);
+    ASSERT_EQ(map.nside, nside);
+    for (int p = 0; p < npix; ++p) ASSERT_EQ(map.pixel(size_t(p))[0], float(p + 1)) << p;
+  }
+  write_pfm_raw(dir + "flat47.pfm", 47, 1, std::vector<float>(3 * 47, 1.f));
+  EXPECT_THROW(read_envmap(dir + "flat47.pfm"), InputError);
+  ReadMapOptions as_healpix;
+  as_healpix.layout = Layout::Healpix;
+  write_pfm_raw(dir + "flat36.pfm", 36, 1, std::vector<float>(3 * 36, 1.f));  // 12 x 3: nside not a power of two
+  EXPECT_THROW(read_envmap(dir + "flat36.pfm", as_healpix), InputError);
 }
 
 // ----------------------------------------------------------------------------- real maps

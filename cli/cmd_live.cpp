@@ -74,7 +74,7 @@ void refuse_options_the_stream_never_reads(const StreamArgs& a) {
   if (metadata) {
     refuse({{!a.publish.empty(), "--publish"}, {!a.exposures.empty(), "--exposures"}, {a.bracketing != d.bracketing, "--bracketing"},
             {!a.response.empty(), "--response"}, {!a.camera.empty(), "--camera"}, {a.fov != d.fov, "--fov"},
-            {!a.rotation.empty(), "--rotation"}, {a.maps, "--maps"}, {a.layout != d.layout, "--layout"},
+            {!a.rotation.empty(), "--rotation"}, {a.maps, "--maps"}, {a.layout_given, "--layout"},
             {!a.size.empty(), "--size"}, {a.nside != d.nside, "--nside"}, {a.method != d.method, "--method"},
             {a.n != d.n, "--n"}, {a.target_error != d.target_error, "--target-error"},
             {a.error_measure != d.error_measure, "--error-measure"}, {a.frame_budget_ms != d.frame_budget_ms, "--frame-budget-ms"},
@@ -174,7 +174,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
       const int width = first.layout == Layout::Healpix ? first.nside : first.width;  // the pipeline's healpix size
       const int height = first.layout == Layout::Healpix ? 1 : first.height;
       const StreamArgs unset;
-      if (args.layout == unset.layout && args.size.empty() && args.nside == unset.nside) {
+      if (!args.layout_given && args.size.empty() && args.nside == unset.nside) {
         lo.layout = first.layout, lo.width = width, lo.height = height;
       } else if (first.layout != lo.layout || width != lo.width || height != lo.height) {
         throw InputError(fmt::format("{} is {}, the pipeline expects {}: with --maps, --layout and --size (or --nside) "
@@ -294,7 +294,7 @@ std::vector<Command> live_commands() {
          f.opt("--fov", a->fov, "Fisheye field of view / image circle, deg (with --camera only when given: else the image circle found in the first frame bounds the lens)");
          f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees");
          f.flag("--maps", a->maps, "The source delivers environment maps already (replayed .exr, not resampled: their own layout and size unless --layout/--size/--nside are given)");
-         f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
+         f.opt("--layout", a->layout, "latlong|hemisphere|healpix").given(a->layout_given);
          f.opt("--size", a->size, "Map size WxH");
          f.opt("--nside", a->nside, "healpix nside");
          f.opt("--method", a->method, "pharr|hemigon|q2tree|mediancut");

@@ -18,6 +18,7 @@ struct StreamArgs {
   std::string rotation;
   bool maps = false;                // the source delivers environment maps (replayed .exr)
   std::string layout = "hemisphere";
+  bool layout_given = false;  // `--layout hemisphere` written out is not its absence (with --maps)
   std::string size;
   int nside = 0;
   std::string method = "hemigon";

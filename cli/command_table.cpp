@@ -87,6 +87,11 @@ class CliFlags final : public Flags {
                                 ""));  // no name: the help keeps "TEXT"
     return *this;
   }
+  Flags& given(bool& target) override {
+    bool* seen = &target;  // validators run only on values given, never on the default
+    last_->check(CLI::Validator([seen](std::string&) { return *seen = true, std::string(); }, ""));
+    return *this;
+  }
 
  private:
   Flags& keep(CLI::Option* option) {

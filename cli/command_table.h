@@ -45,6 +45,9 @@ class Flags {
   // The option declared last, when given, must not be empty: an empty value would read as
   // "not given" (`--token ""` would otherwise serve without authentication).
   virtual Flags& non_empty() = 0;
+  // Sets `target` true when the option declared last is given (command line or --config),
+  // for an option whose explicit default means something else than its absence.
+  virtual Flags& given(bool& target) = 0;
   // The shared required output: -o,--output.
   Flags& output(std::string& target, const char* help) { return opt("-o,--output", target, help).required(); }
 };

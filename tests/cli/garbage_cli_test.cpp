@@ -99,6 +99,10 @@ TEST(GarbageCli, StreamReplayOfMapsTakesTheirOwnLayoutAndSize) {
   expect_one_line_error(lightprobe("stream --maps --source replay:" + dir.string() +
                                    " --layout latlong --size 128x64 --duration 2 --listen 127.0.0.1:0"),
                         "with --maps, --layout and --size (or --nside) describe the maps replayed");
+  // The default layout written out is a geometry given, not its absence.
+  expect_one_line_error(lightprobe("stream --maps --source replay:" + dir.string() +
+                                   " --layout hemisphere --duration 2 --listen 127.0.0.1:0"),
+                        "with --maps, --layout and --size (or --nside) describe the maps replayed");
 }
 
 // A fisheye without --camera or --fov was unwrapped through a guessed lens (equidistant,

@@ -39,6 +39,9 @@ inline int to_level(float v, int levels) {
   return std::min(int(s), levels - 1);
 }
 
+// A pixel the frame has no data for: masked invalid (RgbImage::valid).
+bool no_data(const RgbImage& frame, size_t p) { return !frame.valid.empty() && !frame.valid[p]; }
+
 bool is_colour(const RgbImage& f, size_t pixel, const std::array<uint8_t, 3>& colour) {
   const float* p = &f.rgb[3 * pixel];
   for (int c = 0; c < 3; ++c)
@@ -149,7 +152,8 @@ std::vector<size_t> sample_pixels(const Bracket& b, int count, const std::option
     double best_d = 2.0, log_e = 0.0;
     bool informative = false;
     for (size_t k = 0; k < b.frames.size() && !skip; ++k) {
-      if (ignore && is_colour(b.frames[k], p, *ignore)) skip = true;
+      // Ignored colour, or no data (an aligned frame's registration border, a transparent pixel).
+      if ((ignore && is_colour(b.frames[k], p, *ignore)) || no_data(b.frames[k], p)) skip = true;
       const float* v = &b.frames[k].rgb[3 * p];
       const double m = (double(v[0]) + v[1] + v[2]) / 3.0;
       if (m > 0.02 && m < 0.98) informative = true;
@@ -312,7 +316,7 @@ CameraResponse recover_robertson(const Bracket& b, const RobertsonOptions& o) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, npix, 4096), [&](const tbb::blocked_range<size_t>& rg) {
       for (size_t k = 0; k < nf; ++k)
         for (size_t p = rg.begin(); p < rg.end(); ++p)
-          lv[k * npix + p] = (o.ignore_colour && is_colour(b.frames[k], p, *o.ignore_colour))
+          lv[k * npix + p] = ((o.ignore_colour && is_colour(b.frames[k], p, *o.ignore_colour)) || no_data(b.frames[k], p))
                                  ? kSkip
                                  : uint16_t(to_level(b.frames[k].rgb[3 * p + size_t(c)], nn));
     });

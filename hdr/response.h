@@ -78,8 +78,9 @@ CameraResponse recover_robertson(const Bracket& bracket, const RobertsonOptions&
 // Deterministic, stratified choice of pixel indices (row-major) for response fitting:
 // Halton(2,3) points over the image, binned by a rough log-irradiance estimate (from each
 // pixel's best-exposed frame) into `count` bins that are filled evenly, so that samples
-// cover both the image and the radiance range. Pixels of `ignore_colour` in any frame are
-// skipped. Returns at most `count` distinct indices.
+// cover both the image and the radiance range. Pixels of `ignore_colour` in any frame, and
+// pixels a frame has no data for (RgbImage::valid: alignment borders, transparency), are
+// skipped; recover_robertson leaves both out too. Returns at most `count` distinct indices.
 std::vector<size_t> sample_pixels(const Bracket& bracket, int count,
                                   const std::optional<std::array<uint8_t, 3>>& ignore_colour = std::nullopt);
 

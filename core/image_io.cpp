@@ -1158,6 +1158,7 @@ RgbImage read_rgb_image(const std::string& path) {
   img.width = c.width;
   img.height = c.height;
   img.rgb = std::move(c.rgb);
+  img.valid = std::move(c.valid);
   img.code_bits = c.bit_depth;
   return img;
 }
@@ -1179,8 +1180,8 @@ namespace {
 
 // PNG camera images are decoded by libpng in-process: through OpenCV they loaded the codecs
 // plugin and its 265 libraries (~0.3 s of a 0.4 s `hdr fuse` of three PNG frames). The same
-// result as OpenCV's IMREAD_UNCHANGED less the alpha: palettes and 1-4 bit grey expanded to
-// 8 bits, 16 bits kept, alpha dropped. libpng reports errors by longjmp, so nothing between
+// result as OpenCV's IMREAD_UNCHANGED: palettes and 1-4 bit grey expanded to 8 bits, 16 bits
+// kept, alpha (and tRNS transparency) kept for the validity mask. libpng reports errors by longjmp, so nothing between
 // png_ calls owns a destructor: the pixels go to a buffer sized from the checked header.
 struct PngSource {
   const uint8_t* data;
@@ -1194,8 +1195,9 @@ void png_source_read(png_structp png, png_bytep out, png_size_t n) {
   src->at += n;
 }
 
-// Fills the rows (each width * 6 bytes: up to 3 channels of 16 bits) and returns true, or
-// false for a damaged file; `channels` (1 or 3) and `depth` (8 or 16) say what was stored.
+// Fills the rows (each width * 8 bytes: up to 4 channels of 16 bits) and returns true, or
+// false for a damaged file; `channels` (1 grey, 2 grey + alpha, 3 RGB, 4 RGBA) and `depth`
+// (8 or 16) say what was stored.
 bool decode_png_rows(PngSource* src, uint32_t width, uint32_t height, png_bytep* rows, int* channels, int* depth) {
   png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   if (!png) return false;
@@ -1211,23 +1213,25 @@ bool decode_png_rows(PngSource* src, uint32_t width, uint32_t height, png_bytep*
   const int type = png_get_color_type(png, info);
   if (type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
   if (type == PNG_COLOR_TYPE_GRAY && png_get_bit_depth(png, info) < 8) png_set_expand_gray_1_2_4_to_8(png);
-  png_set_strip_alpha(png);
+  if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);  // transparency as alpha
   if (png_get_bit_depth(png, info) == 16) png_set_swap(png);  // host (little-endian) order
   png_set_interlace_handling(png);  // png_read_image then runs every pass
   png_read_update_info(png, info);
   *channels = png_get_channels(png, info);
   *depth = png_get_bit_depth(png, info);
-  if ((*channels != 1 && *channels != 3) || (*depth != 8 && *depth != 16) ||
-      png_get_rowbytes(png, info) > size_t(width) * 6)
+  if (*channels < 1 || *channels > 4 || (*depth != 8 && *depth != 16) ||
+      png_get_rowbytes(png, info) > size_t(width) * 8)
     png_error(png, "layout");
   png_read_image(png, rows);
   png_destroy_read_struct(&png, &info, nullptr);
   return true;
 }
 
-// Decoded samples (8-bit, or 16-bit in host order; `channels` 1, 3 or 4, in RGB(A) order or
-// BGR(A) when `bgr`; rows `stride` bytes apart) as a CameraImage: codes / (2^depth - 1), grey
-// repeated, alpha dropped. One conversion for libpng's, libjpeg's and OpenCV's pixels.
+// Decoded samples (8-bit, or 16-bit in host order; `channels` 1 grey, 2 grey + alpha, 3 or
+// 4 in RGB(A) order or BGR(A) when `bgr`; rows `stride` bytes apart) as a CameraImage:
+// codes / (2^depth - 1), grey repeated, alpha below half of its range the validity mask
+// (left empty when every pixel is opaque enough). One conversion for libpng's, libjpeg's and
+// OpenCV's pixels.
 CameraImage camera_image_from_samples(int width, int height, int depth, int channels, bool bgr, const uint8_t* data,
                                       size_t stride) {
   CameraImage out;
@@ -1235,24 +1239,34 @@ CameraImage camera_image_from_samples(int width, int height, int depth, int chan
   out.height = height;
   out.bit_depth = depth;
   const float s = depth == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
+  const bool grey = channels <= 2, alpha = channels == 2 || channels == 4;
   out.rgb.resize(3 * size_t(width) * size_t(height));
+  auto sample = [&](const uint8_t* row, size_t k) {
+    uint16_t v = 0;
+    if (depth == 8) v = row[k];
+    else std::memcpy(&v, &row[2 * k], 2);
+    return v;
+  };
+  size_t transparent = 0;
+  if (alpha) out.valid.assign(size_t(width) * size_t(height), 1);
   for (size_t y = 0; y < size_t(height); ++y) {
     const uint8_t* row = data + y * stride;
     float* o = &out.rgb[3 * y * size_t(width)];
-    for (size_t x = 0; x < size_t(width); ++x)
+    for (size_t x = 0; x < size_t(width); ++x) {
       for (size_t c = 0; c < 3; ++c) {
-        const size_t k = size_t(channels) * x + (channels == 1 ? 0 : bgr ? 2 - c : c);
-        uint16_t v = 0;
-        if (depth == 8) v = row[k];
-        else std::memcpy(&v, &row[2 * k], 2);
-        o[3 * x + c] = float(v) * s;
+        const size_t k = size_t(channels) * x + (grey ? 0 : bgr ? 2 - c : c);
+        o[3 * x + c] = float(sample(row, k)) * s;
       }
+      if (alpha && !(float(sample(row, size_t(channels) * x + size_t(channels) - 1)) * s >= 0.5f))
+        out.valid[y * size_t(width) + x] = 0, ++transparent;
+    }
   }
+  if (transparent == 0) out.valid.clear();
   return out;
 }
 
 CameraImage decode_png_image(const std::string& path, const std::string& bytes, uint32_t width, uint32_t height) {
-  const size_t stride = size_t(width) * 6;
+  const size_t stride = size_t(width) * 8;
   std::vector<uint8_t> pixels(stride * size_t(height));
   std::vector<png_bytep> rows(static_cast<size_t>(height));
   for (uint32_t y = 0; y < height; ++y) rows[y] = pixels.data() + size_t(y) * stride;
@@ -1331,6 +1345,7 @@ CameraImage turned_for_display(CameraImage in, int orientation) {
   CameraImage out;
   out.width = int(swap ? h : w), out.height = int(swap ? w : h), out.bit_depth = in.bit_depth;
   out.rgb.resize(in.rgb.size());
+  out.valid.resize(in.valid.size());
   const size_t ow = size_t(out.width), oh = size_t(out.height);
   for (size_t y = 0; y < oh; ++y)
     for (size_t x = 0; x < ow; ++x) {
@@ -1347,6 +1362,7 @@ CameraImage turned_for_display(CameraImage in, int orientation) {
       const float* p = &in.rgb[3 * (sy * w + sx)];
       float* q = &out.rgb[3 * (y * ow + x)];
       q[0] = p[0], q[1] = p[1], q[2] = p[2];
+      if (!in.valid.empty()) out.valid[y * ow + x] = in.valid[sy * w + sx];
     }
   return out;
 }

@@ -79,6 +79,9 @@ struct CameraImage {
   int bit_depth = 8;
   std::vector<float> rgb;
   int orientation = 1;  // the EXIF Orientation the pixels were turned by (1: read as stored)
+  // Empty: every pixel holds data. Else 0 where the file's alpha is below half (a frame
+  // warped by a registration tool, Hugin's align_image_stack: no data there, not black).
+  std::vector<uint8_t> valid;
 };
 CameraImage read_camera_image(const std::string& path);
 // The width and height read_camera_image gives (as its EXIF Orientation shows the image),

@@ -303,6 +303,12 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     f.width = cam.width;
     f.height = cam.height;
     f.rgb = std::move(cam.rgb);
+    if (!cam.valid.empty()) {  // transparent pixels: no data in this frame, merged from the others
+      const auto none = size_t(std::count(cam.valid.begin(), cam.valid.end(), uint8_t(0)));
+      warn(fmt::format("{}: {} pixels ({:.3g} %) have alpha below half: no data there (left out of this frame), not black",
+                       paths[k], none, 100.0 * double(none) / double(cam.valid.size())));
+      f.valid = std::move(cam.valid);
+    }
     b.frames.push_back(std::move(f));
     b.paths.push_back(paths[k]);
     if (times) {

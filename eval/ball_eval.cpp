@@ -99,13 +99,14 @@ std::vector<BallBackground> all_ball_backgrounds() {
 }
 
 BallCase render_ball_case(const EnvMap& world, BallBackground background, double radius_px, const RgbImage& photo,
-                          uint64_t seed) {
+                          uint64_t seed, double frame) {
   if (!(radius_px >= 8)) throw InputError("eval ball: the radius must be at least 8 px");
   if (background != BallBackground::Black && photo.rgb.empty())
     throw InputError(fmt::format("eval ball: the {} background needs a photo", background_name(background)));
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
-  const int w = int(std::ceil(2.9 * radius_px)), h = int(std::ceil(2.5 * radius_px));
+  if (!(frame >= 1)) throw InputError("eval ball: the frame must be at least 1 (the crop around the ball)");
+  const int w = int(std::ceil(2.9 * frame * radius_px)), h = int(std::ceil(2.5 * frame * radius_px));
   BallCase c;
   c.truth = {1.1 * radius_px + u(rng) * (w - 2.2 * radius_px), 1.1 * radius_px + u(rng) * (h - 2.2 * radius_px),
              radius_px + u(rng) - 0.5};
@@ -247,7 +248,7 @@ EvalBallReport evaluate_ball_detection(const EvalBallOptions& options, const Eva
       for (BallBackground bg : options.backgrounds) {
         const uint64_t case_seed = seed++;
         if (!options.include || options.include(label, r, bg))
-          report.rows.push_back(measure(label, render_ball_case(world, bg, r, photo, case_seed), bg, options));
+          report.rows.push_back(measure(label, render_ball_case(world, bg, r, photo, case_seed, options.frame), bg, options));
       }
     steps.advance();
   }

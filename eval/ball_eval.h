@@ -39,11 +39,12 @@ struct BallCase {
 };
 
 // A ball of radius `radius_px` reflecting `world` in front of `background`; the image is
-// about 2.9 x 2.5 radii, the centre placed off-centre with sub-pixel offsets drawn from
-// `seed`. `photo` (any size, resampled to the image) is needed for every background but
+// about 2.9 x 2.5 radii times `frame` (1: a crop around the ball; 2.3: the ball a sixth of
+// the frame's width, as an uncropped photo frames it), the centre placed off-centre with
+// sub-pixel offsets drawn from `seed`. `photo` (any size, resampled to the image) is needed for every background but
 // Black. Throws InputError on a radius below 8 px or a missing photo.
 BallCase render_ball_case(const EnvMap& world, BallBackground background, double radius_px, const RgbImage& photo,
-                          uint64_t seed);
+                          uint64_t seed, double frame = 1);
 
 struct EvalBallOptions {
   // Map files (latlong), or directories of six cube faces (probe/cube_map.h).
@@ -60,6 +61,7 @@ struct EvalBallOptions {
   // A subset of the grid (empty: all): cases for which it returns false are skipped, and
   // the others keep the seeds, hence the renders, they have in the whole grid.
   std::function<bool(const std::string& map_label, double radius_px, BallBackground)> include;
+  double frame = 1;  // render_ball_case's frame: the image's size in units of the crop's
 };
 
 struct BallRow {

@@ -340,37 +340,55 @@ Circle local_search(const FeatureLevel& L, const Circle& c, double r_min, double
 }
 
 // Exhaustive search on the coarsest level: every centre and radius on the level's pixel
-// grid; the best few local maxima (apart by > 3 level px) as seeds, in full-res coordinates.
-std::vector<Circle> coarse_seeds(const FeatureLevel& L, double r_min, double r_max, int keep, double max_cut,
-                                 bool whole) {
+// grid; the best few local maxima (apart by > 3 level px) as seeds, in full-res coordinates:
+// `keep` by the score, then `keep_whole` by the score for balls wholly in view, then
+// `keep_small` by that score per unit radius (the share of the rim with contrast). The
+// score grows with the radius, so in an uncropped photo (a ball a sixth of the frame wide)
+// large circles through the texture took every seed of the first two kinds; the third is
+// blind to size. All come from one pass (each circle's score is most of find_ball's fixed
+// cost).
+std::vector<std::pair<Circle, bool>> coarse_seeds(const FeatureLevel& L, double r_min, double r_max, int keep,
+                                                  int keep_whole, int keep_small, double max_cut) {
   const int lw = L.feat.cols, lh = L.feat.rows;
   const int r0 = std::max(4, int(std::ceil(r_min / L.s()))), r1 = int(std::floor(r_max / L.s()));
   if (r1 < r0) return {};
   const int nr = r1 - r0 + 1;
-  std::vector<float> sc(size_t(lw + 1) * (lh + 1) * nr, 0.f);
+  const size_t cells = size_t(lw + 1) * (lh + 1) * nr;
+  std::vector<float> sc(cells, 0.f), sc_whole(cells, 0.f), sc_small(cells, 0.f);
   tbb::parallel_for(0, lh + 1, [&](int y) {
     for (int x = 0; x <= lw; ++x)
       for (int r = r0; r <= r1; ++r) {
         const RegionScore rs = region_score(L, {x * L.sx, y * L.sy, r * L.s()}, 48, max_cut);
-        sc[(size_t(y) * (lw + 1) + x) * nr + (r - r0)] = float(whole ? rs.score_whole : rs.score);
+        const size_t id = (size_t(y) * (lw + 1) + x) * nr + (r - r0);
+        sc[id] = float(rs.score), sc_whole[id] = float(rs.score_whole), sc_small[id] = float(rs.score_whole / r);
       }
   });
-  std::vector<size_t> order(sc.size());
-  std::iota(order.begin(), order.end(), size_t(0));
-  const size_t top = std::min<size_t>(order.size(), 2000);
-  std::partial_sort(order.begin(), order.begin() + top, order.end(), [&](size_t a, size_t b) { return sc[a] > sc[b]; });
+  std::vector<std::pair<Circle, bool>> out;
   std::vector<std::array<int, 3>> picked;
-  std::vector<Circle> out;
-  for (size_t t = 0; t < top && int(out.size()) < keep; ++t) {
-    const size_t id = order[t];
-    if (!(sc[id] > 0)) break;
-    const int r = int(id % nr) + r0, x = int(id / nr % (lw + 1)), y = int(id / nr / (lw + 1));
-    bool near = false;
-    for (const auto& p : picked)
-      if (std::abs(p[0] - x) <= 3 && std::abs(p[1] - y) <= 3 && std::abs(p[2] - r) <= 3) near = true;
-    if (near) continue;
-    picked.push_back({x, y, r});
-    out.push_back({x * L.sx, y * L.sy, r * L.s()});
+  for (const int kind : {0, 1, 2}) {
+    const bool whole = kind > 0;
+    const std::vector<float>& score = kind == 0 ? sc : kind == 1 ? sc_whole : sc_small;
+    const int want = kind == 0 ? keep : kind == 1 ? keep_whole : keep_small;
+    const size_t first = picked.size();
+    std::vector<size_t> order(cells);
+    std::iota(order.begin(), order.end(), size_t(0));
+    const size_t top = std::min<size_t>(order.size(), 2000);
+    std::partial_sort(order.begin(), order.begin() + top, order.end(),
+                      [&](size_t a, size_t b) { return score[a] > score[b]; });
+    for (size_t t = 0; t < top && int(picked.size() - first) < want; ++t) {
+      const size_t id = order[t];
+      if (!(score[id] > 0)) break;
+      const int r = int(id % nr) + r0, x = int(id / nr % (lw + 1)), y = int(id / nr / (lw + 1));
+      bool near = false;
+      // Apart from this kind's picks; a later kind also skips what an earlier one took.
+      for (size_t q = kind == 2 ? 0 : first; q < picked.size(); ++q) {
+        const auto& p = picked[q];
+        if (std::abs(p[0] - x) <= 3 && std::abs(p[1] - y) <= 3 && std::abs(p[2] - r) <= 3) near = true;
+      }
+      if (near) continue;
+      picked.push_back({x, y, r});
+      out.push_back({{x * L.sx, y * L.sy, r * L.s()}, whole});
+    }
   }
   return out;
 }
@@ -427,6 +445,7 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   cv::medianBlur(lum, lum_blur, 3);
   cv::absdiff(lum, lum_blur, energy);
   cv::GaussianBlur(energy, energy, cv::Size(0, 0), 1.5);
+  lum.release(), lum_blur.release();  // full-resolution buffers add up on a camera's 15-25 Mpx
 
   const double min_dim = std::min(w, h);
   const double r_min = options.min_radius_fraction * min_dim, r_max = options.max_radius_fraction * min_dim;
@@ -448,9 +467,7 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   if (options.initial_guess)
     seeds.push_back({{options.initial_guess->cx, options.initial_guess->cy, options.initial_guess->radius_px}, false});
   else
-    for (bool whole : {false, true})
-      for (const Circle& c : coarse_seeds(levels.back(), r_min, r_max, whole ? 4 : 8, options.max_cut_fraction, whole))
-        seeds.push_back({c, whole});
+    seeds = coarse_seeds(levels.back(), r_min, r_max, 8, 4, 4, options.max_cut_fraction);
 
   // Each seed refined on the region contrast, then its silhouette fitted; the circle whose
   // fitted rim agrees with the edges along the longest arc wins (a large circle half
@@ -478,10 +495,23 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
       if (!near_guess || 2 * factors[size_t(li)] <= options.initial_guess_reach_px)
         c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction, whole);
     Pick p{c, region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction), {}};
+    auto near = [](const RimFit& fit, const Circle& from) {
+      return std::hypot(fit.ball.cx - from.cx, fit.ball.cy - from.cy) <= 8 + 0.02 * from.r &&
+             std::abs(fit.ball.radius_px - from.r) <= 8 + 0.02 * from.r;
+    };
     p.rim = fit_rim(fine, lin, valid8, {c.cx, c.cy, c.r}, options.rays, edge_noise);
-    const bool near = std::hypot(p.rim.ball.cx - c.cx, p.rim.ball.cy - c.cy) <= 8 + 0.02 * c.r &&
-                      std::abs(p.rim.ball.radius_px - c.r) <= 8 + 0.02 * c.r;
-    if (!near) p.rim.ok = false;
+    // A rim that agrees along most of its length but lies beyond the search window's reach
+    // of the region answer (a ball whose lower rim has little contrast against the ground
+    // pulls the region answer 12 px up) is fitted again from where it was found: held if it
+    // stays there.
+    for (int again = 0; again < 2 && !near(p.rim, c) && p.rim.agreement >= kMinRimAgreement; ++again) {
+      const Circle moved{p.rim.ball.cx, p.rim.ball.cy, p.rim.ball.radius_px};
+      RimFit refit = fit_rim(fine, lin, valid8, {moved.cx, moved.cy, moved.r}, options.rays, edge_noise);
+      if (!(refit.agreement >= kMinRimAgreement)) break;
+      p.rim = std::move(refit);
+      c = p.c = moved;
+    }
+    if (!near(p.rim, c)) p.rim.ok = false;
     // A rim fit that would be rejected as cut by the border loses to any that would not:
     // large circles half outside the image collect arcs of texture along their visible
     // half and outscored (agreement x radius) the ball wholly in view, then find_ball
@@ -498,7 +528,10 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
                      " < " + std::to_string(options.min_confidence).substr(0, 4) + ")");
   Circle result = best->c;
   FindBallReport rep;
-  if (!(arc(*best) > 0) && last_level) {
+  // Above 4 Mpx the half-resolution answer stands: it is good to a pixel or two, and the
+  // full-resolution level would cost about a second and 1 GB at 15 Mpx for less than that.
+  const bool full_level_affordable = double(w) * h <= 4.2e6;
+  if (!(arc(*best) > 0) && last_level && full_level_affordable) {
     if (levels[0].feat.empty()) levels[0] = make_level(col, energy, valid01, 1);
     result = local_search(levels[0], best->c, r_min, r_max, options.max_cut_fraction);
   }
@@ -519,6 +552,12 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
     throw InputError(fmt::format("find_ball: the circle found is {:.1f} px in radius, below {:g} px: too small to "
                                  "unwrap (is there a ball in this image?)",
                                  result.r, options.min_radius_px));
+  if (rep.cut_fraction > options.max_cut_fraction && !rep.subpixel)
+    throw InputError(fmt::format(
+        "find_ball: no ball found wholly in view: the likeliest circle, ({:.0f}, {:.0f}) r {:.0f} px, has no clear rim "
+        "and {:.0f} % of it lies outside the image (balls below {:.0f} px radius, {:g} of the short side, are not "
+        "searched); give the ball with --ball cx,cy,r",
+        result.cx, result.cy, result.r, 100 * rep.cut_fraction, r_min, options.min_radius_fraction));
   if (rep.cut_fraction > options.max_cut_fraction)
     throw InputError("find_ball: ball cut by the image border (" + std::to_string(int(std::round(100 * rep.cut_fraction))) +
                      " % of its rim outside, max_cut_fraction allows " +
@@ -529,7 +568,9 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
 std::string ball_fit_warning(const FindBallReport& r) {
   const int pct = int(std::lround(100 * r.rim_agreement));
   if (!r.subpixel)
-    return "no sub-pixel rim fit held; the ball is the region answer, good to a few pixels";
+    return "no sub-pixel rim fit held; the ball is the region answer, good to a few pixels where the rim stands out "
+           "and off by more where it does not (a ball pasted on a canvas, a rim on a like background): check it, or give "
+           "--ball cx,cy,r";
   if (r.rim_agreement < kPartialRimAgreement)
     return "the ball's rim has an edge along only " + std::to_string(pct) +
            " % of its circumference (dark on dark?): centre and radius rest on that arc" +

@@ -418,6 +418,14 @@ GeometricCalibration calibrate_detections(BoardDetections detections, const Boar
       run.dropped = drop;
     }
   }
+  // No model within reach of the corners: a board of the same corner count but another
+  // shape (--board 18x3 for 9x6: a spline at 59 px RMS), never a lens. Refused, not written
+  // with a warning. Between fit_max_rms_px and this, a warning says it (a blurred board).
+  constexpr double kRefuseRmsPx = 5;
+  if (run.result.no_model_fits && run.result.model.rms_reprojection_px > kRefuseRmsPx)
+    throw InputError(fmt::format("no model fits these views: the best ({}) misses the corners by {:.1f} px RMS (over {:g} "
+                                 "px): check --board (inner corners, columns x rows) and that every view is of one camera",
+                                 run.result.selected, run.result.model.rms_reprojection_px, kRefuseRmsPx));
   run.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return run;
 }

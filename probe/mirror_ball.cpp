@@ -510,6 +510,8 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
       if (!(refit.agreement >= kMinRimAgreement)) break;
       p.rim = std::move(refit);
       c = p.c = moved;
+      // The confidence and the tie-break read the region score: the moved circle's.
+      p.s = region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction);
     }
     if (!near(p.rim, c)) p.rim.ok = false;
     // A rim fit that would be rejected as cut by the border loses to any that would not:

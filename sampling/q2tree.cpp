@@ -297,6 +297,7 @@ class Q2TreeSampler final : public Sampler {
     const bool had_tree = tree_ready_ && !tree_broken_;
     tree_ready_ = false;  // until it matches this frame
     if (map.pixel_count() == 0) throw InputError("q2tree: the map is empty");
+    upper_only_ = map.layout == Layout::Hemisphere;
     if (map.layout == Layout::Healpix)
       prepare_healpix(map);
     else
@@ -323,7 +324,39 @@ class Q2TreeSampler final : public Sampler {
     tree_key_ = key;
   }
 
+  // On a hemisphere map the quads wholly below the horizon hold no data: their lights (4 of
+  // the 15 asked for with n = 16, rgb 0) are left out, and the tree is grown by as many as
+  // that leaves the count short of, so that n - 2 <= count <= n still holds. A quad the
+  // horizon crosses is a HEALPix pixel centred on the equator, symmetric about it: half of
+  // its solid angle is the map's.
   std::vector<Light> place(int n) override {
+    if (!upper_only_) return place_tree(n);
+    const int cap_nside = 1 << max_level_;
+    const int64_t capacity = 12 * int64_t(cap_nside) * cap_nside;
+    std::vector<Light> lights;
+    for (int grown = n;; grown += 3) {
+      lights = place_tree(grown);
+      lights.erase(std::remove_if(lights.begin(), lights.end(),
+                                  [](const Light& l) { return quad_side(l.id) < 0; }),
+                   lights.end());
+      if (int(lights.size()) >= n - 2 || grown + 3 - 2 > capacity || grown > 2 * n + 12) break;
+    }
+    for (Light& l : lights)
+      if (quad_side(l.id) == 0) l.solid_angle *= 0.5;
+    return lights;
+  }
+
+  // -1 when the quad of NUNIQ `id` lies wholly below the horizon, 0 when its centre is on it,
+  // +1 above.
+  static int quad_side(uint64_t id) {
+    int level = 0;
+    while ((uint64_t(4) << (2 * (level + 1))) <= id) ++level;
+    const int64_t ipix = int64_t(id - (uint64_t(4) << (2 * level)));
+    const double z = healpix_direction(int64_t(1) << level, ipix).z;
+    return z < -1e-12 ? -1 : z > 1e-12 ? 1 : 0;
+  }
+
+  std::vector<Light> place_tree(int n) {
     if (prefix_.empty() && levels_.empty()) throw InputError("q2tree: place() called before prepare()");
     if (n < 12)
       throw InputError(fmt::format("q2tree: needs n >= 12 lights (one per HEALPix base quad), got {}", n));
@@ -723,6 +756,7 @@ class Q2TreeSampler final : public Sampler {
   };
 
   SamplerOptions options_;
+  bool upper_only_ = false;  // a hemisphere map: no data below the horizon
   std::vector<double> dw_pow_;    // dw^b per level
   bool negative_pixels_ = false;  // this frame has a negative contribution
   TreeKey tree_key_;

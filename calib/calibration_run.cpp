@@ -306,7 +306,8 @@ std::string GeometricCalibration::to_json() const {
       if (fs::path(w).extension() == ".cameramodel") file = w;
     stand_in = {{"candidate", s->name}, {"lensmodel", s->model.lensmodel}, {"file", file},
                 {"rms_px", num(s->rms_px)}, {"heldout_rms_px", num(s->heldout_rms_px)},
-                {"median_from_chosen_px", num(s->median_from_chosen_px)}, {"fits_poorly", s->fits_poorly}};
+                {"median_from_chosen_px", num(s->median_from_chosen_px)},
+                {"same_ray_from_chosen_px", num(s->same_ray_from_chosen_px)}, {"fits_poorly", s->fits_poorly}};
   }
   const nlohmann::json j = {
       {"output", written}, {"optimization_inputs", optimization_inputs}, {"mrcal_stand_in", stand_in}, {"selected", r.selected}, {"lensmodel", r.model.lensmodel},
@@ -450,9 +451,14 @@ void write_calibration_files(GeometricCalibration& run, const std::string& outpu
       run.written.push_back(output);
       run.notes.push_back(fmt::format(
           "{} (the choice) is not an mrcal model: {} holds it; {} holds {}, the best mrcal candidate of the same "
-          "solve (RMS {:.3f} px, held-out {:.3f} px{}), {:.3f} px from the choice over the covered area",
+          "solve (RMS {:.3f} px, held-out {:.3f} px{}), {:.3f} px from the choice over the covered area with the "
+          "rotation between their frames fitted out, {:.3f} px without{}",
           model.lensmodel, yaml, output, s->model.lensmodel, s->rms_px, s->heldout_rms_px,
-          s->fits_poorly ? ", beyond the fit limits: use with care" : "", s->median_from_chosen_px));
+          s->fits_poorly ? ", beyond the fit limits: use with care" : "", s->median_from_chosen_px,
+          s->same_ray_from_chosen_px,
+          s->same_ray_from_chosen_px > 2 * s->median_from_chosen_px + 0.1
+              ? ": their camera frames differ, so take light directions (probe unwrap --camera) from the YAML"
+              : ""));
     } else {
       // An earlier run's .cameramodel beside the new YAML would disagree with it: said.
       std::error_code ec;

@@ -183,16 +183,22 @@ CornersFile read_corners_vnl(const std::string& path, const BoardSpec& board, do
     out.notes.push_back(fmt::format("{}: {} corners have a level above 0 (mrcal weighs them 2^-level); lightprobe "
                                     "weighs every corner 1",
                                     path, weighed_below_one));
-  // The first image the file names that is here: its size, or a check of the one given.
+  // Every image the file names that is here (headers only, no decode): one size, the
+  // size, or a check of the one given. One camera, one resolution: views of a half-size
+  // copy among them solved to a model 3.3 px off, most of them then dropped as outliers.
   int width = 0, height = 0;
   std::string here;
   for (const std::string& image : d.images) {
     const std::string file = locate(path, image);
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) continue;
-    std::tie(width, height) = camera_image_size(file);  // the header: no decode
-    here = file;
-    break;
+    const auto [w, h] = camera_image_size(file);
+    if (here.empty()) {
+      width = w, height = h, here = file;
+    } else if (w != width || h != height) {
+      throw InputError(fmt::format("{}: {} is {}x{}, {} is {}x{} (one camera, one resolution){}", path, file, w, h, here,
+                                   width, height, turned_size_hint(w, h, width, height)));
+    }
   }
   if (given_width != 0 || given_height != 0) {
     for (double v : {given_width, given_height})

@@ -162,6 +162,7 @@ std::optional<CalibrationResult::MrcalStandIn> mrcal_stand_in(CandidateFits& fit
   s.heldout_rms_px = mean_heldout_px(*best);
   s.fits_poorly = !fits_well(*best);
   s.median_from_chosen_px = projection_difference(chosen, best->model, fits.mask, fits.step).median_px;
+  s.same_ray_from_chosen_px = projection_difference(chosen, best->model, fits.mask, fits.step, false).median_px;
   return s;
 }
 
@@ -184,7 +185,8 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
   if (board.cols < 2 || board.rows < 2)
     throw InputError("calibrate: board needs at least 2 inner corners per side (got " + std::to_string(board.cols) +
                      "x" + std::to_string(board.rows) + ")");
-  if (!(board.square_mm > 0)) throw InputError("calibrate: board square size must be positive");
+  if (!(board.square_mm > 0) || !std::isfinite(board.square_mm))
+    throw InputError("calibrate: board square size must be positive and finite");
   if (width <= 0 || height <= 0) throw InputError("calibrate: image size must be positive");
   const std::vector<LensType> candidates = candidate_types(options);
   CalibrationProblem pr = problem_of(board, width, height, options);

@@ -186,12 +186,15 @@ struct CalibrationResult {
   // within CalibrateOptions::fit_max_rms_px (else the lowest RMS, fits_poorly). What a
   // .cameramodel output holds then, so that mrcal's tools have the calibration to work on;
   // median_from_chosen_px says how far it projects from the choice over the covered area
-  // (rotation fitted out). Empty when the choice is an mrcal model or no mrcal candidate fitted.
+  // (rotation fitted out), same_ray_from_chosen_px the same for one ray in both frames: its
+  // own solve may tilt the camera frame (1 degree on fisheye1: 5.6 px), and for a light probe
+  // the frame is the light's direction. Empty when the choice is an mrcal model or no mrcal
+  // candidate fitted.
   struct MrcalStandIn {
     std::string name;  // candidate name
     CameraModel model;
     SolveRecord solve;
-    double rms_px = 0, heldout_rms_px = 0, median_from_chosen_px = 0;
+    double rms_px = 0, heldout_rms_px = 0, median_from_chosen_px = 0, same_ray_from_chosen_px = 0;
     bool fits_poorly = false;
   };
   std::optional<MrcalStandIn> mrcal_stand_in;

@@ -146,6 +146,31 @@ int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out) {
                                      "given as read (8-bit 51 is 51/255 = 0.2)",
                                      args.readings, r.camera_value, r.label));
   const PhotometricCalibration cal = fit_photometric(readings, o);
+  // Readings that contradict each other give a k (or a curve) all the same: refused, not
+  // saved. A log sensor's value cannot fall as the light rises; and when the typical reading,
+  // predicted from the others, is off by more than half, no k describes them (one wild
+  // reading moves the median little: the robust fit keeps k, and that reading is named).
+  if (cal.log_sensor && !(cal.log_sensor->b > 0))
+    throw InputError(fmt::format("{}: the fitted camera value falls as the luminance rises (b = {:.3g}): no log sensor "
+                                 "responds so; check the readings' columns",
+                                 args.readings, cal.log_sensor->b));
+  std::vector<double> held;
+  const PhotometricResidual* worst = nullptr;
+  for (const PhotometricResidual& r : cal.residuals) {
+    held.push_back(std::abs(r.held_out_relative));
+    if (!worst || std::abs(r.held_out_relative) > std::abs(worst->held_out_relative)) worst = &r;
+  }
+  std::nth_element(held.begin(), held.begin() + long(held.size() / 2), held.end());
+  constexpr double kMaxMedianHeldOut = 0.5;
+  if (!held.empty() && held[held.size() / 2] > kMaxMedianHeldOut)
+    throw InputError(fmt::format("{}: the readings contradict each other: predicted from the others, the median reading "
+                                 "is off by {:.0f} % (worst '{}', {:+.0f} %); check units, columns and regions",
+                                 args.readings, 100 * held[held.size() / 2], worst->label,
+                                 100 * worst->held_out_relative));
+  if (worst && std::abs(worst->held_out_relative) > kMaxMedianHeldOut)
+    warn(fmt::format("{}: reading '{}' is off by {:+.0f} % from what the others predict; the fit ({} loss) {}",
+                     args.readings, worst->label, 100 * worst->held_out_relative, cal.loss,
+                     cal.loss == "none" ? "is pulled by it: consider --loss huber" : "weighs it down"));
   save_photometric(args.output, cal);
   if (cal.log_sensor)
     say(out, "{}: log sensor value = {:.5g} + {:.5g} ln L (+-{:.2g}, +-{:.2g}); ", args.output, cal.log_sensor->a,

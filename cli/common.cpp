@@ -238,7 +238,7 @@ BoardSpec board_from(const std::string& text, double square_mm) {
   // The detectors need 3 a side, and a 2-corner axis shows no distortion: 2x2 solved to
   // infinite held-out errors with exit 0.
   if (cols < 3 || rows < 3) throw InputError(fmt::format("--board counts inner corners and needs at least 3x3, got {}", text));
-  if (!(square_mm > 0)) throw InputError("--square must be positive (mm)");
+  if (!(square_mm > 0) || !std::isfinite(square_mm)) throw InputError("--square must be a positive finite size (mm)");
   return BoardSpec{cols, rows, square_mm};
 }
 

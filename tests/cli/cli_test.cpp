@@ -395,6 +395,29 @@ TEST(Cli, PhotometricCalibrationRecoversAKnownScaleAndRejectsBadReadings) {
   EXPECT_NEAR(nlohmann::json::parse(r.out)["scale_luminance"].get<double>(), 200.0, 200.0 * 1e-6);
   std::ofstream(csv) << "region,camera_value,measured,unit\npatch1,0.5,-100,cd/m2\npatch2,1.0,200,cd/m2\n";
   expect_one_line_error(lightprobe("calib photometric " + csv.string() + " -o " + cal.string()), "readings.csv:2");
+  // Readings that contradict each other (an audit's: ratios 200, 20, 2000, 2; a meter that
+  // falls as the camera value rises; a meter that does not move) gave a k with exit 0.
+  fs::remove(cal);
+  for (const char* body : {"p1,0.5,100,cd/m2\np2,1.0,20,cd/m2\np3,2.0,4000,cd/m2\np4,4.0,8,cd/m2\n",
+                           "p1,4.0,100,cd/m2\np2,2.0,200,cd/m2\np3,1.0,400,cd/m2\np4,0.5,800,cd/m2\n",
+                           "p1,0.5,100,cd/m2\np2,1.0,100,cd/m2\np3,2.0,100,cd/m2\np4,4.0,100,cd/m2\n"}) {
+    std::ofstream(csv) << "region,camera_value,measured,unit\n" << body;
+    expect_one_line_error(lightprobe("calib photometric " + csv.string() + " -o " + cal.string()),
+                          "readings.csv: the readings contradict each other");
+    EXPECT_FALSE(fs::exists(cal));
+  }
+  // One wild reading: the robust fit keeps k, and the reading is named.
+  std::ofstream(csv) << "region,camera_value,measured,unit\np1,0.5,100,cd/m2\np2,1.0,200,cd/m2\np3,2.0,400,cd/m2\n"
+                        "p4,4.0,80000,cd/m2\n";
+  const CliRun wild = lightprobe("calib photometric --json --loss huber " + csv.string() + " -o " + cal.string());
+  ASSERT_EQ(wild.code, 0) << wild.err;
+  EXPECT_NEAR(nlohmann::json::parse(wild.out)["scale_luminance"].get<double>(), 200.0, 200.0 * 0.05);
+  EXPECT_NE(wild.err.find("reading 'p4' is off by"), std::string::npos) << wild.err;
+  // A log sensor whose value falls as the light rises.
+  std::ofstream(csv) << "region,camera_value,measured,unit\na,0.65,10,cd/m2\nb,0.5,40,cd/m2\nc,0.35,160,cd/m2\n"
+                        "d,0.2,640,cd/m2\n";
+  expect_one_line_error(lightprobe("calib photometric --model log " + csv.string() + " -o " + cal.string()),
+                        "falls as the luminance rises");
 }
 
 TEST(Cli, ASynthesisedMirrorBallUnwrapsToTheMapItCameFrom) {
@@ -754,6 +777,10 @@ TEST(Cli, GeometricCalibrationRecoversASyntheticFisheyeAndRefusesBadSets) {
   EXPECT_EQ(j["output"], (std::vector<std::string>{(out / "cam.cameramodel").string(), (out / "cam.yaml").string()}));
   EXPECT_TRUE(j["optimization_inputs"].get<bool>());
   EXPECT_LT(stand_in["median_from_chosen_px"].get<double>(), 0.5);
+  // The same ray in both frames, no rotation fitted out: an audit found the stand-in's frame
+  // tilted 0.25-1 degree from the choice's, hidden by the fitted rotation.
+  EXPECT_GE(stand_in["same_ray_from_chosen_px"].get<double>(), 0.5 * stand_in["median_from_chosen_px"].get<double>());
+  EXPECT_NE(r.err.find("with the rotation between their frames fitted out"), std::string::npos) << r.err;
   EXPECT_FALSE(stand_in["fits_poorly"].get<bool>());
   const std::string cameramodel = slurp(out / "cam.cameramodel");
   EXPECT_NE(cameramodel.find("'lensmodel':  '" + stand_in["lensmodel"].get<std::string>() + "'"), std::string::npos);

@@ -501,6 +501,8 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   const bool rgb = has("R") && has("G") && has("B");
   const bool luma = has("Y");
   const bool luma_only = !rgb && !(has("RY") || has("BY"));  // grey: Y is Y in any primaries
+  // X, Y and Z: CIE XYZ, converted to Rec. 709 (read as grey from Y alone, X and Z were dropped).
+  const bool xyz = !rgb && has("X") && luma && has("Z");
   if (!rgb && !luma) {
     std::string names;
     for (auto it = channels.begin(); it != channels.end(); ++it) names += (names.empty() ? "" : ", ") + std::string(it.name());
@@ -532,10 +534,10 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   } else {
     Imf::FrameBuffer fb;
     const size_t xs = 3 * sizeof(float), ys = xs * size_t(w);
-    if (rgb) {
-      fb.insert(layer + "R", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[0], dw, xs, ys));
-      fb.insert(layer + "G", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[1], dw, xs, ys));
-      fb.insert(layer + "B", Imf::Slice::Make(Imf::FLOAT, &raw.rgb[2], dw, xs, ys));
+    if (rgb || xyz) {
+      fb.insert(layer + (xyz ? "X" : "R"), Imf::Slice::Make(Imf::FLOAT, &raw.rgb[0], dw, xs, ys));
+      fb.insert(layer + (xyz ? "Y" : "G"), Imf::Slice::Make(Imf::FLOAT, &raw.rgb[1], dw, xs, ys));
+      fb.insert(layer + (xyz ? "Z" : "B"), Imf::Slice::Make(Imf::FLOAT, &raw.rgb[2], dw, xs, ys));
     } else {
       y.assign(n, 0.0f);
       fb.insert(layer + "Y", Imf::Slice::Make(Imf::FLOAT, y.data(), dw, sizeof(float), sizeof(float) * size_t(w)));
@@ -545,13 +547,34 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     for (size_t i = 0; i < y.size(); ++i) raw.rgb[3 * i] = raw.rgb[3 * i + 1] = raw.rgb[3 * i + 2] = y[i];
+    if (xyz)  // CIE XYZ to linear Rec. 709 (D65): out-of-gamut colours come out negative, weighed below
+      for (size_t i = 0; i < n; ++i) {
+        float* p = &raw.rgb[3 * i];
+        const double X = p[0], Y = p[1], Z = p[2];
+        p[0] = float(3.2404542 * X - 1.5371385 * Y - 0.4985314 * Z);
+        p[1] = float(-0.9692660 * X + 1.8760108 * Y + 0.0415560 * Z);
+        p[2] = float(0.0556434 * X - 0.2040259 * Y + 1.0572252 * Z);
+      }
   }
-  // Lossy codecs ring around bright spots: tiny negative values that are not radiance.
+  // Lossy codecs ring around bright spots: tiny negative values that are not radiance,
+  // clamped without a word. Only as much as a codec rings: a file resized with a sharp
+  // filter keeps its DWA compression and rings far more (7 % of a channel's power below
+  // zero around a sun), and that is left for the negative-value check to refuse, as it
+  // refuses the same pixels stored losslessly.
   const Imf::Compression comp = header.compression();
   if (comp == Imf::DWAA_COMPRESSION || comp == Imf::DWAB_COMPRESSION || comp == Imf::B44_COMPRESSION ||
       comp == Imf::B44A_COMPRESSION) {
-    for (float& v : raw.rgb)
-      if (v < 0.0f) v = 0.0f;
+    double positive[3] = {0, 0, 0}, negative[3] = {0, 0, 0};
+    for (size_t i = 0; i < raw.rgb.size(); ++i) {
+      const float v = raw.rgb[i];
+      if (v > 0 && std::isfinite(v)) positive[i % 3] += v;
+      else if (v < 0 && std::isfinite(v)) negative[i % 3] -= v;
+    }
+    bool codec_ringing = true;
+    for (int c = 0; c < 3; ++c) codec_ringing = codec_ringing && !(negative[c] > kSlightNegativeShare * positive[c]);
+    if (codec_ringing)
+      for (float& v : raw.rgb)
+        if (v < 0.0f) v = 0.0f;
   }
   // After that clamp: colours outside Rec. 709's gamut come out negative, and those are the
   // scene's, for accept_slight_negatives to weigh and report.

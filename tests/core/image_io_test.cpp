@@ -909,6 +909,64 @@ TEST(ImageIo, SlightNegativesAreReadAsZeroWithOneWarningWhereSomeoneHearsIt) {
   set_warning_sink(before);
 }
 
+// A DWA file's codec ringing (tiny negatives around a bright spot) is clamped without a word;
+// a DWA file resized with a sharp filter rang far more (7 % of a channel's power below zero:
+// an audit's oiiotool --resize of a Blender studio light) and was clamped alike, exit 0, while
+// the same pixels in ZIP are refused. Beyond a codec's ringing it is refused too.
+TEST(ImageIo, ADwaFileRingingBeyondItsCodecIsRefusedAsZipWouldBe) {
+  const std::string dir = temp_dir();
+  auto write_dwa = [&](const std::string& name, float ring) {
+    Imf::Header header(64, 32);
+    header.compression() = Imf::DWAA_COMPRESSION;
+    for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    std::vector<float> rgb(3 * 64 * 32, 1.0f);
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) rgb[3 * (size_t(8) * 64 + size_t(x)) + size_t(c)] = ring;  // a ringing row
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c)
+      fb.insert(std::string(1, "RGB"[c]), Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&rgb[size_t(c)]), 12, 12 * 64));
+    Imf::OutputFile file((dir + name).c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(32);
+  };
+  write_dwa("slight.exr", -0.001f);  // 0.003 % of the power: a codec's ringing
+  write_dwa("strong.exr", -2.0f);   // 6 % below zero: not radiance
+  const WarningSink before = set_warning_sink([](const std::string&) {});
+  const EnvMap slight = read_envmap(dir + "slight.exr");
+  EXPECT_GE(*std::min_element(slight.rgb.begin(), slight.rgb.end()), 0.0f);
+  expect_input_error([&] { read_envmap(dir + "strong.exr"); }, {dir + "strong.exr:", "not radiance"});
+  set_warning_sink(before);
+}
+
+// An EXR of channels X, Y and Z is CIE XYZ: it was read as grey from Y, X and Z dropped.
+TEST(ImageIo, AnXyzExrIsConvertedToRec709) {
+  const std::string dir = temp_dir();
+  Imf::Header header(8, 4);
+  for (const char* c : {"X", "Y", "Z"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+  // Rec. 709 red, green and blue at 1 and a grey, in XYZ (D65, the sRGB matrix).
+  const double xyz[4][3] = {{0.4124564, 0.2126729, 0.0193339}, {0.3575761, 0.7151522, 0.1191920},
+                            {0.1804375, 0.0721750, 0.9503041}, {0.9505, 1.0, 1.089}};
+  std::vector<float> px(3 * 8 * 4);
+  for (size_t i = 0; i < 32; ++i)
+    for (int c = 0; c < 3; ++c) px[3 * i + size_t(c)] = float(xyz[i % 4][c]);
+  Imf::FrameBuffer fb;
+  for (int c = 0; c < 3; ++c)
+    fb.insert(std::string(1, "XYZ"[c]), Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(&px[size_t(c)]), 12, 12 * 8));
+  {
+    Imf::OutputFile file((dir + "xyz.exr").c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(4);
+  }
+  ReadMapOptions latlong;
+  latlong.layout = Layout::Hemisphere;
+  const WarningSink before = set_warning_sink([](const std::string&) {});
+  const EnvMap m = read_envmap(dir + "xyz.exr", latlong);
+  set_warning_sink(before);
+  const double rgb[4][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  for (size_t i = 0; i < 4; ++i)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(m.pixel(i)[c], rgb[i][c], 2e-3) << "pixel " << i << " channel " << c;
+}
+
 // An EXR's image is its display window (OpenEXR, OpenImageIO, Nuke): a data window that is
 // offset, cropped or larger than it places the stored pixels inside it. Pixels of the display
 // window without data are masked, not black; data outside it is dropped.

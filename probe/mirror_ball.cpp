@@ -393,6 +393,38 @@ std::vector<std::pair<Circle, bool>> coarse_seeds(const FeatureLevel& L, double 
   return out;
 }
 
+// Circles found by OpenCV's Hough transform (HOUGH_GRADIENT_ALT, on the compressed
+// luminance at most 800 px across), best supported first, at most `keep`, in full-res
+// coordinates: seeds placed by the rim's own edges to a pixel or two, that skip the region
+// search. In an uncropped photo the region search from a coarse seed converged inside the
+// ball (a circle 30 px small and 34 px off on grace at frame 2.3), out of the rim fit's reach.
+std::vector<Circle> hough_seeds(const cv::Mat& col, double r_min, double r_max, int keep) {
+  const int w = col.cols, h = col.rows;
+  const double f = std::max(1.0, std::max(w, h) / 800.0);
+  cv::Mat grey, small, g8;
+  cv::cvtColor(col, grey, cv::COLOR_RGB2GRAY);
+  if (f > 1)
+    cv::resize(grey, small, cv::Size(std::max(16, int(std::lround(w / f))), std::max(16, int(std::lround(h / f)))), 0, 0,
+               cv::INTER_AREA);
+  else
+    small = grey;
+  small.convertTo(g8, CV_8U, 255.0);
+  std::vector<cv::Vec4f> found;  // x, y, r, votes
+  // Canny's high threshold 100 on codes of the compressed luminance (300, OpenCV's suggestion
+  // for contrasty photos, found no circle on a studio ball in front of Memorial), and a
+  // perfectness of 0.6: the rim fit decides among what these let through.
+  cv::HoughCircles(g8, found, cv::HOUGH_GRADIENT_ALT, 1.5, std::max(8.0, r_min / f), 100, 0.6,
+                   int(std::floor(r_min / f)), int(std::ceil(r_max / f)));
+  std::stable_sort(found.begin(), found.end(), [](const cv::Vec4f& a, const cv::Vec4f& b) { return a[3] > b[3]; });
+  std::vector<Circle> out;
+  const double sx = double(w) / small.cols, sy = double(h) / small.rows;
+  for (const cv::Vec4f& c : found) {
+    if (int(out.size()) >= keep) break;
+    out.push_back({(c[0] + 0.5) * sx, (c[1] + 0.5) * sy, c[2] * std::sqrt(sx * sy)});
+  }
+  return out;
+}
+
 }  // namespace
 
 // A rim fit counts when at least this share of its rays has an edge on it (clean renders
@@ -464,10 +496,14 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
     if (i > 0 || factors.size() == 1 || analysis == 0) levels[i] = make_level(col, energy, valid01, factors[i]);
 
   std::vector<std::pair<Circle, bool>> seeds;  // circle, whole (seeded by score_whole)
-  if (options.initial_guess)
+  size_t first_hough = std::numeric_limits<size_t>::max();  // seeds from here on skip the region search
+  if (options.initial_guess) {
     seeds.push_back({{options.initial_guess->cx, options.initial_guess->cy, options.initial_guess->radius_px}, false});
-  else
+  } else {
     seeds = coarse_seeds(levels.back(), r_min, r_max, 8, 4, 4, options.max_cut_fraction);
+    first_hough = seeds.size();
+    for (const Circle& c : hough_seeds(col, r_min, r_max, 4)) seeds.push_back({c, true});
+  }
 
   // Each seed refined on the region contrast, then its silhouette fitted; the circle whose
   // fitted rim agrees with the edges along the longest arc wins (a large circle half
@@ -490,10 +526,12 @@ BallInImage find_ball(const RgbImage& image, const FindBallOptions& options, Fin
   const int last_level = levels.size() > 1 ? 1 : 0;
   const double edge_noise = edge_noise_level(fine, valid8);
   const bool near_guess = options.initial_guess && options.initial_guess_reach_px > 0;
-  for (auto [c, whole] : seeds) {
-    for (int li = int(levels.size()) - 1; li >= last_level; --li)
-      if (!near_guess || 2 * factors[size_t(li)] <= options.initial_guess_reach_px)
-        c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction, whole);
+  for (size_t si = 0; si < seeds.size(); ++si) {
+    auto [c, whole] = seeds[si];
+    if (si < first_hough)
+      for (int li = int(levels.size()) - 1; li >= last_level; --li)
+        if (!near_guess || 2 * factors[size_t(li)] <= options.initial_guess_reach_px)
+          c = local_search(levels[li], c, r_min, r_max, options.max_cut_fraction, whole);
     Pick p{c, region_score(levels[analysis], c, angles_for(levels[analysis], c), options.max_cut_fraction), {}};
     auto near = [](const RimFit& fit, const Circle& from) {
       return std::hypot(fit.ball.cx - from.cx, fit.ball.cy - from.cy) <= 8 + 0.02 * from.r &&

@@ -1263,6 +1263,7 @@ CameraImage camera_image_from_samples(int width, int height, int depth, int chan
   out.bit_depth = depth;
   const float s = depth == 8 ? 1.0f / 255.0f : 1.0f / 65535.0f;
   const bool grey = channels <= 2, alpha = channels == 2 || channels == 4;
+  out.grey = grey;
   out.rgb.resize(3 * size_t(width) * size_t(height));
   auto sample = [&](const uint8_t* row, size_t k) {
     uint16_t v = 0;
@@ -1366,7 +1367,7 @@ CameraImage turned_for_display(CameraImage in, int orientation) {
   const size_t w = size_t(in.width), h = size_t(in.height);
   const bool swap = orientation >= 5;  // 5-8 exchange rows and columns
   CameraImage out;
-  out.width = int(swap ? h : w), out.height = int(swap ? w : h), out.bit_depth = in.bit_depth;
+  out.width = int(swap ? h : w), out.height = int(swap ? w : h), out.bit_depth = in.bit_depth, out.grey = in.grey;
   out.rgb.resize(in.rgb.size());
   out.valid.resize(in.valid.size());
   const size_t ow = size_t(out.width), oh = size_t(out.height);

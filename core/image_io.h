@@ -79,6 +79,7 @@ struct CameraImage {
   int bit_depth = 8;
   std::vector<float> rgb;
   int orientation = 1;  // the EXIF Orientation the pixels were turned by (1: read as stored)
+  bool grey = false;    // stored as one channel (repeated into three here)
   // Empty: every pixel holds data. Else 0 where the file's alpha is below half (a frame
   // warped by a registration tool, Hugin's align_image_stack: no data there, not black).
   std::vector<uint8_t> valid;

@@ -257,6 +257,7 @@ std::optional<ColourProfile> read_colour_profile(const std::string& path) {
 Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<std::vector<double>>& times) {
   Bracket b;
   std::vector<ExifExposureSettings> settings;  // each frame's recorded ISO and f-number
+  bool first_grey = false;                      // the first camera image's colour mode
   if (times && times->size() != paths.size())
     throw InputError(fmt::format("--exposure-times: {} times for {} images", times->size(), paths.size()));
   // Camera RAW files (through LibRaw) are linear 16-bit with their own shutter time.
@@ -295,9 +296,13 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     CameraImage cam = read_camera_image(paths[k]);
     if (k == 0) {
       b.bit_depth = cam.bit_depth;
+      first_grey = cam.grey;
     } else if (cam.bit_depth != b.bit_depth) {
       throw InputError(fmt::format("{}: {}-bit image in a bracket of {}-bit images", paths[k], cam.bit_depth,
                                    b.bit_depth));
+    } else if (cam.grey != first_grey) {  // merged, its grey would tint the pixels it exposes best
+      throw InputError(fmt::format("{}: a {} image in a bracket of {} images (one camera, one colour mode)", paths[k],
+                                   cam.grey ? "grey" : "colour", first_grey ? "grey" : "colour"));
     }
     RgbImage f;
     f.width = cam.width;

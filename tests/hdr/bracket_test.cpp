@@ -552,6 +552,14 @@ TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   EXPECT_EQ(ok.exposure_seconds, (std::vector<double>{0.5, 0.25}));
   EXPECT_EQ(ok.width(), 8);
   EXPECT_EQ(ok.height(), 6);
+  // A grey frame among colour ones (an audit's) was merged, its grey tinting the pixels it
+  // exposed best; an all-grey bracket (a monochrome camera) stays fine.
+  const std::string grey = (tmp.path / "grey.png").string(), grey2 = (tmp.path / "grey2.png").string();
+  cv::imwrite(grey, cv::Mat(6, 8, CV_8UC1, cv::Scalar(60)));
+  cv::imwrite(grey2, cv::Mat(6, 8, CV_8UC1, cv::Scalar(120)));
+  const std::string mixed = message_of([&] { read_bracket({a, grey}, std::vector<double>{0.5, 0.25}); });
+  EXPECT_NE(mixed.find(grey + ": a grey image in a bracket of colour images"), std::string::npos) << mixed;
+  EXPECT_EQ(read_bracket({grey2, grey}, std::vector<double>{0.5, 0.25}).frames.size(), 2u);
 }
 
 // A longer exposure is brighter: times that say the opposite are not the frames' (a list

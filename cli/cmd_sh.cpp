@@ -8,6 +8,7 @@
 
 #include "cli/commands.h"
 #include "cli/report.h"
+#include "core/accuracy.h"
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
@@ -39,6 +40,13 @@ int run_sh(const ShArgs& args, const Output& out) {
     throw InputError(fmt::format("{}: sh writes its coefficients as JSON; name the output .json", args.output));
   const EnvMap map = args.input == "scene" ? map_or_scene(args.input, 1024) : read_envmap(args.input, read);
 
+  // The SH9's own irradiance facing up is what --normalize-illuminance scales to (what an
+  // engine lighting with the coefficients gives), but on a map that sends no light upwards
+  // it is only the projection's ringing: city black above the horizon was scaled x636 by it.
+  if (args.units.options().normalize_illuminance_lux && map.units == Units::Relative &&
+      !(map_irradiance(map, {0, 0, 1}) > 0))
+    throw InputError(fmt::format("--normalize-illuminance: {} gives no illuminance on an upward-facing surface",
+                                 args.input));
   const auto start = Clock::now();
   LightList ambient;  // a list of no lights but its SH9: scaled as `sample` scales a list
   ambient.sh9 = project_sh9(map, args.input);

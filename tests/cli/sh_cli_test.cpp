@@ -81,6 +81,21 @@ TEST(ShCli, AMapThatHoldsPartOfTheSphereSaysSo) {
   EXPECT_NEAR(nlohmann::json::parse(r.out)["sphere_covered"].get<double>(), 1.0, 1e-9);
 }
 
+// A map black above the horizon sends no light upwards; its SH9's irradiance facing up is the
+// projection's ringing (0.2 % of the downward one), and --normalize-illuminance scaled the
+// coefficients x636 by it with exit 0 (an audit's), where `sample` refuses the same map.
+TEST(ShCli, NoLightFromAboveCannotBeNormalisedToAnIlluminance) {
+  EnvMap ground = make_envmap(Layout::LatLong, 128, 64);
+  for (size_t i = 0; i < ground.pixel_count(); ++i)
+    for (int c = 0; c < 3; ++c) ground.pixel(i)[c] = i / 128 < 32 ? 0.0f : 1.0f + float(i % 7);
+  const fs::path in = scratch() / "ground_only.exr", out = scratch() / "ground_sh.json";
+  write_envmap(in.string(), ground);
+  expect_one_line_error(lightprobe("sh " + in.string() + " --normalize-illuminance 1000 -o " + out.string()),
+                        "gives no illuminance on an upward-facing surface");
+  EXPECT_FALSE(fs::exists(out));
+  ASSERT_EQ(lightprobe("sh " + in.string() + " --scale 2 -o " + out.string()).code, 0);
+}
+
 TEST(ShCli, BadInputIsOneLineAndWritesNothing) {
   const fs::path out = scratch() / "never.json";
   fs::remove(out);

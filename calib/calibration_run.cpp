@@ -478,6 +478,23 @@ void write_calibration_files(GeometricCalibration& run, const std::string& outpu
   if (LensModel::parse(model.lensmodel).has_opencv_form()) {
     write_opencv_yaml(yaml, model);
     run.written.push_back(yaml);
+    // cv::fisheye projects through atan(r / z): a ray beyond 90 degrees of the axis lands on
+    // the wrong side (over 1000 px off on a 190 degree lens). Where the lens sees that far
+    // (at the middle of a frame edge: a circular fisheye's circle, a full-frame one's sides),
+    // the YAML's readers are told.
+    if (model.lensmodel == "LENSMODEL_KANNALA_BRANDT") {
+      double field = 0;
+      const double w = model.width, h = model.height;
+      for (const Pixel px : {Pixel{0.5, h / 2}, Pixel{w - 0.5, h / 2}, Pixel{w / 2, 0.5}, Pixel{w / 2, h - 0.5}})
+        if (const auto ray = unproject(model, px))
+          field = std::max(field, std::acos(std::clamp(ray->z / length(*ray), -1.0, 1.0)) * 180 / M_PI);
+      if (field > 90)
+        run.notes.push_back(fmt::format(
+            "{}: the lens sees {:.0f} degrees from its axis at the frame's edges; OpenCV's cv::fisheye functions take "
+            "rays within 90 degrees only (projectPoints puts one beyond on the wrong side): beyond that use the "
+            ".cameramodel, mrcal or lightprobe's own unwrap",
+            yaml, field));
+    }
   } else {
     if (run.written.empty()) write_opencv_yaml(yaml, model);  // throws the writer's one-line reason
     run.notes.push_back(model.lensmodel + " has no OpenCV form: " + output + " only");

@@ -122,9 +122,11 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   EXPECT_EQ(run.written[0], (dir / "cam.yaml").string());
   EXPECT_TRUE(fs::exists(dir / "cam.yaml"));
   EXPECT_FALSE(fs::exists(out));
-  ASSERT_EQ(run.notes.size(), 1u);
+  ASSERT_EQ(run.notes.size(), 2u);
   EXPECT_EQ(run.notes[0], "LENSMODEL_KANNALA_BRANDT is not an mrcal model: writing OpenCV YAML only (" + run.written[0] +
                              "; mrcal's tools cannot read it)");
+  // A 190 degree lens: cv::fisheye cannot take its rays beyond 90 degrees, said.
+  EXPECT_EQ(run.notes[1].rfind(run.written[0] + ": the lens sees ", 0), 0u) << run.notes[1];
   EXPECT_FALSE(run.optimization_inputs);
   EXPECT_TRUE(run.uncertainty_picture);
   for (const char* p : {"_residuals.png", "_coverage.png", "_uncertainty.png"})
@@ -133,13 +135,14 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   const std::string text = run.summary();
   std::printf("%s", text.c_str());
   const auto lines = lines_of(text);
-  ASSERT_GE(lines.size(), 9u);
+  ASSERT_GE(lines.size(), 10u);
   EXPECT_EQ(lines[0], run.notes[0]);
-  EXPECT_EQ(lines[1].rfind("8 of 8 images have the 10x7 board (0.00 s); solved in ", 0), 0u) << lines[1];
-  EXPECT_EQ(lines[2].rfind("model ", 0), 0u);
-  EXPECT_EQ(lines[3].rfind("LENSMODEL_KANNALA_BRANDT ", 0), 0u);
-  EXPECT_NE(lines[3].find("<- chosen"), std::string::npos);
-  EXPECT_EQ(lines[4], "model LENSMODEL_KANNALA_BRANDT as requested; " + std::to_string(run.result.corners_rejected) +
+  EXPECT_EQ(lines[1], run.notes[1]);
+  EXPECT_EQ(lines[2].rfind("8 of 8 images have the 10x7 board (0.00 s); solved in ", 0), 0u) << lines[2];
+  EXPECT_EQ(lines[3].rfind("model ", 0), 0u);
+  EXPECT_EQ(lines[4].rfind("LENSMODEL_KANNALA_BRANDT ", 0), 0u);
+  EXPECT_NE(lines[4].find("<- chosen"), std::string::npos);
+  EXPECT_EQ(lines[5], "model LENSMODEL_KANNALA_BRANDT as requested; " + std::to_string(run.result.corners_rejected) +
                           " of 560 corners rejected as outliers");
   EXPECT_NE(text.find("projection uncertainty (1 sigma, rays at infinity; headline: jackknife):\n"), std::string::npos);
   EXPECT_EQ(lines.back(), "wrote " + run.written[0] + "; pictures " + run.picture_stem + "_residuals.png, " +

@@ -479,9 +479,10 @@ void write_calibration_files(GeometricCalibration& run, const std::string& outpu
     write_opencv_yaml(yaml, model);
     run.written.push_back(yaml);
     // cv::fisheye projects through atan(r / z): a ray beyond 90 degrees of the axis lands on
-    // the wrong side (over 1000 px off on a 190 degree lens). Where the lens sees that far
-    // (at the middle of a frame edge: a circular fisheye's circle, a full-frame one's sides),
-    // the YAML's readers are told.
+    // the wrong side (over 1000 px off on a 190 degree lens). Where the model maps the middle
+    // of a frame edge that far, the YAML's readers are told. (On a circular fisheye an edge's
+    // middle may lie beyond the image circle, where the polynomial is extrapolated: the note
+    // says what the model maps, not what the lens saw.)
     if (model.lensmodel == "LENSMODEL_KANNALA_BRANDT") {
       double field = 0;
       const double w = model.width, h = model.height;
@@ -490,8 +491,8 @@ void write_calibration_files(GeometricCalibration& run, const std::string& outpu
           field = std::max(field, std::acos(std::clamp(ray->z / length(*ray), -1.0, 1.0)) * 180 / M_PI);
       if (field > 90)
         run.notes.push_back(fmt::format(
-            "{}: the lens sees {:.0f} degrees from its axis at the frame's edges; OpenCV's cv::fisheye functions take "
-            "rays within 90 degrees only (projectPoints puts one beyond on the wrong side): beyond that use the "
+            "{}: the model maps the frame's edges to rays up to {:.0f} degrees from the axis; OpenCV's cv::fisheye "
+            "functions take rays within 90 degrees only (projectPoints puts one beyond on the wrong side): beyond that use the "
             ".cameramodel, mrcal or lightprobe's own unwrap",
             yaml, field));
     }

@@ -126,7 +126,7 @@ TEST(CalibrationRun, SummaryAndJsonReportTheResultAndTheFilesWritten) {
   EXPECT_EQ(run.notes[0], "LENSMODEL_KANNALA_BRANDT is not an mrcal model: writing OpenCV YAML only (" + run.written[0] +
                              "; mrcal's tools cannot read it)");
   // A 190 degree lens: cv::fisheye cannot take its rays beyond 90 degrees, said.
-  EXPECT_EQ(run.notes[1].rfind(run.written[0] + ": the lens sees ", 0), 0u) << run.notes[1];
+  EXPECT_EQ(run.notes[1].rfind(run.written[0] + ": the model maps the frame's edges to rays up to ", 0), 0u) << run.notes[1];
   EXPECT_FALSE(run.optimization_inputs);
   EXPECT_TRUE(run.uncertainty_picture);
   for (const char* p : {"_residuals.png", "_coverage.png", "_uncertainty.png"})

@@ -134,10 +134,15 @@ BoardPose refine_pose(const CalibrationProblem& pr, const CameraModel& m, const 
   return p;
 }
 
-// PnP on normalised rays in the frame R0 (camera -> PnP frame) turns the camera into;
-// rays less than ~84 deg from that frame's axis only.
-std::optional<BoardPose> pnp_on_rays(const std::vector<cv::Point3d>& obj, const std::vector<cv::Vec3d>& rays,
-                                     const cv::Matx33d& R0) {
+// PnP starts on normalised rays in the frame R0 (camera -> PnP frame) turns the camera into;
+// rays less than ~84 deg from that frame's axis only. OpenCV's iterative PnP first, then
+// each of IPPE's two solutions that is not the same pose: a small, distant board seen nearly
+// face on has two poses that image it almost alike (the planar flip), and a start in the
+// wrong one stays there under refinement. IPPE's second solution is kept only when its
+// residual is within kFlipResidualRatio of the first's; otherwise the view is unambiguous.
+std::vector<BoardPose> pnp_starts_on_rays(const std::vector<cv::Point3d>& obj, const std::vector<cv::Vec3d>& rays,
+                                          const cv::Matx33d& R0) {
+  constexpr double kFlipResidualRatio = 10;
   std::vector<cv::Point3d> o;
   std::vector<cv::Point2d> q;
   for (size_t k = 0; k < rays.size(); ++k) {
@@ -146,21 +151,39 @@ std::optional<BoardPose> pnp_on_rays(const std::vector<cv::Point3d>& obj, const 
     o.push_back(obj[k]);
     q.push_back({d[0] / d[2], d[1] / d[2]});
   }
-  if (o.size() < 6) return std::nullopt;
-  cv::Vec3d rv, tv;
+  std::vector<BoardPose> starts;
+  if (o.size() < 6) return starts;
+  auto keep = [&](const cv::Vec3d& rv, const cv::Vec3d& tv) {
+    cv::Matx33d R;
+    cv::Rodrigues(rv, R);
+    const cv::Matx33d Rc = R0.t() * R;
+    const cv::Vec3d tc = R0.t() * tv;
+    for (const BoardPose& s : starts) {  // the same pose as one kept: within ~1 deg
+      cv::Matx33d Rs;
+      cv::Rodrigues(cv::Vec3d(s[0], s[1], s[2]), Rs);
+      if (cv::norm(cv::Mat(Rs.t() * Rc - cv::Matx33d::eye())) < 0.02) return;
+    }
+    cv::Vec3d rc;
+    cv::Rodrigues(Rc, rc);
+    starts.push_back(BoardPose{rc[0], rc[1], rc[2], tc[0], tc[1], tc[2]});
+  };
   try {
-    if (!cv::solvePnP(o, q, cv::Matx33d::eye(), cv::noArray(), rv, tv, false, cv::SOLVEPNP_ITERATIVE))
-      return std::nullopt;
+    cv::Vec3d rv, tv;
+    if (cv::solvePnP(o, q, cv::Matx33d::eye(), cv::noArray(), rv, tv, false, cv::SOLVEPNP_ITERATIVE)) keep(rv, tv);
   } catch (const cv::Exception&) {
-    return std::nullopt;
   }
-  cv::Matx33d R;
-  cv::Rodrigues(rv, R);
-  const cv::Matx33d Rc = R0.t() * R;
-  const cv::Vec3d tc = R0.t() * tv;
-  cv::Vec3d rc;
-  cv::Rodrigues(Rc, rc);
-  return BoardPose{rc[0], rc[1], rc[2], tc[0], tc[1], tc[2]};
+  try {
+    std::vector<cv::Mat> rvs, tvs;
+    cv::Mat err;
+    cv::solvePnPGeneric(o, q, cv::Matx33d::eye(), cv::noArray(), rvs, tvs, false, cv::SOLVEPNP_IPPE, cv::noArray(),
+                        cv::noArray(), err);
+    for (size_t i = 0; i < rvs.size(); ++i) {
+      if (i > 0 && !(err.at<double>(int(i)) <= kFlipResidualRatio * err.at<double>(0))) break;
+      keep(cv::Vec3d(rvs[i]), cv::Vec3d(tvs[i]));
+    }
+  } catch (const cv::Exception&) {  // not coplanar enough for IPPE (a warped board): the iterative start
+  }
+  return starts;
 }
 
 }  // namespace
@@ -248,11 +271,11 @@ std::optional<BoardPose> solve_pose(const CalibrationProblem& pr, const CameraMo
     obj.push_back({b[0], b[1], b[2]});
     rays.push_back({d->x, d->y, d->z});
   }
-  std::optional<BoardPose> p0;
+  std::vector<BoardPose> starts;
   bool all_front = int(rays.size()) == inliers;
   for (const auto& d : rays) all_front = all_front && d[2] >= 0.1;
   if (all_front) {
-    p0 = pnp_on_rays(obj, rays, cv::Matx33d::eye());
+    starts = pnp_starts_on_rays(obj, rays, cv::Matx33d::eye());
   } else {
     // Catadioptric and > 180 deg lenses (boards beside or behind the camera): the PnP runs
     // in a frame turned so that the mean ray of the view is its axis.
@@ -264,10 +287,19 @@ std::optional<BoardPose> solve_pose(const CalibrationProblem& pr, const CameraMo
     const cv::Vec3d a = std::abs(z[0]) < 0.9 ? cv::Vec3d(1, 0, 0) : cv::Vec3d(0, 1, 0);
     const cv::Vec3d x = cv::normalize(a.cross(z)), y = z.cross(x);
     const cv::Matx33d R0(x[0], x[1], x[2], y[0], y[1], y[2], z[0], z[1], z[2]);
-    p0 = pnp_on_rays(obj, rays, R0);
+    starts = pnp_starts_on_rays(obj, rays, R0);
   }
-  if (!p0) return std::nullopt;
-  return refine_pose(pr, m, warp, v, *p0);
+  std::optional<BoardPose> best;
+  double best_error = std::numeric_limits<double>::infinity();
+  for (const BoardPose& s : starts) {
+    const BoardPose p = refine_pose(pr, m, warp, v, s);
+    const double e = view_squared_error(pr, m, warp, v, p);
+    if (!best || e < best_error) {
+      best = p;
+      best_error = e;
+    }
+  }
+  return best;
 }
 
 double heldout_rms(const CalibrationProblem& pr, const ModelFit& f, const ViewSubset& views) {

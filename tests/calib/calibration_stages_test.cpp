@@ -336,8 +336,8 @@ TEST(CalibrationSolve, MeiOnANarrowFieldIsSolvedInItsProfileCoordinatesToTheSame
 
 // SolveOptions::kannala_brandt_stall_after (50): where Kannala-Brandt fits the lens it
 // converges well before (stereo: the same fit as without the rule, bit for bit); on a mirror
-// it cannot fit (MiniOmni), the misfit stops once it stalls instead of crawling to the cap
-// of 200, screened out either way (thousands of px off).
+// it cannot fit (MiniOmni), the misfit stops once it stalls instead of crawling on (to the
+// cap of 200 or near it), screened out either way (thousands of px off).
 TEST(CalibrationSolve, KannalaBrandtStopsWhereItStallsOnAMirrorAndConvergesBeforeOnALens) {
   for (const calib_test::RealSet& set : calib_test::real_sets()) {
     const std::string name = set.name;
@@ -362,7 +362,9 @@ TEST(CalibrationSolve, KannalaBrandtStopsWhereItStallsOnAMirrorAndConvergesBefor
     } else {
       EXPECT_GT(fa.iterations, 50);   // Ceres counts the seed as iteration 0
       EXPECT_LT(fa.iterations, 100);
-      EXPECT_EQ(fb.iterations, 201);  // the cap
+      // Crawls on well past the stall (to the cap of 200 before solve_pose tried both of
+      // IPPE's poses; 121 from the seed's poses since).
+      EXPECT_GT(fb.iterations, 100);
       EXPECT_GT(ra, 1000.0);          // a misfit either way, the screening's 1.5 px far below
       EXPECT_GT(rb, 1000.0);
     }

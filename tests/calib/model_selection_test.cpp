@@ -896,7 +896,9 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
         {"stereo right", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
         {"fisheye1", "LENSMODEL_KANNALA_BRANDT carried"},
         {"Ladybug", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
-        {"VMRImage", "LENSMODEL_OMNIDIR_MEI carried"},
+        // Kannala-Brandt's fit of every view on this mirror fits since one view is posed
+        // again (calibration_solve.cpp, repose_stuck_views): 447213 -> 0.344 px RMS.
+        {"VMRImage", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
         {"KaidanOmni", "LENSMODEL_OMNIDIR_MEI carried"},  // rounds warm on a mirror since stop 41
         {"MiniOmni", "LENSMODEL_OMNIDIR_MEI carried"},
         {"Fisheye190deg", "LENSMODEL_KANNALA_BRANDT carried"}};

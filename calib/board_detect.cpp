@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <tbb/parallel_for.h>
@@ -307,6 +308,7 @@ class Cascade {
     for (const Stage& st : stages_) {
       // mrgingham equalises by itself; the ACCURACY call is the plain image's last resort.
       if (!suffix.empty() && (st.kind == Kind::mrgingham || (st.flags & cv::CALIB_CB_ACCURACY))) continue;
+      if (skip_classic_ && st.kind == Kind::classic) continue;
       const auto t0 = std::chrono::steady_clock::now();
       const bool ok = attempt(img, st, label(st) + suffix);
       char ms[32];
@@ -317,12 +319,23 @@ class Cascade {
       // After the cheap stages, one look for a board of another size: when the image shows
       // one larger than --board, the slow stages would search it for minutes (67 s per view
       // of a 9x6 board with --board 7x5) and find nothing.
-      if (suffix.empty() && st.kind == Kind::sb && st.downscaled && other_board_size(img)) return false;
+      if (suffix.empty() && st.kind == Kind::sb && st.downscaled) {
+        const Seen seen = other_board_size(img);
+        if (seen == Seen::larger) return false;
+        // A whole board smaller than --board: OpenCV's classic finder, told to look for a
+        // larger grid among that board's quads, searches their combinations for minutes (an
+        // 8x5 board at 1920x1080 with --board 9x6: 14 s downscaled, 228 s at full resolution,
+        // per view). SB's stages stay (bounded: 0.6 and 2.9 s there); the classic ones go.
+        if (seen == Seen::smaller_whole) skip_classic_ = true;
+      }
     }
     return false;
   }
   // The size of a board seen that --board cannot be part of; cols 0 when none.
   const std::array<int, 2>& other_size() const { return other_; }
+  // The size of a whole board seen (inside the image, not cut by its edge) smaller than
+  // --board; cols 0 when none.
+  const std::array<int, 2>& smaller_size() const { return smaller_; }
   const std::vector<cv::Point2f>& points() const { return pts_; }
   const std::string& tried() const { return tried_; }
 
@@ -411,10 +424,12 @@ class Cascade {
   }
 
   // SB on the downscaled copy with CALIB_CB_LARGER from the smallest pattern: it grows the
-  // grid to the whole board it sees, whose size comes back in the meta matrix. Only a board
-  // larger than --board in some direction (in either orientation) counts: a smaller one may
-  // be part of the right board, cut by the image edge.
-  bool other_board_size(const cv::Mat& img) {
+  // grid to the whole board it sees, whose size comes back in the meta matrix. A board
+  // larger than --board in some direction (in either orientation) is `larger`; a smaller
+  // one is `smaller_whole` only when every corner lies more than a square's width inside the
+  // image (else it may be part of the right board, cut by the image edge).
+  enum class Seen { none, larger, smaller_whole };
+  Seen other_board_size(const cv::Mat& img) {
     const auto t0 = std::chrono::steady_clock::now();
     cv::Mat small = img;
     if (scale_ < 1) cv::resize(img, small, cv::Size(), scale_, scale_, cv::INTER_AREA);
@@ -426,15 +441,29 @@ class Cascade {
     std::snprintf(ms, sizeof ms, ", size check %.0f ms",
                   1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     tried_ += ms;
-    if (!found || meta.empty()) return false;
+    if (!found || meta.empty()) return Seen::none;
     const int cols = meta.cols, rows = meta.rows;
     // A grid grown into the background (rows made up along the board's edge) is no board.
-    if (pts.size() != size_t(cols) * size_t(rows) || grid_zigzag(pts, cols, rows) >= kMaxZigzag) return false;
-    const bool fits = (cols <= board_.cols && rows <= board_.rows) || (cols <= board_.rows && rows <= board_.cols);
-    if (fits) return false;
+    if (pts.size() != size_t(cols) * size_t(rows) || grid_zigzag(pts, cols, rows) >= kMaxZigzag) return Seen::none;
     // Said the way --board is written: the longer side first when --board's is.
-    other_ = (cols >= rows) == (board_.cols >= board_.rows) ? std::array<int, 2>{cols, rows} : std::array<int, 2>{rows, cols};
-    return true;
+    const std::array<int, 2> size =
+        (cols >= rows) == (board_.cols >= board_.rows) ? std::array<int, 2>{cols, rows} : std::array<int, 2>{rows, cols};
+    const bool fits = (cols <= board_.cols && rows <= board_.rows) || (cols <= board_.rows && rows <= board_.cols);
+    if (!fits) {
+      other_ = size;
+      return Seen::larger;
+    }
+    if (cols * rows >= board_.cols * board_.rows) return Seen::none;  // --board itself
+    double margin = std::numeric_limits<double>::infinity(), square = 0;
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c) {
+        const cv::Point2f& p = pts[size_t(r) * cols + c];
+        margin = std::min({margin, double(p.x), double(p.y), double(small.cols - 1 - p.x), double(small.rows - 1 - p.y)});
+        square = std::max(square, local_square_px(pts, cols, rows, r, c));
+      }
+    if (!(margin > square)) return Seen::none;
+    smaller_ = size;
+    return Seen::smaller_whole;
   }
 
   const cv::Mat& gray_;
@@ -447,7 +476,8 @@ class Cascade {
   std::vector<Stage> stages_;
   std::vector<cv::Point2f> pts_;
   std::string tried_;
-  std::array<int, 2> other_{0, 0};
+  std::array<int, 2> other_{0, 0}, smaller_{0, 0};
+  bool skip_classic_ = false;
 };
 
 }  // namespace
@@ -466,7 +496,10 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board, co
   Cascade cascade(gray, board, options, result);
   bool found = cascade.run(gray, "");
   const bool other_board = cascade.other_size()[0] > 0;
-  if (!found && !other_board && options.clahe && (options.classic || options.sb)) {  // mrgingham equalised already
+  const bool smaller_board = cascade.smaller_size()[0] > 0;
+  // A whole board seen has the contrast the equalised pass would give.
+  if (!found && !other_board && !smaller_board && options.clahe &&
+      (options.classic || options.sb)) {  // mrgingham equalised already
     cv::Mat equalised;
     cv::createCLAHE(2.0, cv::Size(8, 8))->apply(gray, equalised);
     found = cascade.run(equalised, "+clahe");
@@ -477,9 +510,10 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board, co
     result.corners.reserve(cascade.points().size());
     for (const auto& p : cascade.points()) result.corners.push_back({double(p.x), double(p.y)});
     canonicalize_corner_order(result.corners, board.cols, board.rows);
-  } else if (other_board) {
-    result.other_cols = cascade.other_size()[0];
-    result.other_rows = cascade.other_size()[1];
+  } else if (other_board || smaller_board) {
+    const std::array<int, 2>& size = other_board ? cascade.other_size() : cascade.smaller_size();
+    result.other_cols = size[0];
+    result.other_rows = size[1];
     result.reason = "found " + std::to_string(result.other_cols) + "x" + std::to_string(result.other_rows) +
                     " inner corners, --board says " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
                     " (tried " + tried + ")";

@@ -299,6 +299,41 @@ TEST(BoardDetect, ABoardLargerThanTheOneAskedForIsNamedInsteadOfSearched) {
   EXPECT_TRUE(detect_board(boards.images[0], {9, 6, 30}).found);
 }
 
+// The other way round: --board 9x6 for whole 8x5 boards. OpenCV's classic finder, asked for
+// a larger grid among the quads of a smaller board, searched their combinations for 14 s
+// (downscaled) and 228 s (full resolution) per 1920x1080 view; the size check now sees the
+// whole smaller board, the classic stages and the equalised pass are skipped, and the view
+// names what it shows (as the larger board above). A board cut by the image edge is not
+// "whole": it may be part of the right one.
+TEST(BoardDetect, AWholeBoardSmallerThanTheOneAskedForIsNamedAndNotSearchedByTheClassicFinder) {
+  SyntheticBoardsOptions o;
+  o.views = 3;
+  o.board = {8, 5, 30};
+  o.seed = 5;
+  o.max_tilt_deg = 30;
+  o.min_cover = 0.3;
+  o.max_cover = 0.45;
+  const SyntheticBoards boards = synthesize_boards(o);
+  int named = 0;
+  for (const CameraImage& image : boards.images) {
+    const BoardDetection wrong = detect_board(image, {9, 6, 30});
+    EXPECT_FALSE(wrong.found);
+    if (wrong.other_cols == 0) continue;
+    ++named;
+    EXPECT_EQ(wrong.other_cols, 8);
+    EXPECT_EQ(wrong.other_rows, 5);
+    EXPECT_EQ(wrong.reason.rfind("found 8x5 inner corners, --board says 9x6 (tried ", 0), 0u) << wrong.reason;
+    // After the size check: no classic attempt, no equalised pass.
+    const size_t check = wrong.attempts.find("size check");
+    ASSERT_NE(check, std::string::npos) << wrong.attempts;
+    EXPECT_EQ(wrong.attempts.find("classic", check), std::string::npos) << wrong.attempts;
+    EXPECT_EQ(wrong.attempts.find("+clahe"), std::string::npos) << wrong.attempts;
+  }
+  EXPECT_GE(named, 2);
+  // The right size is still found on every view.
+  for (const CameraImage& image : boards.images) EXPECT_TRUE(detect_board(image, {8, 5, 30}).found);
+}
+
 // Ladybug: 5x8, non-square. Both spellings find the board, the corner orders are transposes
 // of each other, corner 0 is the outer grid corner nearest (0, 0), and rows are rows.
 TEST(BoardDetect, NonSquareBoardOrderAndTranspose) {

@@ -394,10 +394,11 @@ std::vector<std::pair<Circle, bool>> coarse_seeds(const FeatureLevel& L, double 
 }
 
 // Circles found by OpenCV's Hough transform (HOUGH_GRADIENT_ALT, on the compressed
-// luminance at most 800 px across), best supported first, at most `keep`, in full-res
-// coordinates: seeds placed by the rim's own edges to a pixel or two, that skip the region
-// search. In an uncropped photo the region search from a coarse seed converged inside the
-// ball (a circle 30 px small and 34 px off on grace at frame 2.3), out of the rim fit's reach.
+// luminance at most 800 px across; where that finds none, on its equalised histogram), best
+// supported first, at most `keep`, in full-res coordinates: seeds placed by the rim's own
+// edges to a pixel or two, that skip the region search. In an uncropped photo the region
+// search from a coarse seed converged inside the ball (a circle 30 px small and 34 px off on
+// grace at frame 2.3), out of the rim fit's reach.
 std::vector<Circle> hough_seeds(const cv::Mat& col, double r_min, double r_max, int keep) {
   const int w = col.cols, h = col.rows;
   const double f = std::max(1.0, std::max(w, h) / 800.0);
@@ -409,12 +410,25 @@ std::vector<Circle> hough_seeds(const cv::Mat& col, double r_min, double r_max, 
   else
     small = grey;
   small.convertTo(g8, CV_8U, 255.0);
-  std::vector<cv::Vec4f> found;  // x, y, r, votes
   // Canny's high threshold 100 on codes of the compressed luminance (300, OpenCV's suggestion
   // for contrasty photos, found no circle on a studio ball in front of Memorial), and a
-  // perfectness of 0.6: the rim fit decides among what these let through.
-  cv::HoughCircles(g8, found, cv::HOUGH_GRADIENT_ALT, 1.5, std::max(8.0, r_min / f), 100, 0.6,
-                   int(std::floor(r_min / f)), int(std::ceil(r_max / f)));
+  // perfectness of 0.6: the rim fit decides among what these let through. Where that finds
+  // no circle, the same on the histogram-equalised codes: a dark rim against a dim
+  // background (the studio ball's black reflections before Memorial's grey walls, uncropped
+  // at R 150) has too little contrast in the compressed codes, and equalising spreads the
+  // dark codes apart (found at every threshold tried, 0.01 px after the rim fit). Not beside
+  // the first pass's circles: on grace they moved the pick by 0.26 px.
+  std::vector<cv::Vec4f> found;  // x, y, r, votes
+  const auto hough = [&](const cv::Mat& codes) {
+    cv::HoughCircles(codes, found, cv::HOUGH_GRADIENT_ALT, 1.5, std::max(8.0, r_min / f), 100, 0.6,
+                     int(std::floor(r_min / f)), int(std::ceil(r_max / f)));
+  };
+  hough(g8);
+  if (found.empty()) {
+    cv::Mat equalised;
+    cv::equalizeHist(g8, equalised);
+    hough(equalised);
+  }
   std::stable_sort(found.begin(), found.end(), [](const cv::Vec4f& a, const cv::Vec4f& b) { return a[3] > b[3]; });
   std::vector<Circle> out;
   const double sx = double(w) / small.cols, sy = double(h) / small.rows;

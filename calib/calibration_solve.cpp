@@ -160,6 +160,11 @@ const ModelFit* CandidateSolver::solved(LensType type) {
   return it == cache_.end() ? nullptr : &it->second;
 }
 
+void CandidateSolver::replace(LensType type, ModelFit fit) {
+  std::lock_guard lock(mutex_);
+  cache_[type] = std::move(fit);
+}
+
 void CandidateSolver::reuse_sample_fits(CandidateSolver& sample_solver) {
   std::lock_guard lock(sample_solver.mutex_);
   sample_views_ = sample_solver.views_;
@@ -296,7 +301,21 @@ ModelFit CandidateSolver::solve_seeded(LensType type, const CalibrationProblem& 
   }
   const SeedReport seed =
       seed_candidate(pr, views_, type, [this](LensType t) -> const ModelFit& { return get(t); }, seed_);
-  return refine_seed(pr, views_, type, seed.fit);
+  ModelFit f = refine_seed(pr, views_, type, seed.fit);
+  if (type == LensType::OpenCV8) f = rational_from_plumb_bob(pr, views_, std::move(f), get(LensType::OpenCV5));
+  return f;
+}
+
+ModelFit rational_from_plumb_bob(const CalibrationProblem& pr, const ViewSubset& views, ModelFit rational,
+                                 const ModelFit& plumb_bob) {
+  if (!pr.solve.use_mrcal || !plumb_bob.ok || plumb_bob.model.intrinsics.size() != 9) return rational;
+  std::vector<double> intrinsics = plumb_bob.model.intrinsics;
+  intrinsics.insert(intrinsics.end(), {0.0, 0.0, 0.0});  // k4 = k5 = k6 = 0: the same projection
+  ModelFit g =
+      solve_mrcal(pr, views, lens_type_name(LensType::OpenCV8), intrinsics, plumb_bob.poses, false, plumb_bob.warp);
+  if (!g.ok || (rational.ok && !(fit_rms(pr, g, views) < fit_rms(pr, rational, views)))) return rational;
+  g.solver = "plumb_bob fit + mrcal";
+  return g;
 }
 
 ModelFit refine_seed(const CalibrationProblem& pr, const ViewSubset& views, LensType type, const ModelFit& seed) {

@@ -4,15 +4,12 @@
 
 #include <cmath>
 #include <cstdio>
-#include <random>
 #include <filesystem>
 #include <nlohmann/json.hpp>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <unistd.h>
 
-#include "calib/calibration_problem.h"
 #include "calib/calibration_run.h"
 #include "calib/projection_difference.h"
 #include "calib/synthetic_boards.h"
@@ -141,26 +138,13 @@ TEST(CalibrationRun, ViewsThatDetermineNoModelAreRefused) {
                            0.01430840574},
                           1920, 1080};
   const BoardSpec board{10, 4, 15};
-  const double poses[][6] = {{-0.210186, 0.188763, -0.228376, 200.075356, 297.606177, 1616.133358},
+  const std::vector<std::array<double, 6>> poses = {{-0.210186, 0.188763, -0.228376, 200.075356, 297.606177, 1616.133358},
                              {0.176490, -0.652219, -0.045230, -1213.452749, 616.902168, 658.396855},
                              {0.851716, -0.936898, 0.143662, -1060.037936, -532.225160, 574.388779},
                              {-0.016799, -0.614690, -0.180628, -1550.560331, 949.444567, 816.334394},
                              {-0.288894, -0.514700, -0.090401, -849.103584, 617.720300, 1363.909283}};
-  std::mt19937 rng(302);
-  std::normal_distribution<double> noise(0, 0.047);
-  std::vector<std::vector<std::array<double, 2>>> corners;
-  for (const auto& p : poses) {
-    cv::Matx33d R;
-    cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
-    corners.emplace_back();
-    for (int k = 0; k < board.cols * board.rows; ++k) {
-      const auto b = board_point(board, k);
-      const cv::Vec3d X = R * cv::Vec3d(b[0], b[1], b[2]) + cv::Vec3d(p[3], p[4], p[5]);
-      const auto q = project(truth, Vec3{X[0], X[1], X[2]});
-      ASSERT_TRUE(q);
-      corners.back().push_back(std::array<double, 2>{q->x + noise(rng), q->y + noise(rng)});
-    }
-  }
+  const auto corners = calib_test::corners_at_poses(truth, board, poses, 0.047, 302);
+  ASSERT_EQ(corners.size(), poses.size());
   GeometricCalibrationOptions o;
   o.calibrate.leverage = false;
   o.calibrate.uncertainty = false;

@@ -4,11 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
-#include <opencv2/calib3d.hpp>
-
-#include "calib/calibration_problem.h"
 #include "calib/geometric.h"
 #include "calib/synthetic_boards.h"
 #include "tests/calib/test_cameras.h"
@@ -93,7 +89,7 @@ TEST(GeometricSolve, WarmOutlierRoundsReachTheColdSolvesMinimum) {
 TEST(GeometricSolve, ASmallFaceOnBoardIsNotLeftInItsFlippedPose) {
   const CameraModel truth{"LENSMODEL_OPENCV5", {1400, 1396, 975.3, 531.8, -0.32, 0.12, 0.0008, -0.0005, -0.02}, 1920, 1080};
   const BoardSpec board{8, 5, 40};
-  const double poses[15][6] = {
+  const std::vector<std::array<double, 6>> poses = {
       {-0.072859, -0.231345, 0.548622, -265.771931, -140.468479, 778.403398},
       {0.503038, 0.494735, 1.281737, 420.139392, -5.262975, 1114.513131},
       {0.214136, -0.306644, -0.136025, -481.003878, 313.579913, 1417.829299},
@@ -109,21 +105,8 @@ TEST(GeometricSolve, ASmallFaceOnBoardIsNotLeftInItsFlippedPose) {
       {-0.525070, -0.397351, -0.345544, -1037.164303, -292.905058, 1350.491219},
       {-0.403661, -0.414521, 1.170506, -1073.893045, -100.939551, 1697.406418},
       {0.322981, 0.166669, 1.009078, 892.405287, 98.007585, 2233.587998}};
-  std::mt19937 rng(1);
-  std::normal_distribution<double> noise(0, 0.03);
-  std::vector<std::vector<std::array<double, 2>>> views;
-  for (const auto& p : poses) {
-    cv::Matx33d R;
-    cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
-    views.emplace_back();
-    for (int k = 0; k < board.cols * board.rows; ++k) {
-      const auto b = board_point(board, k);
-      const cv::Vec3d X = R * cv::Vec3d(b[0], b[1], b[2]) + cv::Vec3d(p[3], p[4], p[5]);
-      const auto q = project(truth, Vec3{X[0], X[1], X[2]});
-      ASSERT_TRUE(q);
-      views.back().push_back(std::array<double, 2>{q->x + noise(rng), q->y + noise(rng)});
-    }
-  }
+  const auto views = calib_test::corners_at_poses(truth, board, poses, 0.03, 1);
+  ASSERT_EQ(views.size(), poses.size());
   CalibrateOptions opt;
   opt.model = "plumb_bob";
   opt.leverage = false;
@@ -164,7 +147,7 @@ TEST(GeometricSolve, AWideRationalLensIsFittedByTheRationalModel) {
                            0.02671074304},
                           800, 600};
   const BoardSpec board{12, 9, 40};
-  const double poses[][6] = {
+  const std::vector<std::array<double, 6>> poses = {
       {0.499714, -0.120472, -2.430688, 153.428883, 527.850620, 363.842655},
       {-0.433639, -0.542141, -0.182194, -577.099644, 192.685035, 637.995077},
       {0.069910, -0.743591, -1.882985, -220.043305, 765.100685, 1101.727379},
@@ -205,21 +188,8 @@ TEST(GeometricSolve, AWideRationalLensIsFittedByTheRationalModel) {
       {0.786727, 0.750657, -0.134377, 638.100293, -937.904287, 1102.530070},
       {-0.684541, 0.428538, 0.133543, 411.266169, 989.559069, 1395.190286},
       {0.166927, 0.453299, -0.221140, 55.325214, -263.603342, 316.385162}};
-  std::mt19937 rng(507);
-  std::normal_distribution<double> noise(0, 0.053);
-  std::vector<std::vector<std::array<double, 2>>> views;
-  for (const auto& p : poses) {
-    cv::Matx33d R;
-    cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
-    views.emplace_back();
-    for (int k = 0; k < board.cols * board.rows; ++k) {
-      const auto b = board_point(board, k);
-      const cv::Vec3d X = R * cv::Vec3d(b[0], b[1], b[2]) + cv::Vec3d(p[3], p[4], p[5]);
-      const auto q = project(truth, Vec3{X[0], X[1], X[2]});
-      ASSERT_TRUE(q);
-      views.back().push_back(std::array<double, 2>{q->x + noise(rng), q->y + noise(rng)});
-    }
-  }
+  const auto views = calib_test::corners_at_poses(truth, board, poses, 0.053, 507);
+  ASSERT_EQ(views.size(), poses.size());
   CalibrateOptions opt;
   opt.leverage = false;
   opt.uncertainty = false;
@@ -253,7 +223,7 @@ TEST(GeometricSolve, AFitWorseThanItsHalvesIsRefittedFromOne) {
                            0.01107276018},
                           2592, 1944};
   const BoardSpec board{7, 5, 50};
-  const double poses[][6] = {
+  const std::vector<std::array<double, 6>> poses = {
       {0.336939, 0.891979, 0.020993, 138.934091, 520.802428, 1248.023725},
       {0.453601, 0.775751, 0.898754, 208.107465, -540.555146, 939.020863},
       {-0.638620, -0.586976, 0.503810, -499.175950, 912.341617, 1798.238700},
@@ -276,21 +246,8 @@ TEST(GeometricSolve, AFitWorseThanItsHalvesIsRefittedFromOne) {
       {-1.152000, -0.431669, -2.832683, 676.518627, 324.802967, 716.944373},
       {0.829438, 0.330786, -0.073308, 113.562856, -518.606433, 382.060990},
       {-0.346080, 1.471716, 0.186974, 573.393801, 136.330191, 1230.414817}};
-  std::mt19937 rng(118);
-  std::normal_distribution<double> noise(0, 0.104);
-  std::vector<std::vector<std::array<double, 2>>> views;
-  for (const auto& p : poses) {
-    cv::Matx33d R;
-    cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
-    views.emplace_back();
-    for (int k = 0; k < board.cols * board.rows; ++k) {
-      const auto b = board_point(board, k);
-      const cv::Vec3d X = R * cv::Vec3d(b[0], b[1], b[2]) + cv::Vec3d(p[3], p[4], p[5]);
-      const auto q = project(truth, Vec3{X[0], X[1], X[2]});
-      ASSERT_TRUE(q);
-      views.back().push_back(std::array<double, 2>{q->x + noise(rng), q->y + noise(rng)});
-    }
-  }
+  const auto views = calib_test::corners_at_poses(truth, board, poses, 0.104, 118);
+  ASSERT_EQ(views.size(), poses.size());
   CalibrateOptions opt;
   opt.leverage = false;
   opt.uncertainty = false;

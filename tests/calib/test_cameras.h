@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdlib>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,12 +14,39 @@
 #include "calib/calibration_problem.h"
 #include "calib/camera_model.h"
 
+#include <opencv2/calib3d.hpp>
+
 namespace lp::calib_test {
 
 // 190 deg Kannala-Brandt fisheye on a 1280x960 sensor: the 95 deg ray lands 554 px from
 // the centre (a circle cropped at top and bottom).
 inline CameraModel kb190() {
   return {"LENSMODEL_KANNALA_BRANDT", {330, 331, 641.3, 478.6, 0.02, -0.01, 0.003, -0.0005}, 1280, 960};
+}
+
+// Corners of `board` at each pose (rvec, tvec: camera_from_board, mm) through `truth`, with
+// Gaussian noise of noise_px on each coordinate (deterministic per seed); empty when a
+// corner cannot be imaged. For sets rebuilt from an audit's poses.
+inline std::vector<std::vector<std::array<double, 2>>> corners_at_poses(const CameraModel& truth,
+                                                                        const BoardSpec& board,
+                                                                        const std::vector<std::array<double, 6>>& poses,
+                                                                        double noise_px, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, noise_px);
+  std::vector<std::vector<std::array<double, 2>>> views;
+  for (const auto& p : poses) {
+    cv::Matx33d R;
+    cv::Rodrigues(cv::Vec3d(p[0], p[1], p[2]), R);
+    views.emplace_back();
+    for (int k = 0; k < board.cols * board.rows; ++k) {
+      const auto b = board_point(board, k);
+      const cv::Vec3d X = R * cv::Vec3d(b[0], b[1], b[2]) + cv::Vec3d(p[3], p[4], p[5]);
+      const auto q = project(truth, Vec3{X[0], X[1], X[2]});
+      if (!q) return {};
+      views.back().push_back(std::array<double, 2>{q->x + noise(rng), q->y + noise(rng)});
+    }
+  }
+  return views;
 }
 
 // Detections as detect_boards gives them, from corners projected through `cam`: image i is

@@ -790,6 +790,8 @@ std::vector<ModelCandidate> solve_candidates(const CalibrationProblem& pr, Candi
     }
     if (!better) continue;
     fits.full.replace(type, std::move(*better));
+    // The board warp decision's split refits started from the old fit: refitted anew.
+    if (fits.known_splits && fits.known_splits->type == type) fits.known_splits.reset();
     c = evaluate(pr, fits, type, screen, o.parallel);
   }
   return table;

@@ -264,5 +264,52 @@ TEST(GeometricSolve, AFitWorseThanItsHalvesIsRefittedFromOne) {
   EXPECT_LT(t.median_px, 1.0);
 }
 
+// A third wide rational lens of the audit (1920x1080, 21 views of a 9x8 board, 0.29 px noise:
+// too few, too noisy views to determine it; the run warns that no model fits). Its outlier
+// rounds solve the rational reference cold each round, and one round's fit stopped at
+// 2.48 px RMS after 0.43 px in the last: its misfit called 130 of 1512 noise-only corners
+// outliers. Such a round is refitted warm from the last one (reject_outliers). The choice
+// stays a poor one either way (12-28 px from the truth, with the warning).
+TEST(GeometricSolve, AnOutlierRoundThatStopsShortIsRefittedFromTheLast) {
+  const CameraModel truth{"LENSMODEL_OPENCV8",
+                          {691.5317311, 693.5712564, 920.6766367, 546.404106, 0.3638461056, -0.04730018906,
+                           0.0004527418205, -0.0002676522793, 0.00972156827, 0.7847211422, -0.02513767886,
+                           0.0139867715},
+                          1920, 1080};
+  const BoardSpec board{9, 8, 20};
+  const std::vector<std::array<double, 6>> poses = {
+      {0.867585, -0.745085, -0.111234, -255.962523, -247.989717, 1781.282589},
+      {-0.368582, 0.656378, 0.331506, 1039.869296, 920.019120, 2025.152390},
+      {0.368401, -1.598075, -2.638656, 166.784894, 357.777534, 1492.257223},
+      {1.137600, -0.727196, -1.284110, -857.033554, -374.901562, 406.625420},
+      {-0.467837, -0.640201, -0.237079, -947.564756, 715.950842, 1289.786983},
+      {1.349466, -0.246478, -0.172014, -10.166158, -157.329718, 246.656242},
+      {0.245078, -0.702744, 0.264717, -244.136688, -223.530667, 167.446466},
+      {0.554226, -0.329495, 0.023651, -242.357892, -71.208974, 520.154843},
+      {-0.272147, -0.004040, -0.263865, -19.059345, -68.785402, 395.540590},
+      {0.592011, -0.784110, -2.251452, -1290.802703, -412.677153, 741.703191},
+      {-0.227101, -0.784256, -0.207175, -161.814406, 90.634115, 369.986531},
+      {0.930006, -0.265697, -0.028787, -154.114617, -1090.689058, 1332.937991},
+      {0.076521, -0.374146, -0.078184, -657.308657, -187.649613, 968.062632},
+      {0.300596, 1.603254, 0.359233, 2233.436110, 1061.161541, 953.751968},
+      {0.307145, -1.187896, -0.198916, -291.747310, -82.767196, 245.082830},
+      {1.855721, -0.513496, -1.881621, -781.047257, 137.129615, 626.881727},
+      {0.695780, 0.190951, 0.364592, -164.510078, -368.508291, 349.240714},
+      {-0.308583, -0.487189, 0.278515, -1271.367847, 704.931713, 1566.657755},
+      {-0.062096, -0.296790, 2.390037, -248.413296, 571.601216, 2303.812613},
+      {-0.039119, 0.123444, -0.176507, -72.716418, -241.636556, 646.901356},
+      {-0.163898, -0.955517, -0.913653, -1608.047935, 970.040882, 1049.045289}};
+  const auto views = calib_test::corners_at_poses(truth, board, poses, 0.294, 719);
+  ASSERT_EQ(views.size(), poses.size());
+  CalibrateOptions opt;
+  opt.leverage = false;
+  opt.uncertainty = false;
+  const CalibrationResult r = calibrate(views, board, truth.width, truth.height, opt);
+  std::printf("  reference %s, %d rounds: %d of %d corners rejected\n", r.outlier_reference.c_str(), r.outlier_rounds,
+              r.corners_rejected, r.corners_total);
+  // Noise only; this test's draw: 56 rejected before, 28 now (the audit's draw: 130, 28).
+  EXPECT_LT(r.corners_rejected, 40);
+}
+
 }  // namespace
 }  // namespace lp

@@ -29,7 +29,6 @@ bool fit_worse_than_heldout(const CalibrationResult& r) {
   return r.heldout_rms_px > 0 && r.model.rms_reprojection_px > 1.5 * r.heldout_rms_px;
 }
 
-
 std::string with_extension(const std::string& path, const std::string& ext) {
   return (fs::path(path).parent_path() / (fs::path(path).stem().string() + ext)).string();
 }

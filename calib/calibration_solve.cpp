@@ -310,8 +310,7 @@ ModelFit rational_from_plumb_bob(const CalibrationProblem& pr, const ViewSubset&
                                  const ModelFit& plumb_bob) {
   if (!pr.solve.use_mrcal || !plumb_bob.ok || plumb_bob.model.intrinsics.size() != 9) return rational;
   // The rational model holds plumb_bob's projection: a fit at least as good as plumb_bob's
-  // is not seen to have stopped short, and its second solve would only cost time (fisheye1:
-  // a quarter more for the whole selection).
+  // is not seen to have stopped short, and a second solve would only cost time.
   if (rational.ok && fit_rms(pr, rational, views) <= fit_rms(pr, plumb_bob, views)) return rational;
   std::vector<double> intrinsics = plumb_bob.model.intrinsics;
   intrinsics.insert(intrinsics.end(), {0.0, 0.0, 0.0});  // k4 = k5 = k6 = 0: the same projection

@@ -16,6 +16,17 @@ using calib_test::kb190;
 
 const BoardSpec kBoard{10, 7, 40};
 
+// calibrate() with `model` ("" for the automatic choice), without the leverage and
+// uncertainty stages these tests do not read.
+CalibrationResult calibrate_views(const std::vector<std::vector<std::array<double, 2>>>& views,
+                                  const BoardSpec& board, const CameraModel& truth, const std::string& model = "") {
+  CalibrateOptions o;
+  o.model = model;
+  o.leverage = false;
+  o.uncertainty = false;
+  return calibrate(views, board, truth.width, truth.height, o);
+}
+
 TEST(GeometricSolve, OneKannalaBrandtSolveIsCvFisheyesMinimumWithinNinetyDegrees) {
   const CameraModel truth = kb190();
   // Corners within 85 deg: cv::fisheye's model is then the same function as ours, so both
@@ -107,11 +118,7 @@ TEST(GeometricSolve, ASmallFaceOnBoardIsNotLeftInItsFlippedPose) {
       {0.322981, 0.166669, 1.009078, 892.405287, 98.007585, 2233.587998}};
   const auto views = calib_test::corners_at_poses(truth, board, poses, 0.03, 1);
   ASSERT_EQ(views.size(), poses.size());
-  CalibrateOptions opt;
-  opt.model = "plumb_bob";
-  opt.leverage = false;
-  opt.uncertainty = false;
-  const CalibrationResult r = calibrate(views, board, truth.width, truth.height, opt);
+  const CalibrationResult r = calibrate_views(views, board, truth, "plumb_bob");
   ASSERT_FALSE(r.no_model_fits);
   const ProjectionDiff t = projection_difference(r.model, truth, {}, 16);
   std::printf("  plumb_bob: %d of %d corners rejected, RMS %.4f px, %.3f px from the truth (median)\n",
@@ -123,10 +130,7 @@ TEST(GeometricSolve, ASmallFaceOnBoardIsNotLeftInItsFlippedPose) {
 
   // The automatic choice: the old code's plumb_bob row fitted every view at 0.127 px and
   // held out at 0.042 (a fit of all views cannot honestly be 3x worse than held out).
-  CalibrateOptions automatic;
-  automatic.leverage = false;
-  automatic.uncertainty = false;
-  const CalibrationResult a = calibrate(views, board, truth.width, truth.height, automatic);
+  const CalibrationResult a = calibrate_views(views, board, truth);
   for (const ModelCandidate& c : a.table)
     if (c.name == "plumb_bob") {
       std::printf("  automatic: plumb_bob RMS %.4f px, held out %.4f px\n", c.rms_px, c.heldout_rms_px);
@@ -190,10 +194,7 @@ TEST(GeometricSolve, AWideRationalLensIsFittedByTheRationalModel) {
       {0.166927, 0.453299, -0.221140, 55.325214, -263.603342, 316.385162}};
   const auto views = calib_test::corners_at_poses(truth, board, poses, 0.053, 507);
   ASSERT_EQ(views.size(), poses.size());
-  CalibrateOptions opt;
-  opt.leverage = false;
-  opt.uncertainty = false;
-  const CalibrationResult r = calibrate(views, board, truth.width, truth.height, opt);
+  const CalibrationResult r = calibrate_views(views, board, truth);
   const ProjectionDiff t = projection_difference(r.model, truth, {}, 16);
   std::printf("  chose %s, RMS %.3f px, %d corners rejected, %.3f px from the truth (median)\n", r.selected.c_str(),
               r.model.rms_reprojection_px, r.corners_rejected, t.median_px);
@@ -248,10 +249,7 @@ TEST(GeometricSolve, AFitWorseThanItsHalvesIsRefittedFromOne) {
       {-0.346080, 1.471716, 0.186974, 573.393801, 136.330191, 1230.414817}};
   const auto views = calib_test::corners_at_poses(truth, board, poses, 0.104, 118);
   ASSERT_EQ(views.size(), poses.size());
-  CalibrateOptions opt;
-  opt.leverage = false;
-  opt.uncertainty = false;
-  const CalibrationResult r = calibrate(views, board, truth.width, truth.height, opt);
+  const CalibrationResult r = calibrate_views(views, board, truth);
   const ProjectionDiff t = projection_difference(r.model, truth, {}, 16);
   std::printf("  reference %s: %d of %d corners rejected; chose %s, %.3f px from the truth (median)\n",
               r.outlier_reference.c_str(), r.corners_rejected, r.corners_total, r.selected.c_str(), t.median_px);
@@ -301,10 +299,7 @@ TEST(GeometricSolve, AnOutlierRoundThatStopsShortIsRefittedFromTheLast) {
       {-0.163898, -0.955517, -0.913653, -1608.047935, 970.040882, 1049.045289}};
   const auto views = calib_test::corners_at_poses(truth, board, poses, 0.294, 719);
   ASSERT_EQ(views.size(), poses.size());
-  CalibrateOptions opt;
-  opt.leverage = false;
-  opt.uncertainty = false;
-  const CalibrationResult r = calibrate(views, board, truth.width, truth.height, opt);
+  const CalibrationResult r = calibrate_views(views, board, truth);
   std::printf("  reference %s, %d rounds: %d of %d corners rejected\n", r.outlier_reference.c_str(), r.outlier_rounds,
               r.corners_rejected, r.corners_total);
   // Noise only; this test's draw: 56 rejected before, 28 now (the audit's draw: 130, 28).

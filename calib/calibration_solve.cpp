@@ -200,8 +200,6 @@ bool mei_walked_off(const ModelFit& f) {
 
 }  // namespace
 
-namespace {
-
 // A joint fit can keep a view in the wrong one of a planar board's two poses (a small,
 // distant board seen nearly face on): the solver does not cross between them, and the
 // intrinsics bend to fit the flipped view (an audit's synthetic 1920x1080 plumb_bob lens:
@@ -240,8 +238,6 @@ ModelFit repose_stuck_views(const CalibrationProblem& pr, const ViewSubset& view
   g.solver = f.solver + ", " + std::to_string(moved) + (moved == 1 ? " view" : " views") + " posed again";
   return g;
 }
-
-}  // namespace
 
 ModelFit CandidateSolver::solve(LensType type) {
   ModelFit f = repose_stuck_views(problem_, views_, type, solve_seeded(type, problem_));

@@ -110,6 +110,12 @@ WideField wide_fit_field(const CalibrationProblem& problem, CandidateSolver& sol
 ModelFit rational_from_plumb_bob(const CalibrationProblem& problem, const ViewSubset& views, ModelFit rational,
                                  const ModelFit& plumb_bob);
 
+// `f` (a fit of `type` on `views`) with the views stuck in the wrong one of a planar board's
+// two poses posed again and every view refitted warm, where that fits better; else `f`.
+// CandidateSolver applies it to every solve; a fit carried from another stage needs it too.
+ModelFit repose_stuck_views(const CalibrationProblem& problem, const ViewSubset& views, LensType type,
+                            const ModelFit& f);
+
 // The fit of candidate `type` on `views` warm-started from `from`, a fit on a superset of
 // them (`poses`: from's poses of `views`, aligned): the jackknife's leave-one-out fits and
 // the repeated splits converge to the same minimum as a cold start, in a fraction of the

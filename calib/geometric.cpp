@@ -237,9 +237,8 @@ CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>
       ks.values.push_back({won.cross_validation_px[k], won.heldout_px[k]});
     fits.known_splits = std::move(ks);
   }
-  if (outliers.reference != LensType::KannalaBrandt)
-    if (std::optional<ModelFit> f = kannala_brandt_from_sample(pr, outliers, fits.used, options.fit_max_rms_px))
-      fits.full.adopt(LensType::KannalaBrandt, *f);
+  for (auto& [type, f] : fits_from_sample(pr, outliers, fits.used, options.fit_max_rms_px, options.parallel))
+    if (!fits.full.solved(type)) fits.full.adopt(type, std::move(f));
   CandidateOptions co;
   co.screen_rms_px = options.model.empty() ? options.fit_max_rms_px : std::numeric_limits<double>::infinity();
   co.perspective_field_limit_deg = options.perspective_field_limit_deg;

@@ -199,6 +199,8 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
       fits[1] = mei.get(LensType::OmnidirMei);
       wide = wide_fit_field(problem, mei, options.perspective_fit_rms_px);
     };
+    // The plumb_bob fit a rational reference started from, where no reference is plumb_bob.
+    std::vector<std::optional<ModelFit>> helpers(others.size());
     run_jobs(1 + others.size(), [&](size_t j) {
       if (j == 0) {
         std::call_once(wide_once, wide_chain);
@@ -224,18 +226,20 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
         if (wide.deg > options.perspective_field_limit_deg) return;  // left unfitted: choose_reference skips it
       }
       ModelFit fit = refine_seed(problem, sample, type, seed);
-      if (type == LensType::OpenCV8)
+      if (type == LensType::OpenCV8) {
         fit = rational_from_plumb_bob(problem, sample, std::move(fit), solver.get(LensType::OpenCV5));
+        if (std::find(refs.begin(), refs.end(), LensType::OpenCV5) == refs.end())
+          helpers[j - 1] = solver.get(LensType::OpenCV5);
+      }
       fits[1 + j] = solver.adopt(type, std::move(fit));
     }, options.parallel ? 0 : 1);
-    if (fits[0] && fits[0]->ok) {
-      rep.sample_kannala_brandt = *fits[0];
-      rep.sample_views = sample;
-      rep.sample_rms_px = fit_rms(problem, *fits[0], sample);
-    }
     const LensType order[2] = {LensType::KannalaBrandt, LensType::OmnidirMei};
     for (size_t i = 0; i < fits.size(); ++i)
       if (fits[i]) on_sample.emplace_back(i < 2 ? order[i] : others[i - 2], std::move(*fits[i]));
+    rep.sample_fits = on_sample;
+    for (auto& h : helpers)
+      if (h) rep.sample_fits.emplace_back(LensType::OpenCV5, std::move(*h));
+    rep.sample_views = sample;
   }
   rep.mei_from_kannala_brandt = pr.solve.mei_from_kannala_brandt;
   std::optional<LensType> ref;
@@ -311,13 +315,31 @@ std::optional<ModelFit> reference_fit(const CalibrationProblem& pr, const Outlie
   return f;
 }
 
-std::optional<ModelFit> kannala_brandt_from_sample(const CalibrationProblem& pr, const OutlierReport& rep,
-                                                   const ViewSubset& used, double max_rms_px) {
-  if (!rep.sample_kannala_brandt || rep.sample_views != used || !(rep.sample_rms_px <= max_rms_px)) return std::nullopt;
-  ModelFit f = warm_refit(pr, used, LensType::KannalaBrandt, *rep.sample_kannala_brandt, rep.sample_kannala_brandt->poses);
-  if (!f.ok) return std::nullopt;
-  f.solver += ", refined warm from the outlier stage's sample";
-  return f;
+std::vector<std::pair<LensType, ModelFit>> fits_from_sample(const CalibrationProblem& pr, const OutlierReport& rep,
+                                                            const ViewSubset& used, double max_rms_px, bool parallel) {
+  // The rational model's 12 parameters have several minima near each other: once corners
+  // were flagged, the warm refit of its fit (outliers in) could stay in another one than the
+  // cold solve finds (Ladybug: 0.2293 px RMS against 0.2282, and then chosen; fisheye1 0.560
+  // against 0.552). It is carried only when no corner was flagged.
+  const auto carries = [&](LensType t) { return t != LensType::OpenCV8 || rep.corners_rejected == 0; };
+  std::vector<const std::pair<LensType, ModelFit>*> carried;
+  if (rep.sample_views == used)
+    for (const auto& tf : rep.sample_fits)
+      if (tf.first != rep.reference && carries(tf.first) && tf.second.ok &&
+          fit_rms(pr, tf.second, rep.sample_views) <= max_rms_px)
+        carried.push_back(&tf);
+  std::vector<std::optional<ModelFit>> refitted(carried.size());
+  run_jobs(carried.size(), [&](size_t i) {
+    const auto& [type, from] = *carried[i];
+    ModelFit f = repose_stuck_views(pr, used, type, warm_refit(pr, used, type, from, from.poses));
+    if (!f.ok) return;
+    f.solver += ", refined warm from the outlier stage's sample";
+    refitted[i] = std::move(f);
+  }, parallel ? 0 : 1);
+  std::vector<std::pair<LensType, ModelFit>> out;
+  for (size_t i = 0; i < carried.size(); ++i)
+    if (refitted[i]) out.emplace_back(carried[i]->first, std::move(*refitted[i]));
+  return out;
 }
 
 }  // namespace lp

@@ -887,21 +887,22 @@ TEST(ModelSelection, ChoiceOnTheSharedRealSetsHolds) {
       }
     }
     // The fits the candidate stage took over from the outlier stage instead of solving them
-    // again (outlier_rejection.h: reference_fit, kannala_brandt_from_sample), per set: the
-    // reference's where its fit can stand, Kannala-Brandt's from the reference sample where it
-    // is not the reference. A path that silently stopped applying (e.g. the sample's views no
+    // again (outlier_rejection.h: reference_fit, fits_from_sample), per set: the
+    // reference's where its fit can stand, the other references' (and plumb_bob's) from the
+    // reference sample where they fit it, the rational model's only where no corner was
+    // flagged (none here). A path that silently stopped applying (e.g. the sample's views no
     // longer matched) would still choose the same models, only slower: this pins it.
     const std::map<std::string, std::string> carried = {
-        {"stereo left", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
-        {"stereo right", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
-        {"fisheye1", "LENSMODEL_KANNALA_BRANDT carried"},
-        {"Ladybug", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
+        {"stereo left", "plumb_bob sample, LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
+        {"stereo right", "plumb_bob sample, LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
+        {"fisheye1", "LENSMODEL_KANNALA_BRANDT carried, LENSMODEL_OMNIDIR_MEI sample"},
+        {"Ladybug", "plumb_bob sample, LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
         // Kannala-Brandt's fit of every view on this mirror fits since one view is posed
         // again (calibration_solve.cpp, repose_stuck_views): 447213 -> 0.344 px RMS.
         {"VMRImage", "LENSMODEL_KANNALA_BRANDT sample, LENSMODEL_OMNIDIR_MEI carried"},
         {"KaidanOmni", "LENSMODEL_OMNIDIR_MEI carried"},  // rounds warm on a mirror since stop 41
         {"MiniOmni", "LENSMODEL_OMNIDIR_MEI carried"},
-        {"Fisheye190deg", "LENSMODEL_KANNALA_BRANDT carried"}};
+        {"Fisheye190deg", "plumb_bob sample, LENSMODEL_KANNALA_BRANDT carried, LENSMODEL_OMNIDIR_MEI sample"}};
     std::string took_over;
     for (const ModelCandidate& c : r.table) {
       const char* how = c.solver.find(", carried from the outlier stage") != std::string::npos ? "carried"

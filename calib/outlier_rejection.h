@@ -110,8 +110,8 @@ std::optional<ModelFit> reference_fit(const CalibrationProblem& problem, const O
 
 // The fits of the reference sample (OutlierReport::sample_fits) re-solved warm on `used`,
 // on every core, when the sample held exactly those views (at most
-// OutlierOptions::reference_views, none dropped): each one whose RMS on the sample was at most
-// max_rms_px, except the reference (reference_fit carries that one). The candidate stage's
+// OutlierOptions::reference_views, none dropped): each one whose RMS on the sample's inlier
+// corners is at most max_rms_px, except the reference (reference_fit carries that one). The candidate stage's
 // cold solves would repeat the seeds (cv::fisheye, the unit-xi search, cv::calibrateCamera and
 // the rational model's second start from plumb_bob: 0.2 s of CPU on 16 views of a 190 deg
 // lens) to reach the same minima, on the inlier corners and with the board warp the stage

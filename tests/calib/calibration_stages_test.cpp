@@ -930,6 +930,45 @@ TEST(OutlierRejection, FitsFromTheSampleAreTheColdFitsOnTheInliers) {
   }
 }
 
+// A reference whose fit of the sample misses the corners (plumb_bob on a 190 deg lens) is,
+// where no corner was flagged, the cold solve of those very corners: carried as it is for the
+// candidate stage to screen out, not solved again. Once a corner is flagged it is not.
+TEST(OutlierRejection, AFitThatMissesTheCornersIsCarriedAsItIsWhereNoCornerWasFlagged) {
+  const CameraModel truth = kb190();
+  const CalibrationProblem pr = problem_for(truth);
+  for (const bool outlier : {false, true}) {
+    SCOPED_TRACE(outlier ? "one outlier corner" : "no outlier");
+    Corners corners = project_board_views(truth, kBoard, 12, 70, 600, 0.2, 3, 85);
+    ASSERT_GE(corners.size(), 10u);
+    if (outlier) corners[4][20][0] += 8;
+    auto views = make_board_views(corners, pr, "test", true);
+    const OutlierReport rep = reject_outliers(pr, views, OutlierOptions{});
+    ASSERT_EQ(rep.corners_rejected > 0, outlier);
+    const ViewSubset used = used_views(views, rep.view_used);
+    ASSERT_EQ(used.size(), views.size());
+    CalibrationProblem later = pr;
+    later.solve.mei_from_kannala_brandt = rep.mei_from_kannala_brandt;
+    const auto carried = fits_from_sample(later, rep, used, 1.5);
+    const auto plumb_bob = std::find_if(carried.begin(), carried.end(),
+                                        [](const auto& tf) { return tf.first == LensType::OpenCV5; });
+    if (outlier) {
+      EXPECT_EQ(plumb_bob, carried.end());
+      continue;
+    }
+    ASSERT_NE(plumb_bob, carried.end());
+    const ModelFit& f = plumb_bob->second;
+    EXPECT_NE(f.solver.find("the outlier stage's fit of the same corners"), std::string::npos) << f.solver;
+    // The cold solve the candidate stage would have made: the same fit, above the screen.
+    CandidateSolver cold(later, used);
+    const ModelFit& c = cold.get(LensType::OpenCV5);
+    ASSERT_TRUE(c.ok) << c.error;
+    std::printf("  plumb_bob carried %.4f px RMS, cold %.4f px\n", fit_rms(pr, f, used), fit_rms(pr, c, used));
+    EXPECT_GT(fit_rms(pr, f, used), 1.5);
+    EXPECT_NEAR(fit_rms(pr, f, used), fit_rms(pr, c, used), 1e-9);
+    EXPECT_EQ(f.model.intrinsics, c.model.intrinsics);
+  }
+}
+
 TEST(ViewDiagnostics, CoverageCountsTheUsedInliersAndLeverageFlagsTheRimView) {
   const CameraModel truth = kb190();
   Corners corners = project_board_views(truth, kBoard, 10, 40, 600, 0.1, 11, 93);

@@ -899,7 +899,9 @@ TEST(OutlierRejection, FitsFromTheSampleAreTheColdFitsOnTheInliers) {
     const std::vector<uint8_t> covered = coverage_mask(pr, used);
     CandidateSolver cold(later, used);
     std::string types;
-    for (const auto& [type, warm] : carried) {
+    for (const auto& carried_fit : carried) {
+      const LensType type = carried_fit.first;  // a plain name: clang 14 cannot capture a binding
+      const ModelFit& warm = carried_fit.second;
       types += " " + lens_type_name(type);
       EXPECT_NE(type, rep.reference);
       const ModelFit& c = cold.get(type);
@@ -913,7 +915,9 @@ TEST(OutlierRejection, FitsFromTheSampleAreTheColdFitsOnTheInliers) {
                   outliers ? "outliers" : "none", lens_type_name(type).c_str(), to_cold, sample_to_cold);
       EXPECT_LT(to_cold, 1e-3) << lens_type_name(type);
       // With outliers, the refit on the inliers is what makes it the cold fit.
-      if (outliers) EXPECT_GT(sample_to_cold, 10 * to_cold) << lens_type_name(type);
+      if (outliers) {
+        EXPECT_GT(sample_to_cold, 10 * to_cold) << lens_type_name(type);
+      }
       EXPECT_NEAR(fit_rms(pr, warm, used), fit_rms(pr, c, used), 1e-6) << lens_type_name(type);
       EXPECT_NE(warm.solver.find("warm from the outlier stage"), std::string::npos) << warm.solver;
     }

@@ -332,12 +332,13 @@ std::vector<std::pair<LensType, ModelFit>> fits_from_sample(const CalibrationPro
   // cold solve finds (Ladybug: 0.2293 px RMS against 0.2282, and then chosen; fisheye1 0.560
   // against 0.552). It is carried only when no corner was flagged.
   const auto carries = [&](LensType t) { return t != LensType::OpenCV8 || rep.corners_rejected == 0; };
+  const auto fits_within = [&](const std::pair<LensType, ModelFit>& tf) {
+    return tf.second.ok && fit_rms(pr, tf.second, rep.sample_views) <= max_rms_px;
+  };
   std::vector<const std::pair<LensType, ModelFit>*> carried;
   if (rep.sample_views == used)
     for (const auto& tf : rep.sample_fits)
-      if (tf.first != rep.reference && carries(tf.first) && tf.second.ok &&
-          fit_rms(pr, tf.second, rep.sample_views) <= max_rms_px)
-        carried.push_back(&tf);
+      if (tf.first != rep.reference && carries(tf.first) && fits_within(tf)) carried.push_back(&tf);
   std::vector<std::optional<ModelFit>> refitted(carried.size());
   run_jobs(carried.size(), [&](size_t i) {
     const auto& [type, from] = *carried[i];
@@ -354,9 +355,6 @@ std::vector<std::pair<LensType, ModelFit>> fits_from_sample(const CalibrationPro
   // for the candidate stage to screen out, where another fit is within max_rms_px (so that the
   // screening applies). On 16 views of a 190 deg lens plumb_bob's (2.56 px RMS) had been
   // solved again, 0.11 s of CPU, only to be screened out.
-  const auto fits_within = [&](const std::pair<LensType, ModelFit>& tf) {
-    return tf.second.ok && fit_rms(pr, tf.second, rep.sample_views) <= max_rms_px;
-  };
   if (rep.sample_views == used && rep.corners_rejected == 0 &&
       std::any_of(rep.sample_fits.begin(), rep.sample_fits.end(), fits_within))
     for (const auto& tf : rep.sample_fits)

@@ -870,6 +870,26 @@ TEST(OutlierRejection, MeiRoundsAreWarmOnlyWhereItsXiIsPinned) {
   }
 }
 
+// The outlier stage on `corners` (every view kept), and what it hands the candidate stage
+// (fits_from_sample, bound 1.5 px), with Mei seeded as calibrate() then sets it.
+struct OutlierStageHandOver {
+  std::vector<BoardView> views;  // `used` points into it
+  OutlierReport rep;
+  ViewSubset used;
+  CalibrationProblem later;
+  std::vector<std::pair<LensType, ModelFit>> carried;
+};
+OutlierStageHandOver outlier_stage_hand_over(const CalibrationProblem& pr, const Corners& corners) {
+  OutlierStageHandOver h;
+  h.views = make_board_views(corners, pr, "test", true);
+  h.rep = reject_outliers(pr, h.views, OutlierOptions{});
+  h.used = used_views(h.views, h.rep.view_used);
+  h.later = pr;
+  h.later.solve.mei_from_kannala_brandt = h.rep.mei_from_kannala_brandt;
+  h.carried = fits_from_sample(h.later, h.rep, h.used, 1.5);
+  return h;
+}
+
 // The candidate stage starts the references other than the outlier stage's own (and the
 // plumb_bob fit the rational one started from) warm from their fits of the reference sample
 // when that sample held every view left (calibrate()): the same minima as the cold solves
@@ -887,15 +907,13 @@ TEST(OutlierRejection, FitsFromTheSampleAreTheColdFitsOnTheInliers) {
       corners[3][17][0] += 5;
       corners[8][40][1] -= 6;
     }
-    auto views = make_board_views(corners, pr, "test", true);
-    const OutlierReport rep = reject_outliers(pr, views, OutlierOptions{});
+    const OutlierStageHandOver h = outlier_stage_hand_over(pr, corners);
+    const OutlierReport& rep = h.rep;
+    const ViewSubset& used = h.used;
+    const CalibrationProblem& later = h.later;
+    const auto& carried = h.carried;
     ASSERT_EQ(rep.corners_rejected > 0, outliers);
-    const ViewSubset used = used_views(views, rep.view_used);
-    ASSERT_EQ(used.size(), views.size());
-    // Mei seeded as the outlier stage decided, as calibrate() sets it for the later stages.
-    CalibrationProblem later = pr;
-    later.solve.mei_from_kannala_brandt = rep.mei_from_kannala_brandt;
-    const auto carried = fits_from_sample(later, rep, used, 1.5);
+    ASSERT_EQ(used.size(), h.views.size());
     const std::vector<uint8_t> covered = coverage_mask(pr, used);
     CandidateSolver cold(later, used);
     std::string types;
@@ -945,14 +963,11 @@ TEST(OutlierRejection, AFitThatMissesTheCornersIsCarriedAsItIsWhereNoCornerWasFl
     Corners corners = project_board_views(truth, kBoard, 12, 70, 600, 0.2, 3, 85);
     ASSERT_GE(corners.size(), 10u);
     if (outlier) corners[4][20][0] += 8;
-    auto views = make_board_views(corners, pr, "test", true);
-    const OutlierReport rep = reject_outliers(pr, views, OutlierOptions{});
-    ASSERT_EQ(rep.corners_rejected > 0, outlier);
-    const ViewSubset used = used_views(views, rep.view_used);
-    ASSERT_EQ(used.size(), views.size());
-    CalibrationProblem later = pr;
-    later.solve.mei_from_kannala_brandt = rep.mei_from_kannala_brandt;
-    const auto carried = fits_from_sample(later, rep, used, 1.5);
+    const OutlierStageHandOver h = outlier_stage_hand_over(pr, corners);
+    const ViewSubset& used = h.used;
+    const auto& carried = h.carried;
+    ASSERT_EQ(h.rep.corners_rejected > 0, outlier);
+    ASSERT_EQ(used.size(), h.views.size());
     const auto plumb_bob = std::find_if(carried.begin(), carried.end(),
                                         [](const auto& tf) { return tf.first == LensType::OpenCV5; });
     if (outlier) {
@@ -963,7 +978,7 @@ TEST(OutlierRejection, AFitThatMissesTheCornersIsCarriedAsItIsWhereNoCornerWasFl
     const ModelFit& f = plumb_bob->second;
     EXPECT_NE(f.solver.find("the outlier stage's fit of the same corners"), std::string::npos) << f.solver;
     // The cold solve the candidate stage would have made: the same fit, above the screen.
-    CandidateSolver cold(later, used);
+    CandidateSolver cold(h.later, used);
     const ModelFit& c = cold.get(LensType::OpenCV5);
     ASSERT_TRUE(c.ok) << c.error;
     std::printf("  plumb_bob carried %.4f px RMS, cold %.4f px\n", fit_rms(pr, f, used), fit_rms(pr, c, used));

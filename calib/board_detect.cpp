@@ -49,11 +49,16 @@ struct RefineStats {
   double median_shift = 0;
 };
 
-// cornerSubPix per corner with a half-window of ~0.4 of the local square size (2..10 px),
-// so small or strongly curved squares are not blurred together with their neighbours.
+// cornerSubPix per corner with a half-window of ~0.4 of the local square size, so small or
+// strongly curved squares are not blurred together with their neighbours: at least 2 px, at
+// most 10 px per 1280 px of the image's long side (at least 10). A fixed 10 px cap made the
+// window 4x narrower, relative to the optics' blur, on an image with 4x the pixels: a
+// fisheye1 view enlarged 4x was refined 0.2-0.26 px (of the original) away from its own
+// corners, which a 10 px half-window at 1032 px puts within 0.05 px of cornerSubPix's with 7.
 // A move larger than max_shift (when > 0) is undone.
 RefineStats refine(const cv::Mat& gray, std::vector<cv::Point2f>& pts, int cols, int rows,
                    double max_shift) {
+  const int max_half = std::max(10, int(10.0 * std::max(gray.cols, gray.rows) / 1280));
   RefineStats stats;
   std::vector<double> shifts;
   const cv::TermCriteria criteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 40, 0.001);
@@ -61,7 +66,7 @@ RefineStats refine(const cv::Mat& gray, std::vector<cv::Point2f>& pts, int cols,
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       const double square = local_square_px(pts, cols, rows, r, c);
-      const int half = std::clamp(static_cast<int>(std::floor(0.4 * square)), 2, 10);
+      const int half = std::clamp(static_cast<int>(std::floor(0.4 * square)), 2, max_half);
       one[0] = pts[r * cols + c];
       cv::cornerSubPix(gray, one, cv::Size(half, half), cv::Size(-1, -1), criteria);
       const cv::Point2f d = one[0] - pts[r * cols + c];
@@ -101,6 +106,16 @@ double sb_scale(int width, int height, const BoardSpec& board, const DetectOptio
   scale = std::max(scale, options.sb_min_square_px / square_full);
   return std::min(1.0, scale);
 }
+
+}  // namespace
+
+std::vector<double> intermediate_scales(double first_scale) {
+  std::vector<double> scales;
+  for (double s = 2 * first_scale; s <= 0.75; s *= 2) scales.push_back(s);
+  return scales;
+}
+
+namespace {
 
 // mrgingham on a CLAHE-equalised copy (its library call does no equalisation; its CLI does,
 // clip limit 8). Returns the corners row-major (gridn per row) and the pyramid level used
@@ -242,8 +257,8 @@ namespace {
 enum class Kind { classic, sb, sb_rectified, mrgingham };
 struct Stage {
   Kind kind;
-  bool downscaled;  // on the copy at `scale` (SB, classic)
-  int flags;        // of the OpenCV finder (SB, SB on rectified views, classic)
+  double scale;  // of the copy it runs on (SB, classic; 1: full resolution)
+  int flags;     // of the OpenCV finder (SB, SB on rectified views, classic)
 };
 
 std::string label(const Stage& st) {
@@ -264,28 +279,38 @@ std::string label(const Stage& st) {
 //   board, 100-230 ms when not; the recall of the cascade;
 // - the rectified views only on images with a fisheye circle; full-resolution SB and
 //   mrgingham for small or far boards.
+// - between the first copy and full resolution, every octave above it up to 3/4
+//   (intermediate_scales): OpenCV's finders are not scale-invariant (the classic one's
+//   adaptive threshold and dilations, SB's kernel, are sized in pixels), so a board found at
+//   1032 px across was lost at 4128 (the same fisheye1 view upscaled 4x), where the cascade
+//   went from 640 px straight to full resolution, 20 s of failing attempts per view.
 std::vector<Stage> detection_stages(const DetectOptions& options, const BoardSpec& board, double scale,
                                     bool fisheye_circle) {
   const int exhaustive = cv::CALIB_CB_EXHAUSTIVE;
   const int classic_global = cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
   const int classic_adaptive = classic_global | cv::CALIB_CB_ADAPTIVE_THRESH;
+  const std::vector<double> between = intermediate_scales(scale);
   std::vector<Stage> stages;
-  if (options.classic) stages.push_back({Kind::classic, true, classic_global});
-  if (options.sb) stages.push_back({Kind::sb, true, exhaustive});
-  if (options.classic && scale < 1) stages.push_back({Kind::classic, true, classic_adaptive});
+  if (options.classic) stages.push_back({Kind::classic, scale, classic_global});
+  if (options.sb) stages.push_back({Kind::sb, scale, exhaustive});
+  if (options.classic && scale < 1) stages.push_back({Kind::classic, scale, classic_adaptive});
+  if (options.classic)
+    for (double s : between) stages.push_back({Kind::classic, s, classic_adaptive});
   // Without a fisheye circle, full-resolution classic (8-30 ms on the real sets) before
   // full-resolution SB (70-240 ms when it fails).
   const bool classic_full_early = options.classic && !fisheye_circle && scale < 1;
-  if (classic_full_early) stages.push_back({Kind::classic, false, classic_adaptive});
-  if (fisheye_circle) stages.push_back({Kind::sb_rectified, false, exhaustive});
-  if (options.sb && scale < 1) stages.push_back({Kind::sb, false, exhaustive});
+  if (classic_full_early) stages.push_back({Kind::classic, 1, classic_adaptive});
+  if (fisheye_circle) stages.push_back({Kind::sb_rectified, 1, exhaustive});
+  if (options.sb)
+    for (double s : between) stages.push_back({Kind::sb, s, exhaustive});
+  if (options.sb && scale < 1) stages.push_back({Kind::sb, 1, exhaustive});
   // mrgingham finds only N x N grids and equalises by itself: one attempt, on the plain image.
-  if (options.mrgingham && board.cols == board.rows) stages.push_back({Kind::mrgingham, false, 0});
-  if (options.classic && !classic_full_early) stages.push_back({Kind::classic, false, classic_adaptive});
+  if (options.mrgingham && board.cols == board.rows) stages.push_back({Kind::mrgingham, 1, 0});
+  if (options.classic && !classic_full_early) stages.push_back({Kind::classic, 1, classic_adaptive});
   // OpenCV's most thorough call as the recall floor: it found nothing the stages above
   // missed on our sets, but its internal upsampling can resolve small boards; it costs
   // 150-400 ms and only views that everything else missed pay for it.
-  if (options.sb) stages.push_back({Kind::sb, false, exhaustive | cv::CALIB_CB_ACCURACY});
+  if (options.sb) stages.push_back({Kind::sb, 1, exhaustive | cv::CALIB_CB_ACCURACY});
   return stages;
 }
 
@@ -319,7 +344,7 @@ class Cascade {
       // After the cheap stages, one look for a board of another size: when the image shows
       // one larger than --board, the slow stages would search it for minutes (67 s per view
       // of a 9x6 board with --board 7x5) and find nothing.
-      if (suffix.empty() && st.kind == Kind::sb && st.downscaled) {
+      if (suffix.empty() && st.kind == Kind::sb && st.scale == scale_ && !(st.flags & cv::CALIB_CB_ACCURACY)) {
         const Seen seen = other_board_size(img);
         if (seen == Seen::larger) return false;
         // A whole board smaller than --board: OpenCV's classic finder, told to look for a
@@ -344,7 +369,7 @@ class Cascade {
   // the refinement's move limit in `limit`.
   bool find_scaled(const cv::Mat& img, const Stage& st, double& limit) {
     cv::Mat small = img;
-    if (st.downscaled && scale_ < 1) cv::resize(img, small, cv::Size(), scale_, scale_, cv::INTER_AREA);
+    if (st.scale < 1) cv::resize(img, small, cv::Size(), st.scale, st.scale, cv::INTER_AREA);
     const double sx = double(small.cols) / img.cols, sy = double(small.rows) / img.rows;
     if (sx < 1) {
       char at[32];

@@ -17,6 +17,9 @@
 //      scaled by the view's local magnification). Strongly curved boards filling a > 180
 //      deg field (OCamCalib's Fisheye190deg: 3 -> 8 of 8 views);
 //   5. SB at full resolution (only when the copy is smaller): small or far boards;
+//   3 and 5 also run on every octave between the downscaled copy and full resolution
+//   (intermediate_scales; 3 before 6, 5 before its full-resolution call): the finders are
+//   sized in pixels, and a view found at 1032 px across can be lost at 4128;
 //   6. classic with ADAPTIVE_THRESH at full resolution, last on images with a fisheye
 //      circle (on curved boards there it can take seconds when its FAST_CHECK passes),
 //      before 5 on the others (8-30 ms against SB's 70-240 ms when SB fails);
@@ -87,6 +90,11 @@ struct DetectOptions {
   bool mrgingham = true;
   int mrgingham_pyramid_level = -1;  // < 0: mrgingham tries levels itself; 0: full resolution
 };
+
+// The scales between the downscaled copy's (`first_scale`) and full resolution that stages
+// 3 and 5 also try: 2x, 4x, ... the first, up to 3/4 (closer to 1, full resolution is
+// tried anyway). Empty for images whose copy is already at least 3/8 of full size.
+std::vector<double> intermediate_scales(double first_scale);
 
 struct BoardDetection {
   bool found = false;

@@ -436,21 +436,22 @@ GeometricCalibration calibrate_detections(BoardDetections detections, const Boar
   // No model within reach of the corners: a board of the same corner count but another
   // shape (--board 18x3 for 9x6: a spline at 59 px RMS), never a lens. Refused, not written
   // with a warning. Between fit_max_rms_px and this, a warning says it (a blurred board).
-  constexpr double kRefuseRmsPx = 5;
-  if (run.result.no_model_fits && run.result.model.rms_reprojection_px > kRefuseRmsPx)
+  // Both limits grow with the image as the fit limits do (pixel_limit_scale).
+  const double refuse_rms_px = 5 * pixel_limit_scale(d.width, d.height);
+  if (run.result.no_model_fits && run.result.model.rms_reprojection_px > refuse_rms_px)
     throw InputError(fmt::format("no model fits these views: the best ({}) misses the corners by {:.1f} px RMS (over {:g} "
                                  "px): check --board (inner corners, columns x rows) and that every view is of one camera",
-                                 run.result.selected, run.result.model.rms_reprojection_px, kRefuseRmsPx));
+                                 run.result.selected, run.result.model.rms_reprojection_px, refuse_rms_px));
   // Nor a model whose two halves of the views disagree by tens of pixels: the views do not
   // determine the lens (an audit's 5 views of a 125 deg lens: halves 413 px apart, the model
   // written 287 px from the truth with a warning). A good model on 4 views of a 190 deg lens
   // had one split 9 px apart: far below.
-  constexpr double kRefuseCrossValidationPx = 50;
-  if (run.result.no_model_fits && run.result.cross_validation_px > kRefuseCrossValidationPx)
+  const double refuse_cross_validation_px = 50 * pixel_limit_scale(d.width, d.height);
+  if (run.result.no_model_fits && run.result.cross_validation_px > refuse_cross_validation_px)
     throw InputError(fmt::format(
         "no model is determined by these views: models of two halves of them ({}) differ by {:.0f} px RMS (over {:g} "
         "px): add views, with boards over the whole image and at several angles",
-        run.result.selected, run.result.cross_validation_px, kRefuseCrossValidationPx));
+        run.result.selected, run.result.cross_validation_px, refuse_cross_validation_px));
   run.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return run;
 }

@@ -1,5 +1,6 @@
 #include "calib/geometric.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -180,8 +181,15 @@ void take_diagnostics(CalibrationResult& res, ViewDiagnostics d) {
 
 }  // namespace
 
+double pixel_limit_scale(int width, int height) {
+  return std::max(1.0, std::max(width, height) / kPixelLimitsLongSidePx);
+}
+
 CalibrationResult calibrate(const std::vector<std::vector<std::array<double, 2>>>& corners_per_view,
-                            const BoardSpec& board, int width, int height, const CalibrateOptions& options) {
+                            const BoardSpec& board, int width, int height, const CalibrateOptions& given) {
+  CalibrateOptions options = given;
+  options.fit_max_rms_px *= pixel_limit_scale(width, height);
+  options.fit_max_cross_validation_px *= pixel_limit_scale(width, height);
   if (board.cols < 2 || board.rows < 2)
     throw InputError("calibrate: board needs at least 2 inner corners per side (got " + std::to_string(board.cols) +
                      "x" + std::to_string(board.rows) + ")");

@@ -70,7 +70,8 @@ struct CalibrateOptions {
   // (kPerspectiveFieldLimitDeg, lens_model.h; CandidateOptions and OutlierOptions::
   // perspective_field_limit_deg). Infinity: always fitted.
   double perspective_field_limit_deg = kPerspectiveFieldLimitDeg;
-  // SelectionOptions (model_selection.h): what "fits" means.
+  // SelectionOptions (model_selection.h): what "fits" means, for images up to
+  // kPixelLimitsLongSidePx across; calibrate() scales both by pixel_limit_scale.
   double fit_max_rms_px = SelectionOptions{}.fit_max_rms_px;
   double fit_max_cross_validation_px = SelectionOptions{}.fit_max_cross_validation_px;
   // OutlierOptions (outlier_rejection.h): k, floor_px, rounds, reference_views,
@@ -199,6 +200,16 @@ struct CalibrationResult {
   };
   std::optional<MrcalStandIn> mrcal_stand_in;
 };
+
+// The pixel limits of a calibration (CalibrateOptions::fit_max_*, and the refusals of
+// calibration_run.h) were set on images up to this long side. A corner's precision in
+// pixels follows the optics' blur in pixels, which grows with the pixel count behind the
+// same lens: fisheye1 enlarged 4x fits Kannala-Brandt at 1.50-1.75 px RMS (0.37 at its own
+// 1032 px), over 1.5 px, and a 100-parameter spline on 6 views was chosen as the only model
+// that "fitted".
+constexpr double kPixelLimitsLongSidePx = 2048;
+// max(1, long side / kPixelLimitsLongSidePx): the factor those limits are multiplied by.
+double pixel_limit_scale(int width, int height);
 
 // corners_per_view[i]: board.cols * board.rows pixel corners (row-major) or empty.
 // Throws InputError (one line) on < 4 views with a board, a board with < 2 corners per

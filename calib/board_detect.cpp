@@ -17,15 +17,32 @@ namespace {
 
 using Corners = std::vector<std::array<double, 2>>;
 
+// The grey image the finders and cornerSubPix work on, 8 bits. An image that fills less than
+// half of its range (its 99.9th percentile of luminance under 0.5) is stretched so that the
+// percentile lands at full scale first: a 12-bit camera's frames saved in 16 bits (Mono12 in
+// a 16-bit PNG) held only 16 grey levels here, and the stereo set so stored came out at
+// 0.186 px of cross-validation against 0.119 from its 8-bit JPEGs. Images that use their
+// range, every shared set among them, are converted as they were.
 cv::Mat to_gray8(const CameraImage& image) {
+  const size_t n = size_t(image.width) * image.height;
+  std::vector<float> luma(n);
+  constexpr int kBins = 4096;
+  std::vector<size_t> histogram(kBins + 1, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const float* p = &image.rgb[3 * i];
+    luma[i] = float(0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]);
+    ++histogram[size_t(std::clamp(double(luma[i]), 0.0, 1.0) * kBins)];
+  }
+  size_t below = 0, bin = 0;
+  while (bin < kBins && (below += histogram[bin]) < n - n / 1000) ++bin;
+  const double p999 = double(bin + 1) / kBins;
+  const double gain = p999 < 0.5 ? 1.0 / p999 : 1.0;
   cv::Mat gray(image.height, image.width, CV_8U);
-  const float* p = image.rgb.data();
   for (int y = 0; y < image.height; ++y) {
     auto* row = gray.ptr<uint8_t>(y);
-    for (int x = 0; x < image.width; ++x, p += 3) {
-      const double v = 0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2];
-      row[x] = static_cast<uint8_t>(std::clamp(std::lround(v * 255.0), 0L, 255L));
-    }
+    const float* v = &luma[size_t(y) * image.width];
+    for (int x = 0; x < image.width; ++x)
+      row[x] = static_cast<uint8_t>(std::clamp(std::lround(double(v[x]) * gain * 255.0), 0L, 255L));
   }
   return gray;
 }

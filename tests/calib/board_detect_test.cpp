@@ -228,6 +228,30 @@ TEST(BoardDetect, AViewFoundAtItsSizeIsFoundOnFourTimesThePixels) {
   EXPECT_LT(median(d), 0.45);
 }
 
+// A 12-bit camera's frames saved in 16 bits (Mono12 in a 16-bit PNG: values up to 4095 of
+// 65535) fill 1/16 of the range. Their corners are the 8-bit frames' own: the grey image
+// the finders see is stretched to the range the frame uses, not cut to 16 grey levels.
+TEST(BoardDetect, TwelveBitFramesInSixteenBitsGiveTheCornersOfTheirEightBitCopies) {
+  if (!have("calib-opencv-stereo-9x6")) GTEST_SKIP() << "no shared data";
+  std::vector<double> d;
+  for (const std::string name : {"left01.jpg", "left02.jpg", "left06.jpg", "left13.jpg"}) {
+    const CameraImage eight = read_camera_image(set_dir("calib-opencv-stereo-9x6") + name);
+    CameraImage twelve = eight;
+    twelve.bit_depth = 16;
+    for (float& v : twelve.rgb) v = float(std::lround(v * 255.0) * 16 / 65535.0);  // 8-bit codes x 16
+    const BoardDetection a = detect_board(eight, {9, 6, 25});
+    const BoardDetection b = detect_board(twelve, {9, 6, 25});
+    ASSERT_TRUE(a.found && b.found) << name;
+    for (size_t k = 0; k < a.corners.size(); ++k)
+      d.push_back(std::hypot(a.corners[k][0] - b.corners[k][0], a.corners[k][1] - b.corners[k][1]));
+  }
+  std::sort(d.begin(), d.end());
+  std::printf("  12 bits in 16 against 8 bits: median %.4f px, worst %.4f px over %zu corners\n", d[d.size() / 2],
+              d.back(), d.size());
+  EXPECT_LT(d[d.size() / 2], 0.01);
+  EXPECT_LT(d.back(), 0.05);
+}
+
 TEST(BoardDetect, IntermediateScalesAreTheOctavesUpToThreeQuarters) {
   EXPECT_EQ(intermediate_scales(0.155), (std::vector<double>{0.31, 0.62}));
   EXPECT_EQ(intermediate_scales(0.333), (std::vector<double>{0.666}));

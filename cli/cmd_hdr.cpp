@@ -30,6 +30,7 @@ struct HdrResponseArgs {
   double lambda = 50;
   std::string ignore_colour;        // "r,g,b" of registration borders to leave out
   std::string align = "none";       // none|mtb|ecc: register hand-held frames before fitting
+  int max_shift = 0;                // px --align searches; 0: AlignOptions' automatic value
   std::string output;
 };
 
@@ -40,6 +41,7 @@ struct HdrFuseArgs {
   bool linear = false;              // a linear sensor: no response curve
   std::string photometric;          // calibration: absolute units (or a log sensor's decode)
   std::string align = "none";       // none|mtb|ecc
+  int max_shift = 0;                // px --align searches; 0: AlignOptions' automatic value
   bool deghost = false;
   bool no_exposure_weighting = false;
   std::string ignore_colour;
@@ -73,11 +75,13 @@ std::optional<std::array<uint8_t, 3>> ignore_colour(const std::string& text) {
 
 // Registers the bracket's frames onto the middle exposure (--align mtb|ecc); returns the
 // shift per frame for the report.
-nlohmann::json align_bracket(Bracket& bracket, const std::string& method, const std::string& ignore) {
+nlohmann::json align_bracket(Bracket& bracket, const std::string& method, const std::string& ignore, int max_shift) {
   AlignOptions ao;
   if (method == "mtb") ao.method = AlignOptions::Method::Mtb;
   else if (method == "ecc") ao.method = AlignOptions::Method::Ecc;
   else throw InputError(fmt::format("--align must be none, mtb or ecc, got '{}'", method));
+  if (max_shift < 0) throw InputError(fmt::format("--max-shift takes pixels, at least 1 (0: automatic), got {}", max_shift));
+  ao.max_shift_px = max_shift;
   ao.ignore_colour = ignore_colour(ignore);
   AlignReport ar;
   bracket.frames = align_frames(bracket.frames, bracket.exposure_seconds, ao, &ar);
@@ -93,7 +97,8 @@ int run_hdr_response(const HdrResponseArgs& args, const Output& out) {
   Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times, args.images));
   const auto t0 = Clock::now();
   nlohmann::json alignment;
-  if (args.align != "none") alignment = align_bracket(bracket, args.align, args.ignore_colour);
+  if (args.max_shift != 0 && args.align == "none") throw InputError("--max-shift is a limit of --align mtb|ecc, which is not given");
+  if (args.align != "none") alignment = align_bracket(bracket, args.align, args.ignore_colour, args.max_shift);
   CameraResponse response;
   if (args.method == "debevec") {
     DebevecOptions o;
@@ -134,6 +139,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     for (const auto& [given, option] :
          {std::pair{args.exposure_times != d.exposure_times, "--exposure-times"}, std::pair{args.response != d.response, "--response"},
           std::pair{args.linear != d.linear, "--linear"}, std::pair{args.align != d.align, "--align"},
+          std::pair{args.max_shift != d.max_shift, "--max-shift"},
           std::pair{args.deghost != d.deghost, "--deghost"},
           std::pair{args.no_exposure_weighting != d.no_exposure_weighting, "--no-exposure-weighting"},
           std::pair{args.ignore_colour != d.ignore_colour, "--ignore-colour"}})
@@ -151,7 +157,8 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
                                    args.linear ? "--linear" : "RAW frames (linear)"));
     // Aligned first: a response recovered from frames that are not registered is fitted to
     // misregistered pixels (a hand-held bracket 18 px apart: a curve flat over 70 codes).
-    if (args.align != "none") report["alignment"] = align_bracket(bracket, args.align, args.ignore_colour);
+    if (args.max_shift != 0 && args.align == "none") throw InputError("--max-shift is a limit of --align mtb|ecc, which is not given");
+    if (args.align != "none") report["alignment"] = align_bracket(bracket, args.align, args.ignore_colour, args.max_shift);
     CameraResponse response;
     if (!args.response.empty()) {
       response = load_response(args.response);
@@ -225,6 +232,7 @@ std::vector<Command> hdr_commands() {
          f.opt("--lambda", a->lambda, "Debevec smoothness weight");
          f.opt("--ignore-colour", a->ignore_colour, "r,g,b of registration borders to leave out");
          f.opt("--align", a->align, "Register hand-held frames before fitting (as hdr fuse --align): none|mtb|ecc").one_of({"none", "mtb", "ecc"});
+         f.opt("--max-shift", a->max_shift, "Largest shift --align searches, px; 0: 2.5 % of the long side, at least 32");
          f.output(a->output, "response.json");
          return [a](const Output& out) { return run_hdr_response(*a, out); };
        }},
@@ -238,6 +246,7 @@ std::vector<Command> hdr_commands() {
          f.flag("--linear", a->linear, "Linear sensor: no response curve");
          f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");
          f.opt("--align", a->align, "Align hand-held frames: none|mtb|ecc");
+         f.opt("--max-shift", a->max_shift, "Largest shift --align searches, px; 0: 2.5 % of the long side, at least 32");
          f.flag("--deghost", a->deghost, "Drop moving objects from the frames that disagree");
          f.flag("--no-exposure-weighting", a->no_exposure_weighting, "Plain hat weights instead of noise-aware ones (every frame trusted alike)");
          f.opt("--ignore-colour", a->ignore_colour, "r,g,b of registration borders to leave out");

@@ -169,11 +169,17 @@ size_t middle_exposure_index(const std::vector<double>& exposure_seconds) {
   return order[(order.size() - 1) / 2];
 }
 
+int default_max_shift_px(int width, int height) {
+  return std::max(32, int(std::lround(0.025 * std::max(width, height))));
+}
+
 std::vector<RgbImage> align_frames(const std::vector<RgbImage>& frames, const std::vector<double>& exposure_seconds,
-                                   const AlignOptions& options, AlignReport* report) {
+                                   const AlignOptions& given, AlignReport* report) {
   const auto start = std::chrono::steady_clock::now();
   check_frames(frames, exposure_seconds);
-  if (options.max_shift_px < 1) throw InputError("align: max_shift_px must be at least 1");
+  if (given.max_shift_px < 0) throw InputError("align: max_shift_px must be at least 1 (0: automatic)");
+  AlignOptions options = given;
+  if (options.max_shift_px == 0) options.max_shift_px = default_max_shift_px(frames[0].width, frames[0].height);
 
   const size_t n = frames.size();
   const size_t ref = middle_exposure_index(exposure_seconds);
@@ -215,8 +221,8 @@ std::vector<RgbImage> align_frames(const std::vector<RgbImage>& frames, const st
     double dx = -s.x, dy = -s.y, angle = 0.0;
     if (std::max(std::abs(dx), std::abs(dy)) > options.max_shift_px)
       throw InputError("align: frame " + std::to_string(i) + " moved by (" + std::to_string(int(dx)) + ", " +
-                       std::to_string(int(dy)) + ") px, more than max_shift_px = " +
-                       std::to_string(options.max_shift_px));
+                       std::to_string(int(dy)) + ") px, more than the " + std::to_string(options.max_shift_px) +
+                       " px searched (--max-shift)");
 
     if (options.method == AlignOptions::Method::Ecc) {
       const double tr = exposure_seconds[ref], ti = exposure_seconds[i];

@@ -34,8 +34,11 @@ struct AlignOptions {
   Method method = Method::Mtb;
   // Largest translation searched, in pixels. Mtb searches up to 2^ceil(log2(max+1)) - 1 px,
   // but no further than its coarsest level allows (short side / 8 px, so 31 px for a
-  // 320 px frame); a shift found beyond max_shift_px throws InputError.
-  int max_shift_px = 32;
+  // 320 px frame); a shift found beyond max_shift_px throws InputError. 0: 2.5 % of the
+  // frames' long side, at least 32 px (default_max_shift_px): a hand's shake is an angle,
+  // so its pixels grow with the frame (a fixed 32 px refused a 6000 px bracket that moved
+  // 60 px, a shift of 13 px at 1280).
+  int max_shift_px = 0;
   // Ecc only: also estimate an in-plane rotation (MOTION_EUCLIDEAN instead of
   // MOTION_TRANSLATION). Ignored by Mtb.
   bool rotation = false;
@@ -58,6 +61,9 @@ struct AlignReport {
   size_t reference = 0;  // index of the reference frame
   double seconds = 0;    // wall time of align_frames
 };
+
+// AlignOptions::max_shift_px's automatic value for frames of this size.
+int default_max_shift_px(int width, int height);
 
 // Index of the middle exposure (the median of exposure_seconds; the shorter of the two
 // middle ones for an even count). The reference of alignment and ghost removal.

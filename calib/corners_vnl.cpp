@@ -152,6 +152,7 @@ CornersFile read_corners_vnl(const std::string& path, const BoardSpec& board, do
                                         "the view is left out",
                                         path, first.file, missing, per_board));
       } else {
+        canonicalize_corner_order(corners, board.cols, board.rows);  // the detector's order (see the header)
         det.found = true;
         det.method = "corners.vnl";
         det.corners = corners;

@@ -30,7 +30,11 @@ struct CornersFile {
   std::vector<std::string> notes;
 };
 
-// Reads a corners.vnl for `board`. The image size is (width, height) when given, else that
+// Reads a corners.vnl for `board`, each view's corners put in the detector's order
+// (canonicalize_corner_order): another tool's labelling of the grid (mrgingham's, a
+// renderer's) is the same board in another pose, but the solves start from poses that
+// depend on it, and on a wide rational lens one labelling left the outlier stage's rounds in
+// other minima (tests/calib/corners_vnl_test.cpp). The image size is (width, height) when given, else that
 // of the first image the file names that exists: as written when absolute or found from the
 // working directory, else beside the file (mrcal's rule); the images need not exist
 // otherwise. InputError in one line naming the file (and line): a row that is not

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include <opencv2/core.hpp>
+
 #include "calib/ceres_plugin.h"
 #include "calib/mrcal_solve.h"
 
@@ -298,7 +300,13 @@ ModelFit CandidateSolver::solve_seeded(LensType type, const CalibrationProblem& 
   const SeedReport seed =
       seed_candidate(pr, views_, type, [this](LensType t) -> const ModelFit& { return get(t); }, seed_);
   ModelFit f = refine_seed(pr, views_, type, seed.fit);
-  if (type == LensType::OpenCV8) f = rational_from_plumb_bob(pr, views_, std::move(f), get(LensType::OpenCV5));
+  if (type == LensType::OpenCV8) {
+    f = rational_from_plumb_bob(pr, views_, std::move(f), get(LensType::OpenCV5));
+    // Kannala-Brandt is solved for it only where the rational fit sees a wide field itself.
+    if (!f.ok || corner_field_deg(f.model, views_) > kRationalFromWideProfileFieldDeg - 10)
+      f = rational_from_wide_profile(pr, views_, std::move(f),
+                                     better_fit(pr, views_, get(LensType::KannalaBrandt), get(LensType::OmnidirMei)));
+  }
   return f;
 }
 
@@ -315,6 +323,55 @@ ModelFit rational_from_plumb_bob(const CalibrationProblem& pr, const ViewSubset&
   if (!g.ok || (rational.ok && !(fit_rms(pr, g, views) < fit_rms(pr, rational, views)))) return rational;
   g.solver = "plumb_bob fit + mrcal";
   return g;
+}
+
+ModelFit rational_from_wide_profile(const CalibrationProblem& pr, const ViewSubset& views, ModelFit rational,
+                                   const ModelFit& wide) {
+  const size_t n = wide.model.intrinsics.size();
+  const bool kb = wide.model.lensmodel == lens_type_name(LensType::KannalaBrandt) && n == 8;
+  const bool mei = wide.model.lensmodel == lens_type_name(LensType::OmnidirMei) && n == 9;
+  if (!pr.solve.use_mrcal || !wide.ok || !(kb || mei)) return rational;
+  const double field_deg = corner_field_deg(wide.model, views);
+  if (!(field_deg > kRationalFromWideProfileFieldDeg && field_deg < 88)) return rational;
+  // The wide model's normalised radius at theta off the axis (its distortion's radial part).
+  const double* p = wide.model.intrinsics.data();
+  const auto radius = [&](double t) {
+    if (kb) {
+      const double t2 = t * t;
+      return t * (1 + t2 * (p[4] + t2 * (p[5] + t2 * (p[6] + t2 * p[7]))));
+    }
+    const double m = std::sin(t) / (std::cos(t) + p[4]), m2 = m * m;
+    return m * (1 + m2 * (p[5] + m2 * p[6]));
+  };
+  // r_d (1 + k4 r^2 + k5 r^4 + k6 r^6) = r_u (1 + k1 r^2 + k2 r^4 + k3 r^6), r = r_u = tan theta:
+  // linear in k1..k6, sampled evenly in theta over the field the corners cover.
+  constexpr int kSamples = 200;
+  cv::Mat A(kSamples, 6, CV_64F), y(kSamples, 1, CV_64F);
+  for (int i = 0; i < kSamples; ++i) {
+    const double t = field_deg * M_PI / 180 * (i + 1) / kSamples;
+    const double rd = radius(t), ru = std::tan(t), r2 = ru * ru;
+    double* a = A.ptr<double>(i);
+    a[0] = ru * r2, a[1] = ru * r2 * r2, a[2] = ru * r2 * r2 * r2;
+    a[3] = -rd * r2, a[4] = -rd * r2 * r2, a[5] = -rd * r2 * r2 * r2;
+    y.at<double>(i) = rd - ru;
+  }
+  cv::Mat c;
+  if (!cv::solve(A, y, c, cv::DECOMP_SVD)) return rational;
+  const std::vector<double> seed = {p[0],           p[1],           p[2],           p[3],
+                                    c.at<double>(0), c.at<double>(1), 0,             0,
+                                    c.at<double>(2), c.at<double>(3), c.at<double>(4), c.at<double>(5)};
+  for (double v : seed)
+    if (!std::isfinite(v)) return rational;
+  ModelFit g = solve_mrcal(pr, views, lens_type_name(LensType::OpenCV8), seed, wide.poses, false, wide.warp);
+  if (!g.ok || (rational.ok && !(fit_rms(pr, g, views) < fit_rms(pr, rational, views)))) return rational;
+  g.solver = std::string(kb ? "Kannala-Brandt" : "Mei") + " fit's radial profile + mrcal";
+  return g;
+}
+
+const ModelFit& better_fit(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& a, const ModelFit& b) {
+  if (!a.ok) return b;
+  if (!b.ok) return a;
+  return fit_rms(pr, b, views) < fit_rms(pr, a, views) ? b : a;
 }
 
 ModelFit refine_seed(const CalibrationProblem& pr, const ViewSubset& views, LensType type, const ModelFit& seed) {

@@ -304,8 +304,7 @@ ModelFit CandidateSolver::solve_seeded(LensType type, const CalibrationProblem& 
     f = rational_from_plumb_bob(pr, views_, std::move(f), get(LensType::OpenCV5));
     // Kannala-Brandt is solved for it only where the rational fit sees a wide field itself.
     if (!f.ok || corner_field_deg(f.model, views_) > kRationalFromWideProfileFieldDeg - 10)
-      f = rational_from_wide_profile(pr, views_, std::move(f),
-                                     better_fit(pr, views_, get(LensType::KannalaBrandt), get(LensType::OmnidirMei)));
+      f = rational_from_wide_profile(pr, views_, std::move(f), get(LensType::KannalaBrandt));
   }
   return f;
 }
@@ -327,21 +326,16 @@ ModelFit rational_from_plumb_bob(const CalibrationProblem& pr, const ViewSubset&
 
 ModelFit rational_from_wide_profile(const CalibrationProblem& pr, const ViewSubset& views, ModelFit rational,
                                    const ModelFit& wide) {
-  const size_t n = wide.model.intrinsics.size();
-  const bool kb = wide.model.lensmodel == lens_type_name(LensType::KannalaBrandt) && n == 8;
-  const bool mei = wide.model.lensmodel == lens_type_name(LensType::OmnidirMei) && n == 9;
-  if (!pr.solve.use_mrcal || !wide.ok || !(kb || mei)) return rational;
+  if (!pr.solve.use_mrcal || !wide.ok || wide.model.lensmodel != lens_type_name(LensType::KannalaBrandt) ||
+      wide.model.intrinsics.size() != 8)
+    return rational;
   const double field_deg = corner_field_deg(wide.model, views);
   if (!(field_deg > kRationalFromWideProfileFieldDeg && field_deg < 88)) return rational;
-  // The wide model's normalised radius at theta off the axis (its distortion's radial part).
+  // Kannala-Brandt's normalised radius at theta off the axis.
   const double* p = wide.model.intrinsics.data();
   const auto radius = [&](double t) {
-    if (kb) {
-      const double t2 = t * t;
-      return t * (1 + t2 * (p[4] + t2 * (p[5] + t2 * (p[6] + t2 * p[7]))));
-    }
-    const double m = std::sin(t) / (std::cos(t) + p[4]), m2 = m * m;
-    return m * (1 + m2 * (p[5] + m2 * p[6]));
+    const double t2 = t * t;
+    return t * (1 + t2 * (p[4] + t2 * (p[5] + t2 * (p[6] + t2 * p[7]))));
   };
   // r_d (1 + k4 r^2 + k5 r^4 + k6 r^6) = r_u (1 + k1 r^2 + k2 r^4 + k3 r^6), r = r_u = tan theta:
   // linear in k1..k6, sampled evenly in theta over the field the corners cover.
@@ -364,14 +358,8 @@ ModelFit rational_from_wide_profile(const CalibrationProblem& pr, const ViewSubs
     if (!std::isfinite(v)) return rational;
   ModelFit g = solve_mrcal(pr, views, lens_type_name(LensType::OpenCV8), seed, wide.poses, false, wide.warp);
   if (!g.ok || (rational.ok && !(fit_rms(pr, g, views) < fit_rms(pr, rational, views)))) return rational;
-  g.solver = std::string(kb ? "Kannala-Brandt" : "Mei") + " fit's radial profile + mrcal";
+  g.solver = "Kannala-Brandt fit's radial profile + mrcal";
   return g;
-}
-
-const ModelFit& better_fit(const CalibrationProblem& pr, const ViewSubset& views, const ModelFit& a, const ModelFit& b) {
-  if (!a.ok) return b;
-  if (!b.ok) return a;
-  return fit_rms(pr, b, views) < fit_rms(pr, a, views) ? b : a;
 }
 
 ModelFit refine_seed(const CalibrationProblem& pr, const ViewSubset& views, LensType type, const ModelFit& seed) {

@@ -110,20 +110,18 @@ WideField wide_fit_field(const CalibrationProblem& problem, CandidateSolver& sol
 ModelFit rational_from_plumb_bob(const CalibrationProblem& problem, const ViewSubset& views, ModelFit rational,
                                  const ModelFit& plumb_bob);
 
-// The rational model also solved from a wide-angle fit (Kannala-Brandt's or Mei's, `wide`):
-// its radial profile theta -> r_d over the corners' field rewritten as the rational model's
-// r_u -> r_d (r_u = tan theta; linear least squares in k1..k6, p1 = p2 = 0; the same core and
-// poses), then refined by mrcal; the better of that and `rational` kept. Only where the corners
-// reach beyond kRationalFromWideProfileFieldDeg under `wide` (and within 88 deg, where tan theta
+// The rational model also solved from Kannala-Brandt's fit (`wide`): its radial profile
+// theta -> r_d over the corners' field rewritten as the rational model's r_u -> r_d
+// (r_u = tan theta; linear least squares in k1..k6, p1 = p2 = 0; the same core and poses),
+// then refined by mrcal; the better of that and `rational` kept. Only where the corners reach
+// beyond kRationalFromWideProfileFieldDeg under `wide` (and within 88 deg, where tan theta
 // stays finite). The other starts begin from no distortion or from plumb_bob's fit, and on a
 // wide rational lens (6000x3376, corners to 75 deg, k4 = 1.1) both stopped at 0.41 px RMS on
-// every view; from Kannala-Brandt's profile it fits at the noise, 0.028 px.
+// every view; from Kannala-Brandt's profile it fits at the noise, 0.028 px. CandidateSolver
+// and the outlier stage's rational reference both use it.
 constexpr double kRationalFromWideProfileFieldDeg = 60;
 ModelFit rational_from_wide_profile(const CalibrationProblem& problem, const ViewSubset& views, ModelFit rational,
                                    const ModelFit& wide);
-// Of two fits of `views`, the one that fits them better (a failed one never).
-const ModelFit& better_fit(const CalibrationProblem& problem, const ViewSubset& views, const ModelFit& a,
-                           const ModelFit& b);
 
 // `f` (a fit of `type` on `views`) with the views stuck in the wrong one of a planar board's
 // two poses posed again and every view refitted warm, where that fits better; else `f`.

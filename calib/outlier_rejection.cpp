@@ -311,8 +311,15 @@ OutlierReport reject_outliers(const CalibrationProblem& problem, std::vector<Boa
         if (wide.deg > options.perspective_field_limit_deg) return;  // left unfitted: choose_reference skips it
       }
       ModelFit fit = refine_seed(problem, sample, type, seed);
-      if (type == LensType::OpenCV8)
+      if (type == LensType::OpenCV8) {
         fit = rational_from_plumb_bob(problem, sample, std::move(fit), solver.get(LensType::OpenCV5));
+        // And from Kannala-Brandt's profile where the field is wide (rational_from_wide_profile),
+        // as CandidateSolver does: the chain's fit of the sample, waited for here.
+        if (!fit.ok || corner_field_deg(fit.model, sample) > kRationalFromWideProfileFieldDeg - 10) {
+          std::call_once(wide_once, wide_chain);
+          if (fits[0]) fit = rational_from_wide_profile(problem, sample, std::move(fit), *fits[0]);
+        }
+      }
       fits[1 + j] = solver.adopt(type, std::move(fit));
     }, options.parallel ? 0 : 1);
     const LensType order[2] = {LensType::KannalaBrandt, LensType::OmnidirMei};

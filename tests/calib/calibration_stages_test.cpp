@@ -907,18 +907,9 @@ TEST(OutlierRejection, ADroppedViewThatTheLaterFitHoldsIsTakenBack) {
 // on every view (the corners' noise is 0.028). Started from Kannala-Brandt's radial profile
 // (rational_from_wide_profile) the rational fit is at the noise.
 TEST(CandidateSolver, TheRationalModelOfAWideLensStartsFromKannalaBrandtsProfile) {
-  const CameraModel lens{"LENSMODEL_OPENCV8",
-                         {1900, 1901, 3010.5, 1680.2, 0.8, 0.2, 3e-4, -2e-4, 0.01, 1.1, 0.45, 0.04},
-                         6000, 3376};
-  const BoardSpec board{14, 14, 30};
-  const std::vector<std::array<double, 6>> poses = {
-      {-0.423543, -0.831215, -1.92775, 43.5674, 171.465, 412.392}, {1.35684, 0.130316, 1.89722, 830.299, 425.883, 251.551},
-      {-0.109129, 0.00878989, 2.30117, 248.131, -9.20521, 390.713}, {0.83465, 0.827023, 0.687677, 708.746, -870.073, 750.336},
-      {0.365143, -0.316005, -2.0036, -251.486, 292.013, 357.65},    {1.18357, 0.479303, 2.83257, 352.998, 223.546, 529.46},
-      {0.567941, 0.302424, -2.62569, -348.788, -62.1544, 881.176},  {0.296817, -0.204341, 1.2483, 131.056, -437.886, 502.848},
-      {0.119847, -0.478797, 2.59632, 782.029, -166.116, 448.882},   {-0.232041, 0.629547, -0.992948, 185.11, 120.531, 591.94},
-      {0.223143, -0.589212, -2.39421, -765.174, 377.124, 635.009},  {-0.739674, -0.366421, -1.79071, 254.406, 243.186, 350.281},
-      {0.702688, 0.422847, 0.884963, 552.549, 68.5504, 784.038},    {0.0485299, -0.191793, 1.90535, 512.268, -257.928, 406.448}};
+  const CameraModel lens = calib_test::wide_rational_6000();
+  const BoardSpec board = calib_test::kWideRationalBoard;
+  const std::vector<std::array<double, 6>> poses = calib_test::wide_rational_poses();
   const Corners corners = calib_test::corners_at_poses(lens, board, poses, 0.02, 56);
   ASSERT_EQ(corners.size(), poses.size());
   CalibrationProblem pr;

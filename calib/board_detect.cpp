@@ -128,7 +128,7 @@ double sb_scale(int width, int height, const BoardSpec& board, const DetectOptio
 
 std::vector<double> intermediate_scales(double first_scale) {
   std::vector<double> scales;
-  for (double s = 2 * first_scale; s <= 0.75; s *= 2) scales.push_back(s);
+  for (double s = 2 * first_scale; s <= 0.5; s *= 2) scales.push_back(s);
   return scales;
 }
 
@@ -296,7 +296,7 @@ std::string label(const Stage& st) {
 //   board, 100-230 ms when not; the recall of the cascade;
 // - the rectified views only on images with a fisheye circle; full-resolution SB and
 //   mrgingham for small or far boards.
-// - between the first copy and full resolution, every octave above it up to 3/4
+// - between the first copy and full resolution, every octave above it up to 1/2
 //   (intermediate_scales): OpenCV's finders are not scale-invariant (the classic one's
 //   adaptive threshold and dilations, SB's kernel, are sized in pixels), so a board found at
 //   1032 px across was lost at 4128 (the same fisheye1 view upscaled 4x), where the cascade

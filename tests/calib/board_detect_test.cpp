@@ -252,9 +252,10 @@ TEST(BoardDetect, TwelveBitFramesInSixteenBitsGiveTheCornersOfTheirEightBitCopie
   EXPECT_LT(d.back(), 0.05);
 }
 
-TEST(BoardDetect, IntermediateScalesAreTheOctavesUpToThreeQuarters) {
-  EXPECT_EQ(intermediate_scales(0.155), (std::vector<double>{0.31, 0.62}));
-  EXPECT_EQ(intermediate_scales(0.333), (std::vector<double>{0.666}));
+TEST(BoardDetect, IntermediateScalesAreTheOctavesUpToOneHalf) {
+  EXPECT_EQ(intermediate_scales(0.155), (std::vector<double>{0.31}));  // 4128 px
+  EXPECT_EQ(intermediate_scales(0.1), (std::vector<double>{0.2, 0.4}));  // 6400 px
+  EXPECT_TRUE(intermediate_scales(0.333).empty());  // 1920 px: 0.33, then 1
   EXPECT_TRUE(intermediate_scales(0.62).empty());  // fisheye1's own size: 0.62, then 1
   EXPECT_TRUE(intermediate_scales(1.0).empty());
 }

@@ -73,6 +73,12 @@ std::optional<std::array<uint8_t, 3>> ignore_colour(const std::string& text) {
   return c;
 }
 
+// --max-shift: pixels, 0 for automatic, and only with --align; checked before any input is read.
+void check_max_shift(const std::string& align, int max_shift) {
+  if (max_shift < 0) throw InputError(fmt::format("--max-shift takes pixels, at least 1 (0: automatic), got {}", max_shift));
+  if (max_shift != 0 && align == "none") throw InputError("--max-shift is a limit of --align mtb|ecc, which is not given");
+}
+
 // Registers the bracket's frames onto the middle exposure (--align mtb|ecc); returns the
 // shift per frame for the report.
 nlohmann::json align_bracket(Bracket& bracket, const std::string& method, const std::string& ignore, int max_shift) {
@@ -80,7 +86,6 @@ nlohmann::json align_bracket(Bracket& bracket, const std::string& method, const 
   if (method == "mtb") ao.method = AlignOptions::Method::Mtb;
   else if (method == "ecc") ao.method = AlignOptions::Method::Ecc;
   else throw InputError(fmt::format("--align must be none, mtb or ecc, got '{}'", method));
-  if (max_shift < 0) throw InputError(fmt::format("--max-shift takes pixels, at least 1 (0: automatic), got {}", max_shift));
   ao.max_shift_px = max_shift;
   ao.ignore_colour = ignore_colour(ignore);
   AlignReport ar;
@@ -94,10 +99,10 @@ nlohmann::json align_bracket(Bracket& bracket, const std::string& method, const 
 }  // namespace
 
 int run_hdr_response(const HdrResponseArgs& args, const Output& out) {
+  check_max_shift(args.align, args.max_shift);
   Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times, args.images));
   const auto t0 = Clock::now();
   nlohmann::json alignment;
-  if (args.max_shift != 0 && args.align == "none") throw InputError("--max-shift is a limit of --align mtb|ecc, which is not given");
   if (args.align != "none") alignment = align_bracket(bracket, args.align, args.ignore_colour, args.max_shift);
   CameraResponse response;
   if (args.method == "debevec") {
@@ -151,13 +156,13 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     radiance = decode_log_sensor(read_rgb_image(args.images[0]), *photometric);
     report["mode"] = "log-sensor";
   } else {
+    check_max_shift(args.align, args.max_shift);
     Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times, args.images));
     if (!args.response.empty() && (args.linear || bracket.linear))
       throw InputError(fmt::format("--response {} and {} contradict: a linear bracket has no response curve", args.response,
                                    args.linear ? "--linear" : "RAW frames (linear)"));
     // Aligned first: a response recovered from frames that are not registered is fitted to
     // misregistered pixels (a hand-held bracket 18 px apart: a curve flat over 70 codes).
-    if (args.max_shift != 0 && args.align == "none") throw InputError("--max-shift is a limit of --align mtb|ecc, which is not given");
     if (args.align != "none") report["alignment"] = align_bracket(bracket, args.align, args.ignore_colour, args.max_shift);
     CameraResponse response;
     if (!args.response.empty()) {

@@ -36,8 +36,8 @@ struct AlignOptions {
   // but no further than its coarsest level allows (short side / 8 px, so 31 px for a
   // 320 px frame); a shift found beyond max_shift_px throws InputError. 0: 2.5 % of the
   // frames' long side, at least 32 px (default_max_shift_px): a hand's shake is an angle,
-  // so its pixels grow with the frame (a fixed 32 px refused a 6000 px bracket that moved
-  // 60 px, a shift of 13 px at 1280).
+  // so its pixels grow with the frame (a fixed 32 px refused a 2048x2600 bracket that moved
+  // 55 px, a shift of 27 px at 1280).
   int max_shift_px = 0;
   // Ecc only: also estimate an in-plane rotation (MOTION_EUCLIDEAN instead of
   // MOTION_TRANSLATION). Ignored by Mtb.

@@ -88,13 +88,21 @@ TEST(UnreadOptionsCli, HdrOptionsTheModeNeverReadsAreRefused) {
   expect_one_line_error(lightprobe("hdr response " + frames() + times + " --method robertson --lambda 5000 -o " + response),
                         "--lambda is Debevec's smoothness weight");
   expect_one_line_error(lightprobe("hdr fuse " + frames() + times + " --ignore-colour 0,0,254.7" + out), "--ignore-colour");
+  // --align's search limit: pixels, and only with --align.
+  expect_one_line_error(lightprobe("hdr fuse " + frames() + times + " --max-shift 40" + out),
+                        "--max-shift is a limit of --align mtb|ecc");
+  expect_one_line_error(lightprobe("hdr response " + frames() + times + " --align mtb --max-shift -3 -o " + response),
+                        "--max-shift takes pixels");
+  EXPECT_EQ(lightprobe("hdr fuse " + frames() + times + " --align mtb --max-shift 8" + out).code, 0);
+  fs::remove(dir / "x.exr");
   // A log sensor's calibration decodes one frame: the bracket's options are refused.
   const std::string readings = write(dir / "log.csv", "region,camera_value,measured,unit\na,0.2,10,cd/m2\nb,0.35,40,cd/m2\n"
                                                       "c,0.5,160,cd/m2\nd,0.65,640,cd/m2\ne,0.8,2560,cd/m2\n");
   const std::string log_cal = (dir / "log_cal.json").string();
   ASSERT_EQ(lightprobe("calib photometric " + readings + " --model log -o " + log_cal).code, 0);
   const std::string one = (b / "frame_01.png").string();
-  for (const std::string option : {"--align mtb", "--deghost", "--linear", "--ignore-colour 0,0,255", "--exposure-times 0.5"})
+  for (const std::string option :
+       {"--align mtb", "--max-shift 40", "--deghost", "--linear", "--ignore-colour 0,0,255", "--exposure-times 0.5"})
     expect_one_line_error(lightprobe("hdr fuse " + one + " --photometric " + log_cal + " " + option + out),
                           option.substr(0, option.find(' ')) + " is an option of brackets");
   expect_one_line_error(lightprobe("hdr fuse " + (b / "truth.exr").string() + " --photometric " + log_cal + out),

@@ -43,6 +43,7 @@
 
 #include "core/chromaticities.h"
 #include "core/error.h"
+#include "core/openexr_cube.h"
 #include "core/file_io.h"
 #include "core/exr_header.h"
 #include "core/image_header.h"
@@ -158,6 +159,7 @@ struct RawImage {
   std::optional<int> nside;
   std::optional<Mat3> world_from_probe;
   std::string layout_key = "layout";  // how the file names the field, for messages
+  bool openexr_cube = false;          // an EXR whose standard envmap attribute says cube
   // Said once the file is accepted (finish_map), so that a file refused after all says one line.
   std::vector<std::string> warnings;
 };
@@ -244,7 +246,34 @@ void accept_slight_negatives(const std::string& path, EnvMap& map, const std::st
                    negative.count, negative.lowest, 100 * negative.share));
 }
 
+// An OpenEXR cube map (envmap = cube: exrenvmap's, Nuke's, `lightprobe prefilter`'s level 0)
+// is read as the latlong map it holds (core/openexr_cube.h), in place of its pixels. The
+// attribute says how the pixels are laid out and wins over a lightprobe.layout beside it
+// (exrenvmap copies the attributes of the latlong map it turned into a cube).
+void read_openexr_cube_as_latlong(const std::string& path, RawImage& raw) {
+  const int n = raw.width;
+  if (int64_t(raw.height) != 6 * int64_t(n))
+    fail(path, fmt::format("its envmap attribute says cube map, which is N x 6N (faces +X -X +Y -Y +Z -Z stacked), "
+                           "but the image is {}x{}",
+                           raw.width, raw.height));
+  if (std::find(raw.valid.begin(), raw.valid.end(), 0) != raw.valid.end())
+    fail(path, "cube map with invalid pixels (alpha): a cube covers the whole sphere, a mask in it is not supported");
+  for (size_t i = 0; i < raw.rgb.size(); ++i)
+    if (!std::isfinite(raw.rgb[i]))
+      fail(path, fmt::format("pixel ({}, {}) of the cube image is {}", i / 3 % size_t(n), i / 3 / size_t(n),
+                             std::isnan(raw.rgb[i]) ? "NaN" : "infinite"));
+  check_image_size(path, 4LL * n, 2LL * n);
+  EnvMap latlong = openexr_cube_to_latlong(raw.rgb, n);
+  raw.width = latlong.width;
+  raw.height = latlong.height;
+  raw.rgb = std::move(latlong.rgb);
+  raw.valid.clear();
+  raw.layout = std::string(to_string(Layout::LatLong));
+  raw.nside.reset();
+}
+
 EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions& options) {
+  if (raw.openexr_cube && !options.layout) read_openexr_cube_as_latlong(path, raw);
   const Layout layout = resolve_layout(path, raw, options);
   EnvMap map;
   map.layout = layout;
@@ -485,6 +514,7 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   if (auto* a = header.findTypedAttribute<Imf::IntAttribute>("lightprobe.nside")) raw.nside = a->value();
   if (auto* a = header.findTypedAttribute<Imf::StringAttribute>(kExrRotationKey))
     raw.world_from_probe = parse_rotation_text(path, kExrRotationKey, a->value());
+  raw.openexr_cube = Imf::hasEnvmap(header) && Imf::envmap(header) == Imf::ENVMAP_CUBE;
 
   const Imf::ChannelList& channels = header.channels();
   // Channels of the layer read: the file's own R, G, B (A, Y, RY, BY), or, when it has none,

@@ -21,6 +21,7 @@
 #include "core/error.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
+#include "core/openexr_cube.h"
 #include "sampling/halton.h"
 
 namespace lp {
@@ -43,34 +44,12 @@ Vec3 ggx_half_vector(double u1, double u2, double alpha) {
   return {sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
 }
 
-// Bilinear lookup at position (x, y) of a face (texel positions as ImfCubeMap.h numbers
-// them, 0 .. face_size - 1), clamped at the face's edges.
+// Lookups in a cube level: core/openexr_cube.h's, shared with the reader of OpenEXR cube maps.
 std::array<double, 3> face_bilinear(const CubeLevel& c, int face, double x, double y) {
-  const int n = c.face_size;
-  const Imath::Box2i dw = cube_window(n);
-  x = std::clamp(x, 0.0, double(n - 1));
-  y = std::clamp(y, 0.0, double(n - 1));
-  const int x0 = std::min(int(x), n - 1), y0 = std::min(int(y), n - 1);
-  const int x1 = std::min(x0 + 1, n - 1), y1 = std::min(y0 + 1, n - 1);
-  const double fx = x - x0, fy = y - y0;
-  auto at = [&](int i, int j, int ch) {
-    const Imath::V2f p = Imf::CubeMap::pixelPosition(Imf::CubeMapFace(face), dw, Imath::V2f(float(i), float(j)));
-    return double(c.rgb[3 * (size_t(std::lround(p.y)) * size_t(n) + size_t(std::lround(p.x))) + size_t(ch)]);
-  };
-  std::array<double, 3> out{};
-  for (int ch = 0; ch < 3; ++ch)
-    out[size_t(ch)] = (1 - fy) * ((1 - fx) * at(x0, y0, ch) + fx * at(x1, y0, ch)) +
-                      fy * ((1 - fx) * at(x0, y1, ch) + fx * at(x1, y1, ch));
-  return out;
+  return openexr_face_bilinear(c.rgb, c.face_size, face, x, y);
 }
-
-// Bilinear lookup of a cube level in an OpenEXR-frame direction (within the face it falls on).
 std::array<double, 3> cube_bilinear(const CubeLevel& c, Vec3 exr_direction) {
-  Imf::CubeMapFace face;
-  Imath::V2f pif;
-  Imf::CubeMap::faceAndPixelPosition(Imath::V3f(float(exr_direction.x), float(exr_direction.y), float(exr_direction.z)),
-                                     cube_window(c.face_size), face, pif);
-  return face_bilinear(c, int(face), pif.x, pif.y);
+  return openexr_cube_bilinear(c.rgb, c.face_size, exr_direction);
 }
 
 // A cube (OpenEXR layout) and its box-filtered mips: each level is summed over the mip of
@@ -231,9 +210,6 @@ CubeLevel prefilter_level(const CubePyramid& source, int face_size, double rough
 }
 
 }  // namespace
-
-Vec3 openexr_from_world(Vec3 d) { return {d.y, d.z, -d.x}; }
-Vec3 world_from_openexr(Vec3 d) { return {-d.z, d.x, d.y}; }
 
 PrefilteredCube prefilter_ggx(const EnvMap& map, const PrefilterOptions& options, const std::string& label) {
   const std::string of = label.empty() ? "" : label + ": ";

@@ -12,11 +12,9 @@
 // A renderer reads P at the lod of its roughness, multiplies by F0 * A + B from the DFG table
 // at (n.v, r), and has the specular image-based lighting.
 //
-// Frame. OpenEXR's cube map (ImfEnvmap.h) is y-up; our world is z-up. The conversion is the
-// one under which a lightprobe latlong map read with OpenEXR's latlong convention (envmap =
-// latlong) shows the same directions: openexr = (y, z, -x) of the world direction (a mirror,
-// as OpenEXR's convention is left-handed against ours). So OpenEXR's own exrenvmap turns the
-// cube's level 0 back into the latlong map it came from (tested).
+// Frame: OpenEXR's cube map is y-up, our world z-up; core/openexr_cube.h has the mapping
+// (openexr_from_world) and OpenEXR's own exrenvmap turns the cube's level 0 back into the
+// latlong map it came from (tested).
 //
 // Each level is summed directly over the source cube's mip of the same face size (no Monte
 // Carlo): importance sampling of D, even filtered (Krivanek & Colbert 2008), left 10-16 %
@@ -30,6 +28,7 @@
 #include <vector>
 
 #include "core/envmap.h"
+#include "core/openexr_cube.h"  // openexr_from_world: the frame above
 #include "core/vec3.h"
 
 namespace lp {
@@ -60,10 +59,6 @@ PrefilteredCube prefilter_ggx(const EnvMap& map, const PrefilterOptions& options
 std::array<double, 3> prefiltered_radiance_brute_force(const EnvMap& map, Vec3 world_direction, double roughness);
 // The chain read back at a world direction and level (bilinear within the face).
 std::array<double, 3> prefiltered_lookup(const PrefilteredCube& cube, int level, Vec3 world_direction);
-
-// World (z-up) <-> OpenEXR envmap frame (y-up), see above.
-Vec3 openexr_from_world(Vec3 d);
-Vec3 world_from_openexr(Vec3 d);
 
 // The split-sum DFG table: size x size entries, u = n.v (texel centres over (0, 1]), v =
 // perceptual roughness r (texel centres over [0, 1]), each (A, B) with

@@ -137,6 +137,25 @@ TEST(PrefilterCli, WritesTheCubeChainAndTheDfgTableAndRefusesWhatItCannotHold) {
   expect_one_line_error(lightprobe("prefilter " + shared(kGrace) + " --size 100 -o " + cube.string()), "--size");
 }
 
+// The chain's file is an OpenEXR cube map (envmap = cube), which every command reads as the
+// latlong it holds (core/openexr_cube.h): `info` on it finds the map's power and its brightest
+// direction (Grace Cathedral's window), as on the map itself. It was refused by its shape.
+TEST(PrefilterCli, ItsCubeReadsBackAsTheMap) {
+  const fs::path cube = scratch() / "specular.exr";
+  ASSERT_EQ(lightprobe("prefilter " + shared(kGrace) + " --size 128 -o " + cube.string()).code, 0);
+  const CliRun map = lightprobe("info --json " + shared(kGrace)), back = lightprobe("info --json " + cube.string());
+  ASSERT_EQ(back.code, 0) << back.err;
+  const auto a = nlohmann::json::parse(map.out), b = nlohmann::json::parse(back.out);
+  EXPECT_EQ(b["layout"], "latlong");
+  EXPECT_EQ(b["width"], 512);
+  EXPECT_EQ(b["height"], 256);
+  EXPECT_NEAR(b["power_luminance"].get<double>() / a["power_luminance"].get<double>(), 1.0, 0.03);
+  double cos_angle = 0;
+  for (int i = 0; i < 3; ++i)
+    cos_angle += a["brightest_direction"][i].get<double>() * b["brightest_direction"][i].get<double>();
+  EXPECT_GT(cos_angle, std::cos(2.0 * 3.14159265358979 / 180)) << "brightest directions more than 2 deg apart";
+}
+
 TEST(SampleCli, GlbIsBinaryGltfAndUnknownExtensionsAreRefused) {
   const fs::path glb = scratch() / "lights.glb";
   ASSERT_EQ(lightprobe("sample " + shared(kGrace) + " --method q2tree --n 16 -o " + glb.string()).code, 0);

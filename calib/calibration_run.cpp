@@ -20,6 +20,57 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Two views whose corners are closer than this (px RMS, at 2048 px of long side or less;
+// pixel_limit_scale beyond) are one pose: detection's noise is 0.02-0.1 px, and a board moved
+// by hand moves its corners by pixels.
+constexpr double kRepeatedViewRmsPx = 0.3;
+
+struct RepeatedView {
+  size_t view = 0, same_as = 0;  // image indices: `view` repeats the earlier `same_as`
+  double rms_px = 0;             // their corners' RMS distance
+};
+
+// RMS distance between two views' corners, the second read in its own order or back to
+// front (a board turned half a turn is labelled from its other end); inf for other counts.
+double corner_rms_px(const std::vector<std::array<double, 2>>& a, const std::vector<std::array<double, 2>>& b) {
+  if (a.empty() || a.size() != b.size()) return std::numeric_limits<double>::infinity();
+  const size_t n = a.size();
+  double direct = 0, reversed = 0;
+  for (size_t k = 0; k < n; ++k) {
+    direct += std::pow(a[k][0] - b[k][0], 2) + std::pow(a[k][1] - b[k][1], 2);
+    reversed += std::pow(a[k][0] - b[n - 1 - k][0], 2) + std::pow(a[k][1] - b[n - 1 - k][1], 2);
+  }
+  return std::sqrt(std::min(direct, reversed) / double(n));
+}
+
+// Each view with a board that lies within limit_px of an earlier kept one, with the nearest.
+std::vector<RepeatedView> repeated_views(const std::vector<std::vector<std::array<double, 2>>>& corners,
+                                         double limit_px) {
+  std::vector<RepeatedView> out;
+  std::vector<size_t> kept;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    if (corners[i].empty()) continue;
+    RepeatedView nearest{i, i, std::numeric_limits<double>::infinity()};
+    for (size_t j : kept)
+      if (const double r = corner_rms_px(corners[j], corners[i]); r < nearest.rms_px) nearest = {i, j, r};
+    if (nearest.rms_px <= limit_px)
+      out.push_back(nearest);
+    else
+      kept.push_back(i);
+  }
+  return out;
+}
+
+// "b.png = a.png (0.00 px), ..." for the first three, then how many more.
+std::string repeats_text(const std::vector<RepeatedView>& repeats, const std::vector<std::string>& images) {
+  std::string s;
+  for (size_t k = 0; k < repeats.size() && k < 3; ++k)
+    s += fmt::format("{}{} = {} ({:.2f} px)", k ? ", " : "", images[repeats[k].view], images[repeats[k].same_as],
+                     repeats[k].rms_px);
+  if (repeats.size() > 3) s += fmt::format(" and {} more", repeats.size() - 3);
+  return s;
+}
+
 // A fit of every view has more data and the same parameters as each half's, so its RMS
 // is below the held-out RMS (each half's model on the other half's corners, poses
 // re-solved) unless the solve of all views stopped in a worse minimum than the halves'
@@ -395,19 +446,30 @@ GeometricCalibration calibrate_detections(BoardDetections detections, const Boar
   if (d.found < 4)
     throw InputError(fmt::format("a {}x{} board was found in only {} of {} images; at least 4 views are needed",
                                  board.cols, board.rows, d.found, n));
-  // One view given twice (the same file, or a copy) adds no information and makes the
-  // held-out views equal fitted ones: a cross-validation of 1e-14 px that means nothing.
-  std::map<std::vector<std::array<double, 2>>, size_t> first_with;
-  for (size_t i = 0; i < n; ++i) {
-    if (d.corners[i].empty()) continue;
-    const auto [it, inserted] = first_with.emplace(d.corners[i], i);
-    if (!inserted)
-      throw InputError(fmt::format("{}: the same view as {} (identical board corners); give each view once",
-                                   d.images[i], d.images[it->second]));
-  }
+  // A view that repeats an earlier one adds no pose, and one in each half of a split makes a
+  // held-out view a fitted one: a copy of a file gave a cross-validation of 1e-14 px, a second
+  // frame of a board that had not moved (0.05 px of noise) took stereo's odd/even value from
+  // 0.119 to 0.065 px. Each is used once; the later ones are left out and said in one line.
+  const std::vector<RepeatedView> repeats =
+      repeated_views(d.corners, kRepeatedViewRmsPx * pixel_limit_scale(d.width, d.height));
+  if (d.found - repeats.size() < 4)
+    throw InputError(fmt::format("only {} distinct views: {} of the {} with a board repeat an earlier one ({}); at least 4 "
+                                 "are needed",
+                                 d.found - repeats.size(), repeats.size(), d.found, repeats_text(repeats, d.images)));
+  if (!repeats.empty())
+    run.notes.push_back(fmt::format("{} {} an earlier one, each used once: {}", repeats.size(),
+                                    repeats.size() == 1 ? "view repeats" : "views repeat", repeats_text(repeats, d.images)));
   const auto t0 = std::chrono::steady_clock::now();
   run.corners = d.corners;
+  for (const RepeatedView& r : repeats) run.corners[r.view].clear();
+  // After every solve (the one without influential views included): what the report says of them.
+  const auto say_repeats = [&] {
+    for (const RepeatedView& r : repeats)
+      run.result.views[r.view].why = fmt::format("left out: the same view as {} (corners {:.2f} px RMS apart)",
+                                                 d.images[r.same_as], r.rms_px);
+  };
   run.result = calibrate(run.corners, board, d.width, d.height, options.calibrate);
+  say_repeats();
   if (options.drop_influential > 0) {
     const std::vector<DroppedView> drop = views_to_drop(run.result, options.drop_influential);
     // At least five views stay: asking for more than that leaves was capped without a word.
@@ -427,6 +489,7 @@ GeometricCalibration calibrate_detections(BoardDetections detections, const Boar
           GeometricCalibration::Answer{r.selected, r.model.rms_reprojection_px, r.cross_validation_px, r.heldout_rms_px};
       for (const DroppedView& v : drop) run.corners[v.view].clear();
       run.result = calibrate(run.corners, board, d.width, d.height, options.calibrate);
+      say_repeats();
       for (const DroppedView& v : drop)
         run.result.views[v.view].why =
             fmt::format("dropped: influential (leaving it out moved the projection by {:.2f} px)", v.leverage_px);

@@ -1,5 +1,6 @@
 // From image files to camera files and the report (calib/calibration_run.h, board_detect.h
 // detect_boards): what `lightprobe calib geometric` prints and writes.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -82,16 +83,47 @@ TEST(CalibrationRun, DetectsEveryImageAndRefusesMixedSizes) {
   EXPECT_THROW(detect_boards({"/nonexistent.png", paths[0]}, o.board), InputError);
 }
 
-TEST(CalibrationRun, RefusesOneViewGivenTwiceNamingBothFiles) {
+// A view given twice (a copy of a file), a second frame of a board that did not move (0.05 px
+// of noise) and one of it labelled from the other end (turned half a turn) are each used
+// once: the answer is that of the views without them, and the report names them. A copy had
+// been refused, which refused a whole set for one duplicate; a second frame had been taken as
+// a view, one in each half of a split (a held-out view a fitted one). A view 1 px away is a
+// view of its own.
+TEST(CalibrationRun, AViewRepeatedIsUsedOnceAndSaid) {
   const CameraModel truth = kb190();
-  auto corners = project_board_views(truth, kBoard, 6, 70, 600, 0.1, 3, 93);
-  ASSERT_GE(corners.size(), 5u);
-  corners[4] = corners[1];  // the same view again: a held-out view equal to a fitted one
+  const auto views = project_board_views(truth, kBoard, 6, 70, 600, 0.1, 3, 93);
+  ASSERT_GE(views.size(), 5u);
+  const GeometricCalibration plain = calibrate_detections(detections_of(views, truth), kBoard);
+  auto repeated = views;
+  repeated.push_back(views[1]);  // view_N: a copy
+  auto noisy = views[3];
+  for (size_t k = 0; k < noisy.size(); ++k) noisy[k][k % 2] += (k % 3 == 0 ? 0.05 : -0.05);
+  repeated.push_back(noisy);  // a second frame
+  repeated.push_back(std::vector<std::array<double, 2>>(views[2].rbegin(), views[2].rend()));  // half a turn
+  const size_t n = views.size();
+  const GeometricCalibration run = calibrate_detections(detections_of(repeated, truth), kBoard);
+  EXPECT_EQ(run.result.selected, plain.result.selected);
+  EXPECT_NEAR(run.result.model.rms_reprojection_px, plain.result.model.rms_reprojection_px, 1e-9);
+  EXPECT_NEAR(run.result.cross_validation_px, plain.result.cross_validation_px, 1e-9);
+  ASSERT_EQ(run.notes.size(), 1u);
+  EXPECT_EQ(run.notes[0], fmt::format("3 views repeat an earlier one, each used once: view_{}.png = view_1.png (0.00 px), "
+                                      "view_{}.png = view_3.png (0.05 px), view_{}.png = view_2.png (0.00 px)",
+                                      n, n + 1, n + 2));
+  EXPECT_EQ(run.result.views[n].why, "left out: the same view as view_1.png (corners 0.00 px RMS apart)");
+  EXPECT_FALSE(run.result.views[n + 1].used);
+  // One pixel off: another view.
+  auto moved = views;
+  moved.push_back(views[1]);
+  for (auto& c : moved.back()) c[0] += 1.0;
+  EXPECT_TRUE(calibrate_detections(detections_of(moved, truth), kBoard).notes.empty());
+  // Four views of which two are one: three distinct views cannot calibrate.
+  const std::vector<std::vector<std::array<double, 2>>> three = {views[0], views[1], views[2], views[0]};
   try {
-    calibrate_detections(detections_of(corners, truth), kBoard);
-    ADD_FAILURE() << "a duplicated view was calibrated";
+    calibrate_detections(detections_of(three, truth), kBoard);
+    ADD_FAILURE() << "three distinct views were calibrated";
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "view_4.png: the same view as view_1.png (identical board corners); give each view once");
+    EXPECT_STREQ(e.what(), "only 3 distinct views: 1 of the 4 with a board repeat an earlier one (view_3.png = "
+                           "view_0.png (0.00 px)); at least 4 are needed");
   }
 }
 

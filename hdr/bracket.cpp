@@ -52,6 +52,59 @@ std::optional<double> parse_seconds(const std::string& text) {
 }
 
 
+// Frames at one exposure (time x ISO / f-number^2): a camera at its shortest or longest time
+// repeats it when an auto-bracket asks for more (a sunlit probe at 1/8000 s twice), or a
+// bracket was shot with a spare frame. A bracket with them was refused whole. The later ones
+// add no range: each exposure is used once, said in one line. Unless their codes differ by
+// more than one exposure allows (a mean code 15 % apart; 30 % for a RAW's linear ones, half a
+// stop either way): then a time is wrong, and that is refused, naming both.
+void drop_repeated_exposures(Bracket& b) {
+  std::vector<std::pair<size_t, size_t>> repeats;  // (frame, the earlier frame it repeats)
+  std::vector<char> dropped(b.frames.size(), 0);
+  for (size_t k = 0; k < b.frames.size(); ++k)
+    for (size_t j = 0; j < k; ++j)
+      if (!dropped[j] && b.exposure_seconds[j] == b.exposure_seconds[k] && b.frames[j].width == b.frames[k].width &&
+          b.frames[j].height == b.frames[k].height) {  // another size is check_bracket's to name
+        const RgbImage &a = b.frames[j], &c = b.frames[k];
+        double sum_a = 0, sum_c = 0;
+        size_t n = 0;
+        if (a.rgb.size() == c.rgb.size())
+          for (size_t i = 0; i < a.rgb.size(); ++i) {
+            const size_t px = i / 3;
+            if ((!a.valid.empty() && !a.valid[px]) || (!c.valid.empty() && !c.valid[px])) continue;
+            const float va = a.rgb[i], vc = c.rgb[i];
+            if (!(va > 0.02f && va < 0.98f && vc > 0.02f && vc < 0.98f)) continue;
+            sum_a += va, sum_c += vc, ++n;
+          }
+        const double apart = n * 100 >= a.rgb.size() ? std::fabs(sum_a - sum_c) / std::max(sum_a, sum_c) : 0.0;
+        if (apart > (b.linear ? 0.30 : 0.15))
+          throw InputError(fmt::format("{} and {}: the same exposure {} s, but their codes are {:.0f} % apart on average: "
+                                       "a time is wrong (give --exposure-times)",
+                                       frame_name(b, j), frame_name(b, k), b.exposure_seconds[k], 100 * apart));
+        dropped[k] = 1;
+        repeats.emplace_back(k, j);
+        break;
+      }
+  if (repeats.empty()) return;
+  if (b.frames.size() - repeats.size() < 2)
+    throw InputError(fmt::format("{} and {}: the same exposure time {} s, as every frame: a bracket needs at least 2 "
+                                 "exposures",
+                                 frame_name(b, repeats[0].second), frame_name(b, repeats[0].first), b.exposure_seconds[0]));
+  std::string which;
+  for (size_t r = 0; r < repeats.size() && r < 3; ++r)
+    which += fmt::format("{}{} = {} ({} s)", r ? ", " : "", frame_name(b, repeats[r].first),
+                         frame_name(b, repeats[r].second), b.exposure_seconds[repeats[r].first]);
+  if (repeats.size() > 3) which += fmt::format(" and {} more", repeats.size() - 3);
+  warn(fmt::format("{} {} the exposure of an earlier one, each exposure used once: {}", repeats.size(),
+                   repeats.size() == 1 ? "frame repeats" : "frames repeat", which));
+  for (size_t k = b.frames.size(); k-- > 0;)
+    if (dropped[k]) {
+      b.frames.erase(b.frames.begin() + std::ptrdiff_t(k));
+      b.exposure_seconds.erase(b.exposure_seconds.begin() + std::ptrdiff_t(k));
+      if (k < b.paths.size()) b.paths.erase(b.paths.begin() + std::ptrdiff_t(k));
+    }
+}
+
 // "100, 400, 1600" (format: one value's text).
 std::string list_of(const std::vector<ExifExposureSettings>& s, double ExifExposureSettings::*field) {
   std::string out;
@@ -343,6 +396,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     }
   }
   fold_iso_and_aperture(b, settings);
+  drop_repeated_exposures(b);
   check_bracket(b);
   apply_sensor_white_level(b);
   check_exposure_order(b, times ? "given (--exposure-times)" : "read from the files");

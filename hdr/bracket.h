@@ -67,7 +67,9 @@ void apply_sensor_white_level(Bracket& bracket);
 // InputError("<file>: no exposure time in EXIF; give --exposure-times"). Where every frame's
 // EXIF records its ISO (or f-number) and they differ, each frame's exposure_seconds is its
 // time x ISO / f-number^2 relative to the first frame's, said in one warning (auto-ISO and
-// ISO or aperture bracketing). All files must have the same bit depth. The result passes check_bracket, has its sensor's white level
+// ISO or aperture bracketing). A frame at the exposure of an earlier one is left out, said in
+// one warning (refused when their codes differ beyond one exposure: a wrong time). All files
+// must have the same bit depth. The result passes check_bracket, has its sensor's white level
 // applied (apply_sensor_white_level); a bracket of 8-bit files keeps their codes too
 // (keep_8bit_codes).
 Bracket read_bracket(const std::vector<std::string>& paths,

@@ -522,6 +522,41 @@ TEST(ReadExposureList, AListThatNamesItsFilesIsReadByName) {
             bare + ": 2 times for 1 images (a list of times alone is read in order)");
 }
 
+// A frame at the exposure of an earlier one (a camera at its shortest time repeats it when an
+// auto-bracket asks for more) is used once, said in one line: the bracket reads as without it.
+// It had refused the bracket whole. Two frames given one time whose codes say otherwise (a
+// typo in the list: memorial0065 is 2 s, not 4) are refused, naming both.
+TEST(ReadBracket, AFrameAtTheExposureOfAnEarlierOneIsUsedOnce) {
+  TempDir tmp;
+  const std::string dir = kData + "/hdr-memorial-debevec/";
+  const std::string copy = (tmp.path / "memorial0064_again.png").string();
+  fs::copy_file(dir + "memorial0064.png", copy);
+  std::vector<std::string> warnings;
+  set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const Bracket plain = read_bracket({dir + "memorial0063.png", dir + "memorial0064.png", dir + "memorial0065.png"},
+                                     std::vector<double>{8, 4, 2});
+  const Bracket again = read_bracket(
+      {dir + "memorial0063.png", dir + "memorial0064.png", copy, dir + "memorial0065.png"}, std::vector<double>{8, 4, 4, 2});
+  set_warning_sink(nullptr);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], "1 frame repeats the exposure of an earlier one, each exposure used once: " + copy + " = " + dir +
+                             "memorial0064.png (4 s)");
+  EXPECT_EQ(again.paths, plain.paths);
+  EXPECT_EQ(again.exposure_seconds, plain.exposure_seconds);
+  ASSERT_EQ(again.frames.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) EXPECT_EQ(again.frames[k].rgb, plain.frames[k].rgb);
+  EXPECT_EQ(again.codes, plain.codes);
+  const std::string wrong = message_of([&] {
+    read_bracket({dir + "memorial0063.png", dir + "memorial0064.png", dir + "memorial0065.png"},
+                 std::vector<double>{8, 4, 4});
+  });
+  EXPECT_NE(wrong.find(dir + "memorial0064.png and " + dir + "memorial0065.png: the same exposure 4 s, but their codes "
+                       "are"),
+            std::string::npos)
+      << wrong;
+  EXPECT_NE(wrong.find("a time is wrong"), std::string::npos) << wrong;
+}
+
 TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   TempDir tmp;
   const std::string a = tmp.png("a.png", 8, 6), b = tmp.png("b.png", 8, 6), odd = tmp.png("odd.png", 7, 8);
@@ -533,9 +568,9 @@ TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   // The odd size is named when it is the first frame, too.
   const std::string first_msg = message_of([&] { read_bracket({odd, a, b}, std::vector<double>{1.0, 2.0, 4.0}); });
   EXPECT_EQ(first_msg, odd + ": size 7x8 differs from the 8x6 of 2 of the 3 images");
-  // Two frames at one exposure time: both named.
+  // Every frame at one exposure time: both named.
   const std::string same_msg = message_of([&] { read_bracket({a, b}, std::vector<double>{0.5, 0.5}); });
-  EXPECT_EQ(same_msg, a + " and " + b + ": the same exposure time 0.5 s; each frame of a bracket needs its own");
+  EXPECT_EQ(same_msg, a + " and " + b + ": the same exposure time 0.5 s, as every frame: a bracket needs at least 2 exposures");
   // No EXIF in a PNG and no times given.
   const std::string exif_msg = message_of([&] { read_bracket({a, b}); });
   EXPECT_EQ(exif_msg, a + ": no exposure time in EXIF; give --exposure-times");

@@ -296,7 +296,7 @@ TEST(GarbageCli, JsonFilesOfTheWrongFormatNameTheFileAndWhatIsWrong) {
   EXPECT_EQ(typed.err.find("json.exception"), std::string::npos) << typed.err;
 }
 
-TEST(GarbageCli, BracketsWithNothingWellExposedOrOneTimeTwiceAreRefused) {
+TEST(GarbageCli, BracketsWithNothingWellExposedOrAWrongTimeTwiceAreRefused) {
   const fs::path dir = fresh_dir("bracket");
   // Three all-black frames (PNG, 8 bit; --linear, so no response is recovered from them):
   // nothing was measured.
@@ -308,10 +308,25 @@ TEST(GarbageCli, BracketsWithNothingWellExposedOrOneTimeTwiceAreRefused) {
   const CliRun r = lightprobe("hdr fuse " + frames + " --linear --exposure-times 0.01,0.1,1 -o " + (dir / "fused.exr").string());
   expect_one_line_error(r, "no pixel is well exposed");
   EXPECT_FALSE(fs::exists(dir / "fused.exr"));
-  // One exposure time on two frames: both named.
-  const CliRun same = lightprobe("hdr fuse " + frames + " --linear --exposure-times 0.01,0.1,0.1 -o " + (dir / "fused.exr").string());
-  expect_one_line_error(same, (dir / "black2.png").string() + " and " + (dir / "black3.png").string());
+  // One exposure time on two frames whose codes say otherwise (0.5 and 0.25, linear): a wrong
+  // time, both named.
+  const fs::path half = dir / "half.png", quarter = dir / "quarter.png", again = dir / "half_again.png";
+  write_display_image(half.string(), 8, 4, std::vector<float>(3 * 8 * 4, 0.5f));
+  write_display_image(quarter.string(), 8, 4, std::vector<float>(3 * 8 * 4, 0.25f));
+  fs::copy_file(half, again);
+  const CliRun same = lightprobe("hdr fuse " + half.string() + " " + quarter.string() +
+                                 " --linear --exposure-times 0.1,0.1 -o " + (dir / "fused.exr").string());
+  expect_one_line_error(same, half.string() + " and " + quarter.string() + ": the same exposure 0.1 s");
   EXPECT_FALSE(fs::exists(dir / "fused.exr"));
+  // The same time on two frames that agree: the later one is used once, said in one warning.
+  const CliRun twice = lightprobe("hdr fuse " + half.string() + " " + again.string() + " " + quarter.string() +
+                                  " --linear --exposure-times 0.1,0.1,0.05 -o " + (dir / "fused.exr").string());
+  EXPECT_EQ(twice.code, 0) << twice.err;
+  EXPECT_NE(twice.err.find("warning: 1 frame repeats the exposure of an earlier one, each exposure used once: " +
+                           again.string() + " = " + half.string() + " (0.1 s)"),
+            std::string::npos)
+      << twice.err;
+  EXPECT_TRUE(fs::exists(dir / "fused.exr"));
 }
 
 TEST(GarbageCli, AMirrorBallOutsideTheImageIsRefusedNotUnwrappedToNothing) {

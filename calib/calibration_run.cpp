@@ -31,16 +31,24 @@ struct RepeatedView {
 };
 
 // RMS distance between two views' corners, the second read in its own order or back to
-// front (a board turned half a turn is labelled from its other end); inf for other counts.
+// front (a board turned half a turn is labelled from its other end), over the corners both
+// have (corners.vnl marks a missing one '-': NaN); inf for other counts or fewer than 4 pairs.
 double corner_rms_px(const std::vector<std::array<double, 2>>& a, const std::vector<std::array<double, 2>>& b) {
-  if (a.empty() || a.size() != b.size()) return std::numeric_limits<double>::infinity();
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (a.empty() || a.size() != b.size()) return kInf;
   const size_t n = a.size();
-  double direct = 0, reversed = 0;
-  for (size_t k = 0; k < n; ++k) {
-    direct += std::pow(a[k][0] - b[k][0], 2) + std::pow(a[k][1] - b[k][1], 2);
-    reversed += std::pow(a[k][0] - b[n - 1 - k][0], 2) + std::pow(a[k][1] - b[n - 1 - k][1], 2);
-  }
-  return std::sqrt(std::min(direct, reversed) / double(n));
+  const auto rms = [&](bool back) {
+    double sum = 0;
+    size_t pairs = 0;
+    for (size_t k = 0; k < n; ++k) {
+      const auto& p = a[k];
+      const auto& q = b[back ? n - 1 - k : k];
+      const double d = std::pow(p[0] - q[0], 2) + std::pow(p[1] - q[1], 2);
+      if (std::isfinite(d)) sum += d, ++pairs;
+    }
+    return pairs >= 4 ? std::sqrt(sum / double(pairs)) : kInf;
+  };
+  return std::min(rms(false), rms(true));
 }
 
 // Each view with a board that lies within limit_px of an earlier kept one, with the nearest.

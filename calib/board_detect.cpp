@@ -5,11 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/lazy_libs.h"  // mrgingham: in the plugin, as it links OpenCV's codecs
 
 namespace lp {
@@ -578,19 +580,24 @@ BoardDetections detect_boards(const std::vector<std::string>& images, const Boar
   out.per_image.resize(n);
   out.corners.resize(n);
   std::vector<std::array<int, 2>> sizes(n);
-  std::vector<char> turned(n, 0);
+  std::vector<int> orientation(n, 1);
   std::vector<std::string> errors(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     try {
       const CameraImage img = read_camera_image(images[i]);
       sizes[i] = {img.width, img.height};
-      turned[i] = img.orientation != 1;
+      orientation[i] = img.orientation;
       out.per_image[i] = detect_board(img, board, options);
     } catch (const InputError& e) {
       errors[i] = e.what();
     }
     if (on_image) on_image();
   });
+  // Turned shots into the frame of the others (an image that could not be read has size 0:
+  // unknown): such a set had been refused ("one set needs one orientation"), and one with
+  // some shots upside down (Orientation 3) calibrated with its principal point mixed from two
+  // frames.
+  turn_views_into_one_frame(out, sizes, orientation, board);
   for (size_t i = 0; i < n; ++i) {  // the first error in the given order
     if (!errors[i].empty()) throw InputError(errors[i]);
     if (i == 0) {
@@ -602,7 +609,7 @@ BoardDetections detect_boards(const std::vector<std::string>& images, const Boar
                        std::to_string(out.height) + " (one camera, one resolution)" +
                        turned_size_hint(sizes[i][0], sizes[i][1], out.width, out.height));
     }
-    out.turned += turned[i];
+    out.turned += orientation[i] != 1;
     if (out.per_image[i].found) {
       out.corners[i] = out.per_image[i].corners;
       ++out.found;
@@ -610,6 +617,52 @@ BoardDetections detect_boards(const std::vector<std::string>& images, const Boar
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
+}
+
+
+void turn_views_into_one_frame(BoardDetections& d, std::vector<std::array<int, 2>>& shown,
+                               const std::vector<int>& orientation, const BoardSpec& board) {
+  d.image_orientation = orientation;
+  std::vector<size_t> known;
+  for (size_t i = 0; i < shown.size(); ++i)
+    if (shown[i][0] > 0) known.push_back(i);
+  if (known.empty()) return;
+  const auto stored = [&](size_t i) {
+    return orientation[i] >= 5 ? std::array<int, 2>{shown[i][1], shown[i][0]} : shown[i];
+  };
+  for (size_t i : known)
+    if (stored(i) != stored(known[0])) return;  // not one sensor: the size checks name the odd one
+  std::map<int, int> seen;
+  for (size_t i : known) ++seen[orientation[i]];
+  int ref = orientation[known[0]];
+  for (const auto& [o, count] : seen)
+    if (count > seen[ref]) ref = o;
+  d.orientation = ref;
+  if (seen.size() == 1) return;
+  size_t ref_image = known[0];
+  while (orientation[ref_image] != ref) ++ref_image;
+  const auto [sw, sh] = stored(known[0]);
+  for (size_t i : known) {
+    if (orientation[i] == ref) continue;
+    auto& corners = d.per_image[i].corners;
+    for (auto& c : corners) c = shown_from_stored(ref, sw, sh, stored_from_shown(orientation[i], sw, sh, c));
+    // Labelled as the detector labels a board in this frame (canonical in the turned image
+    // is not here): the same model as from the views shot unturned.
+    if (!corners.empty()) canonicalize_corner_order(corners, board.cols, board.rows);
+    if (i < d.corners.size() && !d.corners[i].empty()) d.corners[i] = corners;
+    shown[i] = shown[ref_image];
+    ++d.reoriented;
+  }
+}
+
+std::vector<std::array<double, 2>> corners_as_image_shows_them(const BoardDetections& d, size_t i) {
+  std::vector<std::array<double, 2>> corners = d.corners[i];
+  if (i >= d.image_orientation.size() || d.image_orientation[i] == d.orientation) return corners;
+  const bool swap = d.orientation >= 5;
+  const int sw = swap ? d.height : d.width, sh = swap ? d.width : d.height;
+  for (auto& c : corners)
+    c = shown_from_stored(d.image_orientation[i], sw, sh, stored_from_shown(d.orientation, sw, sh, c));
+  return corners;
 }
 
 }  // namespace lp

@@ -120,7 +120,8 @@ BoardDetection detect_board(const CameraImage& image, const BoardSpec& board,
 // its board detected, in parallel (each image independent, so the result does not depend on
 // the order). on_image is called once per image as it finishes, from the worker threads.
 // InputError: the first image (in the given order) that cannot be read, or one whose size
-// differs from the first's (one camera, one resolution).
+// differs from the first's (one camera, one resolution) other than by its EXIF Orientation
+// (then its corners are turned into the frame most images have: `reoriented`).
 struct BoardDetections {
   std::vector<std::string> images;                        // as given
   std::vector<BoardDetection> per_image;
@@ -128,10 +129,26 @@ struct BoardDetections {
   int width = 0, height = 0;  // the images' size
   int found = 0;              // images with the board
   int turned = 0;             // images turned by their EXIF Orientation (read as shown)
+  // One sensor, shots turned differently (EXIF Orientation): the views not in the frame most
+  // images have were turned into it (their corners; width and height are that frame's).
+  int orientation = 1;        // the frame's EXIF Orientation
+  int reoriented = 0;         // views turned into it
+  std::vector<int> image_orientation;  // each image's EXIF Orientation as read (empty: all 1)
   double seconds = 0;         // wall time of the whole stage
 };
 BoardDetections detect_boards(const std::vector<std::string>& images, const BoardSpec& board,
                               const DetectOptions& options = {}, const std::function<void()>& on_image = {});
+
+// One camera turned for some shots records it in each image's EXIF Orientation, and its
+// images are read as shown. Where every image whose size is known (`shown[i]`, {0, 0}:
+// unknown) has one stored size, the views not in the frame most images have (the first's on
+// a tie) get their corners turned into it, in canonical order, and their `shown` size set
+// to that frame's; d.orientation, d.reoriented and d.image_orientation say so.
+void turn_views_into_one_frame(BoardDetections& d, std::vector<std::array<int, 2>>& shown,
+                               const std::vector<int>& orientation, const BoardSpec& board);
+// A view's corners in the frame d's views are in, taken back to image i's own as shown (what
+// corners.vnl holds, as OpenCV and mrgingham read the image).
+std::vector<std::array<double, 2>> corners_as_image_shows_them(const BoardDetections& d, size_t i);
 
 // Put `corners` (row-major, cols per row) into the canonical order described above.
 void canonicalize_corner_order(std::vector<std::array<double, 2>>& corners, int cols, int rows);

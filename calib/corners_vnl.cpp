@@ -110,7 +110,9 @@ void write_corners_vnl(const std::string& path, const BoardDetections& d) {
                                    "does not start with '#'",
                                    path, name));
     if (d.corners[i].empty()) t += name + " - - -\n";
-    for (const auto& c : d.corners[i]) t += fmt::format("{} {:.17g} {:.17g} 0\n", name, c[0], c[1]);
+    // In each image's own frame as shown, as OpenCV and mrgingham read it (a view turned into
+    // the frame of the others is turned back): read_corners_vnl turns it again.
+    for (const auto& c : corners_as_image_shows_them(d, i)) t += fmt::format("{} {:.17g} {:.17g} 0\n", name, c[0], c[1]);
   }
   write_file_atomically(path, t);
 }
@@ -187,13 +189,24 @@ CornersFile read_corners_vnl(const std::string& path, const BoardSpec& board, do
   // Every image the file names that is here (headers only, no decode): one size, the
   // size, or a check of the one given. One camera, one resolution: views of a half-size
   // copy among them solved to a model 3.3 px off, most of them then dropped as outliers.
-  int width = 0, height = 0;
-  std::string here;
-  for (const std::string& image : d.images) {
-    const std::string file = locate(path, image);
+  // Images shown turned by their EXIF Orientation (one camera held upright for some shots):
+  // their views turned into the frame of the others, as detect_boards turns them.
+  std::vector<std::array<int, 2>> shown(d.images.size(), {0, 0});
+  std::vector<int> orientation(d.images.size(), 1);
+  for (size_t i = 0; i < d.images.size(); ++i) {
+    const std::string file = locate(path, d.images[i]);
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) continue;
-    const auto [w, h] = camera_image_size(file);
+    const auto [w, h] = camera_image_size(file, &orientation[i]);
+    shown[i] = {w, h};
+  }
+  turn_views_into_one_frame(d, shown, orientation, board);
+  int width = 0, height = 0;
+  std::string here;
+  for (size_t i = 0; i < d.images.size(); ++i) {
+    if (shown[i][0] == 0) continue;
+    const std::string file = locate(path, d.images[i]);
+    const int w = shown[i][0], h = shown[i][1];
     if (here.empty()) {
       width = w, height = h, here = file;
     } else if (w != width || h != height) {

@@ -92,12 +92,17 @@ int run_calib_geometric(const CalibGeometricArgs& args, const Output& out) {
   CornersFile corners = !args.corners_in.empty() ? read_corners_vnl(args.corners_in, board, size[0], size[1])
                                                  : CornersFile{detect_boards(args.images, board, o.detect, [&] { detected.advance(); }), {}};
   detected.finish();
+  if (const BoardDetections& d = corners.detections; d.reoriented > 0)
+    corners.notes.push_back(fmt::format("{} of the {} images were shot turned another way (EXIF Orientation): their "
+                                        "corners were turned into the frame of the others ({}x{}, Orientation {})",
+                                        d.reoriented, d.images.size(), d.width, d.height, d.orientation));
   if (!args.corners_out.empty()) {
     write_corners_vnl(args.corners_out, corners.detections);
     if (corners.detections.turned > 0)  // right for lightprobe and mrcal's solves; not for drawing on the files
       warn(fmt::format("{}: {} of the {} images were turned by their EXIF Orientation: the corners are in the images "
-                       "as shown, and mrcal's tools that draw on the image files load them as stored",
-                       args.corners_out, corners.detections.turned, corners.detections.images.size()));
+                       "as {}, and mrcal's tools that draw on the image files load them as stored",
+                       args.corners_out, corners.detections.turned, corners.detections.images.size(),
+                       corners.detections.reoriented > 0 ? "most of them are shown" : "shown"));
   }
   GeometricCalibration run = calibrate_detections(std::move(corners.detections), board, o);
   run.notes.insert(run.notes.begin(), corners.notes.begin(), corners.notes.end());

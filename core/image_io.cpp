@@ -1438,6 +1438,34 @@ CameraImage decode_camera_image(const std::string& path, const std::string& byte
 
 }  // namespace
 
+std::array<double, 2> stored_from_shown(int orientation, int stored_width, int stored_height, std::array<double, 2> p) {
+  const double w1 = stored_width - 1, h1 = stored_height - 1, x = p[0], y = p[1];
+  switch (orientation) {  // as turned_for_display maps a shown pixel to its stored one
+    case 2: return {w1 - x, y};
+    case 3: return {w1 - x, h1 - y};
+    case 4: return {x, h1 - y};
+    case 5: return {y, x};
+    case 6: return {y, h1 - x};
+    case 7: return {w1 - y, h1 - x};
+    case 8: return {w1 - y, x};
+    default: return p;
+  }
+}
+
+std::array<double, 2> shown_from_stored(int orientation, int stored_width, int stored_height, std::array<double, 2> p) {
+  const double w1 = stored_width - 1, h1 = stored_height - 1, sx = p[0], sy = p[1];
+  switch (orientation) {  // stored_from_shown solved for the shown point
+    case 2: return {w1 - sx, sy};
+    case 3: return {w1 - sx, h1 - sy};
+    case 4: return {sx, h1 - sy};
+    case 5: return {sy, sx};
+    case 6: return {h1 - sy, sx};
+    case 7: return {h1 - sy, w1 - sx};
+    case 8: return {sy, w1 - sx};
+    default: return p;
+  }
+}
+
 std::string turned_size_hint(int width, int height, int other_width, int other_height) {
   if (width == height || width != other_height || height != other_width) return {};
   return " (the same size turned 90 degrees: images are read as their EXIF Orientation shows them, and one set needs "
@@ -1471,7 +1499,7 @@ CameraImage read_camera_image(const std::string& path) {
   return camera_image_from_bytes(path, guarded(path, "read", [&] { return read_whole_file(path); }));
 }
 
-std::pair<int, int> camera_image_size(const std::string& path) {
+std::pair<int, int> camera_image_size(const std::string& path, int* orientation) {
   const std::string bytes = guarded(path, "read", [&] { return read_whole_file(path); });
   return guarded(path, "read", [&] {
     if (bytes.empty()) fail(path, "cannot read: empty file");
@@ -1479,6 +1507,7 @@ std::pair<int, int> camera_image_size(const std::string& path) {
     if (!header) fail(path, "unsupported camera image format (expected PNG, JPEG, TIFF, PNM or BMP)");
     check_image_size(path, header->width, header->height);
     const int w = int(header->width), h = int(header->height);
+    if (orientation) *orientation = header->orientation >= 1 && header->orientation <= 8 ? header->orientation : 1;
     // Orientations 5-8 exchange rows and columns (turned_for_display; OpenCV turns TIFFs alike).
     return header->orientation >= 5 ? std::pair{h, w} : std::pair{w, h};
   });

@@ -87,7 +87,13 @@ struct CameraImage {
 CameraImage read_camera_image(const std::string& path);
 // The width and height read_camera_image gives (as its EXIF Orientation shows the image),
 // from the header alone: no decode (a 24 MP JPEG's is ~0.2 s). InputError as it would.
-std::pair<int, int> camera_image_size(const std::string& path);
+// `orientation`, when given, receives the EXIF Orientation it is turned by (1: as stored).
+std::pair<int, int> camera_image_size(const std::string& path, int* orientation = nullptr);
+// A point (pixel centres at integers) of an image shown as EXIF `orientation` (1-8) turns it,
+// as read_camera_image gives it, in the stored image of stored_width x stored_height; and
+// back. The same map read_camera_image turns the pixels by (tests/core/image_io_test.cpp).
+std::array<double, 2> stored_from_shown(int orientation, int stored_width, int stored_height, std::array<double, 2> shown);
+std::array<double, 2> shown_from_stored(int orientation, int stored_width, int stored_height, std::array<double, 2> stored);
 // For a message about camera images of different sizes: when one is the other turned 90
 // degrees, " (...)" saying that images are read as their EXIF Orientation says and that one
 // set needs one orientation; else empty.

@@ -1293,6 +1293,16 @@ TEST(ImageIo, TiffsAreTurnedAsTheirOrientationTagSays) {
       EXPECT_FLOAT_EQ(top_right, red(2 - x0, y0));
     else
       EXPECT_FLOAT_EQ(top_right, red(x0, 1 - y0));
+    // Every shown pixel is the stored one stored_from_shown names, and shown_from_stored
+    // takes it back (what turns a calibration view's corners between frames).
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        const std::array<double, 2> s = stored_from_shown(k, 3, 2, {double(x), double(y)});
+        EXPECT_FLOAT_EQ(img.rgb[3 * size_t(y * img.width + x)], red(int(s[0]), int(s[1])));
+        const std::array<double, 2> back = shown_from_stored(k, 3, 2, s);
+        EXPECT_EQ(back[0], x);
+        EXPECT_EQ(back[1], y);
+      }
   }
 }
 

@@ -1183,9 +1183,9 @@ std::string encode_envmap_exr(const EnvMap& map, const WriteMapOptions& options)
   return guarded(name, "write", [&] { return encode_exr(name, map, options); });
 }
 
-static CameraImage camera_image_from_bytes(const std::string& path, const std::string& bytes);
+static CameraImage camera_image_from_bytes(const std::string& path, const std::string& bytes, bool as_stored);
 
-RgbImage read_rgb_image(const std::string& path) {
+RgbImage read_rgb_image(const std::string& path, bool as_stored) {
   RgbImage img;
   // A .tif holds radiance (floating-point samples: read as a map is) or camera codes: its
   // header says which, from the bytes read once for either.
@@ -1207,7 +1207,8 @@ RgbImage read_rgb_image(const std::string& path) {
     img.units = m.units;
     return img;
   }
-  CameraImage c = tiff.empty() ? read_camera_image(path) : camera_image_from_bytes(path, tiff);
+  CameraImage c = tiff.empty() ? read_camera_image(path, as_stored) : camera_image_from_bytes(path, tiff, as_stored);
+  img.orientation = c.orientation;
   img.width = c.width;
   img.height = c.height;
   img.rgb = std::move(c.rgb);
@@ -1473,7 +1474,23 @@ std::string turned_size_hint(int width, int height, int other_width, int other_h
 }
 
 // read_camera_image on the file's bytes, already read.
-static CameraImage camera_image_from_bytes(const std::string& path, const std::string& bytes) {
+// The shown image (turned as `orientation` says) back as stored: OpenCV turns TIFFs itself.
+static CameraImage stored_from_display(CameraImage in, int orientation) {
+  if (orientation <= 1 || orientation > 8) return in;
+  const bool swap = orientation >= 5;
+  CameraImage out = in;
+  out.width = swap ? in.height : in.width, out.height = swap ? in.width : in.height;
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) {
+      const auto p = shown_from_stored(orientation, out.width, out.height, {double(x), double(y)});
+      const size_t from = size_t(p[1]) * size_t(in.width) + size_t(p[0]), to = size_t(y) * size_t(out.width) + size_t(x);
+      for (size_t c = 0; c < 3; ++c) out.rgb[3 * to + c] = in.rgb[3 * from + c];
+      if (!in.valid.empty()) out.valid[to] = in.valid[from];
+    }
+  return out;
+}
+
+static CameraImage camera_image_from_bytes(const std::string& path, const std::string& bytes, bool as_stored) {
   return guarded(path, "read", [&] {
     if (bytes.empty()) fail(path, "cannot read: empty file");
     // The decoder allocates what the header claims: check the claim first.
@@ -1488,15 +1505,23 @@ static CameraImage camera_image_from_bytes(const std::string& path, const std::s
     if (bytes.size() > size_t(std::numeric_limits<int>::max())) fail(path, "file over 2 GiB: not a camera image");
     // OpenCV's TIFF decoder turns TIFFs itself, even under IMREAD_UNCHANGED (8- and 16-bit,
     // grey and RGB, measured with OpenCV 4.6); JPEGs come from every decoder as stored.
-    const int turn = header->format == ImageFormat::Tiff ? 1 : header->orientation;
-    CameraImage image = turned_for_display(decode_camera_image(path, bytes, *header), turn);
+    const bool tiff = header->format == ImageFormat::Tiff;
+    CameraImage image = decode_camera_image(path, bytes, *header);
+    if (as_stored)
+      image = tiff ? stored_from_display(std::move(image), header->orientation) : std::move(image);
+    else
+      image = turned_for_display(std::move(image), tiff ? 1 : header->orientation);
     image.orientation = header->orientation;
     return image;
   });
 }
 
-CameraImage read_camera_image(const std::string& path) {
-  return camera_image_from_bytes(path, guarded(path, "read", [&] { return read_whole_file(path); }));
+CameraImage turned_as_shown(CameraImage stored, int orientation) {
+  return turned_for_display(std::move(stored), orientation);
+}
+
+CameraImage read_camera_image(const std::string& path, bool as_stored) {
+  return camera_image_from_bytes(path, guarded(path, "read", [&] { return read_whole_file(path); }), as_stored);
 }
 
 std::pair<int, int> camera_image_size(const std::string& path, int* orientation) {

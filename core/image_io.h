@@ -84,7 +84,13 @@ struct CameraImage {
   // warped by a registration tool, Hugin's align_image_stack: no data there, not black).
   std::vector<uint8_t> valid;
 };
-CameraImage read_camera_image(const std::string& path);
+// `as_stored`: the pixels as stored, not turned as the file's EXIF Orientation says (what a
+// sensor saw where the orientation is noise: a camera pointing up; `orientation` still says
+// what the file records).
+CameraImage read_camera_image(const std::string& path, bool as_stored = false);
+// A camera image read as stored, turned as EXIF `orientation` tells viewers to show it (what
+// read_camera_image does unless as_stored).
+CameraImage turned_as_shown(CameraImage stored, int orientation);
 // The width and height read_camera_image gives (as its EXIF Orientation shows the image),
 // from the header alone: no decode (a 24 MP JPEG's is ~0.2 s). InputError as it would.
 // `orientation`, when given, receives the EXIF Orientation it is turned by (1: as stored).
@@ -108,10 +114,11 @@ struct RgbImage {
   // > 0: `rgb` holds a camera image's code values in [0, 1] at this bit depth (8 or 16),
   // not radiance; whoever makes a map of it linearises them (probe/camera_codes.h).
   int code_bits = 0;
+  int orientation = 1;  // a camera image's EXIF Orientation as recorded (read_camera_image)
 };
 // .exr/.hdr/.pfm as stored (NaN/Inf/negative refused); 8/16-bit formats as code values
-// in [0, 1] (read_camera_image).
-RgbImage read_rgb_image(const std::string& path);
+// in [0, 1] (read_camera_image, `as_stored` as there).
+RgbImage read_rgb_image(const std::string& path, bool as_stored = false);
 // .exr/.hdr/.pfm without a layout record; atomic like every writer.
 void write_rgb_image(const std::string& path, const RgbImage& image, const WriteMapOptions& options = {});
 

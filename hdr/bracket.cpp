@@ -311,6 +311,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
   Bracket b;
   std::vector<ExifExposureSettings> settings;  // each frame's recorded ISO and f-number
   bool first_grey = false;                      // the first camera image's colour mode
+  std::vector<int> orientation;                 // each camera image's EXIF Orientation
   if (times && times->size() != paths.size())
     throw InputError(fmt::format("--exposure-times: {} times for {} images", times->size(), paths.size()));
   // Camera RAW files (through LibRaw) are linear 16-bit with their own shutter time.
@@ -346,7 +347,9 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
       continue;
     }
     if (b.linear) throw InputError(fmt::format("{}: a non-RAW image in a bracket of RAW files", paths[k]));
-    CameraImage cam = read_camera_image(paths[k]);
+    // As stored: turned below, once every frame's EXIF Orientation is known.
+    CameraImage cam = read_camera_image(paths[k], true);
+    orientation.push_back(cam.orientation);
     if (k == 0) {
       b.bit_depth = cam.bit_depth;
       first_grey = cam.grey;
@@ -393,6 +396,26 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
       settings.push_back(read_exif_exposure(paths[k]));
       if (!settings.back().seconds) throw InputError(paths[k] + ": no exposure time in EXIF; give --exposure-times");
       b.exposure_seconds.push_back(*settings.back().seconds);
+    }
+  }
+  // The frames of one bracket come from one camera that did not turn between them: shown as
+  // their EXIF Orientation says where they agree, as stored where they do not. A camera
+  // pointing up (a fisheye sky bracket) records an arbitrary orientation per frame, and frames
+  // tagged upside down among upright ones were merged turned 180 degrees against the others.
+  if (!orientation.empty()) {
+    if (std::all_of(orientation.begin(), orientation.end(), [&](int o) { return o == orientation[0]; })) {
+      for (RgbImage& f : b.frames) {
+        CameraImage c;
+        c.width = f.width, c.height = f.height, c.rgb = std::move(f.rgb), c.valid = std::move(f.valid);
+        c = turned_as_shown(std::move(c), orientation[0]);
+        f.width = c.width, f.height = c.height, f.rgb = std::move(c.rgb), f.valid = std::move(c.valid);
+      }
+    } else {
+      std::string list;
+      for (size_t k = 0; k < orientation.size(); ++k) list += (k ? ", " : "") + std::to_string(orientation[k]);
+      warn(fmt::format("{}: the frames' EXIF Orientation disagree ({}): one camera did not turn between the frames of "
+                       "a bracket, so they are read as stored",
+                       paths[0], list));
     }
   }
   fold_iso_and_aperture(b, settings);

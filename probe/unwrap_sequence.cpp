@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/sensor_white_level.h"
+#include "core/warnings.h"
 #include "probe/fisheye.h"
 
 namespace lp {
@@ -60,12 +61,24 @@ struct FirstPass {
   std::vector<char> seeded;
   // 16-bit frames: the white level of a sensor of fewer bits, decided at the first frame.
   SequenceWhiteLevel white_level;
+  bool orientation_said = false;  // a fisheye frame's EXIF Orientation left unapplied, said once
 };
 
 // Frames are read in both passes: a frame whose codes cannot be made linear is refused as
 // it is first read, before any ball is searched for.
 RgbImage read_frame(const std::string& f, FirstPass& pass, const UnwrapSequenceOptions& o) {
-  RgbImage img = read_rgb_image(f);
+  // A fisheye is unwrapped in its sensor's frame, where the calibration and "image up is +X"
+  // (CONVENTIONS.md) hold: its EXIF Orientation is a gravity sensor's reading, which for a
+  // camera pointing up is noise. Applied, the same pixels tagged upside down came out turned
+  // 180 degrees in azimuth, and a 90-degree tag refused a calibrated lens for its size.
+  const bool fisheye = o.type == ProbeType::Fisheye;
+  RgbImage img = read_rgb_image(f, fisheye);
+  if (fisheye && img.orientation != 1 && !pass.orientation_said) {
+    warn(fmt::format("{}: its EXIF Orientation ({}) is not applied: a fisheye is unwrapped in its sensor's frame (a "
+                     "camera pointing up records an arbitrary one; --rotation turns the probe)",
+                     f, img.orientation));
+    pass.orientation_said = true;
+  }
   if (pass.width && (img.width != pass.width || img.height != pass.height))
     throw InputError(fmt::format("{}: {}x{} differs from the sequence's {}x{}", f, img.width, img.height, pass.width,
                                  pass.height));

@@ -86,12 +86,6 @@ TEST(CalibCornersCli, CornersOfTurnedPhotosAreWrittenWithAWarning) {
 TEST(CalibCornersCli, ShotsTurnedByTheirExifOrientationAreTurnedIntoTheFrameOfTheOthers) {
   const fs::path dir = scratch() / "corners_mixed_orientation";
   fs::create_directories(dir);
-  const auto app1 = [](char orientation) {
-    const std::string exif = std::string("Exif\0\0MM\0*\0\0\0\x08\0\x01", 16) +
-                             std::string("\x01\x12\0\x03\0\0\0\x01\0", 9) + orientation + std::string("\0\0", 2) +
-                             std::string(4, '\0');
-    return std::string("\xFF\xE1", 2) + char((exif.size() + 2) >> 8) + char((exif.size() + 2) & 0xff) + exif;
-  };
   std::string images, originals;
   for (int i = 1; i <= 14; ++i) {
     if (i == 10) continue;  // the set has no left10
@@ -99,7 +93,7 @@ TEST(CalibCornersCli, ShotsTurnedByTheirExifOrientationAreTurnedIntoTheFrameOfTh
     const char orientation = i == 3 || i == 6 || i == 9 ? 6 : i == 12 ? 3 : 1;
     const std::string jpeg = slurp(shared("calib-opencv-stereo-9x6/" + name));
     std::ofstream((dir / name).string(), std::ios::binary)
-        << (orientation == 1 ? jpeg : jpeg.substr(0, 2) + app1(orientation) + jpeg.substr(2));
+        << (orientation == 1 ? jpeg : with_exif_orientation(jpeg, orientation));
     images += ' ';
     images += (dir / name).string();
     originals += ' ';

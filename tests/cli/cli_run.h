@@ -68,6 +68,16 @@ inline CliRun lightprobe(const std::string& args) {
 
 inline std::string shared(const std::string& rel) { return std::string(LIGHTPROBE_SHARED_DATA) + "/" + rel; }
 
+// A JPEG's bytes with an APP1 Exif segment spliced in after its SOI marker whose one entry is
+// Orientation (1-8): the pixels stay as stored, as a camera turned for the shot writes them.
+inline std::string with_exif_orientation(const std::string& jpeg, char orientation) {
+  const std::string exif = std::string("Exif\0\0MM\0*\0\0\0\x08\0\x01", 16) +
+                           std::string("\x01\x12\0\x03\0\0\0\x01\0", 9) + orientation + std::string("\0\0", 2) +
+                           std::string(4, '\0');
+  const std::string app1 = std::string("\xFF\xE1", 2) + char((exif.size() + 2) >> 8) + char((exif.size() + 2) & 0xff) + exif;
+  return jpeg.substr(0, 2) + app1 + jpeg.substr(2);
+}
+
 inline int line_count(const std::string& s) {
   int n = 0;
   for (char c : s) n += c == '\n';

@@ -411,10 +411,21 @@ TEST(ReadCameraImage, TurnsJpegsAsTheirExifOrientationSays) {
   const Bracket bracket = read_bracket({a, b}, std::vector<double>{0.5, 0.125});
   EXPECT_EQ(bracket.frames[0].width, 5);
   EXPECT_EQ(bracket.frames[0].height, 7);
-  // One frame shot the other way round is refused, and the message says why its size differs.
-  const std::string msg = message_of([&] { read_bracket({a, b, plain}, std::vector<double>{0.5, 0.125, 1}); });
-  EXPECT_EQ(msg, plain + ": size 7x5 differs from the 5x7 of 2 of the 3 images (the same size turned 90 degrees: "
-                         "images are read as their EXIF Orientation shows them, and one set needs one orientation)");
+  // Frames whose Orientation disagree (one camera does not turn between the frames of a
+  // bracket: a camera pointing up records an arbitrary one) are read as stored, said once.
+  // This had been refused for the size the turn gave one frame; frames upside down among
+  // upright ones had been merged turned against them.
+  std::vector<std::string> warnings;
+  const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const Bracket mixed = read_bracket({a, b, plain}, std::vector<double>{0.5, 0.125, 1});
+  set_warning_sink(before);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], a + ": the frames' EXIF Orientation disagree (6, 6, 1): one camera did not turn between the "
+                             "frames of a bracket, so they are read as stored");
+  for (const RgbImage& f : mixed.frames) {
+    EXPECT_EQ(f.width, 7);
+    EXPECT_EQ(f.rgb, as_stored.rgb);
+  }
 }
 
 // Camera codes are taken as sRGB; a bracket whose files carry another ICC profile (the

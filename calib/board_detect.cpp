@@ -619,7 +619,6 @@ BoardDetections detect_boards(const std::vector<std::string>& images, const Boar
   return out;
 }
 
-
 void turn_views_into_one_frame(BoardDetections& d, std::vector<std::array<int, 2>>& shown,
                                const std::vector<int>& orientation, const BoardSpec& board) {
   d.image_orientation = orientation;

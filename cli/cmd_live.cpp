@@ -122,8 +122,14 @@ int run_stream(const StreamArgs& args, const Output& out) {
   LivePipelineOptions& lo = st.pipeline;
   if (args.exposures == "auto") lo.auto_exposures = true;  // planned from each map (hdr/auto_bracket.h)
   else if (!args.exposures.empty()) lo.exposure_cycle = parse_numbers(args.exposures, "--exposures");
-  for (double t : lo.exposure_cycle)
+  for (size_t k = 0; k < lo.exposure_cycle.size(); ++k) {
+    const double t = lo.exposure_cycle[k];
     if (!(t > 0)) throw InputError("--exposures must be positive seconds");
+    // Every bracket would be dropped ("the same exposure time"), the stream serving no light.
+    for (size_t j = 0; j < k; ++j)
+      if (lo.exposure_cycle[j] == t)
+        throw InputError(fmt::format("--exposures: {} s is given twice; each frame of a bracket needs its own", t));
+  }
   if (args.response == "srgb")
     lo.response = srgb_response(256);
   else if (!args.response.empty())

@@ -441,7 +441,26 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     // is divided by that gain once planned (frame_exposure: radiance per unit gain).
     const double gain0 = frame_exposure(b.frames[0]) / (b.frames[0].exposure_s > 0 ? b.frames[0].exposure_s : 1.0);
     for (auto& f : b.frames) {
-      hb.exposure_seconds.push_back(frame_exposure(f) / gain0);
+      // Fused at an exposure the camera did not report, a frame would be taken as 1 s.
+      if (!(f.exposure_s > 0))
+        throw InputError(fmt::format("{}: a bracket frame came back without its exposure time (read back {:g} s): the "
+                                     "bracket cannot be fused",
+                                     source_->describe(), f.exposure_s));
+      const double t = frame_exposure(f) / gain0;
+      // A camera asked for a time beyond its range takes its nearest (times below its
+      // shortest), so two frames come back at one exposure: check_bracket refused each such
+      // bracket and the stream served no light. The later frame of an exposure adds no
+      // range and is left out, said once.
+      if (std::find(hb.exposure_seconds.begin(), hb.exposure_seconds.end(), t) != hb.exposure_seconds.end()) {
+        if (!repeated_exposure_warned_) {
+          repeated_exposure_warned_ = true;
+          warn(fmt::format("{}: two frames of a bracket came back at one exposure ({:g} s): the camera cannot take a "
+                           "time it was asked for; each exposure is used once",
+                           source_->describe(), f.exposure_s));
+        }
+        continue;
+      }
+      hb.exposure_seconds.push_back(t);
       hb.frames.push_back(std::move(f.image));
     }
     const CameraResponse response = options_.response ? *options_.response : linear_response(256);

@@ -144,6 +144,7 @@ class LivePipeline {
   Publish publish_;
   std::unique_ptr<CameraSource> source_;
   bool gain_unit_warned_ = false;  // a camera whose gain is not in dB, said once
+  bool repeated_exposure_warned_ = false;  // a bracket frame at an exposure already in it, said once
   int failed_from_start_ = 0;      // brackets refused as bad input before any was processed
   size_t unmatched_from_start_ = 0;  // frames at no time of the cycle, before any was
   bool matched_once_ = false;

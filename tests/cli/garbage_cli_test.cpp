@@ -329,6 +329,13 @@ TEST(GarbageCli, BracketsWithNothingWellExposedOrAWrongTimeTwiceAreRefused) {
   EXPECT_TRUE(fs::exists(dir / "fused.exr"));
 }
 
+// One time twice in --exposures: every bracket would be dropped for it ("the same exposure
+// time") and the stream would serve no light; refused before the camera opens.
+TEST(GarbageCli, StreamExposuresGivenTwiceAreRefused) {
+  expect_one_line_error(lightprobe("stream --source aravis:Fake_1 --exposures 0.01,0.01,0.04 --duration 1"),
+                        "--exposures: 0.01 s is given twice");
+}
+
 TEST(GarbageCli, AMirrorBallOutsideTheImageIsRefusedNotUnwrappedToNothing) {
   const fs::path dir = fresh_dir("ball");
   const fs::path ball = dir / "ball.exr", out = dir / "map.exr";

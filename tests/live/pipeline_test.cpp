@@ -41,7 +41,8 @@ class ScriptedSource : public CameraSource {
     }
     CameraFrame f;
     const size_t k = cycle_.empty() ? 0 : size_t(seq_ % int64_t(cycle_.size()));
-    f.exposure_s = cycle_.empty() ? 1.0 : cycle_[k];
+    f.exposure_s = cycle_.empty() ? 1.0 : std::max(cycle_[k], shortest_s);
+    if (no_exposure_read_back) f.exposure_s = 0;
     f.bracket_index = cycle_.empty() ? -1 : int(k);
     f.sequence = seq_++;
     f.image.width = 64;
@@ -52,6 +53,8 @@ class ScriptedSource : public CameraSource {
   }
 
   double gain_db = 0;  // every frame's
+  double shortest_s = 0;  // a time asked below it is taken at it, as a camera clamps
+  bool no_exposure_read_back = false;
 
  private:
   int frames_, skip_every_, die_at_;
@@ -91,6 +94,45 @@ TEST(LivePipeline, EveryFrameIsProcessedInAWholeBracketOrCountedAsDropped) {
   EXPECT_EQ(s.frames_in, 3 * (s.brackets_processed + s.brackets_dropped) + s.frames_dropped_partial);
   EXPECT_GT(s.frames_dropped_partial, 0u);
   EXPECT_GT(s.brackets_processed, 40u);
+}
+
+// A camera asked for a time below its shortest takes its shortest: two frames of a bracket at
+// one exposure, which check_bracket refuses. Every bracket was dropped and the stream served
+// no light; now the repeated exposure is used once, said in one warning. A frame whose
+// exposure is not read back is not fused at a guessed 1 s: its bracket is dropped, saying so.
+TEST(LivePipeline, AnExposureTheCameraClampsIsUsedOnceAndAnUnreportedOneIsNotGuessed) {
+  std::vector<std::string> warnings;
+  const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  std::atomic<int> opened{0}, published{0};
+  LivePipeline clamped(
+      [&] {
+        auto s = std::make_unique<ScriptedSource>(60, 0, -1, &opened);
+        s->shortest_s = 0.004;  // the cycle asks 0.001, 0.004, 0.016
+        return s;
+      },
+      options(), [&](const LightList&, std::shared_ptr<const EnvMap>) { ++published; });
+  clamped.start();
+  clamped.wait();
+  set_warning_sink(before);
+  EXPECT_EQ(clamped.stats().brackets_processed, 20u);
+  EXPECT_EQ(clamped.stats().brackets_dropped, 0u);
+  EXPECT_EQ(published.load(), 20);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], "scripted: two frames of a bracket came back at one exposure (0.004 s): the camera cannot take "
+                         "a time it was asked for; each exposure is used once");
+  LivePipeline unknown(
+      [&] {
+        auto s = std::make_unique<ScriptedSource>(30, 0, -1, &opened);
+        s->no_exposure_read_back = true;
+        return s;
+      },
+      options(), [&](const LightList&, std::shared_ptr<const EnvMap>) { ++published; });
+  unknown.start();
+  unknown.wait();
+  EXPECT_EQ(unknown.stats().brackets_processed, 0u);
+  EXPECT_EQ(unknown.stats().brackets_dropped, 10u);
+  EXPECT_NE(unknown.stats().last_error.find("a bracket frame came back without its exposure time"), std::string::npos)
+      << unknown.stats().last_error;
 }
 
 // The published map records the probe rotation it was unwrapped with (CONVENTIONS.md), as

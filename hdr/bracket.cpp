@@ -57,8 +57,9 @@ std::optional<double> parse_seconds(const std::string& text) {
 // bracket was shot with a spare frame. A bracket with them was refused whole. The later ones
 // add no range: each exposure is used once, said in one line. Unless their codes differ by
 // more than one exposure allows (a mean code 15 % apart; 30 % for a RAW's linear ones, half a
-// stop either way): then a time is wrong, and that is refused, naming both.
-void drop_repeated_exposures(Bracket& b) {
+// stop either way): then a time is wrong, and that is refused, naming both. Returns the
+// warning line, said by the caller once the bracket has passed its checks.
+std::string drop_repeated_exposures(Bracket& b) {
   std::vector<std::pair<size_t, size_t>> repeats;  // (frame, the earlier frame it repeats)
   std::vector<char> dropped(b.frames.size(), 0);
   for (size_t k = 0; k < b.frames.size(); ++k)
@@ -85,7 +86,7 @@ void drop_repeated_exposures(Bracket& b) {
         repeats.emplace_back(k, j);
         break;
       }
-  if (repeats.empty()) return;
+  if (repeats.empty()) return {};
   if (b.frames.size() - repeats.size() < 2)
     throw InputError(fmt::format("{} and {}: the same exposure time {} s, as every frame: a bracket needs at least 2 "
                                  "exposures",
@@ -95,14 +96,14 @@ void drop_repeated_exposures(Bracket& b) {
     which += fmt::format("{}{} = {} ({} s)", r ? ", " : "", frame_name(b, repeats[r].first),
                          frame_name(b, repeats[r].second), b.exposure_seconds[repeats[r].first]);
   if (repeats.size() > 3) which += fmt::format(" and {} more", repeats.size() - 3);
-  warn(fmt::format("{} {} the exposure of an earlier one, each exposure used once: {}", repeats.size(),
-                   repeats.size() == 1 ? "frame repeats" : "frames repeat", which));
   for (size_t k = b.frames.size(); k-- > 0;)
     if (dropped[k]) {
       b.frames.erase(b.frames.begin() + std::ptrdiff_t(k));
       b.exposure_seconds.erase(b.exposure_seconds.begin() + std::ptrdiff_t(k));
       if (k < b.paths.size()) b.paths.erase(b.paths.begin() + std::ptrdiff_t(k));
     }
+  return fmt::format("{} {} the exposure of an earlier one, each exposure used once: {}", repeats.size(),
+                     repeats.size() == 1 ? "frame repeats" : "frames repeat", which);
 }
 
 // "100, 400, 1600" (format: one value's text).
@@ -402,6 +403,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
   // their EXIF Orientation says where they agree, as stored where they do not. A camera
   // pointing up (a fisheye sky bracket) records an arbitrary orientation per frame, and frames
   // tagged upside down among upright ones were merged turned 180 degrees against the others.
+  std::vector<std::string> said;  // after the checks: a refused bracket says one line
   if (!orientation.empty()) {
     if (std::all_of(orientation.begin(), orientation.end(), [&](int o) { return o == orientation[0]; })) {
       for (RgbImage& f : b.frames) {
@@ -413,16 +415,17 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     } else {
       std::string list;
       for (size_t k = 0; k < orientation.size(); ++k) list += (k ? ", " : "") + std::to_string(orientation[k]);
-      warn(fmt::format("{}: the frames' EXIF Orientation disagree ({}): one camera did not turn between the frames of "
-                       "a bracket, so they are read as stored",
-                       paths[0], list));
+      said.push_back(fmt::format("{}: the frames' EXIF Orientation disagree ({}): one camera did not turn between the "
+                                 "frames of a bracket, so they are read as stored",
+                                 paths[0], list));
     }
   }
   fold_iso_and_aperture(b, settings);
-  drop_repeated_exposures(b);
+  if (std::string line = drop_repeated_exposures(b); !line.empty()) said.push_back(std::move(line));
   check_bracket(b);
   apply_sensor_white_level(b);
   check_exposure_order(b, times ? "given (--exposure-times)" : "read from the files");
+  for (const std::string& line : said) warn(line);
   if (!b.linear) {  // after the checks: a refused bracket says one line
     if (auto profile = read_colour_profile(paths[0])) b.to_rec709 = profile->to_rec709, b.colour_profile = profile->name;
   }

@@ -1293,6 +1293,11 @@ TEST(ImageIo, TiffsAreTurnedAsTheirOrientationTagSays) {
       EXPECT_FLOAT_EQ(top_right, red(2 - x0, y0));
     else
       EXPECT_FLOAT_EQ(top_right, red(x0, 1 - y0));
+    // Read as stored (a fisheye's sensor frame), the TIFF that OpenCV turned is turned back.
+    const CameraImage stored = read_camera_image(dir + "t.tif", true);
+    ASSERT_EQ(stored.width, 3);
+    ASSERT_EQ(stored.height, 2);
+    for (int i = 0; i < 6; ++i) EXPECT_FLOAT_EQ(stored.rgb[3 * size_t(i)], red(i % 3, i / 3)) << i;
     // Every shown pixel is the stored one stored_from_shown names, and shown_from_stored
     // takes it back (what turns a calibration view's corners between frames).
     for (int y = 0; y < img.height; ++y)

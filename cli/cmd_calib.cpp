@@ -4,14 +4,18 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "calib/calibration_run.h"
 #include "calib/camera_model.h"
 #include "calib/colour_match.h"
 #include "calib/corners_vnl.h"
 #include "calib/photometric.h"
+#include "calib/vignetting.h"
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/error.h"
@@ -19,6 +23,8 @@
 #include "core/warnings.h"
 #include "core/heap_tuning.h"
 #include "core/progress.h"
+#include "eval/svg_chart.h"
+#include "hdr/bracket.h"
 
 namespace lp::cli {
 
@@ -45,6 +51,13 @@ struct CalibPhotometricArgs {
   std::string readings;
   std::string model = "linear";     // linear|log
   std::string loss = "huber";       // huber|cauchy|none
+  std::string output;
+};
+
+struct CalibVignettingArgs {
+  std::vector<std::string> flats;   // flat fields of one camera and lens setting
+  std::string codes;                // camera images: srgb (8-bit default), linear, or a response.json
+  int terms = 0;                    // 0: the fewest the flats support
   std::string output;
 };
 
@@ -197,6 +210,129 @@ int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out) {
   return 0;
 }
 
+// One flat field as linear luminance: codes through --codes, and NaN where a channel is at the
+// top code (clipped: its light is unknown) or the file marks no data.
+// Read as stored: the model is in the sensor's frame (calib/vignetting.h).
+FlatField read_flat(const std::string& path, const std::optional<CodeCurve>& codes) {
+  RgbImage img = read_rgb_image(path, true);
+  if (img.vignetting_corrected)
+    throw InputError(path + ": its vignetting is corrected already; a flat field measures it on the camera's own output");
+  if (img.code_bits > 8 && !codes)
+    throw InputError(fmt::format("{}: {}-bit camera codes may be linear (a raw developer's) or gamma-encoded (an "
+                                 "editor's): say which with --codes linear, --codes srgb or --codes RESPONSE.json",
+                                 path, img.code_bits));
+  const size_t n = size_t(img.width) * size_t(img.height);
+  std::vector<char> clipped(n, 0);
+  if (img.code_bits > 0) {
+    const float top = 1.0f - 0.5f / float((1 << img.code_bits) - 1);
+    for (size_t i = 0; i < n; ++i)
+      clipped[i] = img.rgb[3 * i] >= top || img.rgb[3 * i + 1] >= top || img.rgb[3 * i + 2] >= top;
+    linearise_codes(img, codes.value_or(CodeCurve{}), path);
+  } else if (codes) {
+    warn(fmt::format("{}: radiance already; --codes applies to camera images and is not used", path));
+  }
+  FlatField f;
+  f.width = img.width;
+  f.height = img.height;
+  f.name = path;
+  f.luminance.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const float* p = &img.rgb[3 * i];
+    const bool usable = !clipped[i] && (img.valid.empty() || img.valid[i]);
+    f.luminance[i] = usable ? float(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) : std::nanf("");
+  }
+  return f;
+}
+
+int run_calib_vignetting(const CalibVignettingArgs& args, const Output& out) {
+  if (args.terms < 0 || args.terms > VignettingModel::kMaxTerms)
+    throw InputError(fmt::format("--terms must be 0 (the fewest the flats support) to {}", VignettingModel::kMaxTerms));
+  const auto t0 = std::chrono::steady_clock::now();
+  std::optional<CodeCurve> codes;
+  if (!args.codes.empty()) codes = code_curve(args.codes);
+  std::vector<FlatField> flats;
+  for (const std::string& path : args.flats) flats.push_back(read_flat(path, codes));
+  // One aperture: a lens's falloff changes with it, and flats of two would fit neither.
+  double f_number = 0;
+  std::string f_number_file;
+  for (const std::string& path : args.flats) {
+    const double f = is_camera_image_file(path) ? read_exif_exposure(path).f_number : 0.0;
+    if (!(f > 0)) continue;
+    if (f_number > 0 && std::abs(std::log2(f / f_number)) > 1.0 / 12 + 1e-9)
+      throw InputError(fmt::format("{}: taken at f/{:g}, but {} at f/{:g}: vignetting changes with the aperture; "
+                                   "calibrate each aperture from its own flats",
+                                   path, f, f_number_file, f_number));
+    if (!(f_number > 0)) f_number = f, f_number_file = path;
+  }
+  VignettingFitOptions o;
+  o.terms = args.terms;
+  VignettingModel m = fit_vignetting(flats, o);
+  m.f_number = f_number;
+  const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  constexpr double kUnevenRms = 0.02;
+  if (m.rms_relative > kUnevenRms)
+    warn(fmt::format("{}: the flats depart from one smooth falloff by {:.1f} % RMS: uneven light, a textured target "
+                     "or flats that disagree; the correction is no better than that",
+                     args.flats.front(), 100 * m.rms_relative));
+
+  // The picture: every block's level against r, and the fitted curve.
+  const fs::path chart_path = fs::path(args.output).replace_extension(".svg");
+  ChartPanel panel{"relative illumination V against r (1 = half the image diagonal)", "r", "V", {}, false, false};
+  ChartSeries blocks{"blocks of the flats (each over its own scale)", {}, {}, {}, false};
+  for (const VignettingSample& s : vignetting_samples(flats, m, 3000)) {
+    blocks.x.push_back(std::max(s.r, 1e-3));
+    blocks.y.push_back(s.value);
+  }
+  ChartSeries curve{fmt::format("fit, {} term{}", m.terms, m.terms == 1 ? "" : "s"), {}, {}, {}, true};
+  for (int i = 0; i <= 100; ++i) {
+    const double r = std::max(1e-3, m.max_radius * i / 100.0);
+    curve.x.push_back(r);
+    curve.y.push_back(relative_illumination(m, m.centre[0] + r * m.radius_px, m.centre[1]));
+  }
+  panel.series = {blocks, curve};
+  // Residuals show what the curve hides: dust (single low blocks), uneven light (a band).
+  ChartPanel misfit{"block over the fit, minus 1 (%)", "r", "%", {}, false, false};
+  ChartSeries residual{"blocks of the flats (each over its own scale)", {}, {}, {}, false};
+  for (size_t i = 0; i < blocks.x.size(); ++i) {
+    residual.x.push_back(blocks.x[i]);
+    const double at = relative_illumination(m, m.centre[0] + blocks.x[i] * m.radius_px, m.centre[1]);
+    residual.y.push_back(100 * (blocks.y[i] / at - 1));
+  }
+  misfit.series = {residual};
+  save_vignetting(args.output, m);
+  write_file_atomically(chart_path.string(), svg_chart("Vignetting of " + args.output, {panel, misfit}, 1));
+
+  const double v_edge = relative_illumination(m, m.centre[0] + m.max_radius * m.radius_px, m.centre[1]);
+  std::string poly = "1";
+  for (int t = 0; t < m.terms; ++t)
+    poly += fmt::format(" {} {:.4g} r^{}", m.k[size_t(t)] < 0 ? "-" : "+", std::abs(m.k[size_t(t)]), 2 * t + 2);
+  say(out, "{}: V = {} about ({:.1f}, {:.1f}) px ({}); at the measured edge, r = {:.2f} ({:.0f} px), V = {:.3f} "
+           "({:+.2f} stops, +-{:.2f} %)\n",
+      args.output, poly, m.centre[0], m.centre[1], m.centre_from == "fit" ? "fitted" : "the image centre: too little falloff to place it",
+      m.max_radius, m.max_radius * m.radius_px, v_edge, std::log2(v_edge), 100 * m.edge_sigma_relative);
+  say(out, "{}: residual RMS {:.2f} % over {} blocks of {} flat{}{}; picture {}; {:.0f} ms\n", args.output,
+      100 * m.rms_relative, m.blocks, m.flats, m.flats == 1 ? "" : "s",
+      m.blocks_dropped ? fmt::format(", {} left out (dust, specks)", m.blocks_dropped) : std::string(),
+      chart_path.string(), ms);
+  emit_json(out, {{"output", args.output},
+                  {"picture", chart_path.string()},
+                  {"k", m.k},
+                  {"terms", m.terms},
+                  {"centre", m.centre},
+                  {"centre_from", m.centre_from},
+                  {"radius_px", m.radius_px},
+                  {"max_radius", m.max_radius},
+                  {"edge_relative_illumination", v_edge},
+                  {"edge_sigma_relative", m.edge_sigma_relative},
+                  {"rms_relative", m.rms_relative},
+                  {"flats", m.flats},
+                  {"blocks", m.blocks},
+                  {"blocks_dropped", m.blocks_dropped},
+                  {"f_number", m.f_number},
+                  {"milliseconds", ms}});
+  return 0;
+}
+
 int run_calib_colour(const CalibColourArgs& args, const Output& out) {
   const ColourMatch m = fit_colour_match(read_colour_patches_csv(args.patches));
   save_colour_match(args.output, m);
@@ -249,6 +385,16 @@ std::vector<Command> calib_commands() {
          f.opt("--loss", a->loss, "Robust loss: huber|cauchy|none").one_of({"huber", "cauchy", "none"});
          f.output(a->output, "photometric.json");
          return [a](const Output& out) { return run_calib_photometric(*a, out); };
+       }},
+      {"calib vignetting", "Lens vignetting (relative illumination) from flat fields",
+       "lightprobe calib vignetting flat_*.jpg -o vignetting.json\nlightprobe hdr fuse IMG_*.jpg --vignetting vignetting.json -o probe.exr",
+       [](Flags& f) -> Handler {
+         auto a = std::make_shared<CalibVignettingArgs>();
+         f.arg("FLAT", a->flats, "Images of a uniformly lit, featureless field filling the view (a diffuser over the lens), unclipped; several: the camera turned about its axis between them").required();
+         f.opt("--codes", a->codes, "Camera images: how codes encode light: srgb (8-bit default), linear, or a response.json from hdr response; 16-bit images need it");
+         f.opt("--terms", a->terms, "Even terms of the falloff polynomial, 1-5; 0: the fewest the flats support");
+         f.output(a->output, "vignetting.json (and its picture, vignetting.svg)");
+         return [a](const Output& out) { return run_calib_vignetting(*a, out); };
        }},
       {"calib colour", "3x3 colour match of the probe camera to a backplate camera",
        "lightprobe calib colour patches.csv -o colour.json\nlightprobe probe unwrap ball.exr --type mirrorball --colour-match colour.json -o map.exr",

@@ -8,10 +8,12 @@
 #include <memory>
 
 #include "calib/photometric.h"
+#include "calib/vignetting.h"
 #include "cli/commands.h"
 #include "cli/report.h"
 #include "core/chromaticities.h"
 #include "core/error.h"
+#include "core/warnings.h"
 #include "core/file_io.h"
 #include "core/image_io.h"
 #include "hdr/align.h"
@@ -40,6 +42,7 @@ struct HdrFuseArgs {
   std::string response;             // saved response; default: recovered from this bracket
   bool linear = false;              // a linear sensor: no response curve
   std::string photometric;          // calibration: absolute units (or a log sensor's decode)
+  std::string vignetting;           // calib vignetting's file: divided out of the radiance
   std::string align = "none";       // none|mtb|ecc
   int max_shift = 0;                // px --align searches; 0: AlignOptions' automatic value
   bool deghost = false;
@@ -133,6 +136,8 @@ int run_hdr_response(const HdrResponseArgs& args, const Output& out) {
 int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
   std::optional<PhotometricCalibration> photometric;
   if (!args.photometric.empty()) photometric = load_photometric(args.photometric);
+  std::optional<VignettingModel> vignetting;
+  if (!args.vignetting.empty()) vignetting = load_vignetting(args.vignetting);
   nlohmann::json report = {{"output", args.output}};
   RgbImage radiance;
   const auto t0 = Clock::now();
@@ -153,11 +158,24 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
                                      option, args.photometric));
     if (is_radiance_file(args.images[0]))
       throw InputError(args.images[0] + ": a log sensor's frame is its camera codes (PNG, TIFF, JPEG), not a float image");
-    radiance = decode_log_sensor(read_rgb_image(args.images[0]), *photometric);
+    RgbImage frame = read_rgb_image(args.images[0]);
+    if (vignetting) {  // turned as the frame was
+      vignetting = vignetting_as_shown(*vignetting, frame.orientation);
+      check_vignetting_size(*vignetting, frame.width, frame.height, args.images[0] + " (" + args.vignetting + ")");
+    }
+    radiance = decode_log_sensor(frame, *photometric);
     report["mode"] = "log-sensor";
   } else {
     check_max_shift(args.align, args.max_shift);
     Bracket bracket = read_bracket(args.images, exposure_times(args.exposure_times, args.images));
+    if (vignetting) {  // before the merge's seconds are spent; turned as the frames were
+      vignetting = vignetting_as_shown(*vignetting, bracket.orientation);
+      check_vignetting_size(*vignetting, bracket.frames[0].width, bracket.frames[0].height,
+                            args.images[0] + " (" + args.vignetting + ")");
+      if (const std::string w = aperture_mismatch(*vignetting, bracket.f_number, args.vignetting, "the bracket's frames");
+          !w.empty())
+        warn(w);
+    }
     if (!args.response.empty() && (args.linear || bracket.linear))
       throw InputError(fmt::format("--response {} and {} contradict: a linear bracket has no response curve", args.response,
                                    args.linear ? "--linear" : "RAW frames (linear)"));
@@ -212,6 +230,13 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
       say(out, "{}: {} pixels are saturated in every frame (their radiance is a lower bound)\n", args.output,
           mr.saturated_everywhere);
   }
+  // The lens's falloff out before the absolute scale: a photometric calibration is fitted on
+  // readings of corrected probes (docs/hdr.md, "Vignetting").
+  if (vignetting) {
+    correct_vignetting(radiance, *vignetting, args.vignetting);
+    radiance.vignetting_corrected = true;
+    report["vignetting"] = args.vignetting;
+  }
   if (photometric && !photometric->log_sensor) {
     apply_photometric(radiance, *photometric);
     report["units"] = "radiance";
@@ -250,6 +275,7 @@ std::vector<Command> hdr_commands() {
          f.opt("--response", a->response, "Saved response (hdr response); default: recovered here");
          f.flag("--linear", a->linear, "Linear sensor: no response curve");
          f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");
+         f.opt("--vignetting", a->vignetting, "The lens's vignetting (calib vignetting), divided out of the radiance");
          f.opt("--align", a->align, "Align hand-held frames: none|mtb|ecc");
          f.opt("--max-shift", a->max_shift, "Largest shift --align searches, px; 0: 2.5 % of the long side, at least 32");
          f.flag("--deghost", a->deghost, "Drop moving objects from the frames that disagree");

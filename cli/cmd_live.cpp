@@ -8,6 +8,7 @@
 
 #include "calib/camera_model.h"
 #include "calib/photometric.h"
+#include "calib/vignetting.h"
 #include "cli/cmd_live.h"
 #include "cli/commands.h"
 #include "cli/report.h"
@@ -74,7 +75,7 @@ void refuse_options_the_stream_never_reads(const StreamArgs& a) {
   if (metadata) {
     refuse({{!a.publish.empty(), "--publish"}, {!a.exposures.empty(), "--exposures"}, {a.bracketing != d.bracketing, "--bracketing"},
             {!a.response.empty(), "--response"}, {!a.camera.empty(), "--camera"}, {a.fov != d.fov, "--fov"},
-            {!a.rotation.empty(), "--rotation"}, {a.maps, "--maps"}, {a.layout_given, "--layout"},
+            {!a.vignetting.empty(), "--vignetting"}, {!a.rotation.empty(), "--rotation"}, {a.maps, "--maps"}, {a.layout_given, "--layout"},
             {!a.size.empty(), "--size"}, {a.nside != d.nside, "--nside"}, {a.method != d.method, "--method"},
             {a.n != d.n, "--n"}, {a.target_error != d.target_error, "--target-error"},
             {a.error_measure != d.error_measure, "--error-measure"}, {a.frame_budget_ms != d.frame_budget_ms, "--frame-budget-ms"},
@@ -99,7 +100,7 @@ void refuse_options_the_stream_never_reads(const StreamArgs& a) {
   if (a.bracketing != d.bracketing && a.exposures.empty()) throw InputError("--bracketing needs --exposures (a bracket)");
   if (a.maps)
     refuse({{!a.rotation.empty(), "--rotation"}, {!a.response.empty(), "--response"}, {!a.camera.empty(), "--camera"},
-            {a.fov != d.fov, "--fov"}, {!a.exposures.empty(), "--exposures"}},
+            {!a.vignetting.empty(), "--vignetting"}, {a.fov != d.fov, "--fov"}, {!a.exposures.empty(), "--exposures"}},
            "applies to camera frames; with --maps the frames are maps already");
   else if (!(a.fov > 0 && a.fov <= 360))
     throw InputError(fmt::format("--fov must be a field of view in (0, 360] degrees, got {}", a.fov));
@@ -136,6 +137,7 @@ int run_stream(const StreamArgs& args, const Output& out) {
     lo.response = load_response(args.response);
   if (!args.photometric.empty()) lo.photometric = load_photometric(args.photometric), lo.photometric_file = args.photometric;
   if (!args.camera.empty()) lo.camera = read_camera_model(args.camera), lo.camera_file = args.camera;
+  if (!args.vignetting.empty()) lo.vignetting = load_vignetting(args.vignetting), lo.vignetting_file = args.vignetting;
   // Replayed photos in Display P3 or Adobe RGB streamed as if sRGB: their colours, from the
   // first photo's ICC profile, as probe unwrap and hdr fuse read them.
   std::string colour_profile;  // reported: what the colours were converted from
@@ -297,6 +299,7 @@ std::vector<Command> live_commands() {
          f.opt("--response", a->response, "Camera response: a response.json (hdr response), or srgb for codes written as sRGB (a phone's JPEGs); default linear");
          f.opt("--photometric", a->photometric, "Photometric calibration: absolute units");
          f.opt("--camera", a->camera, "Calibrated camera model (default: equidistant fisheye)");
+         f.opt("--vignetting", a->vignetting, "The lens's vignetting (calib vignetting), corrected in every map");
          f.opt("--fov", a->fov, "Fisheye field of view / image circle, deg (with --camera only when given: else the image circle found in the first frame bounds the lens)");
          f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees");
          f.flag("--maps", a->maps, "The source delivers environment maps already (replayed .exr, not resampled: their own layout and size unless --layout/--size/--nside are given)");

@@ -14,6 +14,7 @@ struct StreamArgs {
   std::string exposures;            // bracketing cycle, seconds
   std::string bracketing = "auto";  // auto|sequencer|writes (Aravis: camera sequencer or feature writes)
   std::string response, photometric, camera;
+  std::string vignetting;           // calib vignetting's file: each map corrected where it was read
   double fov = 180;
   std::string rotation;
   bool maps = false;                // the source delivers environment maps (replayed .exr)

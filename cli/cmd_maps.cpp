@@ -53,6 +53,7 @@ int run_info(const InfoArgs& args, const Output& out) {
       j["world_from_probe"] = map.world_from_probe->m;
       j["probe_yaw_pitch_roll_deg"] = yaw_pitch_roll_deg(*map.world_from_probe);
     }
+    j["vignetting_corrected"] = map.vignetting_corrected;
     all.push_back(j);
     const Vec3 b = s.brightest_direction;
     say(out,
@@ -70,6 +71,7 @@ int run_info(const InfoArgs& args, const Output& out) {
       say(out, "  probe       unwrapped turned by yaw {:.4g}, pitch {:.4g}, roll {:.4g} deg (--rotation)\n", deg(ypr[0]),
           deg(ypr[1]), deg(ypr[2]));
     }
+    if (map.vignetting_corrected) say(out, "  lens        vignetting divided out (--vignetting)\n");
   }
   emit_json(out, all.size() == 1 ? all[0] : nlohmann::json{{"maps", all}});
   return 0;

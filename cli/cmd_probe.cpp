@@ -49,6 +49,7 @@ struct ProbeUnwrapArgs {
   bool fixed_ball = false;          // use frame 0's geometry for every frame (no tracking)
   std::string colour_match;         // 3x3 transform to the backplate camera (calib colour)
   std::string codes;                // camera images: srgb, linear, or a response.json (hdr response)
+  std::string vignetting;           // calib vignetting's file: divided out before the unwrap
   std::string rotation;
   std::string layout = "latlong";
   std::string size;
@@ -82,20 +83,6 @@ void target_size(const std::string& layout_name, const std::string& size, int ns
   } else {
     *w = 1024, *h = 512;
   }
-}
-
-// --codes: a curve's name, or a camera response from `hdr response` (exp g(z) per level).
-CodeCurve code_curve(const std::string& codes) {
-  CodeCurve c;
-  c.name = codes;
-  if (codes == "srgb") return c;
-  if (codes == "linear") {
-    c.kind = CodeCurve::Kind::Linear;
-    return c;
-  }
-  if (!fs::exists(codes))
-    throw InputError(fmt::format("--codes: '{}' is neither srgb, linear nor a response file", codes));
-  return response_code_curve(load_response(codes).log_exposure, codes);
 }
 
 UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
@@ -154,6 +141,10 @@ UnwrapSequenceOptions unwrap_options(const ProbeUnwrapArgs& a) {
   o.fixed_geometry = a.fixed_ball;
   if (!a.colour_match.empty()) o.colour = load_colour_match(a.colour_match);
   if (!a.codes.empty()) o.codes = code_curve(a.codes);
+  if (!a.vignetting.empty()) {
+    o.vignetting = load_vignetting(a.vignetting);
+    o.vignetting_file = a.vignetting;
+  }
   return o;
 }
 
@@ -195,6 +186,11 @@ constexpr double kFewValidWarning = 0.05;
 int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   const std::vector<std::string> files = find_images(args.inputs);
   UnwrapSequenceOptions o = unwrap_options(args);
+  if (o.vignetting && is_camera_image_file(files.front()))
+    if (const std::string w = aperture_mismatch(*o.vignetting, read_exif_exposure(files.front()).f_number,
+                                                args.vignetting, files.front());
+        !w.empty())
+      warn(w);
   // The track's options act across frames, on a ball or circle that is found: with one frame,
   // or a ball given by hand, they changed nothing, with exit 0.
   for (const auto& [given, option] : {std::pair{args.stabilise, "--smooth-track"}, std::pair{args.static_probe, "--static-probe"},
@@ -396,6 +392,7 @@ std::vector<Command> probe_commands() {
          f.flag("--fixed-ball", a->fixed_ball, "Sequences: no tracking, frame 0's geometry for all (for comparison)");
          f.opt("--colour-match", a->colour_match, "3x3 colour transform to the backplate (calib colour)");
          f.opt("--codes", a->codes, "Camera images (PNG, JPEG, TIFF): how codes encode light, made linear before unwrapping: srgb (8-bit default), linear, or a response.json from hdr response; 16-bit images need it");
+         f.opt("--vignetting", a->vignetting, "The lens's vignetting (calib vignetting), divided out of each image before unwrapping");
          f.opt("--rotation", a->rotation, "Probe to world: 'yaw,pitch,roll' degrees or 9 numbers (recorded in the map)");
          f.opt("--layout", a->layout, "latlong|hemisphere|healpix");
          f.opt("--size", a->size, "WxH");

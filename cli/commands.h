@@ -10,6 +10,7 @@
 #include "cli/command_table.h"
 #include "core/envmap.h"
 #include "core/vec3.h"
+#include "probe/camera_codes.h"
 #include "sampling/sampler.h"
 
 namespace lp {
@@ -59,6 +60,9 @@ void refuse_misplaced_geometry(Layout layout, const std::string& size, int nside
 BoardSpec board_from(const std::string& text, double square_mm);
 // --response linear|gamma|scurve of the synthetic brackets.
 ResponseCurve curve_from(const std::string& name);
+// --codes: a curve's name (srgb, linear), or a camera response from `hdr response` (exp g(z)
+// per level).
+CodeCurve code_curve(const std::string& codes);
 
 // --exposure, --scale, --normalize-illuminance: the units a relative map's lights or SH9 are
 // exported in (sampling/light_units.h), shared by `sample` and `sh`.

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
 #include "calib/board_detect.h"
@@ -13,6 +14,7 @@
 #include "core/file_io.h"
 #include "core/limits.h"
 #include "eval/synthetic_sequence.h"
+#include "hdr/response.h"
 #include "hdr/synthetic_bracket.h"
 #include "render/reference_shader.h"
 #include "sampling/light_units.h"
@@ -300,6 +302,19 @@ LightUnitsOptions UnitFlags::options() const {
   if (!normalize_illuminance.empty())
     u.normalize_illuminance_lux = parse_numbers(normalize_illuminance, "--normalize-illuminance", 1)[0];
   return u;
+}
+
+CodeCurve code_curve(const std::string& codes) {
+  CodeCurve c;
+  c.name = codes;
+  if (codes == "srgb") return c;
+  if (codes == "linear") {
+    c.kind = CodeCurve::Kind::Linear;
+    return c;
+  }
+  if (!std::filesystem::exists(codes))
+    throw InputError(fmt::format("--codes: '{}' is neither srgb, linear nor a response file", codes));
+  return response_code_curve(load_response(codes).log_exposure, codes);
 }
 
 }  // namespace lp::cli

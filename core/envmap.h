@@ -48,6 +48,9 @@ struct EnvMap {
   // probe's metadata), recorded in the file. Metadata only: the pixels are in the world frame
   // whatever it holds, and maps made otherwise have none.
   std::optional<Mat3> world_from_probe;
+  // The camera image it came from had its lens vignetting divided out (calib/vignetting.h),
+  // recorded in the file so that no one divides it out twice.
+  bool vignetting_corrected = false;
 
   size_t pixel_count() const { return size_t(width) * size_t(height); }
   bool is_valid(size_t i) const { return valid.empty() || valid[i] != 0; }

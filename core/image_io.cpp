@@ -158,6 +158,7 @@ struct RawImage {
   std::optional<std::string> units;
   std::optional<int> nside;
   std::optional<Mat3> world_from_probe;
+  bool vignetting_corrected = false;
   std::string layout_key = "layout";  // how the file names the field, for messages
   bool openexr_cube = false;          // an EXR whose standard envmap attribute says cube
   // Said once the file is accepted (finish_map), so that a file refused after all says one line.
@@ -287,6 +288,7 @@ EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions&
       fail(path, "the recorded probe rotation (world_from_probe) is not a rotation matrix");
     map.world_from_probe = raw.world_from_probe;
   }
+  map.vignetting_corrected = raw.vignetting_corrected;
   if (layout == Layout::Healpix) {
     // The file's pixels, row by row from the top, are the NESTED pixels in order.
     const int nside = healpix_nside_of_shape(raw.width, raw.height);
@@ -514,6 +516,8 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
   if (auto* a = header.findTypedAttribute<Imf::IntAttribute>("lightprobe.nside")) raw.nside = a->value();
   if (auto* a = header.findTypedAttribute<Imf::StringAttribute>(kExrRotationKey))
     raw.world_from_probe = parse_rotation_text(path, kExrRotationKey, a->value());
+  if (auto* a = header.findTypedAttribute<Imf::StringAttribute>("lightprobe.vignetting"))
+    raw.vignetting_corrected = a->value() == "corrected";
   raw.openexr_cube = Imf::hasEnvmap(header) && Imf::envmap(header) == Imf::ENVMAP_CUBE;
 
   const Imf::ChannelList& channels = header.channels();
@@ -661,6 +665,7 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
   if (map.units == Units::Radiance) Imf::addWhiteLuminance(header, float(kLuminousEfficacy));
   if (map.layout == Layout::Healpix) header.insert("lightprobe.nside", Imf::IntAttribute(map.nside));
   if (map.world_from_probe) header.insert(kExrRotationKey, Imf::StringAttribute(rotation_text(*map.world_from_probe)));
+  if (map.vignetting_corrected) header.insert("lightprobe.vignetting", Imf::StringAttribute("corrected"));
 
   // The frame buffer must hold the file's pixel type: convert to half here when needed.
   std::vector<float> alpha;
@@ -782,6 +787,8 @@ HdrHeader read_hdr_header(const std::string& path, const std::string& bytes) {
       raw.nside = int(v);
     } else if (key == "LIGHTPROBE_WORLD_FROM_PROBE") {
       raw.world_from_probe = parse_rotation_text(path, "LIGHTPROBE_WORLD_FROM_PROBE", value);
+    } else if (key == "LIGHTPROBE_VIGNETTING") {
+      raw.vignetting_corrected = value == "corrected";
     }
   }
   for (int k = 0; k < 3; ++k) header.scale[k] = 1.0 / (exposure * colorcorr[k]);
@@ -970,6 +977,7 @@ std::string encode_hdr(const std::string& path, const EnvMap& map, const WriteMa
   out += fmt::format("LIGHTPROBE_UNITS={}\n", to_string(map.units));
   if (map.layout == Layout::Healpix) out += fmt::format("LIGHTPROBE_NSIDE={}\n", map.nside);
   if (map.world_from_probe) out += "LIGHTPROBE_WORLD_FROM_PROBE=" + rotation_text(*map.world_from_probe) + "\n";
+  if (map.vignetting_corrected) out += "LIGHTPROBE_VIGNETTING=corrected\n";
   out += fmt::format("\n-Y {} +X {}\n", img.height, img.width);
   const int W = img.width;
   std::vector<uint8_t> rgbe(4 * size_t(W));
@@ -1069,6 +1077,9 @@ std::string encode_pfm(const std::string& path, const EnvMap& map, const WriteMa
   const Mat3 identity = rotation_from_yaw_pitch_roll_deg(0, 0, 0);
   if (map.world_from_probe && map.world_from_probe->m != identity.m)
     fail(path, "cannot write: .pfm records no probe rotation (world_from_probe); write .exr or .hdr");
+  if (map.vignetting_corrected)
+    fail(path, "cannot write: .pfm cannot record that the vignetting was corrected, and it would be corrected again; "
+               "write .exr or .hdr");
   const bool little = std::endian::native == std::endian::little;
   std::string out = fmt::format("PF\n{} {}\n{}\n", img.width, img.height, little ? "-1.0" : "1.0");
   const size_t row_floats = 3 * size_t(img.width);
@@ -1205,6 +1216,7 @@ RgbImage read_rgb_image(const std::string& path, bool as_stored) {
     img.rgb = std::move(m.rgb);
     img.valid = std::move(m.valid);
     img.units = m.units;
+    img.vignetting_corrected = m.vignetting_corrected;
     return img;
   }
   CameraImage c = tiff.empty() ? read_camera_image(path, as_stored) : camera_image_from_bytes(path, tiff, as_stored);
@@ -1225,6 +1237,7 @@ void write_rgb_image(const std::string& path, const RgbImage& image, const Write
   m.rgb = image.rgb;
   m.valid = image.valid;
   m.units = image.units;
+  m.vignetting_corrected = image.vignetting_corrected;
   WriteMapOptions o = options;
   o.record_layout = false;
   write_envmap(path, m, o);

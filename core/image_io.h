@@ -5,7 +5,8 @@
 // Map formats, chosen by file extension:
 //   .exr  OpenEXR, float or half RGB(A); attributes "lightprobe.layout",
 //         "lightprobe.units", "lightprobe.nside" and "lightprobe.world_from_probe" (9 numbers,
-//         row-major, in a string: EnvMap::world_from_probe) carry the metadata.
+//         row-major, in a string: EnvMap::world_from_probe) carry the metadata, and
+//         "lightprobe.vignetting" = "corrected" EnvMap::vignetting_corrected.
 //         Reads R,G,B or Y (grey, or Y/RY/BY luminance-chroma) channels of any pixel type,
 //         or, in a file without them, its one layer that has R,G,B ("ViewLayer.Combined.R"
 //         of a Blender render; two such layers are refused); a multi-part file's first part,
@@ -17,14 +18,15 @@
 //         read. Writing half refuses values above 65504 rather than turning them to Inf.
 //   .hdr  Radiance RGBE, reads flat and run-length (new and old) scanlines; writes RLE.
 //         Metadata as header lines "LIGHTPROBE_LAYOUT=..." / "LIGHTPROBE_UNITS=..." /
-//         "LIGHTPROBE_NSIDE=..." / "LIGHTPROBE_WORLD_FROM_PROBE=" and 9 numbers, row-major.
+//         "LIGHTPROBE_NSIDE=..." / "LIGHTPROBE_WORLD_FROM_PROBE=" and 9 numbers, row-major /
+//         "LIGHTPROBE_VIGNETTING=corrected".
 //         Pixels decode as m 2^(e-136) (as OpenCV, stb_image), divided by the product of
 //         EXPOSURE (and COLORCORR) lines. Only the "-Y H +X W" orientation and
 //         FORMAT=32-bit_rle_rgbe are read; XYZE is refused.
 //   .pfm  Portable float map (colour "PF" and grey "Pf", either byte order; the scale's
 //         magnitude is ignored, as most readers do). PFM carries no metadata: the layout
 //         is inferred from the size on read, the units read back as relative and the probe
-//         rotation is not kept.
+//         rotation is not kept; a map whose vignetting was corrected is refused.
 //   .tif  Read only: floating-point TIFFs (32-bit IEEE or LogLuv, panorama stitchers' HDR
 //         output) through OpenCV; alpha as an EXR's. Integer TIFFs are camera codes: refused.
 // .hdr and .pfm cannot hold a mask: writing a map with invalid pixels to them throws.
@@ -115,6 +117,7 @@ struct RgbImage {
   // not radiance; whoever makes a map of it linearises them (probe/camera_codes.h).
   int code_bits = 0;
   int orientation = 1;  // a camera image's EXIF Orientation as recorded (read_camera_image)
+  bool vignetting_corrected = false;  // as EnvMap's, recorded in .exr and .hdr files
 };
 // .exr/.hdr/.pfm as stored (NaN/Inf/negative refused); 8/16-bit formats as code values
 // in [0, 1] (read_camera_image, `as_stored` as there).

@@ -498,6 +498,7 @@ EnvMap resample(const EnvMap& src, Layout layout, int width, int height, const R
   dst.units = src.units;
   // The probe turned with its map: the rotation recorded composes with this one.
   if (src.world_from_probe) dst.world_from_probe = options.world_from_source * *src.world_from_probe;
+  dst.vignetting_corrected = src.vignetting_corrected;
   check_resample(src, layout, options);
   if (src.layout != Layout::Healpix && layout != Layout::Healpix) {
     if (const auto rot = separable_rotation(options.world_from_source))

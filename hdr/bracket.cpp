@@ -412,6 +412,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
         c = turned_as_shown(std::move(c), orientation[0]);
         f.width = c.width, f.height = c.height, f.rgb = std::move(c.rgb), f.valid = std::move(c.valid);
       }
+      b.orientation = orientation[0];
     } else {
       std::string list;
       for (size_t k = 0; k < orientation.size(); ++k) list += (k ? ", " : "") + std::to_string(orientation[k]);

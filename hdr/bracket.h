@@ -40,6 +40,9 @@ struct Bracket {
   // The first frame's ISO and f-number where every frame records them (0: not every frame
   // does): exposure_seconds are relative to them. reference_exposure_scale reads them.
   double iso = 0, f_number = 0;
+  // The EXIF Orientation the frames were turned by (1: as stored; frames whose tags disagree
+  // are read as stored).
+  int orientation = 1;
 
   int width() const { return frames.empty() ? 0 : frames[0].width; }
   int height() const { return frames.empty() ? 0 : frames[0].height; }

@@ -49,6 +49,7 @@ struct LivePipeline::RemapCache {
   BracketUnwrapPlan plan;  // over `compiled`
   FuseUnwrapWorkspace fuse;  // buffers reused from bracket to bracket
   RgbImage out;
+  std::vector<float> vignetting_gain;  // per map pixel, 1 / V where it is read; empty: none
 };
 
 LivePipeline::LivePipeline(OpenSource open, LivePipelineOptions options, Publish publish)
@@ -386,15 +387,19 @@ void LivePipeline::ensure_remap(const RgbImage& frame) {
     throw InputError(fmt::format("{}camera model is for {}x{}, frames are {}x{}",
                                  options_.camera_file.empty() ? "" : options_.camera_file + ": ", model.width, model.height,
                                  width, height));
+  if (options_.vignetting) check_vignetting_size(*options_.vignetting, width, height, options_.vignetting_file);
   remap_ = std::make_unique<RemapCache>();
   remap_->width = width;
   remap_->height = height;
   const Mat3 world_from_camera = options_.world_from_probe * upward_camera_world_from_camera();
   const bool lens_bounds = options_.camera && !options_.fov_given;
-  remap_->compiled = compile_remap(camera_remap(model, world_from_camera, options_.layout, options_.width, options_.height,
-                                                lens_bounds ? 0.0 : options_.fov_deg / 2,
-                                                lens_bounds ? lens_image_circle(frame) : std::nullopt),
-                                   width, height);
+  const RemapTable table = camera_remap(model, world_from_camera, options_.layout, options_.width, options_.height,
+                                        lens_bounds ? 0.0 : options_.fov_deg / 2,
+                                        lens_bounds ? lens_image_circle(frame) : std::nullopt);
+  // The falloff where each map pixel is read, once per frame size: a multiply per map pixel
+  // (the same as correcting the frame, to the bilinear footprint's variation of V).
+  if (options_.vignetting) remap_->vignetting_gain = inverse_vignetting_at(*options_.vignetting, table.src_x, table.src_y);
+  remap_->compiled = compile_remap(table, width, height);
   remap_->plan = plan_bracket_unwrap(remap_->compiled);
 }
 
@@ -498,6 +503,12 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
     unwrap_s = seconds_since(t0);
   }
 
+  if (remap_ && !options_.frames_are_maps && !remap_->vignetting_gain.empty()) {
+    const std::vector<float>& gain = remap_->vignetting_gain;
+    for (size_t i = 0; i < gain.size(); ++i)
+      for (int c = 0; c < 3; ++c) map->rgb[3 * i + size_t(c)] *= gain[i];
+    map->vignetting_corrected = true;
+  }
   // Codes of another colour space (Display P3, Adobe RGB) to Rec. 709, as probe unwrap and
   // hdr fuse convert them.
   if (options_.to_rec709 && !options_.frames_are_maps) apply_colour_matrix(map->rgb, *options_.to_rec709);

@@ -21,6 +21,7 @@
 
 #include "calib/camera_model.h"
 #include "calib/photometric.h"
+#include "calib/vignetting.h"
 #include "core/envmap.h"
 #include "core/light_list.h"
 #include "hdr/auto_bracket.h"
@@ -54,6 +55,10 @@ struct LivePipelineOptions {
   // image's short side) looking up, turned by `world_from_probe`.
   std::optional<CameraModel> camera;
   std::string camera_file;  // where `camera` was read from, named in errors about it
+  // The lens's vignetting (calib/vignetting.h): each map pixel is multiplied by 1 / V where
+  // the unwrap read it (frames of another size are refused, naming vignetting_file).
+  std::optional<VignettingModel> vignetting;
+  std::string vignetting_file;
   double fov_deg = 180;
   // With `camera`: whether fov_deg was given. Without it the calibrated model's own domain
   // is bounded by the image circle found in the first frame (probe unwrap's rule), not by

@@ -82,6 +82,14 @@ RgbImage read_frame(const std::string& f, FirstPass& pass, const UnwrapSequenceO
   if (pass.width && (img.width != pass.width || img.height != pass.height))
     throw InputError(fmt::format("{}: {}x{} differs from the sequence's {}x{}", f, img.width, img.height, pass.width,
                                  pass.height));
+  if (o.vignetting) {
+    check_vignetting_size(vignetting_as_shown(*o.vignetting, fisheye ? 1 : img.orientation), img.width, img.height,
+                          f + " (" + o.vignetting_file + ")");
+    if (img.vignetting_corrected)
+      throw InputError(fmt::format("{}: its vignetting is corrected already (hdr fuse --vignetting); --vignetting {} "
+                                   "would divide it out twice",
+                                   f, o.vignetting_file));
+  }
   if (img.code_bits > 8 && !o.codes)
     throw InputError(fmt::format("{}: {}-bit camera codes may be linear (a raw developer's) or gamma-encoded (an "
                                  "editor's): say which with --codes linear, --codes srgb or --codes RESPONSE.json",
@@ -194,6 +202,11 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
       fr.codes = curve.name;
       fr.clipped_fraction = codes.clipped_fraction;
     }
+    if (o.vignetting) {  // turned as the frame was: a fisheye is read as stored
+      correct_vignetting(frame, vignetting_as_shown(*o.vignetting, o.type == ProbeType::Fisheye ? 1 : frame.orientation),
+                         o.vignetting_file);
+      frame.vignetting_corrected = true;
+    }
     // The unwrappers' messages ("camera model is for 1032x778, image is 1280x960", "remap
     // source is 1x1") name no file: this frame's is put in front.
     try {
@@ -255,6 +268,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
                        (o.type == ProbeType::MirrorBall ? "ball" : "image circle") + " inside the image?)");
     map.units = frame.units;
     map.world_from_probe = o.world_from_probe;
+    map.vignetting_corrected = frame.vignetting_corrected;
     if (o.to_rec709 && !fr.codes.empty()) apply_colour_matrix(map.rgb, *o.to_rec709);  // a linear map of codes
     if (o.colour) apply_colour_match(map, *o.colour);
     if (auto c = centroid(map)) centroids.push_back(*c);

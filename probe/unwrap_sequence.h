@@ -21,6 +21,7 @@
 
 #include "calib/camera_model.h"
 #include "calib/colour_match.h"
+#include "calib/vignetting.h"
 #include "core/envmap.h"
 #include "probe/camera_codes.h"
 #include "probe/camera_unwrap.h"
@@ -66,6 +67,12 @@ struct UnwrapSequenceOptions {
   // and PNG define them; 16-bit ones are refused, their encoding being a converter's choice
   // (linear from a raw developer, a gamma curve from an editor).
   std::optional<CodeCurve> codes;
+  // The camera's lens vignetting (calib/vignetting.h, from `calib vignetting`), divided out of
+  // every frame once it is radiance, before the unwrap; `vignetting_file` names it in errors.
+  // A frame recorded as corrected already (a fused bracket of `hdr fuse --vignetting`) is
+  // refused with it.
+  std::optional<VignettingModel> vignetting;
+  std::string vignetting_file;
 };
 
 struct UnwrapSequenceReport {

@@ -411,6 +411,7 @@ TEST(ReadCameraImage, TurnsJpegsAsTheirExifOrientationSays) {
   const Bracket bracket = read_bracket({a, b}, std::vector<double>{0.5, 0.125});
   EXPECT_EQ(bracket.frames[0].width, 5);
   EXPECT_EQ(bracket.frames[0].height, 7);
+  EXPECT_EQ(bracket.orientation, 6);  // what a lens's vignetting model is turned by (hdr fuse --vignetting)
   // Frames whose Orientation disagree (one camera does not turn between the frames of a
   // bracket: a camera pointing up records an arbitrary one) are read as stored, said once.
   // This had been refused for the size the turn gave one frame; frames upside down among
@@ -422,6 +423,7 @@ TEST(ReadCameraImage, TurnsJpegsAsTheirExifOrientationSays) {
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_EQ(warnings[0], a + ": the frames' EXIF Orientation disagree (6, 6, 1): one camera did not turn between the "
                              "frames of a bracket, so they are read as stored");
+  EXPECT_EQ(mixed.orientation, 1);
   for (const RgbImage& f : mixed.frames) {
     EXPECT_EQ(f.width, 7);
     EXPECT_EQ(f.rgb, as_stored.rgb);

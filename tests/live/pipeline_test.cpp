@@ -289,6 +289,64 @@ TEST(LivePipeline, TheFramesColourMatrixTurnsEveryMap) {
   EXPECT_NEAR(turned[1], 0.5, 1e-5);
 }
 
+// The lens's falloff is divided out where each map pixel was read: uniform frames through
+// V = 1 - 0.5 r^2 (r over the 64 x 64 frame's half-diagonal) give a map that rises from the
+// zenith (the frame's centre, V = 1) to the horizon (the 180-degree circle's rim, 32 px out:
+// V = 1 - 0.5 (32 / 45.25)^2 = 0.75).
+TEST(LivePipeline, TheLensVignettingIsDividedOutOfEveryMap) {
+  auto maps = [](std::optional<VignettingModel> vignetting, bool* corrected) {
+    std::atomic<int> opened{0};
+    auto o = options();
+    o.vignetting = vignetting;
+    o.vignetting_file = "lens.json";
+    std::mutex m;
+    std::vector<float> last;
+    LivePipeline p([&] { return std::make_unique<ScriptedSource>(30, 0, -1, &opened); }, o,
+                   [&](const LightList&, std::shared_ptr<const EnvMap> map) {
+                     const std::lock_guard lock(m);
+                     last.assign(map->pixel_count(), std::nanf(""));
+                     for (size_t i = 0; i < map->pixel_count(); ++i)
+                       if (map->is_valid(i)) last[i] = map->rgb[3 * i + 1];
+                     *corrected = map->vignetting_corrected;
+                   });
+    p.start();
+    p.wait();
+    EXPECT_EQ(p.stats().last_error, "");
+    return last;
+  };
+  VignettingModel v;
+  v.image_width = v.image_height = 64;
+  v.centre = {31.5, 31.5};
+  v.radius_px = 0.5 * std::hypot(64.0, 64.0);
+  v.k = {-0.5};
+  v.terms = 1;
+  v.max_radius = 1;
+  bool plain_corrected = true, corrected = false;
+  const std::vector<float> plain = maps(std::nullopt, &plain_corrected), fixed = maps(v, &corrected);
+  EXPECT_FALSE(plain_corrected);
+  EXPECT_TRUE(corrected);
+  ASSERT_EQ(plain.size(), fixed.size());
+  double lowest = 1e9, highest = 0;
+  for (size_t i = 0; i < plain.size(); ++i)
+    if (std::isfinite(plain[i]) && plain[i] > 0) {
+      lowest = std::min(lowest, double(fixed[i] / plain[i]));
+      highest = std::max(highest, double(fixed[i] / plain[i]));
+    }
+  EXPECT_NEAR(lowest, 1.0, 0.01);       // the zenith row, near the frame's centre
+  EXPECT_NEAR(highest, 1 / 0.75, 0.02);  // the horizon row, at the circle's rim
+
+  v.image_width = 80;  // measured on another camera: every bracket is dropped, naming the file
+  std::atomic<int> opened{0};
+  auto o = options();
+  o.vignetting = v;
+  o.vignetting_file = "lens.json";
+  LivePipeline p([&] { return std::make_unique<ScriptedSource>(12, 0, -1, &opened); }, o,
+                 [&](const LightList&, std::shared_ptr<const EnvMap>) {});
+  p.start();
+  p.wait();
+  EXPECT_EQ(p.stats().last_error, "lens.json: vignetting measured on 80x64 images, this one is 64x64");
+}
+
 TEST(LivePipeline, ACameraModelOfAnotherSizeDropsEveryBracketNamingItsFile) {
   std::atomic<int> opened{0};
   std::atomic<int> published{0};

@@ -417,6 +417,12 @@ LivePipeline::Timings LivePipeline::process(Bracket& b) {
   // threaded process) sat between the fusion and the sampling, ~2 ms of the latency at
   // load 3.5 (bench Live_Latency, 6 interleaved pairs: mean 8.0 -> 5.2 ms).
   lp::Bracket hb;
+  // A replayed probe fused with hdr fuse --vignetting: corrected again, its rim would come out
+  // as much too bright as it was too dark.
+  if (options_.vignetting && !b.frames.empty() && b.frames[0].image.vignetting_corrected)
+    throw InputError(fmt::format("{}: the frames' vignetting is corrected already (hdr fuse --vignetting); --vignetting "
+                                 "{} would divide it out twice",
+                                 source_->describe(), options_.vignetting_file));
   if (options_.frames_are_maps) {
     RgbImage& radiance = b.frames[0].image;
     if (radiance.width != map->width || radiance.height != map->height)

@@ -49,10 +49,12 @@ class ScriptedSource : public CameraSource {
     f.image.height = 64;
     f.image.rgb.assign(64 * 64 * 3, float(std::min(1.0, 0.3 * f.exposure_s / 0.01)));
     f.gain_db = gain_db;
+    f.image.vignetting_corrected = vignetting_corrected;
     return f;
   }
 
   double gain_db = 0;  // every frame's
+  bool vignetting_corrected = false;  // frames recorded as corrected already (a replayed fused probe)
   double shortest_s = 0;  // a time asked below it is taken at it, as a camera clamps
   bool no_exposure_read_back = false;
 
@@ -345,6 +347,24 @@ TEST(LivePipeline, TheLensVignettingIsDividedOutOfEveryMap) {
   p.start();
   p.wait();
   EXPECT_EQ(p.stats().last_error, "lens.json: vignetting measured on 80x64 images, this one is 64x64");
+
+  // Frames corrected already (replayed probes of hdr fuse --vignetting) are not corrected again.
+  v.image_width = 64;
+  o.vignetting = v;
+  std::atomic<int> published{0};
+  LivePipeline again(
+      [&] {
+        auto source = std::make_unique<ScriptedSource>(12, 0, -1, &opened);
+        source->vignetting_corrected = true;
+        return source;
+      },
+      o, [&](const LightList&, std::shared_ptr<const EnvMap>) { ++published; });
+  again.start();
+  again.wait();
+  EXPECT_EQ(published.load(), 0);
+  EXPECT_EQ(again.stats().last_error,
+            "scripted: the frames' vignetting is corrected already (hdr fuse --vignetting); --vignetting lens.json would "
+            "divide it out twice");
 }
 
 TEST(LivePipeline, ACameraModelOfAnotherSizeDropsEveryBracketNamingItsFile) {

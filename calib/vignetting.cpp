@@ -482,8 +482,13 @@ VignettingModel load_vignetting(const std::string& path) {
   check_json_format(j, path, "lightprobe.vignetting/1");
   VignettingModel m;
   try {
-    m.image_width = j.at("image_width").get<int>();
-    m.image_height = j.at("image_height").get<int>();
+    // As numbers first: 1e12 taken as an int is undefined, and came out negative.
+    const double width = j.at("image_width").get<double>(), height = j.at("image_height").get<double>();
+    if (!(width >= 1 && width <= 1e6 && height >= 1 && height <= 1e6 && width == std::floor(width) &&
+          height == std::floor(height)))
+      throw InputError(fmt::format("{}: image size {}x{} is not a camera's", path, width, height));
+    m.image_width = int(width);
+    m.image_height = int(height);
     m.centre = j.at("centre").get<std::array<double, 2>>();
     m.radius_px = j.at("radius_px").get<double>();
     const std::vector<double> k = j.at("k").get<std::vector<double>>();
@@ -502,11 +507,11 @@ VignettingModel load_vignetting(const std::string& path) {
   } catch (const nlohmann::json::exception& e) {
     throw InputError(json_field_problem(path, e));
   }
-  if (m.image_width <= 0 || m.image_height <= 0)
-    throw InputError(fmt::format("{}: image size {}x{} is not positive", path, m.image_width, m.image_height));
-  if (!(std::isfinite(m.centre[0]) && std::isfinite(m.centre[1]) && m.radius_px > 0 && std::isfinite(m.radius_px) &&
-        m.max_radius > 0 && m.max_radius <= 2))
-    throw InputError(path + ": centre, radius_px or max_radius out of range");
+  // A lens's centre lies on its image; terms says how many of k were fitted.
+  if (!(m.centre[0] >= -0.5 && m.centre[0] <= m.image_width - 0.5 && m.centre[1] >= -0.5 &&
+        m.centre[1] <= m.image_height - 0.5 && m.radius_px > 0 && std::isfinite(m.radius_px) && m.max_radius > 0 &&
+        m.max_radius <= 2 && m.terms >= 1 && m.terms <= kMaxTerms))
+    throw InputError(path + ": centre (off the image), radius_px, max_radius or terms out of range");
   for (double k : m.k)
     if (!std::isfinite(k)) throw InputError(path + ": a coefficient k is not finite");
   if (const double r = implausible_radius(m.k, m.max_radius); r >= 0)

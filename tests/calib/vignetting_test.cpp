@@ -225,6 +225,17 @@ TEST(Vignetting, TheFileRoundTripsAndAFalloffThroughZeroIsRefused) {
   EXPECT_EQ(aperture_mismatch(m, 2.83, "v.json", "a.jpg"), "");
   EXPECT_EQ(aperture_mismatch(m, 0, "v.json", "a.jpg"), "");
   EXPECT_EQ(aperture_mismatch(m, 8, "v.json", "a.jpg").rfind("v.json was measured at f/2.8 and a.jpg is at f/8", 0), 0u);
+  // Numbers no camera has: refused, not cast (1e12 as an int came out negative).
+  const std::string good = R"("format": "lightprobe.vignetting/1", "image_height": 600, "radius_px": 500, "k": [-0.1], "max_radius": 0.5)";
+  test_files::write_bytes(dir + "huge.json", "{" + good + R"(, "image_width": 1e12, "centre": [1, 2]})");
+  EXPECT_EQ(test_files::input_error([&] { load_vignetting(dir + "huge.json"); }),
+            dir + "huge.json: image size 1000000000000x600 is not a camera's");
+  test_files::write_bytes(dir + "terms.json", "{" + good + R"(, "image_width": 800, "centre": [1, 2], "terms": 9})");
+  EXPECT_NE(test_files::input_error([&] { load_vignetting(dir + "terms.json"); }).find("out of range"), std::string::npos);
+  test_files::write_bytes(dir + "far.json", "{" + good + R"(, "image_width": 800, "centre": [1e9, 2]})");
+  EXPECT_NE(test_files::input_error([&] { load_vignetting(dir + "far.json"); }).find("off the image"), std::string::npos);
+  test_files::write_bytes(dir + "fine.json", "{" + good + R"(, "image_width": 800, "centre": [400, 300]})");
+  EXPECT_EQ(load_vignetting(dir + "fine.json").terms, 1);
   test_files::write_bytes(dir + "other.json", R"({"format": "lightprobe.photometric/1"})");
   EXPECT_NE(test_files::input_error([&] { load_vignetting(dir + "other.json"); }), "");
 }

@@ -247,6 +247,11 @@ FlatField read_flat(const std::string& path, const std::optional<CodeCurve>& cod
 int run_calib_vignetting(const CalibVignettingArgs& args, const Output& out) {
   if (args.terms < 0 || args.terms > VignettingModel::kMaxTerms)
     throw InputError(fmt::format("--terms must be 0 (the fewest the flats support) to {}", VignettingModel::kMaxTerms));
+  // The picture is written beside the file as .svg: an output named so would be overwritten.
+  if (fs::path(args.output).extension() == ".svg")
+    throw InputError(fmt::format("-o {}: name the calibration (vignetting.json); its picture is written beside it as "
+                                 ".svg",
+                                 args.output));
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<CodeCurve> codes;
   if (!args.codes.empty()) codes = code_curve(args.codes);

@@ -158,6 +158,9 @@ TEST(CalibVignettingCli, RefusesWhatItCannotMeasureOrApply) {
   expect_one_line_error(lightprobe("calib vignetting " + (d / "sixteen.png").string() + " -o " + (d / "v.json").string()),
                         "sixteen.png: 16-bit camera codes may be linear");
   EXPECT_FALSE(fs::exists(d / "v.json"));
+  expect_one_line_error(lightprobe("calib vignetting " + (d / "sixteen.png").string() + " --codes linear -o " +
+                                   (d / "v.svg").string()),
+                        "its picture is written beside it as .svg");
 
   // Measured on this camera, applied to another's bracket: refused before the merge.
   const CliRun fit = lightprobe("calib vignetting --codes linear " + (d / "sixteen.png").string() + " -o " +

@@ -1,4 +1,6 @@
 // Recorded sources: replay:DIR (image files), video:FILE and v4l2:N (cv::VideoCapture).
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,6 +16,7 @@
 #include "core/lazy_libs.h"
 #include "core/sensor_white_level.h"
 #include "core/timestamps.h"
+#include "core/warnings.h"
 #include "probe/camera_source.h"
 
 namespace lp {
@@ -180,7 +183,17 @@ class ReplaySource final : public CameraSource {
       frame.image = read_rgb_image(file.string());
       frame.pixel_format = "RGBFloat";
     } else {
-      CameraImage image = read_camera_image(file.string());
+      // The stream unwraps a fisheye in its sensor's frame, where the calibration and "image up
+      // is +X" hold: a camera pointing up records an arbitrary EXIF Orientation, and applied, a
+      // frame tagged upside down was unwrapped turned 180 degrees in azimuth (probe unwrap
+      // reads fisheyes so since stop 57).
+      CameraImage image = read_camera_image(file.string(), true);
+      if (image.orientation != 1 && !orientation_said_) {
+        orientation_said_ = true;
+        warn(fmt::format("{}: its EXIF Orientation ({}) is not applied: a fisheye is unwrapped in its sensor's frame "
+                         "(a camera pointing up records an arbitrary one; --rotation turns the probe)",
+                         file.string(), image.orientation));
+      }
       frame.image.width = image.width, frame.image.height = image.height;
       frame.image.rgb = std::move(image.rgb);
       frame.pixel_format = image.bit_depth > 8 ? "RGB16" : "RGB8";
@@ -242,6 +255,7 @@ class ReplaySource final : public CameraSource {
   double span_s_ = -1;
   std::optional<double> first_time_s_;  // the first recorded time: the pacing's origin
   SequenceWhiteLevel white_level_;  // of 16-bit frames, decided at the first
+  bool orientation_said_ = false;    // a frame's EXIF Orientation left unapplied, said once
 };
 
 // ---- video:FILE and v4l2:N ----------------------------------------------------------

@@ -10,6 +10,8 @@
 #include <opencv2/videoio.hpp>
 
 #include "core/error.h"
+#include "core/warnings.h"
+#include "tests/cli/cli_run.h"
 
 namespace fs = std::filesystem;
 using lp::CameraFrame;
@@ -91,6 +93,30 @@ TEST(CameraSourceReplay, FramesNumberedWithoutPaddingComeInTheirNumbersOrder) {
     ASSERT_TRUE(frame) << k;
     EXPECT_NEAR(frame->image.rgb[0], 10 * k / 255.0, 1e-6) << "frame_" << k << " (frame_10 came before frame_2)";
   }
+}
+
+// The stream unwraps a fisheye in its sensor's frame: a replayed frame tagged upside down
+// (a camera pointing up records an arbitrary EXIF Orientation) is replayed as stored, said
+// once, as probe unwrap reads fisheyes. Turned, it was unwrapped 180 degrees off in azimuth.
+TEST(CameraSourceReplay, AFrameTaggedUpsideDownIsReplayedAsStoredAndSaidOnce) {
+  TempDir dir;
+  cv::Mat gradient(6, 8, CV_8UC3);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 8; ++x) gradient.at<cv::Vec3b>(y, x) = cv::Vec3b(uchar(20 * x), uchar(30 * y), 100);
+  cv::imwrite((dir.path / "a.jpg").string(), gradient);
+  const std::string plain = lp::cli_test::slurp(dir.path / "a.jpg");
+  std::ofstream(dir.path / "b.jpg", std::ios::binary) << lp::cli_test::with_exif_orientation(plain, 3);
+  std::ofstream(dir.path / "c.jpg", std::ios::binary) << lp::cli_test::with_exif_orientation(plain, 3);
+  std::vector<std::string> warnings;
+  const lp::WarningSink before = lp::set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  auto source = lp::open_source("replay:" + dir.path.string(), {});
+  const auto a = source->next(1.0), b = source->next(1.0), c = source->next(1.0);
+  lp::set_warning_sink(before);
+  ASSERT_TRUE(a && b && c);
+  EXPECT_EQ(a->image.rgb, b->image.rgb);
+  EXPECT_EQ(a->image.rgb, c->image.rgb);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("b.jpg: its EXIF Orientation (3) is not applied"), std::string::npos) << warnings[0];
 }
 
 // A recorded Mono12 camera saved as 16-bit PNGs: the first frame's lamp piles up at 4095, so

@@ -164,6 +164,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
       check_vignetting_size(*vignetting, frame.width, frame.height, args.images[0] + " (" + args.vignetting + ")");
     }
     radiance = decode_log_sensor(frame, *photometric);
+    radiance.orientation = frame.orientation;  // the turn it was shown by, recorded
     report["mode"] = "log-sensor";
   } else {
     check_max_shift(args.align, args.max_shift);
@@ -205,6 +206,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     }
     MergeReport mr;
     radiance = merge_bracket(bracket, response, mo, &mr);
+    radiance.orientation = bracket.orientation;  // recorded: a fisheye unwrap turns it back
     if (bracket.to_rec709) {  // the frames' ICC profile, a matrix one other than sRGB
       apply_colour_matrix(radiance.rgb, *bracket.to_rec709);
       report["colour_profile"] = bracket.colour_profile;

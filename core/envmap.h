@@ -51,6 +51,10 @@ struct EnvMap {
   // The camera image it came from had its lens vignetting divided out (calib/vignetting.h),
   // recorded in the file so that no one divides it out twice.
   bool vignetting_corrected = false;
+  // A fused photo (not a map): the EXIF Orientation (1-8) its frames were shown by, turned
+  // from the sensor's frame (hdr fuse), recorded so that a fisheye, unwrapped in its sensor's
+  // frame, can be turned back. 1: as the sensor stored it.
+  int exif_orientation = 1;
 
   size_t pixel_count() const { return size_t(width) * size_t(height); }
   bool is_valid(size_t i) const { return valid.empty() || valid[i] != 0; }

@@ -159,6 +159,7 @@ struct RawImage {
   std::optional<int> nside;
   std::optional<Mat3> world_from_probe;
   bool vignetting_corrected = false;
+  int exif_orientation = 1;
   std::string layout_key = "layout";  // how the file names the field, for messages
   bool openexr_cube = false;          // an EXR whose standard envmap attribute says cube
   // Said once the file is accepted (finish_map), so that a file refused after all says one line.
@@ -289,6 +290,7 @@ EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions&
     map.world_from_probe = raw.world_from_probe;
   }
   map.vignetting_corrected = raw.vignetting_corrected;
+  map.exif_orientation = raw.exif_orientation;
   if (layout == Layout::Healpix) {
     // The file's pixels, row by row from the top, are the NESTED pixels in order.
     const int nside = healpix_nside_of_shape(raw.width, raw.height);
@@ -518,6 +520,10 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
     raw.world_from_probe = parse_rotation_text(path, kExrRotationKey, a->value());
   if (auto* a = header.findTypedAttribute<Imf::StringAttribute>("lightprobe.vignetting"))
     raw.vignetting_corrected = a->value() == "corrected";
+  if (auto* a = header.findTypedAttribute<Imf::IntAttribute>("lightprobe.exif_orientation")) {
+    if (a->value() < 1 || a->value() > 8) fail(path, fmt::format("lightprobe.exif_orientation {} is not 1-8", a->value()));
+    raw.exif_orientation = a->value();
+  }
   raw.openexr_cube = Imf::hasEnvmap(header) && Imf::envmap(header) == Imf::ENVMAP_CUBE;
 
   const Imf::ChannelList& channels = header.channels();
@@ -666,6 +672,7 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
   if (map.layout == Layout::Healpix) header.insert("lightprobe.nside", Imf::IntAttribute(map.nside));
   if (map.world_from_probe) header.insert(kExrRotationKey, Imf::StringAttribute(rotation_text(*map.world_from_probe)));
   if (map.vignetting_corrected) header.insert("lightprobe.vignetting", Imf::StringAttribute("corrected"));
+  if (map.exif_orientation != 1) header.insert("lightprobe.exif_orientation", Imf::IntAttribute(map.exif_orientation));
 
   // The frame buffer must hold the file's pixel type: convert to half here when needed.
   std::vector<float> alpha;
@@ -789,6 +796,10 @@ HdrHeader read_hdr_header(const std::string& path, const std::string& bytes) {
       raw.world_from_probe = parse_rotation_text(path, "LIGHTPROBE_WORLD_FROM_PROBE", value);
     } else if (key == "LIGHTPROBE_VIGNETTING") {
       raw.vignetting_corrected = value == "corrected";
+    } else if (key == "LIGHTPROBE_EXIF_ORIENTATION") {
+      if (value.size() != 1 || value[0] < '1' || value[0] > '8')
+        fail(path, fmt::format("bad LIGHTPROBE_EXIF_ORIENTATION value '{}' (expected 1-8)", one_line(value, 40)));
+      raw.exif_orientation = value[0] - '0';
     }
   }
   for (int k = 0; k < 3; ++k) header.scale[k] = 1.0 / (exposure * colorcorr[k]);
@@ -978,6 +989,7 @@ std::string encode_hdr(const std::string& path, const EnvMap& map, const WriteMa
   if (map.layout == Layout::Healpix) out += fmt::format("LIGHTPROBE_NSIDE={}\n", map.nside);
   if (map.world_from_probe) out += "LIGHTPROBE_WORLD_FROM_PROBE=" + rotation_text(*map.world_from_probe) + "\n";
   if (map.vignetting_corrected) out += "LIGHTPROBE_VIGNETTING=corrected\n";
+  if (map.exif_orientation != 1) out += fmt::format("LIGHTPROBE_EXIF_ORIENTATION={}\n", map.exif_orientation);
   out += fmt::format("\n-Y {} +X {}\n", img.height, img.width);
   const int W = img.width;
   std::vector<uint8_t> rgbe(4 * size_t(W));
@@ -1080,6 +1092,9 @@ std::string encode_pfm(const std::string& path, const EnvMap& map, const WriteMa
   if (map.vignetting_corrected)
     fail(path, "cannot write: .pfm cannot record that the vignetting was corrected, and it would be corrected again; "
                "write .exr or .hdr");
+  if (map.exif_orientation != 1)
+    fail(path, "cannot write: .pfm cannot record the EXIF Orientation the photo was turned by, which a fisheye "
+               "unwrap turns back; write .exr or .hdr");
   const bool little = std::endian::native == std::endian::little;
   std::string out = fmt::format("PF\n{} {}\n{}\n", img.width, img.height, little ? "-1.0" : "1.0");
   const size_t row_floats = 3 * size_t(img.width);
@@ -1217,6 +1232,7 @@ RgbImage read_rgb_image(const std::string& path, bool as_stored) {
     img.valid = std::move(m.valid);
     img.units = m.units;
     img.vignetting_corrected = m.vignetting_corrected;
+    img.orientation = m.exif_orientation;
     return img;
   }
   CameraImage c = tiff.empty() ? read_camera_image(path, as_stored) : camera_image_from_bytes(path, tiff, as_stored);
@@ -1238,6 +1254,8 @@ void write_rgb_image(const std::string& path, const RgbImage& image, const Write
   m.valid = image.valid;
   m.units = image.units;
   m.vignetting_corrected = image.vignetting_corrected;
+  // A radiance image keeps the EXIF turn it was shown by (a bracket fused as its tags showed it).
+  m.exif_orientation = image.orientation;
   WriteMapOptions o = options;
   o.record_layout = false;
   write_envmap(path, m, o);
@@ -1531,6 +1549,18 @@ static CameraImage camera_image_from_bytes(const std::string& path, const std::s
 
 CameraImage turned_as_shown(CameraImage stored, int orientation) {
   return turned_for_display(std::move(stored), orientation);
+}
+
+RgbImage turned_back_to_sensor(RgbImage shown) {
+  if (shown.orientation == 1) return shown;
+  // Every EXIF orientation is its own inverse but the quarter turns, 6 and 8.
+  const int inverse = shown.orientation == 6 ? 8 : shown.orientation == 8 ? 6 : shown.orientation;
+  CameraImage c;
+  c.width = shown.width, c.height = shown.height, c.rgb = std::move(shown.rgb), c.valid = std::move(shown.valid);
+  c = turned_as_shown(std::move(c), inverse);
+  shown.width = c.width, shown.height = c.height, shown.rgb = std::move(c.rgb), shown.valid = std::move(c.valid);
+  shown.orientation = 1;
+  return shown;
 }
 
 CameraImage read_camera_image(const std::string& path, bool as_stored) {

@@ -6,7 +6,8 @@
 //   .exr  OpenEXR, float or half RGB(A); attributes "lightprobe.layout",
 //         "lightprobe.units", "lightprobe.nside" and "lightprobe.world_from_probe" (9 numbers,
 //         row-major, in a string: EnvMap::world_from_probe) carry the metadata, and
-//         "lightprobe.vignetting" = "corrected" EnvMap::vignetting_corrected.
+//         "lightprobe.vignetting" = "corrected" EnvMap::vignetting_corrected, and
+//         "lightprobe.exif_orientation" (int) EnvMap::exif_orientation when not 1.
 //         Reads R,G,B or Y (grey, or Y/RY/BY luminance-chroma) channels of any pixel type,
 //         or, in a file without them, its one layer that has R,G,B ("ViewLayer.Combined.R"
 //         of a Blender render; two such layers are refused); a multi-part file's first part,
@@ -19,14 +20,15 @@
 //   .hdr  Radiance RGBE, reads flat and run-length (new and old) scanlines; writes RLE.
 //         Metadata as header lines "LIGHTPROBE_LAYOUT=..." / "LIGHTPROBE_UNITS=..." /
 //         "LIGHTPROBE_NSIDE=..." / "LIGHTPROBE_WORLD_FROM_PROBE=" and 9 numbers, row-major /
-//         "LIGHTPROBE_VIGNETTING=corrected".
+//         "LIGHTPROBE_VIGNETTING=corrected" / "LIGHTPROBE_EXIF_ORIENTATION=n".
 //         Pixels decode as m 2^(e-136) (as OpenCV, stb_image), divided by the product of
 //         EXPOSURE (and COLORCORR) lines. Only the "-Y H +X W" orientation and
 //         FORMAT=32-bit_rle_rgbe are read; XYZE is refused.
 //   .pfm  Portable float map (colour "PF" and grey "Pf", either byte order; the scale's
 //         magnitude is ignored, as most readers do). PFM carries no metadata: the layout
 //         is inferred from the size on read, the units read back as relative and the probe
-//         rotation is not kept; a map whose vignetting was corrected is refused.
+//         rotation is not kept; a map whose vignetting was corrected, or a photo turned by
+//         its EXIF Orientation, is refused.
 //   .tif  Read only: floating-point TIFFs (32-bit IEEE or LogLuv, panorama stitchers' HDR
 //         output) through OpenCV; alpha as an EXR's. Integer TIFFs are camera codes: refused.
 // .hdr and .pfm cannot hold a mask: writing a map with invalid pixels to them throws.
@@ -116,9 +118,15 @@ struct RgbImage {
   // > 0: `rgb` holds a camera image's code values in [0, 1] at this bit depth (8 or 16),
   // not radiance; whoever makes a map of it linearises them (probe/camera_codes.h).
   int code_bits = 0;
-  int orientation = 1;  // a camera image's EXIF Orientation as recorded (read_camera_image)
+  // A camera image's EXIF Orientation as recorded (read_camera_image; applied unless read
+  // as stored); a radiance file's: the turn it was shown by from the sensor's frame, as
+  // EnvMap::exif_orientation (a bracket fused as its frames' tags showed it).
+  int orientation = 1;
   bool vignetting_corrected = false;  // as EnvMap's, recorded in .exr and .hdr files
 };
+// A radiance image shown turned by EXIF `orientation` (RgbImage::orientation, as hdr fuse
+// records it) turned back to the sensor's frame; orientation 1 after.
+RgbImage turned_back_to_sensor(RgbImage shown);
 // .exr/.hdr/.pfm as stored (NaN/Inf/negative refused); 8/16-bit formats as code values
 // in [0, 1] (read_camera_image, `as_stored` as there).
 RgbImage read_rgb_image(const std::string& path, bool as_stored = false);

@@ -181,6 +181,16 @@ class ReplaySource final : public CameraSource {
     CameraFrame frame;
     if (is_radiance_file(file.string())) {
       frame.image = read_rgb_image(file.string());
+      // A fused bracket records the EXIF turn its frames were shown by: the stream unwraps
+      // fisheyes in their sensor's frame, so it is turned back (as probe unwrap does).
+      if (frame.image.orientation != 1) {
+        if (!orientation_said_)
+          warn(fmt::format("{}: fused turned by its frames' EXIF Orientation ({}); turned back: a fisheye is unwrapped "
+                           "in its sensor's frame",
+                           file.string(), frame.image.orientation));
+        orientation_said_ = true;
+        frame.image = turned_back_to_sensor(std::move(frame.image));
+      }
       frame.pixel_format = "RGBFloat";
     } else {
       // The stream unwraps a fisheye in its sensor's frame, where the calibration and "image up

@@ -4,8 +4,10 @@
 // unchanged, and the result must be that of the same JPEG without it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "core/envmap.h"
 #include "core/image_io.h"
@@ -71,6 +73,44 @@ TEST(ExifOrientationCli, AFisheyeIsUnwrappedInItsSensorsFrame) {
             std::string::npos)
       << tagged.err;
   expect_same_map(dir / "plain.exr", dir / "tagged.exr");
+}
+
+// A fisheye bracket whose frames all carry one tag, upside down: hdr fuse shows it as the
+// tags say (it cannot know it is a fisheye) and records the turn; probe unwrap --type fisheye
+// turns it back to the sensor's frame. It had been unwrapped 180 degrees off in azimuth.
+TEST(ExifOrientationCli, AFisheyeBracketFusedTurnedIsUnwrappedInItsSensorsFrame) {
+  const fs::path dir = fresh_dir("exif_fisheye_bracket");
+  const fs::path sky = dir / "sky.exr";
+  ASSERT_EQ(lightprobe("synth probe scene --type fisheye --fov 190 --size 96x64 -o " + sky.string()).code, 0);
+  const RgbImage r = read_rgb_image(sky.string());
+  std::string plain, tagged;
+  for (const int k : {0, 1, 2}) {
+    std::vector<float> codes(r.rgb.size());
+    for (size_t i = 0; i < codes.size(); ++i) codes[i] = std::min(1.0f, r.rgb[i] * float(1 << (3 * k)) / 64);
+    const fs::path png = dir / ("f" + std::to_string(k) + ".png");
+    write_display_image(png.string(), r.width, r.height, codes);
+    const fs::path a = dir / ("f" + std::to_string(k) + ".jpg"), b = dir / ("f" + std::to_string(k) + "_up.jpg");
+    jpeg_and_tagged(png.string(), a, b, 3);
+    plain += a.string() + " ", tagged += b.string() + " ";
+  }
+  // One response for both: recovered from the plain frames (the tagged ones are the same pixels).
+  const fs::path response = dir / "response.json";
+  const std::string times = "--exposure-times 1,8,64 ";
+  ASSERT_EQ(lightprobe("hdr response " + plain + times + "-o " + response.string()).code, 0);
+  const std::string fuse = "hdr fuse " + times + "--response " + response.string() + " ";
+  ASSERT_EQ(lightprobe(fuse + plain + "-o " + (dir / "plain.exr").string()).code, 0);
+  const CliRun fused = lightprobe(fuse + tagged + "-o " + (dir / "tagged.exr").string());
+  ASSERT_EQ(fused.code, 0) << fused.err;
+  const RgbImage shown = read_rgb_image((dir / "tagged.exr").string());
+  EXPECT_EQ(shown.orientation, 3);  // recorded in the file
+  EXPECT_EQ(turned_back_to_sensor(shown).rgb, read_rgb_image((dir / "plain.exr").string()).rgb);
+
+  const std::string unwrap = " --type fisheye --fov 190 --size 64x32 -o ";
+  ASSERT_EQ(lightprobe("probe unwrap " + (dir / "plain.exr").string() + unwrap + (dir / "plain_map.exr").string()).code, 0);
+  const CliRun back = lightprobe("probe unwrap " + (dir / "tagged.exr").string() + unwrap + (dir / "tagged_map.exr").string());
+  ASSERT_EQ(back.code, 0) << back.err;
+  EXPECT_NE(back.err.find("fused turned by its frames' EXIF Orientation (3); turned back"), std::string::npos) << back.err;
+  expect_same_map(dir / "plain_map.exr", dir / "tagged_map.exr");
 }
 
 }  // namespace

@@ -192,6 +192,43 @@ TEST(ImageIo, ExrFloatRoundTripIsExactAndKeepsLayoutUnitsAndMask) {
   EXPECT_EQ(count_temp_files(dir), 0u);
 }
 
+// A fused photo's record (stop 58): its lens vignetting divided out, and the EXIF turn its
+// bracket was shown by. Both survive .exr and .hdr; .pfm, which cannot hold them, is refused.
+TEST(ImageIo, AFusedPhotosVignettingAndExifTurnAreRecorded) {
+  const std::string dir = temp_dir();
+  RgbImage img;
+  img.width = 3, img.height = 2;
+  img.rgb.assign(18, 0.5f);
+  img.vignetting_corrected = true;
+  img.orientation = 6;
+  for (const char* ext : {".exr", ".hdr"}) {
+    write_rgb_image(dir + "photo" + ext, img);
+    const RgbImage back = read_rgb_image(dir + "photo" + ext);
+    EXPECT_TRUE(back.vignetting_corrected) << ext;
+    EXPECT_EQ(back.orientation, 6) << ext;
+  }
+  const RgbImage plain = read_rgb_image((write_rgb_image(dir + "plain.exr", RgbImage{3, 2, img.rgb}), dir + "plain.exr"));
+  EXPECT_FALSE(plain.vignetting_corrected);
+  EXPECT_EQ(plain.orientation, 1);
+  EXPECT_NE(test_files::input_error([&] { write_rgb_image(dir + "photo.pfm", img); }).find("cannot write: .pfm"),
+            std::string::npos);
+  img.vignetting_corrected = false;
+  EXPECT_NE(test_files::input_error([&] { write_rgb_image(dir + "photo.pfm", img); }).find("EXIF Orientation"),
+            std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir + "photo.pfm"));
+  // Turned back to the sensor's frame: 6 (a quarter turn clockwise to show) undone by 8.
+  RgbImage shown;
+  shown.width = 2, shown.height = 3;
+  for (int i = 0; i < 6; ++i) shown.rgb.insert(shown.rgb.end(), {float(i), 0, 0});
+  shown.orientation = 6;
+  const RgbImage stored = turned_back_to_sensor(shown);
+  EXPECT_EQ(stored.width, 3);
+  EXPECT_EQ(stored.orientation, 1);
+  CameraImage again;
+  again.width = stored.width, again.height = stored.height, again.rgb = stored.rgb;
+  EXPECT_EQ(turned_as_shown(again, 6).rgb, shown.rgb);
+}
+
 TEST(ImageIo, ExrHalfRoundTripIsWithinHalfPrecision) {
   const std::string dir = temp_dir();
   EnvMap map = make_latlong(64, 32);

@@ -10,6 +10,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/warnings.h"
 #include "tests/cli/cli_run.h"
 
@@ -117,6 +118,31 @@ TEST(CameraSourceReplay, AFrameTaggedUpsideDownIsReplayedAsStoredAndSaidOnce) {
   EXPECT_EQ(a->image.rgb, c->image.rgb);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("b.jpg: its EXIF Orientation (3) is not applied"), std::string::npos) << warnings[0];
+}
+
+// A replayed fused probe that records the EXIF turn its bracket was shown by (hdr fuse) is
+// turned back to the sensor's frame, said once.
+TEST(CameraSourceReplay, AFusedProbeShownTurnedIsReplayedInItsSensorsFrame) {
+  TempDir dir;
+  lp::RgbImage stored;
+  stored.width = 4, stored.height = 3;
+  for (int i = 0; i < 12 * 3; ++i) stored.rgb.push_back(float(i));
+  lp::write_rgb_image((dir.path / "a.exr").string(), stored);
+  lp::RgbImage shown = stored;  // half a turn: pixel i at 11 - i
+  for (int i = 0; i < 12; ++i)
+    for (int c = 0; c < 3; ++c) shown.rgb[size_t(3 * (11 - i) + c)] = stored.rgb[size_t(3 * i + c)];
+  shown.orientation = 3;
+  lp::write_rgb_image((dir.path / "b.exr").string(), shown);
+  std::vector<std::string> warnings;
+  const lp::WarningSink before = lp::set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  auto source = lp::open_source("replay:" + dir.path.string(), {});
+  const auto a = source->next(1.0), b = source->next(1.0);
+  lp::set_warning_sink(before);
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(b->image.rgb, stored.rgb);
+  EXPECT_EQ(a->image.rgb, stored.rgb);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("b.exr: fused turned by its frames' EXIF Orientation (3); turned back"), std::string::npos);
 }
 
 // A recorded Mono12 camera saved as 16-bit PNGs: the first frame's lamp piles up at 4095, so

@@ -1,5 +1,6 @@
 #include "probe/fisheye.h"
 
+#include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -200,6 +201,18 @@ EnvMap unwrap_fisheye(const RgbImage& image, const FisheyeModel& model, Layout l
   if (options.fill.method != FillMethod::None && !map.valid.empty()) fill_invalid(map, options.fill, &rep.fill);
   if (report) *report = rep;
   return map;
+}
+
+std::string orientation_not_applied_note(const std::string& file, int orientation) {
+  return fmt::format("{}: its EXIF Orientation ({}) is not applied: a fisheye is unwrapped in its sensor's frame (a "
+                     "camera pointing up records an arbitrary one; --rotation turns the probe)",
+                     file, orientation);
+}
+
+std::string fused_turn_undone_note(const std::string& file, int orientation) {
+  return fmt::format("{}: fused turned by its frames' EXIF Orientation ({}); turned back: a fisheye is unwrapped in "
+                     "its sensor's frame (--rotation turns the probe)",
+                     file, orientation);
 }
 
 RgbImage render_fisheye(const EnvMap& map, const FisheyeModel& model, int samples_per_edge) {

@@ -91,6 +91,14 @@ struct FisheyeUnwrapReport {
 EnvMap unwrap_fisheye(const RgbImage& image, const FisheyeModel& model, Layout layout, int width, int height,
                       const FisheyeUnwrapOptions& options = {}, FisheyeUnwrapReport* report = nullptr);
 
+// A fisheye is unwrapped in its sensor's frame, where its calibration and "image up is +X"
+// (CONVENTIONS.md) hold; a camera pointing up records an arbitrary EXIF Orientation. The one
+// line said (once) where an image is read for a fisheye unwrap (probe unwrap, the stream's
+// replay): a camera image's tag left unapplied, or a fused photo's recorded turn
+// (RgbImage::orientation, hdr fuse) undone.
+std::string orientation_not_applied_note(const std::string& file, int orientation);
+std::string fused_turn_undone_note(const std::string& file, int orientation);
+
 // Synthetic fisheye photo of a map (ground truth for tests and `synth probe`): each
 // pixel averages samples_per_edge^2 sub-pixel rays, each looking the map up bilinearly
 // (latlong / hemisphere; nearest for healpix). Rays beyond max_theta or on invalid map

@@ -18,6 +18,7 @@
 #include "core/timestamps.h"
 #include "core/warnings.h"
 #include "probe/camera_source.h"
+#include "probe/fisheye.h"
 
 namespace lp {
 
@@ -184,10 +185,7 @@ class ReplaySource final : public CameraSource {
       // A fused bracket records the EXIF turn its frames were shown by: the stream unwraps
       // fisheyes in their sensor's frame, so it is turned back (as probe unwrap does).
       if (frame.image.orientation != 1) {
-        if (!orientation_said_)
-          warn(fmt::format("{}: fused turned by its frames' EXIF Orientation ({}); turned back: a fisheye is unwrapped "
-                           "in its sensor's frame",
-                           file.string(), frame.image.orientation));
+        if (!orientation_said_) warn(fused_turn_undone_note(file.string(), frame.image.orientation));
         orientation_said_ = true;
         frame.image = turned_back_to_sensor(std::move(frame.image));
       }
@@ -200,9 +198,7 @@ class ReplaySource final : public CameraSource {
       CameraImage image = read_camera_image(file.string(), true);
       if (image.orientation != 1 && !orientation_said_) {
         orientation_said_ = true;
-        warn(fmt::format("{}: its EXIF Orientation ({}) is not applied: a fisheye is unwrapped in its sensor's frame "
-                         "(a camera pointing up records an arbitrary one; --rotation turns the probe)",
-                         file.string(), image.orientation));
+        warn(orientation_not_applied_note(file.string(), image.orientation));
       }
       frame.image.width = image.width, frame.image.height = image.height;
       frame.image.rgb = std::move(image.rgb);

@@ -74,19 +74,14 @@ RgbImage read_frame(const std::string& f, FirstPass& pass, const UnwrapSequenceO
   const bool fisheye = o.type == ProbeType::Fisheye;
   RgbImage img = read_rgb_image(f, fisheye);
   if (fisheye && img.orientation != 1 && img.code_bits > 0 && !pass.orientation_said) {
-    warn(fmt::format("{}: its EXIF Orientation ({}) is not applied: a fisheye is unwrapped in its sensor's frame (a "
-                     "camera pointing up records an arbitrary one; --rotation turns the probe)",
-                     f, img.orientation));
+    warn(orientation_not_applied_note(f, img.orientation));
     pass.orientation_said = true;
   }
   // A bracket fused as its frames' tags showed it (hdr fuse records the turn): turned back to
   // the sensor's frame. Unwrapped as it was, a bracket tagged upside down came out 180
   // degrees off in azimuth.
   if (fisheye && img.code_bits == 0 && img.orientation != 1) {
-    if (!pass.orientation_said)
-      warn(fmt::format("{}: fused turned by its frames' EXIF Orientation ({}); turned back: a fisheye is unwrapped in "
-                       "its sensor's frame (--rotation turns the probe)",
-                       f, img.orientation));
+    if (!pass.orientation_said) warn(fused_turn_undone_note(f, img.orientation));
     pass.orientation_said = true;
     img = turned_back_to_sensor(std::move(img));
   }

@@ -332,7 +332,9 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     }
     if (is_raw(paths[k])) {
       RawExposure raw;
-      RgbImage f = read_camera_raw(paths[k], &raw);
+      RgbImage f = read_camera_raw(paths[k], &raw);  // as stored, turned below as JPEGs are
+      orientation.push_back(raw.orientation);
+      f.orientation = 1;
       const double t = raw.seconds;
       ExifExposureSettings e;  // the same fold as for EXIF: a RAW bracket may vary its ISO too
       e.iso = raw.iso, e.f_number = raw.f_number;

@@ -29,6 +29,8 @@ struct DevelopedRaw {
   std::vector<uint16_t> samples;            // Ok: width * height * colors, row-major
   double shutter_seconds = 0;               // as recorded; 0 when none
   double iso = 0, f_number = 0;             // as recorded; 0 when none
+  // Developed as stored (LibRaw's user_flip 0); the file's orientation as EXIF's 1-8.
+  int orientation = 1;
 };
 
 // EXIF exposure time: Exif.Photo.ExposureTime, Exif.Image.ExposureTime, then the APEX
@@ -55,7 +57,7 @@ struct CameraFilesPluginTable {
   // cannot read the file (the image reader reports that).
   std::string (*icc_profile)(const std::string& path);
 };
-inline constexpr int kCameraFilesPluginVersion = 4;
+inline constexpr int kCameraFilesPluginVersion = 5;
 inline constexpr const char* kCameraFilesPluginFile = "liblightprobe_camera_files.so";
 
 // The plugin's table, loaded once; throws std::runtime_error when it cannot be loaded.

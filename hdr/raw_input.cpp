@@ -108,7 +108,8 @@ RgbImage read_camera_raw(const std::string& path, RawExposure* exposure_out) {
   const int colors = img.colors;
   for (size_t i = 0; i < n; ++i)
     for (int c = 0; c < 3; ++c) out.rgb[3 * i + c] = img.samples[i * colors + (colors == 3 ? c : 0)] / 65535.0f;
-  if (exposure_out) *exposure_out = {img.shutter_seconds, img.iso, img.f_number};
+  out.orientation = img.orientation;
+  if (exposure_out) *exposure_out = {img.shutter_seconds, img.iso, img.f_number, img.orientation};
   return out;
 }
 

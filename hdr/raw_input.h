@@ -32,9 +32,12 @@ RgbImage mono_to_rgb(const std::vector<uint16_t>& data, int width, int height, i
 // What a RAW file records of its exposure; 0 where it records nothing.
 struct RawExposure {
   double seconds = 0, iso = 0, f_number = 0;
+  int orientation = 1;  // the file's, as EXIF's 1-8: the pixels are as stored, not turned by it
 };
-// `exposure_out` (may be null) receives the shutter time, ISO and f-number recorded in the
-// file. Throws InputError naming the file when LibRaw cannot open, unpack or develop it.
+// `exposure_out` (may be null) receives the shutter time, ISO, f-number and orientation
+// recorded in the file. The pixels are as the sensor stored them (RgbImage::orientation says
+// the file's orientation; turned_as_shown shows them). Throws InputError naming the file when
+// LibRaw cannot open, unpack or develop it.
 RgbImage read_camera_raw(const std::string& path, RawExposure* exposure_out = nullptr);
 
 }  // namespace lp

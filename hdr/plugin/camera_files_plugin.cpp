@@ -40,6 +40,13 @@ DevelopedRaw develop_raw(const std::string& path, bool (*sensor_fits)(int, int))
   params.no_auto_bright = 1;
   params.use_camera_wb = 1;
   params.output_color = 1;  // sRGB primaries, linear with the gamma above
+  // As stored: the caller turns frames as their orientation says where that is right (a
+  // bracket whose tags agree), and leaves a fisheye's, which a camera pointing up makes noise.
+  params.user_flip = 0;
+  // dcraw's flip (bit 2: exchange the axes, then bit 0: mirror x, bit 1: mirror y; LibRaw
+  // sets 0, 3, 5 or 6 from the file) as EXIF's Orientation.
+  static constexpr int kExifOrientationOfFlip[8] = {1, 2, 4, 3, 5, 8, 6, 7};
+  out.orientation = kExifOrientationOfFlip[raw->imgdata.sizes.flip & 7];
   if ((rc = raw->unpack()) != LIBRAW_SUCCESS) return failed("unpack", rc);
   if ((rc = raw->dcraw_process()) != LIBRAW_SUCCESS) return failed("develop", rc);
   std::unique_ptr<libraw_processed_image_t, void (*)(libraw_processed_image_t*)> img(

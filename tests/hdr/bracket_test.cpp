@@ -1,4 +1,5 @@
 #include "hdr/bracket.h"
+#include "hdr/raw_input.h"
 
 #include <algorithm>
 #include <cmath>
@@ -234,7 +235,8 @@ TEST(ReadBracket, MapsScaledToTheReferenceExposureAgreeAcrossIsoAndAperture) {
 // of `codes` (w x h x 3), whose Exif IFD records the exposure time 1/t_den s, the f-number
 // and the ISO, as a camera writes them: what LibRaw develops back to the same grey ramp.
 std::string dng_with_settings(const TempDir& tmp, const std::string& name, int w, int h,
-                              const std::vector<uint16_t>& codes, uint32_t t_den, uint32_t f_num10, uint32_t iso) {
+                              const std::vector<uint16_t>& codes, uint32_t t_den, uint32_t f_num10, uint32_t iso,
+                              uint32_t orientation = 1) {
   struct Entry {
     uint16_t tag, type;
     uint32_t count;
@@ -257,6 +259,7 @@ std::string dng_with_settings(const TempDir& tmp, const std::string& name, int w
       {271, 2, 5, std::string("Test", 5)},             // Make
       {272, 2, 5, std::string("Test", 5)},             // Model
       {273, 4, 1, le({8}, 4)},                         // StripOffsets: the pixels right after the header
+      {274, 3, 1, le({orientation}, 2)},               // Orientation (EXIF's 1-8)
       {277, 3, 1, le({3}, 2)},                         // SamplesPerPixel
       {278, 4, 1, le({uint32_t(h)}, 4)},               // RowsPerStrip
       {279, 4, 1, le({pixels_bytes}, 4)},              // StripByteCounts
@@ -307,6 +310,45 @@ std::string dng_with_settings(const TempDir& tmp, const std::string& name, int w
   const std::string path = (tmp.path / name).string();
   std::ofstream(path, std::ios::binary) << file;
   return path;
+}
+
+// A RAW bracket tagged upside down (a fisheye pointing up records an arbitrary orientation):
+// LibRaw turned the frames itself and nothing recorded it, so a fisheye unwrap could not turn
+// them back. They are now developed as stored and turned as JPEGs are: where every frame
+// agrees, with the turn recorded (Bracket::orientation); where frames disagree, not at all.
+TEST(ReadBracket, RawFramesAreTurnedByTheirOrientationAsJpegsAreAndTheTurnIsRecorded) {
+  TempDir tmp;
+  const int w = 32, h = 24;
+  std::vector<uint16_t> codes, brighter;  // a ramp across the columns: stored pixel (0, 0) darkest
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u)
+      for (int c = 0; c < 3; ++c) {
+        codes.push_back(uint16_t(200 + 300 * u + 50 * v));
+        brighter.push_back(uint16_t(4 * (200 + 300 * u + 50 * v)));  // four times the exposure
+      }
+  RawExposure settings;
+  const RgbImage stored = read_camera_raw(dng_with_settings(tmp, "plain.dng", w, h, codes, 100, 28, 100), &settings);
+  EXPECT_EQ(settings.orientation, 1);
+  const std::string a = dng_with_settings(tmp, "a.dng", w, h, codes, 100, 28, 100, 3);
+  const std::string b = dng_with_settings(tmp, "b.dng", w, h, brighter, 25, 28, 100, 3);
+  const RgbImage raw = read_camera_raw(a, &settings);
+  EXPECT_EQ(settings.orientation, 3);
+  EXPECT_EQ(raw.rgb, stored.rgb);  // as stored, not turned by LibRaw
+  const Bracket turned = read_bracket({a, b});
+  EXPECT_EQ(turned.orientation, 3);
+  // Half a turn: the stored first pixel is the shown last one.
+  EXPECT_EQ(turned.frames[0].rgb[turned.frames[0].rgb.size() - 2], stored.rgb[1]);
+  EXPECT_EQ(turned_back_to_sensor(RgbImage{w, h, turned.frames[0].rgb, {}, Units::Relative, 0, 3}).rgb, stored.rgb);
+  // One frame tagged otherwise: both as stored, said once.
+  const std::string c = dng_with_settings(tmp, "c.dng", w, h, brighter, 25, 28, 100, 1);
+  std::vector<std::string> warnings;
+  set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const Bracket mixed = read_bracket({a, c});
+  set_warning_sink(nullptr);
+  EXPECT_EQ(mixed.orientation, 1);
+  EXPECT_EQ(mixed.frames[0].rgb, stored.rgb);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("EXIF Orientation disagree (3, 1)"), std::string::npos) << warnings[0];
 }
 
 // The same blindness in RAW brackets: LibRaw reads the ISO and f-number, the bracket used

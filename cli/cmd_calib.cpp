@@ -25,6 +25,7 @@
 #include "core/progress.h"
 #include "eval/svg_chart.h"
 #include "hdr/bracket.h"
+#include "hdr/raw_input.h"
 
 namespace lp::cli {
 
@@ -213,8 +214,24 @@ int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out) {
 // One flat field as linear luminance: codes through --codes, and NaN where a channel is at the
 // top code (clipped: its light is unknown) or the file marks no data.
 // Read as stored: the model is in the sensor's frame (calib/vignetting.h).
-FlatField read_flat(const std::string& path, const std::optional<CodeCurve>& codes) {
-  RgbImage img = read_rgb_image(path, true);
+FlatField read_flat(const std::string& path, const std::optional<CodeCurve>& codes, double* f_number) {
+  // A RAW flat is the best one: linear, and before any in-camera vignetting correction, which
+  // most cameras apply to their JPEGs.
+  const bool raw = is_camera_raw_file(path);
+  RawExposure raw_settings;
+  RgbImage img = raw ? read_camera_raw(path, &raw_settings) : read_rgb_image(path, true);
+  *f_number = raw ? raw_settings.f_number : is_camera_image_file(path) ? read_exif_exposure(path).f_number : 0.0;
+  if (raw) {  // linear 16-bit codes; LibRaw clips highlights to its top code in every channel
+    if (codes) warn(fmt::format("{}: a RAW file is linear; --codes is not used for it", path));
+    const size_t n = size_t(img.width) * size_t(img.height);
+    FlatField f{img.width, img.height, std::vector<float>(n), path};
+    for (size_t i = 0; i < n; ++i) {
+      const float* p = &img.rgb[3 * i];
+      const bool clipped = std::max({p[0], p[1], p[2]}) >= 65534.0f / 65535.0f;
+      f.luminance[i] = clipped ? std::nanf("") : float(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]);
+    }
+    return f;
+  }
   if (img.vignetting_corrected)
     throw InputError(path + ": its vignetting is corrected already; a flat field measures it on the camera's own output");
   if (img.code_bits > 8 && !codes)
@@ -256,12 +273,14 @@ int run_calib_vignetting(const CalibVignettingArgs& args, const Output& out) {
   std::optional<CodeCurve> codes;
   if (!args.codes.empty()) codes = code_curve(args.codes);
   std::vector<FlatField> flats;
-  for (const std::string& path : args.flats) flats.push_back(read_flat(path, codes));
+  std::vector<double> f_numbers(args.flats.size(), 0.0);
+  for (size_t k = 0; k < args.flats.size(); ++k) flats.push_back(read_flat(args.flats[k], codes, &f_numbers[k]));
   // One aperture: a lens's falloff changes with it, and flats of two would fit neither.
   double f_number = 0;
   std::string f_number_file;
-  for (const std::string& path : args.flats) {
-    const double f = is_camera_image_file(path) ? read_exif_exposure(path).f_number : 0.0;
+  for (size_t k = 0; k < args.flats.size(); ++k) {
+    const std::string& path = args.flats[k];
+    const double f = f_numbers[k];
     if (!(f > 0)) continue;
     if (f_number > 0 && std::abs(std::log2(f / f_number)) > 1.0 / 12 + 1e-9)
       throw InputError(fmt::format("{}: taken at f/{:g}, but {} at f/{:g}: vignetting changes with the aperture; "
@@ -395,7 +414,7 @@ std::vector<Command> calib_commands() {
        "lightprobe calib vignetting flat_*.jpg -o vignetting.json\nlightprobe hdr fuse IMG_*.jpg --vignetting vignetting.json -o probe.exr",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<CalibVignettingArgs>();
-         f.arg("FLAT", a->flats, "Images of a uniformly lit, featureless field filling the view (a diffuser over the lens), unclipped; several: the camera turned about its axis between them").required();
+         f.arg("FLAT", a->flats, "Images of a uniformly lit, featureless field filling the view (a diffuser over the lens), unclipped; RAW files best (linear, before in-camera correction); several: the camera turned about its axis between them").required();
          f.opt("--codes", a->codes, "Camera images: how codes encode light: srgb (8-bit default), linear, or a response.json from hdr response; 16-bit images need it");
          f.opt("--terms", a->terms, "Even terms of the falloff polynomial, 1-5; 0: the fewest the flats support");
          f.output(a->output, "vignetting.json (and its picture, vignetting.svg)");

@@ -316,13 +316,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
   if (times && times->size() != paths.size())
     throw InputError(fmt::format("--exposure-times: {} times for {} images", times->size(), paths.size()));
   // Camera RAW files (through LibRaw) are linear 16-bit with their own shutter time.
-  auto is_raw = [](const std::string& p) {
-    std::string e = p.substr(p.find_last_of('.') == std::string::npos ? p.size() : p.find_last_of('.'));
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    for (const char* r : {".cr2", ".cr3", ".nef", ".arw", ".dng", ".raf", ".orf", ".rw2", ".pef", ".srw"})
-      if (e == r) return true;
-    return false;
-  };
+  const auto is_raw = is_camera_raw_file;
   for (size_t k = 0; k < paths.size(); ++k) {
     for (size_t j = 0; j < k; ++j) {
       std::error_code ec;

@@ -84,6 +84,15 @@ RgbImage mono_to_rgb(const std::vector<uint16_t>& data, int width, int height, i
   return out;
 }
 
+bool is_camera_raw_file(const std::string& path) {
+  const size_t dot = path.find_last_of('.');
+  std::string e = dot == std::string::npos ? std::string() : path.substr(dot);
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  for (const char* r : {".cr2", ".cr3", ".nef", ".arw", ".dng", ".raf", ".orf", ".rw2", ".pef", ".srw"})
+    if (e == r) return true;
+  return false;
+}
+
 RgbImage read_camera_raw(const std::string& path, RawExposure* exposure_out) {
   // LibRaw is loaded by the first RAW file (hdr/camera_files_plugin.h).
   const detail::DevelopedRaw img = detail::camera_files_plugin().develop_raw(path, [](int width, int height) {

@@ -27,6 +27,10 @@ RgbImage demosaic_bayer(const std::vector<uint16_t>& data, int width, int height
 // A mono buffer (same conventions) as a grey RgbImage (R = G = B).
 RgbImage mono_to_rgb(const std::vector<uint16_t>& data, int width, int height, int bit_depth);
 
+// Whether `path` names a camera RAW file, by its extension (CR2, CR3, NEF, ARW, DNG, RAF, ORF,
+// RW2, PEF, SRW; any case).
+bool is_camera_raw_file(const std::string& path);
+
 // A camera RAW file (CR2, NEF, ARW, DNG, ...) developed by LibRaw to linear 16-bit sRGB
 // primaries: camera white balance, no gamma, no auto-brightening, values / 65535.
 // What a RAW file records of its exposure; 0 where it records nothing.

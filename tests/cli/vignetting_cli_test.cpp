@@ -10,6 +10,7 @@
 
 #include "core/image_io.h"
 #include "tests/cli/cli_run.h"
+#include "tests/hdr/test_dng.h"
 
 namespace lp::cli_test {
 namespace {
@@ -147,6 +148,28 @@ TEST(CalibVignettingCli, TheFlatsApertureIsKeptAndAnotherApertureIsWarnedAbout) 
   EXPECT_NE(other.err.find("v8.json was measured at f/8 and " + (d / "flat.jpg").string() + " is at f/1.8"),
             std::string::npos)
       << other.err;
+}
+
+// A RAW flat, the best kind (linear, before any in-camera correction): read as the sensor
+// stored it, its f-number from the file, and its clipped highlights left out.
+TEST(CalibVignettingCli, ARawFlatIsReadLinearAsStored) {
+  const fs::path d = fresh_dir("vignetting_raw");
+  std::vector<uint16_t> codes;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      // A speck of clipped light, which must not count as the lens's.
+      const double l = std::hypot(x - 120, y - 100) < 6 ? 1.0 : 0.5 * lens(x, y);
+      for (int c = 0; c < 3; ++c) codes.push_back(uint16_t(std::lround(l * 65535)));
+    }
+  // Tagged upside down: LibRaw would show it turned, moving the centre to (154, 121).
+  write_test_dng(d, "flat.dng", kWidth, kHeight, codes, 100, 56, 100, 3);
+  const CliRun fit = lightprobe("calib vignetting --json " + (d / "flat.dng").string() + " -o " + (d / "v.json").string());
+  ASSERT_EQ(fit.code, 0) << fit.err;
+  const auto j = nlohmann::json::parse(fit.out);
+  EXPECT_NEAR(j["f_number"].get<double>(), 5.6, 1e-6);
+  EXPECT_NEAR(j["k"][0].get<double>(), -0.8, 0.01);
+  EXPECT_NEAR(j["centre"][0].get<double>(), kCx, 0.3);
+  EXPECT_NEAR(j["centre"][1].get<double>(), kCy, 0.3);
 }
 
 TEST(CalibVignettingCli, RefusesWhatItCannotMeasureOrApply) {

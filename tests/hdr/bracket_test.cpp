@@ -249,6 +249,11 @@ TEST(ReadBracket, RawFramesAreTurnedByTheirOrientationAsJpegsAreAndTheTurnIsReco
   RawExposure settings;
   const RgbImage stored = read_camera_raw(write_test_dng(tmp.path, "plain.dng", w, h, codes, 100, 28, 100), &settings);
   EXPECT_EQ(settings.orientation, 1);
+  // Every TIFF Orientation comes back as itself through LibRaw's flip (dcraw's "50132467").
+  for (uint32_t o = 1; o <= 8; ++o) {
+    read_camera_raw(write_test_dng(tmp.path, "o.dng", w, h, codes, 100, 28, 100, o), &settings);
+    EXPECT_EQ(settings.orientation, int(o));
+  }
   const std::string a = write_test_dng(tmp.path, "a.dng", w, h, codes, 100, 28, 100, 3);
   const std::string b = write_test_dng(tmp.path, "b.dng", w, h, brighter, 25, 28, 100, 3);
   const RgbImage raw = read_camera_raw(a, &settings);

@@ -172,6 +172,35 @@ TEST(CalibVignettingCli, ARawFlatIsReadLinearAsStored) {
   EXPECT_NEAR(j["centre"][1].get<double>(), kCy, 0.3);
 }
 
+// Uneven light across a single flat looks like a falloff about another centre: said.
+TEST(CalibVignettingCli, AFlatLitFromOneSideIsWarnedAbout) {
+  const fs::path d = fresh_dir("vignetting_uneven");
+  RgbImage img;
+  img.width = kWidth;
+  img.height = kHeight;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const double r2 = (std::pow(x - 159.5, 2) + std::pow(y - 119.5, 2)) / (kHalfDiagonal * kHalfDiagonal);
+      const double l = 0.5 * (1 - 0.5 * r2) * (1 + 0.2 * (double(x) / kWidth - 0.5));  // 20 % across
+      img.rgb.insert(img.rgb.end(), {float(l), float(l), float(l)});
+    }
+  write_code_image((d / "side.png").string(), img, 16);
+  const CliRun r = lightprobe("calib vignetting --codes linear " + (d / "side.png").string() + " -o " + (d / "v.json").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("from the image's: light that is not even across the flats looks like this"), std::string::npos)
+      << r.err;
+  // The same lens evenly lit says nothing.
+  for (size_t i = 0; i < img.rgb.size(); i += 3) {
+    const double x = double((i / 3) % size_t(kWidth));
+    const float even = float(img.rgb[i] / (1 + 0.2 * (x / kWidth - 0.5)));
+    img.rgb[i] = img.rgb[i + 1] = img.rgb[i + 2] = even;
+  }
+  write_code_image((d / "even.png").string(), img, 16);
+  const CliRun e = lightprobe("calib vignetting --codes linear " + (d / "even.png").string() + " -o " + (d / "e.json").string());
+  ASSERT_EQ(e.code, 0) << e.err;
+  EXPECT_EQ(e.err.find("warning"), std::string::npos) << e.err;
+}
+
 TEST(CalibVignettingCli, RefusesWhatItCannotMeasureOrApply) {
   const fs::path d = fresh_dir("vignetting_refused");
   write_frame(d / "white.png", 50.0, true, 3);  // every code at the top

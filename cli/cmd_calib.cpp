@@ -274,7 +274,14 @@ int run_calib_vignetting(const CalibVignettingArgs& args, const Output& out) {
   if (!args.codes.empty()) codes = code_curve(args.codes);
   std::vector<FlatField> flats;
   std::vector<double> f_numbers(args.flats.size(), 0.0);
-  for (size_t k = 0; k < args.flats.size(); ++k) flats.push_back(read_flat(args.flats[k], codes, &f_numbers[k]));
+  {  // a RAW flat takes LibRaw about a second to develop
+    Progress progress("calib vignetting", args.flats.size(), out.progress && args.flats.size() > 1);
+    for (size_t k = 0; k < args.flats.size(); ++k) {
+      flats.push_back(read_flat(args.flats[k], codes, &f_numbers[k]));
+      progress.advance();
+    }
+    progress.finish();
+  }
   // One aperture: a lens's falloff changes with it, and flats of two would fit neither.
   double f_number = 0;
   std::string f_number_file;

@@ -23,6 +23,7 @@
 #include "core/warnings.h"
 #include "core/heap_tuning.h"
 #include "core/progress.h"
+#include "core/sensor_white_level.h"
 #include "eval/svg_chart.h"
 #include "hdr/bracket.h"
 #include "hdr/raw_input.h"
@@ -212,47 +213,36 @@ int run_calib_photometric(const CalibPhotometricArgs& args, const Output& out) {
 }
 
 // One flat field as linear luminance: codes through --codes, and NaN where a channel is at the
-// top code (clipped: its light is unknown) or the file marks no data.
-// Read as stored: the model is in the sensor's frame (calib/vignetting.h).
-FlatField read_flat(const std::string& path, const std::optional<CodeCurve>& codes, double* f_number) {
+// top code (clipped: its light is unknown) or the file marks no data. Read as stored: the model
+// is in the sensor's frame (calib/vignetting.h). `white_level`: 16-bit flats of a sensor of
+// fewer bits (Mono12 saved as 16-bit) clip at its white level, not at 65535.
+FlatField read_flat(const std::string& path, const std::optional<CodeCurve>& codes, SequenceWhiteLevel& white_level,
+                    double* f_number) {
   // A RAW flat is the best one: linear, and before any in-camera vignetting correction, which
   // most cameras apply to their JPEGs.
   const bool raw = is_camera_raw_file(path);
   RawExposure raw_settings;
   RgbImage img = raw ? read_camera_raw(path, &raw_settings) : read_rgb_image(path, true);
   *f_number = raw ? raw_settings.f_number : is_camera_image_file(path) ? read_exif_exposure(path).f_number : 0.0;
-  if (raw) {  // linear 16-bit codes; LibRaw clips highlights to its top code in every channel
-    if (codes) warn(fmt::format("{}: a RAW file is linear; --codes is not used for it", path));
-    const size_t n = size_t(img.width) * size_t(img.height);
-    FlatField f{img.width, img.height, std::vector<float>(n), path};
-    for (size_t i = 0; i < n; ++i) {
-      const float* p = &img.rgb[3 * i];
-      const bool clipped = std::max({p[0], p[1], p[2]}) >= 65534.0f / 65535.0f;
-      f.luminance[i] = clipped ? std::nanf("") : float(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]);
-    }
-    return f;
-  }
   if (img.vignetting_corrected)
     throw InputError(path + ": its vignetting is corrected already; a flat field measures it on the camera's own output");
-  if (img.code_bits > 8 && !codes)
-    throw InputError(fmt::format("{}: {}-bit camera codes may be linear (a raw developer's) or gamma-encoded (an "
-                                 "editor's): say which with --codes linear, --codes srgb or --codes RESPONSE.json",
-                                 path, img.code_bits));
   const size_t n = size_t(img.width) * size_t(img.height);
   std::vector<char> clipped(n, 0);
-  if (img.code_bits > 0) {
-    const float top = 1.0f - 0.5f / float((1 << img.code_bits) - 1);
-    for (size_t i = 0; i < n; ++i)
-      clipped[i] = img.rgb[3 * i] >= top || img.rgb[3 * i + 1] >= top || img.rgb[3 * i + 2] >= top;
+  auto mark_clipped = [&](float top) {
+    for (size_t i = 0; i < n; ++i) clipped[i] = std::max({img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2]}) >= top;
+  };
+  if (raw) {  // linear 16-bit codes; LibRaw clips highlights to its top code in every channel
+    if (codes) warn(fmt::format("{}: a RAW file is linear; --codes is not used for it", path));
+    mark_clipped(65534.0f / 65535.0f);
+  } else if (img.code_bits > 0) {
+    require_curve_for_deep_codes(img, codes.has_value(), path);
+    if (img.code_bits == 16) img.code_bits = white_level.read(img.rgb, path);
+    mark_clipped(1.0f - 0.5f / float((1 << img.code_bits) - 1));
     linearise_codes(img, codes.value_or(CodeCurve{}), path);
   } else if (codes) {
     warn(fmt::format("{}: radiance already; --codes applies to camera images and is not used", path));
   }
-  FlatField f;
-  f.width = img.width;
-  f.height = img.height;
-  f.name = path;
-  f.luminance.resize(n);
+  FlatField f{img.width, img.height, std::vector<float>(n), path};
   for (size_t i = 0; i < n; ++i) {
     const float* p = &img.rgb[3 * i];
     const bool usable = !clipped[i] && (img.valid.empty() || img.valid[i]);
@@ -276,8 +266,9 @@ int run_calib_vignetting(const CalibVignettingArgs& args, const Output& out) {
   std::vector<double> f_numbers(args.flats.size(), 0.0);
   {  // a RAW flat takes LibRaw about a second to develop
     Progress progress("calib vignetting", args.flats.size(), out.progress && args.flats.size() > 1);
+    SequenceWhiteLevel white_level;
     for (size_t k = 0; k < args.flats.size(); ++k) {
-      flats.push_back(read_flat(args.flats[k], codes, &f_numbers[k]));
+      flats.push_back(read_flat(args.flats[k], codes, white_level, &f_numbers[k]));
       progress.advance();
     }
     progress.finish();

@@ -82,4 +82,11 @@ CodesReport linearise_codes(RgbImage& image, const CodeCurve& curve, const std::
   return linearise_codes(image, make_code_table(curve, image.code_bits, file), file);
 }
 
+void require_curve_for_deep_codes(const RgbImage& image, bool curve_given, const std::string& file) {
+  if (image.code_bits > 8 && !curve_given)
+    throw InputError(fmt::format("{}: {}-bit camera codes may be linear (a raw developer's) or gamma-encoded (an "
+                                 "editor's): say which with --codes linear, --codes srgb or --codes RESPONSE.json",
+                                 file, image.code_bits));
+}
+
 }  // namespace lp

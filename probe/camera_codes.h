@@ -47,6 +47,11 @@ CodeTable make_code_table(const CodeCurve& curve, int bits, const std::string& f
 // level's entry (a NaN the lowest).
 size_t apply_code_table(float* rgb, size_t pixels, const CodeTable& table);
 
+// InputError naming `file` for camera codes deeper than 8 bits read without a curve
+// (`curve_given` false): a raw developer writes linear 16-bit codes, an editor gamma-encoded
+// ones, and nothing in the file tells them apart.
+void require_curve_for_deep_codes(const RgbImage& image, bool curve_given, const std::string& file);
+
 // `image`'s codes as relative linear radiance, in place (sRGB: IEC 61966-2-1's decoding; a
 // table: the entry of each code's level); code_bits is then 0. An image that is radiance
 // already (code_bits 0) is left alone. Pixels at the top code in any channel are clipped:

@@ -96,10 +96,7 @@ RgbImage read_frame(const std::string& f, FirstPass& pass, const UnwrapSequenceO
                                    "would divide it out twice",
                                    f, o.vignetting_file));
   }
-  if (img.code_bits > 8 && !o.codes)
-    throw InputError(fmt::format("{}: {}-bit camera codes may be linear (a raw developer's) or gamma-encoded (an "
-                                 "editor's): say which with --codes linear, --codes srgb or --codes RESPONSE.json",
-                                 f, img.code_bits));
+  require_curve_for_deep_codes(img, o.codes.has_value(), f);
   // A Mono12 frame saved as 16-bit: its clipped sun at 4095 was linearised as a valid value
   // and the report's clipped fraction said 0.
   if (img.code_bits == 16) img.code_bits = pass.white_level.read(img.rgb, f);

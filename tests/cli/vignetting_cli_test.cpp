@@ -172,6 +172,30 @@ TEST(CalibVignettingCli, ARawFlatIsReadLinearAsStored) {
   EXPECT_NEAR(j["centre"][1].get<double>(), kCy, 0.3);
 }
 
+// A Mono12 camera's flat saved as 16-bit: its codes stop at 4095, where a bright speck clips.
+// Read at that white level, as probe unwrap reads such frames: the speck is clipped, not a
+// level, and the falloff is the lens's.
+TEST(CalibVignettingCli, ASixteenBitFlatOfATwelveBitSensorIsReadAtItsWhiteLevel) {
+  const fs::path d = fresh_dir("vignetting_mono12");
+  RgbImage img;
+  img.width = kWidth;
+  img.height = kHeight;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const double level = std::hypot(x - 120, y - 100) < 6 ? 1.0 : 0.6 * lens(x, y);  // 12-bit codes
+      const float code = float(std::round(level * 4095) / 65535);
+      img.rgb.insert(img.rgb.end(), {code, code, code});
+    }
+  write_code_image((d / "mono12.png").string(), img, 16);
+  const CliRun r = lightprobe("calib vignetting --json --codes linear " + (d / "mono12.png").string() + " -o " +
+                              (d / "v.json").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("read as a 12-bit sensor's codes"), std::string::npos) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["k"][0].get<double>(), -0.8, 0.01);
+  EXPECT_NEAR(j["centre"][0].get<double>(), kCx, 0.3);
+}
+
 // Uneven light across a single flat looks like a falloff about another centre: said.
 TEST(CalibVignettingCli, AFlatLitFromOneSideIsWarnedAbout) {
   const fs::path d = fresh_dir("vignetting_uneven");

@@ -419,7 +419,7 @@ std::vector<Command> calib_commands() {
          return [a](const Output& out) { return run_calib_photometric(*a, out); };
        }},
       {"calib vignetting", "Lens vignetting (relative illumination) from flat fields",
-       "lightprobe calib vignetting flat_*.jpg -o vignetting.json\nlightprobe hdr fuse IMG_*.jpg --vignetting vignetting.json -o probe.exr",
+       "lightprobe calib vignetting flat_*.dng -o vignetting.json\nlightprobe hdr fuse IMG_*.jpg --vignetting vignetting.json -o probe.exr",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<CalibVignettingArgs>();
          f.arg("FLAT", a->flats, "Images of a uniformly lit, featureless field filling the view (a diffuser over the lens), unclipped; RAW files best (linear, before in-camera correction); several: the camera turned about its axis between them").required();

@@ -9,6 +9,7 @@
 // dphi * (cos theta0 - cos theta1); for healpix 4 pi / (12 nside^2) (equal area).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -55,6 +56,11 @@ struct EnvMap {
   // from the sensor's frame (hdr fuse), recorded so that a fisheye, unwrapped in its sensor's
   // frame, can be turned back. 1: as the sensor stored it.
   int exif_orientation = 1;
+  // A mirror-ball photo (not a map): the ball's centre and radius in its pixels (cx, cy, r;
+  // the top-left pixel's centre at 0.5, 0.5, as BallInImage), where `probe register` placed
+  // it, recorded so that `probe unwrap` takes it instead of searching for the rim of a ball
+  // pasted on a canvas. Kept only by the photo's writers (write_rgb_image, write_code_image).
+  std::optional<std::array<double, 3>> mirror_ball;
 
   size_t pixel_count() const { return size_t(width) * size_t(height); }
   bool is_valid(size_t i) const { return valid.empty() || valid[i] != 0; }

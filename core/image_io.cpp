@@ -98,6 +98,34 @@ Mat3 parse_rotation_text(const std::string& path, const std::string& key, const 
   return r;
 }
 
+// A recorded mirror ball's "cx cy r" (EnvMap::mirror_ball): three finite numbers, a positive
+// radius, a disc that overlaps the width x height image. Else the file is refused, naming
+// `key`: probe unwrap would take the ball as given.
+std::array<double, 3> parse_mirror_ball_text(const std::string& path, const std::string& key, const std::string& text,
+                                             int width, int height) {
+  const auto bad = [&](const std::string& why) {
+    fail(path, fmt::format("bad {} value '{}' ({})", key, one_line(text, 60), why));
+  };
+  std::istringstream in(text);
+  std::array<double, 3> b{};
+  std::string extra;
+  for (double& x : b)
+    if (!(in >> x) || !std::isfinite(x)) bad("expected 3 numbers: cx cy r");
+  if (in >> extra) bad("expected 3 numbers: cx cy r");
+  if (!(b[2] > 0)) bad("the radius must be positive");
+  if (!(b[0] + b[2] > 0 && b[0] - b[2] < width && b[1] + b[2] > 0 && b[1] - b[2] < height))
+    bad(fmt::format("the ball lies outside the {}x{} image", width, height));
+  return b;
+}
+
+// The ball of an image turned as EXIF `orientation` shows it (stored_width x stored_height
+// as stored); pixel centres at .5 here, at integers in shown_from_stored.
+std::array<double, 3> mirror_ball_as_shown(const std::array<double, 3>& b, int orientation, int stored_width,
+                                           int stored_height) {
+  const auto p = shown_from_stored(orientation, stored_width, stored_height, {b[0] - 0.5, b[1] - 0.5});
+  return {p[0] + 0.5, p[1] + 0.5, b[2]};
+}
+
 // A JPEG that stops before its End Of Image marker: libjpeg decodes what is there, fills the
 // rest with grey and only warns, so OpenCV returns a plausible image. Walk the marker
 // segments and the entropy-coded scans (where 0xFF is followed by 0x00, a restart marker or
@@ -160,6 +188,8 @@ struct RawImage {
   std::optional<Mat3> world_from_probe;
   bool vignetting_corrected = false;
   int exif_orientation = 1;
+  std::optional<std::string> mirror_ball;  // its text, checked against the size in finish_map
+  std::string mirror_ball_key;
   std::string layout_key = "layout";  // how the file names the field, for messages
   bool openexr_cube = false;          // an EXR whose standard envmap attribute says cube
   // Said once the file is accepted (finish_map), so that a file refused after all says one line.
@@ -291,6 +321,8 @@ EnvMap finish_map(const std::string& path, RawImage&& raw, const ReadMapOptions&
   }
   map.vignetting_corrected = raw.vignetting_corrected;
   map.exif_orientation = raw.exif_orientation;
+  if (raw.mirror_ball)
+    map.mirror_ball = parse_mirror_ball_text(path, raw.mirror_ball_key, *raw.mirror_ball, raw.width, raw.height);
   if (layout == Layout::Healpix) {
     // The file's pixels, row by row from the top, are the NESTED pixels in order.
     const int nside = healpix_nside_of_shape(raw.width, raw.height);
@@ -524,6 +556,8 @@ RawImage decode_exr(const std::string& path, const std::string& bytes, MemoryISt
     if (a->value() < 1 || a->value() > 8) fail(path, fmt::format("lightprobe.exif_orientation {} is not 1-8", a->value()));
     raw.exif_orientation = a->value();
   }
+  if (auto* a = header.findTypedAttribute<Imf::StringAttribute>(kMirrorBallKey))
+    raw.mirror_ball = a->value(), raw.mirror_ball_key = kMirrorBallKey;
   raw.openexr_cube = Imf::hasEnvmap(header) && Imf::envmap(header) == Imf::ENVMAP_CUBE;
 
   const Imf::ChannelList& channels = header.channels();
@@ -673,6 +707,7 @@ std::string encode_exr(const std::string& path, const EnvMap& map, const WriteMa
   if (map.world_from_probe) header.insert(kExrRotationKey, Imf::StringAttribute(rotation_text(*map.world_from_probe)));
   if (map.vignetting_corrected) header.insert("lightprobe.vignetting", Imf::StringAttribute("corrected"));
   if (map.exif_orientation != 1) header.insert("lightprobe.exif_orientation", Imf::IntAttribute(map.exif_orientation));
+  if (map.mirror_ball) header.insert(kMirrorBallKey, Imf::StringAttribute(mirror_ball_text(*map.mirror_ball)));
 
   // The frame buffer must hold the file's pixel type: convert to half here when needed.
   std::vector<float> alpha;
@@ -800,6 +835,8 @@ HdrHeader read_hdr_header(const std::string& path, const std::string& bytes) {
       if (value.size() != 1 || value[0] < '1' || value[0] > '8')
         fail(path, fmt::format("bad LIGHTPROBE_EXIF_ORIENTATION value '{}' (expected 1-8)", one_line(value, 40)));
       raw.exif_orientation = value[0] - '0';
+    } else if (key == "LIGHTPROBE_MIRROR_BALL") {
+      raw.mirror_ball = value, raw.mirror_ball_key = "LIGHTPROBE_MIRROR_BALL";
     }
   }
   for (int k = 0; k < 3; ++k) header.scale[k] = 1.0 / (exposure * colorcorr[k]);
@@ -990,6 +1027,7 @@ std::string encode_hdr(const std::string& path, const EnvMap& map, const WriteMa
   if (map.world_from_probe) out += "LIGHTPROBE_WORLD_FROM_PROBE=" + rotation_text(*map.world_from_probe) + "\n";
   if (map.vignetting_corrected) out += "LIGHTPROBE_VIGNETTING=corrected\n";
   if (map.exif_orientation != 1) out += fmt::format("LIGHTPROBE_EXIF_ORIENTATION={}\n", map.exif_orientation);
+  if (map.mirror_ball) out += "LIGHTPROBE_MIRROR_BALL=" + mirror_ball_text(*map.mirror_ball) + "\n";
   out += fmt::format("\n-Y {} +X {}\n", img.height, img.width);
   const int W = img.width;
   std::vector<uint8_t> rgbe(4 * size_t(W));
@@ -1233,6 +1271,7 @@ RgbImage read_rgb_image(const std::string& path, bool as_stored) {
     img.units = m.units;
     img.vignetting_corrected = m.vignetting_corrected;
     img.orientation = m.exif_orientation;
+    img.mirror_ball = m.mirror_ball;
     return img;
   }
   CameraImage c = tiff.empty() ? read_camera_image(path, as_stored) : camera_image_from_bytes(path, tiff, as_stored);
@@ -1242,6 +1281,7 @@ RgbImage read_rgb_image(const std::string& path, bool as_stored) {
   img.rgb = std::move(c.rgb);
   img.valid = std::move(c.valid);
   img.code_bits = c.bit_depth;
+  img.mirror_ball = c.mirror_ball;
   return img;
 }
 
@@ -1256,6 +1296,7 @@ void write_rgb_image(const std::string& path, const RgbImage& image, const Write
   m.vignetting_corrected = image.vignetting_corrected;
   // A radiance image keeps the EXIF turn it was shown by (a bracket fused as its tags showed it).
   m.exif_orientation = image.orientation;
+  m.mirror_ball = image.mirror_ball;
   WriteMapOptions o = options;
   o.record_layout = false;
   write_envmap(path, m, o);
@@ -1283,7 +1324,12 @@ void png_source_read(png_structp png, png_bytep out, png_size_t n) {
 // Fills the rows (each width * 8 bytes: up to 4 channels of 16 bits) and returns true, or
 // false for a damaged file; `channels` (1 grey, 2 grey + alpha, 3 RGB, 4 RGBA) and `depth`
 // (8 or 16) say what was stored.
-bool decode_png_rows(PngSource* src, uint32_t width, uint32_t height, png_bytep* rows, int* channels, int* depth) {
+// `ball_text` (kBallTextBytes) receives the tEXt "lightprobe.mirror_ball" before the pixels,
+// NUL-terminated (empty without one): a buffer, as nothing owning memory may cross libpng's
+// longjmp.
+constexpr size_t kBallTextBytes = 256;
+bool decode_png_rows(PngSource* src, uint32_t width, uint32_t height, png_bytep* rows, int* channels, int* depth,
+                     char* ball_text) {
   png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   if (!png) return false;
   png_infop info = png_create_info_struct(png);
@@ -1295,6 +1341,15 @@ bool decode_png_rows(PngSource* src, uint32_t width, uint32_t height, png_bytep*
   png_set_user_limits(png, width, height);  // what the checked header said, no more
   png_read_info(png, info);
   if (png_get_image_width(png, info) != width || png_get_image_height(png, info) != height) png_error(png, "size");
+  ball_text[0] = '\0';
+  png_textp texts = nullptr;
+  const int n_texts = png_get_text(png, info, &texts, nullptr);
+  for (int i = 0; i < n_texts; ++i)
+    if (std::strcmp(texts[i].key, kMirrorBallKey) == 0 && texts[i].text) {
+      // Longer than any "cx cy r": kept cut, which the parse then refuses.
+      std::strncpy(ball_text, texts[i].text, kBallTextBytes - 1);
+      ball_text[kBallTextBytes - 1] = '\0';
+    }
   const int type = png_get_color_type(png, info);
   if (type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
   if (type == PNG_COLOR_TYPE_GRAY && png_get_bit_depth(png, info) < 8) png_set_expand_gray_1_2_4_to_8(png);
@@ -1358,9 +1413,13 @@ CameraImage decode_png_image(const std::string& path, const std::string& bytes, 
   for (uint32_t y = 0; y < height; ++y) rows[y] = pixels.data() + size_t(y) * stride;
   PngSource src{reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), 0};
   int channels = 0, depth = 0;
-  if (!decode_png_rows(&src, width, height, rows.data(), &channels, &depth))
+  char ball_text[kBallTextBytes];
+  if (!decode_png_rows(&src, width, height, rows.data(), &channels, &depth, ball_text))
     fail(path, "cannot decode image (damaged file)");
-  return camera_image_from_samples(int(width), int(height), depth, channels, false, pixels.data(), stride);
+  CameraImage image = camera_image_from_samples(int(width), int(height), depth, channels, false, pixels.data(), stride);
+  if (ball_text[0])
+    image.mirror_ball = parse_mirror_ball_text(path, kMirrorBallKey, ball_text, int(width), int(height));
+  return image;
 }
 
 // JPEGs likewise by libjpeg-turbo in-process, as OpenCV's decoder does with the same library
@@ -1430,6 +1489,7 @@ CameraImage turned_for_display(CameraImage in, int orientation) {
   const bool swap = orientation >= 5;  // 5-8 exchange rows and columns
   CameraImage out;
   out.width = int(swap ? h : w), out.height = int(swap ? w : h), out.bit_depth = in.bit_depth, out.grey = in.grey;
+  if (in.mirror_ball) out.mirror_ball = mirror_ball_as_shown(*in.mirror_ball, orientation, in.width, in.height);
   out.rgb.resize(in.rgb.size());
   out.valid.resize(in.valid.size());
   const size_t ow = size_t(out.width), oh = size_t(out.height);
@@ -1547,6 +1607,10 @@ static CameraImage camera_image_from_bytes(const std::string& path, const std::s
   });
 }
 
+std::string mirror_ball_text(const std::array<double, 3>& ball) {
+  return fmt::format("{:.17g} {:.17g} {:.17g}", ball[0], ball[1], ball[2]);
+}
+
 CameraImage turned_as_shown(CameraImage stored, int orientation) {
   return turned_for_display(std::move(stored), orientation);
 }
@@ -1557,6 +1621,7 @@ RgbImage turned_back_to_sensor(RgbImage shown) {
   const int inverse = shown.orientation == 6 ? 8 : shown.orientation == 8 ? 6 : shown.orientation;
   CameraImage c;
   c.width = shown.width, c.height = shown.height, c.rgb = std::move(shown.rgb), c.valid = std::move(shown.valid);
+  if (shown.mirror_ball) shown.mirror_ball = mirror_ball_as_shown(*shown.mirror_ball, inverse, c.width, c.height);
   c = turned_as_shown(std::move(c), inverse);
   shown.width = c.width, shown.height = c.height, shown.rgb = std::move(c.rgb), shown.valid = std::move(c.valid);
   shown.orientation = 1;

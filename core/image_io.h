@@ -7,7 +7,8 @@
 //         "lightprobe.units", "lightprobe.nside" and "lightprobe.world_from_probe" (9 numbers,
 //         row-major, in a string: EnvMap::world_from_probe) carry the metadata, and
 //         "lightprobe.vignetting" = "corrected" EnvMap::vignetting_corrected, and
-//         "lightprobe.exif_orientation" (int) EnvMap::exif_orientation when not 1.
+//         "lightprobe.exif_orientation" (int) EnvMap::exif_orientation when not 1, and
+//         "lightprobe.mirror_ball" = "cx cy r" EnvMap::mirror_ball (a registered ball photo).
 //         Reads R,G,B or Y (grey, or Y/RY/BY luminance-chroma) channels of any pixel type,
 //         or, in a file without them, its one layer that has R,G,B ("ViewLayer.Combined.R"
 //         of a Blender render; two such layers are refused); a multi-part file's first part,
@@ -20,7 +21,8 @@
 //   .hdr  Radiance RGBE, reads flat and run-length (new and old) scanlines; writes RLE.
 //         Metadata as header lines "LIGHTPROBE_LAYOUT=..." / "LIGHTPROBE_UNITS=..." /
 //         "LIGHTPROBE_NSIDE=..." / "LIGHTPROBE_WORLD_FROM_PROBE=" and 9 numbers, row-major /
-//         "LIGHTPROBE_VIGNETTING=corrected" / "LIGHTPROBE_EXIF_ORIENTATION=n".
+//         "LIGHTPROBE_VIGNETTING=corrected" / "LIGHTPROBE_EXIF_ORIENTATION=n" /
+//         "LIGHTPROBE_MIRROR_BALL=cx cy r".
 //         Pixels decode as m 2^(e-136) (as OpenCV, stb_image), divided by the product of
 //         EXPOSURE (and COLORCORR) lines. Only the "-Y H +X W" orientation and
 //         FORMAT=32-bit_rle_rgbe are read; XYZE is refused.
@@ -42,6 +44,7 @@
 // All failures throw InputError naming the path and the problem.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <utility>
@@ -87,6 +90,9 @@ struct CameraImage {
   // Empty: every pixel holds data. Else 0 where the file's alpha is below half (a frame
   // warped by a registration tool, Hugin's align_image_stack: no data there, not black).
   std::vector<uint8_t> valid;
+  // A PNG's tEXt "lightprobe.mirror_ball" (cx cy r, as EnvMap::mirror_ball): where `probe
+  // register` put the ball, turned with the pixels.
+  std::optional<std::array<double, 3>> mirror_ball;
 };
 // `as_stored`: the pixels as stored, not turned as the file's EXIF Orientation says (what a
 // sensor saw where the orientation is noise: a camera pointing up; `orientation` still says
@@ -123,6 +129,7 @@ struct RgbImage {
   // EnvMap::exif_orientation (a bracket fused as its frames' tags showed it).
   int orientation = 1;
   bool vignetting_corrected = false;  // as EnvMap's, recorded in .exr and .hdr files
+  std::optional<std::array<double, 3>> mirror_ball;  // as EnvMap's: .exr, .hdr and PNG record it
 };
 // A radiance image shown turned by EXIF `orientation` (RgbImage::orientation, as hdr fuse
 // records it) turned back to the sensor's frame; orientation 1 after.
@@ -133,8 +140,14 @@ RgbImage read_rgb_image(const std::string& path, bool as_stored = false);
 // .exr/.hdr/.pfm without a layout record; atomic like every writer.
 void write_rgb_image(const std::string& path, const RgbImage& image, const WriteMapOptions& options = {});
 
+// The name of a recorded mirror ball (EnvMap::mirror_ball) in EXR attributes and PNG tEXt
+// chunks, and its text there: "cx cy r", 17 significant digits each.
+inline constexpr const char* kMirrorBallKey = "lightprobe.mirror_ball";
+std::string mirror_ball_text(const std::array<double, 3>& ball);
+
 // Writes code values in [0, 1] as an 8- or 16-bit PNG (or TIFF by extension), exactly as a
-// camera would store them (no colour encoding applied), atomically. For synthetic frames.
+// camera would store them (no colour encoding applied), atomically. For synthetic frames and
+// registered photos: a PNG records image.mirror_ball as tEXt "lightprobe.mirror_ball".
 void write_code_image(const std::string& path, const RgbImage& image, int bit_depth);
 
 // 8-bit sRGB PNG/JPEG of already tone-mapped RGB in [0, 1] (overlays, charts).

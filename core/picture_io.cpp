@@ -39,8 +39,9 @@ void png_sink_write(png_structp png, png_bytep bytes, png_size_t n) {
 
 void png_sink_flush(png_structp) {}
 
-// Returns the encoded size, 0 on failure. `rows` are big-endian for 16-bit (PNG's order).
-size_t write_png_rows(PngSink* sink, int width, int height, int bit_depth, png_bytep* rows) {
+// Returns the encoded size, 0 on failure. `rows` are big-endian for 16-bit (PNG's order);
+// `texts` (n of them) are written as tEXt chunks before the pixels.
+size_t write_png_rows(PngSink* sink, int width, int height, int bit_depth, png_bytep* rows, png_text* texts, int n) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   if (!png) return 0;
   png_infop info = png_create_info_struct(png);
@@ -52,13 +53,15 @@ size_t write_png_rows(PngSink* sink, int width, int height, int bit_depth, png_b
   png_set_compression_level(png, 1);  // fast, as OpenCV's default
   png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), bit_depth, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  if (n > 0) png_set_text(png, info, texts, n);
   png_set_rows(png, info, rows);
   png_write_png(png, info, PNG_TRANSFORM_IDENTITY, nullptr);
   png_destroy_write_struct(&png, &info);
   return sink->size;
 }
 
-std::string encode_png(const std::string& path, int width, int height, int bit_depth, const std::vector<uint16_t>& rgb) {
+std::string encode_png(const std::string& path, int width, int height, int bit_depth, const std::vector<uint16_t>& rgb,
+                       const std::vector<std::pair<std::string, std::string>>& png_texts) {
   const size_t row_bytes = 3 * size_t(width) * size_t(bit_depth / 8);
   std::vector<uint8_t> pixels(row_bytes * size_t(height));
   for (size_t i = 0; i < rgb.size(); ++i) {
@@ -73,9 +76,25 @@ std::string encode_png(const std::string& path, int width, int height, int bit_d
   // zlib's bound for stored blocks (5 bytes a 16 KB block) over the filtered rows, the chunks
   // every 8 KB (12 bytes each) and the headers.
   const size_t raw = (row_bytes + 1) * size_t(height);
-  std::vector<uint8_t> out(raw + raw / 1000 + 5 * (raw / 16384 + 1) + 12 * (raw / 8192 + 1) + 4096);
+  size_t text_bytes = 0;  // a tEXt chunk: keyword, NUL, text, and 12 bytes of length, type and CRC
+  for (const auto& [key, text] : png_texts) text_bytes += key.size() + 1 + text.size() + 12;
+  std::vector<uint8_t> out(raw + raw / 1000 + 5 * (raw / 16384 + 1) + 12 * (raw / 8192 + 1) + 4096 + text_bytes);
+  // libpng takes mutable C strings, and nothing with a destructor may cross its longjmp:
+  // copies made here, before the write.
+  std::vector<std::vector<char>> strings;
+  for (const auto& [key, text] : png_texts) {
+    if (key.empty() || key.size() > 79) throw std::invalid_argument("encode_png: a tEXt keyword is 1-79 bytes");
+    for (const std::string* s : {&key, &text}) strings.emplace_back(s->begin(), s->end()), strings.back().push_back('\0');
+  }
+  std::vector<png_text> texts(png_texts.size());
+  for (size_t i = 0; i < texts.size(); ++i) {
+    texts[i].compression = PNG_TEXT_COMPRESSION_NONE;
+    texts[i].key = strings[2 * i].data();
+    texts[i].text = strings[2 * i + 1].data();
+    texts[i].text_length = strings[2 * i + 1].size() - 1;
+  }
   PngSink sink{out.data(), out.size(), 0};
-  const size_t n = write_png_rows(&sink, width, height, bit_depth, rows.data());
+  const size_t n = write_png_rows(&sink, width, height, bit_depth, rows.data(), texts.data(), int(texts.size()));
   if (n == 0) throw InputError(fmt::format("{}: cannot encode as PNG", path));
   return std::string(reinterpret_cast<const char*>(out.data()), n);
 }
@@ -83,13 +102,14 @@ std::string encode_png(const std::string& path, int width, int height, int bit_d
 }  // namespace
 
 std::string encode_rgb_codes(const std::string& path, int width, int height, int bit_depth,
-                             const std::vector<uint16_t>& rgb) {
+                             const std::vector<uint16_t>& rgb,
+                             const std::vector<std::pair<std::string, std::string>>& png_texts) {
   if (bit_depth != 8 && bit_depth != 16) throw InputError(fmt::format("{}: bit depth must be 8 or 16", path));
   if (width <= 0 || height <= 0 || rgb.size() != 3 * size_t(width) * size_t(height))
     throw InputError(fmt::format("{}: image buffer does not match its size", path));
   std::string ext = lower_extension(path);
   if (ext.empty()) ext = ".png";
-  if (ext == ".png") return encode_png(path, width, height, bit_depth, rgb);
+  if (ext == ".png") return encode_png(path, width, height, bit_depth, rgb, png_texts);
   cv::Mat m(height, width, bit_depth == 8 ? CV_8UC3 : CV_16UC3);
   for (int y = 0; y < height; ++y) {
     const uint16_t* p = &rgb[3 * size_t(y) * size_t(width)];
@@ -130,7 +150,9 @@ void write_code_image(const std::string& path, const RgbImage& image, int bit_de
   std::vector<uint16_t> codes(image.rgb.size());
   std::transform(image.rgb.begin(), image.rgb.end(), codes.begin(),
                  [&](float v) { return uint16_t(std::lround(std::clamp(double(v), 0.0, 1.0) * max)); });
-  write_file_atomically(path, encode_rgb_codes(path, image.width, image.height, bit_depth, codes));
+  std::vector<std::pair<std::string, std::string>> texts;
+  if (image.mirror_ball) texts.emplace_back(kMirrorBallKey, mirror_ball_text(*image.mirror_ball));
+  write_file_atomically(path, encode_rgb_codes(path, image.width, image.height, bit_depth, codes, texts));
 }
 
 void write_display_image(const std::string& path, int width, int height, const std::vector<float>& rgb) {

@@ -229,6 +229,51 @@ TEST(ImageIo, AFusedPhotosVignettingAndExifTurnAreRecorded) {
   EXPECT_EQ(turned_as_shown(again, 6).rgb, shown.rgb);
 }
 
+// Where probe register put the ball (EnvMap::mirror_ball) survives every writer of photos to
+// the 17th digit, turns with the pixels, and a value no ball can have is refused, naming it.
+TEST(ImageIo, ARegisteredBallIsRecordedTurnedAndChecked) {
+  const std::string dir = temp_dir();
+  RgbImage img;
+  img.width = 6, img.height = 4;
+  img.rgb.assign(3 * 24, 0.25f);
+  img.mirror_ball = std::array<double, 3>{2.5, 1.75, 1.0 / 3.0};
+  for (const char* ext : {".exr", ".hdr"}) {
+    write_rgb_image(dir + "ball" + ext, img);
+    EXPECT_EQ(read_rgb_image(dir + "ball" + ext).mirror_ball, img.mirror_ball) << ext;
+  }
+  write_code_image(dir + "ball.png", img, 8);
+  EXPECT_EQ(read_rgb_image(dir + "ball.png").mirror_ball, img.mirror_ball);
+  EXPECT_EQ(read_camera_image(dir + "ball.png").mirror_ball, img.mirror_ball);
+  write_code_image(dir + "ball16.png", img, 16);
+  EXPECT_EQ(read_camera_image(dir + "ball16.png").mirror_ball, img.mirror_ball);
+  EXPECT_FALSE(read_rgb_image((write_code_image(dir + "none.png", RgbImage{6, 4, img.rgb}, 8), dir + "none.png"))
+                   .mirror_ball.has_value());
+  // Turned: a marker at the ball's centre pixel stays at the turned ball's centre.
+  RgbImage shown = img;
+  shown.orientation = 6;
+  shown.rgb[3 * (1 * 6 + 2)] = 9;  // the pixel holding (2.5, 1.75): column 2, row 1
+  const RgbImage stored = turned_back_to_sensor(shown);
+  ASSERT_TRUE(stored.mirror_ball.has_value());
+  const auto [sx, sy, sr] = *stored.mirror_ball;
+  EXPECT_EQ(sr, 1.0 / 3.0);
+  EXPECT_EQ(stored.rgb[3 * (size_t(sy) * size_t(stored.width) + size_t(sx))], 9.0f) << sx << " " << sy;
+  CameraImage again;
+  again.width = stored.width, again.height = stored.height, again.rgb = stored.rgb, again.mirror_ball = stored.mirror_ball;
+  EXPECT_EQ(turned_as_shown(again, 6).mirror_ball, img.mirror_ball);
+  // A record no ball can have: refused, naming the file and the record.
+  write_rgb_image(dir + "bad.hdr", img);
+  std::string bytes = read_bytes(dir + "bad.hdr");
+  const size_t at = bytes.find("LIGHTPROBE_MIRROR_BALL=");
+  ASSERT_NE(at, std::string::npos);
+  for (const char* bad : {"2.5 1.75", "2.5 1.75 -1", "2.5 nan 1", "60 1 2", "1 2 3 4"}) {
+    std::string b = bytes;
+    b.replace(at, b.find('\n', at) - at, std::string("LIGHTPROBE_MIRROR_BALL=") + bad);
+    write_bytes(dir + "bad.hdr", b);
+    const std::string e = test_files::input_error([&] { read_rgb_image(dir + "bad.hdr"); });
+    EXPECT_NE(e.find("bad.hdr: bad LIGHTPROBE_MIRROR_BALL value"), std::string::npos) << bad << ": " << e;
+  }
+}
+
 TEST(ImageIo, ExrHalfRoundTripIsWithinHalfPrecision) {
   const std::string dir = temp_dir();
   EnvMap map = make_latlong(64, 32);

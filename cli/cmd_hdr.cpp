@@ -165,6 +165,7 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     }
     radiance = decode_log_sensor(frame, *photometric);
     radiance.orientation = frame.orientation;  // the turn it was shown by, recorded
+    radiance.mirror_ball = frame.mirror_ball;  // where probe register put the ball
     report["mode"] = "log-sensor";
   } else {
     check_max_shift(args.align, args.max_shift);
@@ -207,6 +208,8 @@ int run_hdr_fuse(const HdrFuseArgs& args, const Output& out) {
     MergeReport mr;
     radiance = merge_bracket(bracket, response, mo, &mr);
     radiance.orientation = bracket.orientation;  // recorded: a fisheye unwrap turns it back
+    radiance.mirror_ball = bracket.mirror_ball;  // recorded: probe unwrap takes it, no search
+    if (bracket.mirror_ball) report["mirror_ball"] = *bracket.mirror_ball;
     if (bracket.to_rec709) {  // the frames' ICC profile, a matrix one other than sRGB
       apply_colour_matrix(radiance.rgb, *bracket.to_rec709);
       report["colour_profile"] = bracket.colour_profile;

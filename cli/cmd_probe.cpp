@@ -155,6 +155,7 @@ nlohmann::json report_json(const ProbeUnwrapArgs& a, const UnwrapSequenceOptions
     if (f.ball) {
       fj["ball"] = {f.ball->cx, f.ball->cy, f.ball->radius_px};
       fj["ball_raw"] = {f.ball_detected->cx, f.ball_detected->cy, f.ball_detected->radius_px};
+      fj["ball_source"] = !a.ball.empty() ? "given" : f.ball_recorded ? "recorded" : "found";
     }
     if (const auto& b = f.ball_fit)  // how the ball was found: sub-pixel or not, the fit's standard errors
       fj["ball_fit"] = {{"subpixel", b->subpixel}, {"sigma_centre_px", b->sigma_centre_px}, {"sigma_radius_px", b->sigma_radius_px},
@@ -248,8 +249,9 @@ int run_probe_unwrap(const ProbeUnwrapArgs& args, const Output& out) {
   }
   const UnwrapSequenceReport::Frame& first = r.frames[0];
   if (first.ball && !sequence)
-    say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px -> {} {}x{}{}\n", args.output, first.ball->cx, first.ball->cy,
-        first.ball->radius_px, args.layout, o.width, o.height,
+    say(out, "{}: ball at ({:.2f}, {:.2f}) r {:.2f} px{} -> {} {}x{}{}\n", args.output, first.ball->cx, first.ball->cy,
+        first.ball->radius_px, first.ball_recorded && args.ball.empty() ? " (recorded by probe register)" : "",
+        args.layout, o.width, o.height,
         args.fill ? fmt::format(", fill holds {:.2f} % of the power", 100 * r.fill_power_share) : "");
   else
     say(out, "{}: {} frame(s) -> {} {}x{} in {:.0f} ms{}\n", args.output, files.size(), args.layout, o.width, o.height,
@@ -320,7 +322,14 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
     }
     found.push_back({{"file", f}, {"ball", {balls.back().cx, balls.back().cy, balls.back().radius_px}}});
   }
-  const std::vector<RgbImage> registered = register_balls(frames, balls, args.size);
+  std::vector<RgbImage> registered = register_balls(frames, balls, args.size);
+  // Each photo records where the ball now is (PNG tEXt, EXR attribute; hdr fuse carries it):
+  // probe unwrap takes it instead of searching for the rim of a ball pasted on a canvas, which
+  // found no sub-pixel rim on kartik's photos and missed the centre by 0.8 px.
+  for (RgbImage& r : registered) {
+    const BallInImage t = registered_ball(args.size);
+    r.mirror_ball = std::array<double, 3>{t.cx, t.cy, t.radius_px};
+  }
   // Each photo keeps what it holds: 8- or 16-bit codes as a PNG of that depth, radiance as
   // EXR. All went to 8-bit PNG: a 16-bit bracket lost 8 bits, radiance was clipped at 1.
   std::vector<std::string> names;

@@ -361,6 +361,7 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
     f.width = cam.width;
     f.height = cam.height;
     f.rgb = std::move(cam.rgb);
+    f.mirror_ball = cam.mirror_ball;
     if (!cam.valid.empty()) {  // transparent pixels: no data in this frame, merged from the others
       const auto none = size_t(std::count(cam.valid.begin(), cam.valid.end(), uint8_t(0)));
       warn(fmt::format("{}: {} pixels ({:.3g} %) have alpha below half: no data there (left out of this frame), not black",
@@ -405,8 +406,10 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
       for (RgbImage& f : b.frames) {
         CameraImage c;
         c.width = f.width, c.height = f.height, c.rgb = std::move(f.rgb), c.valid = std::move(f.valid);
+        c.mirror_ball = f.mirror_ball;
         c = turned_as_shown(std::move(c), orientation[0]);
         f.width = c.width, f.height = c.height, f.rgb = std::move(c.rgb), f.valid = std::move(c.valid);
+        f.mirror_ball = c.mirror_ball;
       }
       b.orientation = orientation[0];
     } else {
@@ -420,6 +423,19 @@ Bracket read_bracket(const std::vector<std::string>& paths, const std::optional<
   fold_iso_and_aperture(b, settings);
   if (std::string line = drop_repeated_exposures(b); !line.empty()) said.push_back(std::move(line));
   check_bracket(b);
+  // Photos registered together (probe register) record one ball; frames that record none or
+  // another were not, and their fused image records none, said.
+  const auto& first_ball = b.frames[0].mirror_ball;
+  const bool one_ball = std::all_of(b.frames.begin(), b.frames.end(), [&](const RgbImage& f) {
+    return f.mirror_ball == first_ball;
+  });
+  if (one_ball) {
+    b.mirror_ball = first_ball;
+  } else {
+    said.push_back(fmt::format("{}: the frames do not record one mirror ball (probe register records where it put "
+                               "the ball; these were not registered together): the fused image records none",
+                               paths[0]));
+  }
   apply_sensor_white_level(b);
   check_exposure_order(b, times ? "given (--exposure-times)" : "read from the files");
   for (const std::string& line : said) warn(line);

@@ -43,6 +43,9 @@ struct Bracket {
   // The EXIF Orientation the frames were turned by (1: as stored; frames whose tags disagree
   // are read as stored).
   int orientation = 1;
+  // Where `probe register` put the ball, when every frame records the same place (PNG tEXt,
+  // core/image_io.h), in the frames as turned: hdr fuse records it in the fused image.
+  std::optional<std::array<double, 3>> mirror_ball;
 
   int width() const { return frames.empty() ? 0 : frames[0].width; }
   int height() const { return frames.empty() ? 0 : frames[0].height; }

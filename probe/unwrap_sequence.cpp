@@ -59,6 +59,7 @@ struct FirstPass {
   int width = 0, height = 0;
   std::vector<std::optional<FindBallReport>> fits;
   std::vector<char> seeded;
+  std::vector<size_t> recorded;  // frames whose ball was recorded in the file (probe register)
   // 16-bit frames: the white level of a sensor of fewer bits, decided at the first frame.
   SequenceWhiteLevel white_level;
   bool orientation_said = false;  // a fisheye frame's EXIF Orientation left unapplied, said once
@@ -117,6 +118,9 @@ FirstPass first_pass(const std::vector<std::string>& files, const UnwrapSequence
       pass.seeded.push_back(0);
       if (o.ball) {
         ball = *o.ball;
+      } else if (img.mirror_ball) {  // where probe register put it (core/image_io.h)
+        ball = BallInImage{(*img.mirror_ball)[0], (*img.mirror_ball)[1], (*img.mirror_ball)[2]};
+        pass.recorded.push_back(i);
       } else {
         try {
           FindBallReport fit;
@@ -227,6 +231,7 @@ UnwrapSequenceReport unwrap_probe_sequence(const std::vector<std::string>& files
         fr.ball_detected = BallInImage{report.detected.cx[i], report.detected.cy[i], report.detected.r[i]};
         fr.ball_fit = pass.fits[i];
         fr.ball_seeded = pass.seeded[i];
+        fr.ball_recorded = std::find(pass.recorded.begin(), pass.recorded.end(), i) != pass.recorded.end();
         fr.valid_fraction = ur.valid_solid_angle_fraction;  // before any fill
       } else {
         if (!base_model)

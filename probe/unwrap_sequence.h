@@ -80,7 +80,8 @@ struct UnwrapSequenceReport {
     std::string file;
     std::optional<BallInImage> ball, ball_detected;  // mirror ball: used, and as found
     // How it was found (confidence, whether sub-pixel, the fit's standard errors); nullopt
-    // when the ball was given.
+    // when the ball was given, or recorded in the file.
+    bool ball_recorded = false;  // taken from the file (probe register records it), not searched
     std::optional<FindBallReport> ball_fit;
     bool ball_seeded = false;  // found by the search from the last frame's ball (else the full search)
     std::optional<ImageCircle> circle;               // fisheye sequence

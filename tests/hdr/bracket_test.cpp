@@ -537,6 +537,32 @@ TEST(ReadBracket, AFrameAtTheExposureOfAnEarlierOneIsUsedOnce) {
   EXPECT_NE(wrong.find("a time is wrong"), std::string::npos) << wrong;
 }
 
+// Photos registered together record one ball (probe register), which the bracket keeps for
+// hdr fuse to record; frames that record another, or none, were not registered together: the
+// bracket keeps none, said in one line.
+TEST(ReadBracket, PhotosRegisteredTogetherKeepTheirBallOthersKeepNone) {
+  TempDir tmp;
+  const std::string dir = kData + "/hdr-memorial-debevec/";
+  std::vector<std::string> paths;
+  for (const char* name : {"memorial0063", "memorial0064", "memorial0065"}) {
+    RgbImage f = read_rgb_image(dir + name + ".png");
+    f.mirror_ball = std::array<double, 3>{256.5, 384.25, 200};
+    paths.push_back((tmp.path / (std::string(name) + ".png")).string());
+    write_code_image(paths.back(), f, 8);
+  }
+  std::vector<std::string> warnings;
+  set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  const Bracket together = read_bracket(paths, std::vector<double>{8, 4, 2});
+  EXPECT_TRUE(warnings.empty());
+  ASSERT_TRUE(together.mirror_ball.has_value());
+  EXPECT_EQ(*together.mirror_ball, (std::array<double, 3>{256.5, 384.25, 200}));
+  const Bracket mixed = read_bracket({paths[0], paths[1], dir + "memorial0065.png"}, std::vector<double>{8, 4, 2});
+  set_warning_sink(nullptr);
+  EXPECT_FALSE(mixed.mirror_ball.has_value());
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find(paths[0] + ": the frames do not record one mirror ball"), std::string::npos) << warnings[0];
+}
+
 TEST(ReadBracket, RefusesBadInputWithOneLineNamingTheFile) {
   TempDir tmp;
   const std::string a = tmp.png("a.png", 8, 6), b = tmp.png("b.png", 8, 6), odd = tmp.png("odd.png", 7, 8);

@@ -348,8 +348,8 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   for (size_t i = 0; i < registered.size(); ++i) {
     const RgbImage& r = registered[i];
     const std::string path = (fs::path(args.output_dir) / names[i]).string();
-    // The part of the ball that lay outside the photo: a PNG holds no mask, so it is code 0,
-    // which hdr fuse and probe unwrap take for black. Said, with how much.
+    // The part of the ball that lay outside the photo: transparent in the PNG (no data, which
+    // hdr fuse takes from the other photos), said with how much.
     if (r.code_bits > 0 && !r.valid.empty()) {
       size_t lost = 0, inside = 0;
       for (int y = 0; y < r.height; ++y)
@@ -360,8 +360,7 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
           lost += r.valid[size_t(y) * size_t(r.width) + size_t(x)] == 0;
         }
       if (lost > 0)
-        warn(fmt::format("{}: {} pixels of the ball ({:.2f} %) lay outside the photo and are black (code 0) in {}, "
-                         "which a PNG cannot mark as unseen",
+        warn(fmt::format("{}: {} pixels of the ball ({:.2f} %) lay outside the photo: transparent (no data) in {}",
                          args.images[i], lost, 100.0 * double(lost) / double(std::max<size_t>(1, inside)), names[i]));
     }
     if (r.code_bits > 0) write_code_image(path, r, r.code_bits);

@@ -41,7 +41,8 @@ void png_sink_flush(png_structp) {}
 
 // Returns the encoded size, 0 on failure. `rows` are big-endian for 16-bit (PNG's order);
 // `texts` (n of them) are written as tEXt chunks before the pixels.
-size_t write_png_rows(PngSink* sink, int width, int height, int bit_depth, png_bytep* rows, png_text* texts, int n) {
+size_t write_png_rows(PngSink* sink, int width, int height, int bit_depth, bool alpha, png_bytep* rows, png_text* texts,
+                      int n) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   if (!png) return 0;
   png_infop info = png_create_info_struct(png);
@@ -51,7 +52,8 @@ size_t write_png_rows(PngSink* sink, int width, int height, int bit_depth, png_b
   }
   png_set_write_fn(png, sink, png_sink_write, png_sink_flush);
   png_set_compression_level(png, 1);  // fast, as OpenCV's default
-  png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), bit_depth, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+  png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), bit_depth,
+               alpha ? PNG_COLOR_TYPE_RGB_ALPHA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   if (n > 0) png_set_text(png, info, texts, n);
   png_set_rows(png, info, rows);
@@ -60,16 +62,23 @@ size_t write_png_rows(PngSink* sink, int width, int height, int bit_depth, png_b
   return sink->size;
 }
 
+// `valid` (empty, or one 0/1 per pixel): an alpha channel, 0 where a pixel holds no data
+// (core/image_io.h reads alpha below half as unseen).
 std::string encode_png(const std::string& path, int width, int height, int bit_depth, const std::vector<uint16_t>& rgb,
-                       const std::vector<std::pair<std::string, std::string>>& png_texts) {
-  const size_t row_bytes = 3 * size_t(width) * size_t(bit_depth / 8);
+                       const std::vector<std::pair<std::string, std::string>>& png_texts,
+                       const std::vector<uint8_t>& valid = {}) {
+  const bool alpha = !valid.empty();
+  const size_t channels = alpha ? 4 : 3, bytes = size_t(bit_depth / 8);
+  const size_t row_bytes = channels * size_t(width) * bytes;
   std::vector<uint8_t> pixels(row_bytes * size_t(height));
-  for (size_t i = 0; i < rgb.size(); ++i) {
-    if (bit_depth == 8) {
-      pixels[i] = uint8_t(rgb[i]);
-    } else {
-      pixels[2 * i] = uint8_t(rgb[i] >> 8), pixels[2 * i + 1] = uint8_t(rgb[i] & 0xff);
-    }
+  const uint16_t opaque = bit_depth == 8 ? 0xff : 0xffff;
+  const auto put = [&](size_t at, uint16_t v) {  // PNG's order: big-endian for 16-bit
+    if (bytes == 1) pixels[at] = uint8_t(v);
+    else pixels[2 * at] = uint8_t(v >> 8), pixels[2 * at + 1] = uint8_t(v & 0xff);
+  };
+  for (size_t p = 0; p < rgb.size() / 3; ++p) {
+    for (size_t c = 0; c < 3; ++c) put(channels * p + c, rgb[3 * p + c]);
+    if (alpha) put(channels * p + 3, valid[p] ? opaque : 0);
   }
   std::vector<png_bytep> rows(static_cast<size_t>(height));
   for (int y = 0; y < height; ++y) rows[size_t(y)] = pixels.data() + size_t(y) * row_bytes;
@@ -94,7 +103,7 @@ std::string encode_png(const std::string& path, int width, int height, int bit_d
     texts[i].text_length = strings[2 * i + 1].size() - 1;
   }
   PngSink sink{out.data(), out.size(), 0};
-  const size_t n = write_png_rows(&sink, width, height, bit_depth, rows.data(), texts.data(), int(texts.size()));
+  const size_t n = write_png_rows(&sink, width, height, bit_depth, alpha, rows.data(), texts.data(), int(texts.size()));
   if (n == 0) throw InputError(fmt::format("{}: cannot encode as PNG", path));
   return std::string(reinterpret_cast<const char*>(out.data()), n);
 }
@@ -152,6 +161,20 @@ void write_code_image(const std::string& path, const RgbImage& image, int bit_de
                  [&](float v) { return uint16_t(std::lround(std::clamp(double(v), 0.0, 1.0) * max)); });
   std::vector<std::pair<std::string, std::string>> texts;
   if (image.mirror_ball) texts.emplace_back(kMirrorBallKey, mirror_ball_text(*image.mirror_ball));
+  // Pixels without data (a registered photo beyond the original's edge) are transparent in a
+  // PNG, which read_camera_image reads as unseen; other formats would make them black.
+  const bool unseen = std::find(image.valid.begin(), image.valid.end(), uint8_t(0)) != image.valid.end();
+  if (unseen) {
+    if (bit_depth != 8 && bit_depth != 16) throw InputError(fmt::format("{}: bit depth must be 8 or 16", path));
+    if (image.valid.size() != size_t(image.width) * size_t(image.height))
+      throw std::invalid_argument("write_code_image: the validity mask does not match the image");
+    std::string ext = lower_extension(path);
+    if (!ext.empty() && ext != ".png")
+      throw InputError(fmt::format("{}: {} holds pixels without data, which only a PNG (its alpha) can mark; write .png",
+                                   path, ext));
+    write_file_atomically(path, encode_png(path, image.width, image.height, bit_depth, codes, texts, image.valid));
+    return;
+  }
   write_file_atomically(path, encode_rgb_codes(path, image.width, image.height, bit_depth, codes, texts));
 }
 

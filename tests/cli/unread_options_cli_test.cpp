@@ -5,12 +5,14 @@
 // about in one.
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 #include <sstream>
 #include <map>
 
+#include "core/image_io.h"
 #include "tests/cli/cli_run.h"
 
 namespace lp::cli_test {
@@ -234,7 +236,11 @@ TEST(UnreadOptionsCli, ProbeRegisterRefusesTwoPhotosOfOneNameAndSaysWhatLayOutsi
   const CliRun r = lightprobe("probe register " + k + "ball_1-10s.jpg " + k + "ball_1-160s.jpg -o " + (dir / "reg").string());
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("ball_1-10s.jpg: "), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("lay outside the photo and are black (code 0) in ball_1-10s.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("lay outside the photo: transparent (no data) in ball_1-10s.png"), std::string::npos) << r.err;
+  // Marked as no data in the PNG (alpha 0), not written as black.
+  const lp::CameraImage png = lp::read_camera_image((dir / "reg" / "ball_1-10s.png").string());
+  ASSERT_FALSE(png.valid.empty());
+  EXPECT_GT(std::count(png.valid.begin(), png.valid.end(), uint8_t(0)), 0);
 }
 
 // calib geometric: the corners of eight stereo views, detected once (corners.vnl rows: name x y level).

@@ -248,6 +248,23 @@ TEST(ImageIo, ARegisteredBallIsRecordedTurnedAndChecked) {
   EXPECT_EQ(read_camera_image(dir + "ball16.png").mirror_ball, img.mirror_ball);
   EXPECT_FALSE(read_rgb_image((write_code_image(dir + "none.png", RgbImage{6, 4, img.rgb}, 8), dir + "none.png"))
                    .mirror_ball.has_value());
+  // Pixels without data (beyond a registered photo's edge) are transparent in the PNG, read
+  // back as unseen; a format without alpha is refused rather than writing them black.
+  RgbImage masked = img;
+  masked.valid.assign(24, 1);
+  masked.valid[5] = masked.valid[17] = 0;
+  for (int bits : {8, 16}) {
+    write_code_image(dir + "masked.png", masked, bits);
+    const CameraImage back = read_camera_image(dir + "masked.png");
+    EXPECT_EQ(back.valid, masked.valid) << bits;
+    EXPECT_EQ(back.bit_depth, bits);
+    EXPECT_EQ(back.rgb, read_camera_image(dir + (bits == 8 ? "ball.png" : "ball16.png")).rgb) << bits;
+    EXPECT_EQ(back.mirror_ball, img.mirror_ball);
+  }
+  EXPECT_NE(test_files::input_error([&] { write_code_image(dir + "masked.tif", masked, 8); })
+                .find("masked.tif: .tif holds pixels without data, which only a PNG (its alpha) can mark"),
+            std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir + "masked.tif"));
   // Turned: a marker at the ball's centre pixel stays at the turned ball's centre.
   RgbImage shown = img;
   shown.orientation = 6;

@@ -453,9 +453,11 @@ void convert_to_rec709(const std::string& path, std::vector<float>& rgb, const C
 // alpha ignored, which made a render's transparent background (Blender's "film transparent":
 // alpha and RGB 0) a black part of the scene; now it is masked too, said in one warning. An
 // alpha that is 0 everywhere (some writers' placeholder) means nothing: ignored, with a warning.
+// lightprobe's own files (every one records its units) are read silently, photos too: a fused
+// bracket's pixels that no frame saw said "read as no data" on every read of it.
 void alpha_to_mask(const std::string& path, RawImage& raw, const std::vector<float>& alpha) {
   const size_t transparent = size_t(std::count_if(alpha.begin(), alpha.end(), [](float a) { return !(a > 0.5f); }));
-  if (raw.layout) {
+  if (raw.layout || raw.units) {
     raw.valid.resize(alpha.size());
     for (size_t i = 0; i < alpha.size(); ++i) raw.valid[i] = alpha[i] > 0.5f ? 1 : 0;
     return;

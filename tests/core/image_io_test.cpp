@@ -265,6 +265,14 @@ TEST(ImageIo, ARegisteredBallIsRecordedTurnedAndChecked) {
                 .find("masked.tif: .tif holds pixels without data, which only a PNG (its alpha) can mark"),
             std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir + "masked.tif"));
+  // A fused photo's own mask (pixels no frame saw) reads back as it was, without the warning
+  // that a foreign file's alpha gets.
+  std::vector<std::string> warnings;
+  const WarningSink before = set_warning_sink([&](const std::string& line) { warnings.push_back(line); });
+  write_rgb_image(dir + "masked.exr", masked);
+  EXPECT_EQ(read_rgb_image(dir + "masked.exr").valid, masked.valid);
+  set_warning_sink(before);
+  EXPECT_TRUE(warnings.empty()) << warnings[0];
   // Turned: a marker at the ball's centre pixel stays at the turned ball's centre.
   RgbImage shown = img;
   shown.orientation = 6;

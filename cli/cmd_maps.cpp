@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -16,6 +17,7 @@
 #include "core/resample.h"
 #include "core/warnings.h"
 #include "core/tonemap.h"
+#include "hdr/bracket.h"
 #include "probe/cube_map.h"
 
 namespace lp::cli {
@@ -40,15 +42,111 @@ struct PreviewArgs {
   double percentile = 0.99;
 };
 
+namespace {
+
+// A photo, not a map: a camera's PNG or JPEG, a fused bracket, a registered ball. What it
+// holds and records (its EXIF exposure, the ball probe register put in it, the turn hdr fuse
+// recorded), and what makes a map of it. `info` refused them, so a user checking a fused
+// ball before unwrapping it learned only that it was no map.
+nlohmann::json photo_info(const std::string& path, const Output& out) {
+  const RgbImage img = read_rgb_image(path);
+  const size_t n = size_t(img.width) * size_t(img.height);
+  size_t valid = 0;
+  for (size_t i = 0; i < n; ++i) valid += img.valid.empty() || img.valid[i];
+  nlohmann::json j = {{"file", path}, {"kind", "photo"}, {"width", img.width}, {"height", img.height},
+                      {"valid_fraction", n ? double(valid) / double(n) : 0.0}};
+  say(out, "{}\n  photo       {}x{}, not a map: `lightprobe probe unwrap` makes a map of it (--type mirrorball or "
+      "fisheye)\n",
+      path, img.width, img.height);
+  if (valid < n) say(out, "  valid       {:.1f} % of {} pixels (the rest hold no data)\n", 100.0 * double(valid) / double(n), n);
+  if (img.code_bits > 0) {
+    // Codes: how many sit at the top (clipped light) and at 0.
+    size_t top = 0, black = 0;
+    const float top_code = 1.0f - 0.5f / float((1 << img.code_bits) - 1);  // codes are c / (2^bits - 1)
+    for (size_t i = 0; i < n; ++i) {
+      if (!img.valid.empty() && !img.valid[i]) continue;
+      const float* p = &img.rgb[3 * i];
+      top += std::max({p[0], p[1], p[2]}) >= top_code;
+      black += std::max({p[0], p[1], p[2]}) <= 0.0f;
+    }
+    const double clipped = valid ? double(top) / double(valid) : 0.0, dark = valid ? double(black) / double(valid) : 0.0;
+    j["code_bits"] = img.code_bits;
+    j["clipped_fraction"] = clipped;
+    j["black_fraction"] = dark;
+    say(out, "  codes       {}-bit camera codes; {:.2f} % at the top code (clipped), {:.2f} % at 0\n", img.code_bits,
+        100 * clipped, 100 * dark);
+    if (is_camera_image_file(path)) {
+      ExifExposureSettings e;
+      try {
+        e = read_exif_exposure(path);
+      } catch (const InputError&) {  // unreadable EXIF: the codes are still worth reporting
+      }
+      if (e.seconds) j["exposure_s"] = *e.seconds;
+      if (e.iso > 0) j["iso"] = e.iso;
+      if (e.f_number > 0) j["f_number"] = e.f_number;
+      say(out, "  exposure    {}\n",
+          e.seconds ? fmt::format("{:g} s{}{}", *e.seconds, e.iso > 0 ? fmt::format(", ISO {:g}", e.iso) : "",
+                                  e.f_number > 0 ? fmt::format(", f/{:g}", e.f_number) : "")
+                    : std::string("none in EXIF (hdr fuse needs --exposure-times)"));
+    }
+  } else {
+    std::vector<float> y;
+    for (size_t i = 0; i < n; ++i)
+      if (img.valid.empty() || img.valid[i]) {
+        const float* p = &img.rgb[3 * i];
+        y.push_back(luminance(p[0], p[1], p[2]));
+      }
+    std::sort(y.begin(), y.end());
+    const auto positive = std::upper_bound(y.begin(), y.end(), 0.0f);
+    const double min_positive = positive != y.end() ? *positive : 0.0, max = y.empty() ? 0.0 : y.back();
+    const double median = y.empty() ? 0.0 : y[y.size() / 2];
+    const double stops = min_positive > 0 && max > 0 ? std::log2(max / min_positive) : 0.0;
+    j["units"] = std::string(to_string(img.units));
+    j["luminance"] = {{"min_positive", min_positive}, {"median", median}, {"max", max}};
+    j["range_stops"] = stops;
+    say(out, "  radiance    {}; luminance min>0 {:.4g}  median {:.4g}  max {:.4g}; {:.1f} stops\n", to_string(img.units),
+        min_positive, median, max, stops);
+  }
+  j["exif_orientation"] = img.orientation;
+  if (img.orientation != 1)
+    say(out, "  turned      {} by EXIF Orientation {}\n", img.code_bits > 0 ? "shown" : "fused as shown", img.orientation);
+  if (img.mirror_ball) {
+    j["mirror_ball"] = *img.mirror_ball;
+    say(out, "  ball        at ({:.2f}, {:.2f}) r {:.2f} px, recorded by probe register (probe unwrap takes it)\n",
+        (*img.mirror_ball)[0], (*img.mirror_ball)[1], (*img.mirror_ball)[2]);
+  }
+  j["vignetting_corrected"] = img.vignetting_corrected;
+  if (img.vignetting_corrected) say(out, "  lens        vignetting divided out (--vignetting)\n");
+  return j;
+}
+
+}  // namespace
+
 int run_info(const InfoArgs& args, const Output& out) {
   nlohmann::json all = nlohmann::json::array();
   for (const std::string& path : args.files) {
     ReadMapOptions ro;
     ro.layout = optional_layout(args.layout, "--layout");
-    const EnvMap map = read_envmap(path, ro);
+    // A photo is described as one; a radiance file is a map when its layout is recorded or its
+    // shape is a map's (read_envmap's rule), else read as a photo.
+    if (!ro.layout && is_camera_image_file(path)) {
+      all.push_back(photo_info(path, out));
+      continue;
+    }
+    EnvMap map;
+    try {
+      map = read_envmap(path, ro);
+    } catch (const InputError& e) {
+      // read_envmap's refusal of a radiance file with no layout recorded and no map's shape.
+      if (ro.layout || !is_radiance_file(path) || std::string(e.what()).find("no layout recorded") == std::string::npos)
+        throw;
+      all.push_back(photo_info(path, out));
+      continue;
+    }
     const MapStatistics s = map_statistics(map);
     nlohmann::json j = s.to_json(map);
     j["file"] = path;
+    j["kind"] = "map";
     if (map.world_from_probe) {
       j["world_from_probe"] = map.world_from_probe->m;
       j["probe_yaw_pitch_roll_deg"] = yaw_pitch_roll_deg(*map.world_from_probe);
@@ -145,11 +243,11 @@ int run_preview(const PreviewArgs& args, const Output& out) {
 
 std::vector<Command> map_commands() {
   return {
-      {"info", "Layout, size, dynamic range, power and luminance of maps",
-       "lightprobe info probe.exr\nlightprobe info scene.exr probe.hdr --json",
+      {"info", "Layout, size, dynamic range, power and luminance of maps; what a probe photo holds and records",
+       "lightprobe info probe.exr\nlightprobe info scene.exr probe.hdr --json\nlightprobe info fused_ball.exr registered/ball_1-10s.png",
        [](Flags& f) -> Handler {
          auto a = std::make_shared<InfoArgs>();
-         f.arg("FILE", a->files, "Environment maps (.exr, .hdr, .pfm)").required();
+         f.arg("FILE", a->files, "Environment maps (.exr, .hdr, .pfm), or photos (PNG, JPEG, a fused .exr)").required();
          f.opt("--layout", a->layout, "Read as this layout: latlong|hemisphere|healpix");
          return [a](const Output& out) { return run_info(*a, out); };
        }},

@@ -338,8 +338,16 @@ TEST(Cli, HdrFuseOfMemorialBeatsNothingLessThanAValidRadianceImageAndBadBrackets
                         resp.string() + " --ignore-colour 0,0,255 -o " + out.string());
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["frames"].get<int>(), 16);
-  // A fused photo is no map: read it as one layout to see its range (which no layout changes).
-  expect_one_line_error(lightprobe("info " + out.string()), "no layout recorded");
+  // A fused photo is no map: described as a photo, with what makes a map of it, and its range.
+  CliRun described = lightprobe("info --json " + out.string());
+  ASSERT_EQ(described.code, 0) << described.err;
+  const auto p = nlohmann::json::parse(described.out);
+  EXPECT_EQ(p["kind"], "photo");
+  EXPECT_EQ(p["width"], 512);
+  EXPECT_GT(p["range_stops"].get<double>(), 15);
+  EXPECT_NE(lightprobe("info " + out.string()).out.find("not a map: `lightprobe probe unwrap` makes a map of it"),
+            std::string::npos);
+  // Read as one layout it is a map, as before (no layout changes its range).
   CliRun info = lightprobe("info --json --layout hemisphere " + out.string());
   ASSERT_EQ(info.code, 0) << info.err;
   // Debevec's own map spans ~1e-3 .. 274 (5+ decades); ours must too, up to scale.
@@ -696,6 +704,20 @@ TEST(Cli, DifferentlyCroppedBallPhotosAreRegisteredFusedAndUnwrapped) {
   EXPECT_EQ(un.err.find("rim"), std::string::npos) << un.err;
   EXPECT_NEAR(frame["ball"][0].get<double>(), 160, 1e-9);  // registered to the centre
   EXPECT_NEAR(frame["ball"][1].get<double>(), 160, 1e-9);
+  // info says what each holds: the registered PNG's codes and ball, the fused photo's.
+  const auto png_info = nlohmann::json::parse(lightprobe("info --json " + (dir / "ball_1-40s.png").string()).out);
+  EXPECT_EQ(png_info["kind"], "photo");
+  EXPECT_EQ(png_info["code_bits"], 8);
+  EXPECT_GT(png_info["clipped_fraction"].get<double>(), 0.001);  // the 1/40 s photo clips its lamps
+  EXPECT_LT(png_info["valid_fraction"].get<double>(), 1.0);      // beyond the photo's edge: no data
+  EXPECT_EQ(png_info["mirror_ball"], registered);
+  const auto fused_info = nlohmann::json::parse(lightprobe("info --json " + fused.string()).out);
+  EXPECT_EQ(fused_info["mirror_ball"], registered);
+  EXPECT_GT(fused_info["range_stops"].get<double>(), 5);
+  EXPECT_EQ(nlohmann::json::parse(lightprobe("info --json " + map.string()).out)["kind"], "map");
+  const auto jpeg_info = nlohmann::json::parse(lightprobe("info --json " + k + "/ball_1-10s.jpg").out);
+  EXPECT_NEAR(jpeg_info["exposure_s"].get<double>(), 0.1, 1e-9);
+  EXPECT_NEAR(jpeg_info["f_number"].get<double>(), 1.8, 1e-6);
   // --ball still overrides it.
   CliRun given = lightprobe("probe unwrap --json " + fused.string() +
                             " --type mirrorball --ball 161,159,150 --layout latlong --size 64x32 -o " + map.string());

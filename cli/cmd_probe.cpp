@@ -326,10 +326,8 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   // Each photo records where the ball now is (PNG tEXt, EXR attribute; hdr fuse carries it):
   // probe unwrap takes it instead of searching for the rim of a ball pasted on a canvas, which
   // found no sub-pixel rim on kartik's photos and missed the centre by 0.8 px.
-  for (RgbImage& r : registered) {
-    const BallInImage t = registered_ball(args.size);
-    r.mirror_ball = std::array<double, 3>{t.cx, t.cy, t.radius_px};
-  }
+  const BallInImage target = registered_ball(args.size);
+  for (RgbImage& r : registered) r.mirror_ball = std::array<double, 3>{target.cx, target.cy, target.radius_px};
   // Each photo keeps what it holds: 8- or 16-bit codes as a PNG of that depth, radiance as
   // EXR. All went to 8-bit PNG: a 16-bit bracket lost 8 bits, radiance was clipped at 1.
   std::vector<std::string> names;
@@ -344,7 +342,6 @@ int run_probe_register(const ProbeRegisterArgs& args, const Output& out) {
   // Read before anything is written: nothing here can fail after the photos are.
   const std::optional<std::string> exposures = registered_exposures_csv(args.images, names);
   make_output_directory(args.output_dir);
-  const BallInImage target = registered_ball(args.size);
   for (size_t i = 0; i < registered.size(); ++i) {
     const RgbImage& r = registered[i];
     const std::string path = (fs::path(args.output_dir) / names[i]).string();

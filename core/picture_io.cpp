@@ -165,9 +165,11 @@ void write_code_image(const std::string& path, const RgbImage& image, int bit_de
   // PNG, which read_camera_image reads as unseen; other formats would make them black.
   const bool unseen = std::find(image.valid.begin(), image.valid.end(), uint8_t(0)) != image.valid.end();
   if (unseen) {
+    // encode_rgb_codes' checks, for the PNG written here without it.
     if (bit_depth != 8 && bit_depth != 16) throw InputError(fmt::format("{}: bit depth must be 8 or 16", path));
-    if (image.valid.size() != size_t(image.width) * size_t(image.height))
-      throw std::invalid_argument("write_code_image: the validity mask does not match the image");
+    if (image.width <= 0 || image.height <= 0 || codes.size() != 3 * size_t(image.width) * size_t(image.height) ||
+        image.valid.size() != size_t(image.width) * size_t(image.height))
+      throw InputError(fmt::format("{}: image buffer does not match its size", path));
     std::string ext = lower_extension(path);
     if (!ext.empty() && ext != ".png")
       throw InputError(fmt::format("{}: {} holds pixels without data, which only a PNG (its alpha) can mark; write .png",

@@ -718,6 +718,20 @@ TEST(Cli, DifferentlyCroppedBallPhotosAreRegisteredFusedAndUnwrapped) {
   const auto jpeg_info = nlohmann::json::parse(lightprobe("info --json " + k + "/ball_1-10s.jpg").out);
   EXPECT_NEAR(jpeg_info["exposure_s"].get<double>(), 0.1, 1e-9);
   EXPECT_NEAR(jpeg_info["f_number"].get<double>(), 1.8, 1e-6);
+  // OpenImageIO, a consumer that knows nothing of lightprobe, reads the PNG's alpha and the
+  // record in both files.
+  if (std::system("command -v iinfo >/dev/null 2>&1") == 0) {
+    for (const fs::path& f : {dir / "ball_1-10s.png", fused}) {
+      std::string listing;
+      if (FILE* p = popen(("iinfo -v " + f.string() + " 2>&1").c_str(), "r")) {
+        char buf[512];
+        while (fgets(buf, sizeof buf, p)) listing += buf;
+        pclose(p);
+      }
+      EXPECT_NE(listing.find("channel list: R, G, B, A"), std::string::npos) << listing;
+      EXPECT_NE(listing.find("lightprobe.mirror_ball: \"160 160 "), std::string::npos) << listing;
+    }
+  }
   // --ball still overrides it.
   CliRun given = lightprobe("probe unwrap --json " + fused.string() +
                             " --type mirrorball --ball 161,159,150 --layout latlong --size 64x32 -o " + map.string());
